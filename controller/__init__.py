@@ -1,0 +1,1 @@
+"""Controller: MuJoCo plant built from DH parameters, QP differential IK, self-motion."""

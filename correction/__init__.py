@@ -1,0 +1,53 @@
+"""Kinematic model of a serial arm: parameters, robot files, batched FK and Jacobians.
+
+This is what a controller imports: it depends on nothing else of spherecal.
+"""
+
+from .atomic import atomic_write_bytes, atomic_write_text
+from .conversion import convert, to_modified, to_standard
+from .errors import SpherecalError
+from .kinematics import (
+    Frames,
+    frames,
+    joint_jacobian,
+    link_frames,
+    param_jacobian,
+    tool_point,
+    tool_pose,
+)
+from .model import RobotModel, matrix_rpy, param_names, pose_matrix, rpy_matrix
+from .robot_file import (
+    RobotFileError,
+    dump_robot,
+    load_robot,
+    robot_from_dict,
+    robot_to_dict,
+    save_robot,
+)
+
+__all__ = [
+    "Frames",
+    "RobotFileError",
+    "RobotModel",
+    "SpherecalError",
+    "atomic_write_bytes",
+    "atomic_write_text",
+    "convert",
+    "dump_robot",
+    "frames",
+    "joint_jacobian",
+    "link_frames",
+    "load_robot",
+    "matrix_rpy",
+    "param_jacobian",
+    "param_names",
+    "pose_matrix",
+    "robot_from_dict",
+    "robot_to_dict",
+    "rpy_matrix",
+    "save_robot",
+    "to_modified",
+    "to_standard",
+    "tool_point",
+    "tool_pose",
+]

@@ -1,0 +1,198 @@
+"""The kinematic parameter set of a serial arm of revolute joints."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field, replace
+from typing import Any, Literal
+
+import numpy as np
+
+Convention = Literal["standard", "modified"]
+CONVENTIONS: tuple[str, ...] = ("standard", "modified")
+
+#: Per-joint DH fields, in the order they appear in the flat parameter vector.
+JOINT_FIELDS: tuple[str, ...] = ("a", "alpha", "d", "theta")
+TOOL_FIELDS: tuple[str, ...] = ("tool_x", "tool_y", "tool_z")
+BASE_FIELDS: tuple[str, ...] = (
+    "base_x",
+    "base_y",
+    "base_z",
+    "base_roll",
+    "base_pitch",
+    "base_yaw",
+)
+
+
+def _frozen_array(values: Any, shape: tuple[int, ...], name: str) -> np.ndarray:
+    array = np.array(values, dtype=float).reshape(shape) if np.size(values) else np.zeros(shape)
+    if array.shape != shape:
+        raise ValueError(f"{name} must have shape {shape}, got {array.shape}")
+    array.setflags(write=False)
+    return array
+
+
+@dataclass(frozen=True, eq=False)
+class RobotModel:
+    """DH parameters, joint limits, tool point and base placement of a serial arm.
+
+    Conventions (one joint ``i``, joint angle ``q``):
+      * ``standard`` (paper eq. 1): ``Rz(theta+q) Lz(d) Lx(a) Rx(alpha)``; joint ``i``
+        turns about ``z`` of frame ``i-1``.
+      * ``modified`` (Craig, as Franka publishes): ``Rx(alpha) Lx(a) Rz(theta+q) Lz(d)``;
+        joint ``i`` turns about ``z`` of frame ``i``.
+
+    The world frame is the base frame, placed by ``base_xyz`` [m] and ``base_rpy`` [rad]
+    (URDF convention, ``R = Rz(yaw) Ry(pitch) Rx(roll)``). The tool point [m] (the centre of
+    the spherical joint) is expressed in the frame of the last joint.
+
+    Attributes:
+        name: robot name.
+        convention: ``"standard"`` or ``"modified"``.
+        a, alpha, d, theta: (n,) DH parameters [m, rad, m, rad].
+        lower, upper: (n,) joint limits [rad].
+        tool: (3,) tool point in the last frame [m].
+        base_xyz, base_rpy: (3,) base placement [m], [rad].
+        extras: other top-level keys of the robot file, written back unchanged.
+    """
+
+    name: str
+    convention: Convention
+    a: np.ndarray
+    alpha: np.ndarray
+    d: np.ndarray
+    theta: np.ndarray
+    lower: np.ndarray
+    upper: np.ndarray
+    tool: np.ndarray = field(default_factory=lambda: np.zeros(3))
+    base_xyz: np.ndarray = field(default_factory=lambda: np.zeros(3))
+    base_rpy: np.ndarray = field(default_factory=lambda: np.zeros(3))
+    extras: dict = field(default_factory=dict)
+
+    def __post_init__(self) -> None:
+        if self.convention not in CONVENTIONS:
+            raise ValueError(
+                f"unknown convention {self.convention!r}, expected one of {CONVENTIONS}"
+            )
+        n = np.size(self.a)
+        if n < 1:
+            raise ValueError("a robot needs at least one joint")
+        for name in ("a", "alpha", "d", "theta", "lower", "upper"):
+            object.__setattr__(self, name, _frozen_array(getattr(self, name), (n,), name))
+        for name in ("tool", "base_xyz", "base_rpy"):
+            object.__setattr__(self, name, _frozen_array(getattr(self, name), (3,), name))
+        if np.any(self.lower > self.upper):
+            raise ValueError("joint limits: lower > upper")
+
+    # ----------------------------------------------------------------- sizes
+    @property
+    def n_joints(self) -> int:
+        """Number of joints ``n``."""
+        return int(self.a.size)
+
+    @property
+    def n_params(self) -> int:
+        """Length ``P = 4 n + 3 + 6`` of the flat parameter vector."""
+        return 4 * self.n_joints + len(TOOL_FIELDS) + len(BASE_FIELDS)
+
+    # ----------------------------------------------------- flat parameter view
+    @property
+    def param_names(self) -> tuple[str, ...]:
+        """Names of the flat parameter vector: ``a1, alpha1, d1, theta1, a2, ..., tool_x,
+        tool_y, tool_z, base_x, base_y, base_z, base_roll, base_pitch, base_yaw``."""
+        return param_names(self.n_joints)
+
+    @property
+    def params(self) -> np.ndarray:
+        """(P,) flat parameter vector, ordered as :attr:`param_names` [m, rad]."""
+        joints = np.stack([self.a, self.alpha, self.d, self.theta], axis=1).ravel()
+        return np.concatenate([joints, self.tool, self.base_xyz, self.base_rpy])
+
+    def with_params(self, params: np.ndarray) -> RobotModel:
+        """A copy of this model with the flat parameter vector replaced.
+
+        Args:
+            params: (P,) parameters ordered as :attr:`param_names`.
+        """
+        params = np.asarray(params, dtype=float)
+        if params.shape != (self.n_params,):
+            raise ValueError(f"params must have shape ({self.n_params},), got {params.shape}")
+        n = self.n_joints
+        joints = params[: 4 * n].reshape(n, 4)
+        return replace(
+            self,
+            a=joints[:, 0],
+            alpha=joints[:, 1],
+            d=joints[:, 2],
+            theta=joints[:, 3],
+            tool=params[4 * n : 4 * n + 3],
+            base_xyz=params[4 * n + 3 : 4 * n + 6],
+            base_rpy=params[4 * n + 6 : 4 * n + 9],
+        )
+
+    def param_index(self, name: str) -> int:
+        """Index of a named parameter (``"a3"``, ``"tool_z"``, ...) in :attr:`params`."""
+        try:
+            return self.param_names.index(name)
+        except ValueError:
+            raise KeyError(f"no parameter named {name!r} in a {self.n_joints}-joint model") from None
+
+    # -------------------------------------------------------------- helpers
+    @property
+    def base_transform(self) -> np.ndarray:
+        """(4, 4) homogeneous transform of the base frame in the world."""
+        return pose_matrix(self.base_xyz, self.base_rpy)
+
+    def within_limits(self, q: np.ndarray, tol: float = 0.0) -> np.ndarray:
+        """(N,) True where every joint of ``q`` (N, n) lies inside its limits ± ``tol``."""
+        q = np.atleast_2d(q)
+        return np.all((q >= self.lower - tol) & (q <= self.upper + tol), axis=1)
+
+    def random_configurations(self, count: int, rng: np.random.Generator) -> np.ndarray:
+        """(count, n) joint angles drawn uniformly inside the joint limits [rad]."""
+        return rng.uniform(self.lower, self.upper, size=(count, self.n_joints))
+
+    def same_as(self, other: RobotModel, atol: float = 0.0) -> bool:
+        """True when both models have the same convention, parameters and limits."""
+        return (
+            self.convention == other.convention
+            and self.n_joints == other.n_joints
+            and np.allclose(self.params, other.params, rtol=0.0, atol=atol)
+            and np.allclose(self.lower, other.lower, rtol=0.0, atol=atol)
+            and np.allclose(self.upper, other.upper, rtol=0.0, atol=atol)
+        )
+
+
+def param_names(n_joints: int) -> tuple[str, ...]:
+    """Flat parameter names of an ``n_joints`` model (see :attr:`RobotModel.param_names`)."""
+    joints = tuple(f"{f}{i + 1}" for i in range(n_joints) for f in JOINT_FIELDS)
+    return joints + TOOL_FIELDS + BASE_FIELDS
+
+
+def rpy_matrix(rpy: np.ndarray) -> np.ndarray:
+    """(3, 3) rotation ``Rz(yaw) Ry(pitch) Rx(roll)`` of roll-pitch-yaw angles [rad]."""
+    r, p, y = np.asarray(rpy, dtype=float)
+    cr, sr, cp, sp, cy, sy = np.cos(r), np.sin(r), np.cos(p), np.sin(p), np.cos(y), np.sin(y)
+    return np.array(
+        [
+            [cy * cp, cy * sp * sr - sy * cr, cy * sp * cr + sy * sr],
+            [sy * cp, sy * sp * sr + cy * cr, sy * sp * cr - cy * sr],
+            [-sp, cp * sr, cp * cr],
+        ]
+    )
+
+
+def matrix_rpy(rotation: np.ndarray) -> np.ndarray:
+    """(3,) roll-pitch-yaw angles [rad] of a (3, 3) rotation (inverse of :func:`rpy_matrix`)."""
+    r = np.asarray(rotation, dtype=float)
+    pitch = np.arctan2(-r[2, 0], np.hypot(r[0, 0], r[1, 0]))
+    if np.hypot(r[0, 0], r[1, 0]) < 1e-12:  # gimbal lock: put all of it in roll
+        return np.array([np.arctan2(-r[1, 2], r[1, 1]), pitch, 0.0])
+    return np.array([np.arctan2(r[2, 1], r[2, 2]), pitch, np.arctan2(r[1, 0], r[0, 0])])
+
+
+def pose_matrix(xyz: np.ndarray, rpy: np.ndarray) -> np.ndarray:
+    """(4, 4) homogeneous transform of a translation [m] and roll-pitch-yaw [rad]."""
+    pose = np.eye(4)
+    pose[:3, :3] = rpy_matrix(rpy)
+    pose[:3, 3] = xyz
+    return pose

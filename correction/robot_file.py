@@ -1,0 +1,180 @@
+"""Reading and writing robot files (YAML).
+
+Schema (other top-level keys are kept in :attr:`RobotModel.extras` and written back)::
+
+    name: franka_panda
+    convention: modified          # or: standard
+    joints:                       # base to flange, metres and radians
+      - {a: 0.0, alpha: 0.0, d: 0.333, theta: 0.0, lower: -2.8973, upper: 2.8973}
+    tool: [0.0, 0.0, 0.107]       # tool point in the last joint's frame, metres
+    base: {xyz: [0, 0, 0], rpy: [0, 0, 0]}   # optional
+"""
+
+from __future__ import annotations
+
+import math
+import os
+from importlib import resources
+from pathlib import Path
+from typing import Any
+
+import yaml
+
+from .atomic import atomic_write_text
+from .errors import SpherecalError
+from .model import CONVENTIONS, JOINT_FIELDS, RobotModel
+
+JOINT_KEYS: tuple[str, ...] = JOINT_FIELDS + ("lower", "upper")
+_KNOWN_KEYS = ("name", "convention", "joints", "tool", "base")
+#: Robots shipped inside the package, loadable by name.
+EMBEDDED_ROBOTS: dict[str, str] = {"panda": "panda.yaml", "franka_panda": "panda.yaml"}
+
+
+class RobotFileError(SpherecalError):
+    """A robot file that cannot be read; the message names the file and the field."""
+
+
+def _number(value: Any, where: str) -> float:
+    if isinstance(value, bool) or not isinstance(value, (int, float)):
+        raise RobotFileError(f"{where}: expected a number, got {value!r}")
+    if not math.isfinite(value):
+        raise RobotFileError(f"{where}: must be finite, got {value!r}")
+    return float(value)
+
+
+def _vector3(value: Any, where: str) -> list[float]:
+    if not isinstance(value, (list, tuple)) or len(value) != 3:
+        raise RobotFileError(f"{where}: expected a list of 3 numbers, got {value!r}")
+    return [_number(v, f"{where}[{k}]") for k, v in enumerate(value)]
+
+
+def robot_from_dict(data: Any, source: str = "<robot>") -> RobotModel:
+    """Validate a parsed robot file and build the model.
+
+    Args:
+        data: the parsed YAML document.
+        source: file name used in error messages.
+
+    Raises:
+        RobotFileError: one line naming ``source`` and the offending field.
+    """
+    if not isinstance(data, dict):
+        raise RobotFileError(f"{source}: expected a mapping at the top level, got {type(data).__name__}")
+    for key in ("name", "convention", "joints", "tool"):
+        if key not in data:
+            raise RobotFileError(f"{source}: missing key '{key}'")
+    name = data["name"]
+    if not isinstance(name, str) or not name:
+        raise RobotFileError(f"{source}: name: expected a non-empty string, got {name!r}")
+    convention = data["convention"]
+    if convention not in CONVENTIONS:
+        raise RobotFileError(
+            f"{source}: convention: unknown convention {convention!r} (expected 'standard' or 'modified')"
+        )
+    joints = data["joints"]
+    if not isinstance(joints, list) or not joints:
+        raise RobotFileError(f"{source}: joints: expected a non-empty list of joint mappings")
+    columns: dict[str, list[float]] = {key: [] for key in JOINT_KEYS}
+    for i, joint in enumerate(joints):
+        where = f"{source}: joints[{i}]"
+        if not isinstance(joint, dict):
+            raise RobotFileError(f"{where}: expected a mapping, got {joint!r}")
+        for key in JOINT_KEYS:
+            if key not in joint:
+                raise RobotFileError(f"{where}: missing key '{key}'")
+            columns[key].append(_number(joint[key], f"{where}.{key}"))
+        if columns["lower"][-1] > columns["upper"][-1]:
+            raise RobotFileError(
+                f"{where}: lower ({columns['lower'][-1]}) > upper ({columns['upper'][-1]})"
+            )
+    tool = _vector3(data["tool"], f"{source}: tool")
+    base_xyz, base_rpy = [0.0] * 3, [0.0] * 3
+    base = data.get("base")
+    if base is not None:
+        if not isinstance(base, dict):
+            raise RobotFileError(f"{source}: base: expected a mapping with xyz and rpy, got {base!r}")
+        base_xyz = _vector3(base.get("xyz", [0.0] * 3), f"{source}: base.xyz")
+        base_rpy = _vector3(base.get("rpy", [0.0] * 3), f"{source}: base.rpy")
+    extras = {k: v for k, v in data.items() if k not in _KNOWN_KEYS}
+    return RobotModel(
+        name=name,
+        convention=convention,
+        a=columns["a"],
+        alpha=columns["alpha"],
+        d=columns["d"],
+        theta=columns["theta"],
+        lower=columns["lower"],
+        upper=columns["upper"],
+        tool=tool,
+        base_xyz=base_xyz,
+        base_rpy=base_rpy,
+        extras=extras,
+    )
+
+
+def load_robot(path_or_name: str | os.PathLike) -> RobotModel:
+    """Load a robot file, or an embedded robot by name (``"panda"``).
+
+    Raises:
+        RobotFileError: unreadable file, invalid YAML or an invalid field (one line).
+    """
+    key = str(path_or_name)
+    if key in EMBEDDED_ROBOTS and not Path(key).exists():
+        text = resources.files("correction").joinpath("data", EMBEDDED_ROBOTS[key]).read_text()
+        return robot_from_dict(yaml.safe_load(text), source=key)
+    path = Path(path_or_name)
+    try:
+        text = path.read_text()
+    except OSError as error:
+        raise RobotFileError(f"{path}: cannot read: {error.strerror or error}") from None
+    try:
+        data = yaml.safe_load(text)
+    except yaml.YAMLError as error:
+        mark = getattr(error, "problem_mark", None)
+        line = f" line {mark.line + 1}" if mark is not None else ""
+        raise RobotFileError(f"{path}:{line} invalid YAML: {getattr(error, 'problem', error)}") from None
+    return robot_from_dict(data, source=str(path))
+
+
+def _plain(value: Any) -> Any:
+    """numpy scalars and arrays to plain Python, recursively (floats keep every bit)."""
+    if hasattr(value, "tolist"):
+        return value.tolist()
+    if isinstance(value, dict):
+        return {k: _plain(v) for k, v in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [_plain(v) for v in value]
+    return value
+
+
+def robot_to_dict(model: RobotModel) -> dict:
+    """The robot-file mapping of a model (plain Python types, exact floats)."""
+    joints = [
+        {key: float(getattr(model, key)[i]) for key in JOINT_KEYS} for i in range(model.n_joints)
+    ]
+    data: dict[str, Any] = {
+        "name": model.name,
+        "convention": model.convention,
+        "joints": joints,
+        "tool": [float(v) for v in model.tool],
+        "base": {
+            "xyz": [float(v) for v in model.base_xyz],
+            "rpy": [float(v) for v in model.base_rpy],
+        },
+    }
+    data.update(_plain(model.extras))
+    return data
+
+
+def dump_robot(model: RobotModel, header: str = "") -> str:
+    """YAML text of a robot file; ``header`` lines are written as comments on top."""
+    comments = "".join(f"# {line}\n" for line in header.splitlines())
+    body = yaml.safe_dump(
+        robot_to_dict(model), sort_keys=False, default_flow_style=None, width=1000
+    )
+    return comments + "# spherecal robot file: metres and radians\n" + body
+
+
+def save_robot(model: RobotModel, path: str | os.PathLike, header: str = "") -> Path:
+    """Write a robot file atomically (temporary file, rename); floats round-trip exactly."""
+    return atomic_write_text(path, dump_robot(model, header))

@@ -1,0 +1,1 @@
+"""Identification: spherical-joint samples in, calibrated robot parameters out."""

@@ -1,0 +1,35 @@
+"""The command line: subcommands listed, start-up light, README and CI in step."""
+
+from __future__ import annotations
+
+import re
+import subprocess
+import sys
+from pathlib import Path
+
+ROOT = Path(__file__).parents[1]
+
+
+def test_help_lists_every_subcommand() -> None:
+    out = subprocess.run(
+        [sys.executable, "-m", "validation.cli", "--help"], capture_output=True, text=True, cwd=ROOT
+    )
+    assert out.returncode == 0
+    for name in ("simulate", "calibrate", "validate", "demo", "campaign", "plan", "export"):
+        assert re.search(rf"^\s+{name}\s", out.stdout, re.M), name
+
+
+def test_help_imports_no_heavy_dependency() -> None:
+    code = (
+        "import sys, validation.cli as c; c.build_parser();"
+        "print(sorted(m for m in ('mujoco','rerun','pyswarms','scipy','numpy') if m in sys.modules))"
+    )
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, cwd=ROOT)
+    assert out.stdout.strip() == "[]", out.stdout + out.stderr
+
+
+def test_ci_runs_exactly_the_readme_test_command() -> None:
+    readme = (ROOT / "README.md").read_text()
+    ci = (ROOT / ".ci" / "run").read_text()
+    command = ci.strip().splitlines()[-1]
+    assert command in readme

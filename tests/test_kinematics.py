@@ -1,0 +1,201 @@
+"""Forward kinematics and Jacobians against independent references."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from correction import (
+    RobotModel,
+    joint_jacobian,
+    link_frames,
+    param_jacobian,
+    to_modified,
+    to_standard,
+    tool_point,
+    tool_pose,
+)
+from tests.conftest import perturbed
+
+# MuJoCo Menagerie's franka_emika_panda/panda_nohand.xml: body pos and quat (w x y z) in
+# their parents, each joint a hinge about its body's z, a flange site 0.107 m along z7.
+MENAGERIE_PANDA = """
+<mujoco>
+  <compiler boundmass="0.001" boundinertia="0.000001"/>
+  <worldbody>
+    <body name="link0">
+      <body name="link1" pos="0 0 0.333">
+        <joint name="joint1" axis="0 0 1"/>
+        <body name="link2" quat="0.7071068 -0.7071068 0 0">
+          <joint name="joint2" axis="0 0 1"/>
+          <body name="link3" pos="0 -0.316 0" quat="0.7071068 0.7071068 0 0">
+            <joint name="joint3" axis="0 0 1"/>
+            <body name="link4" pos="0.0825 0 0" quat="0.7071068 0.7071068 0 0">
+              <joint name="joint4" axis="0 0 1"/>
+              <body name="link5" pos="-0.0825 0.384 0" quat="0.7071068 -0.7071068 0 0">
+                <joint name="joint5" axis="0 0 1"/>
+                <body name="link6" quat="0.7071068 0.7071068 0 0">
+                  <joint name="joint6" axis="0 0 1"/>
+                  <body name="link7" pos="0.088 0 0" quat="0.7071068 0.7071068 0 0">
+                    <joint name="joint7" axis="0 0 1"/>
+                    <site name="flange" pos="0 0 0.107"/>
+                  </body>
+                </body>
+              </body>
+            </body>
+          </body>
+        </body>
+      </body>
+    </body>
+  </worldbody>
+</mujoco>
+"""
+
+
+def test_nominal_panda_matches_menagerie_tree(panda: RobotModel, rng) -> None:
+    mujoco = pytest.importorskip("mujoco")
+    model = mujoco.MjModel.from_xml_string(MENAGERIE_PANDA)
+    data = mujoco.MjData(model)
+    q = panda.random_configurations(1000, rng)
+    site = model.site("flange").id
+    reference = np.empty((len(q), 3))
+    for k, qk in enumerate(q):
+        data.qpos[:] = qk
+        mujoco.mj_kinematics(model, data)
+        reference[k] = data.site_xpos[site]
+    # Menagerie rounds its quaternions to 7 digits (0.7071068): normalised, that is an
+    # exact quarter turn to ~1e-15, so the trees agree to far below 1e-9 m.
+    np.testing.assert_allclose(tool_point(panda, q), reference, rtol=0, atol=1e-9)
+
+
+def test_panda_zero_pose_is_the_published_one(panda: RobotModel) -> None:
+    # At q = 0 the flange is 0.088 m forward and 0.333 + 0.316 + 0.384 - 0.107 m up.
+    np.testing.assert_allclose(tool_point(panda, np.zeros(7)), [0.088, 0, 0.926], atol=1e-15)
+
+
+def _central_difference(function, x: np.ndarray, step: float) -> np.ndarray:
+    columns = []
+    for k in range(x.size):
+        dx = np.zeros_like(x)
+        dx[k] = step
+        columns.append((function(x + dx) - function(x - dx)) / (2 * step))
+    return np.stack(columns, axis=-1)
+
+
+def _generic(panda: RobotModel, convention: str, rng) -> RobotModel:
+    model = perturbed(panda, rng, scale=20.0)  # 2 cm, 4 deg: nothing special left
+    model = to_standard(model) if convention == "standard" else model
+    # a non-trivial base and tool so every column is exercised
+    params = model.params.copy()
+    params[-9:] += rng.normal(0, 0.3, 9)
+    return model.with_params(params)
+
+
+@pytest.mark.parametrize("convention", ["standard", "modified"])
+def test_parameter_jacobian_equals_central_differences(panda, convention, rng) -> None:
+    for _ in range(3):
+        model = _generic(panda, convention, rng)
+        q = model.random_configurations(20, rng)
+        analytic = param_jacobian(model, q)
+        numeric = _central_difference(
+            lambda x, m=model, q=q: tool_point(m.with_params(x), q), model.params, 1e-6
+        )
+        assert analytic.shape == (20, 3, model.n_params)
+        scale = np.abs(numeric).max()
+        assert np.abs(analytic - numeric).max() / scale < 1e-6
+
+
+@pytest.mark.parametrize("convention", ["standard", "modified"])
+def test_joint_jacobian_equals_central_differences(panda, convention, rng) -> None:
+    model = _generic(panda, convention, rng)
+    q = model.random_configurations(50, rng)
+    analytic = joint_jacobian(model, q)
+    numeric = np.stack(
+        [
+            (tool_point(model, q + 1e-6 * e) - tool_point(model, q - 1e-6 * e)) / 2e-6
+            for e in np.eye(model.n_joints)
+        ],
+        axis=-1,
+    )
+    assert analytic.shape == (50, 3, 7)
+    assert np.abs(analytic - numeric).max() / np.abs(numeric).max() < 1e-6
+
+
+@pytest.mark.parametrize("convention", ["standard", "modified"])
+def test_frames_pose_and_point_agree(panda, convention, rng) -> None:
+    model = _generic(panda, convention, rng)
+    q = model.random_configurations(30, rng)
+    frames = link_frames(model, q)
+    assert frames.shape == (30, 8, 4, 4)
+    # every frame is a rigid transform
+    rotations = frames[..., :3, :3]
+    np.testing.assert_allclose(
+        rotations @ np.swapaxes(rotations, -1, -2), np.broadcast_to(np.eye(3), rotations.shape),
+        atol=1e-12,
+    )
+    pose = tool_pose(model, q)
+    np.testing.assert_allclose(pose[:, :3, :3], frames[:, -1, :3, :3], atol=1e-15)
+    expected = frames[:, -1, :3, :3] @ model.tool + frames[:, -1, :3, 3]
+    np.testing.assert_allclose(pose[:, :3, 3], expected, atol=1e-12)
+    np.testing.assert_allclose(tool_point(model, q), expected, atol=1e-12)
+    # one configuration drops the batch axis
+    np.testing.assert_allclose(tool_point(model, q[0]), expected[0], atol=1e-12)
+    assert param_jacobian(model, q[0]).shape == (3, model.n_params)
+
+
+def test_frames_follow_the_convention_definition(panda, rng) -> None:
+    """Each link transform is the product the convention defines, built here by hand."""
+
+    def rot(axis: int, angle: float) -> np.ndarray:
+        c, s = np.cos(angle), np.sin(angle)
+        i, j = [(1, 2), (2, 0), (0, 1)][axis]
+        t = np.eye(4)
+        t[i, i], t[i, j], t[j, i], t[j, j] = c, -s, s, c
+        return t
+
+    def trans(axis: int, length: float) -> np.ndarray:
+        t = np.eye(4)
+        t[axis, 3] = length
+        return t
+
+    for convention in ("standard", "modified"):
+        model = _generic(panda, convention, rng)
+        q = model.random_configurations(1, rng)[0]
+        pose = model.base_transform
+        for i in range(7):
+            a, al, d, th = model.a[i], model.alpha[i], model.d[i], model.theta[i]
+            if convention == "standard":
+                link = rot(2, th + q[i]) @ trans(2, d) @ trans(0, a) @ rot(0, al)
+            else:
+                link = rot(0, al) @ trans(0, a) @ rot(2, th + q[i]) @ trans(2, d)
+            pose = pose @ link
+        np.testing.assert_allclose(link_frames(model, q)[-1], pose, atol=1e-12)
+
+
+def test_conversion_keeps_every_tool_point(panda, rng) -> None:
+    for _ in range(5):
+        modified = _generic(panda, "modified", rng)
+        q = modified.random_configurations(200, rng)
+        standard = to_standard(modified)
+        assert standard.convention == "standard"
+        np.testing.assert_allclose(tool_point(standard, q), tool_point(modified, q), atol=1e-12)
+        back = to_modified(standard)
+        np.testing.assert_allclose(tool_point(back, q), tool_point(modified, q), atol=1e-12)
+        # a standard arm of its own (non-zero a7, alpha7) converts by adjusting the tool
+        other = _generic(panda, "standard", rng)
+        np.testing.assert_allclose(
+            tool_point(to_modified(other), q), tool_point(other, q), atol=1e-12
+        )
+
+
+def test_panda_standard_has_identity_base_and_adjusted_tool(panda) -> None:
+    standard = to_standard(panda)
+    np.testing.assert_allclose(standard.base_transform, np.eye(4), atol=1e-15)
+    np.testing.assert_allclose(standard.a, [0, 0, 0.0825, -0.0825, 0, 0.088, 0])
+
+
+def test_bad_shapes_are_refused(panda) -> None:
+    with pytest.raises(ValueError, match=r"q must have shape"):
+        tool_point(panda, np.zeros((4, 6)))
+    with pytest.raises(ValueError, match=r"params must have shape"):
+        panda.with_params(np.zeros(3))

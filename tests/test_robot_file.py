@@ -1,0 +1,102 @@
+"""Robot files: exact round trip, and one clear line for every bad field."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+import yaml
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from correction import RobotFileError, load_robot, save_robot, to_standard
+from tests.conftest import perturbed
+
+PANDA_TEXT = (Path(__file__).parents[1] / "correction" / "data" / "panda.yaml").read_text()
+
+
+def test_embedded_panda_is_the_published_one(panda) -> None:
+    assert panda.convention == "modified" and panda.n_joints == 7
+    np.testing.assert_array_equal(panda.a, [0, 0, 0, 0.0825, -0.0825, 0, 0.088])
+    np.testing.assert_array_equal(panda.d, [0.333, 0, 0.316, 0, 0.384, 0, 0])
+    np.testing.assert_allclose(panda.alpha, np.pi / 2 * np.array([0, -1, 1, 1, -1, 1, 1]))
+    np.testing.assert_array_equal(panda.tool, [0, 0, 0.107])
+    np.testing.assert_array_equal(panda.upper[3], -0.0698)
+    assert panda.param_names[:4] == ("a1", "alpha1", "d1", "theta1")
+    assert panda.param_names[28:31] == ("tool_x", "tool_y", "tool_z")
+    assert panda.param_index("alpha4") == 13
+
+
+def test_round_trip_is_exact(panda, rng, tmp_path) -> None:
+    for model in (perturbed(panda, rng), to_standard(perturbed(panda, rng, 50.0))):
+        path = save_robot(model, tmp_path / "robot.yaml")
+        again = load_robot(path)
+        assert again.convention == model.convention and again.name == model.name
+        np.testing.assert_array_equal(again.params, model.params)
+        np.testing.assert_array_equal(again.lower, model.lower)
+        np.testing.assert_array_equal(again.upper, model.upper)
+    assert not list(tmp_path.glob(".*tmp"))  # no temporary left behind
+
+
+@settings(max_examples=50, deadline=None)
+@given(st.lists(st.floats(allow_nan=False, allow_infinity=False), min_size=37, max_size=37))
+def test_round_trip_any_float(tmp_path_factory, values) -> None:
+    panda = load_robot("panda")
+    model = panda.with_params(np.array(values))
+    path = save_robot(model, tmp_path_factory.mktemp("rt") / "r.yaml")
+    np.testing.assert_array_equal(load_robot(path).params, model.params)
+
+
+def test_other_keys_are_kept(tmp_path) -> None:
+    data = yaml.safe_load(PANDA_TEXT)
+    data["calibration"] = {"method": "lm", "residual_rms_mm": 0.01}
+    path = tmp_path / "cal.yaml"
+    path.write_text(yaml.safe_dump(data))
+    model = load_robot(path)
+    assert model.extras["calibration"]["method"] == "lm"
+    save_robot(model, tmp_path / "again.yaml")
+    assert yaml.safe_load((tmp_path / "again.yaml").read_text())["calibration"]["method"] == "lm"
+
+
+def _edit(edit) -> dict:
+    data = yaml.safe_load(PANDA_TEXT)
+    edit(data)
+    return data
+
+
+BAD_FILES = [
+    ("missing key", lambda d: d.pop("tool"), r"missing key 'tool'"),
+    ("missing joint key", lambda d: d["joints"][2].pop("alpha"), r"joints\[2\]: missing key 'alpha'"),
+    ("wrong type", lambda d: d["joints"][1].update(d="abc"), r"joints\[1\]\.d: expected a number"),
+    ("bool", lambda d: d["joints"][1].update(a=True), r"joints\[1\]\.a: expected a number"),
+    ("nan", lambda d: d["joints"][4].update(theta=float("nan")), r"joints\[4\]\.theta: must be finite"),
+    ("inf", lambda d: d["tool"].__setitem__(2, float("inf")), r"tool\[2\]: must be finite"),
+    ("lower > upper", lambda d: d["joints"][0].update(lower=1.0, upper=-1.0), r"joints\[0\]: lower .* > upper"),
+    ("convention", lambda d: d.update(convention="craig"), r"convention: unknown convention 'craig'"),
+    ("tool length", lambda d: d.update(tool=[0, 0]), r"tool: expected a list of 3 numbers"),
+    ("base", lambda d: d.update(base={"xyz": [0, 0], "rpy": [0, 0, 0]}), r"base\.xyz: expected a list of 3"),
+    ("joints empty", lambda d: d.update(joints=[]), r"joints: expected a non-empty list"),
+]
+
+
+@pytest.mark.parametrize("label,edit,message", BAD_FILES, ids=[b[0] for b in BAD_FILES])
+def test_bad_field_names_file_and_field(tmp_path, label, edit, message) -> None:
+    path = tmp_path / "bad.yaml"
+    path.write_text(yaml.safe_dump(_edit(edit)))
+    with pytest.raises(RobotFileError, match=message) as error:
+        load_robot(path)
+    text = str(error.value)
+    assert text.startswith(str(path)) and "\n" not in text
+
+
+def test_unreadable_and_invalid_yaml(tmp_path) -> None:
+    with pytest.raises(RobotFileError, match="cannot read"):
+        load_robot(tmp_path / "absent.yaml")
+    path = tmp_path / "broken.yaml"
+    path.write_text("name: [unclosed\n")
+    with pytest.raises(RobotFileError, match="invalid YAML"):
+        load_robot(path)
+    path.write_text("- just a list\n")
+    with pytest.raises(RobotFileError, match="mapping at the top level"):
+        load_robot(path)

@@ -1,0 +1,1 @@
+"""Validation: simulated motion capture, nominal vs calibrated comparison, Rerun, demo."""

@@ -1,0 +1,72 @@
+"""The ``spherecal`` command line: one subcommand per job, each living in its package.
+
+Only argparse is imported here and by each package's ``cli`` module; a subcommand imports
+numpy, MuJoCo, Rerun or pyswarms when it runs, so start-up stays short.
+"""
+
+from __future__ import annotations
+
+import argparse
+import importlib
+import sys
+
+#: subcommand -> module with ``HELP``, ``add_arguments(parser)`` and ``run(args) -> int``.
+COMMANDS: dict[str, str] = {
+    "simulate": "controller.cli",
+    "calibrate": "identification.cli",
+    "validate": "validation.validate_cli",
+    "demo": "validation.demo_cli",
+    "campaign": "validation.campaign_cli",
+    "plan": "validation.plan_cli",
+    "export": "controller.export_cli",
+}
+
+
+def build_parser() -> argparse.ArgumentParser:
+    """The top-level parser with every subcommand registered."""
+    parser = argparse.ArgumentParser(
+        prog="spherecal",
+        description="Kinematic calibration of a redundant arm from spherical-joint self-motion.",
+    )
+    parser.add_argument("--version", action="version", version=f"%(prog)s {_version()}")
+    sub = parser.add_subparsers(dest="command", metavar="COMMAND", required=True)
+    for name, module_name in COMMANDS.items():
+        module = importlib.import_module(module_name)
+        command = sub.add_parser(name, help=module.HELP, description=module.HELP)
+        module.add_arguments(command)
+        command.set_defaults(_run=module.run)
+    return parser
+
+
+def _version() -> str:
+    from importlib.metadata import PackageNotFoundError, version
+
+    try:
+        return version("spherecal")
+    except PackageNotFoundError:
+        return "unknown"
+
+
+def main(argv: list[str] | None = None) -> int:
+    """Run one subcommand; spherecal's own errors print one line and exit 1."""
+    from correction.errors import SpherecalError
+
+    args = build_parser().parse_args(argv)
+    try:
+        return int(args._run(args) or 0)
+    except SpherecalError as error:
+        print(f"spherecal {args.command}: error: {error}", file=sys.stderr)
+        return 1
+    except KeyboardInterrupt:
+        print(f"spherecal {args.command}: interrupted", file=sys.stderr)
+        return 130
+
+
+def not_yet_available(name: str) -> int:
+    """What a subcommand that is not built yet does: say so and exit 2."""
+    print(f"spherecal {name}: not yet available in this version", file=sys.stderr)
+    return 2
+
+
+if __name__ == "__main__":
+    sys.exit(main())
