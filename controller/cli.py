@@ -1,4 +1,4 @@
-"""`spherecal simulate`: Simulate self-motion at spherical-joint fixtures on a perturbed (true) robot and write samples."""
+"""`spherecal simulate`: self-motion at spherical-joint fixtures on a perturbed (true) robot."""
 
 from __future__ import annotations
 

@@ -15,6 +15,7 @@ from .kinematics import (
     tool_point,
     tool_pose,
 )
+from .perturb import perturb
 from .model import RobotModel, matrix_rpy, param_names, pose_matrix, rpy_matrix
 from .robot_file import (
     RobotFileError,
@@ -41,6 +42,7 @@ __all__ = [
     "matrix_rpy",
     "param_jacobian",
     "param_names",
+    "perturb",
     "pose_matrix",
     "robot_from_dict",
     "robot_to_dict",

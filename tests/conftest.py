@@ -9,7 +9,7 @@ import pytest
 
 os.environ.setdefault("RERUN_ANALYTICS", "0")
 
-from correction import RobotModel, load_robot  # noqa: E402
+from correction import RobotModel, load_robot, perturb  # noqa: E402
 
 
 @pytest.fixture
@@ -25,9 +25,4 @@ def panda() -> RobotModel:
 def perturbed(model: RobotModel, rng: np.random.Generator, scale: float = 1.0) -> RobotModel:
     """The model with every DH parameter, the tool and the base moved by ``scale`` x
     (1 mm on lengths, 0.2 deg on angles): a different, generic robot."""
-    params = model.params.copy()
-    names = model.param_names
-    for k, name in enumerate(names):
-        is_angle = name.startswith(("alpha", "theta", "base_r", "base_p", "base_y"))
-        params[k] += rng.normal(0.0, np.deg2rad(0.2) if is_angle else 1e-3) * scale
-    return model.with_params(params)
+    return perturb(model, rng, 1e-3 * scale, np.deg2rad(0.2) * scale, 1e-3 * scale, base=True)
