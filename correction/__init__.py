@@ -15,8 +15,8 @@ from .kinematics import (
     tool_point,
     tool_pose,
 )
-from .perturb import perturb
 from .model import RobotModel, matrix_rpy, param_names, pose_matrix, rpy_matrix
+from .perturb import perturb
 from .robot_file import (
     RobotFileError,
     dump_robot,
