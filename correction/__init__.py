@@ -17,6 +17,7 @@ from .kinematics import (
 )
 from .model import RobotModel, matrix_rpy, param_names, pose_matrix, rpy_matrix
 from .perturb import perturb
+from .rigid import apply_transform, fit_rigid_transform, registered_errors
 from .robot_file import (
     RobotFileError,
     dump_robot,
@@ -31,10 +32,12 @@ __all__ = [
     "RobotFileError",
     "RobotModel",
     "SpherecalError",
+    "apply_transform",
     "atomic_write_bytes",
     "atomic_write_text",
     "convert",
     "dump_robot",
+    "fit_rigid_transform",
     "frames",
     "joint_jacobian",
     "link_frames",
@@ -44,6 +47,7 @@ __all__ = [
     "param_names",
     "perturb",
     "pose_matrix",
+    "registered_errors",
     "robot_from_dict",
     "robot_to_dict",
     "rpy_matrix",

@@ -1,0 +1,43 @@
+"""Best rigid transform between two point sets (Kabsch / Horn, by SVD)."""
+
+from __future__ import annotations
+
+import numpy as np
+
+
+def fit_rigid_transform(source: np.ndarray, target: np.ndarray) -> np.ndarray:
+    """The rotation and translation that best map ``source`` onto ``target``.
+
+    Minimises ``sum_k |R source_k + t - target_k|^2`` over proper rotations (det +1).
+
+    Args:
+        source: (N, 3) points [m].
+        target: (N, 3) corresponding points [m], N >= 3 and not collinear.
+
+    Returns:
+        (4, 4) homogeneous transform ``T`` with ``target ~ T source``.
+    """
+    source, target = np.asarray(source, float), np.asarray(target, float)
+    if source.shape != target.shape or source.ndim != 2 or source.shape[1] != 3 or len(source) < 3:
+        raise ValueError(f"need two (N >= 3, 3) point sets, got {source.shape} and {target.shape}")
+    mean_s, mean_t = source.mean(axis=0), target.mean(axis=0)
+    covariance = (target - mean_t).T @ (source - mean_s)
+    u, _, vt = np.linalg.svd(covariance)
+    sign = np.sign(np.linalg.det(u @ vt)) or 1.0
+    rotation = u @ np.diag([1.0, 1.0, sign]) @ vt
+    transform = np.eye(4)
+    transform[:3, :3] = rotation
+    transform[:3, 3] = mean_t - rotation @ mean_s
+    return transform
+
+
+def apply_transform(transform: np.ndarray, points: np.ndarray) -> np.ndarray:
+    """(N, 3) points mapped by a (4, 4) homogeneous transform."""
+    return np.asarray(points) @ transform[:3, :3].T + transform[:3, 3]
+
+
+def registered_errors(predicted: np.ndarray, reference: np.ndarray) -> np.ndarray:
+    """(N,) distances [m] between ``reference`` and ``predicted`` after the best rigid fit of
+    ``predicted`` onto ``reference`` (the base placement is not observable, so it is fitted)."""
+    fitted = apply_transform(fit_rigid_transform(predicted, reference), predicted)
+    return np.linalg.norm(fitted - reference, axis=1)
