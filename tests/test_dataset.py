@@ -1,0 +1,153 @@
+"""samples.csv and fixtures.yaml: round trips, duplicates, subsampling, one-line errors."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from identification.dataset import (
+    Dataset,
+    DatasetError,
+    FixtureSpec,
+    read_fixtures,
+    read_samples,
+    write_fixtures,
+    write_samples,
+)
+
+HEADER = "fixture,q1,q2,q3,q4,q5,q6,q7\n"
+GOOD = "P1,0,0,0,-1,0,1,0\n"
+
+
+def _dataset(panda, rng, count=10, t=True) -> Dataset:
+    q = panda.random_configurations(count, rng)
+    labels = ["P1"] * (count // 2) + ["P2"] * (count - count // 2)
+    return Dataset(labels=labels, q=q, t=np.arange(count) * 1e-3 if t else None)
+
+
+def test_samples_round_trip_exactly(tmp_path, panda, rng) -> None:
+    for t in (True, False):
+        ds = _dataset(panda, rng, t=t)
+        write_samples(tmp_path / "s.csv", ds)
+        back = read_samples(tmp_path / "s.csv", panda)
+        assert back.fixture_names == ("P1", "P2")
+        assert back.counts() == {"P1": 5, "P2": 5}
+        assert np.array_equal(back.q, ds.q)
+        assert (back.t is None) == (not t)
+        if t:
+            assert np.array_equal(back.t, ds.t)
+
+
+def test_fixture_order_is_first_appearance(panda, rng) -> None:
+    ds = Dataset(labels=["B", "A", "B", "C"], q=panda.random_configurations(4, rng))
+    assert ds.fixture_names == ("B", "A", "C")
+    assert ds.fixture_index.tolist() == [0, 1, 0, 2]
+    assert ds.for_fixture("B").shape == (2, 7)
+
+
+def test_deduplicate_exact_and_near(panda, rng) -> None:
+    q = panda.random_configurations(6, rng)
+    extra = np.vstack([q[0], q[1] + 5e-5, q[2] + 5e-3])  # exact, near, distinct
+    ds = Dataset(labels=["P"] * 9, q=np.vstack([q, extra]))
+    assert ds.deduplicated(0.0).n_samples == 8
+    assert ds.deduplicated(1e-4).n_samples == 7
+    assert ds.deduplicated(1e-2).n_samples == 6
+    kept = ds.deduplicated(1e-4)
+    assert np.array_equal(kept.q[:6], q)  # the earlier sample is the one kept
+    # the same configuration at two fixtures is not a duplicate
+    two = Dataset(labels=["A", "B"], q=np.vstack([q[0], q[0]]))
+    assert two.deduplicated().n_samples == 2
+
+
+def test_subsample_is_seeded_and_per_fixture(panda, rng) -> None:
+    ds = _dataset(panda, rng, count=40)
+    a = ds.subsampled(7, np.random.default_rng(3))
+    b = ds.subsampled(7, np.random.default_rng(3))
+    c = ds.subsampled(7, np.random.default_rng(4))
+    assert a.counts() == {"P1": 7, "P2": 7}
+    assert np.array_equal(a.q, b.q) and not np.array_equal(a.q, c.q)
+    assert np.all(np.diff(a.t[a.labels == "P1"]) > 0)  # recording order kept
+    assert ds.subsampled(None, rng) is ds
+
+
+@pytest.mark.parametrize(
+    ("text", "row", "field"),
+    [
+        (HEADER + GOOD + "P1,0,0,0,-1,0,1,nan\n", 3, "q7"),
+        (HEADER + "P1,0,0,abc,-1,0,1,0\n", 2, "q3"),
+        ("fixture,q1,q2,q3,q4,q5,q6\nP1,0,0,0,-1,0,1\n", 1, "q*"),
+        (HEADER + "P1,0,0,0,-1,0,1\n", 2, "q7"),
+        (HEADER + "P1,0,0,0,-1,0,1,0,0\n", 2, "column 9"),
+        (HEADER + GOOD + GOOD + "P1,0,0,0,0.5,0,1,0\n", 4, "q4"),
+        ("", 1, "fixture"),
+        (HEADER, 2, "fixture"),
+        ("fixture,q1,q2,q3,q4,q5,q6,q7,q7\n", 1, "q7"),
+        ("fixture,q1,q2,q3,q4,q5,q6,x\n", 1, "x"),
+        ("fixture,q1,t,q2,q3,q4,q5,q6,q7\n", 1, "t"),
+        ("P,q1,q2,q3,q4,q5,q6,q7\n", 1, "P"),
+        (HEADER + ",0,0,0,-1,0,1,0\n", 2, "fixture"),
+    ],
+)
+def test_bad_samples_one_line_naming_file_row_field(tmp_path, panda, text, row, field) -> None:
+    path = tmp_path / "bad.csv"
+    path.write_text(text)
+    with pytest.raises(DatasetError) as info:
+        read_samples(path, panda)
+    message = str(info.value)
+    assert "\n" not in message
+    assert str(path) in message and f"row {row}," in message and f"field '{field}'" in message, message
+
+
+def test_comments_and_blank_lines_keep_line_numbers(tmp_path, panda) -> None:
+    path = tmp_path / "s.csv"
+    path.write_text("# recorded by hand\n" + HEADER + "\n" + GOOD + "P1,0,0,0,-1,0,1,x\n")
+    with pytest.raises(DatasetError, match="row 5, field 'q7'"):
+        read_samples(path, panda)
+
+
+def test_fixtures_round_trip(tmp_path) -> None:
+    spec = FixtureSpec(("P1", "P2", "P3"), {"P2": np.array([0.5, 0.1, 0.3])}, [("P1", "P2", 0.5), ("P2", "P3", 0.25)])
+    write_fixtures(tmp_path / "f.yaml", spec)
+    back = read_fixtures(tmp_path / "f.yaml")
+    assert back.names == spec.names
+    assert back.distances == spec.distances
+    assert np.array_equal(back.positions["P2"], spec.positions["P2"]) and list(back.positions) == ["P2"]
+
+
+@pytest.mark.parametrize(
+    ("text", "row", "field"),
+    [
+        ("fixtures: {P1: {}, P2: {}}\ndistances:\n  - [P1, P2, -0.5]\n", 3, "distances[0][2]"),
+        ("fixtures: {P1: {}, P2: {}}\ndistances:\n  - [P1, P2, 0]\n", 3, "distances[0][2]"),
+        ("fixtures: {P1: {}, P2: {}}\ndistances:\n  - [P1, P3, 0.5]\n", 3, "distances[0][1]"),
+        ("fixtures:\n  P1: {}\n  P1: {}\n", 3, "P1"),
+        ("fixtures:\n  P1: {postion: [1, 2, 3]}\n", 2, "fixtures.P1.postion"),
+        ("fixtures:\n  P1: {position: [1, 2]}\n", 2, "fixtures.P1.position"),
+        ("", 1, "fixtures"),
+        ("fixtures: {}\n", 1, "fixtures"),
+        ("fixtures: {P1: {}, P2: {}}\ndistances:\n  - [P1, P1, 0.5]\n", 3, "distances[0]"),
+    ],
+)
+def test_bad_fixtures_one_line(tmp_path, text, row, field) -> None:
+    path = tmp_path / "bad.yaml"
+    path.write_text(text)
+    with pytest.raises(DatasetError) as info:
+        read_fixtures(path)
+    message = str(info.value)
+    assert "\n" not in message
+    assert str(path) in message and f"row {row}," in message and f"field '{field}'" in message, message
+
+
+def test_distance_to_fixture_without_samples(tmp_path, panda, rng) -> None:
+    path = tmp_path / "f.yaml"
+    path.write_text("fixtures: {P1: {}, P2: {}, P3: {}}\ndistances:\n  - [P1, P3, 0.5]\n")
+    spec = read_fixtures(path)
+    with pytest.raises(DatasetError, match=r"distances\[0\], field 'P3': fixture 'P3' has no samples"):
+        spec.check_against(_dataset(panda, rng))
+
+
+def test_writers_are_atomic_and_leave_nothing_on_error(tmp_path, panda, rng) -> None:
+    ds = Dataset(labels=["P,1"], q=panda.random_configurations(1, rng))
+    with pytest.raises(DatasetError):
+        write_samples(tmp_path / "s.csv", ds)
+    assert list(tmp_path.iterdir()) == []
