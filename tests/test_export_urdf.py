@@ -1,0 +1,84 @@
+"""URDF export: an independent reader (MuJoCo's URDF compiler, xml.etree) sees our chain."""
+
+from __future__ import annotations
+
+import xml.etree.ElementTree as ET
+
+import mujoco
+import numpy as np
+import pytest
+
+from correction import to_standard, tool_point, tool_pose
+from correction.urdf import ExportError, robot_to_urdf
+from tests.conftest import perturbed
+
+
+def _calibrated(panda, rng, convention):
+    """A perturbed ('calibrated') model of the given convention with a far-from-trivial base."""
+    model = perturbed(panda if convention == "modified" else to_standard(panda), rng)
+    base = np.array([0.12, -0.34, 0.56, 0.3, -0.2, 1.1])
+    return model.with_params(np.concatenate([model.params[:-6], base]))
+
+
+def _mujoco_tool(text, q, prefix="panda_"):
+    """(N, 3) positions and (N, 3, 3) orientations of the tool body in MuJoCo."""
+    mj = mujoco.MjModel.from_xml_string(text)
+    data = mujoco.MjData(mj)
+    body = mujoco.mj_name2id(mj, mujoco.mjtObj.mjOBJ_BODY, f"{prefix}tool")
+    assert body >= 0
+    points, rotations = np.empty((len(q), 3)), np.empty((len(q), 3, 3))
+    for k, qk in enumerate(q):
+        data.qpos[:] = qk
+        mujoco.mj_kinematics(mj, data)
+        points[k], rotations[k] = data.xpos[body], data.xmat[body].reshape(3, 3)
+    return mj, points, rotations
+
+
+@pytest.mark.parametrize("convention", ["modified", "standard"])
+def test_mujoco_reads_the_same_tool_point(panda, rng, convention):
+    model = _calibrated(panda, rng, convention)
+    assert model.convention == convention
+    q = model.random_configurations(1000, rng)
+    mj, points, rotations = _mujoco_tool(robot_to_urdf(model, mujoco=True), q)
+    assert mj.njnt == model.n_joints
+    np.testing.assert_array_equal(mj.jnt_range, np.stack([model.lower, model.upper], axis=1))
+    error = np.linalg.norm(points - tool_point(model, q), axis=1)
+    assert error.max() < 1e-9, error.max()
+    np.testing.assert_allclose(rotations, tool_pose(model, q)[:, :3, :3], atol=1e-12)
+    # Not trivially true: the nominal model is millimetres away.
+    nominal = panda if convention == "modified" else to_standard(panda)
+    assert np.linalg.norm(points - tool_point(nominal, q), axis=1).mean() > 1e-3
+
+
+def test_floats_are_written_exactly_and_names_carry_the_prefix(panda, rng):
+    model = _calibrated(panda, rng, "modified")
+    root = ET.fromstring(robot_to_urdf(model, prefix="left_"))
+    joints = {j.get("name"): j for j in root.iter("joint")}
+    links = {link.get("name") for link in root.iter("link")}
+    assert {f"left_link{i}" for i in range(8)} | {"left_base", "left_flange", "left_tool"} == links
+    revolute = [joints[f"left_joint{i + 1}"] for i in range(7)]
+    assert all(j.get("type") == "revolute" and j.find("axis").get("xyz") == "0 0 1" for j in revolute)
+    limits = np.array([[float(j.find("limit").get(k)) for k in ("lower", "upper")] for j in revolute])
+    np.testing.assert_array_equal(limits, np.stack([model.lower, model.upper], axis=1))  # bit for bit
+    base = joints["left_base_joint"].find("origin")
+    np.testing.assert_array_equal([float(v) for v in base.get("xyz").split()], model.base_xyz)
+    np.testing.assert_array_equal([float(v) for v in base.get("rpy").split()], model.base_rpy)
+    tool = joints["left_tool_joint"].find("origin")
+    np.testing.assert_array_equal([float(v) for v in tool.get("xyz").split()], model.tool)
+
+
+def test_provenance_comment_survives_awkward_text(panda):
+    from dataclasses import replace
+
+    model = replace(panda, extras={"calibration": {"method": "self-motion -- test", "rms_mm": 0.05}})
+    text = robot_to_urdf(model)
+    ET.fromstring(text)  # still well-formed XML although the block contained "--"
+    assert "provenance" in text and "rms_mm: 0.05" in text and "self-motion - - test" in text
+    assert "calibration: none" in robot_to_urdf(panda)
+
+
+def test_bad_options_raise_named_errors(panda):
+    with pytest.raises(ExportError, match="prefix"):
+        robot_to_urdf(panda, prefix='a"b')
+    with pytest.raises(ExportError, match="effort"):
+        robot_to_urdf(panda, effort=[1.0, 2.0])
