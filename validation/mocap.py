@@ -1,0 +1,295 @@
+"""Motion capture as ground truth: a marker cluster on the tool, seen in a frame of its own.
+
+A simulated system reads the markers from the MuJoCo plant of the *true* robot (not from our
+forward kinematics), maps them into a motion-capture frame an unknown rigid transform away from the
+robot base and adds Gaussian noise per marker. The tool point follows from the cluster by fitting
+its known geometry to the measured markers (Kabsch). A real recording enters the same path through
+:func:`read_mocap_csv`.
+"""
+
+from __future__ import annotations
+
+import csv
+import io
+import math
+import os
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from correction import RobotModel, SpherecalError, apply_transform, atomic_write_text, fit_rigid_transform, pose_matrix
+
+#: The paper's motion-capture accuracy: 0.3 mm per marker (std).
+MARKER_NOISE = 0.3e-3
+
+
+class MocapError(SpherecalError):
+    """A motion-capture recording that cannot be used (one line: file, row, field)."""
+
+
+@dataclass(frozen=True)
+class MarkerCluster:
+    """A rigid set of markers on the tool, with the tool point, all in the last link frame.
+
+    Attributes:
+        markers: (M, 3) marker positions in the last link frame [m], M >= 3, not collinear.
+        tool: (3,) tool point (centre of the ball) in the same frame [m].
+    """
+
+    markers: np.ndarray
+    tool: np.ndarray
+
+    def __post_init__(self) -> None:
+        markers = np.array(self.markers, dtype=float)
+        if markers.ndim != 2 or markers.shape[1] != 3 or len(markers) < 3:
+            raise ValueError(f"a cluster needs (M >= 3, 3) markers, got {markers.shape}")
+        centred = markers - markers.mean(axis=0)
+        if np.linalg.matrix_rank(centred, tol=1e-6) < 2:
+            raise ValueError("cluster markers are collinear: the cluster's orientation is not observable")
+        object.__setattr__(self, "markers", markers)
+        object.__setattr__(self, "tool", np.array(self.tool, dtype=float).reshape(3))
+
+    @property
+    def n_markers(self) -> int:
+        """Number of markers ``M``."""
+        return len(self.markers)
+
+    def tool_from_markers(self, measured: np.ndarray) -> np.ndarray:
+        """Tool points from measured markers: the cluster geometry fitted to each frame (Kabsch).
+
+        Args:
+            measured: (N, M, 3) marker positions in any frame [m].
+
+        Returns:
+            (N, 3) tool points in that frame [m].
+        """
+        measured = np.asarray(measured, dtype=float)
+        out = np.empty((len(measured), 3))
+        for k, frame in enumerate(measured):
+            out[k] = apply_transform(fit_rigid_transform(self.markers, frame), self.tool[None])[0]
+        return out
+
+
+def default_cluster(tool: np.ndarray) -> MarkerCluster:
+    """Four non-coplanar markers 5 to 8 cm around the tool point, as on the paper's tool.
+
+    Args:
+        tool: (3,) tool point in the last link frame [m].
+    """
+    tool = np.asarray(tool, dtype=float)
+    offsets = np.array([[0.06, 0.0, -0.03], [-0.03, 0.05, -0.03], [-0.03, -0.05, -0.03], [0.0, 0.02, -0.08]])
+    return MarkerCluster(markers=tool + offsets, tool=tool)
+
+
+def random_mocap_transform(rng: np.random.Generator, distance: float = 2.0) -> np.ndarray:
+    """(4, 4) a random rigid transform mocap <- base: any orientation, ``distance`` [m] away."""
+    rpy = rng.uniform([-np.pi, -np.pi / 2, -np.pi], [np.pi, np.pi / 2, np.pi])
+    direction = rng.normal(size=3)
+    return pose_matrix(distance * direction / np.linalg.norm(direction), rpy)
+
+
+def transform_difference(estimate: np.ndarray, truth: np.ndarray) -> tuple[float, float]:
+    """Translation [m] and rotation angle [rad] between two (4, 4) rigid transforms."""
+    delta = np.linalg.inv(truth) @ estimate
+    angle = math.acos(float(np.clip((np.trace(delta[:3, :3]) - 1.0) / 2.0, -1.0, 1.0)))
+    return float(np.linalg.norm(estimate[:3, 3] - truth[:3, 3])), angle
+
+
+@dataclass(frozen=True)
+class MocapMeasurement:
+    """What a motion-capture system reports for a set of robot configurations.
+
+    Attributes:
+        q: (N, n) joint angles [rad] recorded with each frame.
+        tool: (N, 3) measured tool points in the mocap frame [m].
+        markers: (N, M, 3) measured markers in the mocap frame [m], or None (tool given directly).
+        exact_tool: (N, 3) the plant's exact tool points in the robot base frame [m] (simulation
+            only, never used to register), or None.
+        t: (N,) time stamps [s] or None.
+        source: where it came from (file name or ``"simulated"``).
+    """
+
+    q: np.ndarray
+    tool: np.ndarray
+    markers: np.ndarray | None = None
+    exact_tool: np.ndarray | None = None
+    t: np.ndarray | None = None
+    source: str = "simulated"
+
+    def __len__(self) -> int:
+        return len(self.q)
+
+
+@dataclass
+class SimulatedMocap:
+    """A motion-capture system looking at the true robot's MuJoCo plant.
+
+    Args:
+        truth: the true robot (the plant is built from it, markers as sites on the last link).
+        transform: (4, 4) mocap <- base transform, unknown to the user of the measurements.
+        cluster: the marker cluster; default :func:`default_cluster` at the true tool point.
+        noise: per-marker, per-axis Gaussian noise std [m].
+    """
+
+    truth: RobotModel
+    transform: np.ndarray
+    cluster: MarkerCluster | None = None
+    noise: float = MARKER_NOISE
+    _reader: object = field(default=None, init=False, repr=False)
+
+    def __post_init__(self) -> None:
+        if self.cluster is None:
+            self.cluster = default_cluster(self.truth.tool)
+        if self.noise < 0:
+            raise ValueError(f"noise must be >= 0, got {self.noise}")
+
+    def plant_points(self, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Exact marker and tool positions in the base frame, from MuJoCo's kinematics.
+
+        Args:
+            q: (N, n) joint angles [rad].
+
+        Returns:
+            markers (N, M, 3) and tool points (N, 3) [m], in the robot base (world) frame.
+        """
+        if self._reader is None:
+            self._reader = PlantReader(self.truth, self.cluster.markers)
+        return self._reader(np.atleast_2d(q))
+
+    def measure(self, q: np.ndarray, rng: np.random.Generator, t: np.ndarray | None = None) -> MocapMeasurement:
+        """Noisy markers in the mocap frame, the tool point fitted from them, the exact tool point.
+
+        Args:
+            q: (N, n) joint angles [rad].
+            rng: seeded generator for the marker noise.
+            t: optional (N,) time stamps [s].
+        """
+        q = np.atleast_2d(np.asarray(q, dtype=float))
+        markers, exact = self.plant_points(q)
+        seen = apply_transform(self.transform, markers.reshape(-1, 3)).reshape(markers.shape)
+        seen = seen + rng.normal(0.0, self.noise, seen.shape)
+        return MocapMeasurement(
+            q=q, tool=self.cluster.tool_from_markers(seen), markers=seen, exact_tool=exact, t=t, source="simulated"
+        )
+
+
+class PlantReader:
+    """Marker and tool-site positions of the true robot's MuJoCo plant (``mj_kinematics``).
+
+    Args:
+        truth: the true robot.
+        markers: (M, 3) marker offsets in the last link frame [m].
+    """
+
+    def __init__(self, truth: RobotModel, markers: np.ndarray) -> None:
+        import mujoco
+
+        from controller.plant import build_plant
+
+        self._mujoco = mujoco
+        self.plant = build_plant(truth, markers=np.asarray(markers, dtype=float))
+        self.model, self.data = self.plant.model, self.plant.data
+        self._qpos = np.asarray(self.plant.qpos_index)
+        name = mujoco.mjtObj.mjOBJ_SITE
+        self._markers = [mujoco.mj_name2id(self.model, name, f"marker{k}") for k in range(len(markers))]
+        self._tool = mujoco.mj_name2id(self.model, name, self.plant.tool_site)
+        if min(self._markers + [self._tool]) < 0:
+            raise RuntimeError("the plant lacks its marker or tool sites")
+
+    def __call__(self, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """(N, M, 3) markers and (N, 3) tool points [m] in the world frame for (N, n) ``q``."""
+        markers = np.empty((len(q), len(self._markers), 3))
+        tool = np.empty((len(q), 3))
+        for k, qk in enumerate(q):
+            self.data.qpos[self._qpos] = qk
+            self._mujoco.mj_kinematics(self.model, self.data)
+            markers[k] = self.data.site_xpos[self._markers]
+            tool[k] = self.data.site_xpos[self._tool]
+        return markers, tool
+
+
+# ------------------------------------------------------------------------- CSV files
+def _header(n_joints: int, n_markers: int | None, with_t: bool) -> list[str]:
+    head = (["t"] if with_t else []) + [f"q{i + 1}" for i in range(n_joints)]
+    if n_markers is None:
+        return head + ["x", "y", "z"]
+    return head + [f"m{k}_{axis}" for k in range(n_markers) for axis in "xyz"]
+
+
+def write_mocap_csv(path: str | os.PathLike, measurement: MocapMeasurement, comment: str = "") -> Path:
+    """Write a measurement as a mocap CSV (joint angles and markers, or the tool point), atomically.
+
+    Columns: optional ``t`` [s], ``q1..qn`` [rad], then ``m0_x, m0_y, m0_z, ...`` [m] when markers
+    are present, else ``x, y, z`` [m]. ``comment`` lines are written first, prefixed by ``#``.
+    """
+    m = measurement
+    n_markers = None if m.markers is None else m.markers.shape[1]
+    values = [m.q]
+    if m.t is not None:
+        values.insert(0, np.asarray(m.t)[:, None])
+    values.append(m.tool if m.markers is None else m.markers.reshape(len(m.q), -1))
+    buffer = io.StringIO()
+    for line in comment.splitlines():
+        buffer.write(f"# {line}\n")
+    writer = csv.writer(buffer, lineterminator="\n")
+    writer.writerow(_header(m.q.shape[1], n_markers, m.t is not None))
+    writer.writerows([[repr(float(v)) for v in row] for row in np.hstack(values)])
+    return atomic_write_text(path, buffer.getvalue())
+
+
+def read_mocap_csv(path: str | os.PathLike, n_joints: int, cluster: MarkerCluster | None = None) -> MocapMeasurement:
+    """Read a motion-capture recording: joint angles and measured tool (or marker) positions.
+
+    The header is ``[t,] q1..qn, x, y, z`` (tool point in the mocap frame [m]) or ``[t,] q1..qn,
+    m0_x, m0_y, m0_z, m1_x, ...`` (markers; then ``cluster`` gives their geometry and the tool point
+    is fitted). Lines starting with ``#`` are comments.
+
+    Raises:
+        MocapError: missing file, unexpected header, wrong column count, missing or non-finite
+            value: one line naming file, row and field.
+    """
+    path = Path(path)
+    try:
+        text = path.read_text()
+    except OSError as error:
+        raise MocapError(f"{path}: cannot read mocap file ({error.strerror})") from None
+    rows = [(i + 1, r) for i, r in enumerate(csv.reader(text.splitlines())) if r and not r[0].lstrip().startswith("#")]
+    if not rows:
+        raise MocapError(f"{path}: empty mocap file, expected a header q1..q{n_joints}, x, y, z")
+    header_line, header = rows[0]
+    header = [h.strip() for h in header]
+    with_t = bool(header) and header[0] == "t"
+    n_markers = (len(header) - int(with_t) - n_joints) // 3 if len(header) > int(with_t) + n_joints + 3 else None
+    expected = _header(n_joints, n_markers, with_t)
+    if header != expected:
+        raise MocapError(
+            f"{path}: row {header_line}: header {','.join(header)!r} does not match a {n_joints}-joint robot, "
+            f"expected {','.join(_header(n_joints, None, with_t))!r} or marker columns m0_x, m0_y, m0_z, ..."
+        )
+    if n_markers is not None and (cluster is None or cluster.n_markers != n_markers):
+        raise MocapError(
+            f"{path}: row {header_line}: {n_markers} marker columns need a cluster geometry of {n_markers} markers"
+        )
+    if len(rows) < 4:
+        raise MocapError(f"{path}: {len(rows) - 1} data rows, need at least 3 to register the mocap frame")
+    data = np.empty((len(rows) - 1, len(header)))
+    for k, (line, row) in enumerate(rows[1:]):
+        if len(row) != len(header):
+            raise MocapError(f"{path}: row {line}: {len(row)} columns, expected {len(header)} ({','.join(header)})")
+        for j, cell in enumerate(row):
+            try:
+                value = float(cell)
+            except ValueError:
+                value = math.nan
+            if not math.isfinite(value):
+                what = "missing value" if not cell.strip() else f"bad value {cell.strip()!r}"
+                raise MocapError(f"{path}: row {line}: field {header[j]}: {what}")
+            data[k, j] = value
+    t = data[:, 0] if with_t else None
+    q = data[:, int(with_t) : int(with_t) + n_joints]
+    rest = data[:, int(with_t) + n_joints :]
+    if n_markers is None:
+        return MocapMeasurement(q=q, tool=rest, t=t, source=str(path))
+    markers = rest.reshape(len(rest), n_markers, 3)
+    return MocapMeasurement(q=q, tool=cluster.tool_from_markers(markers), markers=markers, t=t, source=str(path))
