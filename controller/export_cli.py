@@ -5,14 +5,79 @@ from __future__ import annotations
 import argparse
 
 HELP = "Export a calibrated robot file as URDF, MJCF or YAML."
+FORMATS = ("urdf", "mjcf", "yaml")
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     """Register the options of `spherecal export`."""
+    parser.add_argument("robot", metavar="CAL.yaml", help="robot file to export (calibrated or nominal), or 'panda'")
+    parser.add_argument("--format", choices=FORMATS, required=True, help="output format")
+    parser.add_argument("--out", required=True, metavar="FILE", help="output file (written atomically)")
+    parser.add_argument(
+        "--prefix",
+        default=None,
+        help="prefix of URDF link and joint names (default: panda_); the MJCF keeps the plant's names",
+    )
+
+
+def provenance_header(source: str, output_format: str) -> str:
+    """Comment lines naming the input file (and its SHA-256) and the versions that wrote the export."""
+    import hashlib
+    from importlib.metadata import PackageNotFoundError, version
+    from pathlib import Path
+
+    path = Path(source)
+    digest = hashlib.sha256(path.read_bytes()).hexdigest() if path.is_file() else "embedded robot"
+    versions = []
+    for package in ("spherecal", "numpy", "scipy", "mujoco"):
+        try:
+            versions.append(f"{package} {version(package)}")
+        except PackageNotFoundError:
+            versions.append(f"{package} unknown")
+    return (
+        f"spherecal export --format {output_format} {source}\n"
+        f"input sha256: {digest}\n"
+        f"versions: {', '.join(versions)}"
+    )
+
+
+def export_text(model, output_format: str, prefix: str | None = None, header: str = "") -> str:
+    """The exported document of a model as text.
+
+    Args:
+        model: the (calibrated) :class:`correction.RobotModel`.
+        output_format: ``urdf`` (:func:`correction.urdf.robot_to_urdf`), ``mjcf`` (the
+            controller's plant, :func:`controller.plant.build_mjcf`: bodies ``link0..n``, hinges
+            ``joint1..n``, site ``tool``) or ``yaml`` (the robot file, normalised).
+        prefix: URDF name prefix (``panda_`` when None); refused for the other formats.
+        header: comment lines on top (inputs, versions).
+
+    Raises:
+        correction.urdf.ExportError: an invalid prefix or format.
+    """
+    from correction import dump_robot
+    from correction.urdf import ExportError, provenance_comment, robot_to_urdf, xml_comment
+
+    if output_format == "urdf":
+        return robot_to_urdf(model, prefix="panda_" if prefix is None else prefix, header=header)
+    if prefix is not None:
+        raise ExportError(f"--prefix: only the urdf format renames links, not {output_format}")
+    if output_format == "yaml":
+        return dump_robot(model, header=header)
+    if output_format == "mjcf":
+        from controller.plant import build_mjcf
+
+        comments = [xml_comment(header)] if header.strip() else []
+        return "\n".join(comments + [provenance_comment(model), build_mjcf(model)])
+    raise ExportError(f"--format: unknown format {output_format!r}, expected one of {FORMATS}")
 
 
 def run(args: argparse.Namespace) -> int:
-    """Not built yet: exits 2."""
-    from validation.cli import not_yet_available
+    """Load, validate and export; nothing is written unless the whole document was built."""
+    from correction import atomic_write_text, load_robot
 
-    return not_yet_available("export")
+    model = load_robot(args.robot)
+    text = export_text(model, args.format, args.prefix, provenance_header(args.robot, args.format))
+    path = atomic_write_text(args.out, text)
+    print(f"spherecal export: wrote {args.format} of {model.name!r} ({model.convention} DH) to {path}")
+    return 0
