@@ -136,7 +136,7 @@ class SimulatedMocap:
     transform: np.ndarray
     cluster: MarkerCluster | None = None
     noise: float = MARKER_NOISE
-    _reader: object = field(default=None, init=False, repr=False)
+    _plant: object = field(default=None, init=False, repr=False)
 
     def __post_init__(self) -> None:
         if self.cluster is None:
@@ -153,9 +153,13 @@ class SimulatedMocap:
         Returns:
             markers (N, M, 3) and tool points (N, 3) [m], in the robot base (world) frame.
         """
-        if self._reader is None:
-            self._reader = PlantReader(self.truth, self.cluster.markers)
-        return self._reader(np.atleast_2d(q))
+        if self._plant is None:
+            from controller.plant import build_plant
+
+            self._plant = build_plant(self.truth, markers=self.cluster.markers)
+        sites = np.append(self._plant.marker_sites, self._plant.tool_site)
+        points = self._plant.site_positions(np.atleast_2d(q), sites)
+        return points[:, :-1], points[:, -1]
 
     def measure(self, q: np.ndarray, rng: np.random.Generator, t: np.ndarray | None = None) -> MocapMeasurement:
         """Noisy markers in the mocap frame, the tool point fitted from them, the exact tool point.
@@ -172,41 +176,6 @@ class SimulatedMocap:
         return MocapMeasurement(
             q=q, tool=self.cluster.tool_from_markers(seen), markers=seen, exact_tool=exact, t=t, source="simulated"
         )
-
-
-class PlantReader:
-    """Marker and tool-site positions of the true robot's MuJoCo plant (``mj_kinematics``).
-
-    Args:
-        truth: the true robot.
-        markers: (M, 3) marker offsets in the last link frame [m].
-    """
-
-    def __init__(self, truth: RobotModel, markers: np.ndarray) -> None:
-        import mujoco
-
-        from controller.plant import build_plant
-
-        self._mujoco = mujoco
-        self.plant = build_plant(truth, markers=np.asarray(markers, dtype=float))
-        self.model, self.data = self.plant.model, self.plant.data
-        self._qpos = np.asarray(self.plant.qpos_index)
-        name = mujoco.mjtObj.mjOBJ_SITE
-        self._markers = [mujoco.mj_name2id(self.model, name, f"marker{k}") for k in range(len(markers))]
-        self._tool = mujoco.mj_name2id(self.model, name, self.plant.tool_site)
-        if min(self._markers + [self._tool]) < 0:
-            raise RuntimeError("the plant lacks its marker or tool sites")
-
-    def __call__(self, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """(N, M, 3) markers and (N, 3) tool points [m] in the world frame for (N, n) ``q``."""
-        markers = np.empty((len(q), len(self._markers), 3))
-        tool = np.empty((len(q), 3))
-        for k, qk in enumerate(q):
-            self.data.qpos[self._qpos] = qk
-            self._mujoco.mj_kinematics(self.model, self.data)
-            markers[k] = self.data.site_xpos[self._markers]
-            tool[k] = self.data.site_xpos[self._tool]
-        return markers, tool
 
 
 # ------------------------------------------------------------------------- CSV files

@@ -1,0 +1,146 @@
+"""Validation: simulated motion capture, registration, comparisons, Rerun recordings."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from correction import apply_transform, fit_rigid_transform, perturb, tool_point
+from validation.compare import compare, format_comparisons, parameter_deviations
+from validation.mocap import (
+    MarkerCluster,
+    MocapError,
+    MocapMeasurement,
+    SimulatedMocap,
+    default_cluster,
+    random_mocap_transform,
+    read_mocap_csv,
+    transform_difference,
+    write_mocap_csv,
+)
+
+
+@pytest.fixture(scope="module")
+def truth(panda):
+    return perturb(panda, np.random.default_rng(7))
+
+
+@pytest.fixture(scope="module")
+def mocap(truth):
+    return SimulatedMocap(truth, random_mocap_transform(np.random.default_rng(8)))
+
+
+def test_registration_recovers_mocap_frame_from_noisy_markers(truth, mocap, rng) -> None:
+    q = truth.random_configurations(2000, rng)
+    measured = mocap.measure(q, rng)
+    estimate = fit_rigid_transform(tool_point(truth, q), measured.tool)
+    shift, angle = transform_difference(estimate, mocap.transform)
+    assert shift < 0.05e-3 and np.rad2deg(angle) < 0.01
+    # and the noise is really there: the tool points scatter by about the marker noise
+    scatter = np.linalg.norm(apply_transform(mocap.transform, measured.exact_tool) - measured.tool, axis=1)
+    assert 0.1e-3 < scatter.mean() < 0.6e-3
+
+
+def test_markers_come_from_mujoco_and_the_cluster_gives_the_tool_point(truth, rng) -> None:
+    mocap = SimulatedMocap(truth, np.eye(4), noise=0.0)
+    q = truth.random_configurations(20, rng)
+    measured = mocap.measure(q, rng)
+    np.testing.assert_allclose(measured.exact_tool, tool_point(truth, q), atol=1e-12)
+    np.testing.assert_allclose(measured.tool, measured.exact_tool, atol=1e-12)
+    # markers keep their distances to the tool point (rigid cluster)
+    expected = np.linalg.norm(mocap.cluster.markers - mocap.cluster.tool, axis=1)
+    distances = np.linalg.norm(measured.markers - measured.tool[:, None], axis=2)
+    np.testing.assert_allclose(distances, np.broadcast_to(expected, distances.shape), atol=1e-12)
+
+
+def test_cluster_rejects_collinear_markers() -> None:
+    with pytest.raises(ValueError, match="collinear"):
+        MarkerCluster(markers=[[0, 0, 0], [1, 0, 0], [2, 0, 0]], tool=[0, 0, 0])
+
+
+def test_compare_keeps_the_two_columns_apart(panda, truth, mocap, rng) -> None:
+    q = truth.random_configurations(500, rng)
+    measured = mocap.measure(q, rng)
+    result = compare("random", {"nominal": panda, "truth": truth}, q, measured.tool, measured.exact_tool)
+    assert result.vs_exact["truth"].max < 1e-9  # the true model is exact against the plant
+    assert result.vs_exact["nominal"].mean > 1e-3  # a perturbed robot is millimetres off
+    floor = result.floor.mean
+    assert 0.1e-3 < floor < 0.6e-3
+    assert result.vs_mocap["truth"].mean == pytest.approx(floor, rel=1e-9)
+    text = format_comparisons([result])
+    assert "mocap floor" in text and "vs exact" in text
+
+
+def test_registration_removes_a_base_placement(panda, rng) -> None:
+    moved = panda.with_params(panda.params + np.r_[np.zeros(panda.n_params - 6), 0.1, -0.2, 0.3, 0.1, 0.2, -0.3])
+    q = panda.random_configurations(100, rng)
+    result = compare("moved", {"moved": moved}, q, exact=tool_point(panda, q))
+    assert result.vs_exact["moved"].max < 1e-9
+
+
+def test_parameter_deviations(panda, truth) -> None:
+    deviations = parameter_deviations(panda, truth, truth)
+    np.testing.assert_allclose(deviations.calibrated, 0.0)
+    i = panda.param_index("alpha2")
+    assert deviations.display(deviations.nominal)[i] == pytest.approx(np.rad2deg(panda.alpha[1] - truth.alpha[1]))
+    assert "alpha2" in deviations.format()
+
+
+@pytest.mark.parametrize("markers", [False, True])
+def test_mocap_csv_round_trip(tmp_path, truth, mocap, rng, markers) -> None:
+    q = truth.random_configurations(10, rng)
+    measured = mocap.measure(q, rng, t=np.arange(10) * 0.5)
+    if not markers:
+        measured = MocapMeasurement(q=measured.q, tool=measured.tool, t=measured.t)
+    path = write_mocap_csv(tmp_path / "m.csv", measured, comment="seed 1")
+    back = read_mocap_csv(path, truth.n_joints, cluster=mocap.cluster)
+    np.testing.assert_array_equal(back.q, measured.q)
+    np.testing.assert_array_equal(back.t, measured.t)
+    np.testing.assert_allclose(back.tool, measured.tool, atol=1e-12)
+
+
+@pytest.mark.parametrize(
+    ("edit", "message"),
+    [
+        (lambda lines: lines.__setitem__(3, lines[3].replace(",", ",,", 1)), "row 4: 11 columns, expected 10"),
+        (lambda lines: lines.__setitem__(2, ",".join(lines[2].split(",")[:-1] + [""])), "row 3: field z: missing"),
+        (lambda lines: lines.__setitem__(5, lines[5].replace(lines[5].split(",")[2], "abc")), "row 6: field q3"),
+        (lambda lines: lines.__setitem__(0, "q1,q2,q3,x,y,z"), "row 1: header"),
+    ],
+)
+def test_mocap_csv_errors_name_file_row_field(tmp_path, truth, rng, edit, message) -> None:
+    q = truth.random_configurations(6, rng)
+    path = write_mocap_csv(tmp_path / "m.csv", MocapMeasurement(q=q, tool=tool_point(truth, q)))
+    lines = path.read_text().splitlines()
+    edit(lines)
+    path.write_text("\n".join(lines) + "\n")
+    with pytest.raises(MocapError) as error:
+        read_mocap_csv(path, truth.n_joints)
+    text = str(error.value)
+    assert "\n" not in text and str(path) in text and message in text
+
+
+def test_marker_columns_need_a_cluster(tmp_path, truth, mocap, rng) -> None:
+    path = write_mocap_csv(tmp_path / "m.csv", mocap.measure(truth.random_configurations(5, rng), rng))
+    with pytest.raises(MocapError, match="cluster"):
+        read_mocap_csv(path, truth.n_joints)
+    assert default_cluster(truth.tool).n_markers == 4
+
+
+def test_recording_holds_the_documented_entities(tmp_path, panda, truth, rng) -> None:
+    from validation.recording import Recording, read_entity_rows
+
+    q = truth.random_configurations(40, rng)
+    recording = Recording(tmp_path / "r.rrd")
+    recording.fixtures(["P1", "P2"], np.zeros((2, 3)))
+    recording.self_motion(truth, np.arange(40) * 0.01, q)
+    recording.samples(tool_point(truth, q), ["P1"] * 20 + ["P2"] * 20)
+    recording.validation(tool_point(truth, q), {"nominal": tool_point(panda, q), "calibrated": tool_point(truth, q)})
+    recording.series("plots/error/nominal", np.ones(40))
+    recording.coverage(q, truth.lower, truth.upper)
+    assert recording.close() == tmp_path / "r.rrd"
+    rows = read_entity_rows(tmp_path / "r.rrd")
+    assert rows["world/robot/links"] == rows["world/robot/tool"] == rows["plots/error/nominal"] == 40
+    for path in ("world/fixtures", "world/samples", "validation/measured", "validation/errors/nominal", "coverage/q7"):
+        assert rows[path] == 1, path
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["r.rrd"]
