@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from correction import apply_transform, fit_rigid_transform, perturb, tool_point
-from validation.compare import compare, format_comparisons, parameter_deviations
+from validation.compare import ValidationSet, compare, format_comparisons, parameter_deviations
 from validation.mocap import (
     MarkerCluster,
     MocapError,
@@ -61,7 +61,10 @@ def test_cluster_rejects_collinear_markers() -> None:
 def test_compare_keeps_the_two_columns_apart(panda, truth, mocap, rng) -> None:
     q = truth.random_configurations(500, rng)
     measured = mocap.measure(q, rng)
-    result = compare("random", {"nominal": panda, "truth": truth}, q, measured.tool, measured.exact_tool)
+    sets = [ValidationSet("random", q[:400], measured.tool[:400], measured.exact_tool[:400]),
+            ValidationSet("P1", q[400:], measured.tool[400:], measured.exact_tool[400:])]
+    result, other = compare({"nominal": panda, "truth": truth}, sets)
+    assert other.vs_exact["truth"].count == 100 and other.name == "P1"
     assert result.vs_exact["truth"].max < 1e-9  # the true model is exact against the plant
     assert result.vs_exact["nominal"].mean > 1e-3  # a perturbed robot is millimetres off
     floor = result.floor.mean
@@ -74,8 +77,8 @@ def test_compare_keeps_the_two_columns_apart(panda, truth, mocap, rng) -> None:
 def test_registration_removes_a_base_placement(panda, rng) -> None:
     moved = panda.with_params(panda.params + np.r_[np.zeros(panda.n_params - 6), 0.1, -0.2, 0.3, 0.1, 0.2, -0.3])
     q = panda.random_configurations(100, rng)
-    result = compare("moved", {"moved": moved}, q, exact=tool_point(panda, q))
-    assert result.vs_exact["moved"].max < 1e-9
+    (result,) = compare({"moved": moved}, [ValidationSet("moved", q, exact=tool_point(panda, q))])
+    assert result.vs_exact["moved"].max < 1e-9 and not result.vs_mocap and result.floor is None
 
 
 def test_parameter_deviations(panda, truth) -> None:

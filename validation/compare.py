@@ -67,39 +67,67 @@ class Comparison:
     errors_exact: dict[str, np.ndarray]
 
 
-def compare(
-    name: str,
-    models: dict[str, RobotModel],
-    q: np.ndarray,
-    measured: np.ndarray | None = None,
-    exact: np.ndarray | None = None,
-) -> Comparison:
-    """Tool-point errors of each model on configurations ``q``, after registration.
+@dataclass(frozen=True)
+class ValidationSet:
+    """Configurations to validate on, with what is known about their tool points.
 
-    Args:
-        name: name of the configuration set.
-        models: model name -> model (e.g. ``{"nominal": ..., "calibrated": ...}``).
+    Attributes:
+        name: e.g. ``"random workspace"`` or ``"self-motion P1"``.
         q: (N, n) joint angles [rad].
         measured: (N, 3) mocap tool points in the mocap frame [m], or None.
-        exact: (N, 3) exact tool points (the plant's) in the base frame [m], or None.
+        exact: (N, 3) the plant's exact tool points in the base frame [m] (simulation), or None.
+    """
+
+    name: str
+    q: np.ndarray
+    measured: np.ndarray | None = None
+    exact: np.ndarray | None = None
+
+
+def _split_errors(predicted: list[np.ndarray], reference: list[np.ndarray]) -> list[np.ndarray]:
+    """Errors after ONE registration over all sets together, split back per set."""
+    errors = registered_errors(np.concatenate(predicted), np.concatenate(reference))
+    return np.split(errors, np.cumsum([len(p) for p in predicted])[:-1])
+
+
+def compare(models: dict[str, RobotModel], sets: list[ValidationSet]) -> list[Comparison]:
+    """Tool-point errors of each model on each set, after registration.
+
+    Each model is registered once (best rigid fit of its predictions onto the reference) over all
+    sets together, as a lab registers its mocap frame once; a self-motion set alone (all points at
+    one fixture) could not fix the rotation. The mocap and exact columns are registered separately.
+
+    Args:
+        models: model name -> model (e.g. ``{"nominal": ..., "calibrated": ...}``).
+        sets: validation sets; every set has ``measured`` or none has, likewise ``exact``.
 
     Returns:
-        The comparison; ``floor`` is the error of ``exact`` against ``measured`` when both exist.
+        One :class:`Comparison` per set; ``floor`` is the error of the exact tool points against
+        the measured ones when both are known.
     """
-    predicted = {key: tool_point(model, q) for key, model in models.items()}
-    e_mocap = {} if measured is None else {k: registered_errors(p, measured) for k, p in predicted.items()}
-    e_exact = {} if exact is None else {k: registered_errors(p, exact) for k, p in predicted.items()}
-    floor = None
-    if measured is not None and exact is not None:
-        floor = ErrorStats.of(registered_errors(exact, measured))
-    return Comparison(
-        name=name,
-        vs_mocap={k: ErrorStats.of(e) for k, e in e_mocap.items()},
-        vs_exact={k: ErrorStats.of(e) for k, e in e_exact.items()},
-        floor=floor,
-        errors_mocap=e_mocap,
-        errors_exact=e_exact,
-    )
+    predicted = {key: [tool_point(model, s.q) for s in sets] for key, model in models.items()}
+    columns: dict[str, dict[str, list[np.ndarray]]] = {"measured": {}, "exact": {}}
+    for column in columns:
+        reference = [getattr(s, column) for s in sets]
+        if any(r is None for r in reference):
+            if any(r is not None for r in reference):
+                raise ValueError(f"either every validation set has {column} tool points or none has")
+            continue
+        columns[column] = {key: _split_errors(p, reference) for key, p in predicted.items()}
+    floors = None
+    if columns["measured"] and columns["exact"]:
+        floors = _split_errors([s.exact for s in sets], [s.measured for s in sets])
+    return [
+        Comparison(
+            name=s.name,
+            vs_mocap={k: ErrorStats.of(e[i]) for k, e in columns["measured"].items()},
+            vs_exact={k: ErrorStats.of(e[i]) for k, e in columns["exact"].items()},
+            floor=None if floors is None else ErrorStats.of(floors[i]),
+            errors_mocap={k: e[i] for k, e in columns["measured"].items()},
+            errors_exact={k: e[i] for k, e in columns["exact"].items()},
+        )
+        for i, s in enumerate(sets)
+    ]
 
 
 def format_comparisons(comparisons: list[Comparison]) -> str:

@@ -9,10 +9,80 @@ HELP = "Compare nominal and calibrated models against the truth or motion-captur
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     """Register the options of `spherecal validate`."""
+    parser.add_argument("--truth", help="robot file of the true robot (simulation)")
+    parser.add_argument("--nominal", required=True, help="robot file of the nominal model ('panda': embedded)")
+    parser.add_argument("--calibrated", required=True, help="robot file of the calibrated model")
+    parser.add_argument("--mocap", help="recorded mocap CSV: [t,] q1..qn, x, y, z (tool point in the mocap frame, m)")
+    parser.add_argument("--samples", help="samples.csv of the self-motion sets to validate on as well (simulation)")
+    parser.add_argument("--configurations", type=int, default=5000, help="random workspace configurations (5000)")
+    parser.add_argument("--noise", type=float, default=0.3, help="simulated marker noise std [mm] (0.3)")
+    parser.add_argument("--seed", type=int, default=0, help="seed of the simulated mocap (0)")
+    parser.add_argument("--out", help="write the report as JSON (metres) to this file")
+    parser.add_argument("--rrd", help="save a Rerun recording to this file")
+    parser.add_argument("--spawn", action="store_true", help="stream to a live Rerun viewer")
 
 
 def run(args: argparse.Namespace) -> int:
-    """Not built yet: exits 2."""
-    from validation.cli import not_yet_available
+    """Load and check every input, validate, print the table, then write the outputs."""
+    import json
+    from pathlib import Path
 
-    return not_yet_available("validate")
+    import numpy as np
+
+    from correction import atomic_write_text, load_robot
+    from validation.inputs import check_models
+    from validation.mocap import read_mocap_csv
+    from validation.pipeline import record_validation, validate_models
+    from validation.provenance import provenance
+
+    if args.truth is None and args.mocap is None:
+        raise SystemExit("spherecal validate: error: give --truth (simulation) or --mocap (recorded data)")
+    if args.configurations < 3 or args.noise < 0:
+        raise SystemExit("spherecal validate: error: --configurations must be >= 3 and --noise >= 0")
+    files = {"nominal": args.nominal, "calibrated": args.calibrated}
+    if args.truth is not None:
+        files["truth"] = args.truth
+    models = {role: load_robot(path) for role, path in files.items()}
+    check_models(models, files)
+    n = models["nominal"].n_joints
+    measurement = None if args.mocap is None else read_mocap_csv(args.mocap, n)
+    self_motion = None
+    if args.samples is not None:
+        from identification.dataset import read_samples
+
+        dataset = read_samples(args.samples, models.get("truth", models["nominal"]))
+        self_motion = {name: dataset.for_fixture(name) for name in dataset.fixture_names}
+
+    report = validate_models(
+        models["nominal"],
+        models["calibrated"],
+        np.random.default_rng(args.seed),
+        truth=models.get("truth"),
+        measurement=measurement,
+        self_motion=self_motion,
+        configurations=args.configurations,
+        noise=args.noise * 1e-3,
+    )
+    print(report.format())
+    if report.deviations is not None:
+        print("\nparameter deviations from the truth:\n" + report.deviations.format())
+    if args.out:
+        inputs = {k: Path(v) if isinstance(v, str) and Path(v).is_file() else v for k, v in vars(args).items()}
+        inputs = {k: v for k, v in inputs.items() if not k.startswith("_") and k != "command"}
+        result = {"provenance": provenance(args.seed, inputs), "validation": report.to_dict()}
+        print(f"report: {atomic_write_text(args.out, json.dumps(result, indent=2) + chr(10))}")
+    if args.rrd or args.spawn:
+        from validation.recording import Recording
+
+        recording = Recording(args.rrd, spawn=args.spawn, application_id="spherecal_validate")
+        try:
+            record_validation(recording, report, {"nominal": models["nominal"], "calibrated": models["calibrated"]})
+            q = np.concatenate([s.q for s in report.sets[1:]]) if len(report.sets) > 1 else report.sets[0].q
+            recording.coverage(q, models["nominal"].lower, models["nominal"].upper)
+        except BaseException:
+            recording.abort()
+            raise
+        path = recording.close()
+        if path is not None:
+            print(f"recording: {path}")
+    return 0

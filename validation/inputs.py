@@ -1,0 +1,33 @@
+"""Checks across input files before anything is computed or written."""
+
+from __future__ import annotations
+
+from correction import RobotModel, SpherecalError
+
+
+class ValidationInputError(SpherecalError):
+    """Input files that do not fit together (one line naming the file and the field)."""
+
+
+def check_models(models: dict[str, RobotModel], files: dict[str, str]) -> None:
+    """Every model has the joint count and the DH convention of the nominal one.
+
+    Args:
+        models: role (``"nominal"``, ``"calibrated"``, ``"truth"``) -> model; ``"nominal"`` first.
+        files: role -> the file it came from (for the message).
+
+    Raises:
+        ValidationInputError: on the first mismatch.
+    """
+    reference = models["nominal"]
+    for role, model in models.items():
+        if model.n_joints != reference.n_joints:
+            raise ValidationInputError(
+                f"{files[role]}: field joints: {model.n_joints} joints, but the nominal {files['nominal']} has "
+                f"{reference.n_joints}"
+            )
+        if model.convention != reference.convention:
+            raise ValidationInputError(
+                f"{files[role]}: field convention: {model.convention!r}, but the nominal {files['nominal']} is "
+                f"{reference.convention!r} (convert it with correction.convert first)"
+            )
