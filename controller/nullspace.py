@@ -1,0 +1,139 @@
+"""The null-space velocity controller: the QP of :mod:`controller.qp_ik` on a model's kinematics.
+
+Its kinematics live in a MuJoCo model built from the model it is given (the NOMINAL one on a
+real arm): ``mj_kinematics + mj_comPos + mj_jacSite`` cost a few microseconds, far less than
+numpy per step.
+"""
+
+from __future__ import annotations
+
+import warnings
+
+import mujoco
+import numpy as np
+
+from correction import RobotModel
+
+from .plant import TIMESTEP, build_plant
+from .qp_ik import (
+    LIMIT_GAIN,
+    LIMIT_MARGIN,
+    MAX_VELOCITY,
+    ControllerFallbackWarning,
+    PersistentOSQP,
+    QPSolveError,
+    StepReport,
+    build_problem,
+    damped_pinv_velocity,
+    damped_task_velocity,
+    solve_step,
+    velocity_bounds,
+)
+
+#: Gain of the primary task ``v = Kp (p_B - p)`` when a target is given [1/s].
+POSITION_GAIN = 20.0
+
+
+class NullSpaceController:
+    """Joint velocity commands: tool-point task first, ``q_r`` strictly in its null space.
+
+    Args:
+        model: the kinematics the controller believes (nominal, or a calibrated model).
+        solver: ``"osqp"`` (default, a persistent ``osqp.OSQP`` updated each step when
+            ``persistent``) or any name in ``qpsolvers.available_solvers``.
+        persistent: keep one OSQP instance set up (only with ``solver="osqp"``).
+        fallback: on a failed QP use the damped pseudo-inverse with clamped limits and warn
+            (:class:`ControllerFallbackWarning`); otherwise raise :class:`QPSolveError`.
+        max_velocity: scalar or (n,) joint speed limit [rad/s].
+        margin: distance kept from the position limits [rad].
+        limit_gain: [1/s], see :func:`velocity_bounds`.
+        dt: control period [s] (kept for users that integrate the command).
+    """
+
+    def __init__(
+        self,
+        model: RobotModel,
+        solver: str = "osqp",
+        persistent: bool = True,
+        fallback: bool = True,
+        max_velocity: float | np.ndarray = MAX_VELOCITY,
+        margin: float = LIMIT_MARGIN,
+        limit_gain: float = LIMIT_GAIN,
+        dt: float = TIMESTEP,
+    ):
+        import qpsolvers
+
+        if solver not in qpsolvers.available_solvers:
+            raise QPSolveError(f"QP solver {solver!r} is not installed; have {', '.join(qpsolvers.available_solvers)}")
+        self.model = model
+        self.solver = solver
+        self.fallback = fallback
+        self.max_velocity = max_velocity
+        self.margin = margin
+        self.limit_gain = limit_gain
+        self.dt = dt
+        self.report = StepReport()
+        self._kin = build_plant(model)
+        self._jac = np.zeros((3, self._kin.mj_model.nv))
+        self._n = model.n_joints
+        self._zero3 = np.zeros(3)
+        self._persistent = PersistentOSQP(self._n) if (solver == "osqp" and persistent) else None
+
+    # ------------------------------------------------------------------ kinematics
+    def kinematics(self, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Tool point (3,) [m] and Jacobian (3, n) [m/rad] of the controller's model at ``q``.
+
+        The returned arrays are internal buffers, overwritten by the next call.
+        """
+        m, d = self._kin.mj_model, self._kin.mj_data
+        d.qpos[: self._n] = q
+        mujoco.mj_kinematics(m, d)
+        mujoco.mj_comPos(m, d)
+        mujoco.mj_jacSite(m, d, self._jac, None, self._kin.tool_site)
+        return d.site_xpos[self._kin.tool_site], self._jac
+
+    # ------------------------------------------------------------------------ step
+    def bounds(self, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """(n,) lower and upper joint velocity bounds at ``q`` [rad/s]."""
+        return velocity_bounds(q, self.model.lower, self.model.upper, self.max_velocity, self.margin,
+                               self.limit_gain)
+
+    def build(self, q: np.ndarray, q_r: np.ndarray, target: np.ndarray | None = None,
+              gain: float = POSITION_GAIN):
+        """The step's :class:`qpsolvers.Problem` (see :func:`build_problem`), to inspect or solve.
+
+        Args:
+            q: (n,) measured joint angles [rad].
+            q_r: (n,) desired secondary joint velocity [rad/s].
+            target: (3,) tool-point target [m]; None during self-motion (``v = 0``: never feed
+                the model's tool position back against a fixture the chain already holds).
+            gain: ``Kp`` [1/s].
+        """
+        point, jac = self.kinematics(q)
+        v = self._zero3 if target is None else damped_task_velocity(jac, gain * (np.asarray(target) - point))
+        lb, ub = self.bounds(q)
+        return build_problem(jac.copy(), v, q_r, lb, ub)
+
+    def step(self, q: np.ndarray, q_r: np.ndarray, target: np.ndarray | None = None,
+             gain: float = POSITION_GAIN) -> np.ndarray:
+        """(n,) joint velocity command [rad/s] for one control period (arguments as :meth:`build`)."""
+        if self._persistent is None:
+            return solve_step(self.build(q, q_r, target, gain), self.solver, None, self.fallback, self.report)
+        point, jac = self.kinematics(q)
+        v = self._zero3 if target is None else damped_task_velocity(jac, gain * (np.asarray(target) - point))
+        lb, ub = self.bounds(q)
+        qdot = self._persistent.solve(jac, v, q_r, lb, ub)
+        self.report.steps += 1
+        if qdot is not None:
+            return qdot
+        return self._fail(build_problem(jac.copy(), v, q_r, lb, ub))
+
+    def _fail(self, problem) -> np.ndarray:
+        reason = self._persistent.last_status if self._persistent is not None else self.solver
+        if not self.fallback:
+            raise QPSolveError(f"differential IK: QP solver failed ({reason}) and fallback is off")
+        message = f"fallback: damped pseudo-inverse with clamped limits ({reason})"
+        self.report.status = message
+        self.report.fallbacks += 1
+        warnings.warn(message, ControllerFallbackWarning, stacklevel=3)
+        return damped_pinv_velocity(problem)

@@ -1,0 +1,275 @@
+"""The MuJoCo plant of a DH robot model, with spherical-joint fixtures as ``connect`` equalities.
+
+One body per joint, placed by its DH transform, so that body ``i``'s frame *is* frame ``i`` of
+:mod:`correction`'s kinematics (both conventions). A site ``tool`` sits at the tool point,
+optional sites ``marker0 ..`` sit rigidly on the last link, and every fixture is a world site
+``fixture<k>`` tied to the tool site by a ``<connect>`` equality that starts released: MuJoCo,
+not our code, closes the chain when a fixture is engaged.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import mujoco
+import numpy as np
+
+from correction import RobotModel
+
+#: Physical defaults of the plant (settings that keep the closed chain stable at 1 kHz).
+TIMESTEP = 1e-3  # [s] the Panda's 1 kHz control rate
+CONNECT_SOLREF = (0.002, 1.0)  # stiff: MuJoCo's default 0.02 leaves 1-2 mm of violation
+VELOCITY_GAIN = 100.0  # kv of the joint velocity actuators [N m s/rad]
+LINK_MASS = 2.0  # [kg]
+LINK_INERTIA = 0.02  # [kg m^2] diagonal
+ARMATURE = 0.1  # [kg m^2]
+JOINT_DAMPING = 1.0  # [N m s/rad]
+
+
+def _num(value: float) -> str:
+    return format(float(value), ".17g")
+
+
+def _vec(values: np.ndarray) -> str:
+    return " ".join(_num(v) for v in np.ravel(values))
+
+
+def _quat(rotation: np.ndarray) -> np.ndarray:
+    quat = np.empty(4)
+    mujoco.mju_mat2Quat(quat, np.ascontiguousarray(rotation, dtype=float).ravel())
+    return quat
+
+
+def _rot_x(angle: float) -> np.ndarray:
+    c, s = np.cos(angle), np.sin(angle)
+    return np.array([[1.0, 0.0, 0.0], [0.0, c, -s], [0.0, s, c]])
+
+
+def _rot_z(angle: float) -> np.ndarray:
+    c, s = np.cos(angle), np.sin(angle)
+    return np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
+
+
+def joint_offsets(model: RobotModel) -> list[tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]]:
+    """Per joint, the body placement in its parent and the hinge in the body, at ``q = 0``.
+
+    Returns:
+        For each joint ``i``: ``(pos (3,), rotation (3, 3), joint_pos (3,), joint_axis (3,))``,
+        body ``i`` in body ``i-1`` [m] and the hinge anchor and axis in body ``i``.
+        Modified DH: ``Rx(alpha) Lx(a) Rz(theta) Lz(d)``, hinge through the origin about ``z``
+        (``Rz(q)`` commutes with ``Lz(d)``). Standard DH: ``Rz(theta) Lz(d) Lx(a) Rx(alpha)``,
+        hinge about ``z`` of the parent frame through the parent's origin.
+    """
+    out = []
+    for a, alpha, d, theta in zip(model.a, model.alpha, model.d, model.theta, strict=True):
+        if model.convention == "modified":
+            rotation = _rot_x(alpha) @ _rot_z(theta)
+            pos = np.array([a, 0.0, 0.0]) + rotation @ np.array([0.0, 0.0, d])
+            out.append((pos, rotation, np.zeros(3), np.array([0.0, 0.0, 1.0])))
+        else:
+            rz = _rot_z(theta)
+            pos = np.array([0.0, 0.0, d]) + rz @ np.array([a, 0.0, 0.0])
+            rotation = rz @ _rot_x(alpha)
+            out.append((pos, rotation, -rotation.T @ pos, rotation.T @ np.array([0.0, 0.0, 1.0])))
+    return out
+
+
+def build_mjcf(
+    model: RobotModel,
+    fixtures: dict[str, np.ndarray] | None = None,
+    markers: np.ndarray | None = None,
+    timestep: float = TIMESTEP,
+    connect_solref: tuple[float, float] = CONNECT_SOLREF,
+    velocity_gain: float = VELOCITY_GAIN,
+) -> str:
+    """MJCF text of the arm.
+
+    Args:
+        model: the robot (nominal or a perturbed "true" robot), either convention.
+        fixtures: fixture name -> (3,) centre in the world [m]; one world site ``fixture<k>``
+            and one released ``connect`` equality ``connect<k>`` each, in dict order.
+        markers: (M, 3) offsets in the last link frame [m]; sites ``marker0 ..``.
+        timestep: [s].
+        connect_solref: ``solref`` of the connect equalities (time constant [s], damping ratio).
+        velocity_gain: ``kv`` of the joint velocity actuators.
+
+    Returns:
+        The MJCF document (floats written with 17 significant digits).
+    """
+    fixtures = fixtures or {}
+    n = model.n_joints
+    offsets = joint_offsets(model)
+    base = model.base_transform
+    lines = [
+        f'<mujoco model="{model.name}">',
+        '  <compiler angle="radian" autolimits="true"/>',
+        f'  <option timestep="{_num(timestep)}" integrator="implicitfast" gravity="0 0 -9.81"/>',
+        "  <default>",
+        '    <geom contype="0" conaffinity="0" group="1" rgba="0.85 0.85 0.9 1"/>',
+        f'    <joint type="hinge" armature="{_num(ARMATURE)}" damping="{_num(JOINT_DAMPING)}"/>',
+        '    <site size="0.005"/>',
+        "  </default>",
+        "  <worldbody>",
+    ]
+    for k, (name, centre) in enumerate(fixtures.items()):
+        lines.append(f'    <site name="fixture{k}" pos="{_vec(centre)}" size="0.01" rgba="1 0.3 0.1 1"/>'
+                     f"<!-- {name} -->")
+    lines.append(f'    <body name="link0" pos="{_vec(base[:3, 3])}" quat="{_vec(_quat(base[:3, :3]))}">')
+    lines.append('      <geom type="cylinder" size="0.06 0.02" pos="0 0 0.02"/>')
+    indent = "      "
+    for i in range(n):
+        pos, rotation, joint_pos, axis = offsets[i]
+        if np.linalg.norm(pos) > 1e-6:
+            lines.append(f'{indent}<geom type="capsule" size="0.025" fromto="0 0 0 {_vec(pos)}"/>')
+        lines.append(f'{indent}<body name="link{i + 1}" pos="{_vec(pos)}" quat="{_vec(_quat(rotation))}" '
+                     'gravcomp="1">')
+        indent += "  "
+        lines.append(f'{indent}<inertial pos="0 0 0" mass="{_num(LINK_MASS)}" diaginertia="{_vec([LINK_INERTIA] * 3)}"/>')
+        lines.append(f'{indent}<joint name="joint{i + 1}" pos="{_vec(joint_pos)}" axis="{_vec(axis)}" '
+                     f'range="{_num(model.lower[i])} {_num(model.upper[i])}"/>')
+        lines.append(f'{indent}<geom type="sphere" size="0.03" pos="{_vec(joint_pos)}"/>')
+    if np.linalg.norm(model.tool) > 1e-6:
+        lines.append(f'{indent}<geom type="capsule" size="0.015" fromto="0 0 0 {_vec(model.tool)}"/>')
+    lines.append(f'{indent}<site name="tool" pos="{_vec(model.tool)}" rgba="0.1 0.8 0.2 1"/>')
+    for m, offset in enumerate(np.zeros((0, 3)) if markers is None else np.asarray(markers, float).reshape(-1, 3)):
+        lines.append(f'{indent}<site name="marker{m}" pos="{_vec(offset)}" rgba="0.2 0.4 1 1"/>')
+    for _ in range(n + 1):
+        indent = indent[:-2]
+        lines.append(f"{indent}</body>")
+    lines.append("  </worldbody>")
+    if fixtures:
+        lines.append("  <equality>")
+        for k in range(len(fixtures)):
+            lines.append(f'    <connect name="connect{k}" site1="tool" site2="fixture{k}" active="false" '
+                         f'solref="{_vec(connect_solref)}"/>')
+        lines.append("  </equality>")
+    lines.append("  <actuator>")
+    for i in range(n):
+        lines.append(f'    <velocity name="velocity{i + 1}" joint="joint{i + 1}" kv="{_num(velocity_gain)}"/>')
+    lines.append("  </actuator>")
+    lines.append("</mujoco>")
+    return "\n".join(lines) + "\n"
+
+
+@dataclass(eq=False)
+class Plant:
+    """A MuJoCo arm built from a :class:`RobotModel`, with its fixtures.
+
+    Attributes:
+        model: the robot it was built from.
+        mjcf: the MJCF text.
+        mj_model, mj_data: MuJoCo's model and data.
+        fixture_names: fixture names in site order (``fixture<k>`` is ``fixture_names[k]``).
+        fixture_centres: (F, 3) nominal centres of the fixture sites [m].
+        tool_site: site id of the tool point.
+        marker_sites: (M,) site ids of ``marker0 ..``.
+        fixture_sites: (F,) site ids of the fixture sites.
+    """
+
+    model: RobotModel
+    mjcf: str
+    mj_model: mujoco.MjModel
+    mj_data: mujoco.MjData
+    fixture_names: tuple[str, ...] = ()
+    fixture_centres: np.ndarray = field(default_factory=lambda: np.zeros((0, 3)))
+    tool_site: int = 0
+    marker_sites: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=int))
+    fixture_sites: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=int))
+
+    # ----------------------------------------------------------------------- state
+    @property
+    def n_joints(self) -> int:
+        return self.model.n_joints
+
+    @property
+    def q(self) -> np.ndarray:
+        """(n,) view of the joint angles [rad] (the joint readings)."""
+        return self.mj_data.qpos[: self.n_joints]
+
+    def set_state(self, q: np.ndarray, qdot: np.ndarray | None = None) -> None:
+        """Teleport to joint angles ``q`` (n,) [rad] with velocity ``qdot`` (zero if None)."""
+        n = self.n_joints
+        self.mj_data.qpos[:n] = q
+        self.mj_data.qvel[:n] = 0.0 if qdot is None else qdot
+        self.mj_data.ctrl[:n] = self.mj_data.qvel[:n]
+        mujoco.mj_forward(self.mj_model, self.mj_data)
+
+    # -------------------------------------------------------------------- fixtures
+    def fixture_index(self, name: str) -> int:
+        try:
+            return self.fixture_names.index(name)
+        except ValueError:
+            raise KeyError(f"no fixture named {name!r}; have {self.fixture_names}") from None
+
+    def engage(self, name: str) -> None:
+        """Activate the spherical joint of fixture ``name`` (and release every other one)."""
+        index = self.fixture_index(name)
+        self.mj_data.eq_active[:] = 0
+        self.mj_data.eq_active[index] = 1
+
+    def release(self) -> None:
+        """Release every fixture."""
+        self.mj_data.eq_active[:] = 0
+
+    def move_fixture(self, name: str, centre: np.ndarray) -> None:
+        """Move the world site of fixture ``name`` to ``centre`` (3,) [m] (compliance, backlash)."""
+        self.mj_model.site_pos[self.fixture_sites[self.fixture_index(name)]] = centre
+
+    # ----------------------------------------------------------------- kinematics
+    def tool_position(self) -> np.ndarray:
+        """(3,) copy of the tool site in the world [m] at the last computed state."""
+        return self.mj_data.site_xpos[self.tool_site].copy()
+
+    def site_positions(self, q: np.ndarray, sites: np.ndarray | None = None) -> np.ndarray:
+        """World positions of sites over a batch of configurations (kinematics only).
+
+        Args:
+            q: (N, n) or (n,) joint angles [rad].
+            sites: (S,) site ids; the marker sites when None.
+
+        Returns:
+            (N, S, 3) positions [m] ((S, 3) for a single configuration). The plant's state is
+            restored afterwards.
+        """
+        sites = self.marker_sites if sites is None else np.asarray(sites, dtype=int)
+        q = np.asarray(q, dtype=float)
+        batch = np.atleast_2d(q)
+        data = mujoco.MjData(self.mj_model)
+        out = np.empty((batch.shape[0], sites.size, 3))
+        for k, qk in enumerate(batch):
+            data.qpos[: self.n_joints] = qk
+            mujoco.mj_kinematics(self.mj_model, data)
+            out[k] = data.site_xpos[sites]
+        return out[0] if q.ndim == 1 else out
+
+    def tool_points(self, q: np.ndarray) -> np.ndarray:
+        """(N, 3) tool site over a batch of configurations ``q`` (N, n) [m]."""
+        return self.site_positions(np.atleast_2d(q), np.array([self.tool_site]))[:, 0]
+
+
+def build_plant(
+    model: RobotModel,
+    fixtures: dict[str, np.ndarray] | None = None,
+    markers: np.ndarray | None = None,
+    **options,
+) -> Plant:
+    """Build the MuJoCo plant of ``model`` (see :func:`build_mjcf` for the arguments)."""
+    fixtures = {str(k): np.asarray(v, dtype=float).reshape(3) for k, v in (fixtures or {}).items()}
+    mjcf = build_mjcf(model, fixtures, markers, **options)
+    mj_model = mujoco.MjModel.from_xml_string(mjcf)
+    mj_data = mujoco.MjData(mj_model)
+    n_markers = 0 if markers is None else np.asarray(markers).reshape(-1, 3).shape[0]
+    site = lambda name: mujoco.mj_name2id(mj_model, mujoco.mjtObj.mjOBJ_SITE, name)  # noqa: E731
+    plant = Plant(
+        model=model,
+        mjcf=mjcf,
+        mj_model=mj_model,
+        mj_data=mj_data,
+        fixture_names=tuple(fixtures),
+        fixture_centres=np.array(list(fixtures.values())).reshape(-1, 3),
+        tool_site=site("tool"),
+        marker_sites=np.array([site(f"marker{m}") for m in range(n_markers)], dtype=int),
+        fixture_sites=np.array([site(f"fixture{k}") for k in range(len(fixtures))], dtype=int),
+    )
+    mujoco.mj_forward(mj_model, mj_data)
+    return plant
