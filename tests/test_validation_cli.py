@@ -1,0 +1,97 @@
+"""`spherecal validate`: a simulated run, a recorded run, and bad inputs refused in one line."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+
+from correction import (
+    dump_robot,
+    load_robot,
+    perturb,
+    robot_from_dict,
+    robot_to_dict,
+    save_robot,
+    to_standard,
+    tool_point,
+)
+from validation.cli import main
+from validation.mocap import MocapMeasurement, write_mocap_csv
+
+
+@pytest.fixture
+def files(tmp_path, panda):
+    rng = np.random.default_rng(3)
+    truth = perturb(panda, rng)
+    calibrated = truth.with_params(truth.params + rng.normal(0.0, 1e-6, truth.n_params))
+    paths = {"truth": tmp_path / "truth.yaml", "nominal": tmp_path / "nominal.yaml", "calibrated": tmp_path / "c.yaml"}
+    save_robot(truth, paths["truth"])
+    save_robot(panda, paths["nominal"])
+    save_robot(calibrated, paths["calibrated"])
+    q = panda.random_configurations(50, rng)
+    paths["mocap"] = write_mocap_csv(tmp_path / "mocap.csv", MocapMeasurement(q=q, tool=tool_point(truth, q) + 1.0))
+    return paths
+
+
+def _args(files, *extra):
+    return ["validate", "--nominal", str(files["nominal"]), "--calibrated", str(files["calibrated"]), *extra]
+
+
+def test_simulated_validation_prints_both_columns_and_writes_report(files, tmp_path, capsys) -> None:
+    out = tmp_path / "out" / "report.json"
+    code = main(_args(files, "--truth", str(files["truth"]), "--configurations", "300", "--out", str(out)))
+    assert code == 0
+    text = capsys.readouterr().out
+    assert "mocap floor" in text and "vs exact tool point" in text and "alpha3" in text
+    report = json.loads(out.read_text())
+    random = report["validation"]["sets"]["random workspace"]
+    assert random["vs_exact"]["calibrated"]["mean"] < 1e-5 < 1e-3 < random["vs_exact"]["nominal"]["mean"]
+    assert report["provenance"]["seed"] == 0 and "numpy" in report["provenance"]["versions"]
+    assert len(report["provenance"]["inputs"]["truth"]["sha256"]) == 64
+
+
+def test_recorded_mocap_validation(files, capsys) -> None:
+    assert main(_args(files, "--mocap", str(files["mocap"]))) == 0
+    text = capsys.readouterr().out
+    assert "recorded (50)" in text
+    # the mocap points are the truth's, shifted by 1 m: the calibrated model is micrometres off
+    calibrated = next(line for line in text.splitlines() if "calibrated" in line)
+    assert float(calibrated.split("|")[1].split()[0]) < 0.01
+
+
+def _bad_joint_count(files, tmp_path):
+    data = robot_to_dict(load_robot(files["calibrated"]))
+    data["joints"] = data["joints"][:6]
+    path = tmp_path / "six.yaml"
+    path.write_text(dump_robot(robot_from_dict(data)))
+    return ["--truth", str(files["truth"])], {"calibrated": path}, "field joints: 6 joints"
+
+
+def _other_convention(files, tmp_path):
+    path = tmp_path / "truth_standard.yaml"
+    save_robot(to_standard(load_robot(files["truth"])), path)
+    return ["--truth", str(path)], {}, "field convention: 'standard'"
+
+
+def _missing_mocap_value(files, tmp_path):
+    lines = files["mocap"].read_text().splitlines()
+    lines[7] = ",".join(lines[7].split(",")[:4] + [""] + lines[7].split(",")[5:])
+    path = tmp_path / "missing.csv"
+    path.write_text("\n".join(lines) + "\n")
+    return ["--mocap", str(path)], {}, "row 8: field q5: missing value"
+
+
+@pytest.mark.parametrize("case", [_bad_joint_count, _other_convention, _missing_mocap_value])
+def test_bad_inputs_exit_nonzero_with_one_line_and_write_nothing(files, tmp_path, capsys, case) -> None:
+    extra, replace, message = case(files, tmp_path)
+    files = {**files, **replace}
+    out, rrd = tmp_path / "out" / "report.json", tmp_path / "out" / "v.rrd"
+    before = sorted(p.name for p in tmp_path.rglob("*"))
+    code = main(_args(files, *extra, "--out", str(out), "--rrd", str(rrd)))
+    captured = capsys.readouterr()
+    assert code == 1
+    assert captured.err.count("\n") == 1 and message in captured.err, captured.err
+    assert captured.err.startswith("spherecal validate: error: ")
+    assert sorted(p.name for p in tmp_path.rglob("*")) == before
