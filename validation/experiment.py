@@ -1,0 +1,104 @@
+"""The shared steps of a simulated experiment (demo and campaigns): true robot, motion, calibration.
+
+Thin adapters over the controller (MuJoCo self-motion) and identification (calibration) packages,
+so the demo and the campaign workers run exactly the same steps.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from correction import RobotModel, load_robot, perturb
+
+
+def nominal_robot() -> RobotModel:
+    """The embedded nominal Panda."""
+    return load_robot("panda")
+
+
+def true_robot(nominal: RobotModel, rng: np.random.Generator) -> RobotModel:
+    """A seeded "true" robot: the nominal one perturbed by the issues' default spread
+    (lengths 1 mm, angles 0.2 deg, tool 1 mm std; base not perturbed)."""
+    return perturb(nominal, rng)
+
+
+def default_fixtures() -> dict[str, np.ndarray]:
+    """The three fixture centres P1, P2, P3 in the base frame [m] (identification's Panda layout)."""
+    from identification.synthetic import PANDA_FIXTURES
+
+    return {name: np.asarray(centre, dtype=float) for name, centre in PANDA_FIXTURES.items()}
+
+
+@dataclass
+class MotionData:
+    """Calibration data of one simulated experiment.
+
+    Attributes:
+        dataset: the recorded samples (:class:`identification.dataset.Dataset`).
+        spec: the fixtures (:class:`identification.dataset.FixtureSpec`), distances exact.
+        trajectory: the MuJoCo run (controller's result) when simulated with dynamics, else None.
+    """
+
+    dataset: object
+    spec: object
+    trajectory: object = None
+
+
+def fixture_spec(fixtures: dict[str, np.ndarray], known_distances: bool):
+    """Fixtures with unknown centres; with ``known_distances``, every pairwise distance (exact)."""
+    from identification.dataset import FixtureSpec
+
+    names = tuple(fixtures)
+    distances = []
+    if known_distances:
+        pairs = [(a, b) for i, a in enumerate(names) for b in names[i + 1 :]]
+        distances = [(a, b, float(np.linalg.norm(fixtures[a] - fixtures[b]))) for a, b in pairs]
+    return FixtureSpec(names=names, distances=distances)
+
+
+def motion_set(
+    truth: RobotModel,
+    nominal: RobotModel,
+    fixtures: dict[str, np.ndarray],
+    samples: int,
+    noise: float,
+    rng: np.random.Generator,
+    source: str = "synthetic",
+    seconds: float = 20.0,
+) -> MotionData:
+    """Calibration samples at every fixture on the true robot.
+
+    Args:
+        truth: the true robot (the plant).
+        nominal: the model the controller runs on (MuJoCo source).
+        fixtures: name -> (3,) centre [m].
+        samples: samples kept per fixture.
+        noise: fixture noise std [m] (the physical point moves, the joint readings do not).
+        rng: seeded generator.
+        source: ``"synthetic"`` (kinematic projection onto the self-motion manifold) or ``"mujoco"``
+            (self-motion through the QP controller on the MuJoCo plant).
+        seconds: simulated time per fixture [s] (MuJoCo).
+    """
+    if source == "synthetic":
+        from identification.synthetic import make_dataset
+
+        dataset, _ = make_dataset(truth, fixtures, samples, rng, noise)
+        return MotionData(dataset, fixture_spec(fixtures, len(fixtures) > 1))
+    if source == "mujoco":
+        return _mujoco_motion(truth, nominal, fixtures, samples, noise, rng, seconds)
+    raise ValueError(f"unknown motion source {source!r}, expected 'synthetic' or 'mujoco'")
+
+
+def _mujoco_motion(truth, nominal, fixtures, samples, noise, rng, seconds) -> MotionData:
+    from controller.self_motion import SelfMotionSettings, collect_self_motion
+
+    settings = SelfMotionSettings(seconds=seconds, samples=samples, noise=noise)
+    run = collect_self_motion(truth, nominal, fixtures, rng, settings)
+    return MotionData(run.dataset(), fixture_spec(fixtures, len(fixtures) > 1), run)
+
+
+def calibrate_from(nominal: RobotModel, data: MotionData, fixtures=None, known_distances: bool = True) -> RobotModel:
+    """The calibrated model from the data (identification's default least-squares method)."""
+    raise NotImplementedError("waiting for identification's calibrate API")
