@@ -1,0 +1,70 @@
+"""Campaigns: task seeding, aggregation into Table 2, files, determinism over workers."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from validation.campaign import (
+    CampaignConfig,
+    TaskResult,
+    format_table,
+    run_campaign,
+    table,
+    table_csv,
+    tasks,
+    write_tables,
+)
+
+
+def fake_runner(task) -> TaskResult:
+    """A deterministic stand-in for a calibration: errors drawn from the task's own seed."""
+    rng = np.random.default_rng(task.seed)
+    mean = rng.uniform(1e-5, 1e-4) * (10 if task.noise else 1)
+    return TaskResult(task.row, task.index, mean, 3 * mean, mean + 3e-4, 5e-3, 0.0)
+
+
+def test_tasks_cover_every_row_and_set_with_distinct_seeds() -> None:
+    config = CampaignConfig(sets=3)
+    todo = tasks(config)
+    assert len(todo) == 4 * 2 * 3
+    assert [t.row for t in todo[::3]] == ["P1", "P2", "P3", "Pall", "P1N", "P2N", "P3N", "PallN"]
+    assert len({t.seed for t in todo}) == len(todo)
+    assert todo[9].fixtures == ("P1", "P2", "P3") and todo[9].noise == 0.0
+
+
+def test_table_aggregates_mean_std_max_over_sets() -> None:
+    results = [TaskResult("P1", i, m, 2 * m, 0.0, 0.0, 0.0) for i, m in enumerate([1e-4, 2e-4, 3e-4])]
+    (row,) = table(results)
+    assert row.sets == 3
+    np.testing.assert_allclose(row.average, [2e-4, np.std([1e-4, 2e-4, 3e-4]), 3e-4])
+    np.testing.assert_allclose(row.maximal, [4e-4, 2 * np.std([1e-4, 2e-4, 3e-4]), 6e-4])
+    csv_text = table_csv([row], comment="seed 0")
+    assert csv_text.splitlines()[0] == "# seed 0"
+    assert csv_text.splitlines()[2].startswith("P1,3,0.200,0.082,0.300,0.400,0.163,0.600")
+    assert "0.00 / 0.01" in format_table([row])  # the paper's row beside ours
+
+
+def test_campaign_is_the_same_on_one_or_two_workers(tmp_path) -> None:
+    config = CampaignConfig(sets=3, fixture_sets=("P1", "Pall"))
+    one = run_campaign(config, workers=1, progress=False, runner=fake_runner)
+    two = run_campaign(config, workers=2, progress=False, runner=fake_runner)
+    assert one == two
+    csv_path, md_path = write_tables(table(two), tmp_path / "out", comment="test")
+    assert csv_path.read_text() == table_csv(table(one), comment="test")
+    assert md_path.read_text().count("\n| P") == 4
+    assert sorted(p.name for p in (tmp_path / "out").iterdir()) == ["table2.csv", "table2.md"]
+
+
+@pytest.mark.slow
+def test_small_real_campaign_is_reproducible(tmp_path) -> None:
+    from validation.campaign import run_task
+
+    config = CampaignConfig(sets=2, samples=150, configurations=500, fixture_sets=("P1", "Pall"))
+    first = run_campaign(config, workers=2, progress=False)
+    again = [run_task(t) for t in tasks(config)[:2]]
+    assert [r.mean for r in first[:2]] == [r.mean for r in again]
+    rows = {r.name: r for r in table(first)}
+    # noise-free with three fixtures and known distances: micrometres; nominal: millimetres
+    assert rows["Pall"].average[0] < 1e-5 < 1e-3 < rows["Pall"].nominal_average
+    assert rows["PallN"].average[0] < 0.15e-3
