@@ -57,6 +57,7 @@ class Dataset:
         t: (K,) time stamps [s], or None.
         fixture_names: fixture names in order of first appearance (computed when left empty).
         source: file the samples came from (for messages), or "".
+        lines: (K,) line number of every sample in ``source`` (1-based), or None.
     """
 
     labels: np.ndarray
@@ -64,6 +65,7 @@ class Dataset:
     t: np.ndarray | None = None
     fixture_names: tuple[str, ...] = ()
     source: str = ""
+    lines: np.ndarray | None = None
 
     def __post_init__(self) -> None:
         labels = np.asarray(self.labels).astype(str).reshape(-1)
@@ -77,6 +79,8 @@ class Dataset:
             if t.shape != labels.shape:
                 raise ValueError(f"t must have shape {labels.shape}, got {t.shape}")
             object.__setattr__(self, "t", t)
+        if self.lines is not None:
+            object.__setattr__(self, "lines", np.asarray(self.lines, dtype=int).reshape(labels.shape))
         if not self.fixture_names:
             _, first = np.unique(labels, return_index=True)
             object.__setattr__(self, "fixture_names", tuple(str(labels[i]) for i in np.sort(first)))
@@ -114,7 +118,12 @@ class Dataset:
         labels = self.labels[index]
         names = tuple(name for name in self.fixture_names if np.any(labels == name))
         t = None if self.t is None else self.t[index]
-        return replace(self, labels=labels, q=self.q[index], t=t, fixture_names=names)
+        lines = None if self.lines is None else self.lines[index]
+        return replace(self, labels=labels, q=self.q[index], t=t, fixture_names=names, lines=lines)
+
+    def row_of(self, k: int) -> str:
+        """``"row N"`` of sample ``k`` in its file (or ``"sample k"`` when lines are unknown)."""
+        return f"row {self.lines[k]}" if self.lines is not None else f"sample {k + 1}"
 
     # ------------------------------------------------------------------------- reductions
     def deduplicated(self, tol: float = DEDUP_TOL) -> Dataset:
@@ -208,9 +217,7 @@ def _parse_header(header: list[str], n: int, where: str) -> bool:
                 raise DatasetError(f"{where}, field {name!r}: unknown column (expected fixture[,t],q1..q{n})")
             raise DatasetError(f"{where}, field {name!r}: joint columns must be q1..q{n} in order")
     if len(joints) != n:
-        raise DatasetError(
-            f"{where}, field 'q*': {len(joints)} joint columns, the robot has {n} (expected q1..q{n})"
-        )
+        raise DatasetError(f"{where}, field 'q*': {len(joints)} joint columns, the robot has {n} (expected q1..q{n})")
     return has_t
 
 
@@ -273,7 +280,9 @@ def read_samples(path: str | os.PathLike, model: RobotModel, limit_tol: float = 
             f"{path}: row {lines[k]}, field 'q{i + 1}': {q[k, i]:.6g} rad outside the joint limits "
             f"[{model.lower[i]:.6g}, {model.upper[i]:.6g}]"
         )
-    return Dataset(labels=np.array(labels), q=q, t=data[:, 0] if has_t else None, source=str(path))
+    return Dataset(
+        labels=np.array(labels), q=q, t=data[:, 0] if has_t else None, source=str(path), lines=np.array(lines)
+    )
 
 
 def format_samples(dataset: Dataset) -> str:

@@ -1,0 +1,214 @@
+"""Calibrate: build the problem, solve it (``lm``, ``pso`` or ``pso+lm``), report what was found."""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from correction import RobotModel
+
+from .dataset import Dataset, FixtureSpec
+from .identifiability import Identifiability, predicted_std
+from .problem import NOISE, CalibrationProblem, build_problem, format_value, prune
+from .solvers import solve_lm, solve_pso
+
+METHODS: tuple[str, ...] = ("lm", "pso", "pso+lm")
+#: Floor of the residual noise used to judge excitation [m] (noise-free data still has rounding).
+SIGMA_FLOOR = 1e-6
+
+
+@dataclass(frozen=True, eq=False)
+class CalibrationResult:
+    """A calibration: the model, what was identified and how well.
+
+    Attributes:
+        model: the calibrated robot.
+        nominal: the robot it started from.
+        method: ``lm``, ``pso`` or ``pso+lm``.
+        centres: fixture name -> (3,) centre [m] (estimated, known or pinned).
+        identified: names of the identified parameters.
+        fixed: name -> reason, every parameter left at its start value.
+        condition_number: of the column-scaled Jacobian at the solution.
+        std: name -> standard deviation of every unknown (parameters [m or rad], centres ``P1.x`` [m]).
+        residual_before, residual_after: (K,) distance between each sample's tool point and its
+            fixture centre [m], at the start (centres at the mean tool point) and at the end.
+        samples_per_fixture: fixture -> samples used.
+        warnings: what the user must know.
+        timings: stage -> wall time [s].
+        problem: the final problem (inspectable).
+        x: (F,) its solution.
+    """
+
+    model: RobotModel
+    nominal: RobotModel
+    method: str
+    centres: dict[str, np.ndarray]
+    identified: tuple[str, ...]
+    fixed: dict[str, str]
+    condition_number: float
+    std: dict[str, float]
+    residual_before: np.ndarray
+    residual_after: np.ndarray
+    samples_per_fixture: dict[str, int]
+    warnings: tuple[str, ...]
+    timings: dict[str, float] = field(default_factory=dict)
+    problem: CalibrationProblem | None = None
+    x: np.ndarray | None = None
+
+    @staticmethod
+    def _stats(r: np.ndarray) -> tuple[float, float]:
+        return float(np.sqrt(np.mean(r**2))), float(np.max(r))
+
+    @property
+    def rms_before(self) -> float:
+        """RMS of :attr:`residual_before` [m]."""
+        return self._stats(self.residual_before)[0]
+
+    @property
+    def rms_after(self) -> float:
+        """RMS of :attr:`residual_after` [m]."""
+        return self._stats(self.residual_after)[0]
+
+    def changes(self) -> list[tuple[str, float, float, float]]:
+        """(name, start value, calibrated value, std) of every identified parameter."""
+        names = self.model.param_names
+        start, end = self.nominal.params, self.model.params
+        return [(n, float(start[names.index(n)]), float(end[names.index(n)]), self.std[n]) for n in self.identified]
+
+    def block(self) -> dict:
+        """The ``calibration:`` block of the output robot file (plain Python, metres, radians, mm where named)."""
+        rms_b, max_b = self._stats(self.residual_before)
+        rms_a, max_a = self._stats(self.residual_after)
+        return {
+            "method": self.method,
+            "samples_per_fixture": dict(self.samples_per_fixture),
+            "residual_mm": {
+                "before": {"rms": rms_b * 1e3, "max": max_b * 1e3},
+                "after": {"rms": rms_a * 1e3, "max": max_a * 1e3},
+            },
+            "fixture_centres": {k: [float(v) for v in c] for k, c in self.centres.items()},
+            "pinned_fixtures": list(self.problem.pinned) if self.problem else [],
+            "identified": list(self.identified),
+            "fixed": dict(self.fixed),
+            "condition_number": float(self.condition_number),
+            "std": {k: float(v) for k, v in self.std.items()},
+            "warnings": list(self.warnings),
+            "timings_s": {k: float(v) for k, v in self.timings.items()},
+        }
+
+    def summary(self) -> str:
+        """One screen: residuals before/after, parameter changes with std, fixed parameters, warnings."""
+        rms_b, max_b = self._stats(self.residual_before)
+        rms_a, max_a = self._stats(self.residual_after)
+        counts = ", ".join(f"{k} {v}" for k, v in self.samples_per_fixture.items())
+        lines = [
+            f"calibration ({self.method}): {sum(self.samples_per_fixture.values())} samples ({counts})",
+            f"residual [mm]   before: rms {rms_b * 1e3:.4f}  max {max_b * 1e3:.4f}"
+            f"   after: rms {rms_a * 1e3:.4f}  max {max_a * 1e3:.4f}",
+            f"identified {len(self.identified)} parameters, condition number {self.condition_number:.3g}",
+            f"  {'parameter':<9} {'change':>14} {'std':>14}",
+        ]
+        for name, start, end, std in self.changes():
+            lines.append(f"  {name:<9} {format_value(name, end - start):>14} {format_value(name, std):>14}")
+        groups: dict[str, list[str]] = {}
+        for name, reason in self.fixed.items():
+            groups.setdefault(reason, []).append(name)
+        lines.append(f"fixed {len(self.fixed)} parameters:")
+        for reason, names in groups.items():
+            lines.append(f"  {', '.join(names)}: {reason}")
+        for name, c in self.centres.items():
+            lines.append(f"centre {name} [m]: {np.array2string(np.asarray(c), precision=6)}")
+        lines.extend(f"warning: {w}" for w in self.warnings)
+        return "\n".join(lines)
+
+
+def calibrate(
+    nominal: RobotModel,
+    dataset: Dataset,
+    spec: FixtureSpec | None = None,
+    method: str = "lm",
+    start: RobotModel | None = None,
+    seed: int = 0,
+    loss: str = "linear",
+    noise: float = NOISE,
+    pso_options: dict | None = None,
+) -> CalibrationResult:
+    """Identify the parameters of ``nominal`` that put every sample's tool point on its fixture.
+
+    Args:
+        nominal: the robot to calibrate (its convention and limits are kept).
+        dataset: samples (deduplicate / subsample first: :meth:`Dataset.deduplicated`).
+        spec: known fixture positions and distances (all unknown when None).
+        method: ``lm``, ``pso`` or ``pso+lm``.
+        start: start model (default ``nominal``); fixed parameters keep its values.
+        seed: seeds PSO.
+        loss: ``linear``, ``soft_l1`` or ``huber`` (``lm`` only).
+        noise: expected fixture noise [m] (robust-loss scale, distance weight).
+        pso_options: keyword arguments of :func:`solve_pso`.
+
+    Returns:
+        The :class:`CalibrationResult`.
+
+    Raises:
+        DatasetError, UnidentifiableError: see :func:`build_problem`.
+    """
+    if method not in METHODS:
+        raise ValueError(f"unknown method {method!r}, expected one of {METHODS}")
+    timings: dict[str, float] = {}
+    clock = time.perf_counter()
+    start = nominal if start is None else start
+    problem = build_problem(start, dataset, spec, nominal=nominal, noise=noise)
+    before = np.linalg.norm(problem.sample_errors(problem.x0), axis=1)
+    timings["build"] = time.perf_counter() - clock
+    x = problem.x0
+    if method in ("pso", "pso+lm"):
+        solution = solve_pso(problem, seed=seed, **(pso_options or {}))
+        x, timings["pso"] = solution.x, solution.seconds
+    if method in ("lm", "pso+lm"):
+        solution = solve_lm(problem, x, loss=loss)
+        x, timings["lm"] = solution.x, solution.seconds
+        # the data's own noise decides what it can see; re-solve without what it cannot
+        sigma = max(_sigma(problem, x), SIGMA_FLOOR)
+        pruned, x_pruned = prune(problem, x, sigma)
+        if pruned is not problem:
+            problem = pruned
+            solution = solve_lm(problem, x_pruned, loss=loss)
+            x, timings["lm"] = solution.x, timings["lm"] + solution.seconds
+    clock = time.perf_counter()
+    jac = problem.jacobian(x)
+    sigma = _sigma(problem, x)
+    std_values = predicted_std(jac, sigma)
+    ident = Identifiability.of(jac)
+    params, centres = problem.unpack(x)
+    model = problem.model.with_params(params)
+    after = np.linalg.norm(problem.sample_errors(x), axis=1)
+    timings["covariance"] = time.perf_counter() - clock
+    warnings = list(problem.warnings)
+    if ident.condition_number > 1e8:
+        warnings.append(f"ill-conditioned: condition number {ident.condition_number:.3g} at the solution")
+    return CalibrationResult(
+        model=model,
+        nominal=start,
+        method=method,
+        centres=problem.centre_dict(centres),
+        identified=problem.identified,
+        fixed=problem.fixed,
+        condition_number=ident.condition_number,
+        std=dict(zip(problem.unknown_names, (float(s) for s in std_values), strict=True)),
+        residual_before=before,
+        residual_after=after,
+        samples_per_fixture=dataset.counts(),
+        warnings=tuple(warnings),
+        timings=timings,
+        problem=problem,
+        x=x,
+    )
+
+
+def _sigma(problem: CalibrationProblem, x: np.ndarray) -> float:
+    """Residual standard deviation per coordinate [m]: ``sqrt(|r|^2 / (M - F))``."""
+    r = problem.residuals(x)
+    dof = max(problem.n_residuals - problem.n_unknowns, 1)
+    return float(np.sqrt(r @ r / dof))

@@ -1,0 +1,202 @@
+"""Solvers of a :class:`CalibrationProblem`: least squares (``lm``) and particle swarm (``pso``).
+
+``lm`` is :func:`scipy.optimize.least_squares` on the analytic Jacobian with ``x_scale='jac'``
+(MINPACK's Levenberg-Marquardt for the plain loss, the trust-region reflective method for the
+robust losses ``soft_l1`` / ``huber`` whose scale is the expected noise).
+
+``pso`` is the paper's method: pyswarms' ``GlobalBestPSO`` over bounded deviations of the
+identified parameters from the start, minimising eq. 5, the mean distance between each sample's
+tool point and its fixture centre (free centres are the per-fixture mean tool point; known
+distances add a penalty). pyswarms is imported only here, with its logging kept off the root
+logger and no ``report.log`` written.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import os
+import tempfile
+import time
+from dataclasses import dataclass
+
+import numpy as np
+
+from correction import tool_point
+
+from .problem import CalibrationProblem, prior_std
+
+LOSSES: tuple[str, ...] = ("linear", "soft_l1", "huber")
+
+
+@dataclass(frozen=True)
+class Solution:
+    """Where a solver ended.
+
+    Attributes:
+        x: (F,) unknowns at the end.
+        evaluations: residual (or swarm objective) evaluations.
+        seconds: wall time [s].
+        message: the solver's own words.
+    """
+
+    x: np.ndarray
+    evaluations: int
+    seconds: float
+    message: str
+
+
+def solve_lm(
+    problem: CalibrationProblem,
+    x0: np.ndarray | None = None,
+    loss: str = "linear",
+    f_scale: float | None = None,
+    tol: float = 1e-12,
+    max_nfev: int | None = None,
+) -> Solution:
+    """Least squares with the analytic Jacobian.
+
+    Args:
+        problem: the problem.
+        x0: (F,) start (default ``problem.x0``).
+        loss: ``linear``, ``soft_l1`` or ``huber``.
+        f_scale: residual scale of the robust loss [m] (default ``problem.noise``).
+        tol: ``ftol``, ``xtol`` and ``gtol``.
+        max_nfev: evaluation budget (scipy's default when None).
+    """
+    from scipy.optimize import least_squares
+
+    if loss not in LOSSES:
+        raise ValueError(f"unknown loss {loss!r}, expected one of {LOSSES}")
+    x0 = problem.x0 if x0 is None else np.asarray(x0, float)
+    method = "lm" if loss == "linear" else "trf"
+    start = time.perf_counter()
+    result = least_squares(
+        problem.residuals,
+        x0,
+        jac=problem.jacobian,
+        method=method,
+        x_scale="jac",
+        loss=loss,
+        f_scale=f_scale or problem.noise,
+        ftol=tol,
+        xtol=tol,
+        gtol=tol,
+        max_nfev=max_nfev,
+    )
+    return Solution(result.x, int(result.nfev), time.perf_counter() - start, str(result.message))
+
+
+@contextlib.contextmanager
+def _quiet_pyswarms():
+    """Import/construct pyswarms without it configuring the root logger or writing report.log.
+
+    pyswarms' Reporter loads the logging config named by ``LOG_CFG`` when that file exists; an
+    incremental, empty config changes nothing (a non-incremental one would close every handler).
+    """
+    fd, path = tempfile.mkstemp(suffix=".yaml", prefix="spherecal-pyswarms-")
+    with os.fdopen(fd, "w") as handle:
+        handle.write("version: 1\nincremental: true\n")
+    old = os.environ.get("LOG_CFG")
+    os.environ["LOG_CFG"] = path
+    try:
+        yield
+    finally:
+        if old is None:
+            os.environ.pop("LOG_CFG", None)
+        else:
+            os.environ["LOG_CFG"] = old
+        os.unlink(path)
+
+
+def solve_pso(
+    problem: CalibrationProblem,
+    seed: int = 0,
+    x0: np.ndarray | None = None,
+    particles: int = 60,
+    iterations: int = 300,
+    bound: float = 20.0,
+    samples_per_fixture: int | None = 150,
+    options: dict | None = None,
+) -> Solution:
+    """Particle swarm over the identified parameters (the paper's eq. 5).
+
+    Args:
+        problem: the problem.
+        seed: seeds pyswarms (which draws from numpy's global generator: seeded here, restored after).
+        x0: (F,) centre of the search box (default ``problem.x0``); its centres are ignored.
+        particles: swarm size.
+        iterations: swarm iterations.
+        bound: half-width of the search box in prior spreads (1 mm, 0.2 deg per unit).
+        samples_per_fixture: samples per fixture the objective uses (a seeded subset; None: all).
+        options: pyswarms ``c1, c2, w`` (default 0.5, 0.3, 0.9).
+
+    Returns:
+        The best parameters found, with each free centre at the mean tool point of its samples.
+    """
+    x0 = problem.x0 if x0 is None else np.asarray(x0, float)
+    start = time.perf_counter()
+    params0, centres0 = problem.unpack(x0)
+    rng = np.random.default_rng(seed)
+    dataset = problem.dataset
+    subset = dataset.subsampled(samples_per_fixture, rng) if samples_per_fixture else dataset
+    fixture = np.array([dataset.fixture_names.index(name) for name in subset.labels])
+    free_slots = [dataset.fixture_names.index(name) for name in problem.free_centres]
+    half = bound * prior_std(problem.model)[problem.free]
+    distances = [
+        (dataset.fixture_names.index(a), dataset.fixture_names.index(b), target)
+        for a, b, target in problem.spec.distances
+    ]
+    counts = np.bincount(fixture, minlength=len(dataset.fixture_names))
+
+    def centres_of(points: np.ndarray) -> np.ndarray:
+        centres = centres0.copy()
+        if free_slots:
+            sums = np.zeros_like(centres)
+            np.add.at(sums, fixture, points)
+            centres[free_slots] = sums[free_slots] / counts[free_slots, None]
+        return centres
+
+    def cost(deviation: np.ndarray) -> float:
+        params = params0.copy()
+        params[problem.free] += deviation
+        points = tool_point(problem.model.with_params(params), subset.q)
+        centres = centres_of(points)
+        value = np.mean(np.linalg.norm(points - centres[fixture], axis=1))
+        for a, b, target in distances:
+            value += problem.distance_weight * abs(np.linalg.norm(centres[a] - centres[b]) - target)
+        return float(value)
+
+    evaluations = 0
+
+    def swarm_cost(swarm: np.ndarray) -> np.ndarray:
+        nonlocal evaluations
+        evaluations += swarm.shape[0]
+        return np.array([cost(row) for row in swarm])
+
+    with _quiet_pyswarms():
+        import pyswarms
+
+        state = np.random.get_state()  # noqa: NPY002 (pyswarms draws from the global state)
+        np.random.seed(seed)  # noqa: NPY002
+        try:
+            init = rng.uniform(-half, half, (particles, half.size))
+            init[0] = 0.0  # the start itself is a particle
+            optimiser = pyswarms.single.GlobalBestPSO(
+                n_particles=particles,
+                dimensions=half.size,
+                options=options or {"c1": 0.5, "c2": 0.3, "w": 0.9},
+                bounds=(-half, half),
+                init_pos=init,
+            )
+            _, best = optimiser.optimize(swarm_cost, iters=iterations, verbose=False)
+        finally:
+            np.random.set_state(state)  # noqa: NPY002
+    params = params0.copy()
+    params[problem.free] += best
+    points = tool_point(problem.model.with_params(params), dataset.q)
+    full = dataset.fixture_index
+    centres = centres0.copy()
+    for j in free_slots:
+        centres[j] = points[full == j].mean(axis=0)
+    message = f"{iterations} iterations of {particles} particles"
+    return Solution(problem.pack(params, centres), evaluations, time.perf_counter() - start, message)

@@ -1,0 +1,129 @@
+"""Spherical-joint samples made purely kinematically (no simulator): test data for identification.
+
+Each sample is a random configuration inside the joint limits projected onto ``p_true(q) = c_j``
+(plus optional Gaussian fixture noise on ``c_j``, drawn per sample) by damped Newton steps on the
+true model's joint Jacobian. Random seeds spread the samples over the self-motion manifold.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from correction import RobotModel, joint_jacobian, tool_point
+
+from .dataset import Dataset, FixtureSpec
+
+#: Fixture centres for the Panda [m] in its base frame: three points in front of the robot with a
+#: wide self-motion, in the spirit of the paper's P1-P3.
+PANDA_FIXTURES: dict[str, tuple[float, float, float]] = {
+    "P1": (0.45, 0.0, 0.35),
+    "P2": (0.40, 0.30, 0.50),
+    "P3": (0.35, -0.35, 0.25),
+}
+
+
+def project_to_point(
+    model: RobotModel,
+    q: np.ndarray,
+    targets: np.ndarray,
+    iterations: int = 60,
+    damping: float = 1e-4,
+    tol: float = 1e-12,
+) -> tuple[np.ndarray, np.ndarray]:
+    """Move every configuration so that its tool point reaches its target.
+
+    Damped Newton (Levenberg) steps ``dq = J^T (J J^T + damping^2 I)^-1 (target - p)``, clipped
+    to the joint limits after every step.
+
+    Args:
+        model: the robot.
+        q: (N, n) start configurations [rad].
+        targets: (N, 3) or (3,) target points [m].
+        iterations: maximum number of steps.
+        damping: damping [m].
+        tol: a configuration has converged when its tool point is this close [m].
+
+    Returns:
+        (N, n) configurations [rad] and (N,) bool: converged inside the joint limits.
+    """
+    q = np.array(q, dtype=float)
+    targets = np.broadcast_to(np.asarray(targets, float), (q.shape[0], 3))
+    for _ in range(iterations):
+        error = targets - tool_point(model, q)
+        if np.all(np.einsum("ij,ij->i", error, error) < tol**2):
+            break
+        jac = joint_jacobian(model, q)
+        gram = jac @ jac.transpose(0, 2, 1) + damping**2 * np.eye(3)
+        step = np.einsum("nij,ni->nj", jac, np.linalg.solve(gram, error[..., None])[..., 0])
+        q = np.clip(q + step, model.lower, model.upper)
+    converged = np.linalg.norm(targets - tool_point(model, q), axis=1) < max(tol, 1e-10)
+    return q, converged
+
+
+def fixture_samples(
+    model: RobotModel,
+    centre: np.ndarray,
+    count: int,
+    rng: np.random.Generator,
+    noise: float = 0.0,
+    max_rounds: int = 20,
+) -> np.ndarray:
+    """Configurations whose tool point sits at ``centre`` (+ noise) on the true model.
+
+    Args:
+        model: the true robot.
+        centre: (3,) fixture centre [m].
+        count: number of samples.
+        rng: seeded generator.
+        noise: std of the Gaussian fixture noise added to the centre per sample [m].
+        max_rounds: rounds of random seeds before giving up.
+
+    Returns:
+        (count, n) joint angles [rad] inside the joint limits.
+
+    Raises:
+        ValueError: the centre is not reachable often enough from random seeds.
+    """
+    kept: list[np.ndarray] = []
+    have = 0
+    for _ in range(max_rounds):
+        seeds = model.random_configurations(2 * count, rng)
+        targets = np.asarray(centre, float) + rng.normal(0.0, noise, (seeds.shape[0], 3))
+        q, ok = project_to_point(model, seeds, targets)
+        kept.append(q[ok])
+        have += int(ok.sum())
+        if have >= count:
+            return np.concatenate(kept)[:count]
+    raise ValueError(f"fixture at {np.asarray(centre).tolist()}: only {have} of {count} samples reached")
+
+
+def make_dataset(
+    model: RobotModel,
+    centres: dict[str, np.ndarray] | None = None,
+    per_fixture: int = 500,
+    rng: np.random.Generator | None = None,
+    noise: float = 0.0,
+) -> tuple[Dataset, FixtureSpec]:
+    """Samples at every fixture and the spec with all centre-to-centre distances known.
+
+    Args:
+        model: the true robot.
+        centres: name -> (3,) centre [m]; the Panda layout :data:`PANDA_FIXTURES` by default.
+        per_fixture: samples per fixture.
+        rng: seeded generator (default seed 0).
+        noise: fixture noise std [m].
+
+    Returns:
+        The dataset (fixtures in the order given) and a :class:`FixtureSpec` with unknown
+        positions and every pairwise distance (exact, from the true centres).
+    """
+    rng = np.random.default_rng(0) if rng is None else rng
+    centres = {k: np.asarray(v, float) for k, v in (centres or PANDA_FIXTURES).items()}
+    names = tuple(centres)
+    q = [fixture_samples(model, centres[name], per_fixture, rng, noise) for name in names]
+    labels = np.repeat(np.array(names), per_fixture)
+    dataset = Dataset(labels=labels, q=np.concatenate(q), fixture_names=names)
+    distances = [
+        (a, b, float(np.linalg.norm(centres[a] - centres[b]))) for i, a in enumerate(names) for b in names[i + 1 :]
+    ]
+    return dataset, FixtureSpec(names=names, distances=distances)
