@@ -1,0 +1,259 @@
+"""Correction in a controller: joint-space (calibrated IK) and Cartesian target compensation.
+
+Two ways to use a calibrated model in a control loop:
+
+* **Joint-space correction** (the controller lets you choose its joint targets or its
+  kinematics): :func:`corrected_ik` is :func:`controller.ik.ik` with the calibrated model,
+  checked against the nominal one and raising instead of returning a miss.
+* **Cartesian compensation** (the controller keeps its own NOMINAL kinematics, like the
+  Panda's Cartesian controllers): :func:`compensate` returns the target to command so that the
+  real arm, described by the calibrated model, ends on the desired point.
+
+The controller picks its own null-space posture, so the command must be consistent with the
+configuration it will actually reach. The controller is modelled as nominal IK from the seed
+(``q_k = ik(nominal, t_k, q_seed)``, or any ``controller(model, target, q_seed, orientation)``
+you pass), and the command is iterated to a fixed point::
+
+    t_0 = target
+    q_k = controller(nominal, t_k, q_seed)          # where the nominal controller goes
+    p_k = tool_point(calibrated, q_k)               # where the real arm then is
+    t_{k+1} = t_k + (target - p_k)                  # (orientation: R_{k+1} = R_target R_k'^T R_k)
+
+The map ``t -> p`` differs from the identity by the calibration's correction (millimetres,
+varying slowly over the workspace), so each iteration shrinks the residual by about the
+relative change of that correction: a few iterations reach ``1e-10`` m.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass
+
+import numpy as np
+
+from correction import RobotModel, tool_point, tool_pose
+from correction.errors import SpherecalError
+
+from .ik import UnreachableError, ik
+
+#: Default position [m] and orientation [rad] tolerance of the fixed point.
+POSITION_TOL = 1e-9
+ORIENTATION_TOL = 1e-8
+#: Largest nominal/calibrated tool-point difference [m] accepted at the seed: a calibration
+#: corrects millimetres; decimetres mean the two files describe different robots.
+MAX_MODEL_DIFFERENCE = 0.05
+
+#: ``controller(model, target (3,), q_seed (n,), orientation (3, 3) | None) -> q (n,)``.
+Controller = Callable[[RobotModel, np.ndarray, np.ndarray, "np.ndarray | None"], np.ndarray]
+
+
+class ModelMismatchError(SpherecalError):
+    """The calibrated model does not describe the same robot as the nominal one."""
+
+
+class CompensationError(SpherecalError):
+    """The compensation fixed point was not reached within the iteration budget."""
+
+
+@dataclass(frozen=True)
+class CompensationResult:
+    """Outcome of :func:`compensate`.
+
+    Attributes:
+        command: (3,) tool-point target to send to the nominal controller [m].
+        command_orientation: (3, 3) orientation to send (None when none was asked).
+        q: (n,) configuration the nominal controller is predicted to reach [rad].
+        landing: (3,) calibrated tool point at ``q``: where the real arm ends [m].
+        position_residual: |target - landing| [m].
+        orientation_residual: angle between the target and the calibrated orientation at
+            ``q`` [rad] (0 when no orientation was asked).
+        iterations: controller evaluations after the first (0 when ``target`` itself is exact).
+        history: (iterations + 1,) position residual of every iterate [m].
+    """
+
+    command: np.ndarray
+    command_orientation: np.ndarray | None
+    q: np.ndarray
+    landing: np.ndarray
+    position_residual: float
+    orientation_residual: float
+    iterations: int
+    history: np.ndarray
+
+
+def check_models(nominal: RobotModel, calibrated: RobotModel, source: str = "calibrated model") -> None:
+    """Raise :class:`ModelMismatchError` unless both models describe the same arm.
+
+    Same joint count, same DH convention and the same joint limits (a calibration changes
+    geometry, not limits).
+
+    Args:
+        source: name of the calibrated file, for the message.
+    """
+    if calibrated.n_joints != nominal.n_joints:
+        raise ModelMismatchError(
+            f"{source}: has {calibrated.n_joints} joints, the controller's model {nominal.name!r} has "
+            f"{nominal.n_joints} (a file of another robot?)"
+        )
+    if calibrated.convention != nominal.convention:
+        raise ModelMismatchError(
+            f"{source}: convention is {calibrated.convention}, the controller's model uses {nominal.convention} "
+            "(convert it with correction.convert first)"
+        )
+    for field in ("lower", "upper"):
+        diff = np.abs(getattr(calibrated, field) - getattr(nominal, field))
+        if np.any(diff > 1e-9):
+            joint = int(np.argmax(diff))
+            raise ModelMismatchError(
+                f"{source}: joints[{joint}].{field} is {getattr(calibrated, field)[joint]!r}, the controller's "
+                f"model has {getattr(nominal, field)[joint]!r} (a file of another robot?)"
+            )
+
+
+def _check_difference(nominal: RobotModel, calibrated: RobotModel, q: np.ndarray, source: str) -> None:
+    gap = float(np.linalg.norm(tool_point(nominal, q) - tool_point(calibrated, q)))
+    if gap > MAX_MODEL_DIFFERENCE:
+        raise ModelMismatchError(
+            f"{source}: tool point differs from the controller's model by {gap * 1e3:.0f} mm at the seed "
+            f"(more than {MAX_MODEL_DIFFERENCE * 1e3:.0f} mm: not a calibration of this robot)"
+        )
+
+
+def _target(target: np.ndarray, orientation: np.ndarray | None) -> tuple[np.ndarray, np.ndarray | None]:
+    target = np.asarray(target, dtype=float)
+    if target.shape != (3,) or not np.all(np.isfinite(target)):
+        raise SpherecalError(f"target: expected 3 finite coordinates [m], got {target.tolist()!r}")
+    if orientation is None:
+        return target, None
+    orientation = np.asarray(orientation, dtype=float)
+    if orientation.shape != (3, 3) or not np.allclose(orientation @ orientation.T, np.eye(3), atol=1e-9):
+        raise SpherecalError("orientation: expected a (3, 3) rotation matrix")
+    return target, orientation
+
+
+def _angle(rotation: np.ndarray) -> float:
+    """Rotation angle of a (3, 3) rotation [rad], accurate near zero (atan2, not arccos)."""
+    axis = np.array([rotation[2, 1] - rotation[1, 2], rotation[0, 2] - rotation[2, 0], rotation[1, 0] - rotation[0, 1]])
+    return float(np.arctan2(0.5 * np.linalg.norm(axis), 0.5 * (np.trace(rotation) - 1.0)))
+
+
+def nominal_ik_controller(model: RobotModel, target: np.ndarray, q_seed: np.ndarray,
+                          orientation: np.ndarray | None = None) -> np.ndarray:
+    """The default controller model: :func:`controller.ik.ik` from the seed, no restarts.
+
+    Raises:
+        UnreachableError: the IK does not converge (target outside the model's workspace).
+    """
+    result = ik(model, target, q_seed, orientation=orientation)
+    if not result.converged:
+        raise UnreachableError(
+            f"target {np.round(target, 4).tolist()} m: out of reach of {model.name!r} from the seed "
+            f"(IK misses by {result.position_error * 1e3:.3f} mm, {np.rad2deg(result.orientation_error):.3f} deg)"
+        )
+    return result.q
+
+
+def corrected_ik(
+    calibrated: RobotModel,
+    target: np.ndarray,
+    q0: np.ndarray,
+    orientation: np.ndarray | None = None,
+    nominal: RobotModel | None = None,
+) -> np.ndarray:
+    """Joint-space correction: joint angles that put the REAL tool point on ``target``.
+
+    :func:`controller.ik.ik` with the calibrated model, for a control loop that accepts joint
+    targets. With ``nominal`` given, the calibrated model is first checked to be a calibration
+    of that robot.
+
+    Args:
+        calibrated: the calibrated model.
+        target: (3,) desired tool point in the world [m].
+        q0: (n,) start, usually the current joint angles [rad].
+        orientation: optional (3, 3) desired orientation of the last frame.
+        nominal: the controller's own model, for :func:`check_models`.
+
+    Returns:
+        (n,) joint angles inside the limits [rad].
+
+    Raises:
+        ModelMismatchError: ``calibrated`` is not a calibration of ``nominal``.
+        UnreachableError: no joint angles reach the target (outside the workspace).
+    """
+    target, orientation = _target(target, orientation)
+    q0 = np.asarray(q0, dtype=float)
+    if q0.shape != (calibrated.n_joints,):
+        raise ModelMismatchError(f"q0: expected {calibrated.n_joints} joint angles, got {q0.shape[0]}")
+    if nominal is not None:
+        check_models(nominal, calibrated)
+        _check_difference(nominal, calibrated, q0, "calibrated model")
+    return nominal_ik_controller(calibrated, target, q0, orientation)
+
+
+def compensate(
+    target: np.ndarray,
+    nominal: RobotModel,
+    calibrated: RobotModel,
+    q_seed: np.ndarray,
+    orientation: np.ndarray | None = None,
+    controller: Controller | None = None,
+    tol: float = POSITION_TOL,
+    orientation_tol: float = ORIENTATION_TOL,
+    max_iter: int = 20,
+) -> CompensationResult:
+    """The Cartesian target to give a nominal-kinematics controller so the real arm lands on ``target``.
+
+    Args:
+        target: (3,) desired tool point of the real arm in the world [m].
+        nominal: the kinematics the controller uses.
+        calibrated: the calibrated model (the real arm).
+        q_seed: (n,) the controller's start configuration [rad] (its current joint angles).
+        orientation: optional (3, 3) desired orientation of the last frame of the real arm.
+        controller: model of the controller, ``controller(model, target, q_seed, orientation) -> q``;
+            :func:`nominal_ik_controller` by default. It must raise a :class:`SpherecalError`
+            for a target it cannot reach.
+        tol: position tolerance of the fixed point [m].
+        orientation_tol: orientation tolerance [rad].
+        max_iter: most controller evaluations after the first.
+
+    Returns:
+        :class:`CompensationResult` with the command, the predicted configuration, iterations
+        and residuals.
+
+    Raises:
+        ModelMismatchError: the calibrated model is of another robot (joint count, convention,
+            limits) or differs from the nominal one by more than :data:`MAX_MODEL_DIFFERENCE`.
+        UnreachableError: the nominal controller cannot reach a command (target outside the
+            workspace).
+        CompensationError: the residual is still above ``tol`` after ``max_iter`` iterations.
+    """
+    target, orientation = _target(target, orientation)
+    check_models(nominal, calibrated)
+    q_seed = np.asarray(q_seed, dtype=float)
+    if q_seed.shape != (nominal.n_joints,):
+        raise ModelMismatchError(f"q_seed: expected {nominal.n_joints} joint angles, got {q_seed.shape[0]}")
+    _check_difference(nominal, calibrated, q_seed, "calibrated model")
+    controller = controller or nominal_ik_controller
+    command, command_rot = target.copy(), None if orientation is None else orientation.copy()
+    history: list[float] = []
+    for iteration in range(max_iter + 1):
+        q = np.asarray(controller(nominal, command, q_seed, command_rot), dtype=float)
+        pose = tool_pose(calibrated, q)
+        landing = pose[:3, 3]
+        miss = target - landing
+        history.append(float(np.linalg.norm(miss)))
+        turn = None if orientation is None else orientation @ pose[:3, :3].T
+        angle = 0.0 if turn is None else _angle(turn)
+        if history[-1] <= tol and angle <= orientation_tol:
+            return CompensationResult(command, command_rot, q, landing, history[-1], angle, iteration,
+                                      np.array(history))
+        if iteration == max_iter:
+            break
+        command = command + miss
+        if turn is not None:
+            command_rot = turn @ command_rot
+    raise CompensationError(
+        f"target {np.round(target, 4).tolist()} m: compensation residual {history[-1] * 1e3:.2g} mm "
+        f"(orientation {np.rad2deg(angle):.2g} deg) after {max_iter} iterations, tolerance {tol * 1e3:.2g} mm "
+        "(near a singularity or the workspace boundary?)"
+    )
