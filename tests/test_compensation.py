@@ -1,0 +1,143 @@
+"""Cartesian compensation and corrected IK: fixed point, orientation, named errors."""
+
+from __future__ import annotations
+
+from dataclasses import replace
+
+import numpy as np
+import pytest
+
+from controller.compensation import (
+    CompensationError,
+    ModelMismatchError,
+    compensate,
+    corrected_ik,
+    nominal_ik_controller,
+)
+from controller.ik import UnreachableError
+from correction import RobotModel, perturb, to_standard, tool_point, tool_pose
+from correction.errors import SpherecalError
+
+
+@pytest.fixture
+def robots(panda, rng):
+    true = perturb(panda, rng)
+    return panda, true, rng
+
+
+def _case(model, rng, inset=0.1, spread=0.3):
+    q_goal = rng.uniform(model.lower + inset, model.upper - inset)
+    q_seed = np.clip(q_goal + rng.normal(0.0, spread, model.n_joints), model.lower + inset, model.upper - inset)
+    return q_goal, q_seed
+
+
+def test_compensated_command_lands_the_calibrated_arm_on_target(robots):
+    nominal, calibrated, rng = robots
+    for _ in range(10):
+        q_goal, q_seed = _case(calibrated, rng)
+        target = tool_point(calibrated, q_goal)
+        result = compensate(target, nominal, calibrated, q_seed)
+        # Independent of the result's own bookkeeping: run the nominal controller on the command.
+        q = nominal_ik_controller(nominal, result.command, q_seed)
+        assert np.linalg.norm(tool_point(calibrated, q) - target) < 1e-9
+        assert np.linalg.norm(tool_point(nominal, q) - result.command) < 1e-9  # nominal reaches its command
+        assert np.linalg.norm(result.command - target) > 1e-3  # and the command is millimetres off target
+        assert 2 <= result.iterations <= 12 and result.history[0] > 1e-3 > 1e-9 > result.history[-1]
+        assert np.all(np.diff(np.log(result.history)) < 0)  # contracts every iteration
+        np.testing.assert_allclose(result.landing, tool_point(calibrated, result.q), atol=0)
+
+
+def test_identical_models_need_no_iteration(robots):
+    nominal, _, rng = robots
+    q_goal, q_seed = _case(nominal, rng)
+    target = tool_point(nominal, q_goal)
+    result = compensate(target, nominal, nominal, q_seed)
+    assert result.iterations == 0 and np.array_equal(result.command, target)
+
+
+def test_orientation_is_compensated_too(robots):
+    nominal, calibrated, rng = robots
+    q_goal, q_seed = _case(calibrated, rng, spread=0.1)
+    pose = tool_pose(calibrated, q_goal)
+    result = compensate(pose[:3, 3], nominal, calibrated, q_seed, orientation=pose[:3, :3])
+    q = nominal_ik_controller(nominal, result.command, q_seed, result.command_orientation)
+    reached = tool_pose(calibrated, q)
+    assert np.linalg.norm(reached[:3, 3] - pose[:3, 3]) < 1e-9
+    assert np.abs(reached[:3, :3] - pose[:3, :3]).max() < 1e-8
+    nominal_rotation = tool_pose(nominal, q)[:3, :3]
+    assert np.abs(nominal_rotation - result.command_orientation).max() < 1e-8  # the controller meets its command
+    assert np.abs(result.command_orientation - pose[:3, :3]).max() > 1e-4  # which differs from the target
+
+
+def test_works_for_the_standard_convention_and_a_custom_controller(robots):
+    nominal, calibrated, rng = robots
+    nominal, calibrated = to_standard(nominal), to_standard(calibrated)
+    calls = []
+
+    def controller(model, target, q_seed, orientation):
+        calls.append(model)
+        return nominal_ik_controller(model, target, q_seed, orientation)
+
+    q_goal, q_seed = _case(calibrated, rng)
+    target = tool_point(calibrated, q_goal)
+    result = compensate(target, nominal, calibrated, q_seed, controller=controller)
+    assert result.position_residual < 1e-9 and all(model is nominal for model in calls)
+    assert len(calls) == result.iterations + 1
+
+
+def test_corrected_ik_puts_the_calibrated_tool_point_on_target(robots):
+    nominal, calibrated, rng = robots
+    q_goal, q_seed = _case(calibrated, rng)
+    target = tool_point(calibrated, q_goal)
+    q = corrected_ik(calibrated, target, q_seed, nominal=nominal)
+    assert np.linalg.norm(tool_point(calibrated, q) - target) < 1e-9
+    assert calibrated.within_limits(q)
+
+
+def _one_line(error: pytest.ExceptionInfo) -> str:
+    message = str(error.value)
+    assert "\n" not in message and isinstance(error.value, SpherecalError)
+    return message
+
+
+def test_unreachable_target_raises(robots):
+    nominal, calibrated, rng = robots
+    _, q_seed = _case(nominal, rng)
+    far = np.array([1.5, 0.0, 0.5])  # the Panda reaches about 0.86 m from the shoulder
+    with pytest.raises(UnreachableError) as error:
+        compensate(far, nominal, calibrated, q_seed)
+    assert "out of reach" in _one_line(error)
+    with pytest.raises(UnreachableError):
+        corrected_ik(calibrated, far, q_seed)
+
+
+def test_a_file_of_another_robot_raises(robots, panda):
+    nominal, calibrated, rng = robots
+    q_goal, q_seed = _case(nominal, rng)
+    target = tool_point(calibrated, q_goal)
+    six = RobotModel(name="six", convention="modified", a=panda.a[:6], alpha=panda.alpha[:6], d=panda.d[:6],
+                     theta=panda.theta[:6], lower=panda.lower[:6], upper=panda.upper[:6], tool=panda.tool)
+    cases = {
+        "6 joints": six,
+        "convention is standard": to_standard(calibrated),
+        "joints[3].upper": replace(calibrated, upper=calibrated.upper + np.eye(7)[3] * 0.1),
+        "not a calibration of this robot": perturb(nominal, rng, 0.05, 0.05, 0.05),
+    }
+    for fragment, other in cases.items():
+        with pytest.raises(ModelMismatchError) as error:
+            compensate(target, nominal, other, q_seed)
+        assert fragment in _one_line(error), fragment
+    with pytest.raises(ModelMismatchError, match="6 joints"):
+        corrected_ik(six, target, q_seed[:6], nominal=nominal)
+    with pytest.raises(ModelMismatchError, match="q_seed"):
+        compensate(target, nominal, calibrated, q_seed[:6])
+    with pytest.raises(SpherecalError, match="target"):
+        compensate(np.array([0.3, np.nan, 0.5]), nominal, calibrated, q_seed)
+
+
+def test_no_convergence_is_an_error_not_a_silent_command(robots):
+    nominal, calibrated, rng = robots
+    q_goal, q_seed = _case(calibrated, rng)
+    with pytest.raises(CompensationError) as error:
+        compensate(tool_point(calibrated, q_goal), nominal, calibrated, q_seed, max_iter=1)
+    assert "after 1 iterations" in _one_line(error)
