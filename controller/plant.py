@@ -124,7 +124,8 @@ def build_mjcf(
         lines.append(f'{indent}<body name="link{i + 1}" pos="{_vec(pos)}" quat="{_vec(_quat(rotation))}" '
                      'gravcomp="1">')
         indent += "  "
-        lines.append(f'{indent}<inertial pos="0 0 0" mass="{_num(LINK_MASS)}" diaginertia="{_vec([LINK_INERTIA] * 3)}"/>')
+        inertia = _vec([LINK_INERTIA] * 3)
+        lines.append(f'{indent}<inertial pos="0 0 0" mass="{_num(LINK_MASS)}" diaginertia="{inertia}"/>')
         lines.append(f'{indent}<joint name="joint{i + 1}" pos="{_vec(joint_pos)}" axis="{_vec(axis)}" '
                      f'range="{_num(model.lower[i])} {_num(model.upper[i])}"/>')
         lines.append(f'{indent}<geom type="sphere" size="0.03" pos="{_vec(joint_pos)}"/>')

@@ -1,0 +1,187 @@
+"""Secondary-task velocities ``q_r`` that drive self-motion: random or coverage-directed.
+
+An exploration is asked for a new ``q_r`` target at decision times; :class:`Ramp` blends
+from the current ``q_r`` to the new one with a raised cosine over a few hundred
+milliseconds (a step change kicks the tool off the fixture by 0.1 mm or more). The QP then
+projects ``q_r`` into the null space of the tool-point task.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+MODES: tuple[str, ...] = ("coverage", "random")
+#: Defaults: exploration speed [rad/s], decision periods [s], ramp duration [s], histogram bins.
+RANDOM_SPEED = 0.6  # each joint uniform in [-speed, speed]
+COVERAGE_SPEED = 1.5  # |q_r| toward a goal
+SPEED = COVERAGE_SPEED
+RANDOM_PERIOD = 2.0
+COVERAGE_PERIOD = 2.0
+RAMP_TIME = 0.3
+GOAL_STEP = 0.6  # [rad]
+GOAL_MARGIN = 0.03  # [rad] goals stay this far inside the limits
+
+
+def joint_coverage(q: np.ndarray, lower: np.ndarray, upper: np.ndarray) -> np.ndarray:
+    """Share of each joint's range visited by a continuous trajectory (the paper's Fig. 5).
+
+    A continuous path visits every angle between its extremes, so this is
+    ``(max q_j - min q_j) / (upper_j - lower_j)``.
+
+    Args:
+        q: (K, n) joint angles [rad] (K >= 1).
+        lower, upper: (n,) limits [rad].
+
+    Returns:
+        (n,) shares in [0, 1].
+    """
+    return (q.max(axis=0) - q.min(axis=0)) / (upper - lower)
+
+
+@dataclass
+class Ramp:
+    """Raised-cosine blend of ``q_r`` from ``start`` to ``end`` over ``duration`` seconds."""
+
+    n: int
+    duration: float = RAMP_TIME
+    start: np.ndarray = field(init=False)
+    end: np.ndarray = field(init=False)  # the last value returned
+    t0: float = 0.0
+
+    def __post_init__(self) -> None:
+        self.start = np.zeros(self.n)
+        self.end = np.zeros(self.n)
+
+    def retarget(self, t: float) -> None:
+        """Start a new blend at time ``t`` [s] from the last value returned."""
+        self.start = self.end.copy()
+        self.t0 = t
+
+    def __call__(self, t: float, command: np.ndarray) -> np.ndarray:
+        """(n,) ``q_r`` at time ``t`` [s]: from the frozen start toward the live ``command`` (n,)."""
+        s = (t - self.t0) / self.duration
+        if s >= 1.0:
+            self.end = command
+        else:
+            w = 0.5 - 0.5 * np.cos(np.pi * max(s, 0.0))
+            self.end = self.start + w * (command - self.start)
+        return self.end
+
+
+class RandomExploration:
+    """The paper's: uniformly random joint velocities, renewed every ``period`` seconds."""
+
+    def __init__(self, n: int, rng: np.random.Generator, speed: float = SPEED, period: float = RANDOM_PERIOD):
+        self.n, self.rng, self.speed, self.period = n, rng, speed, period
+        self._q_r = np.zeros(n)
+
+    def decide(self, t: float, q_history: np.ndarray, jac: np.ndarray) -> None:
+        """Draw new joint velocities in ``[-speed, speed]`` (the arguments are unused)."""
+        self._q_r = self.rng.uniform(-self.speed, self.speed, self.n)
+
+    def done(self, q: np.ndarray) -> bool:
+        """Never early: decisions come every ``period``."""
+        return False
+
+    def command(self, q: np.ndarray) -> np.ndarray:
+        """(n,) the current random ``q_r`` [rad/s]."""
+        return self._q_r
+
+
+class CoverageExploration:
+    """Steer toward the least-visited part of the least-covered joint's range.
+
+    At each decision the joint ``j`` with the smallest coverage (skipping joints whose last
+    goal could not be found or reached) gets a goal value just past the visited part of its
+    range, on the side with more unvisited range. A goal configuration with ``q_j`` at that
+    value is found on the self-motion manifold by IK on the controller's model with joint
+    ``j`` pinned, started at the current configuration; ``q_r`` then points from ``q`` to that
+    configuration (the QP keeps only its null-space part). A new decision is taken when the
+    goal is reached or after ``period`` seconds.
+
+    Args:
+        model: the controller's model (nominal).
+        target: (3,) fixture centre [m] (where the controller's model believes the tool is).
+        rng: seeded generator.
+        speed: |q_r| far from the goal [rad/s].
+        period: longest time spent on one goal [s].
+        step: how far past the visited range a goal is set [rad].
+    """
+
+    def __init__(self, model, target: np.ndarray, rng: np.random.Generator, speed: float = SPEED,
+                 period: float = COVERAGE_PERIOD, step: float = GOAL_STEP):
+        self.model, self.target, self.rng = model, np.asarray(target, float), rng
+        self.lower, self.upper = model.lower + GOAL_MARGIN, model.upper - GOAL_MARGIN
+        self.n = self.lower.size
+        self.speed, self.period, self.step = speed, period, step
+        self.goal: np.ndarray | None = None
+        self._tabu = np.zeros(self.n)
+        self._joint = -1
+
+    def _find_goal(self, q: np.ndarray, j: int, value: float) -> np.ndarray | None:
+        from dataclasses import replace
+
+        from .ik import ik
+
+        lower, upper = self.lower.copy(), self.upper.copy()
+        lower[j] = upper[j] = value
+        start = q.copy()
+        start[j] = value
+        result = ik(replace(self.model, lower=lower, upper=upper), self.target, start, max_iter=50)
+        return result.q if result.converged else None
+
+    def decide(self, t: float, q_history: np.ndarray, jac: np.ndarray) -> None:
+        """Choose the next goal.
+
+        Args:
+            t: time [s].
+            q_history: (K, n) every joint reading of this fixture so far (K >= 1).
+            jac: (3, n) the controller's Jacobian at the current configuration (unused).
+        """
+        q = q_history[-1]
+        if self.goal is not None and np.linalg.norm(self.goal - q) > 0.1:
+            self._tabu[self._joint] = 2  # not reached in time: try others first
+        lo, hi = q_history.min(axis=0), q_history.max(axis=0)
+        coverage = (hi - lo) / (self.upper - self.lower)
+        self.goal = None
+        for j in np.argsort(coverage + 10.0 * (self._tabu > 0)):
+            below, above = lo[j] - self.lower[j], self.upper[j] - hi[j]
+            sides = [(-1.0, below), (1.0, above)]
+            sides.sort(key=lambda s: -s[1])
+            for direction, room in sides:
+                if room < 0.02:
+                    continue
+                for step in (self.step, 0.5 * self.step):
+                    value = (lo[j] - min(step, room)) if direction < 0 else (hi[j] + min(step, room))
+                    goal = self._find_goal(q, j, value)
+                    if goal is not None:
+                        self.goal, self._joint = goal, int(j)
+                        break
+                if self.goal is not None:
+                    break
+            if self.goal is not None:
+                break
+            self._tabu[j] = 2
+        self._tabu = np.maximum(self._tabu - 1, 0)
+
+    def done(self, q: np.ndarray) -> bool:
+        """True when the goal is reached (a new decision is due)."""
+        return self.goal is None or float(np.linalg.norm(self.goal - q)) < 0.05
+
+    def command(self, q: np.ndarray) -> np.ndarray:
+        """(n,) ``q_r`` toward the goal [rad/s]: ``speed`` far away, proportional within 0.3 rad."""
+        if self.goal is None:
+            return np.zeros(self.n)
+        delta = self.goal - q
+        return delta * (self.speed / max(float(np.linalg.norm(delta)), 0.3))
+
+
+def make_exploration(mode: str, model, target: np.ndarray, rng: np.random.Generator, speed: float | None = None):
+    """The exploration of ``mode`` (``"coverage"`` or ``"random"``) for ``model`` at ``target`` (3,) [m]."""
+    if mode == "coverage":
+        return CoverageExploration(model, target, rng, COVERAGE_SPEED if speed is None else speed)
+    if mode == "random":
+        return RandomExploration(model.n_joints, rng, RANDOM_SPEED if speed is None else speed)
+    raise ValueError(f"unknown exploration mode {mode!r}, expected one of {MODES}")

@@ -1,0 +1,278 @@
+"""The measurement protocol in simulation: self-motion at spherical-joint fixtures.
+
+At each fixture: reach it with IK on the TRUE model (the plant), engage the ``connect``
+equality, then drive self-motion with :class:`NullSpaceController` running on the NOMINAL
+model, exactly as on a real arm, and record the joint readings at 1 kHz. The closed chain, not
+the nominal model, keeps the true tool point on the fixture. ``N`` random samples per fixture
+are kept; the whole run is also offered decimated (every 10 ms) for viewing.
+
+Optional fixture compliance (the paper's measurement noise) moves the physical anchor point
+of the fixture, never the joint readings.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field, replace
+
+import mujoco
+import numpy as np
+
+from correction import RobotModel, frames
+from correction.errors import SpherecalError
+
+from .exploration import COVERAGE_PERIOD, RANDOM_PERIOD, Ramp, joint_coverage, make_exploration
+from .ik import ik
+from .nullspace import NullSpaceController
+from .plant import TIMESTEP, build_plant
+from .qp_ik import LIMIT_MARGIN
+
+#: Start of the reaching IK (the Panda's "ready" pose) and reach settings.
+HOME = np.array([0.0, -0.785, 0.0, -2.356, 0.0, 1.571, 0.785])
+REACH_RESTARTS = 20
+#: A fixture closer than this to the base column (base to the first joint's frame) is inside
+#: the robot [m].
+BASE_RADIUS = 0.12
+#: Correlation time of the fixture compliance [s]: a new offset every this often, blended.
+NOISE_PERIOD = 0.2
+#: How often the exploration is asked whether its goal is reached [s].
+CHECK_PERIOD = 0.05
+
+
+class UnreachableFixtureError(SpherecalError):
+    """The tool point of the true robot cannot reach a fixture inside the joint limits."""
+
+
+class FixtureInsideRobotError(SpherecalError):
+    """A fixture lies inside the robot's base column."""
+
+
+@dataclass(frozen=True)
+class SelfMotionSettings:
+    """Settings of :func:`collect_self_motion`.
+
+    Attributes:
+        seconds: self-motion per fixture [s].
+        samples: samples kept per fixture (drawn at random from the 1 kHz record).
+        mode: ``"coverage"`` (default) or ``"random"`` exploration.
+        noise: std of the fixture compliance per axis [m] (0: ideal fixture).
+        speed: exploration speed [rad/s] (None: the mode's default).
+        decimate: period of the decimated trajectory [s].
+        solver: QP solver name (``"osqp"`` persistent by default).
+    """
+
+    seconds: float = 20.0
+    samples: int = 500
+    mode: str = "coverage"
+    noise: float = 0.0
+    speed: float | None = None
+    decimate: float = 0.01
+    solver: str = "osqp"
+
+
+@dataclass(frozen=True, eq=False)
+class SelfMotionRun:
+    """Everything a self-motion run produced.
+
+    Attributes:
+        true_model, nominal_model: the plant's robot and the controller's.
+        fixture_names: (F,) names in run order; ``fixture_centres`` (F, 3) true centres [m].
+        t, q, labels, tool: kept samples: (K,) time [s], (K, n) joint readings [rad], (K,)
+            fixture names, (K, 3) TRUE tool point (plant's site) [m].
+        trajectory_t, trajectory_q, trajectory_labels, trajectory_tool: the whole run every
+            ``settings.decimate`` seconds, same shapes.
+        coverage: (F, n) share of each joint's range visited.
+        max_violation: (F,) largest distance between tool site and fixture anchor [m].
+        max_deviation: (F,) largest distance between tool site and the fixture centre [m]
+            (differs from ``max_violation`` only with compliance noise).
+        rms_deviation: (F,) root-mean-square distance between tool site and fixture centre [m]
+            (the effective measurement noise; sqrt(3) x the per-axis std).
+        limit_excess: (F,) largest excursion beyond a joint limit [rad] (0: none).
+        reach_q: (F, n) configuration where each fixture was engaged.
+        fallbacks: QP steps that fell back to the damped pseudo-inverse.
+        settings: what made it.
+    """
+
+    true_model: RobotModel
+    nominal_model: RobotModel
+    fixture_names: tuple[str, ...]
+    fixture_centres: np.ndarray
+    t: np.ndarray
+    q: np.ndarray
+    labels: np.ndarray
+    tool: np.ndarray
+    trajectory_t: np.ndarray
+    trajectory_q: np.ndarray
+    trajectory_labels: np.ndarray
+    trajectory_tool: np.ndarray
+    coverage: np.ndarray
+    max_violation: np.ndarray
+    max_deviation: np.ndarray
+    rms_deviation: np.ndarray
+    limit_excess: np.ndarray
+    reach_q: np.ndarray
+    fallbacks: int = 0
+    settings: SelfMotionSettings = field(default_factory=SelfMotionSettings)
+
+    def dataset(self):
+        """The kept samples as an :class:`identification.dataset.Dataset` (with times)."""
+        from identification.dataset import Dataset
+
+        return Dataset(labels=self.labels, q=self.q, t=self.t, fixture_names=self.fixture_names)
+
+    def coverage_table(self) -> str:
+        """Per-fixture coverage [%] per joint, violation [mm] and limit excess [rad], as text."""
+        n = self.coverage.shape[1]
+        head = "fixture " + " ".join(f"{'q' + str(j + 1):>5}" for j in range(n)) + "   min%  viol_mm  limit_rad"
+        rows = [head]
+        for k, name in enumerate(self.fixture_names):
+            cov = self.coverage[k] * 100
+            rows.append(f"{name:<7} " + " ".join(f"{c:5.1f}" for c in cov)
+                        + f"  {cov.min():5.1f}  {self.max_violation[k] * 1e3:7.4f}  {self.limit_excess[k]:9.2e}")
+        return "\n".join(rows)
+
+
+def check_fixture(model: RobotModel, name: str, centre: np.ndarray) -> None:
+    """Raise :class:`FixtureInsideRobotError` if ``centre`` lies in the base column of ``model``.
+
+    The base column is the segment from the base origin to the origin of frame 1 (which the
+    first joint does not move), thickened by :data:`BASE_RADIUS`.
+    """
+    origins = frames(model, np.zeros((1, model.n_joints))).origin[:, :, 0]  # (n+1, 3)
+    a, b = origins[0], origins[1]
+    axis = b - a
+    s = np.clip(np.dot(centre - a, axis) / max(np.dot(axis, axis), 1e-12), 0.0, 1.0)
+    distance = np.linalg.norm(centre - (a + s * axis))
+    if distance < BASE_RADIUS:
+        raise FixtureInsideRobotError(
+            f"fixture {name} at {np.round(centre, 4).tolist()} m is inside the robot "
+            f"({distance * 1e3:.0f} mm from the base column, need >= {BASE_RADIUS * 1e3:.0f} mm)")
+
+
+def reach_fixture(model: RobotModel, name: str, centre: np.ndarray, rng: np.random.Generator,
+                  margin: float = 2 * LIMIT_MARGIN) -> np.ndarray:
+    """(n,) joint angles putting ``model``'s tool point on ``centre``, ``margin`` inside the limits.
+
+    Raises:
+        FixtureInsideRobotError, UnreachableFixtureError.
+    """
+    check_fixture(model, name, centre)
+    inner = replace(model, lower=model.lower + margin, upper=model.upper - margin)
+    result = ik(inner, centre, np.clip(HOME, inner.lower, inner.upper), restarts=REACH_RESTARTS, rng=rng)
+    if not result.converged:
+        raise UnreachableFixtureError(
+            f"fixture {name} at {np.round(centre, 4).tolist()} m is out of reach "
+            f"(IK inside the joint limits misses it by {result.position_error * 1e3:.1f} mm)")
+    return result.q
+
+
+class _Compliance:
+    """Smooth random offset of a fixture's anchor: knots N(0, std^2) every period, cosine-blended.
+
+    Starts at zero (where the fixture was reached) so that engaging it does not jump.
+    """
+
+    def __init__(self, std: float, rng: np.random.Generator, period: float = NOISE_PERIOD):
+        self.std, self.rng, self.period = std, rng, period
+        self.a = np.zeros(3)
+        self.b = rng.normal(0.0, std, 3)
+        self.t0 = 0.0
+
+    def __call__(self, t: float) -> np.ndarray:
+        while t - self.t0 >= self.period:
+            self.a, self.b, self.t0 = self.b, self.rng.normal(0.0, self.std, 3), self.t0 + self.period
+        w = 0.5 - 0.5 * np.cos(np.pi * (t - self.t0) / self.period)
+        return self.a + w * (self.b - self.a)
+
+
+def collect_self_motion(
+    true_model: RobotModel,
+    nominal_model: RobotModel,
+    fixtures: dict[str, np.ndarray],
+    rng: np.random.Generator,
+    settings: SelfMotionSettings | None = None,
+) -> SelfMotionRun:
+    """Run the protocol at every fixture and return what was recorded.
+
+    Args:
+        true_model: the plant's robot (perturbed "true" parameters).
+        nominal_model: the controller's kinematics.
+        fixtures: name -> (3,) true centre in the world [m], visited in order.
+        rng: seeded generator (exploration, sample choice, noise, IK restarts).
+        settings: :class:`SelfMotionSettings` (defaults when None).
+
+    Raises:
+        FixtureInsideRobotError, UnreachableFixtureError: before anything is simulated.
+    """
+    settings = settings or SelfMotionSettings()
+    fixtures = {str(k): np.asarray(v, dtype=float).reshape(3) for k, v in fixtures.items()}
+    names = tuple(fixtures)
+    reach = np.array([reach_fixture(true_model, k, c, rng) for k, c in fixtures.items()]).reshape(len(names), -1)
+    plant = build_plant(true_model, fixtures)
+    controller = NullSpaceController(nominal_model, solver=settings.solver)
+    n = true_model.n_joints
+    steps = int(round(settings.seconds / TIMESTEP))
+    keep = min(settings.samples, steps)
+    every = max(int(round(settings.decimate / TIMESTEP)), 1)
+    out = {key: [] for key in ("t", "q", "labels", "tool", "tt", "tq", "tlabels", "ttool")}
+    coverage = np.zeros((len(names), n))
+    violation, deviation, rms, excess = (np.zeros(len(names)) for _ in range(4))
+    m, d = plant.mj_model, plant.mj_data
+    tool_id = plant.tool_site
+    for k, name in enumerate(names):
+        exploration = make_exploration(settings.mode, nominal_model, fixtures[name], rng, settings.speed)
+        period = int(round((COVERAGE_PERIOD if settings.mode == "coverage" else RANDOM_PERIOD) / TIMESTEP))
+        check = int(round(CHECK_PERIOD / TIMESTEP))
+        ramp = Ramp(n)
+        compliance = _Compliance(settings.noise, rng) if settings.noise > 0 else None
+        centre = fixtures[name]
+        anchor_id = int(plant.fixture_sites[k])
+        plant.move_fixture(name, centre)
+        plant.set_state(reach[k])
+        plant.engage(name)
+        q_log = np.empty((steps, n))
+        tool_log = np.empty((steps, 3))
+        gap_log = np.empty(steps)
+        next_decision = 0
+        for s in range(steps):
+            t = s * TIMESTEP
+            if compliance is not None:
+                m.site_pos[anchor_id] = centre + compliance(t)
+            mujoco.mj_step1(m, d)
+            q = d.qpos[:n]
+            q_log[s] = q
+            tool_log[s] = d.site_xpos[tool_id]
+            gap_log[s] = np.linalg.norm(d.site_xpos[tool_id] - d.site_xpos[anchor_id])
+            if s == next_decision or (s % check == 0 and exploration.done(q)):
+                exploration.decide(t, q_log[: s + 1], controller.kinematics(q)[1])
+                ramp.retarget(t)
+                next_decision = s + period
+            d.ctrl[:n] = controller.step(q, ramp(t, exploration.command(q)))
+            mujoco.mj_step2(m, d)
+        plant.release()
+        offset = k * settings.seconds
+        chosen = np.sort(rng.choice(steps, size=keep, replace=False))
+        label = np.full(keep, name)
+        out["t"].append(offset + chosen * TIMESTEP)
+        out["q"].append(q_log[chosen])
+        out["labels"].append(label)
+        out["tool"].append(tool_log[chosen])
+        out["tt"].append(offset + np.arange(0, steps, every) * TIMESTEP)
+        out["tq"].append(q_log[::every])
+        out["tlabels"].append(np.full(q_log[::every].shape[0], name))
+        out["ttool"].append(tool_log[::every])
+        coverage[k] = joint_coverage(q_log, true_model.lower, true_model.upper)
+        violation[k] = gap_log.max()
+        distance = np.linalg.norm(tool_log - centre, axis=1)
+        deviation[k] = distance.max()
+        rms[k] = np.sqrt(np.mean(distance**2))
+        excess[k] = max(0.0, float(np.max(true_model.lower - q_log)), float(np.max(q_log - true_model.upper)))
+    cat = {key: np.concatenate(v) for key, v in out.items()}
+    return SelfMotionRun(
+        true_model=true_model, nominal_model=nominal_model, fixture_names=names,
+        fixture_centres=np.array([fixtures[k] for k in names]).reshape(-1, 3),
+        t=cat["t"], q=cat["q"], labels=cat["labels"], tool=cat["tool"],
+        trajectory_t=cat["tt"], trajectory_q=cat["tq"], trajectory_labels=cat["tlabels"],
+        trajectory_tool=cat["ttool"], coverage=coverage, max_violation=violation, max_deviation=deviation,
+        rms_deviation=rms, limit_excess=excess, reach_q=reach, fallbacks=controller.report.fallbacks,
+        settings=settings,
+    )
