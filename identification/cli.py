@@ -9,10 +9,93 @@ HELP = "Identify DH parameters from spherical-joint samples and write a calibrat
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     """Register the options of `spherecal calibrate`."""
+    parser.add_argument("--robot", required=True, help="nominal robot file (or 'panda')")
+    parser.add_argument("--samples", required=True, help="samples.csv: fixture[,t],q1..qn [rad]")
+    parser.add_argument("--fixtures", help="fixtures.yaml: known positions and distances [m]")
+    parser.add_argument("--method", choices=("lm", "pso", "pso+lm"), default="lm", help="solver (default lm)")
+    parser.add_argument("--max-samples", type=int, default=None, help="keep at most N samples per fixture (random)")
+    parser.add_argument("--seed", type=int, default=0, help="seed of subsampling and PSO (default 0)")
+    parser.add_argument("--loss", choices=("linear", "soft_l1", "huber"), default="linear", help="lm loss")
+    parser.add_argument(
+        "--noise", type=float, default=3e-4, help="expected fixture noise [m] (robust-loss scale; default 0.0003)"
+    )
+    parser.add_argument(
+        "--dedup-tol", type=float, default=1e-4, help="drop samples within this of an earlier one [rad] (1e-4)"
+    )
+    parser.add_argument("--out", required=True, help="calibrated robot file to write (YAML)")
+
+
+def _sha256(path: str) -> str:
+    import hashlib
+
+    with open(path, "rb") as handle:
+        return hashlib.sha256(handle.read()).hexdigest()
+
+
+def _versions(method: str) -> dict[str, str]:
+    from importlib.metadata import PackageNotFoundError, version
+
+    out = {}
+    packages = ("numpy", "scipy", "mujoco", "spherecal") + (("pyswarms",) if "pso" in method else ())
+    for name in packages:
+        try:
+            out[name] = version(name)
+        except PackageNotFoundError:
+            out[name] = "not installed"
+    return out
 
 
 def run(args: argparse.Namespace) -> int:
-    """Not built yet: exits 2."""
-    from validation.cli import not_yet_available
+    """Read, check, calibrate, then write ``--out`` atomically and print the summary."""
+    import datetime
+    import time
+    from dataclasses import replace
+    from pathlib import Path
 
-    return not_yet_available("calibrate")
+    import numpy as np
+
+    from correction import load_robot, save_robot
+
+    from .calibrate import calibrate
+    from .dataset import read_fixtures, read_samples
+
+    clock = time.perf_counter()
+    if args.max_samples is not None and args.max_samples < 1:
+        raise SystemExit("spherecal calibrate: error: --max-samples must be >= 1")
+    if not args.noise > 0 or args.dedup_tol < 0:
+        raise SystemExit("spherecal calibrate: error: --noise must be > 0 and --dedup-tol >= 0")
+    nominal = load_robot(args.robot)
+    dataset = read_samples(args.samples, nominal)
+    spec = read_fixtures(args.fixtures) if args.fixtures else None
+    read = len(dataset.labels)
+    dataset = dataset.deduplicated(args.dedup_tol)
+    dropped = read - dataset.n_samples
+    dataset = dataset.subsampled(args.max_samples, np.random.default_rng(args.seed))
+    result = calibrate(nominal, dataset, spec, method=args.method, seed=args.seed, loss=args.loss, noise=args.noise)
+    block = result.block()
+    block["duplicates_dropped"] = dropped
+    block["inputs"] = {
+        "robot": {"path": args.robot, "sha256": _sha256(args.robot) if Path(args.robot).exists() else "embedded"},
+        "samples": {"path": args.samples, "sha256": _sha256(args.samples)},
+    }
+    if args.fixtures:
+        block["inputs"]["fixtures"] = {"path": args.fixtures, "sha256": _sha256(args.fixtures)}
+    block["options"] = {
+        "loss": args.loss,
+        "noise_m": args.noise,
+        "max_samples": args.max_samples,
+        "dedup_tol_rad": args.dedup_tol,
+    }
+    block["seed"] = args.seed
+    block["versions"] = _versions(args.method)
+    block["time"] = datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="seconds")
+    extras = {k: v for k, v in nominal.extras.items() if k != "calibration"}
+    extras["calibration"] = block
+    model = replace(result.model, extras=extras)
+    header = f"calibrated by spherecal calibrate ({args.method}) from {args.samples}"
+    save_robot(model, args.out, header=header)
+    print(result.summary())
+    if dropped:
+        print(f"dropped {dropped} duplicate samples (within {args.dedup_tol:g} rad)")
+    print(f"wrote {args.out} in {time.perf_counter() - clock:.2f} s")
+    return 0

@@ -82,6 +82,6 @@ def predicted_std(jac: np.ndarray, sigma: float) -> np.ndarray:
     """
     norms = column_norms(jac)
     _, s, vt = np.linalg.svd(jac / norms, full_matrices=False)
-    inv = np.where(s > s[0] * 1e-14, 1.0 / np.maximum(s, 1e-300), np.inf)
+    inv = 1.0 / np.maximum(s, s[0] * 1e-14)  # a null direction gives a huge (not infinite) std
     scaled_var = (vt.T**2) @ (inv**2)
     return sigma * np.sqrt(scaled_var) / norms

@@ -163,7 +163,7 @@ def solve_pso(
         centres = centres_of(points)
         value = np.mean(np.linalg.norm(points - centres[fixture], axis=1))
         for a, b, target in distances:
-            value += problem.distance_weight * abs(np.linalg.norm(centres[a] - centres[b]) - target)
+            value += abs(np.linalg.norm(centres[a] - centres[b]) - target)
         return float(value)
 
     evaluations = 0

@@ -1,0 +1,180 @@
+"""Identification: Jacobian, gauge and identifiability, accuracy against a known true robot, PSO."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from correction import load_robot, perturb, registered_errors, to_standard, tool_point
+from identification.calibrate import calibrate
+from identification.dataset import Dataset, DatasetError, FixtureSpec
+from identification.problem import UnidentifiableError, build_problem
+from identification.synthetic import make_dataset, project_to_point
+
+
+@pytest.fixture(scope="module")
+def truth():
+    panda = load_robot("panda")
+    return panda, perturb(panda, np.random.default_rng(1))
+
+
+@pytest.fixture(scope="module")
+def clean(truth):
+    return make_dataset(truth[1], rng=np.random.default_rng(2))
+
+
+def _accuracy(model, true) -> np.ndarray:
+    q = true.random_configurations(5000, np.random.default_rng(5))
+    return registered_errors(tool_point(model, q), tool_point(true, q))
+
+
+def test_synthetic_samples_sit_on_their_fixture(truth, clean) -> None:
+    _, true = truth
+    dataset, spec = clean
+    points = tool_point(true, dataset.q)
+    for name in dataset.fixture_names:
+        spread = points[dataset.labels == name] - points[dataset.labels == name].mean(axis=0)
+        assert np.abs(spread).max() < 1e-9
+    assert np.all(true.within_limits(dataset.q))
+    assert np.all(dataset.q.std(axis=0) > 0.2)  # spread over the self-motion manifold
+    assert len(spec.distances) == 3
+
+
+def test_projection_reaches_the_target(truth, rng) -> None:
+    _, true = truth
+    q, ok = project_to_point(true, true.random_configurations(50, rng), np.array([0.5, 0.0, 0.1]))
+    assert ok.mean() > 0.5
+    assert np.allclose(tool_point(true, q[ok]), [0.5, 0.0, 0.1], atol=1e-9)
+
+
+def test_jacobian_matches_finite_differences(truth, clean) -> None:
+    panda, _ = truth
+    dataset, spec = clean
+    small = dataset.select(np.arange(0, dataset.n_samples, 25))
+    for problem in (build_problem(panda, small, spec), build_problem(panda, small)):  # distances; scale anchor
+        x = problem.x0 + 1e-4 * np.random.default_rng(0).normal(size=problem.n_unknowns)
+        jac = problem.jacobian(x)
+        eps = 1e-7
+        numeric = np.stack(
+            [(problem.residuals(x + eps * e) - problem.residuals(x - eps * e)) / (2 * eps) for e in np.eye(x.size)],
+            axis=1,
+        )
+        assert jac.shape == (problem.n_residuals, problem.n_unknowns)
+        assert np.abs(jac - numeric).max() < 1e-6 * max(1.0, problem.distance_weight)
+
+
+def test_gauge_base_and_tool_redundancy_are_fixed(truth, clean) -> None:
+    panda, _ = truth
+    dataset, spec = clean
+    problem = build_problem(panda, dataset, spec)
+    for name in ("a1", "alpha1", "d1", "theta1"):
+        assert problem.fixed[name].startswith("gauge")
+    assert all(problem.fixed[n].startswith("base placement") for n in panda.param_names if n.startswith("base_"))
+    assert "tool_z" in problem.fixed["d7"] and "tool_x" in problem.fixed["theta7"]
+    assert set(problem.identified).isdisjoint(problem.fixed)
+    assert not problem.pinned and not problem.warnings
+    # standard DH: only theta1 and d1 move the point set rigidly
+    standard = to_standard(panda)
+    std_problem = build_problem(standard, Dataset(dataset.labels, dataset.q), spec)
+    assert std_problem.fixed["d1"].startswith("gauge") and std_problem.fixed["theta1"].startswith("gauge")
+    assert "a1" not in std_problem.fixed or not std_problem.fixed["a1"].startswith("gauge")
+
+
+def test_noise_free_lm_recovers_the_robot(truth, clean) -> None:
+    panda, true = truth
+    dataset, spec = clean
+    result = calibrate(panda, dataset, spec)
+    errors = _accuracy(result.model, true)
+    assert errors.mean() <= 1e-6  # 0.001 mm
+    assert result.rms_after < 1e-8 < 1e-3 < result.rms_before
+    assert np.isfinite(result.condition_number) and result.condition_number < 1e5
+    assert _accuracy(panda, true).mean() > 1e-3  # the nominal model is millimetres off
+
+
+def test_noisy_lm_within_targets(truth) -> None:
+    panda, true = truth
+    dataset, spec = make_dataset(true, rng=np.random.default_rng(3), noise=3e-4)
+    result = calibrate(panda, dataset, spec)
+    errors = _accuracy(result.model, true)
+    assert errors.mean() <= 0.08e-3 and errors.max() <= 0.2e-3, (errors.mean(), errors.max())
+    # the covariance is honest: residual ~ noise, std of identified parameters small but nonzero
+    assert 0.2e-3 < result.rms_after / np.sqrt(3) < 0.4e-3
+    assert all(0 < result.std[n] < 1e-3 for n in result.identified)
+
+
+def test_one_fixture_no_distance_does_not_collapse(truth) -> None:
+    panda, true = truth
+    dataset, _ = make_dataset(true, {"P1": (0.5, 0.0, 0.1)}, rng=np.random.default_rng(4), noise=3e-4)
+    result = calibrate(panda, dataset)
+    assert any(w.startswith("scale:") for w in result.warnings)
+    assert result.problem.pinned == ("P1",)
+    assert {"a1", "alpha1", "d1", "theta1", "d7", "theta7"} <= set(result.fixed)
+    calibrated, nominal = _accuracy(result.model, true), _accuracy(panda, true)
+    assert calibrated.mean() < nominal.mean() and calibrated.max() < nominal.max()
+    # the scale did not shrink: the mean arm length stays within 0.5 % of the truth
+    q = true.random_configurations(2000, np.random.default_rng(6))
+    ratio = (
+        np.linalg.norm(tool_point(result.model, q), axis=1).mean() / np.linalg.norm(tool_point(true, q), axis=1).mean()
+    )
+    assert abs(ratio - 1) < 5e-3
+
+
+def test_several_fixtures_without_distance_are_guarded(truth, clean) -> None:
+    panda, _ = truth
+    dataset, _ = clean
+    problem = build_problem(panda, dataset)
+    assert problem.pinned and problem.anchor is not None
+    assert any("absolute scale comes from the nominal model" in w for w in problem.warnings)
+
+
+def test_known_positions_fix_the_gauge(truth, clean) -> None:
+    panda, true = truth
+    dataset, spec = clean
+    centres = {n: tool_point(true, dataset.for_fixture(n)).mean(axis=0) for n in dataset.fixture_names}
+    known = FixtureSpec(spec.names, centres)
+    problem = build_problem(panda, dataset, known)
+    assert problem.free_centres == () and not problem.pinned
+    assert not any(r.startswith("gauge") for r in problem.fixed.values())
+
+
+def test_too_few_samples_and_rank_deficiency(truth, clean) -> None:
+    panda, _ = truth
+    dataset, spec = clean
+    few = dataset.select(np.array([0, 1, 600, 1200]))
+    with pytest.raises(DatasetError, match="fewer than the"):
+        build_problem(panda, few, spec)
+    # every sample at one configuration: the centre absorbs everything; only the one direction the
+    # scale anchor adds (|c - s0| = R) remains, so exactly one parameter is kept
+    same = Dataset(np.full(200, "P1"), np.repeat(dataset.q[:1], 200, axis=0))
+    assert len(build_problem(panda, same).identified) == 1
+
+
+def test_robust_loss_resists_slips(truth, clean) -> None:
+    panda, true = truth
+    dataset, spec = clean
+    q = dataset.q.copy()
+    slipped = np.random.default_rng(7).choice(dataset.n_samples, 30, replace=False)
+    q[slipped] += np.random.default_rng(8).normal(0, 0.02, (30, 7))  # 2 % of samples off by ~1 cm
+    q = np.clip(q, panda.lower, panda.upper)
+    bad = Dataset(dataset.labels, q)
+    plain = _accuracy(calibrate(panda, bad, spec).model, true).mean()
+    robust = _accuracy(calibrate(panda, bad, spec, loss="soft_l1", noise=1e-4).model, true).mean()
+    assert robust < 0.5 * plain
+
+
+def test_pso_is_seeded_quiet_and_restores_numpy_state(truth, clean, tmp_path, monkeypatch) -> None:
+    panda, true = truth
+    dataset, spec = clean
+    monkeypatch.chdir(tmp_path)
+    np.random.seed(123)  # noqa: NPY002
+    expected = np.random.random()  # noqa: NPY002
+    np.random.seed(123)  # noqa: NPY002
+    options = {"particles": 20, "iterations": 30, "samples_per_fixture": 40}
+    a = calibrate(panda, dataset, spec, method="pso", seed=5, pso_options=options)
+    b = calibrate(panda, dataset, spec, method="pso", seed=5, pso_options=options)
+    assert np.random.random() == expected  # noqa: NPY002
+    assert np.array_equal(a.model.params, b.model.params)
+    assert list(tmp_path.iterdir()) == []  # no report.log
+    assert a.rms_after <= a.rms_before
+    finished = calibrate(panda, dataset, spec, method="pso+lm", seed=5, pso_options=options)
+    assert _accuracy(finished.model, true).mean() < 1e-6
