@@ -8,7 +8,7 @@ import pytest
 from correction import load_robot, perturb, registered_errors, to_standard, tool_point
 from identification.calibrate import calibrate
 from identification.dataset import Dataset, DatasetError, FixtureSpec
-from identification.problem import UnidentifiableError, build_problem
+from identification.problem import build_problem
 from identification.synthetic import make_dataset, project_to_point
 
 

@@ -1,0 +1,111 @@
+"""`spherecal calibrate`: output file, bad input (one line, exit 1, no output), light start-up."""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+import yaml
+
+from correction import load_robot, perturb, save_robot
+from identification.dataset import write_fixtures, write_samples
+from identification.synthetic import make_dataset
+from validation.cli import main
+
+ROOT = Path(__file__).parents[1]
+HEADER = "fixture,q1,q2,q3,q4,q5,q6,q7\n"
+
+
+@pytest.fixture(scope="module")
+def inputs(tmp_path_factory):
+    folder = tmp_path_factory.mktemp("cal")
+    panda = load_robot("panda")
+    true = perturb(panda, np.random.default_rng(11))
+    dataset, spec = make_dataset(true, per_fixture=200, rng=np.random.default_rng(12))
+    save_robot(panda, folder / "robot.yaml")
+    write_samples(folder / "samples.csv", dataset)
+    write_fixtures(folder / "fixtures.yaml", spec)
+    return folder
+
+
+def test_calibrate_writes_a_robot_file_with_its_provenance(inputs, tmp_path, capsys) -> None:
+    out = tmp_path / "cal.yaml"
+    args = ["calibrate", "--robot", str(inputs / "robot.yaml"), "--samples", str(inputs / "samples.csv")]
+    code = main(args + ["--fixtures", str(inputs / "fixtures.yaml"), "--max-samples", "150", "--out", str(out)])
+    assert code == 0
+    printed = capsys.readouterr().out
+    assert "residual [mm]" in printed and "fixed" in printed
+    model = load_robot(out)  # any consumer of robot files can read it
+    block = model.extras["calibration"]
+    assert block["method"] == "lm" and block["samples_per_fixture"] == {"P1": 150, "P2": 150, "P3": 150}
+    assert block["residual_mm"]["after"]["rms"] < 1e-3
+    assert {"d7", "theta7", "a1", "base_x"} <= set(block["fixed"])
+    assert set(block["identified"]) <= set(block["std"])
+    assert len(block["inputs"]["samples"]["sha256"]) == 64 and "fixtures" in block["inputs"]
+    assert {"numpy", "scipy", "mujoco", "spherecal"} <= set(block["versions"]) and block["seed"] == 0
+    assert set(block["fixture_centres"]) == {"P1", "P2", "P3"}
+
+
+def _bad(tmp_path, samples_text=None, fixtures_text=None, inputs=None):
+    samples = tmp_path / "s.csv"
+    if samples_text is not None:
+        samples.write_text(samples_text)
+    else:
+        samples.write_text((inputs / "samples.csv").read_text())
+    args = ["calibrate", "--robot", "panda", "--samples", str(samples), "--out", str(tmp_path / "cal.yaml")]
+    if fixtures_text is not None:
+        (tmp_path / "f.yaml").write_text(fixtures_text)
+        args += ["--fixtures", str(tmp_path / "f.yaml")]
+    return args
+
+
+GOOD = "P1,0,0,0,-1,0,1,0\nP1,0.1,0,0,-1,0,1,0\n"
+
+
+@pytest.mark.parametrize(
+    ("samples", "fixtures", "where"),
+    [
+        (HEADER + GOOD + "P1,0,0,nan,-1,0,1,0\n", None, ("s.csv", "row 4", "field 'q3'")),
+        (HEADER + GOOD + "P1,0,0,x,-1,0,1,0\n", None, ("s.csv", "row 4", "field 'q3'")),
+        ("fixture,q1,q2,q3,q4,q5,q6\nP1,0,0,0,-1,0,1\n", None, ("s.csv", "row 1", "field 'q*'")),
+        (HEADER + GOOD + "P1,0,0,0,0.2,0,1,0\n", None, ("s.csv", "row 4", "field 'q4'")),
+        ("", None, ("s.csv", "row 1", "field 'fixture'")),
+        (HEADER + GOOD, None, ("s.csv", "rows 2-3", "field 'fixture'")),  # fewer samples than unknowns
+        (
+            None,
+            "fixtures: {P1: {}, P2: {}, P3: {}, P4: {}}\ndistances:\n  - [P1, P4, 0.5]\n",
+            ("f.yaml", "distances[0]", "field 'P4'"),
+        ),
+        (
+            None,
+            "fixtures: {P1: {}, P2: {}, P3: {}}\ndistances:\n  - [P1, P2, -0.5]\n",
+            ("f.yaml", "row 3", "field 'distances[0][2]'"),
+        ),
+    ],
+)
+def test_bad_input_one_line_exit_1_no_output(inputs, tmp_path, capsys, samples, fixtures, where) -> None:
+    args = _bad(tmp_path, samples, fixtures, inputs)
+    assert main(args) == 1
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1 and err.startswith("spherecal calibrate: error: "), err
+    for part in where:
+        assert part in err, err
+    assert not (tmp_path / "cal.yaml").exists()
+    assert not [p for p in tmp_path.iterdir() if p.name.startswith(".cal.yaml")]
+
+
+def test_lm_path_imports_no_simulator_viewer_or_swarm(inputs, tmp_path) -> None:
+    code = (
+        "import sys; from validation.cli import main;"
+        f"main(['calibrate','--robot','panda','--samples',{str(inputs / 'samples.csv')!r},"
+        f"'--fixtures',{str(inputs / 'fixtures.yaml')!r},'--out',{str(tmp_path / 'c.yaml')!r}]);"
+        "print(sorted(m for m in ('mujoco','rerun','pyswarms') if m in sys.modules), file=sys.stderr)"
+    )
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, cwd=tmp_path)
+    assert out.returncode == 0, out.stderr
+    assert out.stderr.strip().splitlines()[-1] == "[]"
+    assert yaml.safe_load((tmp_path / "c.yaml").read_text())["calibration"]["method"] == "lm"
+    assert not (tmp_path / "report.log").exists()
