@@ -1,1 +1,49 @@
-"""Controller: MuJoCo plant built from DH parameters, QP differential IK, self-motion."""
+"""Controller: MuJoCo plant built from DH parameters, QP differential IK, self-motion.
+
+Public names are loaded lazily (PEP 562) so that ``spherecal --help``, which imports
+``controller.cli``, does not import numpy or MuJoCo.
+"""
+
+from __future__ import annotations
+
+import importlib
+
+_EXPORTS: dict[str, str] = {
+    "CoverageExploration": "exploration",
+    "Ramp": "exploration",
+    "RandomExploration": "exploration",
+    "joint_coverage": "exploration",
+    "make_exploration": "exploration",
+    "IKResult": "ik",
+    "UnreachableError": "ik",
+    "ik": "ik",
+    "NullSpaceController": "nullspace",
+    "Plant": "plant",
+    "build_mjcf": "plant",
+    "build_plant": "plant",
+    "ControllerFallbackWarning": "qp_ik",
+    "PersistentOSQP": "qp_ik",
+    "QPSolveError": "qp_ik",
+    "build_problem": "qp_ik",
+    "damped_pinv_velocity": "qp_ik",
+    "solve_step": "qp_ik",
+    "velocity_bounds": "qp_ik",
+    "FixtureInsideRobotError": "self_motion",
+    "SelfMotionRun": "self_motion",
+    "SelfMotionSettings": "self_motion",
+    "UnreachableFixtureError": "self_motion",
+    "collect_self_motion": "self_motion",
+    "reach_fixture": "self_motion",
+}
+
+__all__ = sorted(_EXPORTS)
+
+
+def __getattr__(name: str):
+    if name in _EXPORTS:
+        return getattr(importlib.import_module(f".{_EXPORTS[name]}", __name__), name)
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+
+
+def __dir__() -> list[str]:
+    return __all__

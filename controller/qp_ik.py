@@ -221,7 +221,12 @@ def solve_step(
         reason = persistent.last_status
     else:
         opts = OSQP_SETTINGS if solver == "osqp" else {}
-        qdot = qpsolvers.solve_problem(problem, solver=solver, **opts).x
+        if solver == "osqp":  # OSQP wants CSC; it is re-created and refactorised on every call
+            problem = qpsolvers.Problem(sparse.csc_matrix(problem.P), problem.q, None, None,
+                                        sparse.csc_matrix(problem.A), problem.b, problem.lb, problem.ub)
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", PendingDeprecationWarning)  # osqp's raise_error notice
+            qdot = qpsolvers.solve_problem(problem, solver=solver, **opts).x
         reason = f"{solver} returned no solution"
     if report is not None:
         report.steps += 1

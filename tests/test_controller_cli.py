@@ -1,0 +1,78 @@
+"""`spherecal simulate`: files written on success, nothing and one line on bad input."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from correction import load_robot
+from identification.dataset import read_fixtures, read_samples
+from validation.cli import main
+
+
+def _simulate(tmp_path, *extra):
+    out = tmp_path / "out"
+    code = main(["simulate", "--out", str(out), "--seconds", "0.5", "--samples", "40", "--seed", "4", *extra])
+    return code, out
+
+
+def test_simulate_writes_three_readable_files(tmp_path, capsys):
+    code, out = _simulate(tmp_path, "--known-distances")
+    assert code == 0
+    assert sorted(p.name for p in out.iterdir()) == ["fixtures.yaml", "samples.csv", "truth.yaml"]
+    truth = load_robot(out / "truth.yaml")
+    data = read_samples(out / "samples.csv", truth)
+    spec = read_fixtures(out / "fixtures.yaml")
+    assert data.fixture_names == spec.names == ("P1", "P2", "P3")
+    assert data.q.shape == (120, 7) and data.t is not None
+    sim = truth.extras["simulation"]
+    assert sim["seed"] == 4 and {"numpy", "scipy", "mujoco", "spherecal"} <= set(sim["versions"])
+    centres = {k: np.array(v) for k, v in sim["fixtures"].items()}
+    assert not spec.positions  # the centres are what calibration estimates
+    for a, b, distance in spec.distances:
+        assert distance == pytest.approx(np.linalg.norm(centres[a] - centres[b]), abs=1e-12)
+    assert len(spec.distances) == 3
+    assert not truth.same_as(load_robot("panda"), atol=1e-6)  # the true robot is perturbed
+
+
+def test_simulate_is_reproducible(tmp_path):
+    _, out1 = _simulate(tmp_path / "a", "--noise", "0")
+    _, out2 = _simulate(tmp_path / "b", "--noise", "0")
+    assert (out1 / "samples.csv").read_text() == (out2 / "samples.csv").read_text()
+
+
+def _write(tmp_path, text: str):
+    path = tmp_path / "fixtures.yaml"
+    path.write_text(text)
+    return path
+
+
+@pytest.mark.parametrize(
+    "text, message",
+    [
+        ("fixtures:\n  A: {position: [0.5, 0.0, 0.4]}\n  B: {position: [2.0, 0.0, 0.3]}\n",
+         "fixture B .* out of reach"),
+        ("fixtures:\n  A: {position: [0.0, 0.05, 0.2]}\n", "fixture A .* inside the robot"),
+        ("fixtures:\n  A: {position: [0.5, 0.0]}\n", "row 2, field 'fixtures.A.position'"),
+        ("fixtures:\n  A: {}\n", "fixtures.A.position.*true centre"),
+        ("fixtures: [unclosed\n", "invalid YAML"),
+    ],
+)
+def test_bad_fixtures_exit_nonzero_and_write_nothing(tmp_path, capsys, text, message):
+    import re
+
+    path = _write(tmp_path, text)
+    code, out = _simulate(tmp_path, "--fixtures", str(path))
+    err = capsys.readouterr().err.strip()
+    assert code == 1
+    assert len(err.splitlines()) == 1 and err.startswith("spherecal simulate: error:")
+    assert re.search(message, err), err
+    assert not out.exists()
+
+
+@pytest.mark.parametrize("args", [["--seconds", "0"], ["--samples", "100000"], ["--noise", "-1"],
+                                  ["--solver", "nope"], ["--robot", "missing.yaml"]])
+def test_bad_options_exit_nonzero_and_write_nothing(tmp_path, capsys, args):
+    code, out = _simulate(tmp_path, *args)
+    assert code == 1 and len(capsys.readouterr().err.strip().splitlines()) == 1
+    assert not out.exists()

@@ -1,0 +1,66 @@
+"""The MuJoCo plant: generated MJCF against correction's kinematics, fixtures engage/release."""
+
+from __future__ import annotations
+
+import mujoco
+import numpy as np
+import pytest
+
+from controller.plant import build_plant
+from correction import link_frames, to_standard, tool_point
+from tests.conftest import perturbed
+
+
+@pytest.mark.parametrize("convention", ["modified", "standard"])
+@pytest.mark.parametrize("kind", ["nominal", "perturbed"])
+def test_sites_equal_forward_kinematics(panda, rng, convention, kind):
+    model = panda if convention == "modified" else to_standard(panda)
+    if kind == "perturbed":
+        model = perturbed(model, rng, scale=5.0)  # base moved too
+    markers = np.array([[0.05, 0.0, 0.1], [-0.03, 0.04, 0.08], [0.0, -0.06, 0.12]])
+    plant = build_plant(model, {"P1": [0.5, 0.0, 0.4]}, markers=markers)
+    q = model.random_configurations(1000, rng)
+    sites = np.append(plant.marker_sites, plant.tool_site)
+    got = plant.site_positions(q, sites)
+    frames = link_frames(model, q)[:, -1]
+    expected_markers = np.einsum("nij,mj->nmi", frames[:, :3, :3], markers) + frames[:, None, :3, 3]
+    assert np.abs(got[:, -1] - tool_point(model, q)).max() < 1e-9
+    assert np.abs(got[:, :-1] - expected_markers).max() < 1e-9
+    # every body frame is the model's link frame
+    data = mujoco.MjData(plant.mj_model)
+    for qk, fk in zip(q[:20], link_frames(model, q[:20]), strict=True):
+        data.qpos[:] = qk
+        mujoco.mj_kinematics(plant.mj_model, data)
+        assert np.abs(data.xpos[1:] - fk[:, :3, 3]).max() < 1e-9
+        assert np.abs(data.xmat[1:].reshape(-1, 3, 3) - fk[:, :3, :3]).max() < 1e-9
+
+
+def test_plant_settings_and_fixtures(panda):
+    plant = build_plant(panda, {"A": [0.5, 0.0, 0.4], "B": [0.4, 0.2, 0.3]})
+    m = plant.mj_model
+    assert m.opt.timestep == pytest.approx(1e-3)
+    assert m.neq == 2 and m.nu == panda.n_joints
+    assert np.allclose(m.eq_solref[:, 0], 0.002)
+    assert np.allclose(m.jnt_range, np.stack([panda.lower, panda.upper], axis=1))
+    assert not plant.mj_data.eq_active.any()
+    plant.engage("B")
+    assert plant.mj_data.eq_active.tolist() == [0, 1]
+    plant.release()
+    assert not plant.mj_data.eq_active.any()
+    with pytest.raises(KeyError):
+        plant.engage("C")
+
+
+def test_engaged_fixture_holds_tool_point(panda, rng):
+    from controller.self_motion import reach_fixture
+
+    centre = np.array([0.5, 0.0, 0.4])
+    plant = build_plant(panda, {"A": centre})
+    plant.set_state(reach_fixture(panda, "A", centre, rng))
+    plant.engage("A")
+    plant.mj_data.qvel[:] = rng.normal(0.0, 0.2, panda.n_joints)  # push it around, no control
+    for _ in range(300):
+        mujoco.mj_step(plant.mj_model, plant.mj_data)
+    mujoco.mj_forward(plant.mj_model, plant.mj_data)
+    assert np.linalg.norm(plant.tool_position() - centre) < 2e-4
+    plant.release()  # released: it falls away (gravity compensation is on, velocity stays)

@@ -1,0 +1,96 @@
+"""Self-motion at a fixture: the closed chain holds the true tool point, limits hold, coverage."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from controller.cli import DEFAULT_FIXTURES
+from controller.exploration import Ramp, joint_coverage
+from controller.self_motion import (
+    FixtureInsideRobotError,
+    SelfMotionSettings,
+    UnreachableFixtureError,
+    collect_self_motion,
+    reach_fixture,
+)
+from correction import perturb, tool_point
+
+
+@pytest.fixture(scope="module")
+def short_run():
+    from correction import load_robot
+
+    panda = load_robot("panda")
+    rng = np.random.default_rng(11)
+    true = perturb(panda, rng)
+    fixtures = {"P2": DEFAULT_FIXTURES["P2"]}
+    return collect_self_motion(true, panda, fixtures, rng, SelfMotionSettings(seconds=2.0, samples=200))
+
+
+def test_short_run_holds_the_fixture(short_run):
+    run = short_run
+    assert run.q.shape == (200, 7) and run.labels.tolist() == ["P2"] * 200
+    assert np.all(np.diff(run.t) > 0) and run.t.max() < 2.0
+    assert run.max_violation[0] < 5e-5  # 0.05 mm
+    assert run.max_deviation[0] < 5e-5
+    assert run.limit_excess[0] == 0.0 and run.fallbacks == 0
+    # the recorded true tool point is the TRUE model's FK of the joint readings, on the fixture
+    assert np.abs(run.tool - tool_point(run.true_model, run.q)).max() < 1e-9
+    assert np.linalg.norm(run.tool - np.array(DEFAULT_FIXTURES["P2"]), axis=1).max() < 5e-5
+    # while the nominal model's idea of the tool point drifts (it is not fed back)
+    nominal = tool_point(run.nominal_model, run.q)
+    assert np.ptp(nominal, axis=0).max() > 1e-4
+    # it moved: self-motion, not standing still
+    assert run.coverage[0].max() > 0.05
+    assert run.trajectory_q.shape == (200, 7) and np.allclose(np.diff(run.trajectory_t), 0.01)
+
+
+def test_dataset_view(short_run):
+    data = short_run.dataset()
+    assert data.fixture_names == ("P2",) and data.q.shape == (200, 7) and data.t is not None
+
+
+def test_compliance_moves_the_point_not_the_readings(panda):
+    rng = np.random.default_rng(5)
+    true = perturb(panda, rng)
+    run = collect_self_motion(true, panda, {"P": DEFAULT_FIXTURES["P2"]}, rng,
+                              SelfMotionSettings(seconds=1.0, samples=100, noise=3e-4))
+    assert 1e-4 < run.rms_deviation[0] < 1e-3
+    # the readings are exact joint angles of the true robot, whose tool point sits off the centre
+    assert np.abs(run.tool - tool_point(true, run.q)).max() < 1e-9
+    assert run.limit_excess[0] == 0.0
+
+
+def test_bad_fixtures_are_refused(panda, rng):
+    with pytest.raises(UnreachableFixtureError, match="fixture far .* out of reach"):
+        reach_fixture(panda, "far", np.array([1.5, 0.0, 0.3]), rng)
+    with pytest.raises(FixtureInsideRobotError, match="fixture in .* inside the robot"):
+        reach_fixture(panda, "in", np.array([0.02, 0.03, 0.2]), rng)
+
+
+def test_ramp_is_smooth():
+    ramp = Ramp(2, duration=0.3)
+    ramp.retarget(0.0)
+    values = np.array([ramp(t, np.array([1.0, -1.0])) for t in np.arange(0.0, 0.5, 1e-3)])
+    assert values[0] == pytest.approx([0.0, 0.0]) and values[-1] == pytest.approx([1.0, -1.0])
+    assert np.abs(np.diff(values, axis=0)).max() < 1e-2
+
+
+def test_joint_coverage():
+    q = np.array([[0.0, 0.0], [1.0, -0.5], [0.5, 0.5]])
+    assert np.allclose(joint_coverage(q, np.array([-1.0, -1.0]), np.array([1.0, 1.0])), [0.5, 0.5])
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("seed", [0, 1])
+def test_default_fixtures_cover_thirty_percent(panda, seed):
+    rng = np.random.default_rng(seed)
+    true = perturb(panda, rng)
+    fixtures = {k: np.array(v) for k, v in DEFAULT_FIXTURES.items()}
+    run = collect_self_motion(true, panda, fixtures, rng, SelfMotionSettings(seconds=20.0))
+    print(run.coverage_table())
+    assert np.all(run.coverage >= 0.30)
+    assert np.all(run.max_violation < 5e-5)
+    assert np.all(run.limit_excess == 0.0)
+    assert run.fallbacks == 0
