@@ -1,0 +1,81 @@
+"""Speed of one control step and of a full simulated data collection (one core).
+
+Prints median and 95th percentile time of one control step (Jacobian, QP build and solve)
+along a self-motion trajectory, for the persistent OSQP default, qpsolvers' OSQP path
+(re-created every call) and DAQP through qpsolvers; then the wall time to simulate and
+record 3 default fixtures x 20 s. Writes ``bench/controller.json``.
+Targets (issue 4): <= 50 us per step with the default; <= 10 s for the 3 fixtures.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import platform
+import sys
+import time
+import warnings
+from pathlib import Path
+
+# This script is named like the package it measures: keep bench/ off the import path.
+sys.path[:] = [p for p in sys.path if Path(p or ".").resolve() != Path(__file__).resolve().parent]
+os.environ.setdefault("OMP_NUM_THREADS", "1")
+os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
+
+import numpy as np  # noqa: E402
+
+from controller.cli import DEFAULT_FIXTURES  # noqa: E402
+from controller.nullspace import NullSpaceController  # noqa: E402
+from controller.self_motion import SelfMotionSettings, collect_self_motion  # noqa: E402
+from correction import load_robot, perturb  # noqa: E402
+
+
+def step_times(panda, trajectory: np.ndarray, q_r: np.ndarray, solver: str, persistent: bool) -> np.ndarray:
+    """(K,) seconds per ``controller.step`` along a recorded trajectory."""
+    controller = NullSpaceController(panda, solver=solver, persistent=persistent)
+    for q, v in zip(trajectory[:50], q_r[:50], strict=True):  # warm up
+        controller.step(q, v)
+    times = np.empty(trajectory.shape[0])
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        for k, (q, v) in enumerate(zip(trajectory, q_r, strict=True)):
+            start = time.perf_counter()
+            controller.step(q, v)
+            times[k] = time.perf_counter() - start
+    return times
+
+
+def main() -> None:
+    panda = load_robot("panda")
+    rng = np.random.default_rng(0)
+    true = perturb(panda, rng)
+    fixtures = {k: np.array(v) for k, v in DEFAULT_FIXTURES.items()}
+    start = time.perf_counter()
+    run = collect_self_motion(true, panda, fixtures, rng, SelfMotionSettings(seconds=20.0))
+    wall = time.perf_counter() - start
+
+    # steps along a real self-motion path: 1 kHz slices of the recorded trajectory
+    trajectory = run.trajectory_q[:3000]
+    q_r = np.gradient(trajectory, 0.01, axis=0)
+    results = {}
+    print("one control step (Jacobian + QP build + solve), self-motion trajectory, 3000 steps")
+    print(f"{'solver':<28} {'median_us':>10} {'p95_us':>10} {'ratio':>7}")
+    cases = [("osqp persistent (default)", "osqp", True), ("qpsolvers osqp", "osqp", False),
+             ("qpsolvers daqp", "daqp", False)]
+    base = None
+    for label, solver, persistent in cases:
+        times = step_times(panda, trajectory, q_r, solver, persistent) * 1e6
+        median, p95 = float(np.median(times)), float(np.percentile(times, 95))
+        base = base or median
+        results[label] = {"median_us": median, "p95_us": p95}
+        print(f"{label:<28} {median:10.1f} {p95:10.1f} {median / base:7.2f}")
+    print(f"\nsimulate and record 3 fixtures x 20 s (coverage mode, default solver): {wall:.2f} s wall")
+    print(run.coverage_table())
+    results["three_fixtures_20s_wall_s"] = wall
+    results["targets"] = {"step_median_us": 50, "three_fixtures_wall_s": 10}
+    results["machine"] = {"python": platform.python_version(), "processor": platform.processor()}
+    Path(__file__).with_suffix(".json").write_text(json.dumps(results, indent=2) + "\n")
+
+
+if __name__ == "__main__":
+    main()
