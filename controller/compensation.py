@@ -27,7 +27,7 @@ relative change of that correction: a few iterations reach ``1e-10`` m.
 from __future__ import annotations
 
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -42,6 +42,13 @@ ORIENTATION_TOL = 1e-8
 #: Largest nominal/calibrated tool-point difference [m] accepted at the seed: a calibration
 #: corrects millimetres; decimetres mean the two files describe different robots.
 MAX_MODEL_DIFFERENCE = 0.05
+#: Iterations without a better residual before the fixed point is given up.
+STALL_ITERATIONS = 3
+#: Above this joint motion per metre of command change [rad/m] the controller's posture is said
+#: to jump (a smooth IK moves about 1/reach, a few rad/m).
+JUMP_RATIO = 50.0
+#: Controller evaluations spent locating a posture jump (position targets).
+BISECTIONS = 16
 
 #: ``controller(model, target (3,), q_seed (n,), orientation (3, 3) | None) -> q (n,)``.
 Controller = Callable[[RobotModel, np.ndarray, np.ndarray, "np.ndarray | None"], np.ndarray]
@@ -69,6 +76,9 @@ class CompensationResult:
             ``q`` [rad] (0 when no orientation was asked).
         iterations: controller evaluations after the first (0 when ``target`` itself is exact).
         history: (iterations + 1,) position residual of every iterate [m].
+        converged: residuals within the tolerances. False only with ``strict=False``: the
+            command is then the best iterate, and ``note`` says why no better one was found.
+        note: "" when converged, else the one-line reason.
     """
 
     command: np.ndarray
@@ -79,6 +89,30 @@ class CompensationResult:
     orientation_residual: float
     iterations: int
     history: np.ndarray
+    converged: bool = True
+    note: str = ""
+
+
+def _straddle(best: CompensationResult, other_command: np.ndarray, other_q: np.ndarray, target: np.ndarray,
+              nominal: RobotModel, calibrated: RobotModel, q_seed: np.ndarray, controller: Controller,
+              history: list[float], evaluations: int = BISECTIONS) -> CompensationResult:
+    """Best command near a posture jump: bisect between the best command and one of the other
+    posture, keeping the best landing (the closest ones lie at the jump)."""
+    a, b = best.command, other_command
+    if np.allclose(other_q, best.q):
+        return best
+    for _ in range(evaluations):
+        middle = 0.5 * (a + b)
+        q = np.asarray(controller(nominal, middle, q_seed, None), dtype=float)
+        landing = tool_point(calibrated, q)
+        history.append(float(np.linalg.norm(target - landing)))
+        if history[-1] < best.position_residual:
+            best = replace(best, command=middle, q=q, landing=landing, position_residual=history[-1])
+        if np.abs(q - best.q).max() <= np.abs(q - other_q).max():
+            a = middle
+        else:
+            b = middle
+    return best
 
 
 def check_models(nominal: RobotModel, calibrated: RobotModel, source: str = "calibrated model") -> None:
@@ -200,6 +234,7 @@ def compensate(
     tol: float = POSITION_TOL,
     orientation_tol: float = ORIENTATION_TOL,
     max_iter: int = 20,
+    strict: bool = True,
 ) -> CompensationResult:
     """The Cartesian target to give a nominal-kinematics controller so the real arm lands on ``target``.
 
@@ -214,18 +249,27 @@ def compensate(
             for a target it cannot reach.
         tol: position tolerance of the fixed point [m].
         orientation_tol: orientation tolerance [rad].
-        max_iter: most controller evaluations after the first.
+        max_iter: most controller evaluations after the first; the iteration also stops when
+            :data:`STALL_ITERATIONS` in a row do not improve on the best residual.
+        strict: raise :class:`CompensationError` when the tolerance is not met; otherwise return
+            the best iterate with ``converged=False`` and the reason in ``note``.
 
     Returns:
         :class:`CompensationResult` with the command, the predicted configuration, iterations
         and residuals.
+
+    A controller whose posture choice jumps between nearby commands (a Gauss-Newton IK whose
+    path branches, seen on about 1 target in 50 with :func:`controller.ik.ik` from a seed 0.3 rad
+    away) may have no command at all that lands on the target: the landings of the two
+    branches straddle it. The iteration then alternates between the branches; it is stopped,
+    and the error (or the ``note``) names the jump.
 
     Raises:
         ModelMismatchError: the calibrated model is of another robot (joint count, convention,
             limits) or differs from the nominal one by more than :data:`MAX_MODEL_DIFFERENCE`.
         UnreachableError: the nominal controller cannot reach a command (target outside the
             workspace).
-        CompensationError: the residual is still above ``tol`` after ``max_iter`` iterations.
+        CompensationError: (``strict`` only) the residual is still above ``tol`` at the end.
     """
     target, orientation = _target(target, orientation)
     check_models(nominal, calibrated)
@@ -236,24 +280,45 @@ def compensate(
     controller = controller or nominal_ik_controller
     command, command_rot = target.copy(), None if orientation is None else orientation.copy()
     history: list[float] = []
+    best: CompensationResult | None = None
+    jump, stalled, previous = 0.0, 0, None
     for iteration in range(max_iter + 1):
         q = np.asarray(controller(nominal, command, q_seed, command_rot), dtype=float)
         pose = tool_pose(calibrated, q)
-        landing = pose[:3, 3]
-        miss = target - landing
+        miss = target - pose[:3, 3]
         history.append(float(np.linalg.norm(miss)))
         turn = None if orientation is None else orientation @ pose[:3, :3].T
         angle = 0.0 if turn is None else _angle(turn)
+        current = CompensationResult(command, command_rot, q, pose[:3, 3], history[-1], angle, iteration,
+                                     np.array(history))
         if history[-1] <= tol and angle <= orientation_tol:
-            return CompensationResult(command, command_rot, q, landing, history[-1], angle, iteration,
-                                      np.array(history))
-        if iteration == max_iter:
+            return current
+        if previous is not None:  # joint motion per metre of command change: ~1/reach unless the posture jumps
+            step = float(np.linalg.norm(command - previous[0]))
+            jump = max(jump, float(np.abs(q - previous[1]).max()) / step if step > 0 else 0.0)
+        previous = (command, q)
+        if best is None or history[-1] + angle < best.position_residual + best.orientation_residual:
+            best, stalled = current, 0
+        else:
+            stalled += 1
+        if iteration == max_iter or stalled >= STALL_ITERATIONS:
             break
         command = command + miss
         if turn is not None:
             command_rot = turn @ command_rot
-    raise CompensationError(
-        f"target {np.round(target, 4).tolist()} m: compensation residual {history[-1] * 1e3:.2g} mm "
-        f"(orientation {np.rad2deg(angle):.2g} deg) after {max_iter} iterations, tolerance {tol * 1e3:.2g} mm "
-        "(near a singularity or the workspace boundary?)"
+    if jump > JUMP_RATIO and orientation is None:
+        best = _straddle(best, previous[0], previous[1], target, nominal, calibrated, q_seed, controller, history)
+    why = (
+        f"the nominal controller's posture jumps between nearby commands ({jump:.0f} rad of joint motion per m "
+        "of command change), its landings straddle the target"
+        if jump > JUMP_RATIO
+        else "near a singularity or the workspace boundary?"
     )
+    note = (
+        f"target {np.round(target, 4).tolist()} m: best compensation residual {best.position_residual * 1e3:.3g} mm "
+        f"(orientation {np.rad2deg(best.orientation_residual):.2g} deg) after {len(history) - 1} evaluations, "
+        f"tolerance {tol * 1e3:.2g} mm; {why}"
+    )
+    if strict:
+        raise CompensationError(note)
+    return replace(best, iterations=len(history) - 1, history=np.array(history), converged=False, note=note)

@@ -140,4 +140,35 @@ def test_no_convergence_is_an_error_not_a_silent_command(robots):
     q_goal, q_seed = _case(calibrated, rng)
     with pytest.raises(CompensationError) as error:
         compensate(tool_point(calibrated, q_goal), nominal, calibrated, q_seed, max_iter=1)
-    assert "after 1 iterations" in _one_line(error)
+    assert "after 1 evaluations" in _one_line(error)
+
+
+def test_a_controller_whose_posture_jumps_is_named_and_best_effort_is_flagged(robots):
+    """A controller choosing between two postures by the sign of a command coordinate: the
+    landings straddle the target, no command is exact, and that is said, never hidden."""
+    nominal, calibrated, rng = robots
+    q_goal, q_seed = _case(calibrated, rng, spread=0.05)
+    target = tool_point(calibrated, q_goal)
+    other_seed = np.clip(q_seed + np.array([0.0, 0.0, 0.6, 0.0, 0.0, 0.0, 0.0]), nominal.lower, nominal.upper)
+
+    def branch(start):
+        return lambda model, command, seed, orientation: nominal_ik_controller(model, command, start, orientation)
+
+    # each posture's exact command lies in the other posture's half-space: no fixed point exists
+    x_a = compensate(target, nominal, calibrated, q_seed, controller=branch(q_seed)).command[0]
+    x_b = compensate(target, nominal, calibrated, q_seed, controller=branch(other_seed)).command[0]
+    assert abs(x_a - x_b) > 1e-5
+
+    def jumpy(model, command, seed, orientation):
+        on_a_side = (command[0] - 0.5 * (x_a + x_b)) * (x_a - x_b) > 0
+        return nominal_ik_controller(model, command, other_seed if on_a_side else seed, orientation)
+
+    with pytest.raises(CompensationError) as error:
+        compensate(target, nominal, calibrated, q_seed, controller=jumpy)
+    assert "posture jumps" in _one_line(error)
+    result = compensate(target, nominal, calibrated, q_seed, controller=jumpy, strict=False)
+    assert not result.converged and "posture jumps" in result.note
+    # the best effort beats the uncompensated command and is what its fields say
+    assert result.position_residual < result.history[0]
+    q = jumpy(nominal, result.command, q_seed, None)
+    assert np.linalg.norm(tool_point(calibrated, q) - target) == pytest.approx(result.position_residual, abs=1e-12)
