@@ -49,6 +49,7 @@ class LandingTable:
     iterations: np.ndarray
     residuals: np.ndarray
     notes: list[str]
+    skipped: list[str]
     accuracy_random: float
     accuracy_landing: float
     servo_residual: float
@@ -70,6 +71,8 @@ class LandingTable:
             f"{self.residuals[converged].max():.1e} m; servo |q - q_cmd| max {self.servo_residual:.1e} rad"
         )
         rows.extend(f"  not converged: {note}" for note in self.notes)
+        rows.append(f"{len(self.skipped)} drawn targets skipped, not reachable from their seed:")
+        rows.extend(f"  {note}" for note in self.skipped)
         return "\n".join(rows)
 
 
@@ -115,6 +118,7 @@ def calibrated_model(nominal, true, rng: np.random.Generator, calibration: str):
 def landing_table(count: int, seed: int = 20261122, calibration: str = "identified") -> LandingTable:
     """Command ``count`` random reachable targets three ways on the true plant (see module docstring)."""
     from controller.compensation import compensate, corrected_ik, nominal_ik_controller
+    from controller.ik import UnreachableError
     from controller.plant import build_plant
     from correction import load_robot, perturb, tool_point
 
@@ -129,28 +133,35 @@ def landing_table(count: int, seed: int = 20261122, calibration: str = "identifi
     names = ("(a) nominal model", "(b) corrected IK (calibrated model)", "(c) nominal model, compensated target")
     errors = {name: np.empty(count) for name in names}
     iterations, residuals, landed_q = np.empty(count, dtype=int), np.empty(count), []
-    servo, notes = 0.0, []
-    for k in range(count):
+    servo, notes, skipped, k = 0.0, [], [], 0
+    while k < count:
         q_goal = rng.uniform(lower, upper)
         target = tool_point(true, q_goal)
         q_seed = np.clip(q_goal + rng.normal(0.0, SEED_SPREAD, nominal.n_joints), lower, upper)
-        result = compensate(target, nominal, calibrated, q_seed, strict=False)
+        try:  # reachable: by the nominal controller from the seed (a), the corrected IK (b) and (c)
+            commands = (
+                nominal_ik_controller(nominal, target, q_seed),
+                corrected_ik(calibrated, target, q_seed, nominal=nominal),
+            )
+            result = compensate(target, nominal, calibrated, q_seed, strict=False)
+        except UnreachableError as error:
+            skipped.append(str(error))
+            continue
         if not result.converged:
             notes.append(result.note)
-        commands = (
-            nominal_ik_controller(nominal, target, q_seed),
-            corrected_ik(calibrated, target, q_seed, nominal=nominal),
-            nominal_ik_controller(nominal, result.command, q_seed),  # what the nominal controller does
-        )
+        commands += (nominal_ik_controller(nominal, result.command, q_seed),)  # what the nominal controller does
         for name, q_cmd in zip(names, commands, strict=True):
             landing, residual = _servo(plant, q_seed, q_cmd)
             errors[name][k] = np.linalg.norm(landing - target)
             servo = max(servo, residual)
         iterations[k], residuals[k] = result.iterations, result.position_residual
         landed_q += [commands[1], commands[2]]
+        k += 1
     landed_q = np.array(landed_q)
     accuracy_landing = np.linalg.norm(tool_point(calibrated, landed_q) - tool_point(true, landed_q), axis=1).mean()
-    return LandingTable(description, errors, iterations, residuals, notes, accuracy_random, accuracy_landing, servo)
+    return LandingTable(
+        description, errors, iterations, residuals, notes, skipped, accuracy_random, accuracy_landing, servo
+    )
 
 
 def _check(table: LandingTable) -> None:
