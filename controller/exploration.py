@@ -22,6 +22,7 @@ COVERAGE_PERIOD = 2.0
 RAMP_TIME = 0.3
 GOAL_STEP = 0.6  # [rad]
 GOAL_MARGIN = 0.03  # [rad] goals stay this far inside the limits
+GOAL_RESTARTS = 4  # random IK starts when the goal is not found from the current configuration
 
 
 def joint_coverage(q: np.ndarray, lower: np.ndarray, upper: np.ndarray) -> np.ndarray:
@@ -129,7 +130,8 @@ class CoverageExploration:
         lower[j] = upper[j] = value
         start = q.copy()
         start[j] = value
-        result = ik(replace(self.model, lower=lower, upper=upper), self.target, start, max_iter=50)
+        result = ik(replace(self.model, lower=lower, upper=upper), self.target, start, max_iter=50,
+                    restarts=GOAL_RESTARTS, rng=self.rng)
         return result.q if result.converged else None
 
     def decide(self, t: float, q_history: np.ndarray, jac: np.ndarray) -> None:
@@ -153,7 +155,7 @@ class CoverageExploration:
             for direction, room in sides:
                 if room < 0.02:
                     continue
-                for step in (self.step, 0.5 * self.step):
+                for step in (self.step, 0.5 * self.step, 0.25 * self.step):
                     value = (lo[j] - min(step, room)) if direction < 0 else (hi[j] + min(step, room))
                     goal = self._find_goal(q, j, value)
                     if goal is not None:
