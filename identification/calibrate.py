@@ -142,7 +142,8 @@ def calibrate(
         dataset: samples (deduplicate / subsample first: :meth:`Dataset.deduplicated`).
         spec: known fixture positions and distances (all unknown when None).
         method: ``lm``, ``pso`` or ``pso+lm``.
-        start: start model (default ``nominal``); fixed parameters keep its values.
+        start: start model of the identified parameters (default ``nominal``); the fixed ones keep
+            their nominal values.
         seed: seeds PSO.
         loss: ``linear``, ``soft_l1`` or ``huber`` (``lm`` only).
         noise: expected fixture noise [m] (robust-loss scale, distance weight).
@@ -158,13 +159,12 @@ def calibrate(
         raise ValueError(f"unknown method {method!r}, expected one of {METHODS}")
     timings: dict[str, float] = {}
     clock = time.perf_counter()
-    start = nominal if start is None else start
-    problem = build_problem(start, dataset, spec, nominal=nominal, noise=noise)
+    problem = build_problem(nominal, dataset, spec, noise=noise)
     before = np.linalg.norm(problem.sample_errors(problem.x0), axis=1)
     timings["build"] = time.perf_counter() - clock
-    x = problem.x0
+    x = problem.x0 if start is None else problem.start_from(start)
     if method in ("pso", "pso+lm"):
-        solution = solve_pso(problem, seed=seed, **(pso_options or {}))
+        solution = solve_pso(problem, seed=seed, x0=x, **(pso_options or {}))
         x, timings["pso"] = solution.x, solution.seconds
     if method in ("lm", "pso+lm"):
         solution = solve_lm(problem, x, loss=loss)
@@ -190,7 +190,7 @@ def calibrate(
         warnings.append(f"ill-conditioned: condition number {ident.condition_number:.3g} at the solution")
     return CalibrationResult(
         model=model,
-        nominal=start,
+        nominal=nominal,
         method=method,
         centres=problem.centre_dict(centres),
         identified=problem.identified,

@@ -160,6 +160,13 @@ class CalibrationProblem:
         centres[slot >= 0] = x[self.n_free_params :].reshape(-1, 3)
         return params, centres
 
+    def start_from(self, model: RobotModel) -> np.ndarray:
+        """(F,) unknowns starting at ``model``'s parameters, free centres at its mean tool points."""
+        centres = self.centres.copy()
+        slot, _ = self._layout()
+        centres[slot >= 0] = _mean_points(model, self.dataset)[slot >= 0]
+        return self.pack(model.params, centres)
+
     def model_at(self, x: np.ndarray) -> RobotModel:
         """The robot of an unknown vector."""
         return self.model.with_params(self.unpack(x)[0])
