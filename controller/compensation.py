@@ -187,6 +187,57 @@ def nominal_ik_controller(model: RobotModel, target: np.ndarray, q_seed: np.ndar
     return result.q
 
 
+class DifferentialIKFlow:
+    """Controller model of a velocity-level differential-IK controller (the QP of
+    :class:`controller.nullspace.NullSpaceController` with no secondary task), integrated
+    kinematically from the seed until the tool point of ``model`` is on the command.
+
+    Its null-space posture is the end of that flow, not the Gauss-Newton answer of
+    :func:`controller.ik.ik`: pass an instance as ``compensate(..., controller=...)`` when the
+    controller in the loop is such a QP. Position targets only.
+
+    Args:
+        seconds: longest integration [s].
+        tol: tool-point tolerance of the end point [m].
+        dt: integration step [s] (the controller's period).
+    """
+
+    def __init__(self, seconds: float = 4.0, tol: float = 1e-11, dt: float | None = None):
+        from .plant import TIMESTEP
+
+        self.seconds, self.tol, self.dt = seconds, tol, TIMESTEP if dt is None else dt
+        self._controllers: dict[int, object] = {}
+        self.fallbacks = 0
+
+    def __call__(self, model: RobotModel, target: np.ndarray, q_seed: np.ndarray,
+                 orientation: np.ndarray | None = None) -> np.ndarray:
+        import warnings
+
+        from .nullspace import NullSpaceController
+        from .qp_ik import ControllerFallbackWarning
+
+        if orientation is not None:
+            raise SpherecalError("orientation: DifferentialIKFlow models position-only controllers")
+        controller = self._controllers.get(id(model))
+        if controller is None or controller.model is not model:
+            controller = self._controllers[id(model)] = NullSpaceController(model)
+        q, rest = np.array(q_seed, dtype=float), np.zeros(model.n_joints)
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always", ControllerFallbackWarning)
+            for step in range(int(round(self.seconds / self.dt))):
+                q = q + self.dt * controller.step(q, rest, target)
+                if step % 50 == 0 and np.linalg.norm(tool_point(model, q) - target) < self.tol:
+                    break
+        self.fallbacks += len(caught)
+        miss = float(np.linalg.norm(tool_point(model, q) - target))
+        if miss > self.tol:
+            raise UnreachableError(
+                f"target {np.round(target, 4).tolist()} m: the differential-IK flow of {model.name!r} stops "
+                f"{miss * 1e3:.3g} mm away after {self.seconds:g} s"
+            )
+        return q
+
+
 def corrected_ik(
     calibrated: RobotModel,
     target: np.ndarray,

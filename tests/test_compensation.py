@@ -172,3 +172,18 @@ def test_a_controller_whose_posture_jumps_is_named_and_best_effort_is_flagged(ro
     assert result.position_residual < result.history[0]
     q = jumpy(nominal, result.command, q_seed, None)
     assert np.linalg.norm(tool_point(calibrated, q) - target) == pytest.approx(result.position_residual, abs=1e-12)
+
+
+def test_differential_ik_flow_is_a_controller_model(robots):
+    from controller.compensation import DifferentialIKFlow
+
+    nominal, calibrated, rng = robots
+    q_goal, q_seed = _case(calibrated, rng, spread=0.1)
+    target = tool_point(calibrated, q_goal)
+    flow = DifferentialIKFlow()
+    q = flow(nominal, target, q_seed)
+    assert np.linalg.norm(tool_point(nominal, q) - target) < 1e-11 and nominal.within_limits(q)
+    result = compensate(target, nominal, calibrated, q_seed, controller=flow)
+    assert np.linalg.norm(tool_point(calibrated, flow(nominal, result.command, q_seed)) - target) < 1e-9
+    with pytest.raises(SpherecalError, match="orientation"):
+        flow(nominal, target, q_seed, np.eye(3))
