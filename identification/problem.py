@@ -245,6 +245,13 @@ def scale_centre(model: RobotModel) -> np.ndarray:
     return base[:3, 3] + model.d[0] * base[:3, 2]
 
 
+def _rows(dataset: Dataset) -> str:
+    """``"rows 2-1501"`` of a dataset read from a file (``"all rows"`` otherwise)."""
+    if dataset.lines is None or dataset.n_samples == 0:
+        return "all rows"
+    return f"rows {dataset.lines.min()}-{dataset.lines.max()}"
+
+
 def _mean_points(model: RobotModel, dataset: Dataset) -> np.ndarray:
     """(J, 3) mean tool point of every fixture's samples on ``model`` [m]."""
     points = tool_point(model, dataset.q)
@@ -303,6 +310,11 @@ def build_problem(
         )
     names = model.param_names
     names_fixtures = dataset.fixture_names
+    if all(np.ptp(dataset.for_fixture(name), axis=0).max() == 0 for name in names_fixtures):
+        raise UnidentifiableError(
+            f"{dataset.source or 'samples'}: {_rows(dataset)}, field 'q*': at every fixture all samples are "
+            f"one configuration; the arm must move through its self-motion for any parameter to be identified"
+        )
     fixed: dict[str, str] = {}
     warnings: list[str] = []
     for name in names:
@@ -359,10 +371,8 @@ def build_problem(
         anchor=anchor,
     )
     if problem.n_residuals < problem.n_unknowns:
-        last = dataset.n_samples - 1
-        rows = f"rows {dataset.lines[0]}-{dataset.lines[last]}" if dataset.lines is not None else "all rows"
         raise DatasetError(
-            f"{dataset.source or 'samples'}: {rows}, field 'fixture': {dataset.n_samples} samples give "
+            f"{dataset.source or 'samples'}: {_rows(dataset)}, field 'fixture': {dataset.n_samples} samples give "
             f"{problem.n_residuals} equations, fewer than the {problem.n_unknowns} unknowns "
             f"({candidates.size} free parameters, {3 * len(free_centres)} centre coordinates)"
         )
@@ -383,7 +393,8 @@ def build_problem(
     centre_cols = np.arange(fp, jac.shape[1])
     if np.any(~np.isin(centre_cols, accepted)):
         raise UnidentifiableError(
-            f"{dataset.source or 'samples'}: field 'fixture': the fixture centres are not determined by the samples"
+            f"{dataset.source or 'samples'}: {_rows(dataset)}, field 'fixture': "
+            f"the fixture centres are not determined by the samples"
         )
     for col, coef in rejected.items():
         weights = np.abs(coef) * np.linalg.norm(jac, axis=0)
@@ -394,8 +405,8 @@ def build_problem(
     keep = accepted[accepted < fp]
     if keep.size == 0:
         raise UnidentifiableError(
-            f"{dataset.source or 'samples'}: field 'q*': no parameter can be identified from these samples "
-            f"(joint motion too small or too few distinct configurations)"
+            f"{dataset.source or 'samples'}: {_rows(dataset)}, field 'q*': no parameter can be identified "
+            f"from these samples (joint motion too small or too few distinct configurations)"
         )
     ordered_fixed = {name: fixed[name] for name in names if name in fixed}
     problem = replace(problem, free=candidates[keep], fixed=ordered_fixed)

@@ -8,7 +8,7 @@ import pytest
 from correction import load_robot, perturb, registered_errors, to_standard, tool_point
 from identification.calibrate import calibrate
 from identification.dataset import Dataset, DatasetError, FixtureSpec
-from identification.problem import build_problem
+from identification.problem import UnidentifiableError, build_problem
 from identification.synthetic import make_dataset, project_to_point
 
 
@@ -146,7 +146,11 @@ def test_too_few_samples_and_rank_deficiency(truth, clean) -> None:
     # every sample at one configuration: the centre absorbs everything; only the one direction the
     # scale anchor adds (|c - s0| = R) remains, so exactly one parameter is kept
     same = Dataset(np.full(200, "P1"), np.repeat(dataset.q[:1], 200, axis=0))
-    assert len(build_problem(panda, same).identified) == 1
+    with pytest.raises(UnidentifiableError, match="all samples are one configuration"):
+        build_problem(panda, same)
+    three = Dataset(dataset.labels, np.repeat(dataset.q[[0, 500, 1000]], 500, axis=0))
+    with pytest.raises(UnidentifiableError):
+        build_problem(panda, three, spec)
 
 
 def test_robust_loss_resists_slips(truth, clean) -> None:
