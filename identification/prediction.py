@@ -1,0 +1,254 @@
+"""Predicted accuracy of a calibration from its data, before (or without) solving it.
+
+The calibration problem of the data (:func:`identification.problem.build_problem`: same unknowns,
+gauge, scale fixing and excitation pruning as :func:`identification.calibrate.calibrate`) is
+linearised at a generic point near the model (the rank test's point, so that accidental symmetries
+of the nominal design do not count). With fixture noise ``sigma`` per coordinate::
+
+    cov(x) = sigma^2 (J^T W J)^-1                     x: identified parameters and centres
+
+where ``W`` weights the sample rows (``sample_weight``: one planning sample standing for several
+recorded ones) and the scale-anchor row (its radius comes from the nominal model, so its "noise" is
+the prior spread of that radius). Parameters pruned as barely excited stay at the nominal value:
+they add a bias ``(G_Q - G_F J_F^+ J_Q) dp_Q`` with ``dp_Q`` drawn from the prior spread (what the
+fit cannot absorb of their error). Both are propagated to the tool point over random workspace
+configurations ``G = d p / d params`` (N, 3, P) after removing the six rigid motions of the point
+set (the validation registers every model by a best rigid fit), then sampled::
+
+    e = Proj G_F L z + Proj B dp_Q,     L L^T = cov,  z ~ N(0, I)
+
+Returns the expected mean and 95th percentile of ``|e|`` [m] and the identifiability summary.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, replace
+
+import numpy as np
+
+from correction import RobotModel, param_jacobian, tool_point
+
+from .dataset import Dataset, FixtureSpec
+from .identifiability import Identifiability, column_norms
+from .problem import GAUGE, NOISE, CalibrationProblem, build_problem, format_value, prior_std, prune
+
+#: Floor of the noise used to decide what the data excites [m] (calibrate's SIGMA_FLOOR).
+SIGMA_FLOOR = 1e-6
+#: A parameter whose predicted std exceeds this share of its prior spread is "weakly determined".
+WEAK_SHARE = 0.3
+#: Default workspace configurations and Monte Carlo draws of the parameter error.
+CONFIGURATIONS = 1000
+DRAWS = 200
+
+
+@dataclass(frozen=True, eq=False)
+class Workspace:
+    """Random workspace configurations and the registered sensitivity of their tool points.
+
+    Attributes:
+        q: (N, n) configurations inside the joint limits [rad].
+        sensitivity: (3 N, P) ``d p / d params`` with the six rigid motions of the point set
+            projected out (what survives the best-rigid-fit registration of the validation).
+    """
+
+    q: np.ndarray
+    sensitivity: np.ndarray
+
+    @staticmethod
+    def of(model: RobotModel, count: int = CONFIGURATIONS, rng: np.random.Generator | None = None) -> Workspace:
+        """``count`` configurations uniform in the joint limits of ``model`` (seeded; default seed 0)."""
+        rng = np.random.default_rng(0) if rng is None else rng
+        q = model.random_configurations(count, rng)
+        jac, points = param_jacobian(model, q, return_point=True)
+        return Workspace(q=q, sensitivity=remove_rigid_motion(jac.reshape(3 * count, -1), points))
+
+
+def remove_rigid_motion(field: np.ndarray, points: np.ndarray) -> np.ndarray:
+    """Project a displacement field onto the complement of the rigid motions of a point set.
+
+    A small rigid motion moves point ``p`` by ``t + w x p``; registration (best rigid fit) removes
+    exactly the least-squares part of a small error field in that 6-D space.
+
+    Args:
+        field: (3 N, C) displacement columns, points stacked ``x0 y0 z0 x1 ...`` [m per unit].
+        points: (N, 3) the points [m].
+
+    Returns:
+        (3 N, C) the columns minus their rigid-motion part.
+    """
+    n = points.shape[0]
+    centred = points - points.mean(axis=0)
+    basis = np.zeros((n, 3, 6))
+    basis[:, :, :3] = np.eye(3)
+    for k in range(3):  # w_k e_k x p
+        basis[:, :, 3 + k] = np.cross(np.eye(3)[k], centred)
+    q, _ = np.linalg.qr(basis.reshape(3 * n, 6))
+    return field - q @ (q.T @ field)
+
+
+@dataclass(frozen=True, eq=False)
+class Prediction:
+    """Predicted calibration accuracy.
+
+    Attributes:
+        mean: expected mean tool-point error over the workspace after registration [m].
+        p95: 95th percentile of the tool-point error (over configurations and draws) [m].
+        rms: root-mean-square tool-point error [m].
+        noise: fixture noise per coordinate assumed [m].
+        samples: fixture name -> samples (as weighted: ``count x sample_weight``).
+        identified: names of the identified parameters.
+        std: name -> predicted standard deviation [m or rad] of every identified parameter.
+        weak: identified parameters whose std exceeds :data:`WEAK_SHARE` of their prior spread.
+        fixed: name -> reason, every parameter not identified (gauge, redundant, barely excited).
+        identifiability: singular values and condition number of the column-scaled Jacobian.
+        errors: (N, D) sampled error magnitudes [m] (configurations x draws), for plots.
+    """
+
+    mean: float
+    p95: float
+    rms: float
+    noise: float
+    samples: dict[str, float]
+    identified: tuple[str, ...]
+    std: dict[str, float]
+    weak: tuple[str, ...]
+    fixed: dict[str, str]
+    identifiability: Identifiability
+    errors: np.ndarray
+
+    def summary(self) -> str:
+        """A few lines for humans (mm, deg)."""
+        s = self.identifiability.singular_values
+        counts = ", ".join(f"{k} {v:.0f}" for k, v in self.samples.items())
+        lines = [
+            f"predicted tool-point error after registration at {self.noise * 1e3:.3g} mm fixture noise "
+            f"({counts} samples): mean {self.mean * 1e3:.4f} mm, 95th percentile {self.p95 * 1e3:.4f} mm",
+            f"identified {len(self.identified)} parameters, "
+            f"condition number {self.identifiability.condition_number:.3g}, "
+            f"singular values {s[0]:.3g} .. {s[-1]:.3g}",
+        ]
+        if self.weak:
+            weak = ", ".join(f"{n} ({format_value(n, self.std[n])})" for n in self.weak)
+            lines.append(f"weakly determined (std > {WEAK_SHARE:.0%} of the prior spread): {weak}")
+        pruned = [n for n, why in self.fixed.items() if why.startswith("barely excited")]
+        if pruned:
+            lines.append(f"not excited (left at nominal): {', '.join(pruned)}")
+        return "\n".join(lines)
+
+
+def generic_point(problem: CalibrationProblem) -> tuple[CalibrationProblem, np.ndarray]:
+    """The problem re-based on the rank test's generic model (seeded 0.1 x prior perturbation) and its
+    unknown vector: the linearisation point of the prediction."""
+    model = problem.model
+    generic = model.params + np.random.default_rng(0).normal(0.0, 0.1, model.n_params) * prior_std(model)
+    moved = replace(problem, model=model.with_params(generic), _cache={})
+    return moved, moved.pack(generic, problem.centres)
+
+
+def _anchor_spread(problem: CalibrationProblem) -> float:
+    """Prior spread [m] of the scale anchor's radius (taken from the nominal model, not measured)."""
+    name, point, _ = problem.anchor
+    q = problem.dataset.for_fixture(name)
+    jac, points = param_jacobian(problem.model, q, return_point=True)
+    radial = points.mean(axis=0) - point
+    grad = (radial / np.linalg.norm(radial)) @ jac.mean(axis=0)  # (P,)
+    names = problem.model.param_names
+    skip = set(GAUGE[problem.model.convention]) | {n for n in names if n.startswith("base_")}
+    prior = np.array([0.0 if n in skip else s for n, s in zip(names, prior_std(problem.model), strict=True)])
+    return max(float(np.linalg.norm(grad * prior)), 1e-9)
+
+
+def covariance(jac: np.ndarray, sigma: float) -> np.ndarray:
+    """(F, F) ``sigma^2 (J^T J)^-1`` through the SVD of the column-scaled (M, F) Jacobian."""
+    norms = column_norms(jac)
+    _, s, vt = np.linalg.svd(jac / norms, full_matrices=False)
+    inv = 1.0 / np.maximum(s, s[0] * 1e-14)
+    root = (vt.T * inv) / norms[:, None]  # (J^T J)^-1 = root root^T
+    return sigma**2 * root @ root.T
+
+
+def predict_accuracy(
+    model: RobotModel,
+    dataset: Dataset,
+    spec: FixtureSpec | None = None,
+    noise: float = NOISE,
+    workspace: Workspace | None = None,
+    sample_weight: float = 1.0,
+    draws: int = DRAWS,
+    rng: np.random.Generator | None = None,
+    problem: CalibrationProblem | None = None,
+) -> Prediction:
+    """Predict the accuracy a calibration from ``dataset`` will reach.
+
+    Args:
+        model: the nominal robot (the calibration's start).
+        dataset: the samples (recorded or simulated), (K, n) joint angles with fixture labels.
+        spec: known fixture positions and distances (all unknown when None).
+        noise: fixture noise std per coordinate [m] (0 allowed: only the pruning bias remains).
+        workspace: where the error is evaluated (default :meth:`Workspace.of` ``model``, seed 0).
+        sample_weight: each sample stands for this many recorded ones (planning with few samples).
+        draws: Monte Carlo draws of the parameter error.
+        rng: seeds the draws (default seed 0).
+        problem: a prebuilt ``build_problem(model, dataset, spec, noise=noise)`` (saves its cost).
+
+    Returns:
+        The :class:`Prediction`.
+
+    Raises:
+        DatasetError, UnidentifiableError: as :func:`identification.problem.build_problem`.
+    """
+    rng = np.random.default_rng(0) if rng is None else rng
+    workspace = Workspace.of(model) if workspace is None else workspace
+    problem = build_problem(model, dataset, spec, noise=max(noise, SIGMA_FLOOR)) if problem is None else problem
+    sigma = max(noise, SIGMA_FLOOR)
+    lin, x_lin = generic_point(problem)
+    pruned, x = prune(lin, x_lin, sigma / np.sqrt(sample_weight))
+    rows = np.ones((pruned.n_residuals, 1))
+    rows[: 3 * dataset.n_samples] = np.sqrt(sample_weight)
+    jac = pruned.jacobian(x) * rows
+    fp = pruned.n_free_params
+    cov = covariance(jac, noise)[:fp, :fp]
+    free = pruned.free
+    std = np.sqrt(np.diag(cov))
+    gains = workspace.sensitivity
+    values, vectors = np.linalg.eigh(cov)
+    root = vectors * np.sqrt(np.clip(values, 0.0, None))
+    field = gains[:, free] @ root @ rng.standard_normal((fp, draws))
+    # biases, one column per standard-normal source: (shift of the unknowns, direct tool-point effect)
+    shifts, direct = [], []
+    dropped = np.setdiff1d(lin.free, free)
+    if dropped.size:  # barely excited parameters left at nominal: the fit absorbs what it can
+        cols = [int(np.flatnonzero(lin.free == i)[0]) for i in dropped]
+        spread = prior_std(model)[dropped]
+        shifts.append(-np.linalg.lstsq(jac, (lin.jacobian(x_lin) * rows)[:, cols] * spread, rcond=None)[0])
+        direct.append(gains[:, dropped] * spread)
+    if pruned.anchor is not None:  # the scale anchor's radius is the nominal model's, not measured
+        kick = np.zeros((pruned.n_residuals, 1))
+        kick[-1] = pruned.distance_weight * _anchor_spread(pruned)
+        shifts.append(np.linalg.lstsq(jac, kick, rcond=None)[0])
+        direct.append(np.zeros((gains.shape[0], 1)))
+    if shifts:
+        shift, effect = np.hstack(shifts), np.hstack(direct)
+        bias = gains[:, free] @ shift[:fp] + effect
+        field += bias @ rng.standard_normal((bias.shape[1], draws))
+    errors = np.linalg.norm(field.reshape(-1, 3, draws), axis=1)
+    prior = prior_std(model)[free]
+    names = pruned.identified
+    return Prediction(
+        mean=float(errors.mean()),
+        p95=float(np.percentile(errors, 95)),
+        rms=float(np.sqrt(np.mean(errors**2))),
+        noise=noise,
+        samples={k: v * sample_weight for k, v in dataset.counts().items()},
+        identified=names,
+        std=dict(zip(names, (float(s) for s in std), strict=True)),
+        weak=tuple(n for n, s, p in zip(names, std, prior, strict=True) if s > WEAK_SHARE * p),
+        fixed=pruned.fixed,
+        identifiability=Identifiability.of(pruned.jacobian(x)),
+        errors=errors,
+    )
+
+
+def workspace_points(model: RobotModel, workspace: Workspace) -> np.ndarray:
+    """(N, 3) tool points of the workspace configurations [m] (for plots)."""
+    return tool_point(model, workspace.q)

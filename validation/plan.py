@@ -1,0 +1,413 @@
+"""Experiment planning: where to put the fixtures, which distances to measure.
+
+For every candidate fixture position: can the arm's tool point reach it inside the joint limits,
+and how much of each joint's range does its self-motion cover there? Then the subset of the
+reachable candidates (and of their centre-to-centre distances) that minimises the predicted
+calibration error (:func:`identification.prediction.predict_accuracy`).
+
+Two ways to explore a candidate's self-motion (``motion``):
+
+* ``"kinematic"`` (default): random configurations projected onto the candidate on the nominal
+  model (:func:`identification.synthetic.fixture_samples`): the whole self-motion manifold inside
+  the limits, what a long exploration reaches. About 0.1 s per candidate.
+* ``"controller"``: the null-space controller on the MuJoCo plant for ``seconds`` per candidate
+  (:func:`controller.self_motion.collect_self_motion`, nominal plant): what a short real run covers.
+
+A candidate may restrict the self-motion of some joints (``joint_range``: share of each joint's
+range, e.g. an obstacle or a fixture that blocks joints 2 and 3): its samples then come from a
+window of that width around a well-centred reach configuration.
+"""
+
+from __future__ import annotations
+
+import itertools
+import math
+from dataclasses import dataclass, field, replace
+from pathlib import Path
+
+import numpy as np
+
+from correction import RobotModel
+from correction.errors import SpherecalError
+from identification.dataset import Dataset, FixtureSpec
+from identification.prediction import Prediction, Workspace, predict_accuracy
+from identification.synthetic import fixture_samples, project_to_point
+
+MOTIONS: tuple[str, ...] = ("kinematic", "controller")
+#: Samples per candidate used for planning (each stands for ``samples / PLAN_SAMPLES`` recorded ones).
+PLAN_SAMPLES = 120
+#: Exhaustive search over fixture subsets up to this many combinations, greedy above.
+EXHAUSTIVE_LIMIT = 300
+#: A distance is recommended when it lowers the predicted mean error by more than this share.
+DISTANCE_GAIN = 0.05
+
+
+class CandidateError(SpherecalError):
+    """A candidate list that is empty or malformed (message names the file or option and field)."""
+
+
+@dataclass(frozen=True)
+class Candidate:
+    """A candidate fixture position.
+
+    Attributes:
+        name: label (``C1`` ... or from the file).
+        position: (3,) centre in the base frame [m].
+        joint_range: (n,) share of each joint's range the self-motion may use there (None: all).
+    """
+
+    name: str
+    position: np.ndarray
+    joint_range: np.ndarray | None = None
+
+
+@dataclass(frozen=True, eq=False)
+class Survey:
+    """What the arm can do at one candidate.
+
+    Attributes:
+        candidate: the candidate.
+        reachable: whether the tool point reaches it inside the joint limits.
+        reason: why not (one line), or ``""``.
+        q: (K, n) self-motion samples [rad] (empty when unreachable).
+        coverage: (n,) share of each joint's range covered by the samples (zeros when unreachable).
+        alone: predicted accuracy of this candidate alone (None when unreachable or unidentifiable).
+    """
+
+    candidate: Candidate
+    reachable: bool
+    reason: str
+    q: np.ndarray
+    coverage: np.ndarray
+    alone: Prediction | None = None
+
+
+@dataclass(frozen=True, eq=False)
+class FixtureSet:
+    """A scored set of fixtures.
+
+    Attributes:
+        names: candidate names.
+        distances: measured centre-to-centre distances, as name pairs.
+        prediction: predicted accuracy with those distances.
+        without_distances: predicted accuracy with no distance measured (None for one fixture).
+    """
+
+    names: tuple[str, ...]
+    distances: tuple[tuple[str, str], ...]
+    prediction: Prediction
+    without_distances: Prediction | None = None
+
+
+@dataclass(frozen=True, eq=False)
+class Plan:
+    """The outcome of :func:`plan`.
+
+    Attributes:
+        surveys: one per candidate, in input order (unreachable ones included).
+        best: the chosen fixture set.
+        search: ``"exhaustive"`` or ``"greedy"``.
+        motion, noise, samples: the settings planned for.
+        seconds: wall time per stage [s].
+    """
+
+    surveys: list[Survey]
+    best: FixtureSet | None
+    search: str
+    motion: str
+    noise: float
+    samples: int
+    seconds: dict[str, float] = field(default_factory=dict)
+
+    def ranked(self) -> list[Survey]:
+        """Reachable candidates by predicted error alone (best first), then the unreachable ones."""
+        scored = [s for s in self.surveys if s.alone is not None]
+        rest = [s for s in self.surveys if s.alone is None]
+        return sorted(scored, key=lambda s: s.alone.mean) + rest
+
+
+# ------------------------------------------------------------------------------------ candidates
+def grid_candidates(text: str) -> list[Candidate]:
+    """Candidates on a box grid ``"xmin,xmax,nx;ymin,ymax,ny;zmin,zmax,nz"`` [m], named ``C1`` ...
+
+    Raises:
+        CandidateError: not three ``min,max,count`` triples, or a count < 1.
+    """
+    axes = []
+    parts = text.split(";")
+    if len(parts) != 3:
+        raise CandidateError(f"--grid {text!r}: expected 'xmin,xmax,nx;ymin,ymax,ny;zmin,zmax,nz'")
+    for axis, part in zip("xyz", parts, strict=True):
+        fields = part.split(",")
+        try:
+            lo, hi, count = float(fields[0]), float(fields[1]), int(fields[2])
+        except (ValueError, IndexError):
+            raise CandidateError(f"--grid {text!r}: field '{axis}': expected 'min,max,count', got {part!r}") from None
+        if len(fields) != 3 or count < 1 or not (math.isfinite(lo) and math.isfinite(hi)):
+            raise CandidateError(f"--grid {text!r}: field '{axis}': expected 'min,max,count' with count >= 1")
+        axes.append(np.linspace(lo, hi, count) if count > 1 else np.array([(lo + hi) / 2]))
+    points = np.stack(np.meshgrid(*axes, indexing="ij"), axis=-1).reshape(-1, 3)
+    return [Candidate(f"C{k + 1}", p) for k, p in enumerate(points)]
+
+
+def read_candidates(path: str | Path, n_joints: int) -> list[Candidate]:
+    """Candidates from YAML: ``candidates: {C1: {position: [x, y, z], joint_range: [...]}, ...}``.
+
+    ``joint_range`` (optional) gives, per joint, the share of its range the self-motion may use.
+
+    Raises:
+        CandidateError: unreadable file, no candidates, a bad position or joint range.
+    """
+    import yaml
+
+    path = Path(path)
+    try:
+        data = yaml.safe_load(path.read_text())
+    except (OSError, yaml.YAMLError) as error:
+        raise CandidateError(f"{path}: cannot read candidates: {str(error).splitlines()[0]}") from None
+    entries = data.get("candidates") if isinstance(data, dict) else None
+    if not isinstance(entries, dict) or not entries:
+        raise CandidateError(
+            f"{path}: field 'candidates': expected a non-empty mapping name -> {{position: [x, y, z]}}"
+        )
+    out = []
+    for name, entry in entries.items():
+        where = f"{path}: field 'candidates.{name}"
+        if not isinstance(entry, dict) or "position" not in entry:
+            raise CandidateError(f"{where}': expected a mapping with 'position: [x, y, z]'")
+        position = _vector(entry["position"], 3, f"{where}.position'")
+        joint_range = None
+        if entry.get("joint_range") is not None:
+            joint_range = _vector(entry["joint_range"], n_joints, f"{where}.joint_range'")
+            if np.any(joint_range <= 0) or np.any(joint_range > 1):
+                raise CandidateError(f"{where}.joint_range': every share must be in (0, 1]")
+        unknown = set(entry) - {"position", "joint_range"}
+        if unknown:
+            raise CandidateError(f"{where}.{sorted(unknown)[0]}': unknown field")
+        out.append(Candidate(str(name), position, joint_range))
+    return out
+
+
+def _vector(value, size: int, where: str) -> np.ndarray:
+    try:
+        vector = np.asarray(value, dtype=float)
+    except (TypeError, ValueError):
+        raise CandidateError(f"{where}: expected {size} numbers, got {value!r}") from None
+    if vector.shape != (size,) or not np.all(np.isfinite(vector)):
+        raise CandidateError(f"{where}: expected {size} finite numbers, got {value!r}")
+    return vector
+
+
+# --------------------------------------------------------------------------------------- survey
+def reach_configuration(
+    model: RobotModel, centre: np.ndarray, rng: np.random.Generator, seeds: int = 200
+) -> np.ndarray:
+    """(n,) a configuration reaching ``centre``, as far from the joint limits as the seeds find.
+
+    Raises:
+        UnreachableFixtureError (from the controller package's family): no seed reaches it.
+    """
+    from controller.self_motion import UnreachableFixtureError
+
+    q, ok = project_to_point(model, model.random_configurations(seeds, rng), centre)
+    if not ok.any():
+        where = np.round(centre, 4).tolist()
+        raise UnreachableFixtureError(f"no configuration inside the joint limits reaches {where} m")
+    share = np.minimum(q[ok] - model.lower, model.upper - q[ok]) / (model.upper - model.lower)
+    return q[ok][np.argmax(share.min(axis=1))]
+
+
+def restricted(model: RobotModel, q0: np.ndarray, joint_range: np.ndarray) -> RobotModel:
+    """The model with each joint's limits narrowed to ``joint_range`` of its range around ``q0``
+    (the window is shifted to stay inside the original limits)."""
+    width = np.asarray(joint_range) * (model.upper - model.lower)
+    lower = np.clip(q0 - width / 2, model.lower, model.upper - width)
+    return replace(model, lower=lower, upper=lower + width)
+
+
+def motion_samples(
+    model: RobotModel,
+    candidate: Candidate,
+    count: int,
+    rng: np.random.Generator,
+    motion: str = "kinematic",
+    seconds: float = 3.0,
+    noise: float = 0.0,
+    truth: RobotModel | None = None,
+) -> np.ndarray:
+    """(count, n) self-motion samples at a candidate (see the module docstring for ``motion``).
+
+    Args:
+        model: the nominal robot (reach and, with ``motion="controller"``, the controller's model).
+        candidate: where, and the allowed share of each joint's range.
+        count: samples.
+        rng: seeded generator.
+        motion: ``"kinematic"`` or ``"controller"``.
+        seconds: controller run per candidate [s].
+        noise: fixture noise per coordinate [m] (moves the physical point, not the joints).
+        truth: the robot the samples are taken on (default ``model``).
+
+    Raises:
+        FixtureInsideRobotError, UnreachableFixtureError: the candidate cannot be used.
+    """
+    from controller.self_motion import SelfMotionSettings, UnreachableFixtureError, check_fixture, collect_self_motion
+
+    truth = model if truth is None else truth
+    centre = candidate.position
+    check_fixture(model, candidate.name, centre)
+    if candidate.joint_range is not None:
+        window = candidate.joint_range
+        truth = restricted(truth, reach_configuration(truth, centre, rng), window)
+        model = replace(model, lower=truth.lower, upper=truth.upper)
+    if motion == "controller":
+        settings = SelfMotionSettings(seconds=seconds, samples=count, noise=noise)
+        return collect_self_motion(truth, model, {candidate.name: centre}, rng, settings).q
+    if motion != "kinematic":
+        raise ValueError(f"unknown motion {motion!r}, expected one of {MOTIONS}")
+    try:
+        return fixture_samples(truth, centre, count, rng, noise, max_rounds=3)
+    except ValueError:
+        raise UnreachableFixtureError(
+            f"fixture {candidate.name} at {np.round(centre, 4).tolist()} m is out of reach inside the joint limits"
+        ) from None
+
+
+def survey(
+    model: RobotModel,
+    candidates: list[Candidate],
+    rng: np.random.Generator,
+    motion: str = "kinematic",
+    seconds: float = 3.0,
+    count: int = PLAN_SAMPLES,
+) -> list[Survey]:
+    """Reach and self-motion coverage at every candidate (unreachable ones kept, with the reason)."""
+    from controller.exploration import joint_coverage
+
+    out = []
+    for candidate in candidates:
+        try:
+            q = motion_samples(model, candidate, count, rng, motion, seconds)
+        except SpherecalError as error:
+            out.append(Survey(candidate, False, str(error), np.zeros((0, model.n_joints)), np.zeros(model.n_joints)))
+            continue
+        out.append(Survey(candidate, True, "", q, joint_coverage(q, model.lower, model.upper)))
+    return out
+
+
+# -------------------------------------------------------------------------------------- scoring
+def dataset_of(surveys: list[Survey]) -> Dataset:
+    """The samples of several surveyed candidates as one data set."""
+    names = tuple(s.candidate.name for s in surveys)
+    labels = np.concatenate([np.full(len(s.q), s.candidate.name) for s in surveys])
+    return Dataset(labels=labels, q=np.concatenate([s.q for s in surveys]), fixture_names=names)
+
+
+def score(
+    model: RobotModel,
+    surveys: list[Survey],
+    distances: tuple[tuple[str, str], ...],
+    noise: float,
+    samples: int,
+    workspace: Workspace,
+) -> Prediction:
+    """Predicted accuracy of the surveyed candidates with those distances measured, for ``samples``
+    recorded samples per fixture (each planning sample stands for ``samples / K`` of them)."""
+    position = {s.candidate.name: s.candidate.position for s in surveys}
+    spec = FixtureSpec(
+        names=tuple(position),
+        distances=[(a, b, float(np.linalg.norm(position[a] - position[b]))) for a, b in distances],
+    )
+    weight = samples / min(len(s.q) for s in surveys)
+    return predict_accuracy(model, dataset_of(surveys), spec, noise=noise, workspace=workspace, sample_weight=weight)
+
+
+def all_pairs(names: tuple[str, ...]) -> tuple[tuple[str, str], ...]:
+    """Every centre-to-centre pair."""
+    return tuple(itertools.combinations(names, 2))
+
+
+def choose_distances(
+    model: RobotModel, surveys: list[Survey], noise: float, samples: int, workspace: Workspace
+) -> FixtureSet:
+    """The fewest distances (greedy) whose predicted error is within :data:`DISTANCE_GAIN` of all of them."""
+    names = tuple(s.candidate.name for s in surveys)
+    none = score(model, surveys, (), noise, samples, workspace) if len(names) > 1 else None
+    every = all_pairs(names)
+    full = score(model, surveys, every, noise, samples, workspace)
+    if len(every) <= 1:
+        return FixtureSet(names, every, full, none)
+    chosen: tuple[tuple[str, str], ...] = ()
+    current = none
+    while current.mean > (1 + DISTANCE_GAIN) * full.mean and len(chosen) < len(every):
+        options = [
+            (score(model, surveys, chosen + (p,), noise, samples, workspace), p) for p in every if p not in chosen
+        ]
+        current, pair = min(options, key=lambda o: o[0].mean)
+        chosen += (pair,)
+    return FixtureSet(names, chosen, current if chosen else none, none)
+
+
+def plan(
+    model: RobotModel,
+    candidates: list[Candidate],
+    fixtures: int,
+    rng: np.random.Generator,
+    noise: float = 3e-4,
+    samples: int = 500,
+    motion: str = "kinematic",
+    seconds: float = 3.0,
+    configurations: int = 1000,
+) -> Plan:
+    """Survey the candidates, then choose ``fixtures`` of them (and the distances to measure).
+
+    Subsets are scored with every distance among them known (the best case), exhaustively when
+    there are at most :data:`EXHAUSTIVE_LIMIT` of them, else greedily (add the candidate that lowers
+    the predicted mean error most); the winner's distances are then thinned by :func:`choose_distances`.
+
+    Raises:
+        CandidateError: no candidates, or ``fixtures`` outside 1..4.
+    """
+    import time
+
+    if not candidates:
+        raise CandidateError("no candidate fixture positions given")
+    if not 1 <= fixtures <= 4:
+        raise CandidateError(f"--fixtures must be in 1..4, got {fixtures}")
+    clock = time.perf_counter()
+    surveys = survey(model, candidates, rng, motion, seconds)
+    seconds_taken = {"survey": time.perf_counter() - clock}
+    clock = time.perf_counter()
+    workspace = Workspace.of(model, configurations, rng)
+    scored = []
+    for s in surveys:
+        if s.reachable:
+            try:
+                s = replace(s, alone=score(model, [s], (), noise, samples, workspace))
+            except SpherecalError as error:
+                s = replace(s, reason=f"not identifiable alone: {error}")
+        scored.append(s)
+    usable = [s for s in scored if s.reachable]
+    best, search = None, "none"
+    if len(usable) >= fixtures:
+        best, search = _search(model, usable, fixtures, noise, samples, workspace)
+    seconds_taken["score"] = time.perf_counter() - clock
+    return Plan(scored, best, search, motion, noise, samples, seconds_taken)
+
+
+def _search(model, usable, fixtures, noise, samples, workspace) -> tuple[FixtureSet, str]:
+    def value(group) -> float:
+        try:
+            names = tuple(s.candidate.name for s in group)
+            return score(model, list(group), all_pairs(names), noise, samples, workspace).mean
+        except SpherecalError:
+            return math.inf
+
+    if math.comb(len(usable), fixtures) <= EXHAUSTIVE_LIMIT:
+        group, search = min(itertools.combinations(usable, fixtures), key=value), "exhaustive"
+    else:
+        ranked = sorted((s for s in usable if s.alone is not None), key=lambda s: s.alone.mean)
+        group, search = [ranked[0]] if ranked else [usable[0]], "greedy"
+        while len(group) < fixtures:
+            options = [s for s in usable if s not in group]
+            group.append(min(options, key=lambda s: value([*group, s])))
+    return choose_distances(model, list(group), noise, samples, workspace), search
