@@ -120,10 +120,9 @@ def calibrated_model(nominal, true, rng: np.random.Generator, calibration: str):
     )
 
 
-def landing_table(count: int, seed: int = 20261122, calibration: str = "identified") -> LandingTable:
-    """Command ``count`` random reachable targets three ways on the true plant (see module docstring)."""
-    from controller.compensation import compensate, corrected_ik, nominal_ik_controller
-    from controller.ik import UnreachableError
+def _setup(seed: int, calibration: str):
+    """Seeded generator, nominal, true and calibrated models, its description, the true plant, and the
+    calibration's accuracy [m] (mean tool-point error against the truth on 1000 random configurations)."""
     from controller.plant import build_plant
     from correction import load_robot, perturb, tool_point
 
@@ -133,7 +132,17 @@ def landing_table(count: int, seed: int = 20261122, calibration: str = "identifi
     calibrated, description = calibrated_model(nominal, true, rng, calibration)
     plant = build_plant(true)
     q_random = true.random_configurations(1000, rng)
-    accuracy_random = np.linalg.norm(tool_point(calibrated, q_random) - tool_point(true, q_random), axis=1).mean()
+    accuracy = np.linalg.norm(tool_point(calibrated, q_random) - tool_point(true, q_random), axis=1).mean()
+    return rng, nominal, true, calibrated, description, plant, accuracy
+
+
+def landing_table(count: int, seed: int = 20261122, calibration: str = "identified") -> LandingTable:
+    """Command ``count`` random reachable targets three ways on the true plant (see module docstring)."""
+    from controller.compensation import compensate, corrected_ik, nominal_ik_controller
+    from controller.ik import UnreachableError
+    from correction import tool_point
+
+    rng, nominal, true, calibrated, description, plant, accuracy_random = _setup(seed, calibration)
     lower, upper = nominal.lower + LIMIT_INSET, nominal.upper - LIMIT_INSET
     names = ("(a) nominal model", "(b) corrected IK (calibrated model)", "(c) nominal model, compensated target")
     errors = {name: np.empty(count) for name in names}
@@ -201,17 +210,10 @@ def qp_landing_table(count: int, seed: int = 20261122, calibration: str = "ident
     from controller.compensation import DifferentialIKFlow, compensate
     from controller.ik import UnreachableError
     from controller.nullspace import NullSpaceController
-    from controller.plant import build_plant
     from controller.qp_ik import ControllerFallbackWarning
-    from correction import load_robot, perturb, tool_point
+    from correction import tool_point
 
-    rng = np.random.default_rng(seed)
-    nominal = load_robot("panda")
-    true = perturb(nominal, rng)
-    calibrated, description = calibrated_model(nominal, true, rng, calibration)
-    plant = build_plant(true)
-    q_random = true.random_configurations(1000, rng)
-    accuracy = np.linalg.norm(tool_point(calibrated, q_random) - tool_point(true, q_random), axis=1).mean()
+    rng, nominal, true, calibrated, description, plant, accuracy = _setup(seed, calibration)
     nominal_qp, calibrated_qp = NullSpaceController(nominal), NullSpaceController(calibrated)
     flow = DifferentialIKFlow()
 
