@@ -10,7 +10,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from correction import RobotModel, frames
+from correction import RobotModel, frames, joint_jacobian, tool_pose
 from correction.errors import SpherecalError
 
 #: Position tolerance [m] and orientation tolerance [rad] of a converged solution.
@@ -55,17 +55,14 @@ def _rotvec(rotation: np.ndarray) -> np.ndarray:
 def _error_and_jacobian(model: RobotModel, q: np.ndarray, target: np.ndarray, orientation: np.ndarray | None
                         ) -> tuple[np.ndarray, np.ndarray]:
     """Task error (3,) or (6,) [m, rad] and its Jacobian d(p, omega)/dq (3 or 6, n)."""
-    f = frames(model, q[None])
-    x, y, z, o = f.x[-1, :, 0], f.y[-1, :, 0], f.z[-1, :, 0], f.origin[-1, :, 0]
-    point = o + model.tool[0] * x + model.tool[1] * y + model.tool[2] * z
-    axes = f.z[1:, :, 0] if model.convention == "modified" else f.z[:-1, :, 0]  # (n, 3)
-    origins = f.origin[1:, :, 0] if model.convention == "modified" else f.origin[:-1, :, 0]
-    jac_p = np.cross(axes, point - origins).T
+    pose = tool_pose(model, q)
+    jac_p = joint_jacobian(model, q)
     if orientation is None:
-        return target - point, jac_p
-    current = np.stack([x, y, z], axis=1)
-    err_o = _rotvec(orientation @ current.T)
-    return np.concatenate([target - point, err_o]), np.vstack([jac_p, axes.T])
+        return target - pose[:3, 3], jac_p
+    z = frames(model, q[None]).z[:, :, 0]  # (n+1, 3): joint i turns about z of frame i (modified) or i-1
+    axes = z[1:] if model.convention == "modified" else z[:-1]
+    err_o = _rotvec(orientation @ pose[:3, :3].T)
+    return np.concatenate([target - pose[:3, 3], err_o]), np.vstack([jac_p, axes.T])
 
 
 def _solve_from(model: RobotModel, q: np.ndarray, target: np.ndarray, orientation: np.ndarray | None,

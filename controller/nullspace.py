@@ -7,8 +7,6 @@ numpy per step.
 
 from __future__ import annotations
 
-import warnings
-
 import mujoco
 import numpy as np
 
@@ -19,13 +17,12 @@ from .qp_ik import (
     LIMIT_GAIN,
     LIMIT_MARGIN,
     MAX_VELOCITY,
-    ControllerFallbackWarning,
     PersistentOSQP,
     QPSolveError,
     StepReport,
     build_problem,
-    damped_pinv_velocity,
     damped_task_velocity,
+    fall_back,
     solve_step,
     velocity_bounds,
 )
@@ -125,15 +122,9 @@ class NullSpaceController:
         qdot = self._persistent.solve(jac, v, q_r, lb, ub)
         self.report.steps += 1
         if qdot is not None:
+            self.report.status = "qp"
             return qdot
         return self._fail(build_problem(jac.copy(), v, q_r, lb, ub))
 
     def _fail(self, problem) -> np.ndarray:
-        reason = self._persistent.last_status if self._persistent is not None else self.solver
-        if not self.fallback:
-            raise QPSolveError(f"differential IK: QP solver failed ({reason}) and fallback is off")
-        message = f"fallback: damped pseudo-inverse with clamped limits ({reason})"
-        self.report.status = message
-        self.report.fallbacks += 1
-        warnings.warn(message, ControllerFallbackWarning, stacklevel=3)
-        return damped_pinv_velocity(problem)
+        return fall_back(problem, self._persistent.last_status, self.fallback, self.report)

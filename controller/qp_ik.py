@@ -234,11 +234,16 @@ def solve_step(
         if report is not None:
             report.status = "qp"
         return qdot
+    return fall_back(problem, reason, fallback, report)
+
+
+def fall_back(problem: qpsolvers.Problem, reason: str, fallback: bool, report: StepReport | None) -> np.ndarray:
+    """After a failed QP: raise :class:`QPSolveError`, or warn and return :func:`damped_pinv_velocity`."""
     if not fallback:
         raise QPSolveError(f"differential IK: QP solver failed ({reason}) and fallback is off")
     message = f"fallback: damped pseudo-inverse with clamped limits ({reason})"
     if report is not None:
         report.status = message
         report.fallbacks += 1
-    warnings.warn(message, ControllerFallbackWarning, stacklevel=2)
+    warnings.warn(message, ControllerFallbackWarning, stacklevel=3)
     return damped_pinv_velocity(problem)
