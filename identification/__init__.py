@@ -1,1 +1,39 @@
-"""Identification: spherical-joint samples in, calibrated robot parameters out."""
+"""Identification: spherical-joint samples in, calibrated robot parameters out.
+
+The public names are loaded lazily (``identification.cli`` must import nothing heavy)::
+
+    from identification import read_samples, read_fixtures, build_problem, CalibrationResult
+    from identification.calibrate import calibrate   # (the submodule shares the function's name)
+"""
+
+from __future__ import annotations
+
+import importlib
+from typing import Any
+
+_EXPORTS: dict[str, str] = {
+    "Dataset": "dataset",
+    "DatasetError": "dataset",
+    "FixtureSpec": "dataset",
+    "read_samples": "dataset",
+    "write_samples": "dataset",
+    "read_fixtures": "dataset",
+    "write_fixtures": "dataset",
+    "CalibrationProblem": "problem",
+    "UnidentifiableError": "problem",
+    "build_problem": "problem",
+    "prune": "problem",
+    "CalibrationResult": "calibrate",
+    "solve_lm": "solvers",
+    "solve_pso": "solvers",
+    "Identifiability": "identifiability",
+    "make_dataset": "synthetic",
+}
+
+__all__ = sorted(_EXPORTS)
+
+
+def __getattr__(name: str) -> Any:
+    if name not in _EXPORTS:
+        raise AttributeError(f"module 'identification' has no attribute {name!r}")
+    return getattr(importlib.import_module(f".{_EXPORTS[name]}", __name__), name)

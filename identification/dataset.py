@@ -130,7 +130,10 @@ class Dataset:
         """Drop exact and near duplicates within each fixture.
 
         A sample is dropped when an earlier kept sample of the same fixture lies within ``tol``
-        on every joint (``max_i |q_i - q'_i| <= tol``); ``tol = 0`` drops exact duplicates only.
+        on every joint (``max_i |q_i - q'_i| <= tol``); samples sharing one ``tol`` grid cell
+        collapse onto the first of them first, so a dense cluster may lose a few more samples than
+        the strict rule would. ``tol = 0`` drops exact duplicates only. About 0.5 s for 100 000
+        samples of a 1 kHz recording.
 
         Args:
             tol: tolerance [rad], >= 0.
@@ -164,25 +167,43 @@ class Dataset:
 
 
 def _first_of_clusters(q: np.ndarray, tol: float) -> np.ndarray:
-    """(K,) bool: True for samples with no earlier kept sample within ``tol`` (Chebyshev)."""
-    keep = np.ones(q.shape[0], dtype=bool)
-    if q.shape[0] < 2:
-        return keep
-    if tol == 0.0:
-        _, first = np.unique(q, axis=0, return_index=True)
-        keep[:] = False
-        keep[first] = True
-        return keep
-    from scipy.spatial import cKDTree
+    """(K,) bool: True for samples with no earlier kept sample within ``tol`` (Chebyshev).
 
-    pairs = cKDTree(q).query_pairs(tol, p=np.inf, output_type="ndarray")
-    if pairs.size == 0:
+    Samples in the same ``tol`` grid cell collapse onto the first of them (a robot standing still
+    at 1 kHz gives thousands); the survivors are swept in order of their most spread joint, where
+    only neighbours closer than ``tol`` on that joint can be duplicates. No KD-tree: importing
+    scipy.spatial alone costs a third of a second of the command's start-up.
+    """
+    keep = np.zeros(q.shape[0], dtype=bool)
+    if q.shape[0] < 2:
+        keep[:] = True
         return keep
+    cells = np.floor(q / tol).astype(np.int64) if tol > 0 else q
+    _, first = np.unique(cells, axis=0, return_index=True)
+    first = np.sort(first)
+    keep[first] = True
+    if tol == 0.0 or first.size < 2:
+        return keep
+    sub = q[first]
+    col = int(np.argmax(np.ptp(sub, axis=0)))
+    order = np.argsort(sub[:, col], kind="stable")
+    ordered = sub[order]
+    pairs = []
+    for offset in range(1, ordered.shape[0]):
+        near = ordered[offset:, col] - ordered[:-offset, col] <= tol
+        if not near.any():
+            break
+        i = np.flatnonzero(near)
+        i = i[np.abs(ordered[i + offset] - ordered[i]).max(axis=1) <= tol]
+        pairs.append(np.stack([first[order[i]], first[order[i + offset]]], axis=1))
+    if not pairs:
+        return keep
+    pairs = np.sort(np.concatenate(pairs), axis=1)  # (earlier, later) in recording order
     pairs = pairs[np.lexsort((pairs[:, 1], pairs[:, 0]))]
     starts = np.searchsorted(pairs[:, 0], np.arange(q.shape[0] + 1))
-    for i in range(q.shape[0]):  # greedy in recording order: a kept sample hides its later neighbours
-        if keep[i] and starts[i] < starts[i + 1]:
-            keep[pairs[starts[i] : starts[i + 1], 1]] = False
+    for k in np.unique(pairs[:, 0]):  # greedy in recording order: a kept sample hides its later neighbours
+        if keep[k]:
+            keep[pairs[starts[k] : starts[k + 1], 1]] = False
     return keep
 
 
