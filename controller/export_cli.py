@@ -35,7 +35,7 @@ def provenance_header(source: str, output_format: str) -> str:
         except PackageNotFoundError:
             versions.append(f"{package} unknown")
     return (
-        f"spherecal export --format {output_format} {source}\n"
+        f"spherecal export to {output_format} of {source}\n"
         f"input sha256: {digest}\n"
         f"versions: {', '.join(versions)}"
     )
