@@ -95,3 +95,17 @@ def test_infeasible_step_falls_back_and_says_so(panda):
 def test_unknown_solver_is_refused(panda):
     with pytest.raises(QPSolveError, match="not installed"):
         NullSpaceController(panda, solver="no_such_solver")
+
+
+def test_damping_keeps_a_singular_step_bounded(panda):
+    q = np.zeros(7)
+    q[3] = panda.upper[3] - 0.02  # elbow nearly straight, wrist aligned: near-singular
+    controller = NullSpaceController(panda)
+    point, jac = controller.kinematics(q)
+    target = point + np.array([0.0, 0.0, 0.05])  # straight out along the stretched arm
+    # unreachable at the speed limit: the strict equality is infeasible, the fallback says so
+    with pytest.warns(ControllerFallbackWarning, match="primal infeasible"):
+        qdot = controller.step(q, np.zeros(7), target=target)
+    assert np.all(np.isfinite(qdot)) and np.abs(qdot).max() <= controller.max_velocity + 1e-9
+    lb, ub = controller.bounds(q)
+    assert np.all(qdot >= lb - 1e-9) and np.all(qdot <= ub + 1e-9)
