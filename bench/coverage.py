@@ -13,11 +13,14 @@ import sys
 import time
 from pathlib import Path
 
-import numpy as np
+# bench/controller.py would shadow the controller package: keep bench/ off the import path.
+sys.path[:] = [p for p in sys.path if Path(p or ".").resolve() != Path(__file__).resolve().parent]
 
-from controller.cli import DEFAULT_FIXTURES
-from controller.self_motion import SelfMotionSettings, collect_self_motion
-from correction import load_robot, perturb
+import numpy as np  # noqa: E402
+
+from controller.cli import DEFAULT_FIXTURES  # noqa: E402
+from controller.self_motion import SelfMotionSettings, collect_self_motion  # noqa: E402
+from correction import load_robot, perturb  # noqa: E402
 
 
 def main(seeds: int = 5) -> None:
