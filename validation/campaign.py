@@ -123,7 +123,7 @@ def run_task(task: Task) -> TaskResult:
     data = motion_set(
         truth, nominal, fixtures, task.config.samples, task.noise, rng, task.config.source, task.config.seconds
     )
-    calibrated = calibrate_from(nominal, data, fixtures, known_distances=len(fixtures) > 1)
+    calibrated = calibrate_from(nominal, data).model
     report = validate_models(nominal, calibrated, rng, truth=truth, configurations=task.config.configurations)
     random = report.comparison(RANDOM_SET)
     return TaskResult(

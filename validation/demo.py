@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import json
 import time
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 
 import numpy as np
@@ -13,7 +13,7 @@ import numpy as np
 from correction import RobotModel, atomic_write_text, save_robot, tool_point
 
 from .experiment import calibrate_from, default_fixtures, motion_set, nominal_robot, true_robot
-from .mocap import MARKER_NOISE
+from .mocap import MARKER_NOISE, MocapMeasurement, write_mocap_csv
 from .pipeline import RANDOM_SET, ValidationReport, record_validation, validate_models
 from .provenance import comment_block, provenance
 
@@ -55,6 +55,7 @@ class DemoResult:
     nominal: RobotModel
     calibrated: RobotModel
     report: ValidationReport
+    calibration: object = None  # identification.calibrate.CalibrationResult
     files: dict[str, Path] = field(default_factory=dict)
     timings: dict[str, float] = field(default_factory=dict)
 
@@ -76,8 +77,10 @@ def run_demo(config: DemoConfig, say=print) -> DemoResult:
 
     say(f"[2/4] calibrating from {len(data.dataset.q)} samples, fixture distances known")
     clock = time.perf_counter()
-    calibrated = calibrate_from(nominal, data, fixtures, known_distances=True)
+    calibration = calibrate_from(nominal, data)
+    calibrated = calibration.model
     timings["calibration"] = time.perf_counter() - clock
+    say(calibration.summary())
 
     say(
         f"[3/4] validating with simulated mocap ({config.mocap_noise * 1e3:.2f} mm per marker): "
@@ -95,7 +98,7 @@ def run_demo(config: DemoConfig, say=print) -> DemoResult:
         noise=config.mocap_noise,
     )
     timings["validation"] = time.perf_counter() - clock
-    result = DemoResult(truth, nominal, calibrated, report, timings=timings)
+    result = DemoResult(truth, nominal, calibrated, report, calibration, timings=timings)
     say(report.format())
     say(summary(report))
 
@@ -131,16 +134,20 @@ def _inputs(config: DemoConfig) -> dict:
 
 def write_results(config: DemoConfig, result: DemoResult, data, fixtures: dict[str, np.ndarray]) -> dict[str, Path]:
     """Samples, fixtures, truth, calibrated model, report JSON and the recording, each with provenance."""
-    from identification.dataset import write_fixtures, write_samples
+    from identification.dataset import format_fixtures, format_samples
 
     out = Path(config.out)
     info = provenance(config.seed, _inputs(config))
     header = "spherecal demo\n" + comment_block(info)
+    comment = "".join(f"# {line}\n" for line in header.splitlines())
+    first = result.report.sets[0]
+    measured = MocapMeasurement(q=first.q, tool=first.measured)
     files = {
-        "samples": write_samples(out / "samples.csv", data.dataset),
-        "fixtures": write_fixtures(out / "fixtures.yaml", data.spec),
+        "samples": atomic_write_text(out / "samples.csv", comment + format_samples(data.dataset)),
+        "fixtures": atomic_write_text(out / "fixtures.yaml", comment + format_fixtures(data.spec)),
+        "mocap": write_mocap_csv(out / "mocap.csv", measured, comment=header + "\nsimulated mocap, random set"),
         "truth": save_robot(result.truth, out / "truth.yaml", header=header + "\nthe TRUE robot of this simulation"),
-        "calibrated": save_robot(result.calibrated, out / "calibrated.yaml", header=header),
+        "calibrated": save_robot(_with_block(result, info), out / "calibrated.yaml", header=header),
     }
     report = {
         "provenance": info,
@@ -163,11 +170,12 @@ def write_recording(config: DemoConfig, result: DemoResult, data, fixtures: dict
         recording.fixtures(list(fixtures), np.array(list(fixtures.values())))
         trajectory = data.trajectory
         if trajectory is not None:
-            recording.self_motion(result.truth, trajectory.t, trajectory.q)
+            recording.self_motion(result.truth, trajectory.trajectory_t, trajectory.trajectory_q)
         q, labels = data.dataset.q, data.dataset.labels
         recording.samples(tool_point(result.truth, q), labels)
         record_validation(recording, result.report, {"nominal": result.nominal, "calibrated": result.calibrated})
-        recording.series("plots/residual", calibration_residuals(result.calibrated, q, labels) * 1e3)
+        recording.series("plots/residual/nominal", result.calibration.residual_before * 1e3)
+        recording.series("plots/residual/calibrated", result.calibration.residual_after * 1e3)
         recording.coverage(q, result.truth.lower, result.truth.upper)
     except BaseException:
         recording.abort()
@@ -175,11 +183,8 @@ def write_recording(config: DemoConfig, result: DemoResult, data, fixtures: dict
     return recording.close()
 
 
-def calibration_residuals(model: RobotModel, q: np.ndarray, labels: np.ndarray) -> np.ndarray:
-    """(K,) distance [m] of each sample's predicted tool point from its fixture's mean prediction."""
-    points = tool_point(model, q)
-    out = np.empty(len(q))
-    for name in dict.fromkeys(labels):
-        mask = labels == name
-        out[mask] = np.linalg.norm(points[mask] - points[mask].mean(axis=0), axis=1)
-    return out
+def _with_block(result: DemoResult, info: dict) -> RobotModel:
+    """The calibrated model with identification's ``calibration:`` block and the demo's provenance."""
+    block = {**result.calibration.block(), "provenance": info}
+    extras = {k: v for k, v in result.nominal.extras.items() if k != "calibration"}
+    return replace(result.calibrated, extras={**extras, "calibration": block})

@@ -25,10 +25,11 @@ def true_robot(nominal: RobotModel, rng: np.random.Generator) -> RobotModel:
 
 
 def default_fixtures() -> dict[str, np.ndarray]:
-    """The three fixture centres P1, P2, P3 in the base frame [m] (identification's Panda layout)."""
-    from identification.synthetic import PANDA_FIXTURES
+    """The three fixture centres P1, P2, P3 in the base frame [m]: ``spherecal simulate``'s defaults
+    (chosen by the controller for joint coverage under self-motion)."""
+    from controller.cli import DEFAULT_FIXTURES
 
-    return {name: np.asarray(centre, dtype=float) for name, centre in PANDA_FIXTURES.items()}
+    return {name: np.asarray(centre, dtype=float) for name, centre in DEFAULT_FIXTURES.items()}
 
 
 @dataclass
@@ -99,6 +100,12 @@ def _mujoco_motion(truth, nominal, fixtures, samples, noise, rng, seconds) -> Mo
     return MotionData(run.dataset(), fixture_spec(fixtures, len(fixtures) > 1), run)
 
 
-def calibrate_from(nominal: RobotModel, data: MotionData, fixtures=None, known_distances: bool = True) -> RobotModel:
-    """The calibrated model from the data (identification's default least-squares method)."""
-    raise NotImplementedError("waiting for identification's calibrate API")
+def calibrate_from(nominal: RobotModel, data: MotionData):
+    """Calibrate ``nominal`` from the data with identification's default method (``lm``).
+
+    Returns:
+        The :class:`identification.calibrate.CalibrationResult` (``.model`` is the calibrated robot).
+    """
+    from identification.calibrate import calibrate
+
+    return calibrate(nominal, data.dataset, data.spec)

@@ -1,0 +1,72 @@
+"""`spherecal demo` end to end on a short configuration; its recording read back."""
+
+from __future__ import annotations
+
+import json
+import re
+from pathlib import Path
+
+import pytest
+
+from validation.cli import main
+
+ROOT = Path(__file__).parents[1]
+SECONDS, SAMPLES, CONFIGURATIONS = 1.0, 60, 200
+
+
+@pytest.fixture(scope="module")
+def demo(tmp_path_factory):
+    out = tmp_path_factory.mktemp("demo")
+    args = ["demo", "--out", str(out), "--seconds", str(SECONDS), "--samples", str(SAMPLES)]
+    args += ["--configurations", str(CONFIGURATIONS), "--seed", "3", "--noise", "0"]
+    return out, args
+
+
+def test_short_demo_writes_everything_and_its_recording_holds_the_documented_entities(demo, capsys) -> None:
+    from validation.recording import read_entity_rows
+
+    out, args = demo
+    assert main(args) == 0
+    text = capsys.readouterr().out
+    assert "mocap floor" in text and f"recording: {out / 'demo.rrd'}" in text
+    headline = re.search(r"nominal ([\d.]+) mm -> calibrated ([\d.]+) mm against the exact", text)
+    assert float(headline[2]) < float(headline[1])
+    names = sorted(p.name for p in out.iterdir())
+    expected = ["calibrated.yaml", "demo.json", "demo.rrd", "fixtures.yaml", "mocap.csv", "samples.csv", "truth.yaml"]
+    assert names == expected
+    report = json.loads((out / "demo.json").read_text())
+    assert report["provenance"]["seed"] == 3 and report["provenance"]["inputs"]["samples_per_fixture"] == SAMPLES
+    for name in ("samples.csv", "fixtures.yaml", "truth.yaml", "calibrated.yaml", "mocap.csv"):
+        assert "mujoco 4" in (out / name).read_text(), name  # versions recorded in every result file
+
+    rows = read_entity_rows(out / "demo.rrd")
+    steps = 3 * round(SECONDS / 0.01)  # the controller's decimated trajectory: every 10 ms, three fixtures
+    expected_rows = {
+        "world/fixtures": 1,
+        "world/samples": 1,
+        "world/robot/links": steps,
+        "world/robot/tool": steps,
+        "validation/measured": 1,
+        "validation/nominal": 1,
+        "validation/calibrated": 1,
+        "validation/errors/nominal": 1,
+        "validation/errors/calibrated": 1,
+        "plots/error/nominal": CONFIGURATIONS,
+        "plots/error/calibrated": CONFIGURATIONS,
+        "plots/residual/nominal": 3 * SAMPLES,
+        "plots/residual/calibrated": 3 * SAMPLES,
+        **{f"coverage/q{i}": 1 for i in range(1, 8)},
+    }
+    assert rows == expected_rows
+    readme = (ROOT / "README.md").read_text()
+    section = readme.split("## Validation", 1)[1].split("\n## ", 1)[0]
+    for path in expected_rows:
+        documented = re.sub(r"(errors|error|residual)/(nominal|calibrated)$", r"\1/<model>", path)
+        documented = re.sub(r"q\d$", "q<i>", documented)
+        assert f"`{documented}`" in section, documented
+
+
+def test_demo_refuses_bad_options_and_writes_nothing(tmp_path, capsys) -> None:
+    with pytest.raises(SystemExit):
+        main(["demo", "--out", str(tmp_path / "x"), "--samples", "5"])
+    assert not (tmp_path / "x").exists()
