@@ -158,13 +158,14 @@ def _anchor_spread(problem: CalibrationProblem) -> float:
     return max(float(np.linalg.norm(grad * prior)), 1e-9)
 
 
-def covariance(jac: np.ndarray, sigma: float) -> np.ndarray:
-    """(F, F) ``sigma^2 (J^T J)^-1`` through the SVD of the column-scaled (M, F) Jacobian."""
+def normal_inverse(jac: np.ndarray) -> np.ndarray:
+    """(F, F) ``(J^T J)^-1`` of a (M, F) Jacobian, through the eigen-decomposition of the
+    column-scaled normal matrix (null directions get a huge, not infinite, variance)."""
     norms = column_norms(jac)
-    _, s, vt = np.linalg.svd(jac / norms, full_matrices=False)
-    inv = 1.0 / np.maximum(s, s[0] * 1e-14)
-    root = (vt.T * inv) / norms[:, None]  # (J^T J)^-1 = root root^T
-    return sigma**2 * root @ root.T
+    scaled = jac / norms
+    values, vectors = np.linalg.eigh(scaled.T @ scaled)
+    inv = 1.0 / np.maximum(values, values[-1] * 1e-14)
+    return (vectors * inv) @ vectors.T / np.outer(norms, norms)
 
 
 def predict_accuracy(
@@ -207,7 +208,8 @@ def predict_accuracy(
     rows[: 3 * dataset.n_samples] = np.sqrt(sample_weight)
     jac = pruned.jacobian(x) * rows
     fp = pruned.n_free_params
-    cov = covariance(jac, noise)[:fp, :fp]
+    inverse = normal_inverse(jac)
+    cov = noise**2 * inverse[:fp, :fp]
     free = pruned.free
     std = np.sqrt(np.diag(cov))
     gains = workspace.sensitivity
@@ -220,12 +222,12 @@ def predict_accuracy(
     if dropped.size:  # barely excited parameters left at nominal: the fit absorbs what it can
         cols = [int(np.flatnonzero(lin.free == i)[0]) for i in dropped]
         spread = prior_std(model)[dropped]
-        shifts.append(-np.linalg.lstsq(jac, (lin.jacobian(x_lin) * rows)[:, cols] * spread, rcond=None)[0])
+        shifts.append(-inverse @ (jac.T @ ((lin.jacobian(x_lin) * rows)[:, cols] * spread)))
         direct.append(gains[:, dropped] * spread)
     if pruned.anchor is not None:  # the scale anchor's radius is the nominal model's, not measured
         kick = np.zeros((pruned.n_residuals, 1))
         kick[-1] = pruned.distance_weight * _anchor_spread(pruned)
-        shifts.append(np.linalg.lstsq(jac, kick, rcond=None)[0])
+        shifts.append(inverse @ (jac.T @ kick))
         direct.append(np.zeros((gains.shape[0], 1)))
     if shifts:
         shift, effect = np.hstack(shifts), np.hstack(direct)
