@@ -42,9 +42,9 @@ def test_synthetic_samples_sit_on_their_fixture(truth, clean) -> None:
 
 def test_projection_reaches_the_target(truth, rng) -> None:
     _, true = truth
-    q, ok = project_to_point(true, true.random_configurations(50, rng), np.array([0.5, 0.0, 0.1]))
+    q, ok = project_to_point(true, true.random_configurations(50, rng), np.array([0.5, 0.1, 0.0]))
     assert ok.mean() > 0.5
-    assert np.allclose(tool_point(true, q[ok]), [0.5, 0.0, 0.1], atol=1e-9)
+    assert np.allclose(tool_point(true, q[ok]), [0.5, 0.1, 0.0], atol=1e-9)
 
 
 def test_jacobian_matches_finite_differences(truth, clean) -> None:
@@ -104,7 +104,7 @@ def test_noisy_lm_within_targets(truth) -> None:
 
 def test_one_fixture_no_distance_does_not_collapse(truth) -> None:
     panda, true = truth
-    dataset, _ = make_dataset(true, {"P1": (0.5, 0.0, 0.1)}, rng=np.random.default_rng(4), noise=3e-4)
+    dataset, _ = make_dataset(true, {"P1": (0.5, 0.1, 0.0)}, rng=np.random.default_rng(4), noise=3e-4)
     result = calibrate(panda, dataset)
     assert any(w.startswith("scale:") for w in result.warnings)
     assert result.problem.pinned == ("P1",)
@@ -156,9 +156,10 @@ def test_too_few_samples_and_rank_deficiency(truth, clean) -> None:
 def test_robust_loss_resists_slips(truth, clean) -> None:
     panda, true = truth
     dataset, spec = clean
+    dataset = dataset.subsampled(150, np.random.default_rng(6))  # the trust-region solver is slower
     q = dataset.q.copy()
-    slipped = np.random.default_rng(7).choice(dataset.n_samples, 30, replace=False)
-    q[slipped] += np.random.default_rng(8).normal(0, 0.02, (30, 7))  # 2 % of samples off by ~1 cm
+    slipped = np.random.default_rng(7).choice(dataset.n_samples, 9, replace=False)
+    q[slipped] += np.random.default_rng(8).normal(0, 0.02, (9, 7))  # 2 % of samples off by ~1 cm
     q = np.clip(q, panda.lower, panda.upper)
     bad = Dataset(dataset.labels, q)
     plain = _accuracy(calibrate(panda, bad, spec).model, true).mean()
