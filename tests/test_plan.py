@@ -1,0 +1,148 @@
+"""spherecal plan: candidate parsing, survey (reach, coverage, joint windows), set choice, CLI errors."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from validation.cli import main
+from validation.plan import (
+    Candidate,
+    CandidateError,
+    grid_candidates,
+    motion_samples,
+    plan,
+    read_candidates,
+    restricted,
+)
+from validation.plan_cli import format_plan
+
+REACHABLE = {"A": [0.5, -0.25, 0.5], "B": [0.5, 0.0, 0.4], "C": [0.45, 0.25, 0.45]}
+
+
+def _yaml(tmp_path, text: str):
+    path = tmp_path / "candidates.yaml"
+    path.write_text(text)
+    return path
+
+
+def test_grid_has_every_point():
+    candidates = grid_candidates("0.2,0.7,5;-0.5,0.5,5;0.1,0.7,3")
+    assert len(candidates) == 75
+    points = np.array([c.position for c in candidates])
+    assert np.allclose(points.min(axis=0), [0.2, -0.5, 0.1]) and np.allclose(points.max(axis=0), [0.7, 0.5, 0.7])
+    assert len({tuple(p) for p in points}) == 75
+
+
+@pytest.mark.parametrize("text", ["", "1,2,3", "0,1,2;0,1,2;0,1,0", "0,1,x;0,1,2;0,1,2", "0,1;0,1,2;0,1,2"])
+def test_bad_grid_raises(text):
+    with pytest.raises(CandidateError):
+        grid_candidates(text)
+
+
+def test_read_candidates(tmp_path, panda):
+    path = _yaml(tmp_path, "candidates:\n  A: {position: [0.5, 0, 0.4]}\n  B: {position: [0.4, 0.2, 0.3], "
+                           "joint_range: [1, 0.1, 0.1, 1, 1, 1, 1]}\n")
+    a, b = read_candidates(path, panda.n_joints)
+    assert a.name == "A" and a.joint_range is None and np.allclose(a.position, [0.5, 0, 0.4])
+    assert np.allclose(b.joint_range, [1, 0.1, 0.1, 1, 1, 1, 1])
+
+
+@pytest.mark.parametrize(
+    "text, field",
+    [
+        ("candidates: {}\n", "candidates"),
+        ("candidates: []\n", "candidates"),
+        ("other: 1\n", "candidates"),
+        ("candidates:\n  A: {position: [0.5, 0]}\n", "candidates.A.position"),
+        ("candidates:\n  A: {position: [0.5, 0, x]}\n", "candidates.A.position"),
+        ("candidates:\n  A: {position: [0.5, 0, 0.3], joint_range: [1, 1]}\n", "candidates.A.joint_range"),
+        ("candidates:\n  A: {position: [0.5, 0, 0.3], joint_range: [1, 0, 1, 1, 1, 1, 1]}\n", "joint_range"),
+        ("candidates:\n  A: {position: [0.5, 0, 0.3], colour: red}\n", "candidates.A.colour"),
+        ("candidates: [\n", "cannot read"),
+    ],
+)
+def test_bad_candidates_raise_one_line(tmp_path, panda, text, field):
+    with pytest.raises(CandidateError) as info:
+        read_candidates(_yaml(tmp_path, text), panda.n_joints)
+    assert field in str(info.value) and "\n" not in str(info.value)
+
+
+@pytest.mark.parametrize(
+    "args",
+    [
+        ["--candidates", "EMPTY"],
+        ["--candidates", "MISSING"],
+        ["--grid", "0,1,2;0,1"],
+        ["--grid", "0.5,0.5,1;0,0,1;0.4,0.4,1", "--fixtures", "5"],
+        [],
+    ],
+)
+def test_cli_bad_candidates_exit_nonzero_with_one_line(tmp_path, capsys, args):
+    empty = _yaml(tmp_path, "candidates: {}\n")
+    args = [str(empty) if a == "EMPTY" else str(tmp_path / "missing.yaml") if a == "MISSING" else a for a in args]
+    rrd = tmp_path / "plan.rrd"
+    assert main(["plan", *args, "--rrd", str(rrd)]) == 1
+    err = capsys.readouterr().err.strip()
+    assert err.startswith("spherecal plan: error:") and "\n" not in err
+    assert not rrd.exists()
+
+
+def test_restricted_window_inside_limits(panda):
+    q0 = panda.upper - 0.01
+    model = restricted(panda, q0, np.full(panda.n_joints, 0.2))
+    np.testing.assert_allclose(model.upper - model.lower, 0.2 * (panda.upper - panda.lower))
+    assert np.all(model.lower >= panda.lower - 1e-12) and np.all(model.upper <= panda.upper + 1e-12)
+
+
+def test_joint_window_limits_the_self_motion(panda):
+    from correction import tool_point
+
+    rng = np.random.default_rng(1)
+    window = np.array([1, 0.1, 0.1, 1, 1, 1, 1.0])
+    q = motion_samples(panda, Candidate("A", np.array(REACHABLE["A"]), window), 60, rng)
+    share = (q.max(axis=0) - q.min(axis=0)) / (panda.upper - panda.lower)
+    assert np.all(share[1:3] <= 0.1 + 1e-9) and share[[0, 3, 4, 5, 6]].max() > 0.15
+    np.testing.assert_allclose(tool_point(panda, q), np.tile(REACHABLE["A"], (60, 1)), atol=1e-9)
+
+
+def test_unreachable_candidates_are_reported(panda):
+    candidates = [Candidate(k, np.array(v)) for k, v in REACHABLE.items()]
+    candidates += [Candidate("far", np.array([1.5, 0.0, 0.3])), Candidate("inside", np.array([0.0, 0.0, 0.2]))]
+    result = plan(panda, candidates, 2, np.random.default_rng(0), samples=300)
+    by_name = {s.candidate.name: s for s in result.surveys}
+    assert len(result.surveys) == 5
+    assert not by_name["far"].reachable and "out of reach" in by_name["far"].reason
+    assert not by_name["inside"].reachable and "inside the robot" in by_name["inside"].reason
+    assert all(by_name[k].reachable and by_name[k].coverage.min() > 0.2 for k in REACHABLE)
+    assert result.search == "exhaustive" and len(result.best.names) == 2
+    assert set(result.best.names) <= set(REACHABLE) and len(result.best.distances) == 1
+    assert result.best.prediction.mean < result.best.without_distances.mean
+    text = format_plan(result)
+    assert text.count("unreachable:") == 2 and "inside the robot" in text and "best set" in text
+    # ranked by predicted error alone, unreachable last
+    ranked = [s.candidate.name for s in result.ranked()]
+    assert ranked[-2:] in (["far", "inside"], ["inside", "far"])
+
+
+def test_cli_plan_and_too_few_reachable(tmp_path, capsys):
+    path = _yaml(tmp_path, "candidates:\n  A: {position: [0.5, -0.25, 0.5]}\n  far: {position: [2, 0, 0]}\n")
+    rrd = tmp_path / "plan.rrd"
+    assert main(["plan", "--candidates", str(path), "--fixtures", "1", "--samples", "100", "--rrd", str(rrd)]) == 0
+    out = capsys.readouterr().out
+    assert "best set" in out and "unreachable" in out and rrd.stat().st_size > 0
+    assert main(["plan", "--candidates", str(path), "--fixtures", "2"]) == 1
+    assert "no plan" in capsys.readouterr().out
+
+
+def test_cli_predict_from_a_data_set(tmp_path, capsys, panda):
+    from identification.dataset import write_fixtures, write_samples
+    from identification.synthetic import make_dataset
+
+    dataset, spec = make_dataset(panda, {k: np.array(v) for k, v in REACHABLE.items()}, 60, np.random.default_rng(2))
+    write_samples(tmp_path / "samples.csv", dataset)
+    write_fixtures(tmp_path / "fixtures.yaml", spec)
+    args = ["plan", "--predict", str(tmp_path / "samples.csv"), "--spec", str(tmp_path / "fixtures.yaml")]
+    assert main(args) == 0
+    out = capsys.readouterr().out
+    assert "predicted tool-point error" in out and "condition number" in out

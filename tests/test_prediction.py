@@ -1,0 +1,111 @@
+"""Predicted calibration accuracy: rigid-motion projection against Kabsch, covariance algebra, scaling
+laws, and (slow) agreement with measured campaigns."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from correction import param_jacobian, registered_errors, tool_point
+from identification.prediction import Workspace, normal_inverse, predict_accuracy, remove_rigid_motion
+from identification.synthetic import make_dataset
+
+FIXTURES = {"P1": (0.5, -0.25, 0.5), "P2": (0.5, 0.0, 0.4), "P3": (0.45, 0.25, 0.45)}
+
+
+@pytest.fixture(scope="module")
+def data(panda):
+    return make_dataset(panda, FIXTURES, 120, np.random.default_rng(3))
+
+
+@pytest.fixture(scope="module")
+def workspace(panda):
+    return Workspace.of(panda, 400, np.random.default_rng(4))
+
+
+def test_rigid_field_is_removed(rng):
+    points = rng.normal(size=(50, 3))
+    w, t = rng.normal(size=3), rng.normal(size=3)
+    rigid = (t + np.cross(w, points)).reshape(-1, 1)
+    assert np.abs(remove_rigid_motion(rigid, points)).max() < 1e-12
+    other = rng.normal(size=(150, 2))
+    once = remove_rigid_motion(other, points)
+    np.testing.assert_allclose(remove_rigid_motion(once, points), once, atol=1e-12)  # a projector
+
+
+def test_projected_error_matches_kabsch_registration(panda, rng):
+    """A small parameter error: |Proj G dp| per point equals the registered error of the two point sets."""
+    q = panda.random_configurations(300, rng)
+    dp = rng.normal(0.0, 1e-4, panda.n_params) * np.r_[np.ones(4 * panda.n_joints + 3), np.zeros(6)]
+    jac, points = param_jacobian(panda, q, return_point=True)
+    linear = remove_rigid_motion(jac.reshape(-1, panda.n_params) @ dp[:, None], points).reshape(-1, 3)
+    kabsch = registered_errors(tool_point(panda.with_params(panda.params + dp), q), points)
+    np.testing.assert_allclose(np.linalg.norm(linear, axis=1), kabsch, rtol=2e-2, atol=2e-8)
+
+
+def test_normal_inverse_matches_numpy(rng):
+    jac = rng.normal(size=(200, 12)) * np.logspace(-3, 2, 12)
+    np.testing.assert_allclose(normal_inverse(jac), np.linalg.inv(jac.T @ jac), rtol=1e-8)
+
+
+def test_error_scales_with_noise_and_samples(panda, data, workspace):
+    dataset, spec = data
+    base = predict_accuracy(panda, dataset, spec, noise=3e-4, workspace=workspace)
+    double = predict_accuracy(panda, dataset, spec, noise=6e-4, workspace=workspace)
+    more = predict_accuracy(panda, dataset, spec, noise=3e-4, workspace=workspace, sample_weight=4.0)
+    assert 0 < base.mean < base.p95
+    if not any(why.startswith("barely") for why in base.fixed.values()):
+        assert double.mean == pytest.approx(2 * base.mean, rel=0.15)
+    assert more.mean == pytest.approx(base.mean / 2, rel=0.25)
+    assert predict_accuracy(panda, dataset, spec, noise=0.0, workspace=workspace).mean < 1e-3 * base.mean
+    assert base.identifiability.condition_number < 1e4
+    assert set(base.identified).isdisjoint(base.fixed)
+    assert "predicted tool-point error" in base.summary()
+
+
+def test_known_distances_remove_the_scale_error(panda, data, workspace):
+    dataset, spec = data
+    with_d = predict_accuracy(panda, dataset, spec, workspace=workspace)
+    without = predict_accuracy(panda, dataset, None, workspace=workspace)
+    assert without.mean > 5 * with_d.mean
+
+
+def test_restricted_motion_is_predicted_worse(panda, data, workspace):
+    from identification.dataset import Dataset
+    from validation.plan import Candidate, motion_samples
+
+    dataset, spec = data
+    rng = np.random.default_rng(5)
+    window = np.full(panda.n_joints, 0.15)
+    q = [motion_samples(panda, Candidate(k, np.array(c), window), 120, rng) for k, c in FIXTURES.items()]
+    small = Dataset(labels=np.repeat(list(FIXTURES), 120), q=np.concatenate(q), fixture_names=tuple(FIXTURES))
+    full = predict_accuracy(panda, dataset, spec, workspace=workspace)
+    poor = predict_accuracy(panda, small, spec, workspace=workspace)
+    assert poor.mean > 2 * full.mean
+    assert poor.identifiability.condition_number > full.identifiability.condition_number
+    assert poor.weak or any(why.startswith("barely") for why in poor.fixed.values())
+
+
+@pytest.mark.slow
+def test_predicted_mean_within_25_percent_of_a_10_set_campaign(panda):
+    """Two and three fixtures, distances known, 0.3 mm: prediction from one data set vs 10 calibrations."""
+    from identification.calibrate import calibrate
+    from validation.experiment import default_fixtures, true_robot
+
+    workspace = Workspace.of(panda, 1000)
+    for k in (2, 3):
+        fixtures = dict(list(default_fixtures().items())[:k])
+        measured, predicted = [], None
+        for index in range(10):
+            rng = np.random.default_rng((7, k, index))
+            truth = true_robot(panda, rng)
+            dataset, spec = make_dataset(truth, fixtures, 500, rng, 3e-4)
+            if predicted is None:
+                predicted = predict_accuracy(panda, dataset, spec, noise=3e-4, workspace=workspace).mean
+            model = calibrate(panda, dataset, spec).model
+            q = truth.random_configurations(2000, rng)
+            measured.append(registered_errors(tool_point(model, q), tool_point(truth, q)).mean())
+        ratio = predicted / np.mean(measured)
+        print(f"{k} fixtures: predicted {predicted * 1e3:.4f} mm, measured {np.mean(measured) * 1e3:.4f} mm, "
+              f"ratio {ratio:.2f}")
+        assert 0.75 < ratio < 1.25
