@@ -53,6 +53,14 @@ def table(panda, true) -> list[dict]:
     reference = tool_point(true, q)
     far = perturb(panda, np.random.default_rng(9), 1e-2, np.deg2rad(2.0), 1e-2)
     rows = []
+    for name, model in (("nominal", panda), ("far", far)):
+        points = tool_point(model, q)
+        errors = registered_errors(points, reference)
+        raw = np.linalg.norm(points - reference, axis=1).mean()
+        print(
+            f"start {name}: mean {errors.mean() * 1e3:.3f} mm, max {errors.max() * 1e3:.3f} mm, "
+            f"raw mean {raw * 1e3:.3f} mm"
+        )
     print(
         f"{'data':<10} {'start':<8} {'method':<7} {'mean mm':>9} {'max mm':>9} {'raw mm':>8} "
         f"{'rms mm':>9} {'wall s':>7}"
@@ -80,8 +88,8 @@ def table(panda, true) -> list[dict]:
                 rows.append(row)
                 label = "noise-free" if noise == 0 else f"{noise * 1e3:.1f} mm"
                 print(
-                    f"{label:<10} {start_name:<8} {method:<7} {row['mean_mm']:9.5f} {row['max_mm']:9.5f} "
-                    f"{row['raw_mean_mm']:8.3f} {row['rms_mm']:9.5f} {wall:7.2f}"
+                    f"{label:<10} {start_name:<8} {method:<7} {row['mean_mm']:9.3g} {row['max_mm']:9.3g} "
+                    f"{row['raw_mean_mm']:8.3f} {row['rms_mm']:9.3g} {wall:7.2f}"
                 )
     return rows
 
