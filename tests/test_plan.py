@@ -146,3 +146,24 @@ def test_cli_predict_from_a_data_set(tmp_path, capsys, panda):
     assert main(args) == 0
     out = capsys.readouterr().out
     assert "predicted tool-point error" in out and "condition number" in out
+
+
+@pytest.mark.slow
+def test_plan_beats_defaults_and_ranks_a_p3_like_set_last(panda):
+    """On a small grid: the plan's best three fixtures measure better than the defaults (6 sets each), and
+    the defaults with joints 2 and 3 held to 10 % are predicted and measured worst."""
+    from validation.analysis import P3_LIKE, AnalysisConfig, Cell, run_cells
+    from validation.experiment import default_fixtures
+
+    result = plan(panda, grid_candidates("0.3,0.6,2;-0.4,0.4,3;0.2,0.6,2"), 3, np.random.default_rng(0))
+    best = tuple((s.candidate.name, tuple(s.candidate.position)) for s in result.surveys
+                 if s.candidate.name in result.best.names)
+    defaults = tuple((k, tuple(v)) for k, v in default_fixtures().items())
+    cells = [Cell("plan", "best", best, sets=6), Cell("plan", "default", defaults, sets=6),
+             Cell("plan", "p3-like", defaults, joint_range=P3_LIKE, sets=6)]
+    rows = {r.cell.name: r for r in run_cells(cells, AnalysisConfig(configurations=1000, workers=2, seed=3))}
+    for name, r in rows.items():
+        print(f"{name}: predicted {r.predicted_mean * 1e3:.4f} mm, measured {r.measured.mean() * 1e3:.4f} mm")
+    assert rows["best"].measured.mean() < rows["default"].measured.mean()
+    assert rows["p3-like"].predicted_mean > max(rows["best"].predicted_mean, rows["default"].predicted_mean)
+    assert rows["p3-like"].measured.mean() > max(rows["best"].measured.mean(), rows["default"].measured.mean())
