@@ -5,17 +5,18 @@ gauge, scale fixing and excitation pruning as :func:`identification.calibrate.ca
 linearised at a generic point near the model (the rank test's point, so that accidental symmetries
 of the nominal design do not count). With fixture noise ``sigma`` per coordinate::
 
-    cov(x) = sigma^2 (J^T W J)^-1                     x: identified parameters and centres
+    cov(x) = sigma^2 (J^T J)^-1                     x: identified parameters and centres
 
-where ``W`` weights the sample rows (``sample_weight``: one planning sample standing for several
-recorded ones) and the scale-anchor row (its radius comes from the nominal model, so its "noise" is
-the prior spread of that radius). Parameters pruned as barely excited stay at the nominal value:
-they add a bias ``(G_Q - G_F J_F^+ J_Q) dp_Q`` with ``dp_Q`` drawn from the prior spread (what the
-fit cannot absorb of their error). Both are propagated to the tool point over random workspace
-configurations ``G = d p / d params`` (N, 3, P) after removing the six rigid motions of the point
-set (the validation registers every model by a best rigid fit), then sampled::
+(sample rows scaled by ``sqrt(sample_weight)`` when one planning sample stands for several recorded
+ones). Two biases are added, each drawn from its prior spread: parameters pruned as barely excited
+stay at the nominal value and contribute ``(G_Q - G_F J_F^+ J_Q) dp_Q`` (what the fit cannot absorb
+of their error); without a known distance or position the scale anchor's radius is the nominal
+model's, off by its prior spread, and shifts the solution by ``J^+ (w dr e_anchor)``. Everything is
+propagated to the tool point over random workspace configurations ``G = d p / d params`` (N, 3, P)
+after removing the six rigid motions of the point set (the validation registers every model by a
+best rigid fit), then sampled::
 
-    e = Proj G_F L z + Proj B dp_Q,     L L^T = cov,  z ~ N(0, I)
+    e = Proj G_F (L z + shift),     L L^T = cov,  z ~ N(0, I)
 
 Returns the expected mean and 95th percentile of ``|e|`` [m] and the identifiability summary.
 """
