@@ -128,6 +128,7 @@ class Prediction:
             f"condition number {self.identifiability.condition_number:.3g}, "
             f"singular values {s[0]:.3g} .. {s[-1]:.3g}",
         ]
+        lines.append("singular values (column-scaled): " + " ".join(f"{v:.3g}" for v in s))
         if self.weak:
             weak = ", ".join(f"{n} ({format_value(n, self.std[n])})" for n in self.weak)
             lines.append(f"weakly determined (std > {WEAK_SHARE:.0%} of the prior spread): {weak}")

@@ -131,6 +131,10 @@ def test_cli_plan_and_too_few_reachable(tmp_path, capsys):
     assert main(["plan", "--candidates", str(path), "--fixtures", "1", "--samples", "100", "--rrd", str(rrd)]) == 0
     out = capsys.readouterr().out
     assert "best set" in out and "unreachable" in out and rrd.stat().st_size > 0
+    from validation.recording import read_entity_rows
+
+    rows = read_entity_rows(rrd)
+    assert rows.get("plan/candidates") == 1 and rows.get("plan/best") == 1 and rows.get("plan/table") == 1
     assert main(["plan", "--candidates", str(path), "--fixtures", "2"]) == 1
     assert "no plan" in capsys.readouterr().out
 

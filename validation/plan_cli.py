@@ -71,7 +71,10 @@ def run(args: argparse.Namespace) -> int:
     result = plan(model, candidates, args.fixtures, rng, args.noise * 1e-3, args.samples, args.motion, args.seconds)
     print(format_plan(result))
     if args.rrd:
-        path = write_recording(args.rrd, result)
+        from validation.provenance import comment_block, provenance
+
+        inputs = {k: v for k, v in vars(args).items() if not k.startswith("_") and k != "command"}
+        path = write_recording(args.rrd, result, comment_block(provenance(args.seed, inputs)))
         print(f"written: {path}")
     print(f"wall time {time.perf_counter() - start:.1f} s (survey {result.seconds['survey']:.1f} s, "
           f"scoring {result.seconds['score']:.1f} s, motion: {result.motion})")
@@ -131,9 +134,10 @@ def format_plan(result) -> str:
     return "\n".join(lines)
 
 
-def write_recording(path: str, result) -> str:
+def write_recording(path: str, result, provenance: str = "") -> str:
     """The candidates coloured by predicted error alone (green good, red poor, grey unreachable),
-    the chosen set as larger points; Rerun is imported only here."""
+    the chosen set as larger points, the printed plan and its provenance as text; Rerun is imported
+    only here."""
     import numpy as np
 
     from validation.recording import Recording
@@ -157,6 +161,8 @@ def write_recording(path: str, result) -> str:
         if result.best is not None:
             chosen = np.array([s.candidate.position for s in surveys if s.candidate.name in result.best.names])
             recording.stream.log("plan/best", rr.Points3D(chosen, radii=0.025, colors=(40, 120, 220)), static=True)
+        text = f"{provenance}\n\n{format_plan(result)}" if provenance else format_plan(result)
+        recording.stream.log("plan/table", rr.TextDocument(text), static=True)
     except BaseException:
         recording.abort()
         raise
