@@ -11,9 +11,10 @@ known. ``w = noise / distance_std`` makes a known distance as stiff as its state
 What the data cannot see is fixed at the start model's value, with the reason:
 
 * the base placement (``base_*``), always;
-* the gauge: with fewer than three known centres, the joint-1 parameters that move the whole
-  point set rigidly (modified DH: ``a1, alpha1, d1, theta1``; standard: ``d1, theta1``) trade
-  off against the centres;
+* the gauge: the joint-1 parameters move the whole point set rigidly (modified DH: ``a1, alpha1,
+  d1, theta1``; standard: ``d1, theta1``) and trade off against unknown centres: all are fixed
+  when no centre is known; with known centres only as many as rigid motions keeping them in
+  place remain (none for two or more known centres, generically);
 * the scale: with unknown centres and no known distance or position, a uniform scale of all
   lengths is unobservable (and noise pulls it smaller), so one fixture is pinned at the mean of
   the nominal model's tool points and a warning says so;
@@ -245,6 +246,41 @@ def scale_centre(model: RobotModel) -> np.ndarray:
     return base[:3, 3] + model.d[0] * base[:3, 2]
 
 
+def _gauge_left(model: RobotModel, dataset: Dataset, known: list[np.ndarray]) -> list[str]:
+    """Joint-1 parameters to fix so that no rigid motion keeping the ``known`` centres stays free.
+
+    Each joint-1 gauge parameter moves every tool point by a twist ``dp = w x p + v`` (constant:
+    it acts before every joint variable). Combinations of them that keep every known centre in
+    place (``w x c + v = 0``) are invisible; one parameter per such direction is fixed (pivoted QR,
+    preferring ``theta1, d1, alpha1, a1``).
+    """
+    from scipy.linalg import qr
+
+    gauge = list(GAUGE[model.convention])[::-1]  # theta1, d1, alpha1, a1 (preference to fix)
+    q = dataset.q[np.linspace(0, dataset.n_samples - 1, min(dataset.n_samples, 12)).astype(int)]
+    jac, points = param_jacobian(model, q, return_point=True)
+    # fit (w, v) of every gauge column from dp_k = -p_k x w + v (exact for a rigid motion)
+    skew = np.zeros((points.shape[0], 3, 3))
+    skew[:, 0, 1], skew[:, 0, 2], skew[:, 1, 2] = points[:, 2], -points[:, 1], points[:, 0]
+    skew -= skew.transpose(0, 2, 1)
+    design = np.concatenate([skew, np.broadcast_to(np.eye(3), skew.shape)], axis=2).reshape(-1, 6)
+    cols = [model.param_index(name) for name in gauge]
+    twists = np.linalg.lstsq(design, jac[:, :, cols].reshape(-1, len(cols)), rcond=None)[0]  # (6, g)
+    moves = []
+    for c in known:  # displacement of each known centre under each gauge twist: w x c + v
+        moves.append(np.cross(twists[:3].T, c).T + twists[3:])
+    a = np.concatenate(moves)  # (3 * known, g)
+    s = np.linalg.svd(a, compute_uv=False)
+    rank = int(np.sum(s > 1e-9 * max(1.0, s[0]))) if s.size else 0
+    free_dims = len(cols) - rank
+    if free_dims <= 0:
+        return []
+    _, _, vt = np.linalg.svd(a)
+    null = vt[rank:]  # (free_dims, g)
+    _, _, pivots = qr(null, pivoting=True)
+    return sorted((gauge[i] for i in pivots[:free_dims]), key=GAUGE[model.convention].index)
+
+
 def _rows(dataset: Dataset) -> str:
     """``"rows 2-1501"`` of a dataset read from a file (``"all rows"`` otherwise)."""
     if dataset.lines is None or dataset.n_samples == 0:
@@ -321,10 +357,22 @@ def build_problem(
         if name.startswith("base_"):
             fixed[name] = "base placement: not observable from spherical-joint data"
     known = {name: np.asarray(p, float) for name, p in spec.positions.items() if name in names_fixtures}
-    if len(known) < 3:
-        why = "unknown fixture centres" if not known else f"only {len(known)} known fixture position(s)"
+    if len(known) == 1 and not spec.distances:
+        (lone,) = known
+        warnings.append(
+            f"fixture {lone}: one known position without a known distance fixes neither the scale nor the "
+            f"joint-1 gauge; it is treated as unknown"
+        )
+        known = {}
+    if not known:
         for name in GAUGE[model.convention]:
-            fixed[name] = f"gauge: moves every tool point rigidly, indistinguishable with {why}"
+            fixed[name] = "gauge: moves every tool point rigidly, indistinguishable with unknown fixture centres"
+    else:
+        for name in _gauge_left(model, dataset, list(known.values())):
+            fixed[name] = (
+                f"gauge: with {len(known)} known fixture position(s) a rigid motion about them is still "
+                f"indistinguishable"
+            )
     centres = _mean_points(model, dataset)
     for name, position in known.items():
         centres[names_fixtures.index(name)] = position

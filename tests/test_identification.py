@@ -135,6 +135,18 @@ def test_known_positions_fix_the_gauge(truth, clean) -> None:
     problem = build_problem(panda, dataset, known)
     assert problem.free_centres == () and not problem.pinned
     assert not any(r.startswith("gauge") for r in problem.fixed.values())
+    # three known centres: the joint-1 parameters are seen, the model is exact without registration
+    q = true.random_configurations(2000, np.random.default_rng(6))
+    exact = calibrate(panda, dataset, known).model
+    assert np.linalg.norm(tool_point(exact, q) - tool_point(true, q), axis=1).mean() < 1e-6
+    # one known centre and the distances: one rigid motion about it stays free (fixed), the rest is seen
+    one = FixtureSpec(spec.names, {"P1": centres["P1"]}, spec.distances)
+    result = calibrate(panda, dataset, one)
+    assert sum(r.startswith("gauge") for r in result.fixed.values()) == 1
+    assert _accuracy(result.model, true).mean() < 1e-6
+    # one known centre alone fixes nothing: it is dropped with a warning
+    lone = build_problem(panda, dataset, FixtureSpec(spec.names, {"P1": centres["P1"]}))
+    assert "P1" in lone.free_centres and any("one known position" in w for w in lone.warnings)
 
 
 def test_too_few_samples_and_rank_deficiency(truth, clean) -> None:
