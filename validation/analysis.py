@@ -294,6 +294,7 @@ def markdown(analysis: Analysis, provenance: str) -> str:
         "measured std column says how far a mean of so few sets can be trusted.",
         "",
     ]
+    lines += _findings(by)
     for group, title in TITLES.items():
         if not by[group]:
             continue
@@ -322,6 +323,31 @@ def markdown(analysis: Analysis, provenance: str) -> str:
         "",
     ]
     return "\n".join(lines)
+
+
+def _findings(by: dict[str, list[CellResult]]) -> list[str]:
+    """A few sentences with the figures of this run (measured means, mm)."""
+
+    def pair(group: str) -> str:
+        return ", ".join(f"{r.cell.name} {r.measured.mean() * 1e3:.3g}" for r in by[group])
+
+    lines = ["## Findings (measured mean error, mm)", ""]
+    for group, what in (
+        ("fixtures", "Fixtures (with, then without distances)"),
+        ("joint range", "Joint range"),
+        ("samples", "Samples per fixture (about 1/sqrt(samples))"),
+        ("noise", "Noise (about linear)"),
+    ):
+        if by[group]:
+            lines.append(f"- {what}: {pair(group)}.")
+    ratios = [r.predicted_mean / r.measured.mean() for rs in by.values() for r in rs if r.measured.mean() > 1e-7]
+    if ratios:
+        lines.append(
+            f"- Predicted / measured mean over all cells: median {np.median(ratios):.2f}, range "
+            f"{min(ratios):.2f} to {max(ratios):.2f} (the prediction uses one data set, the measurement "
+            "4 or 10 sets; strongly restricted self-motion is the least linear case)."
+        )
+    return [*lines, ""]
 
 
 def _plan_lines(rows: list[CellResult]) -> list[str]:

@@ -99,7 +99,7 @@ def format_plan(result) -> str:
         "predicted mean / 95th percentile tool-point error after registration [mm] of each candidate ALONE "
         "(scale from the nominal model), and the share of each joint's range its self-motion covers [%]",
         f"{'rank':>4} {'name':<8} {'x':>7} {'y':>7} {'z':>7} | {'mean':>7} {'p95':>7} | "
-        + " ".join(f"{'q' + str(j + 1):>4}" for j in range(len(result.surveys[0].coverage)))
+        + " ".join(f"{'q' + str(j + 1):>4}" for j in range(len(result.surveys[0].coverage) if result.surveys else 0))
         + " | note",
     ]
     chosen = set(result.best.names) if result.best else set()

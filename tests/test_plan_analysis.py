@@ -1,0 +1,34 @@
+"""The experiment-design analysis: its cells cover the issue's axes; one tiny cell runs and renders."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from validation.analysis import P3_LIKE, Analysis, AnalysisConfig, Cell, cells, markdown, run_cells
+
+
+def test_cells_cover_every_axis():
+    config = AnalysisConfig()
+    todo = cells(config, {"A": (0.5, 0.0, 0.4), "B": (0.4, 0.3, 0.2), "C": (0.3, -0.3, 0.6)})
+    counts = {(len(c.fixtures), c.distances) for c in todo if c.group == "fixtures"}
+    assert counts == {(1, False), (2, True), (2, False), (3, True), (3, False), (4, True), (4, False)}
+    assert {c.samples for c in todo if c.group == "samples"} == {50, 200, 500, 2000}
+    assert {c.noise for c in todo if c.group == "noise"} == {0.0, 1e-4, 3e-4, 1e-3}
+    assert any(c.joint_range == P3_LIKE for c in todo if c.group == "joint range")
+    assert [c.name for c in todo if c.group == "plan"][-1].startswith("plan's best")
+    key = [c for c in todo if c.group == "fixtures" and c.distances and len(c.fixtures) in (2, 3)]
+    assert all(c.sets == config.key_sets == 10 for c in key)
+
+
+def test_one_small_cell_runs_and_renders():
+    from validation.plan import Plan
+
+    cell = Cell("noise", "tiny", (("P1", (0.5, -0.25, 0.5)), ("P2", (0.5, 0.0, 0.4))), samples=60, sets=2)
+    config = AnalysisConfig(configurations=200, workers=1)
+    (result,) = run_cells([cell], config)
+    again = run_cells([cell], config)[0]
+    np.testing.assert_array_equal(result.measured, again.measured)  # seeded
+    assert result.measured.shape == (2,) and np.all(result.measured > 0) and result.predicted_mean > 0
+    empty = Plan([], None, "none", "kinematic", 3e-4, 500)
+    text = markdown(Analysis([result], empty, config, {"cells": 1.0}), "provenance")
+    assert "## Fixture noise" in text and "| tiny |" in text and "<!--\nprovenance\n-->" in text
