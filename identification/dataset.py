@@ -339,6 +339,7 @@ class FixtureSpec:
         distances: known centre-to-centre distances ``(name_a, name_b, metres)``.
         extras: other top-level keys of the file, written back unchanged.
         source: file the spec came from (for messages), or "".
+        rows: file line of ``"fixtures.P1"`` and ``"distances[k]"`` entries (for messages).
     """
 
     names: tuple[str, ...] = ()
@@ -346,6 +347,10 @@ class FixtureSpec:
     distances: list[tuple[str, str, float]] = field(default_factory=list)
     extras: dict = field(default_factory=dict)
     source: str = ""
+    rows: dict[str, int] = field(default_factory=dict)
+
+    def _row(self, key: str) -> str:
+        return f"row {self.rows[key]}, " if key in self.rows else ""
 
     @staticmethod
     def unknown(names: tuple[str, ...] | list[str]) -> FixtureSpec:
@@ -359,14 +364,16 @@ class FixtureSpec:
         for name in self.positions:
             if name not in have:
                 raise DatasetError(
-                    f"{where}: fixtures.{name}, field 'position': fixture {name!r} has no samples"
+                    f"{where}: {self._row('fixtures.' + name)}field 'fixtures.{name}.position': "
+                    f"fixture {name!r} has no samples"
                     f"{' in ' + dataset.source if dataset.source else ''}"
                 )
         for k, (a, b, _) in enumerate(self.distances):
             for name in (a, b):
                 if name not in have:
                     raise DatasetError(
-                        f"{where}: distances[{k}], field {name!r}: fixture {name!r} has no samples"
+                        f"{where}: {self._row(f'distances[{k}]')}field 'distances[{k}]': "
+                        f"fixture {name!r} has no samples"
                         f"{' in ' + dataset.source if dataset.source else ''}"
                     )
 
@@ -481,7 +488,9 @@ def read_fixtures(path: str | os.PathLike) -> FixtureSpec:
         seen_pairs.add(pair)
         distances.append((a, b, float(value)))
     extras = {k: v for k, v in data.items() if k not in ("fixtures", "distances")}
-    return FixtureSpec(tuple(names), positions, distances, extras, source=str(path))
+    rows = {f"fixtures.{name}": _node_line(root, "fixtures", name) for name in names}
+    rows.update({f"distances[{k}]": _node_line(root, "distances", k) for k in range(len(distances))})
+    return FixtureSpec(tuple(names), positions, distances, extras, source=str(path), rows=rows)
 
 
 def format_fixtures(spec: FixtureSpec) -> str:

@@ -142,7 +142,7 @@ def test_distance_to_fixture_without_samples(tmp_path, panda, rng) -> None:
     path = tmp_path / "f.yaml"
     path.write_text("fixtures: {P1: {}, P2: {}, P3: {}}\ndistances:\n  - [P1, P3, 0.5]\n")
     spec = read_fixtures(path)
-    with pytest.raises(DatasetError, match=r"distances\[0\], field 'P3': fixture 'P3' has no samples"):
+    with pytest.raises(DatasetError, match=r"row 3, field 'distances\[0\]': fixture 'P3' has no samples"):
         spec.check_against(_dataset(panda, rng))
 
 

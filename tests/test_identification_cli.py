@@ -77,7 +77,7 @@ GOOD = "P1,0,0,0,-1,0,1,0\nP1,0.1,0,0,-1,0,1,0\n"
         (
             None,
             "fixtures: {P1: {}, P2: {}, P3: {}, P4: {}}\ndistances:\n  - [P1, P4, 0.5]\n",
-            ("f.yaml", "distances[0]", "field 'P4'"),
+            ("f.yaml", "row 3", "field 'distances[0]'", "'P4' has no samples"),
         ),
         (
             None,
