@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import logging
+
 import numpy as np
 import pytest
 
@@ -183,6 +185,8 @@ def test_pso_is_seeded_quiet_and_restores_numpy_state(truth, clean, tmp_path, mo
     panda, true = truth
     dataset, spec = clean
     monkeypatch.chdir(tmp_path)
+    root = logging.getLogger()
+    handlers, level = list(root.handlers), root.level
     np.random.seed(123)  # noqa: NPY002
     expected = np.random.random()  # noqa: NPY002
     np.random.seed(123)  # noqa: NPY002
@@ -192,6 +196,7 @@ def test_pso_is_seeded_quiet_and_restores_numpy_state(truth, clean, tmp_path, mo
     assert np.random.random() == expected  # noqa: NPY002
     assert np.array_equal(a.model.params, b.model.params)
     assert list(tmp_path.iterdir()) == []  # no report.log
+    assert root.handlers == handlers and root.level == level  # pyswarms left the root logger alone
     assert a.rms_after <= a.rms_before
     finished = calibrate(panda, dataset, spec, method="pso+lm", seed=5, pso_options=options)
     assert _accuracy(finished.model, true).mean() < 1e-6
