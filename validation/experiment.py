@@ -100,12 +100,17 @@ def _mujoco_motion(truth, nominal, fixtures, samples, noise, rng, seconds) -> Mo
     return MotionData(run.dataset(), fixture_spec(fixtures, len(fixtures) > 1), run)
 
 
-def calibrate_from(nominal: RobotModel, data: MotionData):
+def calibrate_from(nominal: RobotModel, data: MotionData, start: RobotModel | None = None):
     """Calibrate ``nominal`` from the data with identification's default method (``lm``).
+
+    Args:
+        nominal: the model calibrated (fixed parameters and a pinned single fixture come from it).
+        data: the samples and fixture spec.
+        start: start of the optimisation (default ``nominal``).
 
     Returns:
         The :class:`identification.calibrate.CalibrationResult` (``.model`` is the calibrated robot).
     """
     from identification.calibrate import calibrate
 
-    return calibrate(nominal, data.dataset, data.spec)
+    return calibrate(nominal, data.dataset, data.spec, start=start)
