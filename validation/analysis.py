@@ -329,11 +329,16 @@ def _findings(by: dict[str, list[CellResult]]) -> list[str]:
     """A few sentences with the figures of this run (measured means, mm)."""
 
     def pair(group: str) -> str:
-        return ", ".join(f"{r.cell.name} {r.measured.mean() * 1e3:.3g}" for r in by[group])
+        def label(c: Cell) -> str:
+            if group != "fixtures" or len(c.fixtures) == 1:
+                return c.name
+            return f"{c.name} {'with' if c.distances else 'without'} distances"
+
+        return ", ".join(f"{label(r.cell)} {r.measured.mean() * 1e3:.3g}" for r in by[group])
 
     lines = ["## Findings (measured mean error, mm)", ""]
     for group, what in (
-        ("fixtures", "Fixtures (with, then without distances)"),
+        ("fixtures", "Fixtures"),
         ("joint range", "Joint range"),
         ("samples", "Samples per fixture (about 1/sqrt(samples))"),
         ("noise", "Noise (about linear)"),
