@@ -147,3 +147,20 @@ def test_recording_holds_the_documented_entities(tmp_path, panda, truth, rng) ->
     for path in ("world/fixtures", "world/samples", "validation/measured", "validation/errors/nominal", "coverage/q7"):
         assert rows[path] == 1, path
     assert sorted(p.name for p in tmp_path.iterdir()) == ["r.rrd"]
+
+
+def test_saving_a_recording_writes_no_analytics_files(tmp_path) -> None:
+    import os
+    import subprocess
+    import sys
+
+    env = {k: v for k, v in os.environ.items() if k not in ("RERUN_ANALYTICS", "XDG_CONFIG_HOME", "XDG_DATA_HOME")}
+    env["HOME"] = str(tmp_path)
+    code = (
+        "import numpy as np; from validation.recording import Recording;"
+        f"r = Recording({str(tmp_path / 'r.rrd')!r}); r.fixtures(['P1'], np.zeros((1, 3))); r.close()"
+    )
+    out = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True, text=True, timeout=60)
+    assert out.returncode == 0, out.stderr
+    assert "Welcome to Rerun" not in out.stdout + out.stderr
+    assert [p.name for p in tmp_path.rglob("*") if p.is_file()] == ["r.rrd"]

@@ -106,6 +106,7 @@ def run_demo(config: DemoConfig, say=print) -> DemoResult:
     timings["validation"] = time.perf_counter() - clock
     result = DemoResult(truth, nominal, calibrated, report, calibration, timings=timings)
     say(report.format())
+    say(deviation_summary(report, calibration.identified))
     say(summary(report))
 
     say(f"[4/4] writing results to {config.out}/")
@@ -124,6 +125,18 @@ def summary(report: ValidationReport) -> str:
         f"{c.vs_mocap['nominal'].mean * 1e3:.3f} -> {c.vs_mocap['calibrated'].mean * 1e3:.3f} mm against the mocap "
         f"(noise floor {c.floor.mean * 1e3:.3f} mm)"
     )
+
+
+def deviation_summary(report: ValidationReport, identified: tuple[str, ...]) -> str:
+    """RMS deviation from the truth of the identified lengths [mm] and angles [deg] (the paper's Fig. 3)."""
+    d = report.deviations
+    pick = np.array([name in identified for name in d.names])
+    angle = np.array([d.is_angle(name) for name in d.names])
+    parts = []
+    for label, mask, unit in (("lengths", pick & ~angle, "mm"), ("angles", pick & angle, "deg")):
+        nominal, calibrated = (np.sqrt(np.mean(d.display(v)[mask] ** 2)) for v in (d.nominal, d.calibrated))
+        parts.append(f"{label} {nominal:.4f} -> {calibrated:.4f} {unit}")
+    return f"identified parameters, RMS deviation from the truth (nominal -> calibrated): {'; '.join(parts)}"
 
 
 def _inputs(config: DemoConfig) -> dict:

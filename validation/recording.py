@@ -18,8 +18,10 @@ path                            archetype       timeline     rows
 ``coverage/q<i>``               BarChart        static       1 (histogram of joint i over its range)
 ==============================  ==============  ===========  =====================================
 
-Rerun is imported only when a recording is made; its analytics are switched off
-(``RERUN_ANALYTICS=0``) unless the user set that variable.
+Rerun is imported only when a recording is made. Saving a recording with the Python SDK writes
+no analytics file and no notice (a test checks it under an empty HOME); ``RERUN_ANALYTICS=0`` is set
+unless the user set it. The ``rerun`` 0.41 viewer binary (``--spawn``, ``rerun file.rrd``) ignores
+that variable: it stays quiet with ``CI=1`` in its environment or after ``rerun analytics disable``.
 """
 
 from __future__ import annotations
