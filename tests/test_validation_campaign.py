@@ -67,4 +67,4 @@ def test_small_real_campaign_is_reproducible(tmp_path) -> None:
     rows = {r.name: r for r in table(first)}
     # noise-free with three fixtures and known distances: micrometres; nominal: millimetres
     assert rows["Pall"].average[0] < 1e-5 < 1e-3 < rows["Pall"].nominal_average
-    assert rows["PallN"].average[0] < 0.15e-3
+    assert rows["PallN"].average[0] < min(0.25e-3, rows["PallN"].nominal_average / 10)  # 150 noisy samples each

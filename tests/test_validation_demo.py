@@ -70,3 +70,19 @@ def test_demo_refuses_bad_options_and_writes_nothing(tmp_path, capsys) -> None:
     with pytest.raises(SystemExit):
         main(["demo", "--out", str(tmp_path / "x"), "--samples", "5"])
     assert not (tmp_path / "x").exists()
+
+
+@pytest.mark.slow
+def test_default_demo_meets_its_accuracy_figures(tmp_path) -> None:
+    """The default demo (seed 0, 0.3 mm fixture noise, 0.3 mm mocap): calibrated <= 0.1 mm against the
+    exact tool point where nominal is >= 2 mm, and against the mocap at its noise floor."""
+    from validation.demo import DemoConfig, run_demo
+    from validation.pipeline import RANDOM_SET
+
+    result = run_demo(DemoConfig(out=tmp_path, rrd=False), say=lambda line: None)
+    random = result.report.comparison(RANDOM_SET)
+    assert random.vs_exact["nominal"].mean >= 2e-3
+    assert random.vs_exact["calibrated"].mean <= 0.1e-3
+    floor = random.floor.mean
+    assert 0.25e-3 < floor < 0.4e-3
+    assert floor <= random.vs_mocap["calibrated"].mean <= floor + 0.05e-3
