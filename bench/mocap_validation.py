@@ -1,0 +1,80 @@
+"""Cost of a validation: simulated mocap, comparison, recording (one core).
+
+Prints medians over repeats and writes ``bench/mocap_validation.json`` (not named ``validation.py``:
+it would shadow the package). The baseline is the plant's kinematics alone (``Plant.site_positions``
+for the markers and tool), measured in the same process: the cluster fit and the registration should
+stay a small multiple of it.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+# bench/controller.py would shadow the controller package: keep bench/ off the import path.
+sys.path[:] = [p for p in sys.path if Path(p or ".").resolve() != Path(__file__).resolve().parent]
+os.environ.setdefault("OMP_NUM_THREADS", "1")
+os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
+os.environ.setdefault("RERUN_ANALYTICS", "0")
+
+import numpy as np  # noqa: E402
+
+from correction import load_robot, perturb  # noqa: E402
+from validation.mocap import SimulatedMocap, random_mocap_transform  # noqa: E402
+from validation.pipeline import validate_models  # noqa: E402
+
+
+def median_time(function, repeats: int = 5) -> float:
+    function()  # warm up
+    times = []
+    for _ in range(repeats):
+        start = time.perf_counter()
+        function()
+        times.append(time.perf_counter() - start)
+    return float(np.median(times))
+
+
+def main() -> None:
+    from validation.recording import Recording
+
+    panda = load_robot("panda")
+    rng = np.random.default_rng(0)
+    truth = perturb(panda, rng)
+    count = 5000
+    q = panda.random_configurations(count, rng)
+    mocap = SimulatedMocap(truth, random_mocap_transform(rng))
+    mocap.plant_points(q[:1])  # build the plant once
+    folder = Path(tempfile.mkdtemp())
+
+    def record():
+        report = validate_models(panda, truth, np.random.default_rng(1), truth=truth, configurations=count)
+        recording = Recording(folder / "bench.rrd")
+        from validation.pipeline import record_validation
+
+        record_validation(recording, report, {"nominal": panda, "calibrated": truth})
+        recording.close()
+
+    cases = {
+        "plant kinematics (baseline)": lambda: mocap.plant_points(q),
+        "mocap measure (plant + noise + cluster fit)": lambda: mocap.measure(q, np.random.default_rng(2)),
+        "validate_models (build plant, measure, compare)": lambda: validate_models(
+            panda, truth, np.random.default_rng(1), truth=truth, configurations=count
+        ),
+        "validate + record .rrd": record,
+    }
+    results = {name: {"median_s": median_time(function)} for name, function in cases.items()}
+    base = results["plant kinematics (baseline)"]["median_s"]
+    print(f"{count} configurations, median of 5, one thread")
+    for name, r in results.items():
+        print(f"  {name:50s} {r['median_s'] * 1e3:8.1f} ms  ({r['median_s'] / base:5.1f} x baseline)")
+    out = Path(__file__).with_suffix(".json")
+    out.write_text(json.dumps({"configurations": count, "results": results}, indent=2))
+    print(f"wrote {out}")
+
+
+if __name__ == "__main__":
+    main()
