@@ -129,20 +129,15 @@ def _with_simulation(model, provenance: dict):
 def _provenance(args: argparse.Namespace, settings, result) -> dict:
     """The ``simulation:`` block of truth.yaml: seed, versions, inputs, settings, outcome."""
     import sys
-    from importlib.metadata import PackageNotFoundError, version
 
-    def ver(name: str) -> str:
-        try:
-            return version(name)
-        except PackageNotFoundError:
-            return "unknown"
+    from correction.provenance import versions
 
     return {
         "seed": args.seed,
         "command": "spherecal simulate " + " ".join(sys.argv[2:]) if len(sys.argv) > 2 else "spherecal simulate",
         "nominal_robot": str(args.robot),
         "fixtures_file": None if args.fixtures is None else str(args.fixtures),
-        "versions": {name: ver(name) for name in ("spherecal", "numpy", "scipy", "mujoco", "osqp", "qpsolvers")},
+        "versions": versions(),
         "perturbation": {"length_std": args.length_std, "angle_std_deg": args.angle_std_deg,
                          "tool_std": args.tool_std},
         "settings": {"seconds": settings.seconds, "samples": settings.samples, "mode": settings.mode,

@@ -22,22 +22,14 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 def provenance_header(source: str, output_format: str) -> str:
     """Comment lines naming the input file (and its SHA-256) and the versions that wrote the export."""
-    import hashlib
-    from importlib.metadata import PackageNotFoundError, version
-    from pathlib import Path
+    from correction.provenance import input_record, versions
 
-    path = Path(source)
-    digest = hashlib.sha256(path.read_bytes()).hexdigest() if path.is_file() else "embedded robot"
-    versions = []
-    for package in ("spherecal", "numpy", "scipy", "mujoco"):
-        try:
-            versions.append(f"{package} {version(package)}")
-        except PackageNotFoundError:
-            versions.append(f"{package} unknown")
+    digest = input_record(source)["sha256"]
+    packages = ", ".join(f"{k} {v}" for k, v in versions(("spherecal", "numpy", "scipy", "mujoco")).items())
     return (
         f"spherecal export to {output_format} of {source}\n"
         f"input sha256: {digest}\n"
-        f"versions: {', '.join(versions)}"
+        f"versions: {packages}"
     )
 
 

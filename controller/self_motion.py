@@ -33,7 +33,7 @@ REACH_RESTARTS = 20
 #: the robot [m].
 BASE_RADIUS = 0.12
 #: Correlation time of the fixture compliance [s]: a new offset every this often, blended.
-NOISE_PERIOD = 0.2
+NOISE_PERIOD = 0.05
 #: How often the exploration is asked whether its goal is reached [s].
 CHECK_PERIOD = 0.05
 
@@ -55,6 +55,7 @@ class SelfMotionSettings:
         samples: samples kept per fixture (drawn at random from the 1 kHz record).
         mode: ``"coverage"`` (default) or ``"random"`` exploration.
         noise: std of the fixture compliance per axis [m] (0: ideal fixture).
+        noise_period: correlation time of the compliance [s] (a new offset this often).
         speed: exploration speed [rad/s] (None: the mode's default).
         decimate: period of the decimated trajectory [s].
         solver: QP solver name (``"osqp"`` persistent by default).
@@ -64,6 +65,7 @@ class SelfMotionSettings:
     samples: int = 500
     mode: str = "coverage"
     noise: float = 0.0
+    noise_period: float = NOISE_PERIOD
     speed: float | None = None
     decimate: float = 0.01
     solver: str = "osqp"
@@ -223,7 +225,7 @@ def collect_self_motion(
         period = int(round((COVERAGE_PERIOD if settings.mode == "coverage" else RANDOM_PERIOD) / TIMESTEP))
         check = int(round(CHECK_PERIOD / TIMESTEP))
         ramp = Ramp(n)
-        compliance = _Compliance(settings.noise, rng) if settings.noise > 0 else None
+        compliance = _Compliance(settings.noise, rng, settings.noise_period) if settings.noise > 0 else None
         centre = fixtures[name]
         anchor_id = int(plant.fixture_sites[k])
         plant.move_fixture(name, centre)

@@ -11,12 +11,23 @@ from correction import RobotModel
 
 from .dataset import Dataset, FixtureSpec
 from .identifiability import Identifiability, predicted_std
-from .problem import NOISE, CalibrationProblem, build_problem, format_value, prune
+from .problem import (
+    NOISE,
+    CalibrationProblem,
+    ImplausibleCalibrationError,
+    _rows,
+    build_problem,
+    format_value,
+    prior_std,
+    prune,
+)
 from .solvers import solve_lm, solve_pso
 
 METHODS: tuple[str, ...] = ("lm", "pso", "pso+lm")
 #: Floor of the residual noise used to judge excitation [m] (noise-free data still has rounding).
 SIGMA_FLOOR = 1e-6
+#: Largest plausible change of an identified parameter, in prior spreads (25 mm, 5 deg).
+MAX_CHANGE = 25.0
 
 
 @dataclass(frozen=True, eq=False)
@@ -134,6 +145,7 @@ def calibrate(
     loss: str = "linear",
     noise: float = NOISE,
     pso_options: dict | None = None,
+    max_change: float = MAX_CHANGE,
 ) -> CalibrationResult:
     """Identify the parameters of ``nominal`` that put every sample's tool point on its fixture.
 
@@ -148,12 +160,15 @@ def calibrate(
         loss: ``linear``, ``soft_l1`` or ``huber`` (``lm`` only).
         noise: expected fixture noise [m] (robust-loss scale, distance weight).
         pso_options: keyword arguments of :func:`solve_pso`.
+        max_change: largest plausible change of an identified parameter from nominal, in prior
+            spreads (1 mm on lengths and the tool, 0.2 deg on angles); a fit beyond it is refused.
 
     Returns:
         The :class:`CalibrationResult`.
 
     Raises:
         DatasetError, UnidentifiableError: see :func:`build_problem`.
+        ImplausibleCalibrationError: the fit moved a parameter more than ``max_change`` spreads.
     """
     if method not in METHODS:
         raise ValueError(f"unknown method {method!r}, expected one of {METHODS}")
@@ -167,14 +182,18 @@ def calibrate(
         solution = solve_pso(problem, seed=seed, x0=x, **(pso_options or {}))
         x, timings["pso"] = solution.x, solution.seconds
     if method in ("lm", "pso+lm"):
+        x_start = x
         solution = solve_lm(problem, x, loss=loss)
         x, timings["lm"] = solution.x, solution.seconds
-        # the data's own noise decides what it can see; re-solve without what it cannot
+        # The data's own noise decides what it can see, judged near the start (a poorly excited
+        # data set lets the first fit wander to a far, wrong basin); re-solve without what it cannot
+        # see, from the start again rather than from where the first fit wandered.
         sigma = max(_sigma(problem, x), SIGMA_FLOOR)
-        pruned, x_pruned = prune(problem, x, sigma)
+        pruned, _ = prune(problem, x, sigma, jac=problem.generic_jacobian())
         if pruned is not problem:
+            x_restart = pruned.pack(*problem.unpack(x_start))
             problem = pruned
-            solution = solve_lm(problem, x_pruned, loss=loss)
+            solution = solve_lm(problem, x_restart, loss=loss)
             x, timings["lm"] = solution.x, timings["lm"] + solution.seconds
     clock = time.perf_counter()
     jac = problem.jacobian(x)
@@ -182,6 +201,7 @@ def calibrate(
     std_values = predicted_std(jac, sigma)
     ident = Identifiability.of(jac)
     params, centres = problem.unpack(x)
+    check_plausible(problem, params, max_change)
     model = problem.model.with_params(params)
     after = np.linalg.norm(problem.sample_errors(x), axis=1)
     timings["covariance"] = time.perf_counter() - clock
@@ -204,6 +224,32 @@ def calibrate(
         timings=timings,
         problem=problem,
         x=x,
+    )
+
+
+def check_plausible(problem: CalibrationProblem, params: np.ndarray, max_change: float = MAX_CHANGE) -> None:
+    """Refuse a fit that moved an identified parameter further than ``max_change`` prior spreads.
+
+    Real arms differ from their design by millimetres and tenths of a degree; a fit that moves a
+    parameter by centimetres or tens of degrees has fitted noise along a direction the samples
+    barely see (too little self-motion, too few samples), and would make the arm less accurate.
+
+    Raises:
+        ImplausibleCalibrationError: one line naming the samples file, rows and the parameter.
+    """
+    free = problem.free
+    change = (params - problem.model.params)[free]
+    ratio = np.abs(change) / prior_std(problem.model)[free]
+    if ratio.size == 0 or ratio.max() <= max_change:
+        return
+    worst = int(np.argmax(ratio))
+    name = problem.model.param_names[free[worst]]
+    dataset = problem.dataset
+    raise ImplausibleCalibrationError(
+        f"{dataset.source or 'samples'}: {_rows(dataset)}, field '{name}': the fit moves {name} by "
+        f"{format_value(name, change[worst])} from nominal ({ratio[worst]:.0f}x a real arm's spread, limit "
+        f"{max_change:g}x): the samples do not determine it; record more self-motion (wider joint ranges, "
+        f"more fixtures or known distances)"
     )
 
 

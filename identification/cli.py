@@ -22,27 +22,13 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument(
         "--dedup-tol", type=float, default=1e-4, help="drop samples within this of an earlier one [rad] (1e-4)"
     )
+    parser.add_argument(
+        "--max-change",
+        type=float,
+        default=25.0,
+        help="refuse a fit that moves a parameter more than this many prior spreads (1 mm, 0.2 deg) from nominal (25)",
+    )
     parser.add_argument("--out", required=True, help="calibrated robot file to write (YAML)")
-
-
-def _sha256(path: str) -> str:
-    import hashlib
-
-    with open(path, "rb") as handle:
-        return hashlib.sha256(handle.read()).hexdigest()
-
-
-def _versions(method: str) -> dict[str, str]:
-    from importlib.metadata import PackageNotFoundError, version
-
-    out = {}
-    packages = ("numpy", "scipy", "mujoco", "spherecal") + (("pyswarms",) if "pso" in method else ())
-    for name in packages:
-        try:
-            out[name] = version(name)
-        except PackageNotFoundError:
-            out[name] = "not installed"
-    return out
 
 
 def run(args: argparse.Namespace) -> int:
@@ -57,11 +43,11 @@ def run(args: argparse.Namespace) -> int:
     import datetime
     import time
     from dataclasses import replace
-    from pathlib import Path
 
     import numpy as np
 
     from correction import load_robot, save_robot
+    from correction.provenance import PACKAGES, input_record, versions
 
     from .calibrate import calibrate
     from .dataset import read_fixtures, read_samples
@@ -69,8 +55,8 @@ def run(args: argparse.Namespace) -> int:
     clock = time.perf_counter()
     if args.max_samples is not None and args.max_samples < 1:
         raise SystemExit("spherecal calibrate: error: --max-samples must be >= 1")
-    if not args.noise > 0 or args.dedup_tol < 0:
-        raise SystemExit("spherecal calibrate: error: --noise must be > 0 and --dedup-tol >= 0")
+    if not args.noise > 0 or args.dedup_tol < 0 or not args.max_change > 0:
+        raise SystemExit("spherecal calibrate: error: --noise and --max-change must be > 0, --dedup-tol >= 0")
     nominal = load_robot(args.robot)
     dataset = read_samples(args.samples, nominal)
     spec = read_fixtures(args.fixtures) if args.fixtures else None
@@ -78,23 +64,33 @@ def run(args: argparse.Namespace) -> int:
     dataset = dataset.deduplicated(args.dedup_tol)
     dropped = read - dataset.n_samples
     dataset = dataset.subsampled(args.max_samples, np.random.default_rng(args.seed))
-    result = calibrate(nominal, dataset, spec, method=args.method, seed=args.seed, loss=args.loss, noise=args.noise)
+    result = calibrate(
+        nominal,
+        dataset,
+        spec,
+        method=args.method,
+        seed=args.seed,
+        loss=args.loss,
+        noise=args.noise,
+        max_change=args.max_change,
+    )
     block = result.block()
     block["duplicates_dropped"] = dropped
     block["inputs"] = {
-        "robot": {"path": args.robot, "sha256": _sha256(args.robot) if Path(args.robot).exists() else "embedded"},
-        "samples": {"path": args.samples, "sha256": _sha256(args.samples)},
+        "robot": input_record(args.robot),
+        "samples": input_record(args.samples),
     }
     if args.fixtures:
-        block["inputs"]["fixtures"] = {"path": args.fixtures, "sha256": _sha256(args.fixtures)}
+        block["inputs"]["fixtures"] = input_record(args.fixtures)
     block["options"] = {
         "loss": args.loss,
         "noise_m": args.noise,
         "max_samples": args.max_samples,
         "dedup_tol_rad": args.dedup_tol,
+        "max_change": args.max_change,
     }
     block["seed"] = args.seed
-    block["versions"] = _versions(args.method)
+    block["versions"] = versions(PACKAGES[:4] + (("pyswarms",) if "pso" in args.method else ()))
     block["time"] = datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="seconds")
     extras = {k: v for k, v in nominal.extras.items() if k != "calibration"}
     extras["calibration"] = block

@@ -49,6 +49,10 @@ class UnidentifiableError(SpherecalError):
     """The data cannot determine any parameter (or the problem is otherwise rank deficient)."""
 
 
+class ImplausibleCalibrationError(SpherecalError):
+    """The fit moved a parameter further from nominal than any real arm differs from its design."""
+
+
 def prior_std(model: RobotModel) -> np.ndarray:
     """(P,) prior spread of every parameter: 1 mm on lengths and tool, 0.2 deg on angles."""
     n = model.n_joints
@@ -167,6 +171,18 @@ class CalibrationProblem:
         slot, _ = self._layout()
         centres[slot >= 0] = _mean_points(model, self.dataset)[slot >= 0]
         return self.pack(model.params, centres)
+
+    def generic_jacobian(self) -> np.ndarray:
+        """(M, F) Jacobian at a generic point near the start model (seeded 0.1x prior perturbation).
+
+        What the data can see is judged here, not at the nominal design (whose accidental symmetries,
+        tool on the last axis and zero offsets, are not structural) nor at a solution (which a poorly
+        excited data set lets wander far from any real arm).
+        """
+        generic = self.model.params + np.random.default_rng(0).normal(0.0, 0.1, self.model.n_params) * prior_std(
+            self.model
+        )
+        return replace(self, model=self.model.with_params(generic)).jacobian(self.pack(generic, self.centres))
 
     def model_at(self, x: np.ndarray) -> RobotModel:
         """The robot of an unknown vector."""
@@ -426,9 +442,7 @@ def build_problem(
         )
     # rank test at a generic point near the start (seeded 0.1x prior perturbation), so that accidental
     # symmetries of the nominal design (tool on the last axis, zero offsets) do not count as structural
-    prior = prior_std(model)
-    generic = model.params + np.random.default_rng(0).normal(0.0, 0.1, model.n_params) * prior
-    jac = replace(problem, model=model.with_params(generic)).jacobian(problem.pack(generic, centres))
+    jac = problem.generic_jacobian()
     fp = candidates.size
     # preference: centres, tool point, then joints from the last to the first
     n = model.n_joints
@@ -461,13 +475,17 @@ def build_problem(
     return replace(problem, identifiability=Identifiability.of(problem.jacobian(problem.x0)))
 
 
-def prune(problem: CalibrationProblem, x: np.ndarray, sigma: float) -> tuple[CalibrationProblem, np.ndarray]:
+def prune(
+    problem: CalibrationProblem, x: np.ndarray, sigma: float, jac: np.ndarray | None = None
+) -> tuple[CalibrationProblem, np.ndarray]:
     """Fix, one at a time, the parameters whose predicted std exceeds their prior spread.
 
     Args:
         problem: a solved problem.
         x: (F,) its solution.
         sigma: residual noise [m] (estimated from the fit).
+        jac: (M, F) Jacobian that judges the excitation (default: at ``x``;
+            :meth:`CalibrationProblem.generic_jacobian` does not depend on how far a fit wandered).
 
     Returns:
         The problem without the barely excited parameters (they go back to the start model's value)
@@ -476,7 +494,7 @@ def prune(problem: CalibrationProblem, x: np.ndarray, sigma: float) -> tuple[Cal
     prior = prior_std(problem.model)
     names = problem.model.param_names
     params, centres = problem.unpack(x)
-    jac = problem.jacobian(x)
+    jac = problem.jacobian(x) if jac is None else jac
     fp = problem.n_free_params
     keep = np.arange(fp)
     fixed = dict(problem.fixed)

@@ -2,32 +2,14 @@
 
 from __future__ import annotations
 
-import hashlib
-import platform
 import sys
 from datetime import datetime, timezone
-from importlib.metadata import PackageNotFoundError, version
 from pathlib import Path
 from typing import Any
 
-PACKAGES = ("spherecal", "numpy", "scipy", "mujoco", "qpsolvers", "osqp", "rerun-sdk")
+from correction.provenance import PACKAGES, file_digest, versions
 
-
-def versions() -> dict[str, str]:
-    """Installed versions of Python and of the packages a result depends on."""
-    out = {"python": platform.python_version()}
-    for package in PACKAGES:
-        try:
-            out[package] = version(package)
-        except PackageNotFoundError:
-            out[package] = "not installed"
-    return out
-
-
-def file_digest(path: str | Path) -> str:
-    """SHA-256 of a file's bytes (hex)."""
-    return hashlib.sha256(Path(path).read_bytes()).hexdigest()
-
+__all__ = ["PACKAGES", "comment_block", "file_digest", "provenance", "versions"]
 
 def provenance(seed: int | None, inputs: dict[str, Any], command: list[str] | None = None) -> dict[str, Any]:
     """The block written into every result: command line, time, versions, seed and inputs.
