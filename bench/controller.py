@@ -10,18 +10,12 @@ Targets (issue 4): <= 50 us per step with the default; <= 10 s for the 3 fixture
 from __future__ import annotations
 
 import json
-import os
 import platform
-import sys
 import time
 import warnings
 from pathlib import Path
 
-# This script is named like the package it measures: keep bench/ off the import path.
-sys.path[:] = [p for p in sys.path if Path(p or ".").resolve() != Path(__file__).resolve().parent]
-os.environ.setdefault("OMP_NUM_THREADS", "1")
-os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
-
+import bench_common  # noqa: F401  (first: import path, BLAS threads)
 import numpy as np  # noqa: E402
 
 from controller.cli import DEFAULT_FIXTURES  # noqa: E402

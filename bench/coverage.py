@@ -13,9 +13,7 @@ import sys
 import time
 from pathlib import Path
 
-# bench/controller.py would shadow the controller package: keep bench/ off the import path.
-sys.path[:] = [p for p in sys.path if Path(p or ".").resolve() != Path(__file__).resolve().parent]
-
+import bench_common  # noqa: F401  (first: import path, BLAS threads)
 import numpy as np  # noqa: E402
 
 from controller.cli import DEFAULT_FIXTURES  # noqa: E402

@@ -11,18 +11,11 @@ after the best rigid fit, and raw), final residual and wall time.
 from __future__ import annotations
 
 import json
-import os
 import sys
 import time
 from pathlib import Path
 
-# as `spherecal calibrate` does: one BLAS thread (the problem is small; threads stall when busy)
-for _variable in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
-    os.environ.setdefault(_variable, "1")
-
-# this file's name shadows the package when run as a script: drop bench/ from the path first
-sys.path[:] = [p for p in sys.path if Path(p or ".").resolve() != Path(__file__).resolve().parent]
-
+import bench_common  # noqa: F401  (first: import path, BLAS threads)
 import numpy as np  # noqa: E402
 
 from correction import load_robot, perturb, registered_errors, tool_point  # noqa: E402

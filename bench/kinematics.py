@@ -7,28 +7,14 @@ Prints medians over repeats and writes ``bench/kinematics.json``. Targets (issue
 from __future__ import annotations
 
 import json
-import os
 import platform
-import time
 from pathlib import Path
 
-os.environ.setdefault("OMP_NUM_THREADS", "1")
-os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
-
+import bench_common  # first: import path, BLAS threads
 import numpy as np  # noqa: E402
 
 from correction import joint_jacobian, load_robot, param_jacobian, tool_point  # noqa: E402
 from correction.kinematics import frames  # noqa: E402
-
-
-def median_time(function, repeats: int = 9) -> float:
-    function()  # warm up
-    times = []
-    for _ in range(repeats):
-        start = time.perf_counter()
-        function()
-        times.append(time.perf_counter() - start)
-    return float(np.median(times))
 
 
 def main() -> None:
@@ -43,7 +29,7 @@ def main() -> None:
     }
     results = {}
     for name, function in cases.items():
-        seconds = median_time(function)
+        seconds = bench_common.median_time(function)
         results[name] = {"median_s": seconds, "per_second": batch / seconds}
     base = results["frames (baseline: all link frames)"]["median_s"]
     print(f"batch {batch}, median of 9, one thread ({platform.processor() or platform.machine()})")

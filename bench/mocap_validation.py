@@ -9,33 +9,15 @@ stay a small multiple of it.
 from __future__ import annotations
 
 import json
-import os
-import sys
 import tempfile
-import time
 from pathlib import Path
 
-# bench/controller.py would shadow the controller package: keep bench/ off the import path.
-sys.path[:] = [p for p in sys.path if Path(p or ".").resolve() != Path(__file__).resolve().parent]
-os.environ.setdefault("OMP_NUM_THREADS", "1")
-os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
-os.environ.setdefault("RERUN_ANALYTICS", "0")
-
+import bench_common  # first: import path, BLAS threads
 import numpy as np  # noqa: E402
 
 from correction import load_robot, perturb  # noqa: E402
 from validation.mocap import SimulatedMocap, random_mocap_transform  # noqa: E402
 from validation.pipeline import validate_models  # noqa: E402
-
-
-def median_time(function, repeats: int = 5) -> float:
-    function()  # warm up
-    times = []
-    for _ in range(repeats):
-        start = time.perf_counter()
-        function()
-        times.append(time.perf_counter() - start)
-    return float(np.median(times))
 
 
 def main() -> None:
@@ -66,7 +48,7 @@ def main() -> None:
         ),
         "validate + record .rrd": record,
     }
-    results = {name: {"median_s": median_time(function)} for name, function in cases.items()}
+    results = {name: {"median_s": bench_common.median_time(function)} for name, function in cases.items()}
     base = results["plant kinematics (baseline)"]["median_s"]
     print(f"{count} configurations, median of 5, one thread")
     for name, r in results.items():

@@ -124,24 +124,12 @@ def check_models(nominal: RobotModel, calibrated: RobotModel, source: str = "cal
     Args:
         source: name of the calibrated file, for the message.
     """
-    if calibrated.n_joints != nominal.n_joints:
+    mismatch = nominal.mismatch(calibrated, limits=True)
+    if mismatch is not None:
+        field, what = mismatch
         raise ModelMismatchError(
-            f"{source}: has {calibrated.n_joints} joints, the controller's model {nominal.name!r} has "
-            f"{nominal.n_joints} (a file of another robot?)"
+            f"{source}: field {field}: {what} (the controller's model is {nominal.name!r}: a file of another robot?)"
         )
-    if calibrated.convention != nominal.convention:
-        raise ModelMismatchError(
-            f"{source}: convention is {calibrated.convention}, the controller's model uses {nominal.convention} "
-            "(convert it with correction.convert first)"
-        )
-    for field in ("lower", "upper"):
-        diff = np.abs(getattr(calibrated, field) - getattr(nominal, field))
-        if np.any(diff > 1e-9):
-            joint = int(np.argmax(diff))
-            raise ModelMismatchError(
-                f"{source}: joints[{joint}].{field} is {getattr(calibrated, field)[joint]!r}, the controller's "
-                f"model has {getattr(nominal, field)[joint]!r} (a file of another robot?)"
-            )
 
 
 def _check_difference(nominal: RobotModel, calibrated: RobotModel, q: np.ndarray, source: str) -> None:

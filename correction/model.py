@@ -151,6 +151,32 @@ class RobotModel:
         """(count, n) joint angles drawn uniformly inside the joint limits [rad]."""
         return rng.uniform(self.lower, self.upper, size=(count, self.n_joints))
 
+    def mismatch(self, other: RobotModel, limits: bool = False) -> tuple[str, str] | None:
+        """The first way ``other`` is not a description of the same arm as this model.
+
+        Args:
+            other: the model to compare (a calibration, a truth file, ...).
+            limits: also require the same joint limits (a calibration changes geometry, not limits).
+
+        Returns:
+            ``(field, what)``, e.g. ``("joints", "6 joints, expected 7")``, or None when they match.
+        """
+        if other.n_joints != self.n_joints:
+            return "joints", f"{other.n_joints} joints, expected {self.n_joints}"
+        if other.convention != self.convention:
+            return "convention", (
+                f"{other.convention!r}, expected {self.convention!r} (convert it with correction.convert first)"
+            )
+        if limits:
+            for name in ("lower", "upper"):
+                diff = np.abs(getattr(other, name) - getattr(self, name))
+                if np.any(diff > 1e-9):
+                    joint = int(np.argmax(diff))
+                    return f"joints[{joint}].{name}", (
+                        f"{getattr(other, name)[joint]!r}, expected {getattr(self, name)[joint]!r}"
+                    )
+        return None
+
     def same_as(self, other: RobotModel, atol: float = 0.0) -> bool:
         """True when both models have the same convention, parameters and limits."""
         return (

@@ -119,7 +119,7 @@ def test_a_file_of_another_robot_raises(robots, panda):
                      theta=panda.theta[:6], lower=panda.lower[:6], upper=panda.upper[:6], tool=panda.tool)
     cases = {
         "6 joints": six,
-        "convention is standard": to_standard(calibrated),
+        "field convention: 'standard'": to_standard(calibrated),
         "joints[3].upper": replace(calibrated, upper=calibrated.upper + np.eye(7)[3] * 0.1),
         "not a calibration of this robot": perturb(nominal, rng, 0.05, 0.05, 0.05),
     }

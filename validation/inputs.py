@@ -21,13 +21,7 @@ def check_models(models: dict[str, RobotModel], files: dict[str, str]) -> None:
     """
     reference = models["nominal"]
     for role, model in models.items():
-        if model.n_joints != reference.n_joints:
-            raise ValidationInputError(
-                f"{files[role]}: field joints: {model.n_joints} joints, but the nominal {files['nominal']} has "
-                f"{reference.n_joints}"
-            )
-        if model.convention != reference.convention:
-            raise ValidationInputError(
-                f"{files[role]}: field convention: {model.convention!r}, but the nominal {files['nominal']} is "
-                f"{reference.convention!r} (convert it with correction.convert first)"
-            )
+        mismatch = reference.mismatch(model)
+        if mismatch is not None:
+            field, what = mismatch
+            raise ValidationInputError(f"{files[role]}: field {field}: {what} as in the nominal {files['nominal']}")
