@@ -8,6 +8,7 @@ import numpy as np
 import pytest
 
 os.environ.setdefault("RERUN_ANALYTICS", "0")
+os.environ.setdefault("CI", "1")  # the Rerun viewer binary is quiet under CI
 
 from correction import RobotModel, load_robot, perturb  # noqa: E402
 

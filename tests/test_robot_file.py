@@ -100,3 +100,14 @@ def test_unreadable_and_invalid_yaml(tmp_path) -> None:
     path.write_text("- just a list\n")
     with pytest.raises(RobotFileError, match="mapping at the top level"):
         load_robot(path)
+
+
+def test_atomic_files_follow_the_umask(panda, tmp_path) -> None:
+    import os
+
+    old = os.umask(0o022)
+    try:
+        path = save_robot(panda, tmp_path / "robot.yaml")
+    finally:
+        os.umask(old)
+    assert path.stat().st_mode & 0o777 == 0o644
