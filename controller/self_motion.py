@@ -28,6 +28,12 @@ from .qp_ik import LIMIT_MARGIN
 
 #: Start of the reaching IK (the Panda's "ready" pose) and reach settings.
 HOME = np.array([0.0, -0.785, 0.0, -2.356, 0.0, 1.571, 0.785])
+
+
+def home(model: RobotModel) -> np.ndarray:
+    """(n,) start posture of the reach IK: the Panda's ready pose for 7 joints, mid-range otherwise."""
+    start = HOME if model.n_joints == HOME.size else 0.5 * (model.lower + model.upper)
+    return np.clip(start, model.lower, model.upper)
 REACH_RESTARTS = 20
 #: A fixture closer than this to the base column (base to the first joint's frame) is inside
 #: the robot [m].
@@ -159,7 +165,7 @@ def reach_fixture(model: RobotModel, name: str, centre: np.ndarray, rng: np.rand
     """
     check_fixture(model, name, centre)
     inner = replace(model, lower=model.lower + margin, upper=model.upper - margin)
-    result = ik(inner, centre, np.clip(HOME, inner.lower, inner.upper), restarts=REACH_RESTARTS, rng=rng)
+    result = ik(inner, centre, home(inner), restarts=REACH_RESTARTS, rng=rng)
     if not result.converged:
         raise UnreachableFixtureError(
             f"fixture {name} at {np.round(centre, 4).tolist()} m is out of reach "
