@@ -25,8 +25,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument(
         "--max-change",
         type=float,
-        default=25.0,
-        help="refuse a fit that moves a parameter more than this many prior spreads (1 mm, 0.2 deg) from nominal (25)",
+        default=4.0,
+        help="refuse a fit that moves the tool point more than this many times what a real arm's errors "
+        "(1 mm, 0.2 deg) typically do (4: about 24 mm on the Panda)",
     )
     parser.add_argument("--out", required=True, help="calibrated robot file to write (YAML)")
 

@@ -41,8 +41,21 @@ def test_table_aggregates_mean_std_max_over_sets() -> None:
     np.testing.assert_allclose(row.maximal, [4e-4, 2 * np.std([1e-4, 2e-4, 3e-4]), 6e-4])
     csv_text = table_csv([row], comment="seed 0")
     assert csv_text.splitlines()[0] == "# seed 0"
-    assert csv_text.splitlines()[2].startswith("P1,3,0.200,0.082,0.300,0.400,0.163,0.600")
+    assert csv_text.splitlines()[2].startswith("P1,3,0,0.200,0.082,0.300,0.400,0.163,0.600")
     assert "0.00 / 0.01" in format_table([row])  # the paper's row beside ours
+
+
+def test_refused_sets_are_counted_not_averaged() -> None:
+    nan = float("nan")
+    results = [
+        TaskResult("P1", 0, 1e-4, 2e-4, 0.0, 0.0, 0.0),
+        TaskResult("P1", 1, nan, nan, nan, nan, 0.0, refused="samples.csv: rows 2-61, field 'alpha3': ..."),
+        TaskResult("P2", 0, nan, nan, nan, nan, 0.0, refused="..."),
+    ]
+    p1, p2 = table(results)
+    assert (p1.sets, p1.refused) == (1, 1) and p1.average[0] == pytest.approx(1e-4)
+    assert (p2.sets, p2.refused) == (0, 1) and np.isnan(p2.average[0])
+    assert table_csv([p1]).splitlines()[1].startswith("P1,1,1,0.100")
 
 
 def test_campaign_is_the_same_on_one_or_two_workers(tmp_path) -> None:

@@ -31,7 +31,7 @@ from pathlib import Path
 
 import numpy as np
 
-from correction import atomic_write_text
+from correction import SpherecalError, atomic_write_text
 
 #: The paper's simulated Table 2 (mm): row -> (mean of average error, mean of maximal error).
 PAPER_TABLE2 = {
@@ -98,6 +98,7 @@ class TaskResult:
     mocap_mean: float
     nominal_mean: float
     seconds: float
+    refused: str = ""  # the one-line reason when the calibration refused this set's data
 
 
 def row_name(fixture_set: str, noise: float) -> str:
@@ -137,7 +138,11 @@ def run_task(task: Task) -> TaskResult:
     data = motion_set(
         truth, start, fixtures, task.config.samples, task.noise, rng, task.config.source, task.config.seconds
     )
-    calibrated = calibrate_from(nominal, data, start=start).model
+    try:
+        calibrated = calibrate_from(nominal, data, start=start).model
+    except SpherecalError as error:  # a refusal is a result of the protocol, not a crash of the campaign
+        nan = float("nan")
+        return TaskResult(task.row, task.index, nan, nan, nan, nan, time.perf_counter() - clock, str(error))
     report = validate_models(start, calibrated, rng, truth=truth, configurations=task.config.configurations)
     random = report.comparison(RANDOM_SET)
     return TaskResult(
@@ -189,22 +194,30 @@ class TableRow:
     maximal: tuple[float, float, float]  # mean, std, max of the sets' maximal errors
     mocap_average: float  # mean of the sets' average error against a 0.3 mm mocap
     nominal_average: float  # mean of the nominal model's average error
+    refused: int = 0  # sets whose data the calibration refused (not in the statistics)
 
 
 def table(results: list[TaskResult]) -> list[TableRow]:
     """Aggregate task results into Table 2 rows, in the order the rows first appear."""
     rows = []
     for name in dict.fromkeys(r.row for r in results):
-        mine = [r for r in results if r.row == name]
+        mine = [r for r in results if r.row == name and not r.refused]
         means, maxes = np.array([r.mean for r in mine]), np.array([r.max for r in mine])
+
+        def stats(values: np.ndarray) -> tuple[float, float, float]:
+            if values.size == 0:
+                return (float("nan"),) * 3
+            return float(values.mean()), float(values.std()), float(values.max())
+
         rows.append(
             TableRow(
                 name=name,
                 sets=len(mine),
-                average=(float(means.mean()), float(means.std()), float(means.max())),
-                maximal=(float(maxes.mean()), float(maxes.std()), float(maxes.max())),
-                mocap_average=float(np.mean([r.mocap_mean for r in mine])),
-                nominal_average=float(np.mean([r.nominal_mean for r in mine])),
+                average=stats(means),
+                maximal=stats(maxes),
+                mocap_average=float(np.mean([r.mocap_mean for r in mine])) if mine else float("nan"),
+                nominal_average=float(np.mean([r.nominal_mean for r in mine])) if mine else float("nan"),
+                refused=sum(1 for r in results if r.row == name and r.refused),
             )
         )
     return rows
@@ -213,6 +226,7 @@ def table(results: list[TaskResult]) -> list[TableRow]:
 COLUMNS = (
     "set",
     "sets",
+    "refused",
     "average_mean_mm",
     "average_std_mm",
     "average_max_mm",
@@ -230,7 +244,7 @@ def _cells(row: TableRow) -> list[str]:
     paper = PAPER_TABLE2.get(row.name)
     values = [*row.average, *row.maximal, row.mocap_average, row.nominal_average]
     return (
-        [row.name, str(row.sets)]
+        [row.name, str(row.sets), str(row.refused)]
         + [f"{v * 1e3:.3f}" for v in values]
         + (["", ""] if paper is None else [f"{paper[0]:.2f}", f"{paper[1]:.2f}"])
     )
@@ -239,18 +253,18 @@ def _cells(row: TableRow) -> list[str]:
 def format_table(rows: list[TableRow]) -> str:
     """The printed table (mm), the paper's simulated means beside ours."""
     head = (
-        f"{'set':<6} {'n':>3} | {'average error [mm]':^26} | {'maximal error [mm]':^26} | {'vs mocap':>8} "
-        f"{'nominal':>8} | {'paper avg/max':>13}\n"
-        f"{'':<6} {'':>3} | {'mean':>8} {'std':>8} {'max':>8} | {'mean':>8} {'std':>8} {'max':>8} | "
+        f"{'set':<6} {'n':>3} {'ref':>3} | {'average error [mm]':^26} | {'maximal error [mm]':^26} | "
+        f"{'vs mocap':>8} {'nominal':>8} | {'paper avg/max':>13}\n"
+        f"{'':<6} {'':>3} {'':>3} | {'mean':>8} {'std':>8} {'max':>8} | {'mean':>8} {'std':>8} {'max':>8} | "
         f"{'avg':>8} {'avg':>8} | {'mean':>13}"
     )
     lines = [head]
     for row in rows:
         c = _cells(row)
-        paper = f"{c[10]} / {c[11]}" if c[10] else "-"
+        paper = f"{c[11]} / {c[12]}" if c[11] else "-"
         lines.append(
-            f"{c[0]:<6} {c[1]:>3} | {c[2]:>8} {c[3]:>8} {c[4]:>8} | {c[5]:>8} {c[6]:>8} {c[7]:>8} | "
-            f"{c[8]:>8} {c[9]:>8} | {paper:>13}"
+            f"{c[0]:<6} {c[1]:>3} {c[2]:>3} | {c[3]:>8} {c[4]:>8} {c[5]:>8} | {c[6]:>8} {c[7]:>8} {c[8]:>8} | "
+            f"{c[9]:>8} {c[10]:>8} | {paper:>13}"
         )
     return "\n".join(lines)
 

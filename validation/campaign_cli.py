@@ -66,6 +66,9 @@ def run(args: argparse.Namespace) -> int:
         "tool point on random workspace configurations, after registration"
     )
     print(format_table(rows_out))
+    for result in results:
+        if result.refused:
+            print(f"refused: {result.row} set {result.index}: {result.refused}")
     inputs = {k: v for k, v in vars(args).items() if not k.startswith("_") and k != "command"}
     info = provenance(args.seed, {**inputs, "wall_time_s": round(wall, 1)})
     csv_path, md_path = write_tables(rows_out, args.out, comment_block(info))
