@@ -17,6 +17,7 @@ from pathlib import Path
 
 import bench_common  # noqa: F401  (first: import path, BLAS threads)
 import numpy as np  # noqa: E402
+import qpsolvers  # noqa: E402
 
 from controller.cli import DEFAULT_FIXTURES  # noqa: E402
 from controller.nullspace import NullSpaceController  # noqa: E402
@@ -58,6 +59,9 @@ def main() -> None:
              ("qpsolvers daqp", "daqp", False)]
     base = None
     for label, solver, persistent in cases:
+        if solver not in qpsolvers.available_solvers:
+            print(f"{label:<28} not installed (pip install daqp)")
+            continue
         times = step_times(panda, trajectory, q_r, solver, persistent) * 1e6
         median, p95 = float(np.median(times)), float(np.percentile(times, 95))
         base = base or median
