@@ -59,18 +59,22 @@ def _fixtures(path: str | None) -> dict:
 
 
 def _check_args(args: argparse.Namespace) -> None:
+    import math
     from pathlib import Path
 
-    if not args.seconds > 0:
-        raise _fail(f"--seconds must be > 0, got {args.seconds}")
+    if not (args.seconds > 0 and math.isfinite(args.seconds)):
+        raise _fail(f"--seconds must be finite and > 0, got {args.seconds}")
     if not 1 <= args.samples <= int(round(args.seconds * 1000)):
         raise _fail(f"--samples must be in 1..{int(round(args.seconds * 1000))} (1 kHz x seconds), got {args.samples}")
     for name in ("noise", "length_std", "angle_std_deg", "tool_std"):
-        if not getattr(args, name) >= 0:
-            raise _fail(f"--{name.replace('_', '-')} must be >= 0, got {getattr(args, name)}")
+        if not (getattr(args, name) >= 0 and math.isfinite(getattr(args, name))):
+            raise _fail(f"--{name.replace('_', '-')} must be finite and >= 0, got {getattr(args, name)}")
     out = Path(args.out)
     if out.exists() and not out.is_dir():
         raise _fail(f"--out {out}: exists and is not a directory")
+    blocker = next((p for p in out.parents if p.exists() and not p.is_dir()), None)
+    if blocker is not None:  # found before the simulation runs, not when the files are written
+        raise _fail(f"--out {out}: {blocker} is not a directory")
 
 
 def run(args: argparse.Namespace) -> int:
@@ -111,7 +115,10 @@ def run(args: argparse.Namespace) -> int:
     truth_text = dump_robot(truth, header=f"true robot of `spherecal simulate --seed {args.seed}`")
 
     out = Path(args.out)
-    out.mkdir(parents=True, exist_ok=True)
+    try:
+        out.mkdir(parents=True, exist_ok=True)
+    except OSError as error:
+        raise _fail(f"--out {out}: cannot create the directory: {error.strerror or error}") from None
     atomic_write_text(out / "samples.csv", samples_text)
     atomic_write_text(out / "fixtures.yaml", fixtures_text)
     atomic_write_text(out / "truth.yaml", truth_text)

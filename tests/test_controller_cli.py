@@ -71,8 +71,17 @@ def test_bad_fixtures_exit_nonzero_and_write_nothing(tmp_path, capsys, text, mes
 
 
 @pytest.mark.parametrize("args", [["--seconds", "0"], ["--samples", "100000"], ["--noise", "-1"],
+                                  ["--seconds", "inf"], ["--noise", "inf"], ["--length-std", "nan"],
                                   ["--solver", "nope"], ["--robot", "missing.yaml"]])
 def test_bad_options_exit_nonzero_and_write_nothing(tmp_path, capsys, args):
     code, out = _simulate(tmp_path, *args)
     assert code == 1 and len(capsys.readouterr().err.strip().splitlines()) == 1
     assert not out.exists()
+
+
+def test_out_below_a_file_fails_before_simulating(tmp_path, capsys):
+    (tmp_path / "plain").write_text("x")
+    code = main(["simulate", "--out", str(tmp_path / "plain" / "sub"), "--seconds", "0.5", "--samples", "10"])
+    err = capsys.readouterr().err.strip()
+    assert code == 1 and err.startswith("spherecal simulate: error: --out") and "\n" not in err
+    assert "P1" not in err and sorted(p.name for p in tmp_path.iterdir()) == ["plain"]
