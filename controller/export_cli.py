@@ -18,6 +18,10 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         default=None,
         help="prefix of URDF link and joint names (default: panda_); the MJCF keeps the plant's names",
     )
+    parser.add_argument("--effort", default=None, metavar="E1,...,En",
+                        help="URDF joint torque limits [N m], comma-separated (default: Franka's, 7-joint arms)")
+    parser.add_argument("--velocity", default=None, metavar="V1,...,Vn",
+                        help="URDF joint velocity limits [rad/s], comma-separated (default: Franka's, 7-joint arms)")
 
 
 def provenance_header(source: str, output_format: str) -> str:
@@ -33,7 +37,20 @@ def provenance_header(source: str, output_format: str) -> str:
     )
 
 
-def export_text(model, output_format: str, prefix: str | None = None, header: str = "") -> str:
+def _limits(text: str | None, option: str) -> list[float] | None:
+    """A comma-separated option as floats (None when not given)."""
+    from correction.urdf import ExportError
+
+    if text is None:
+        return None
+    try:
+        return [float(v) for v in text.split(",")]
+    except ValueError:
+        raise ExportError(f"{option}: expected comma-separated numbers, got {text!r}") from None
+
+
+def export_text(model, output_format: str, prefix: str | None = None, header: str = "",
+                effort: list[float] | None = None, velocity: list[float] | None = None) -> str:
     """The exported document of a model as text.
 
     Args:
@@ -43,17 +60,25 @@ def export_text(model, output_format: str, prefix: str | None = None, header: st
             ``joint1..n``, site ``tool``) or ``yaml`` (the robot file, normalised).
         prefix: URDF name prefix (``panda_`` when None); refused for the other formats.
         header: comment lines on top (inputs, versions).
+        effort, velocity: (n,) URDF joint limits [N m], [rad/s]; Franka's for a 7-joint arm when
+            None, required for other arms; refused for the other formats.
 
     Raises:
-        correction.urdf.ExportError: an invalid prefix or format.
+        correction.urdf.ExportError: an invalid prefix, limits or format.
     """
     from correction import dump_robot
-    from correction.urdf import ExportError, provenance_comment, robot_to_urdf, xml_comment
+    from correction.urdf import PANDA_EFFORT, ExportError, provenance_comment, robot_to_urdf, xml_comment
 
     if output_format == "urdf":
-        return robot_to_urdf(model, prefix="panda_" if prefix is None else prefix, header=header)
-    if prefix is not None:
-        raise ExportError(f"--prefix: only the urdf format renames links, not {output_format}")
+        n = model.n_joints
+        for option, values in (("--effort", effort), ("--velocity", velocity)):
+            if values is None and n != len(PANDA_EFFORT):
+                raise ExportError(f"{option}: no default for a {n}-joint robot, give {n} comma-separated values")
+        return robot_to_urdf(model, prefix="panda_" if prefix is None else prefix, effort=effort, velocity=velocity,
+                             header=header)
+    for option, value in (("--prefix", prefix), ("--effort", effort), ("--velocity", velocity)):
+        if value is not None:
+            raise ExportError(f"{option}: only the urdf format takes it, not {output_format}")
     if output_format == "yaml":
         return dump_robot(model, header=header)
     if output_format == "mjcf":
@@ -69,7 +94,8 @@ def run(args: argparse.Namespace) -> int:
     from correction import atomic_write_text, load_robot
 
     model = load_robot(args.robot)
-    text = export_text(model, args.format, args.prefix, provenance_header(args.robot, args.format))
+    effort, velocity = _limits(args.effort, "--effort"), _limits(args.velocity, "--velocity")
+    text = export_text(model, args.format, args.prefix, provenance_header(args.robot, args.format), effort, velocity)
     path = atomic_write_text(args.out, text)
     print(f"spherecal export: wrote {args.format} of {model.name!r} ({model.convention} DH) to {path}")
     return 0

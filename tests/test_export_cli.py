@@ -73,3 +73,36 @@ def test_mjcf_export_compiles_to_the_same_tool_point(tmp_path, calibrated_file, 
         points.append(data.site_xpos[site].copy())
     assert np.abs(np.array(points) - tool_point(model, q)).max() < 1e-9
     assert "rms_mm: 0.031" in out.read_text()
+
+
+@pytest.mark.parametrize("where", ["directory", "missing_parent_is_file"])
+def test_unwritable_out_is_one_line_error(tmp_path, calibrated_file, capsys, where):
+    path, _ = calibrated_file
+    if where == "directory":
+        out = tmp_path / "adir"
+        out.mkdir()
+    else:
+        (tmp_path / "plain").write_text("x")
+        out = tmp_path / "plain" / "robot.urdf"
+    assert main(["export", str(path), "--format", "urdf", "--out", str(out)]) == 1
+    err = capsys.readouterr().err.strip()
+    assert err.startswith("spherecal export: error:") and "\n" not in err and str(out) in err
+    assert not [p for p in tmp_path.rglob(".*.tmp")]
+
+
+def test_urdf_export_of_a_six_joint_arm_takes_effort_and_velocity(tmp_path, capsys):
+    from tests.test_generic_arm import UR5
+
+    robot = save_robot(UR5, tmp_path / "ur5.yaml")
+    out = tmp_path / "ur5.urdf"
+    assert main(["export", str(robot), "--format", "urdf", "--out", str(out)]) == 1
+    err = capsys.readouterr().err.strip()
+    assert "--effort" in err and "\n" not in err and not out.exists()
+    assert main(["export", str(robot), "--format", "urdf", "--out", str(out), "--effort", "150,150,150,28,28,28",
+                 "--velocity", "3.14,3.14,3.14,3.14,3.14,3.14"]) == 0
+    limits = [j.find("limit") for j in ET.fromstring(out.read_text()).iter("joint") if j.get("type") == "revolute"]
+    assert [float(lim.get("effort")) for lim in limits] == [150, 150, 150, 28, 28, 28]
+    assert main(["export", str(robot), "--format", "yaml", "--out", str(tmp_path / "x.yaml"),
+                 "--effort", "1,1,1,1,1,1"]) == 1
+    assert main(["export", str(robot), "--format", "urdf", "--out", str(out), "--effort", "1,x"]) == 1
+    assert len(capsys.readouterr().err.strip().splitlines()) == 2
