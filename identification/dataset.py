@@ -259,7 +259,7 @@ def read_samples(path: str | os.PathLike, model: RobotModel, limit_tol: float = 
     """
     path = Path(path)
     try:
-        text = path.read_text()
+        text = path.read_text(encoding="utf-8-sig")  # a spreadsheet's byte-order mark is not data
     except (OSError, UnicodeDecodeError) as error:
         raise DatasetError(f"{path}: cannot read: {getattr(error, 'strerror', None) or error}") from None
     n = model.n_joints
@@ -422,7 +422,7 @@ def read_fixtures(path: str | os.PathLike) -> FixtureSpec:
 
     path = Path(path)
     try:
-        text = path.read_text()
+        text = path.read_text(encoding="utf-8-sig")  # a spreadsheet's byte-order mark is not data
     except (OSError, UnicodeDecodeError) as error:
         raise DatasetError(f"{path}: cannot read: {getattr(error, 'strerror', None) or error}") from None
     try:

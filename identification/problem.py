@@ -43,6 +43,8 @@ GAUGE: dict[str, tuple[str, ...]] = {"modified": ("a1", "alpha1", "d1", "theta1"
 NOISE = 3e-4
 #: Default accuracy of a known distance [m].
 DISTANCE_STD = 1e-6
+#: Largest disagreement [m] between a known distance and the distance of two known positions.
+CONSISTENCY_TOL = 1e-3
 
 
 class UnidentifiableError(SpherecalError):
@@ -317,9 +319,29 @@ def _check_inputs(dataset: Dataset, spec: FixtureSpec) -> None:
     for k, label in enumerate(dataset.labels):
         if label not in listed:
             raise DatasetError(
-                f"{dataset.source or 'samples'}: {dataset.row_of(k)}, field 'fixture': fixture {label!r} "
+                f"{dataset.source or 'samples'}: {dataset.row_of(k)}, field 'fixture': fixture {str(label)!r} "
                 f"is not listed in {spec.source or 'the fixtures'}"
             )
+
+
+def _drop_known_distances(spec: FixtureSpec, known: dict[str, np.ndarray]) -> FixtureSpec:
+    """``spec`` without distances between two known positions (they add nothing but a constant residual).
+
+    Raises:
+        DatasetError: such a distance disagrees with its positions by more than :data:`CONSISTENCY_TOL`.
+    """
+    keep = []
+    for k, (a, b, value) in enumerate(spec.distances):
+        if a not in known or b not in known:
+            keep.append((a, b, value))
+            continue
+        apart = float(np.linalg.norm(known[a] - known[b]))
+        if abs(apart - value) > CONSISTENCY_TOL:
+            raise DatasetError(
+                f"{spec.source or 'fixtures'}: {spec._row(f'distances[{k}]')}field 'distances[{k}]': "
+                f"distance {a}-{b} is {value:.6g} m but their known positions are {apart:.6g} m apart"
+            )
+    return spec if len(keep) == len(spec.distances) else replace(spec, distances=keep)
 
 
 def build_problem(
@@ -349,7 +371,7 @@ def build_problem(
 
     Raises:
         DatasetError: a fixture used but not listed, a distance or position naming a fixture
-            without samples, fewer equations than unknowns.
+            without samples, a distance contradicting two known positions, fewer equations than unknowns.
         UnidentifiableError: nothing can be identified.
     """
     spec = FixtureSpec.unknown(dataset.fixture_names) if spec is None else spec
@@ -389,6 +411,7 @@ def build_problem(
                 f"gauge: with {len(known)} known fixture position(s) a rigid motion about them is still "
                 f"indistinguishable"
             )
+    spec = _drop_known_distances(spec, known)
     centres = _mean_points(model, dataset)
     for name, position in known.items():
         centres[names_fixtures.index(name)] = position

@@ -151,3 +151,23 @@ def test_writers_are_atomic_and_leave_nothing_on_error(tmp_path, panda, rng) -> 
     with pytest.raises(DatasetError):
         write_samples(tmp_path / "s.csv", ds)
     assert list(tmp_path.iterdir()) == []
+
+
+def test_byte_order_mark_is_not_part_of_the_header(tmp_path, panda) -> None:
+    # spreadsheets save "UTF-8 CSV" with a byte-order mark; it used to make the header 'ï»¿fixture'
+    path = tmp_path / "s.csv"
+    path.write_bytes(b"\xef\xbb\xbf" + (HEADER + GOOD).encode())
+    assert read_samples(path, panda).fixture_names == ("P1",)
+    yaml_path = tmp_path / "f.yaml"
+    yaml_path.write_bytes(b"\xef\xbb\xbffixtures: {P1: {}}\n")
+    assert read_fixtures(yaml_path).names == ("P1",)
+
+
+def test_unlisted_fixture_message_names_it_plainly(tmp_path, panda, rng) -> None:
+    from identification.problem import build_problem
+
+    path = tmp_path / "s.csv"
+    path.write_text(HEADER + GOOD + "P9,0,0,0,-1,0,1,0\n")
+    with pytest.raises(DatasetError) as info:
+        build_problem(panda, read_samples(path, panda), FixtureSpec.unknown(["P1"]))
+    assert "row 3, field 'fixture': fixture 'P9' is not listed" in str(info.value)

@@ -151,6 +151,24 @@ def test_known_positions_fix_the_gauge(truth, clean) -> None:
     assert "P1" in lone.free_centres and any("one known position" in w for w in lone.warnings)
 
 
+def test_distance_between_known_positions_is_checked_then_dropped(truth, clean, tmp_path) -> None:
+    from identification.dataset import read_fixtures
+
+    panda, true = truth
+    dataset, spec = clean
+    centres = {n: tool_point(true, dataset.for_fixture(n)).mean(axis=0) for n in dataset.fixture_names}
+    apart = float(np.linalg.norm(centres["P1"] - centres["P2"]))
+    path = tmp_path / "f.yaml"
+    lines = [f"  {n}: {{position: {[float(v) for v in c]}}}" for n, c in centres.items()]
+    path.write_text("fixtures:\n" + "\n".join(lines) + f"\ndistances:\n  - [P1, P2, {apart + 0.05}]\n")
+    # a contradiction used to be fitted silently: sigma blew up, 36 of 37 parameters were pruned
+    with pytest.raises(DatasetError, match=r"f.yaml: row 6, field 'distances\[0\]': distance P1-P2 is"):
+        build_problem(panda, dataset, read_fixtures(path))
+    # a consistent one carries no information: dropped, so it cannot inflate the residual noise
+    problem = build_problem(panda, dataset, FixtureSpec(spec.names, centres, [("P1", "P2", apart + 2e-4)]))
+    assert problem.spec.distances == [] and problem.n_residuals == 3 * dataset.n_samples
+
+
 def test_too_few_samples_and_rank_deficiency(truth, clean) -> None:
     panda, _ = truth
     dataset, spec = clean
