@@ -123,6 +123,17 @@ def test_mocap_csv_errors_name_file_row_field(tmp_path, truth, rng, edit, messag
     assert "\n" not in text and str(path) in text and message in text
 
 
+def test_mocap_csv_binary_or_byte_order_mark(tmp_path, truth, rng) -> None:
+    # a binary file used to escape as a UnicodeDecodeError traceback; a BOM broke the header
+    q = truth.random_configurations(6, rng)
+    path = write_mocap_csv(tmp_path / "m.csv", MocapMeasurement(q=q, tool=tool_point(truth, q)))
+    path.write_bytes(b"\xef\xbb\xbf" + path.read_bytes())
+    np.testing.assert_array_equal(read_mocap_csv(path, truth.n_joints).q, q)
+    path.write_bytes(b"\x89PNG\r\n\x1a\n\xf0\x90\x80")
+    with pytest.raises(MocapError, match="cannot read mocap file"):
+        read_mocap_csv(path, truth.n_joints)
+
+
 def test_marker_columns_need_a_cluster(tmp_path, truth, mocap, rng) -> None:
     path = write_mocap_csv(tmp_path / "m.csv", mocap.measure(truth.random_configurations(5, rng), rng))
     with pytest.raises(MocapError, match="cluster"):

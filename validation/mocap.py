@@ -220,9 +220,9 @@ def read_mocap_csv(path: str | os.PathLike, n_joints: int, cluster: MarkerCluste
     """
     path = Path(path)
     try:
-        text = path.read_text()
-    except OSError as error:
-        raise MocapError(f"{path}: cannot read mocap file ({error.strerror})") from None
+        text = path.read_text(encoding="utf-8-sig")  # a spreadsheet's byte-order mark is not data
+    except (OSError, UnicodeDecodeError) as error:
+        raise MocapError(f"{path}: cannot read mocap file ({getattr(error, 'strerror', None) or error})") from None
     rows = [(i + 1, r) for i, r in enumerate(csv.reader(text.splitlines())) if r and not r[0].lstrip().startswith("#")]
     if not rows:
         raise MocapError(f"{path}: empty mocap file, expected a header q1..q{n_joints}, x, y, z")
