@@ -48,6 +48,13 @@ def _vector3(value: Any, where: str) -> list[float]:
     return [_number(v, f"{where}[{k}]") for k, v in enumerate(value)]
 
 
+def _no_unknown_keys(mapping: dict, known: tuple[str, ...], where: str) -> None:
+    """A misspelt key would otherwise be dropped and its value read as zero."""
+    unknown = [key for key in mapping if key not in known]
+    if unknown:
+        raise RobotFileError(f"{where}: unknown key {unknown[0]!r} (expected {', '.join(known)})")
+
+
 def robot_from_dict(data: Any, source: str = "<robot>") -> RobotModel:
     """Validate a parsed robot file and build the model.
 
@@ -79,6 +86,7 @@ def robot_from_dict(data: Any, source: str = "<robot>") -> RobotModel:
         where = f"{source}: joints[{i}]"
         if not isinstance(joint, dict):
             raise RobotFileError(f"{where}: expected a mapping, got {joint!r}")
+        _no_unknown_keys(joint, JOINT_KEYS, where)
         for key in JOINT_KEYS:
             if key not in joint:
                 raise RobotFileError(f"{where}: missing key '{key}'")
@@ -93,6 +101,7 @@ def robot_from_dict(data: Any, source: str = "<robot>") -> RobotModel:
     if base is not None:
         if not isinstance(base, dict):
             raise RobotFileError(f"{source}: base: expected a mapping with xyz and rpy, got {base!r}")
+        _no_unknown_keys(base, ("xyz", "rpy"), f"{source}: base")
         base_xyz = _vector3(base.get("xyz", [0.0] * 3), f"{source}: base.xyz")
         base_rpy = _vector3(base.get("rpy", [0.0] * 3), f"{source}: base.rpy")
     extras = {k: v for k, v in data.items() if k not in _KNOWN_KEYS}

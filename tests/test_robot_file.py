@@ -77,6 +77,9 @@ BAD_FILES = [
     ("tool length", lambda d: d.update(tool=[0, 0]), r"tool: expected a list of 3 numbers"),
     ("base", lambda d: d.update(base={"xyz": [0, 0], "rpy": [0, 0, 0]}), r"base\.xyz: expected a list of 3"),
     ("joints empty", lambda d: d.update(joints=[]), r"joints: expected a non-empty list"),
+    # a misspelt key used to be dropped silently: the base placement or a joint offset read as zero
+    ("base typo", lambda d: d.update(base={"xyz": [0, 0, 0], "RPY": [0, 0, 1.5]}), r"base: unknown key 'RPY'"),
+    ("joint typo", lambda d: d["joints"][3].update(offset=0.1), r"joints\[3\]: unknown key 'offset'"),
 ]
 
 
