@@ -10,11 +10,13 @@ not our code, closes the chain when a fixture is engaged.
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from xml.sax.saxutils import quoteattr
 
 import mujoco
 import numpy as np
 
 from correction import RobotModel
+from correction.urdf import xml_comment
 
 #: Physical defaults of the plant (settings that keep the closed chain stable at 1 kHz).
 TIMESTEP = 1e-3  # [s] the Panda's 1 kHz control rate
@@ -101,7 +103,7 @@ def build_mjcf(
     offsets = joint_offsets(model)
     base = model.base_transform
     lines = [
-        f'<mujoco model="{model.name}">',
+        f"<mujoco model={quoteattr(model.name)}>",
         '  <compiler angle="radian" autolimits="true"/>',
         f'  <option timestep="{_num(timestep)}" integrator="implicitfast" gravity="0 0 -9.81"/>',
         "  <default>",
@@ -113,7 +115,7 @@ def build_mjcf(
     ]
     for k, (name, centre) in enumerate(fixtures.items()):
         lines.append(f'    <site name="fixture{k}" pos="{_vec(centre)}" size="0.01" rgba="1 0.3 0.1 1"/>'
-                     f"<!-- {name} -->")
+                     + xml_comment(name))
     lines.append(f'    <body name="link0" pos="{_vec(base[:3, 3])}" quat="{_vec(_quat(base[:3, :3]))}">')
     lines.append('      <geom type="cylinder" size="0.06 0.02" pos="0 0 0.02"/>')
     indent = "      "

@@ -64,3 +64,18 @@ def test_engaged_fixture_holds_tool_point(panda, rng):
     mujoco.mj_forward(plant.mj_model, plant.mj_data)
     assert np.linalg.norm(plant.tool_position() - centre) < 2e-4
     plant.release()  # released: it falls away (gravity compensation is on, velocity stays)
+
+
+def test_names_with_xml_characters_compile(panda):
+    from dataclasses import replace
+
+    from controller.plant import build_mjcf
+
+    text = build_mjcf(replace(panda, name='arm "x" & <y>'), fixtures={"a--b": np.zeros(3), 'c"': np.ones(3)})
+    import xml.etree.ElementTree as ET
+
+    root = ET.fromstring(text)
+    assert root.get("model") == 'arm "x" & <y>'
+    assert [s.get("name") for s in root.iter("site") if s.get("name", "").startswith("fixture")] == [
+        "fixture0", "fixture1"]
+    mujoco.MjModel.from_xml_string(text)

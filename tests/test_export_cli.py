@@ -106,3 +106,12 @@ def test_urdf_export_of_a_six_joint_arm_takes_effort_and_velocity(tmp_path, caps
                  "--effort", "1,1,1,1,1,1"]) == 1
     assert main(["export", str(robot), "--format", "urdf", "--out", str(out), "--effort", "1,x"]) == 1
     assert len(capsys.readouterr().err.strip().splitlines()) == 2
+
+
+def test_mjcf_export_of_a_name_with_xml_characters_is_well_formed(tmp_path, panda):
+    from dataclasses import replace
+
+    robot = save_robot(replace(panda, name='panda & "gripper" <v2>'), tmp_path / "odd.yaml")
+    out = tmp_path / "odd.xml"
+    assert main(["export", str(robot), "--format", "mjcf", "--out", str(out)]) == 0
+    assert ET.fromstring(out.read_text()).get("model") == 'panda & "gripper" <v2>'
