@@ -34,7 +34,11 @@ def test_grid_has_every_point():
     assert len({tuple(p) for p in points}) == 75
 
 
-@pytest.mark.parametrize("text", ["", "1,2,3", "0,1,2;0,1,2;0,1,0", "0,1,x;0,1,2;0,1,2", "0,1;0,1,2;0,1,2"])
+@pytest.mark.parametrize(
+    "text",
+    # the last one (a typed extra zero) used to try to allocate 73 TiB and die with a MemoryError traceback
+    ["", "1,2,3", "0,1,2;0,1,2;0,1,0", "0,1,x;0,1,2;0,1,2", "0,1;0,1,2;0,1,2", "0,1,100000;0,1,100000;0,1,1000"],
+)
 def test_bad_grid_raises(text):
     with pytest.raises(CandidateError):
         grid_candidates(text)

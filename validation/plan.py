@@ -38,6 +38,8 @@ MOTIONS: tuple[str, ...] = ("kinematic", "controller")
 PLAN_SAMPLES = 120
 #: Exhaustive search over fixture subsets up to this many combinations, greedy above.
 EXHAUSTIVE_LIMIT = 300
+#: Most grid points :func:`grid_candidates` makes (each costs about 0.2 s of survey).
+MAX_GRID = 10_000
 #: A distance is recommended when it lowers the predicted mean error by more than this share.
 DISTANCE_GAIN = 0.05
 
@@ -131,7 +133,7 @@ def grid_candidates(text: str) -> list[Candidate]:
     """Candidates on a box grid ``"xmin,xmax,nx;ymin,ymax,ny;zmin,zmax,nz"`` [m], named ``C1`` ...
 
     Raises:
-        CandidateError: not three ``min,max,count`` triples, or a count < 1.
+        CandidateError: not three ``min,max,count`` triples, a count < 1, more than :data:`MAX_GRID` points.
     """
     axes = []
     parts = text.split(";")
@@ -146,6 +148,9 @@ def grid_candidates(text: str) -> list[Candidate]:
         if len(fields) != 3 or count < 1 or not (math.isfinite(lo) and math.isfinite(hi)):
             raise CandidateError(f"--grid {text!r}: field '{axis}': expected 'min,max,count' with count >= 1")
         axes.append(np.linspace(lo, hi, count) if count > 1 else np.array([(lo + hi) / 2]))
+    total = math.prod(a.size for a in axes)
+    if total > MAX_GRID:
+        raise CandidateError(f"--grid {text!r}: field 'count': {total} points, at most {MAX_GRID} (about 0.2 s each)")
     points = np.stack(np.meshgrid(*axes, indexing="ij"), axis=-1).reshape(-1, 3)
     return [Candidate(f"C{k + 1}", p) for k, p in enumerate(points)]
 
