@@ -142,11 +142,13 @@ class SelfMotionRun:
 def check_fixture(model: RobotModel, name: str, centre: np.ndarray) -> None:
     """Raise :class:`FixtureInsideRobotError` if ``centre`` lies in the base column of ``model``.
 
-    The base column is the segment from the base origin to the origin of frame 1 (which the
-    first joint does not move), thickened by :data:`BASE_RADIUS`.
+    The base column is the segment from the base origin to the first joint's fixed point
+    (modified DH: the origin of frame 1; standard DH: ``d1`` along the first axis, since
+    frame 1 turns with joint 1 and carries ``a1``), thickened by :data:`BASE_RADIUS`.
     """
-    origins = frames(model, np.zeros((1, model.n_joints))).origin[:, :, 0]  # (n+1, 3)
-    a, b = origins[0], origins[1]
+    f = frames(model, np.zeros((1, model.n_joints)))
+    a = f.origin[0, :, 0]
+    b = f.origin[1, :, 0] if model.convention == "modified" else a + model.d[0] * f.z[0, :, 0]
     axis = b - a
     s = np.clip(np.dot(centre - a, axis) / max(np.dot(axis, axis), 1e-12), 0.0, 1.0)
     distance = np.linalg.norm(centre - (a + s * axis))

@@ -48,3 +48,18 @@ def test_six_joint_arm_calibrates() -> None:
     # the parallel shoulder-elbow-wrist axes leave d2, d3 (only their sum with d4 counts) unidentified
     assert {"d1", "theta1"} <= set(result.fixed)
     assert sum(name in result.fixed for name in ("d2", "d3", "d4")) >= 2
+
+
+def test_base_column_of_a_standard_arm_with_a_shoulder_offset_is_vertical() -> None:
+    """Standard DH: frame 1 turns with joint 1, so with a1 != 0 its origin is off the base column."""
+    from dataclasses import replace
+
+    import pytest
+
+    from controller.self_motion import FixtureInsideRobotError, check_fixture
+
+    arm = replace(UR5, a=[0.3, -0.425, -0.39225, 0.0, 0.0, 0.0])  # an industrial arm's shoulder offset
+    check_fixture(arm, "P1", np.array([0.3, 0.0, 0.2]))  # 0.3 m from the column: was refused
+    for centre in ([0.0, 0.05, 0.05], [0.0, -0.05, 0.08]):
+        with pytest.raises(FixtureInsideRobotError):
+            check_fixture(arm, "P2", np.array(centre))
