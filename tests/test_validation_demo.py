@@ -72,6 +72,26 @@ def test_demo_refuses_bad_options_and_writes_nothing(tmp_path, capsys) -> None:
     assert not (tmp_path / "x").exists()
 
 
+@pytest.mark.parametrize("command", ["demo", "campaign"])
+def test_out_that_is_a_file_is_refused_before_the_run(tmp_path, capsys, command) -> None:
+    # used to fail with "cannot write: File exists" only after the whole run (minutes to hours)
+    taken = tmp_path / "taken"
+    taken.write_text("keep me\n")
+    args = [command, "--out", str(taken), "--samples", "10", "--configurations", "3", "--source", "synthetic"]
+    extra = ["--sets", "1", "--rows", "P1", "--workers", "1"] if command == "campaign" else ["--no-rrd"]
+    assert main(args + extra) == 1
+    out, err = capsys.readouterr()
+    assert f"{taken}: field '--out': exists and is not a folder" in err and len(err.strip().splitlines()) == 1
+    assert out == "" and taken.read_text() == "keep me\n"
+
+
+def test_campaign_refuses_non_positive_seconds(tmp_path) -> None:
+    # --seconds -1 with MuJoCo motion died with "negative dimensions are not allowed" deep in the controller
+    with pytest.raises(SystemExit, match="--seconds > 0"):
+        main(["campaign", "--source", "mujoco", "--seconds", "-1", "--out", str(tmp_path / "c")])
+    assert not (tmp_path / "c").exists()
+
+
 @pytest.mark.slow
 def test_default_demo_meets_its_accuracy_figures(tmp_path) -> None:
     """The default demo (seed 0, 0.3 mm fixture noise, 0.3 mm mocap): calibrated <= 0.1 mm against the

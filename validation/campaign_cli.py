@@ -44,8 +44,21 @@ def run(args: argparse.Namespace) -> int:
     unknown = [r for r in rows if r not in FIXTURE_SETS]
     if unknown or not rows:
         raise SystemExit(f"spherecal campaign: error: --rows: unknown {unknown}, choose from {list(FIXTURE_SETS)}")
-    if args.sets < 1 or args.samples < 10 or args.configurations < 3 or args.noise < 0 or args.workers < 1:
-        raise SystemExit("spherecal campaign: error: need --sets >= 1, --samples >= 10, --configurations >= 3")
+    if (
+        args.sets < 1
+        or args.samples < 10
+        or args.configurations < 3
+        or not args.noise >= 0
+        or args.workers < 1
+        or not args.seconds > 0
+    ):
+        raise SystemExit(
+            "spherecal campaign: error: need --sets >= 1, --samples >= 10, --configurations >= 3, --noise >= 0, "
+            "--workers >= 1, --seconds > 0"
+        )
+    from validation.inputs import check_out_folder
+
+    check_out_folder(args.out)
     config = CampaignConfig(
         sets=args.sets,
         samples=args.samples,

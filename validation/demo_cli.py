@@ -36,6 +36,9 @@ def run(args: argparse.Namespace) -> int:
         )
     if args.samples > round(args.seconds * 1000) and args.source == "mujoco":
         raise SystemExit(f"spherecal demo: error: --samples {args.samples} > {args.seconds} s of 1 kHz readings")
+    from validation.inputs import check_out_folder
+
+    check_out_folder(args.out)
     start = time.perf_counter()
     config = DemoConfig(
         seed=args.seed,

@@ -2,6 +2,9 @@
 
 from __future__ import annotations
 
+import os
+from pathlib import Path
+
 from correction import RobotModel, SpherecalError
 
 
@@ -25,3 +28,13 @@ def check_models(models: dict[str, RobotModel], files: dict[str, str]) -> None:
         if mismatch is not None:
             field, what = mismatch
             raise ValidationInputError(f"{files[role]}: field {field}: {what} as in the nominal {files['nominal']}")
+
+
+def check_out_folder(path: str | os.PathLike, option: str = "--out") -> None:
+    """Refuse an output folder that is an existing file, before a long run rather than after it.
+
+    Raises:
+        ValidationInputError: ``path`` exists and is not a directory.
+    """
+    if Path(path).exists() and not Path(path).is_dir():
+        raise ValidationInputError(f"{path}: field '{option}': exists and is not a folder")
