@@ -43,13 +43,23 @@ class IKResult:
 
 
 def _rotvec(rotation: np.ndarray) -> np.ndarray:
-    """(3,) rotation vector of a (3, 3) rotation [rad] (angle below pi)."""
-    cos = np.clip((np.trace(rotation) - 1.0) / 2.0, -1.0, 1.0)
+    """(3,) rotation vector of a (3, 3) rotation [rad], angle in [0, pi].
+
+    Near a half turn the skew part vanishes, so the axis is taken from the symmetric part
+    ``(R + R^T)/2 = cos I + (1 - cos) n n^T`` instead (a half turn is not a zero error).
+    """
     axis = np.array([rotation[2, 1] - rotation[1, 2], rotation[0, 2] - rotation[2, 0],
                      rotation[1, 0] - rotation[0, 1]])
-    angle = np.arccos(cos)
-    sin = np.sin(angle)
-    return axis * (0.5 if sin < 1e-9 else angle / (2.0 * sin))
+    sin, cos = 0.5 * np.linalg.norm(axis), 0.5 * (np.trace(rotation) - 1.0)
+    angle = np.arctan2(sin, cos)
+    if sin < 1e-9:
+        if cos > 0:
+            return 0.5 * axis
+        outer = (0.5 * (rotation + rotation.T) - cos * np.eye(3)) / (1.0 - cos)  # n n^T
+        k = int(np.argmax(np.diag(outer)))
+        unit = outer[k] / np.sqrt(outer[k, k])
+        return angle * (unit if unit @ axis >= 0 else -unit)
+    return axis * (angle / (2.0 * sin))
 
 
 def _error_and_jacobian(model: RobotModel, q: np.ndarray, target: np.ndarray, orientation: np.ndarray | None

@@ -41,3 +41,16 @@ def test_ik_reports_unreachable(panda, rng):
     assert not result.converged and result.position_error > 0.3
     assert panda.within_limits(result.q)[0]
     assert np.linalg.norm(tool_point(panda, result.q) - [1.5, 0.0, 0.3]) == np.float64(result.position_error)
+
+
+def test_ik_half_turn_of_the_tool_is_not_reported_as_reached(panda):
+    """A target orientation exactly 180 deg away had a zero rotation error: 'converged' at the start."""
+    q0 = np.array([0.1, -0.5, 0.2, -2.0, 0.1, 1.6, 0.3])
+    start = tool_pose(panda, q0)
+    flip = np.diag([-1.0, -1.0, 1.0])  # half turn about the tool's z (joint 7's axis)
+    for target in (start[:3, :3] @ flip, start[:3, :3] @ np.diag([1.0, -1.0, -1.0])):
+        result = ik(panda, start[:3, 3], q0, orientation=target)
+        reached = tool_pose(panda, result.q)[:3, :3]
+        angle = np.arccos(np.clip((np.trace(target @ reached.T) - 1) / 2, -1, 1))
+        assert result.converged == (angle < 1e-6), (result, angle)
+    assert ik(panda, start[:3, 3], q0, orientation=start[:3, :3] @ flip).converged  # reachable: joint 7 turns
