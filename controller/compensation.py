@@ -148,8 +148,9 @@ def _target(target: np.ndarray, orientation: np.ndarray | None) -> tuple[np.ndar
     if orientation is None:
         return target, None
     orientation = np.asarray(orientation, dtype=float)
-    if orientation.shape != (3, 3) or not np.allclose(orientation @ orientation.T, np.eye(3), atol=1e-9):
-        raise SpherecalError("orientation: expected a (3, 3) rotation matrix")
+    if (orientation.shape != (3, 3) or not np.allclose(orientation @ orientation.T, np.eye(3), atol=1e-9)
+            or np.linalg.det(orientation) < 0):
+        raise SpherecalError("orientation: expected a (3, 3) rotation matrix (orthonormal, det +1)")
     return target, orientation
 
 
@@ -256,7 +257,7 @@ def corrected_ik(
     target, orientation = _target(target, orientation)
     q0 = np.asarray(q0, dtype=float)
     if q0.shape != (calibrated.n_joints,):
-        raise ModelMismatchError(f"q0: expected {calibrated.n_joints} joint angles, got {q0.shape[0]}")
+        raise ModelMismatchError(f"q0: expected {calibrated.n_joints} joint angles, got shape {q0.shape}")
     if nominal is not None:
         check_models(nominal, calibrated)
         _check_difference(nominal, calibrated, q0, "calibrated model")
@@ -314,7 +315,9 @@ def compensate(
     check_models(nominal, calibrated)
     q_seed = np.asarray(q_seed, dtype=float)
     if q_seed.shape != (nominal.n_joints,):
-        raise ModelMismatchError(f"q_seed: expected {nominal.n_joints} joint angles, got {q_seed.shape[0]}")
+        raise ModelMismatchError(f"q_seed: expected {nominal.n_joints} joint angles, got shape {q_seed.shape}")
+    if max_iter < 0:
+        raise SpherecalError(f"max_iter: expected >= 0 controller evaluations, got {max_iter}")
     _check_difference(nominal, calibrated, q_seed, "calibrated model")
     controller = controller or nominal_ik_controller
     command, command_rot = target.copy(), None if orientation is None else orientation.copy()

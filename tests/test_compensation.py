@@ -187,3 +187,18 @@ def test_differential_ik_flow_is_a_controller_model(robots):
     assert np.linalg.norm(tool_point(calibrated, flow(nominal, result.command, q_seed)) - target) < 1e-9
     with pytest.raises(SpherecalError, match="orientation"):
         flow(nominal, target, q_seed, np.eye(3))
+
+
+@pytest.mark.parametrize(
+    "call, message",
+    [
+        (lambda n, c, q: corrected_ik(c, [0.5, 0.0, 0.4], 0.0, nominal=n), r"q0: .* got shape \(\)"),
+        (lambda n, c, q: compensate([0.5, 0.0, 0.4], n, c, q[None]), r"q_seed: .* got shape \(1, 7\)"),
+        (lambda n, c, q: corrected_ik(c, [0.5, 0.0, 0.4], q, orientation=-np.eye(3)), "orientation: .*rotation"),
+        (lambda n, c, q: compensate([0.5, 0.0, 0.4], n, c, q, max_iter=-1), "max_iter"),
+    ],
+)
+def test_bad_arguments_are_one_line_errors(robots, call, message):
+    nominal, calibrated = robots[:2]
+    with pytest.raises(SpherecalError, match=message):
+        call(nominal, calibrated, np.array([0.1, -0.5, 0.2, -2.0, 0.1, 1.6, 0.3]))
