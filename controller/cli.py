@@ -94,6 +94,9 @@ def run(args: argparse.Namespace) -> int:
     if args.solver not in qpsolvers.available_solvers:
         raise _fail(f"--solver {args.solver!r} is not installed; have {', '.join(qpsolvers.available_solvers)}")
     nominal = load_robot(args.robot)
+    if nominal.n_joints < 4:  # the tool point pinned leaves n - 3 degrees of freedom
+        raise _fail(f"--robot {args.robot}: {nominal.n_joints} joints have no self-motion at a spherical joint "
+                    "(needs at least 4)")
     fixtures = _fixtures(args.fixtures)
     rng = np.random.default_rng(args.seed)
     true = perturb(nominal, rng, args.length_std, np.deg2rad(args.angle_std_deg), args.tool_std)

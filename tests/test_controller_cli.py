@@ -85,3 +85,19 @@ def test_out_below_a_file_fails_before_simulating(tmp_path, capsys):
     err = capsys.readouterr().err.strip()
     assert code == 1 and err.startswith("spherecal simulate: error: --out") and "\n" not in err
     assert "P1" not in err and sorted(p.name for p in tmp_path.iterdir()) == ["plain"]
+
+
+def test_arm_without_self_motion_is_refused(tmp_path, capsys, panda):
+    """A point fixture leaves n - 3 degrees of freedom: a 3-joint arm cannot move at all."""
+    from dataclasses import replace
+
+    from correction import save_robot, tool_point
+
+    arm = replace(panda, **{k: getattr(panda, k)[:3] for k in ("a", "alpha", "d", "theta", "lower", "upper")},
+                  tool=[0.3, 0.0, 0.0])
+    robot = save_robot(arm, tmp_path / "r3.yaml")
+    centre = tool_point(arm, np.array([0.2, 0.5, 0.1])).tolist()
+    fixtures = _write(tmp_path, f"fixtures:\n  A: {{position: {centre}}}\n")
+    code, out = _simulate(tmp_path, "--robot", str(robot), "--fixtures", str(fixtures))
+    err = capsys.readouterr().err.strip()
+    assert code == 1 and "3 joints" in err and "\n" not in err and not out.exists()
