@@ -31,7 +31,7 @@ from correction import RobotModel, param_jacobian, tool_point
 
 from .dataset import Dataset, FixtureSpec
 from .identifiability import Identifiability, column_norms
-from .problem import GAUGE, NOISE, CalibrationProblem, build_problem, format_value, prior_std, prune
+from .problem import NOISE, CalibrationProblem, anchor_spread, build_problem, format_value, prior_std, prune
 
 #: Floor of the noise used to decide what the data excites [m] (calibrate's SIGMA_FLOOR).
 SIGMA_FLOOR = 1e-6
@@ -150,14 +150,7 @@ def generic_point(problem: CalibrationProblem) -> tuple[CalibrationProblem, np.n
 def _anchor_spread(problem: CalibrationProblem) -> float:
     """Prior spread [m] of the scale anchor's radius (taken from the nominal model, not measured)."""
     name, point, _ = problem.anchor
-    q = problem.dataset.for_fixture(name)
-    jac, points = param_jacobian(problem.model, q, return_point=True)
-    radial = points.mean(axis=0) - point
-    grad = (radial / np.linalg.norm(radial)) @ jac.mean(axis=0)  # (P,)
-    names = problem.model.param_names
-    skip = set(GAUGE[problem.model.convention]) | {n for n in names if n.startswith("base_")}
-    prior = np.array([0.0 if n in skip else s for n, s in zip(names, prior_std(problem.model), strict=True)])
-    return max(float(np.linalg.norm(grad * prior)), 1e-9)
+    return anchor_spread(problem.model, problem.dataset.for_fixture(name), point)
 
 
 def normal_inverse(jac: np.ndarray) -> np.ndarray:

@@ -264,6 +264,26 @@ def scale_centre(model: RobotModel) -> np.ndarray:
     return base[:3, 3] + model.d[0] * base[:3, 2]
 
 
+def anchor_spread(model: RobotModel, q: np.ndarray, point: np.ndarray) -> float:
+    """Prior spread [m] of the distance between the mean tool point of ``q`` and ``point`` on ``model``.
+
+    What a scale taken from the nominal model is off by: the radius's gradient with respect to the
+    parameters times their prior spread (:func:`prior_std`; gauge and base parameters left out).
+
+    Args:
+        model: the robot.
+        q: (K, n) configurations at one fixture [rad].
+        point: (3,) the scale centre [m] (:func:`scale_centre`).
+    """
+    jac, points = param_jacobian(model, q, return_point=True)
+    radial = points.mean(axis=0) - point
+    grad = (radial / np.linalg.norm(radial)) @ jac.mean(axis=0)  # (P,)
+    names = model.param_names
+    skip = set(GAUGE[model.convention]) | {n for n in names if n.startswith("base_")}
+    prior = np.array([0.0 if n in skip else s for n, s in zip(names, prior_std(model), strict=True)])
+    return max(float(np.linalg.norm(grad * prior)), 1e-9)
+
+
 def _gauge_left(model: RobotModel, dataset: Dataset, known: list[np.ndarray]) -> list[str]:
     """Joint-1 parameters to fix so that no rigid motion keeping the ``known`` centres stays free.
 
@@ -421,24 +441,24 @@ def build_problem(
         counts = dataset.counts()
         pin_name = max(names_fixtures, key=lambda n: counts[n])  # first of the largest
         j = names_fixtures.index(pin_name)
-        nominal_points = tool_point(nominal, dataset.for_fixture(pin_name))
-        mean = nominal_points.mean(axis=0)
-        scatter = float(np.sqrt(np.mean(np.sum((nominal_points - mean) ** 2, axis=1))))
+        mean = tool_point(nominal, dataset.for_fixture(pin_name)).mean(axis=0)
+        point = scale_centre(nominal)
+        radius = float(np.linalg.norm(mean - point))
+        spread = anchor_spread(nominal, dataset.for_fixture(pin_name), point)
         pinned = (pin_name,)
         if pin == "centre":
             centres[j] = mean
             how = f"fixture {pin_name}'s centre is pinned at the mean of the nominal model's tool points"
         else:
-            point = scale_centre(nominal)
-            anchor = (pin_name, point, float(np.linalg.norm(mean - point)))
+            anchor = (pin_name, point, radius)
             how = (
                 f"fixture {pin_name}'s distance from the joint-1 axis point is held at the nominal model's "
-                f"{anchor[2]:.4f} m"
+                f"{radius:.4f} m"
             )
         warnings.append(
-            f"scale: no known distance or fixture position, so {how} and absolute scale comes from the nominal "
-            f"model; expect scale errors of the order of the nominal model's (its tool points scatter "
-            f"{scatter * 1e3:.3g} mm RMS there), i.e. about 0.1-0.3 % of the distance from the base"
+            f"scale: no known distance and at most one known fixture position, so {how} and absolute scale comes "
+            f"from the nominal model; a real arm's errors (1 mm, 0.2 deg) make that distance wrong by about "
+            f"{spread * 1e3:.2g} mm, a {spread / radius * 100:.2g} % scale error the reported std do not include"
         )
     free_centres = tuple(n for n in names_fixtures if n not in known and (n not in pinned or anchor is not None))
     candidates = np.array([i for i, n in enumerate(names) if n not in fixed], dtype=int)
