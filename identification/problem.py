@@ -411,6 +411,12 @@ def build_problem(
         )
     fixed: dict[str, str] = {}
     warnings: list[str] = []
+    unused = [name for name in spec.names if name not in names_fixtures]
+    if unused:
+        warnings.append(
+            f"{spec.source or 'fixtures'} lists {', '.join(unused)} but {dataset.source or 'the samples'} has no "
+            f"samples there; ignored"
+        )
     for name in names:
         if name.startswith("base_"):
             fixed[name] = "base placement: not observable from spherical-joint data"

@@ -191,6 +191,14 @@ def test_scale_warning_states_the_scale_error_it_leaves() -> None:
     assert 0.5 < np.mean(stated) / actual < 2.0, (np.mean(stated), actual)
 
 
+def test_listed_fixture_without_samples_is_reported(truth, clean) -> None:
+    # a recording left out (or a fixture renamed) used to pass without a word
+    panda, _ = truth
+    dataset, spec = clean
+    problem = build_problem(panda, dataset, FixtureSpec(spec.names + ("P4",), distances=spec.distances))
+    assert any("lists P4 but" in w and "ignored" in w for w in problem.warnings), problem.warnings
+
+
 def test_too_few_samples_and_rank_deficiency(truth, clean) -> None:
     panda, _ = truth
     dataset, spec = clean
