@@ -38,7 +38,8 @@ def joint_coverage(q: np.ndarray, lower: np.ndarray, upper: np.ndarray) -> np.nd
     Returns:
         (n,) shares in [0, 1].
     """
-    return (q.max(axis=0) - q.min(axis=0)) / (upper - lower)
+    span = upper - lower
+    return np.divide(q.max(axis=0) - q.min(axis=0), span, out=np.zeros(span.shape), where=span > 0)
 
 
 @dataclass
@@ -114,7 +115,8 @@ class CoverageExploration:
     def __init__(self, model, target: np.ndarray, rng: np.random.Generator, speed: float = SPEED,
                  period: float = COVERAGE_PERIOD, step: float = GOAL_STEP):
         self.model, self.target, self.rng = model, np.asarray(target, float), rng
-        self.lower, self.upper = model.lower + GOAL_MARGIN, model.upper - GOAL_MARGIN
+        margin = np.minimum(GOAL_MARGIN, 0.5 * (model.upper - model.lower))  # a locked joint: its value
+        self.lower, self.upper = model.lower + margin, model.upper - margin
         self.n = self.lower.size
         self.speed, self.period, self.step = speed, period, step
         self.goal: np.ndarray | None = None
@@ -146,7 +148,7 @@ class CoverageExploration:
         if self.goal is not None and np.linalg.norm(self.goal - q) > 0.1:
             self._tabu[self._joint] = 2  # not reached in time: try others first
         lo, hi = q_history.min(axis=0), q_history.max(axis=0)
-        coverage = (hi - lo) / (self.upper - self.lower)
+        coverage = joint_coverage(q_history, self.lower, self.upper)
         self.goal = None
         for j in np.argsort(coverage + 10.0 * (self._tabu > 0)):
             below, above = lo[j] - self.lower[j], self.upper[j] - hi[j]

@@ -79,6 +79,7 @@ def velocity_bounds(
         ``(lb, ub)`` each (n,) [rad/s], with ``lb <= 0 <= ub`` whenever ``q`` is inside the
         margins.
     """
+    margin = np.minimum(margin, 0.5 * (upper - lower))  # a locked joint (lower == upper) is held, not infeasible
     lb = np.maximum(-max_velocity, gain * (lower + margin - q))
     ub = np.minimum(max_velocity, gain * (upper - margin - q))
     return lb, ub

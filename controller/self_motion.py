@@ -166,6 +166,7 @@ def reach_fixture(model: RobotModel, name: str, centre: np.ndarray, rng: np.rand
         FixtureInsideRobotError, UnreachableFixtureError.
     """
     check_fixture(model, name, centre)
+    margin = np.minimum(margin, 0.5 * (model.upper - model.lower))  # a joint narrower than 2 margins: its middle
     inner = replace(model, lower=model.lower + margin, upper=model.upper - margin)
     result = ik(inner, centre, home(inner), restarts=REACH_RESTARTS, rng=rng)
     if not result.converged:

@@ -63,3 +63,19 @@ def test_base_column_of_a_standard_arm_with_a_shoulder_offset_is_vertical() -> N
     for centre in ([0.0, 0.05, 0.05], [0.0, -0.05, 0.08]):
         with pytest.raises(FixtureInsideRobotError):
             check_fixture(arm, "P2", np.array(centre))
+
+
+def test_locked_joint_is_held_and_the_others_explore(panda) -> None:
+    """lower == upper (a joint locked for the campaign) crashed the reach IK and made the QP infeasible."""
+    from dataclasses import replace
+
+    from controller.self_motion import SelfMotionSettings, collect_self_motion
+
+    lower, upper = panda.lower.copy(), panda.upper.copy()
+    lower[6] = upper[6] = 0.0
+    arm = replace(panda, lower=lower, upper=upper)
+    run = collect_self_motion(arm, arm, {"P1": np.array([0.5, 0.0, 0.4])}, np.random.default_rng(0),
+                              SelfMotionSettings(seconds=1.5, samples=50))
+    assert np.abs(run.trajectory_q[:, 6]).max() < 1e-3
+    assert run.coverage[0, 6] == 0.0 and run.coverage[0, :6].max() > 0.05
+    assert run.max_violation.max() < 5e-4
