@@ -299,8 +299,8 @@ def compensate(
         and residuals.
 
     A controller whose posture choice jumps between nearby commands (a Gauss-Newton IK whose
-    path branches, seen on about 1 target in 50 with :func:`controller.ik.ik` from a seed 0.3 rad
-    away) may have no command at all that lands on the target: the landings of the two
+    path branches, seen on 1 target in 200 of the README's landing run with :func:`controller.ik.ik`
+    from a seed 0.3 rad away) may have no command at all that lands on the target: the landings of the two
     branches straddle it. The iteration then alternates between the branches; it is stopped,
     and the error (or the ``note``) names the jump.
 
