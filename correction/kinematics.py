@@ -1,7 +1,8 @@
 """Batched forward kinematics and analytic Jacobians of a :class:`RobotModel`.
 
 All functions take joint angles ``q`` of shape (N, n) (or (n,) for one configuration, in
-which case the batch axis is dropped from the result). Internally a frame is kept as its
+which case the batch axis is dropped from the result, except by :func:`frames`, which keeps
+it as N = 1). Internally a frame is kept as its
 three axes and origin, each of shape (3, N), so that every step is a handful of contiguous
 vector operations over the batch: no Python loop over samples.
 """
@@ -51,7 +52,7 @@ def frames(model: RobotModel, q: np.ndarray) -> Frames:
 
     Args:
         model: the robot.
-        q: (N, n) joint angles [rad].
+        q: (N, n) joint angles [rad]; (n,) gives N = 1 (the batch axis is kept).
 
     Returns:
         :class:`Frames` with arrays of shape (n+1, 3, N): frame 0 is the base, frame ``i``
