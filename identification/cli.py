@@ -56,7 +56,7 @@ def run(args: argparse.Namespace) -> int:
     clock = time.perf_counter()
     if args.max_samples is not None and args.max_samples < 1:
         raise SystemExit("spherecal calibrate: error: --max-samples must be >= 1")
-    if not args.noise > 0 or args.dedup_tol < 0 or not args.max_change > 0:
+    if not args.noise > 0 or not args.dedup_tol >= 0 or not args.max_change > 0:
         raise SystemExit("spherecal calibrate: error: --noise and --max-change must be > 0, --dedup-tol >= 0")
     nominal = load_robot(args.robot)
     dataset = read_samples(args.samples, nominal)

@@ -138,7 +138,7 @@ class Dataset:
         Args:
             tol: tolerance [rad], >= 0.
         """
-        if tol < 0:
+        if not tol >= 0:
             raise ValueError(f"tol must be >= 0, got {tol}")
         keep = np.ones(self.n_samples, dtype=bool)
         for name in self.fixture_names:
@@ -178,7 +178,7 @@ def _first_of_clusters(q: np.ndarray, tol: float) -> np.ndarray:
     if q.shape[0] < 2:
         keep[:] = True
         return keep
-    cells = np.floor(q / tol).astype(np.int64) if tol > 0 else q
+    cells = np.floor(q / tol) if tol > 0 else q  # floats: a tiny tol overflows int64 and merges distinct cells
     _, first = np.unique(cells, axis=0, return_index=True)
     first = np.sort(first)
     keep[first] = True

@@ -59,6 +59,14 @@ def test_deduplicate_exact_and_near(panda, rng) -> None:
     assert two.deduplicated().n_samples == 2
 
 
+def test_tiny_or_nan_dedup_tolerance(panda, rng) -> None:
+    # q / 1e-20 overflowed int64: 245 of 300 distinct samples were dropped as "duplicates"
+    ds = _dataset(panda, rng, count=300)
+    assert ds.deduplicated(1e-20).n_samples == 300
+    with pytest.raises(ValueError, match="tol must be >= 0"):
+        ds.deduplicated(float("nan"))
+
+
 def test_subsample_is_seeded_and_per_fixture(panda, rng) -> None:
     ds = _dataset(panda, rng, count=40)
     a = ds.subsampled(7, np.random.default_rng(3))
