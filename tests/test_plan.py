@@ -175,3 +175,13 @@ def test_plan_beats_defaults_and_ranks_a_p3_like_set_last(panda):
     assert rows["best"].measured.mean() < rows["default"].measured.mean()
     assert rows["p3-like"].predicted_mean > max(rows["best"].predicted_mean, rows["default"].predicted_mean)
     assert rows["p3-like"].measured.mean() > max(rows["best"].measured.mean(), rows["default"].measured.mean())
+
+
+def test_plan_output_under_a_file_is_refused_before_planning(tmp_path, capsys):
+    from validation.cli import main
+
+    blocker = tmp_path / "blocker"
+    blocker.write_text("x\n")
+    assert main(["plan", "--grid", "0.3,0.6,2;0,0,1;0.2,0.2,1", "--rrd", str(blocker / "p.rrd")]) == 1
+    out, err = capsys.readouterr()
+    assert f"field '--rrd': {blocker} is not a folder" in err and out == ""

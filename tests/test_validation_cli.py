@@ -95,3 +95,18 @@ def test_bad_inputs_exit_nonzero_with_one_line_and_write_nothing(files, tmp_path
     assert captured.err.count("\n") == 1 and message in captured.err, captured.err
     assert captured.err.startswith("spherecal validate: error: ")
     assert sorted(p.name for p in tmp_path.rglob("*")) == before
+
+
+@pytest.mark.parametrize("option", ["--out", "--rrd"])
+def test_output_under_a_file_is_refused_before_anything_is_written(files, tmp_path, capsys, option) -> None:
+    # --rrd under a file used to die with a FileExistsError traceback after --out's JSON was written
+    blocker = tmp_path / "blocker"
+    blocker.write_text("x\n")
+    outputs = {"--out": str(tmp_path / "report.json"), "--rrd": str(tmp_path / "v.rrd")}
+    outputs[option] = str(blocker / "x")
+    args = _args(files, "--truth", str(files["truth"]))
+    args += ["--configurations", "20"] + [v for k, path in outputs.items() for v in (k, path)]
+    assert main(args) == 1
+    err = capsys.readouterr().err
+    assert f"field '{option}': {blocker} is not a folder" in err and len(err.strip().splitlines()) == 1
+    assert sorted(p.name for p in tmp_path.iterdir() if p.suffix in (".json", ".rrd")) == []

@@ -50,6 +50,11 @@ def run(args: argparse.Namespace) -> int:
         raise _fail(f"--noise must be >= 0, got {args.noise}")
     if args.samples < 10:
         raise _fail(f"--samples must be >= 10, got {args.samples}")
+    from validation.inputs import check_out_file
+
+    for option, path in (("--rrd", args.rrd), ("--analysis", args.analysis)):
+        if path is not None:
+            check_out_file(path, option)
     if args.analysis is not None:
         from validation.analysis import AnalysisConfig, write_analysis
 

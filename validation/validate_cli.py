@@ -39,6 +39,11 @@ def run(args: argparse.Namespace) -> int:
         raise SystemExit("spherecal validate: error: give --truth (simulation) or --mocap (recorded data)")
     if args.configurations < 3 or args.noise < 0:
         raise SystemExit("spherecal validate: error: --configurations must be >= 3 and --noise >= 0")
+    from validation.inputs import check_out_file
+
+    for option, path in (("--out", args.out), ("--rrd", args.rrd)):
+        if path is not None:
+            check_out_file(path, option)
     files = {"nominal": args.nominal, "calibrated": args.calibrated}
     if args.truth is not None:
         files["truth"] = args.truth
