@@ -62,8 +62,10 @@ def _check_args(args: argparse.Namespace) -> None:
     import math
     from pathlib import Path
 
-    if not (args.seconds > 0 and math.isfinite(args.seconds)):
-        raise _fail(f"--seconds must be finite and > 0, got {args.seconds}")
+    if args.seed < 0:
+        raise _fail(f"--seed must be >= 0 (numpy seeds are non-negative), got {args.seed}")
+    if not (args.seconds >= 0.001 and math.isfinite(args.seconds)):
+        raise _fail(f"--seconds must be finite and >= 0.001 (one 1 kHz step), got {args.seconds}")
     if not 1 <= args.samples <= int(round(args.seconds * 1000)):
         raise _fail(f"--samples must be in 1..{int(round(args.seconds * 1000))} (1 kHz x seconds), got {args.samples}")
     for name in ("noise", "length_std", "angle_std_deg", "tool_std"):

@@ -72,6 +72,7 @@ def test_bad_fixtures_exit_nonzero_and_write_nothing(tmp_path, capsys, text, mes
 
 @pytest.mark.parametrize("args", [["--seconds", "0"], ["--samples", "100000"], ["--noise", "-1"],
                                   ["--seconds", "inf"], ["--noise", "inf"], ["--length-std", "nan"],
+                                  ["--seed", "-1"], ["--seconds", "0.0004"],
                                   ["--solver", "nope"], ["--robot", "missing.yaml"]])
 def test_bad_options_exit_nonzero_and_write_nothing(tmp_path, capsys, args):
     code, out = _simulate(tmp_path, *args)
