@@ -89,6 +89,9 @@ def test_campaign_refuses_non_positive_seconds(tmp_path) -> None:
     # --seconds -1 with MuJoCo motion died with "negative dimensions are not allowed" deep in the controller
     with pytest.raises(SystemExit, match="--seconds > 0"):
         main(["campaign", "--source", "mujoco", "--seconds", "-1", "--out", str(tmp_path / "c")])
+    # more samples than 1 kHz readings ran on silently (as the demo refuses)
+    with pytest.raises(SystemExit, match="--samples 100 > 0.01 s of 1 kHz readings"):
+        main(["campaign", "--source", "mujoco", "--seconds", "0.01", "--samples", "100", "--out", str(tmp_path / "c")])
     assert not (tmp_path / "c").exists()
 
 

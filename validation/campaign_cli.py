@@ -56,6 +56,8 @@ def run(args: argparse.Namespace) -> int:
             "spherecal campaign: error: need --sets >= 1, --samples >= 10, --configurations >= 3, --noise >= 0, "
             "--workers >= 1, --seconds > 0"
         )
+    if args.source == "mujoco" and args.samples > round(args.seconds * 1000):
+        raise SystemExit(f"spherecal campaign: error: --samples {args.samples} > {args.seconds} s of 1 kHz readings")
     from validation.inputs import check_out_folder
 
     check_out_folder(args.out)
