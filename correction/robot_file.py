@@ -133,9 +133,11 @@ def load_robot(path_or_name: str | os.PathLike) -> RobotModel:
         return robot_from_dict(yaml.safe_load(text), source=key)
     path = Path(path_or_name)
     try:
-        text = path.read_text()
+        text = path.read_text(encoding="utf-8")
     except OSError as error:
         raise RobotFileError(f"{path}: cannot read: {error.strerror or error}") from None
+    except UnicodeDecodeError as error:
+        raise RobotFileError(f"{path}: cannot read: not UTF-8 text (byte {error.start})") from None
     try:
         data = yaml.safe_load(text)
     except yaml.YAMLError as error:

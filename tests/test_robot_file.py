@@ -103,6 +103,9 @@ def test_unreadable_and_invalid_yaml(tmp_path) -> None:
     path.write_text("- just a list\n")
     with pytest.raises(RobotFileError, match="mapping at the top level"):
         load_robot(path)
+    path.write_bytes(b"name: caf\xe9\n")  # Latin-1, not UTF-8: was a UnicodeDecodeError traceback
+    with pytest.raises(RobotFileError, match="broken.yaml: cannot read: not UTF-8 text"):
+        load_robot(path)
 
 
 def test_atomic_files_follow_the_umask(panda, tmp_path) -> None:
