@@ -33,3 +33,20 @@ def test_ci_runs_exactly_the_readme_test_command() -> None:
     ci = (ROOT / ".ci" / "run").read_text()
     command = ci.strip().splitlines()[-1]
     assert command in readme
+
+
+def test_an_os_error_is_one_line_and_exit_1(capsys, monkeypatch) -> None:
+    import validation.cli as cli
+
+    def failing(args):
+        raise PermissionError(13, "Permission denied", "/root/locked/out.yaml")
+
+    parser = cli.build_parser()
+    monkeypatch.setattr(cli, "build_parser", lambda: parser)
+    parser.set_defaults(_run=failing)
+    for action in parser._subparsers._group_actions:
+        for sub in action.choices.values():
+            sub.set_defaults(_run=failing)
+    assert cli.main(["export", "panda", "--format", "yaml", "--out", "/root/locked/out.yaml"]) == 1
+    err = capsys.readouterr().err
+    assert err == "spherecal export: error: /root/locked/out.yaml: Permission denied\n"

@@ -57,6 +57,10 @@ def main(argv: list[str] | None = None) -> int:
     except SpherecalError as error:
         print(f"spherecal {args.command}: error: {error}", file=sys.stderr)
         return 1
+    except OSError as error:  # a file that cannot be read or written: one line, not a traceback
+        where = f"{error.filename}: " if error.filename else ""
+        print(f"spherecal {args.command}: error: {where}{error.strerror or error}", file=sys.stderr)
+        return 1
     except KeyboardInterrupt:
         print(f"spherecal {args.command}: interrupted", file=sys.stderr)
         return 130
