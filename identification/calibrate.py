@@ -30,6 +30,9 @@ SIGMA_FLOOR = 1e-6
 #: Largest plausible tool-point change of a calibration, in multiples of what a real arm's
 #: errors (1 mm, 0.2 deg) typically move it (about 6 mm on the Panda, so about 24 mm).
 MAX_CHANGE = 4.0
+#: Residual noise above this multiple of the expected ``noise`` gets a warning (a wrong distance or
+#: position, a moved fixture, or ``noise`` set too small).
+NOISE_RATIO = 3.0
 #: Random configurations the plausibility of a calibration is judged on.
 PLAUSIBILITY_CONFIGURATIONS = 2000
 
@@ -211,6 +214,8 @@ def calibrate(
     after = np.linalg.norm(problem.sample_errors(x), axis=1)
     timings["covariance"] = time.perf_counter() - clock
     warnings = list(problem.warnings)
+    if sigma > NOISE_RATIO * noise:
+        warnings.append(_noise_warning(problem, x, sigma, noise))
     if ident.condition_number > 1e8:
         warnings.append(f"ill-conditioned: condition number {ident.condition_number:.3g} at the solution")
     return CalibrationResult(
@@ -268,6 +273,21 @@ def check_plausible(problem: CalibrationProblem, params: np.ndarray, max_change:
         f"{format_value(name, params[free[worst]] - model.params[free[worst]])}: the samples do not determine "
         f"the parameters; record more self-motion (wider joint ranges, more fixtures or known distances)"
     )
+
+
+def _noise_warning(problem: CalibrationProblem, x: np.ndarray, sigma: float, noise: float) -> str:
+    """The residuals are far above the expected noise: say so, naming the most strained known distance."""
+    text = (
+        f"residual noise {sigma * 1e3:.3g} mm per axis is {sigma / noise:.3g}x the expected {noise * 1e3:.3g} mm "
+        f"(--noise): check the known distances and positions, whether a fixture moved during recording, or --noise"
+    )
+    distances = problem.spec.distances
+    if distances:
+        strain = np.abs(problem.residuals(x)[3 * problem.dataset.n_samples :][: len(distances)])
+        k = int(np.argmax(strain))
+        a, b, value = distances[k]
+        text += f"; the most strained distance is {a}-{b} ({value:.6g} m in {problem.spec.source or 'the fixtures'})"
+    return text
 
 
 def _sigma(problem: CalibrationProblem, x: np.ndarray) -> float:

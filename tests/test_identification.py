@@ -199,6 +199,18 @@ def test_listed_fixture_without_samples_is_reported(truth, clean) -> None:
     assert any("lists P4 but" in w and "ignored" in w for w in problem.warnings), problem.warnings
 
 
+def test_wrong_distance_is_flagged_not_written_silently(truth, clean) -> None:
+    # a 10 mm typo in one distance used to give a 3 mm-off model with no word (residual 2 mm vs 0.3 expected)
+    panda, _ = truth
+    dataset, spec = clean
+    small = dataset.select(np.arange(0, dataset.n_samples, 5))
+    assert not any("residual noise" in w for w in calibrate(panda, small, spec).warnings)
+    (a, b, value), *rest = spec.distances
+    typo = FixtureSpec(spec.names, distances=[(a, b, value + 0.01), *rest])
+    warning = next((w for w in calibrate(panda, small, typo).warnings if "residual noise" in w), "")
+    assert f"the most strained distance is {a}-{b}" in warning, warning
+
+
 def test_too_few_samples_and_rank_deficiency(truth, clean) -> None:
     panda, _ = truth
     dataset, spec = clean
