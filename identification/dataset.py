@@ -410,6 +410,11 @@ def _duplicate_keys(node: Any, where: str) -> None:
             _duplicate_keys(value, where)
 
 
+def _plain_name(name: Any) -> Any:
+    """A fixture numbered in YAML (``1: {}``) is named ``"1"``, as in samples.csv; other keys unchanged."""
+    return str(name) if isinstance(name, int) and not isinstance(name, bool) else name
+
+
 def read_fixtures(path: str | os.PathLike) -> FixtureSpec:
     """Read and check ``fixtures.yaml``.
 
@@ -445,6 +450,7 @@ def read_fixtures(path: str | os.PathLike) -> FixtureSpec:
     fixtures = data.get("fixtures")
     if not isinstance(fixtures, dict) or not fixtures:
         raise fail("expected a non-empty mapping of fixture names", "fixtures")
+    fixtures = {_plain_name(name): entry for name, entry in fixtures.items()}
     names: list[str] = []
     positions: dict[str, np.ndarray] = {}
     for name, entry in fixtures.items():
@@ -472,7 +478,7 @@ def read_fixtures(path: str | os.PathLike) -> FixtureSpec:
     for k, item in enumerate(raw):
         if not isinstance(item, list) or len(item) != 3:
             raise fail(f"expected [name, name, metres], got {item!r}", "distances", k)
-        a, b, value = item
+        a, b, value = _plain_name(item[0]), _plain_name(item[1]), item[2]
         for j, name in enumerate((a, b)):
             if name not in fixtures:
                 raise fail(f"fixture {name!r} is not listed under 'fixtures'", "distances", k, j)

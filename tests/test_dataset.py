@@ -179,3 +179,14 @@ def test_unlisted_fixture_message_names_it_plainly(tmp_path, panda, rng) -> None
     with pytest.raises(DatasetError) as info:
         build_problem(panda, read_samples(path, panda), FixtureSpec.unknown(["P1"]))
     assert "row 3, field 'fixture': fixture 'P9' is not listed" in str(info.value)
+
+
+def test_numbered_fixtures_match_numbered_samples(tmp_path, panda) -> None:
+    # "1: {}" used to be refused ("fixture name must be a non-empty string") while samples.csv accepts 1
+    path = tmp_path / "f.yaml"
+    path.write_text("fixtures:\n  1: {}\n  2: {position: [0.5, 0, 0.3]}\ndistances:\n  - [1, 2, 0.5]\n")
+    spec = read_fixtures(path)
+    assert spec.names == ("1", "2") and list(spec.positions) == ["2"] and spec.distances == [("1", "2", 0.5)]
+    samples = tmp_path / "s.csv"
+    samples.write_text(HEADER + GOOD.replace("P1", "1") + GOOD.replace("P1", "2"))
+    spec.check_against(read_samples(samples, panda))
