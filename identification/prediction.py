@@ -103,6 +103,7 @@ class Prediction:
         fixed: name -> reason, every parameter not identified (gauge, redundant, barely excited).
         identifiability: singular values and condition number of the column-scaled Jacobian.
         errors: (N, D) sampled error magnitudes [m] (configurations x draws), for plots.
+        warnings: the calibration problem's warnings (scale from the nominal model, unused fixtures).
     """
 
     mean: float
@@ -116,6 +117,7 @@ class Prediction:
     fixed: dict[str, str]
     identifiability: Identifiability
     errors: np.ndarray
+    warnings: tuple[str, ...] = ()
 
     def summary(self) -> str:
         """A few lines for humans (mm, deg)."""
@@ -135,6 +137,7 @@ class Prediction:
         pruned = [n for n, why in self.fixed.items() if why.startswith("barely excited")]
         if pruned:
             lines.append(f"not excited (left at nominal): {', '.join(pruned)}")
+        lines.extend(f"warning: {w}" for w in self.warnings)
         return "\n".join(lines)
 
 
@@ -243,6 +246,7 @@ def predict_accuracy(
         fixed=pruned.fixed,
         identifiability=Identifiability.of(pruned.jacobian(x)),
         errors=errors,
+        warnings=pruned.warnings,
     )
 
 

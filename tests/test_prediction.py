@@ -68,6 +68,8 @@ def test_known_distances_remove_the_scale_error(panda, data, workspace):
     with_d = predict_accuracy(panda, dataset, spec, workspace=workspace)
     without = predict_accuracy(panda, dataset, None, workspace=workspace)
     assert without.mean > 5 * with_d.mean
+    # and the printed prediction says why (plan --predict showed 1.5 mm with no word about the scale)
+    assert "warning: scale:" in without.summary() and "warning:" not in with_d.summary()
 
 
 def test_restricted_motion_is_predicted_worse(panda, data, workspace):
