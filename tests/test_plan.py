@@ -185,3 +185,11 @@ def test_plan_output_under_a_file_is_refused_before_planning(tmp_path, capsys):
     assert main(["plan", "--grid", "0.3,0.6,2;0,0,1;0.2,0.2,1", "--rrd", str(blocker / "p.rrd")]) == 1
     out, err = capsys.readouterr()
     assert f"field '--rrd': {blocker} is not a folder" in err and out == ""
+
+
+def test_binary_candidates_file_is_one_line(tmp_path, panda):
+    # a binary file escaped as a UnicodeDecodeError traceback
+    path = tmp_path / "c.yaml"
+    path.write_bytes(b"\x89PNG\r\n\x1a\n\xf0\x90\x80")
+    with pytest.raises(CandidateError, match="cannot read candidates"):
+        read_candidates(path, panda.n_joints)

@@ -168,7 +168,7 @@ def read_candidates(path: str | Path, n_joints: int) -> list[Candidate]:
     path = Path(path)
     try:
         data = yaml.safe_load(path.read_text())
-    except (OSError, yaml.YAMLError) as error:
+    except (OSError, UnicodeDecodeError, yaml.YAMLError) as error:
         raise CandidateError(f"{path}: cannot read candidates: {str(error).splitlines()[0]}") from None
     entries = data.get("candidates") if isinstance(data, dict) else None
     if not isinstance(entries, dict) or not entries:
