@@ -31,6 +31,9 @@ def test_tasks_cover_every_row_and_set_with_distinct_seeds() -> None:
     assert [t.row for t in todo[::3]] == ["P1", "P2", "P3", "Pall", "P1N", "P2N", "P3N", "PallN"]
     assert len({t.seed for t in todo}) == len(todo)
     assert todo[9].fixtures == ("P1", "P2", "P3") and todo[9].noise == 0.0
+    # a row alone (--rows P2) reproduces that row of the full table (its seeds used to shift with the selection)
+    alone = tasks(CampaignConfig(sets=3, fixture_sets=("P2",)))
+    assert [t.seed for t in alone] == [t.seed for t in todo if t.row in ("P2", "P2N")]
 
 
 def test_table_aggregates_mean_std_max_over_sets() -> None:

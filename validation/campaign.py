@@ -107,15 +107,19 @@ def row_name(fixture_set: str, noise: float) -> str:
 
 
 def tasks(config: CampaignConfig) -> list[Task]:
-    """Every (row, set) task, seeded from (seed, row number, set number)."""
+    """Every (row, set) task, seeded from (seed, row number, set number).
+
+    The row number is the row's place in the full table (noise level, then :data:`FIXTURE_SETS`
+    order), so a row gives the same sets whichever other rows are run with it.
+    """
     out = []
-    row = 0
-    for noise in config.noise_levels:
+    names = list(FIXTURE_SETS)
+    for level, noise in enumerate(config.noise_levels):
         for name in config.fixture_sets:
+            row = level * len(names) + names.index(name)
             for index in range(config.sets):
                 seed = (config.seed, row, index)
                 out.append(Task(row_name(name, noise), FIXTURE_SETS[name], noise, index, seed, config))
-            row += 1
     return out
 
 
