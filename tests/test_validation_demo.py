@@ -72,6 +72,18 @@ def test_demo_refuses_bad_options_and_writes_nothing(tmp_path, capsys) -> None:
     assert not (tmp_path / "x").exists()
 
 
+@pytest.mark.parametrize("command", ["demo", "validate"])
+def test_nan_noise_is_refused(tmp_path, command) -> None:
+    # NaN passed the "< 0" checks: validate died in the mocap fit, demo in the sample projection (tracebacks)
+    args = ["--nominal", "panda", "--calibrated", "panda", "--truth", "panda"] if command == "validate" else []
+    with pytest.raises(SystemExit, match="noise"):
+        main([command, *args, "--noise", "nan", "--out", str(tmp_path / "x")])
+    if command == "demo":
+        with pytest.raises(SystemExit, match="noise"):
+            main([command, "--mocap-noise", "nan", "--out", str(tmp_path / "x")])
+    assert not (tmp_path / "x").exists()
+
+
 @pytest.mark.parametrize("command", ["demo", "campaign"])
 def test_out_that_is_a_file_is_refused_before_the_run(tmp_path, capsys, command) -> None:
     # used to fail with "cannot write: File exists" only after the whole run (minutes to hours)

@@ -30,7 +30,12 @@ def run(args: argparse.Namespace) -> int:
 
     from validation.demo import DemoConfig, run_demo
 
-    if args.samples < 10 or args.seconds <= 0 or args.configurations < 3 or min(args.noise, args.mocap_noise) < 0:
+    if (
+        args.samples < 10
+        or not args.seconds > 0
+        or args.configurations < 3
+        or not (args.noise >= 0 and args.mocap_noise >= 0)
+    ):
         raise SystemExit(
             "spherecal demo: error: need --samples >= 10, --seconds > 0, --configurations >= 3, noises >= 0"
         )

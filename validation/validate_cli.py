@@ -37,7 +37,7 @@ def run(args: argparse.Namespace) -> int:
 
     if args.truth is None and args.mocap is None:
         raise SystemExit("spherecal validate: error: give --truth (simulation) or --mocap (recorded data)")
-    if args.configurations < 3 or args.noise < 0:
+    if args.configurations < 3 or not args.noise >= 0:
         raise SystemExit("spherecal validate: error: --configurations must be >= 3 and --noise >= 0")
     from validation.inputs import check_out_file
 
