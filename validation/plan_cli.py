@@ -50,6 +50,8 @@ def run(args: argparse.Namespace) -> int:
         raise _fail(f"--noise must be >= 0, got {args.noise}")
     if args.samples < 10:
         raise _fail(f"--samples must be >= 10, got {args.samples}")
+    if not args.seconds > 0:
+        raise _fail(f"--seconds must be > 0, got {args.seconds}")
     from validation.inputs import check_out_file
 
     for option, path in (("--rrd", args.rrd), ("--analysis", args.analysis)):
