@@ -15,9 +15,11 @@ What the data cannot see is fixed at the start model's value, with the reason:
   d1, theta1``; standard: ``d1, theta1``) and trade off against unknown centres: all are fixed
   when no centre is known; with known centres only as many as rigid motions keeping them in
   place remain (none for two or more known centres, generically);
-* the scale: with unknown centres and no known distance or position, a uniform scale of all
-  lengths is unobservable (and noise pulls it smaller), so one fixture is pinned at the mean of
-  the nominal model's tool points and a warning says so;
+* the scale: with unknown centres, no known distance and fewer than two known positions, a uniform
+  scale of all lengths is unobservable (and noise pulls it smaller), so one fixture's distance from
+  the joint-1 axis point is held at the nominal model's (``pin="radius"``, the default; ``"centre"``
+  pins that centre at the mean of the nominal model's tool points) and a warning says so, with the
+  scale error to expect (not part of the reported std);
 * columns that add no rank to the column-scaled Jacobian, tested in a preference order
   (centres, tool point, joints from the last to the first), e.g. ``d7, theta7`` against the tool;
 * (after a solve, :func:`prune`) parameters the data barely excites: predicted std at the residual
@@ -88,7 +90,7 @@ class CalibrationProblem:
         centres: (J, 3) start centres [m], in ``dataset.fixture_names`` order (known and pinned
             ones stay at these values).
         free_centres: fixtures whose centre is an unknown.
-        pinned: fixtures pinned at the mean of the nominal tool points (scale gauge).
+        pinned: the fixture that fixes the scale from the nominal model (see ``anchor``), or ().
         distance_weight: weight ``w`` of the distance residuals.
         noise: expected fixture noise [m].
         warnings: what the user must know about this problem.
