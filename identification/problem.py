@@ -346,6 +346,29 @@ def _check_inputs(dataset: Dataset, spec: FixtureSpec) -> None:
             )
 
 
+def _check_reach(model: RobotModel, spec: FixtureSpec) -> None:
+    """Refuse known positions and distances the arm cannot span (e.g. millimetres typed for metres).
+
+    Reach bound: ``sum |a| + sum |d| + |tool|`` from the base origin.
+    """
+    reach = float(np.abs(model.a).sum() + np.abs(model.d).sum() + np.linalg.norm(model.tool))
+    where = spec.source or "fixtures"
+    origin = model.base_transform[:3, 3]
+    for name, position in spec.positions.items():
+        gap = float(np.linalg.norm(np.asarray(position, float) - origin))
+        if gap > reach:
+            raise DatasetError(
+                f"{where}: {spec._row('fixtures.' + name)}field 'fixtures.{name}.position': {gap:.6g} m from the "
+                f"base, beyond the arm's reach ({reach:.3g} m); positions are in metres"
+            )
+    for k, (a, b, value) in enumerate(spec.distances):
+        if value > 2 * reach:
+            raise DatasetError(
+                f"{where}: {spec._row(f'distances[{k}]')}field 'distances[{k}]': {a}-{b} {value:.6g} m is more "
+                f"than the arm can span ({2 * reach:.3g} m); distances are in metres"
+            )
+
+
 def _drop_known_distances(spec: FixtureSpec, known: dict[str, np.ndarray]) -> FixtureSpec:
     """``spec`` without distances between two known positions (they add nothing but a constant residual).
 
@@ -393,11 +416,13 @@ def build_problem(
 
     Raises:
         DatasetError: a fixture used but not listed, a distance or position naming a fixture
-            without samples, a distance contradicting two known positions, fewer equations than unknowns.
+            without samples, a position or distance beyond the arm's reach, a distance contradicting two
+            known positions, fewer equations than unknowns.
         UnidentifiableError: nothing can be identified.
     """
     spec = FixtureSpec.unknown(dataset.fixture_names) if spec is None else spec
     _check_inputs(dataset, spec)
+    _check_reach(model, spec)
     nominal = model if nominal is None else nominal
     if dataset.n_joints != model.n_joints:
         raise DatasetError(

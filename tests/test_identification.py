@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import logging
+import re
 
 import numpy as np
 import pytest
@@ -209,6 +210,25 @@ def test_wrong_distance_is_flagged_not_written_silently(truth, clean) -> None:
     typo = FixtureSpec(spec.names, distances=[(a, b, value + 0.01), *rest])
     warning = next((w for w in calibrate(panda, small, typo).warnings if "residual noise" in w), "")
     assert f"the most strained distance is {a}-{b}" in warning, warning
+
+
+@pytest.mark.parametrize(
+    ("text", "field"),
+    [
+        ("fixtures: {P1: {}, P2: {}, P3: {}}\ndistances:\n  - [P1, P2, 824.6]\n", "distances[0]"),
+        ("fixtures:\n  P1: {position: [500, 100, 0]}\n  P2: {}\n  P3: {}\n", "fixtures.P1.position"),
+    ],
+)
+def test_millimetres_typed_for_metres_are_refused(truth, clean, tmp_path, text, field) -> None:
+    # used to "calibrate" with 200 m residuals and write the file
+    from identification.dataset import read_fixtures
+
+    panda, _ = truth
+    dataset, _ = clean
+    path = tmp_path / "f.yaml"
+    path.write_text(text)
+    with pytest.raises(DatasetError, match=rf"row \d+, field '{re.escape(field)}': .* in metres"):
+        build_problem(panda, dataset, read_fixtures(path))
 
 
 def test_too_few_samples_and_rank_deficiency(truth, clean) -> None:
