@@ -123,11 +123,14 @@ def test_mocap_csv_errors_name_file_row_field(tmp_path, truth, rng, edit, messag
     assert "\n" not in text and str(path) in text and message in text
 
 
-def test_mocap_csv_binary_or_byte_order_mark(tmp_path, truth, rng) -> None:
-    # a binary file used to escape as a UnicodeDecodeError traceback; a BOM broke the header
+def test_mocap_csv_binary_byte_order_mark_crlf_whitespace_lines(tmp_path, truth, rng) -> None:
+    # a binary file used to escape as a UnicodeDecodeError traceback; a BOM broke the header; a trailing
+    # whitespace-only line was a 1-column data row
     q = truth.random_configurations(6, rng)
     path = write_mocap_csv(tmp_path / "m.csv", MocapMeasurement(q=q, tool=tool_point(truth, q)))
     path.write_bytes(b"\xef\xbb\xbf" + path.read_bytes())
+    np.testing.assert_array_equal(read_mocap_csv(path, truth.n_joints).q, q)
+    path.write_bytes(path.read_bytes().replace(b"\n", b"\r\n") + b"\r\n  \r\n\t\n")  # CRLF, whitespace lines
     np.testing.assert_array_equal(read_mocap_csv(path, truth.n_joints).q, q)
     path.write_bytes(b"\x89PNG\r\n\x1a\n\xf0\x90\x80")
     with pytest.raises(MocapError, match="cannot read mocap file"):

@@ -223,7 +223,11 @@ def read_mocap_csv(path: str | os.PathLike, n_joints: int, cluster: MarkerCluste
         text = path.read_text(encoding="utf-8-sig")  # a spreadsheet's byte-order mark is not data
     except (OSError, UnicodeDecodeError) as error:
         raise MocapError(f"{path}: cannot read mocap file ({getattr(error, 'strerror', None) or error})") from None
-    rows = [(i + 1, r) for i, r in enumerate(csv.reader(text.splitlines())) if r and not r[0].lstrip().startswith("#")]
+    rows = [
+        (i + 1, r)
+        for i, r in enumerate(csv.reader(text.splitlines()))
+        if "".join(r).strip() and not r[0].lstrip().startswith("#")  # blank or whitespace-only lines skipped
+    ]
     if not rows:
         raise MocapError(f"{path}: empty mocap file, expected a header q1..q{n_joints}, x, y, z")
     header_line, header = rows[0]
