@@ -9,12 +9,14 @@ HELP = "Identify DH parameters from spherical-joint samples and write a calibrat
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     """Register the options of `spherecal calibrate`."""
+    from identification.options import seed
+
     parser.add_argument("--robot", required=True, help="nominal robot file (or 'panda')")
     parser.add_argument("--samples", required=True, help="samples.csv: fixture[,t],q1..qn [rad]")
     parser.add_argument("--fixtures", help="fixtures.yaml: known positions and distances [m]")
     parser.add_argument("--method", choices=("lm", "pso", "pso+lm"), default="lm", help="solver (default lm)")
     parser.add_argument("--max-samples", type=int, default=None, help="keep at most N samples per fixture (random)")
-    parser.add_argument("--seed", type=int, default=0, help="seed of subsampling and PSO (default 0)")
+    parser.add_argument("--seed", type=seed, default=0, help="seed of subsampling and PSO (default 0)")
     parser.add_argument("--loss", choices=("linear", "soft_l1", "huber"), default="linear", help="lm loss")
     parser.add_argument(
         "--noise", type=float, default=3e-4, help="expected fixture noise [m] (robust-loss scale; default 0.0003)"

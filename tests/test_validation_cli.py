@@ -110,3 +110,13 @@ def test_output_under_a_file_is_refused_before_anything_is_written(files, tmp_pa
     err = capsys.readouterr().err
     assert f"field '{option}': {blocker} is not a folder" in err and len(err.strip().splitlines()) == 1
     assert sorted(p.name for p in tmp_path.iterdir() if p.suffix in (".json", ".rrd")) == []
+
+
+@pytest.mark.parametrize("command", ["calibrate", "validate", "plan", "demo", "campaign"])
+def test_negative_seed_is_a_usage_error(command, capsys) -> None:
+    # numpy refuses negative seeds: every one of these died with "ValueError: expected non-negative integer"
+    with pytest.raises(SystemExit) as info:
+        main([command, "--seed", "-1"])
+    assert info.value.code == 2
+    assert "--seed: expected an integer >= 0, got '-1'" in capsys.readouterr().err
+

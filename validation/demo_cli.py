@@ -9,7 +9,9 @@ HELP = "End-to-end demo on the embedded Panda: simulate, calibrate, validate, re
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     """Register the options of `spherecal demo`."""
-    parser.add_argument("--seed", type=int, default=0, help="seed of the true robot, motion and noise (0)")
+    from identification.options import seed
+
+    parser.add_argument("--seed", type=seed, default=0, help="seed of the true robot, motion and noise (0)")
     parser.add_argument("--samples", type=int, default=1500, help="samples kept per fixture (1500)")
     parser.add_argument("--noise", type=float, default=0.3, help="fixture noise in the calibration data, mm std (0.3)")
     parser.add_argument("--mocap-noise", type=float, default=0.3, help="mocap noise per marker, mm std (0.3)")

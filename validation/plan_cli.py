@@ -9,6 +9,8 @@ HELP = "Rank candidate fixture positions by the calibration accuracy they predic
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     """Register the options of `spherecal plan`."""
+    from identification.options import seed
+
     parser.add_argument("--robot", default="panda", help="nominal robot file or 'panda' (default)")
     where = parser.add_mutually_exclusive_group()
     where.add_argument("--candidates", default=None,
@@ -27,7 +29,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="self-motion at a candidate: kinematic projection (default, the whole manifold) or "
                              "the null-space controller on the MuJoCo plant for --seconds")
     parser.add_argument("--seconds", type=float, default=3.0, help="controller self-motion per candidate [s] (3)")
-    parser.add_argument("--seed", type=int, default=0, help="seed of everything random (default 0)")
+    parser.add_argument("--seed", type=seed, default=0, help="seed of everything random (default 0)")
     parser.add_argument("--rrd", default=None, help="write a Rerun recording of the candidates coloured by score")
     parser.add_argument("--workers", type=int, default=2, help="worker processes of --analysis (2)")
 
