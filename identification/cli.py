@@ -9,7 +9,7 @@ HELP = "Identify DH parameters from spherical-joint samples and write a calibrat
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     """Register the options of `spherecal calibrate`."""
-    from identification.options import seed
+    from identification.options import non_negative, positive, seed
 
     parser.add_argument("--robot", required=True, help="nominal robot file (or 'panda')")
     parser.add_argument("--samples", required=True, help="samples.csv: fixture[,t],q1..qn [rad]")
@@ -19,14 +19,14 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--seed", type=seed, default=0, help="seed of subsampling and PSO (default 0)")
     parser.add_argument("--loss", choices=("linear", "soft_l1", "huber"), default="linear", help="lm loss")
     parser.add_argument(
-        "--noise", type=float, default=3e-4, help="expected fixture noise [m] (robust-loss scale; default 0.0003)"
+        "--noise", type=positive, default=3e-4, help="expected fixture noise [m] (robust-loss scale; default 0.0003)"
     )
     parser.add_argument(
-        "--dedup-tol", type=float, default=1e-4, help="drop samples within this of an earlier one [rad] (1e-4)"
+        "--dedup-tol", type=non_negative, default=1e-4, help="drop samples within this of an earlier one [rad] (1e-4)"
     )
     parser.add_argument(
         "--max-change",
-        type=float,
+        type=positive,
         default=4.0,
         help="refuse a fit that moves the tool point more than this many times what a real arm's errors "
         "(1 mm, 0.2 deg) typically do (4: about 24 mm on the Panda)",

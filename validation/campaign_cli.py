@@ -9,12 +9,12 @@ HELP = "Run the paper's simulated protocol (fixture sets x noise levels) and pri
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     """Register the options of `spherecal campaign`."""
-    from identification.options import seed
+    from identification.options import non_negative, positive, seed
 
     parser.add_argument("--sets", type=int, default=10, help="motion sets per row (10)")
     parser.add_argument("--samples", type=int, default=500, help="samples per fixture in each set (500)")
     parser.add_argument("--configurations", type=int, default=5000, help="random validation configurations (5000)")
-    parser.add_argument("--noise", type=float, default=0.3, help="fixture noise of the noisy rows, mm std (0.3)")
+    parser.add_argument("--noise", type=non_negative, default=0.3, help="fixture noise of the noisy rows, mm std (0.3)")
     parser.add_argument(
         "--source",
         choices=("synthetic", "mujoco"),
@@ -28,7 +28,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         help="realistic: perturbed true robot, calibrated from nominal (default); paper: true = nominal, "
         "started from a perturbed model, as the paper's simulation",
     )
-    parser.add_argument("--seconds", type=float, default=20.0, help="MuJoCo self-motion per fixture, s (20)")
+    parser.add_argument("--seconds", type=positive, default=20.0, help="MuJoCo self-motion per fixture, s (20)")
     parser.add_argument("--rows", default="P1,P2,P3,Pall", help="fixture sets (P1,P2,P3,Pall)")
     parser.add_argument("--seed", type=seed, default=0, help="base seed (0); every set is seeded from it")
     parser.add_argument("--workers", type=int, default=2, help="worker processes (2)")

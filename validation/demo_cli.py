@@ -9,13 +9,15 @@ HELP = "End-to-end demo on the embedded Panda: simulate, calibrate, validate, re
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     """Register the options of `spherecal demo`."""
-    from identification.options import seed
+    from identification.options import non_negative, positive, seed
 
     parser.add_argument("--seed", type=seed, default=0, help="seed of the true robot, motion and noise (0)")
     parser.add_argument("--samples", type=int, default=1500, help="samples kept per fixture (1500)")
-    parser.add_argument("--noise", type=float, default=0.3, help="fixture noise in the calibration data, mm std (0.3)")
-    parser.add_argument("--mocap-noise", type=float, default=0.3, help="mocap noise per marker, mm std (0.3)")
-    parser.add_argument("--seconds", type=float, default=60.0, help="simulated self-motion per fixture, s (60)")
+    parser.add_argument(
+        "--noise", type=non_negative, default=0.3, help="fixture noise in the calibration data, mm std (0.3)"
+    )
+    parser.add_argument("--mocap-noise", type=non_negative, default=0.3, help="mocap noise per marker, mm std (0.3)")
+    parser.add_argument("--seconds", type=positive, default=60.0, help="simulated self-motion per fixture, s (60)")
     parser.add_argument("--configurations", type=int, default=5000, help="random validation configurations (5000)")
     parser.add_argument(
         "--source", choices=("mujoco", "synthetic"), default="mujoco", help="motion: MuJoCo self-motion (default)"

@@ -9,7 +9,7 @@ HELP = "Rank candidate fixture positions by the calibration accuracy they predic
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     """Register the options of `spherecal plan`."""
-    from identification.options import seed
+    from identification.options import non_negative, positive, seed
 
     parser.add_argument("--robot", default="panda", help="nominal robot file or 'panda' (default)")
     where = parser.add_mutually_exclusive_group()
@@ -23,12 +23,12 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                             "(docs/experiment_design.md)")
     parser.add_argument("--spec", default=None, help="fixtures.yaml of --predict (known positions, distances)")
     parser.add_argument("--fixtures", type=int, default=3, help="number of fixtures wanted, 1..4 (default 3)")
-    parser.add_argument("--noise", type=float, default=0.3, help="fixture noise std per axis [mm] (default 0.3)")
+    parser.add_argument("--noise", type=non_negative, default=0.3, help="fixture noise std per axis [mm] (default 0.3)")
     parser.add_argument("--samples", type=int, default=500, help="samples to be recorded per fixture (default 500)")
     parser.add_argument("--motion", choices=("kinematic", "controller"), default="kinematic",
                         help="self-motion at a candidate: kinematic projection (default, the whole manifold) or "
                              "the null-space controller on the MuJoCo plant for --seconds")
-    parser.add_argument("--seconds", type=float, default=3.0, help="controller self-motion per candidate [s] (3)")
+    parser.add_argument("--seconds", type=positive, default=3.0, help="controller self-motion per candidate [s] (3)")
     parser.add_argument("--seed", type=seed, default=0, help="seed of everything random (default 0)")
     parser.add_argument("--rrd", default=None, help="write a Rerun recording of the candidates coloured by score")
     parser.add_argument("--workers", type=int, default=2, help="worker processes of --analysis (2)")

@@ -9,7 +9,7 @@ HELP = "Compare nominal and calibrated models against the truth or motion-captur
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     """Register the options of `spherecal validate`."""
-    from identification.options import seed
+    from identification.options import non_negative, seed
 
     parser.add_argument("--truth", help="robot file of the true robot (simulation)")
     parser.add_argument("--nominal", required=True, help="robot file of the nominal model ('panda': embedded)")
@@ -17,7 +17,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--mocap", help="recorded mocap CSV: [t,] q1..qn, x, y, z (tool point in the mocap frame, m)")
     parser.add_argument("--samples", help="samples.csv of the self-motion sets to validate on as well (simulation)")
     parser.add_argument("--configurations", type=int, default=5000, help="random workspace configurations (5000)")
-    parser.add_argument("--noise", type=float, default=0.3, help="simulated marker noise std [mm] (0.3)")
+    parser.add_argument("--noise", type=non_negative, default=0.3, help="simulated marker noise std [mm] (0.3)")
     parser.add_argument("--seed", type=seed, default=0, help="seed of the simulated mocap (0)")
     parser.add_argument("--out", help="write the report as JSON (metres) to this file")
     parser.add_argument("--rrd", help="save a Rerun recording to this file")
