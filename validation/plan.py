@@ -38,7 +38,7 @@ MOTIONS: tuple[str, ...] = ("kinematic", "controller")
 PLAN_SAMPLES = 120
 #: Exhaustive search over fixture subsets up to this many combinations, greedy above.
 EXHAUSTIVE_LIMIT = 300
-#: Most grid points :func:`grid_candidates` makes (each costs about 0.2 s of survey).
+#: Most grid points :func:`grid_candidates` makes (each one is surveyed and scored).
 MAX_GRID = 10_000
 #: A distance is recommended when it lowers the predicted mean error by more than this share.
 DISTANCE_GAIN = 0.05
@@ -150,7 +150,7 @@ def grid_candidates(text: str) -> list[Candidate]:
         axes.append(np.linspace(lo, hi, count) if count > 1 else np.array([(lo + hi) / 2]))
     total = math.prod(a.size for a in axes)
     if total > MAX_GRID:
-        raise CandidateError(f"--grid {text!r}: field 'count': {total} points, at most {MAX_GRID} (about 0.2 s each)")
+        raise CandidateError(f"--grid {text!r}: field 'count': {total} points, at most {MAX_GRID}")
     points = np.stack(np.meshgrid(*axes, indexing="ij"), axis=-1).reshape(-1, 3)
     return [Candidate(f"C{k + 1}", p) for k, p in enumerate(points)]
 
