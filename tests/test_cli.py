@@ -28,6 +28,18 @@ def test_help_imports_no_heavy_dependency() -> None:
     assert out.stdout.strip() == "[]", out.stdout + out.stderr
 
 
+def test_subcommand_help_imports_no_heavy_dependency() -> None:
+    code = (
+        "import sys, contextlib, io, validation.cli as c\n"
+        "for name in c.COMMANDS:\n"
+        "    with contextlib.suppress(SystemExit), contextlib.redirect_stdout(io.StringIO()):\n"
+        "        c.main([name, '--help'])\n"
+        "print(sorted(m for m in ('mujoco','rerun','pyswarms','scipy','numpy') if m in sys.modules))"
+    )
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, cwd=ROOT)
+    assert out.stdout.strip() == "[]", out.stdout + out.stderr
+
+
 def test_ci_runs_exactly_the_readme_test_command() -> None:
     readme = (ROOT / "README.md").read_text()
     ci = (ROOT / ".ci" / "run").read_text()

@@ -49,9 +49,8 @@ def _version() -> str:
 
 def main(argv: list[str] | None = None) -> int:
     """Run one subcommand; spherecal's own errors print one line and exit 1."""
+    args = build_parser().parse_args(argv)  # --help and usage errors end here, before numpy loads
     from correction.errors import SpherecalError
-
-    args = build_parser().parse_args(argv)
     try:
         return int(args._run(args) or 0)
     except SpherecalError as error:
