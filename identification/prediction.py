@@ -23,18 +23,17 @@ Returns the expected mean and 95th percentile of ``|e|`` [m] and the identifiabi
 
 from __future__ import annotations
 
-from dataclasses import dataclass, replace
+from dataclasses import dataclass
 
 import numpy as np
 
 from correction import RobotModel, param_jacobian, tool_point
 
+from .calibrate import SIGMA_FLOOR
 from .dataset import Dataset, FixtureSpec
 from .identifiability import Identifiability, column_norms
 from .problem import NOISE, CalibrationProblem, anchor_spread, build_problem, format_value, prior_std, prune
 
-#: Floor of the noise used to decide what the data excites [m] (calibrate's SIGMA_FLOOR).
-SIGMA_FLOOR = 1e-6
 #: A parameter whose predicted std exceeds this share of its prior spread is "weakly determined".
 WEAK_SHARE = 0.3
 #: Default workspace configurations and Monte Carlo draws of the parameter error.
@@ -141,15 +140,6 @@ class Prediction:
         return "\n".join(lines)
 
 
-def generic_point(problem: CalibrationProblem) -> tuple[CalibrationProblem, np.ndarray]:
-    """The problem re-based on the rank test's generic model (seeded 0.1 x prior perturbation) and its
-    unknown vector: the linearisation point of the prediction."""
-    model = problem.model
-    generic = model.params + np.random.default_rng(0).normal(0.0, 0.1, model.n_params) * prior_std(model)
-    moved = replace(problem, model=model.with_params(generic), _cache={})
-    return moved, moved.pack(generic, problem.centres)
-
-
 def _anchor_spread(problem: CalibrationProblem) -> float:
     """Prior spread [m] of the scale anchor's radius (taken from the nominal model, not measured)."""
     name, point, _ = problem.anchor
@@ -200,7 +190,7 @@ def predict_accuracy(
     workspace = Workspace.of(model) if workspace is None else workspace
     problem = build_problem(model, dataset, spec, noise=max(noise, SIGMA_FLOOR)) if problem is None else problem
     sigma = max(noise, SIGMA_FLOOR)
-    lin, x_lin = generic_point(problem)
+    lin, x_lin = problem.generic_point()
     pruned, x = prune(lin, x_lin, sigma / np.sqrt(sample_weight))
     rows = np.ones((pruned.n_residuals, 1))
     rows[: 3 * dataset.n_samples] = np.sqrt(sample_weight)

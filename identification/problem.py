@@ -176,17 +176,23 @@ class CalibrationProblem:
         centres[slot >= 0] = _mean_points(model, self.dataset)[slot >= 0]
         return self.pack(model.params, centres)
 
-    def generic_jacobian(self) -> np.ndarray:
-        """(M, F) Jacobian at a generic point near the start model (seeded 0.1x prior perturbation).
+    def generic_point(self) -> tuple[CalibrationProblem, np.ndarray]:
+        """This problem re-based on a generic model near the start (seeded 0.1 x prior perturbation),
+        and its unknown vector there.
 
-        What the data can see is judged here, not at the nominal design (whose accidental symmetries,
+        What the data can see is judged there, not at the nominal design (whose accidental symmetries,
         tool on the last axis and zero offsets, are not structural) nor at a solution (which a poorly
         excited data set lets wander far from any real arm).
         """
-        generic = self.model.params + np.random.default_rng(0).normal(0.0, 0.1, self.model.n_params) * prior_std(
-            self.model
-        )
-        return replace(self, model=self.model.with_params(generic)).jacobian(self.pack(generic, self.centres))
+        model = self.model
+        generic = model.params + np.random.default_rng(0).normal(0.0, 0.1, model.n_params) * prior_std(model)
+        moved = replace(self, model=model.with_params(generic), _cache={})
+        return moved, moved.pack(generic, self.centres)
+
+    def generic_jacobian(self) -> np.ndarray:
+        """(M, F) Jacobian at :meth:`generic_point`."""
+        moved, x = self.generic_point()
+        return moved.jacobian(x)
 
     def model_at(self, x: np.ndarray) -> RobotModel:
         """The robot of an unknown vector."""
