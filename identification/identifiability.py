@@ -94,13 +94,16 @@ def greedy_rank(jac: np.ndarray, order: np.ndarray, rel_tol: float = 1e-7) -> tu
     return np.array(sorted(accepted), dtype=int), rejected
 
 
-def predicted_std(jac: np.ndarray, sigma: float) -> np.ndarray:
-    """(F,) standard deviation of every unknown for residual noise ``sigma`` [m] (Gauss-Markov).
+def normal_inverse(jac: np.ndarray) -> np.ndarray:
+    """(F, F) ``(J^T J)^-1`` of a (M, F) Jacobian, through the SVD of the column-scaled Jacobian
+    (never the squared normal matrix; a null direction gets a huge, not infinite, variance)."""
+    norms = column_norms(jac)
+    _, s, vt = np.linalg.svd(jac / norms, full_matrices=False)
+    inv = 1.0 / np.maximum(s, s[0] * 1e-14)
+    return (vt.T * inv**2) @ vt / np.outer(norms, norms)
 
-    ``cov = sigma^2 (J^T J)^-1`` computed through the eigen-decomposition of the column-scaled
-    normal matrix.
-    """
-    values, vectors, norms = _scaled_gram_eig(jac)
-    inv = 1.0 / np.maximum(values, values[-1] * 1e-16)  # a null direction gives a huge (not infinite) std
-    scaled_var = (vectors**2) @ inv
-    return sigma * np.sqrt(scaled_var) / norms
+
+def predicted_std(jac: np.ndarray, sigma: float) -> np.ndarray:
+    """(F,) standard deviation of every unknown for residual noise ``sigma`` [m] (Gauss-Markov):
+    the square root of the diagonal of ``cov = sigma^2 (J^T J)^-1``."""
+    return sigma * np.sqrt(np.diag(normal_inverse(jac)))

@@ -31,7 +31,7 @@ from correction import RobotModel, param_jacobian, tool_point
 
 from .calibrate import SIGMA_FLOOR
 from .dataset import Dataset, FixtureSpec
-from .identifiability import Identifiability, column_norms
+from .identifiability import Identifiability, normal_inverse
 from .problem import NOISE, CalibrationProblem, anchor_spread, build_problem, format_value, prior_std, prune
 
 #: A parameter whose predicted std exceeds this share of its prior spread is "weakly determined".
@@ -144,16 +144,6 @@ def _anchor_spread(problem: CalibrationProblem) -> float:
     """Prior spread [m] of the scale anchor's radius (taken from the nominal model, not measured)."""
     name, point, _ = problem.anchor
     return anchor_spread(problem.model, problem.dataset.for_fixture(name), point)
-
-
-def normal_inverse(jac: np.ndarray) -> np.ndarray:
-    """(F, F) ``(J^T J)^-1`` of a (M, F) Jacobian, through the eigen-decomposition of the
-    column-scaled normal matrix (null directions get a huge, not infinite, variance)."""
-    norms = column_norms(jac)
-    scaled = jac / norms
-    values, vectors = np.linalg.eigh(scaled.T @ scaled)
-    inv = 1.0 / np.maximum(values, values[-1] * 1e-14)
-    return (vectors * inv) @ vectors.T / np.outer(norms, norms)
 
 
 def predict_accuracy(

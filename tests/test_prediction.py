@@ -7,7 +7,8 @@ import numpy as np
 import pytest
 
 from correction import param_jacobian, registered_errors, tool_point
-from identification.prediction import Workspace, normal_inverse, predict_accuracy, remove_rigid_motion
+from identification.identifiability import normal_inverse, predicted_std
+from identification.prediction import Workspace, predict_accuracy, remove_rigid_motion
 from identification.synthetic import make_dataset
 
 FIXTURES = {"P1": (0.5, -0.25, 0.5), "P2": (0.5, 0.0, 0.4), "P3": (0.45, 0.25, 0.45)}
@@ -46,6 +47,7 @@ def test_projected_error_matches_kabsch_registration(panda, rng):
 def test_normal_inverse_matches_numpy(rng):
     jac = rng.normal(size=(200, 12)) * np.logspace(-3, 2, 12)
     np.testing.assert_allclose(normal_inverse(jac), np.linalg.inv(jac.T @ jac), rtol=1e-8)
+    np.testing.assert_allclose(predicted_std(jac, 0.3), 0.3 * np.sqrt(np.diag(np.linalg.inv(jac.T @ jac))), rtol=1e-8)
 
 
 def test_error_scales_with_noise_and_samples(panda, data, workspace):
