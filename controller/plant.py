@@ -15,7 +15,7 @@ from xml.sax.saxutils import quoteattr
 import mujoco
 import numpy as np
 
-from correction import RobotModel
+from correction import RobotModel, link_frames
 from correction.urdf import xml_comment
 
 #: Physical defaults of the plant (settings that keep the closed chain stable at 1 kHz).
@@ -42,37 +42,28 @@ def _quat(rotation: np.ndarray) -> np.ndarray:
     return quat
 
 
-def _rot_x(angle: float) -> np.ndarray:
-    c, s = np.cos(angle), np.sin(angle)
-    return np.array([[1.0, 0.0, 0.0], [0.0, c, -s], [0.0, s, c]])
-
-
-def _rot_z(angle: float) -> np.ndarray:
-    c, s = np.cos(angle), np.sin(angle)
-    return np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
-
-
 def joint_offsets(model: RobotModel) -> list[tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]]:
     """Per joint, the body placement in its parent and the hinge in the body, at ``q = 0``.
+
+    The placements are the relative transforms of :func:`correction.link_frames` at ``q = 0``, so
+    the DH chain is defined in one place. Modified DH: the hinge turns about ``z`` through the body's
+    origin (``Rz(q)`` commutes with ``Lz(d)``). Standard DH: about ``z`` of the parent frame, through
+    the parent's origin.
 
     Returns:
         For each joint ``i``: ``(pos (3,), rotation (3, 3), joint_pos (3,), joint_axis (3,))``,
         body ``i`` in body ``i-1`` [m] and the hinge anchor and axis in body ``i``.
-        Modified DH: ``Rx(alpha) Lx(a) Rz(theta) Lz(d)``, hinge through the origin about ``z``
-        (``Rz(q)`` commutes with ``Lz(d)``). Standard DH: ``Rz(theta) Lz(d) Lx(a) Rx(alpha)``,
-        hinge about ``z`` of the parent frame through the parent's origin.
     """
+    frames = link_frames(model, np.zeros(model.n_joints))  # (n+1, 4, 4), frame 0 is the base
+    z = np.array([0.0, 0.0, 1.0])
     out = []
-    for a, alpha, d, theta in zip(model.a, model.alpha, model.d, model.theta, strict=True):
+    for parent, child in zip(frames[:-1], frames[1:], strict=True):
+        rotation = parent[:3, :3].T @ child[:3, :3]
+        pos = parent[:3, :3].T @ (child[:3, 3] - parent[:3, 3])
         if model.convention == "modified":
-            rotation = _rot_x(alpha) @ _rot_z(theta)
-            pos = np.array([a, 0.0, 0.0]) + rotation @ np.array([0.0, 0.0, d])
-            out.append((pos, rotation, np.zeros(3), np.array([0.0, 0.0, 1.0])))
+            out.append((pos, rotation, np.zeros(3), z))
         else:
-            rz = _rot_z(theta)
-            pos = np.array([0.0, 0.0, d]) + rz @ np.array([a, 0.0, 0.0])
-            rotation = rz @ _rot_x(alpha)
-            out.append((pos, rotation, -rotation.T @ pos, rotation.T @ np.array([0.0, 0.0, 1.0])))
+            out.append((pos, rotation, -rotation.T @ pos, rotation.T @ z))
     return out
 
 
