@@ -16,11 +16,11 @@ from .problem import (
     NOISE,
     CalibrationProblem,
     ImplausibleCalibrationError,
-    _rows,
     build_problem,
     format_value,
     prior_std,
     prune,
+    samples_location,
 )
 from .solvers import solve_lm, solve_pso
 
@@ -267,7 +267,7 @@ def check_plausible(problem: CalibrationProblem, params: np.ndarray, max_change:
     name = model.param_names[free[worst]]
     dataset = problem.dataset
     raise ImplausibleCalibrationError(
-        f"{dataset.source or 'samples'}: {_rows(dataset)}, field '{name}': the fit moves the tool point "
+        f"{samples_location(dataset)}, field '{name}': the fit moves the tool point "
         f"{change * 1e3:.1f} mm from the nominal model (mean over the workspace; a real arm's errors move it "
         f"about {typical * 1e3:.1f} mm, limit {max_change:g}x), changing {name} by "
         f"{format_value(name, params[free[worst]] - model.params[free[worst]])}: the samples do not determine "

@@ -327,11 +327,15 @@ def _gauge_left(model: RobotModel, dataset: Dataset, known: list[np.ndarray]) ->
     return sorted((gauge[i] for i in pivots[:free_dims]), key=GAUGE[model.convention].index)
 
 
-def _rows(dataset: Dataset) -> str:
-    """``"rows 2-1501"`` of a dataset read from a file (``"all rows"`` otherwise)."""
-    if dataset.lines is None or dataset.n_samples == 0:
-        return "all rows"
-    return f"rows {dataset.lines.min()}-{dataset.lines.max()}"
+def samples_location(dataset: Dataset) -> str:
+    """``"samples.csv: rows 2-1501"``: where a dataset came from, for one-line errors
+    (``"samples: all rows"`` when it was not read from a file)."""
+    rows = (
+        "all rows"
+        if dataset.lines is None or dataset.n_samples == 0
+        else f"rows {dataset.lines.min()}-{dataset.lines.max()}"
+    )
+    return f"{dataset.source or 'samples'}: {rows}"
 
 
 def _mean_points(model: RobotModel, dataset: Dataset) -> np.ndarray:
@@ -439,7 +443,7 @@ def build_problem(
     names_fixtures = dataset.fixture_names
     if all(np.ptp(dataset.for_fixture(name), axis=0).max() == 0 for name in names_fixtures):
         raise UnidentifiableError(
-            f"{dataset.source or 'samples'}: {_rows(dataset)}, field 'q*': at every fixture all samples are "
+            f"{samples_location(dataset)}, field 'q*': at every fixture all samples are "
             f"one configuration; the arm must move through its self-motion for any parameter to be identified"
         )
     fixed: dict[str, str] = {}
@@ -518,7 +522,7 @@ def build_problem(
     )
     if problem.n_residuals < problem.n_unknowns:
         raise DatasetError(
-            f"{dataset.source or 'samples'}: {_rows(dataset)}, field 'fixture': {dataset.n_samples} samples give "
+            f"{samples_location(dataset)}, field 'fixture': {dataset.n_samples} samples give "
             f"{problem.n_residuals} equations, fewer than the {problem.n_unknowns} unknowns "
             f"({candidates.size} free parameters, {3 * len(free_centres)} centre coordinates)"
         )
@@ -537,7 +541,7 @@ def build_problem(
     centre_cols = np.arange(fp, jac.shape[1])
     if np.any(~np.isin(centre_cols, accepted)):
         raise UnidentifiableError(
-            f"{dataset.source or 'samples'}: {_rows(dataset)}, field 'fixture': "
+            f"{samples_location(dataset)}, field 'fixture': "
             f"the fixture centres are not determined by the samples"
         )
     for col, coef in rejected.items():
@@ -549,7 +553,7 @@ def build_problem(
     keep = accepted[accepted < fp]
     if keep.size == 0:
         raise UnidentifiableError(
-            f"{dataset.source or 'samples'}: {_rows(dataset)}, field 'q*': no parameter can be identified "
+            f"{samples_location(dataset)}, field 'q*': no parameter can be identified "
             f"from these samples (joint motion too small or too few distinct configurations)"
         )
     ordered_fixed = {name: fixed[name] for name in names if name in fixed}
