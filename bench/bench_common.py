@@ -1,19 +1,13 @@
 """Shared by the bench scripts; import it first.
 
-Some scripts are named like the package they measure (bench/controller.py): running one puts
-bench/ first on the import path, where it would shadow that package, so bench/ is dropped from
-the path here. One BLAS thread, as the command-line tools use, and no Rerun analytics.
+One BLAS thread, as the command-line tools use, and no Rerun analytics.
 """
 
 from __future__ import annotations
 
 import os
-import sys
 import time
-from pathlib import Path
 
-HERE = Path(__file__).resolve().parent
-sys.path[:] = [p for p in sys.path if Path(p or ".").resolve() != HERE]
 for _variable in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS"):
     os.environ.setdefault(_variable, "1")
 os.environ.setdefault("RERUN_ANALYTICS", "0")

@@ -18,11 +18,10 @@ from pathlib import Path
 import bench_common  # noqa: F401  (first: import path, BLAS threads)
 import numpy as np  # noqa: E402
 import qpsolvers  # noqa: E402
-
-from controller.cli import DEFAULT_FIXTURES  # noqa: E402
-from controller.nullspace import NullSpaceController  # noqa: E402
-from controller.self_motion import SelfMotionSettings, collect_self_motion  # noqa: E402
-from correction import load_robot, perturb  # noqa: E402
+from spherecal.controller.cli import DEFAULT_FIXTURES  # noqa: E402
+from spherecal.controller.nullspace import NullSpaceController  # noqa: E402
+from spherecal.controller.self_motion import SelfMotionSettings, collect_self_motion  # noqa: E402
+from spherecal.correction import load_robot, perturb  # noqa: E402
 
 
 def step_times(panda, trajectory: np.ndarray, q_r: np.ndarray, solver: str, persistent: bool) -> np.ndarray:

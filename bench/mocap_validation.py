@@ -14,14 +14,13 @@ from pathlib import Path
 
 import bench_common  # first: import path, BLAS threads
 import numpy as np  # noqa: E402
-
-from correction import load_robot, perturb  # noqa: E402
-from validation.mocap import SimulatedMocap, random_mocap_transform  # noqa: E402
-from validation.pipeline import validate_models  # noqa: E402
+from spherecal.correction import load_robot, perturb  # noqa: E402
+from spherecal.validation.mocap import SimulatedMocap, random_mocap_transform  # noqa: E402
+from spherecal.validation.pipeline import validate_models  # noqa: E402
 
 
 def main() -> None:
-    from validation.recording import Recording
+    from spherecal.validation.recording import Recording
 
     panda = load_robot("panda")
     rng = np.random.default_rng(0)
@@ -35,7 +34,7 @@ def main() -> None:
     def record():
         report = validate_models(panda, truth, np.random.default_rng(1), truth=truth, configurations=count)
         recording = Recording(folder / "bench.rrd")
-        from validation.pipeline import record_validation
+        from spherecal.validation.pipeline import record_validation
 
         record_validation(recording, report, {"nominal": panda, "calibrated": truth})
         recording.close()

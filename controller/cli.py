@@ -37,7 +37,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def _fail(message: str):
-    from correction.errors import SpherecalError
+    from spherecal.correction.errors import SpherecalError
 
     return SpherecalError(message)
 
@@ -48,7 +48,7 @@ def _fixtures(path: str | None) -> dict:
 
     if path is None:
         return {k: np.array(v, dtype=float) for k, v in DEFAULT_FIXTURES.items()}
-    from identification.dataset import read_fixtures
+    from spherecal.identification.dataset import read_fixtures
 
     spec = read_fixtures(path)
     missing = [name for name in spec.names if name not in spec.positions]
@@ -86,9 +86,8 @@ def run(args: argparse.Namespace) -> int:
 
     import numpy as np
     import qpsolvers
-
-    from correction import atomic_write_text, dump_robot, load_robot, perturb
-    from identification.dataset import FixtureSpec, format_fixtures, format_samples
+    from spherecal.correction import atomic_write_text, dump_robot, load_robot, perturb
+    from spherecal.identification.dataset import FixtureSpec, format_fixtures, format_samples
 
     from .self_motion import SelfMotionSettings, collect_self_motion
 
@@ -142,7 +141,7 @@ def _provenance(args: argparse.Namespace, settings, result) -> dict:
     """The ``simulation:`` block of truth.yaml: seed, versions, inputs, settings, outcome."""
     import sys
 
-    from correction.provenance import versions
+    from spherecal.correction.provenance import versions
 
     return {
         "seed": args.seed,

@@ -30,9 +30,8 @@ from collections.abc import Callable
 from dataclasses import dataclass, replace
 
 import numpy as np
-
-from correction import RobotModel, tool_point, tool_pose
-from correction.errors import SpherecalError
+from spherecal.correction import RobotModel, tool_point, tool_pose
+from spherecal.correction.errors import SpherecalError
 
 from .ik import UnreachableError, ik
 

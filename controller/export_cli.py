@@ -26,7 +26,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 def provenance_header(source: str, output_format: str) -> str:
     """Comment lines naming the input file (and its SHA-256) and the versions that wrote the export."""
-    from correction.provenance import input_record, versions
+    from spherecal.correction.provenance import input_record, versions
 
     digest = input_record(source)["sha256"]
     packages = ", ".join(f"{k} {v}" for k, v in versions(("spherecal", "numpy", "scipy", "mujoco")).items())
@@ -39,7 +39,7 @@ def provenance_header(source: str, output_format: str) -> str:
 
 def _limits(text: str | None, option: str) -> list[float] | None:
     """A comma-separated option as floats (None when not given)."""
-    from correction.urdf import ExportError
+    from spherecal.correction.urdf import ExportError
 
     if text is None:
         return None
@@ -66,8 +66,8 @@ def export_text(model, output_format: str, prefix: str | None = None, header: st
     Raises:
         correction.urdf.ExportError: an invalid prefix, limits or format.
     """
-    from correction import dump_robot
-    from correction.urdf import PANDA_EFFORT, ExportError, provenance_comment, robot_to_urdf, xml_comment
+    from spherecal.correction import dump_robot
+    from spherecal.correction.urdf import PANDA_EFFORT, ExportError, provenance_comment, robot_to_urdf, xml_comment
 
     if output_format == "urdf":
         n = model.n_joints
@@ -82,7 +82,7 @@ def export_text(model, output_format: str, prefix: str | None = None, header: st
     if output_format == "yaml":
         return dump_robot(model, header=header)
     if output_format == "mjcf":
-        from controller.plant import build_mjcf
+        from spherecal.controller.plant import build_mjcf
 
         comments = [xml_comment(header)] if header.strip() else []
         return "\n".join(comments + [provenance_comment(model), build_mjcf(model)])
@@ -91,7 +91,7 @@ def export_text(model, output_format: str, prefix: str | None = None, header: st
 
 def run(args: argparse.Namespace) -> int:
     """Load, validate and export; nothing is written unless the whole document was built."""
-    from correction import atomic_write_text, load_robot
+    from spherecal.correction import atomic_write_text, load_robot
 
     model = load_robot(args.robot)
     effort, velocity = _limits(args.effort, "--effort"), _limits(args.velocity, "--velocity")

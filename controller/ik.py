@@ -9,9 +9,8 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-
-from correction import RobotModel, frames, joint_jacobian, tool_point, tool_pose
-from correction.errors import SpherecalError
+from spherecal.correction import RobotModel, frames, joint_jacobian, tool_point, tool_pose
+from spherecal.correction.errors import SpherecalError
 
 #: Position tolerance [m] and orientation tolerance [rad] of a converged solution.
 POSITION_TOL = 1e-10

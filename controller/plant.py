@@ -14,9 +14,8 @@ from xml.sax.saxutils import quoteattr
 
 import mujoco
 import numpy as np
-
-from correction import RobotModel, link_frames
-from correction.urdf import xml_comment
+from spherecal.correction import RobotModel, link_frames
+from spherecal.correction.urdf import xml_comment
 
 #: Physical defaults of the plant (settings that keep the closed chain stable at 1 kHz).
 TIMESTEP = 1e-3  # [s] the Panda's 1 kHz control rate

@@ -25,8 +25,7 @@ from dataclasses import dataclass
 import numpy as np
 import qpsolvers
 import scipy.sparse as sparse
-
-from correction.errors import SpherecalError
+from spherecal.correction.errors import SpherecalError
 
 #: Defaults of the controller.
 MAX_VELOCITY = 2.0  # [rad/s] (the Panda allows 2.175-2.61)

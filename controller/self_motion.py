@@ -16,9 +16,8 @@ from dataclasses import dataclass, field, replace
 
 import mujoco
 import numpy as np
-
-from correction import RobotModel, frames
-from correction.errors import SpherecalError
+from spherecal.correction import RobotModel, frames
+from spherecal.correction.errors import SpherecalError
 
 from .exploration import COVERAGE_PERIOD, RANDOM_PERIOD, Ramp, joint_coverage, make_exploration
 from .ik import ik
@@ -123,7 +122,7 @@ class SelfMotionRun:
 
     def dataset(self):
         """The kept samples as an :class:`identification.dataset.Dataset` (with times)."""
-        from identification.dataset import Dataset
+        from spherecal.identification.dataset import Dataset
 
         return Dataset(labels=self.labels, q=self.q, t=self.t, fixture_names=self.fixture_names)
 

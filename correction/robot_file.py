@@ -129,7 +129,7 @@ def load_robot(path_or_name: str | os.PathLike) -> RobotModel:
     """
     key = str(path_or_name)
     if key in EMBEDDED_ROBOTS and not Path(key).exists():
-        text = resources.files("correction").joinpath("data", EMBEDDED_ROBOTS[key]).read_text()
+        text = resources.files(__package__).joinpath("data", EMBEDDED_ROBOTS[key]).read_text()
         return robot_from_dict(yaml.safe_load(text), source=key)
     path = Path(path_or_name)
     try:

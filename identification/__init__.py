@@ -2,8 +2,8 @@
 
 The public names are loaded lazily (``identification.cli`` must import nothing heavy)::
 
-    from identification import read_samples, read_fixtures, build_problem, CalibrationResult
-    from identification.calibrate import calibrate   # (the submodule shares the function's name)
+    from spherecal.identification import read_samples, read_fixtures, build_problem, CalibrationResult
+    from spherecal.identification.calibrate import calibrate   # (the submodule shares the function's name)
 """
 
 from __future__ import annotations

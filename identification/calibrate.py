@@ -6,8 +6,7 @@ import time
 from dataclasses import dataclass, field
 
 import numpy as np
-
-from correction import RobotModel, param_jacobian, registered_errors, tool_point
+from spherecal.correction import RobotModel, param_jacobian, registered_errors, tool_point
 
 from .dataset import Dataset, FixtureSpec
 from .identifiability import Identifiability, predicted_std

@@ -9,7 +9,7 @@ HELP = "Identify DH parameters from spherical-joint samples and write a calibrat
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     """Register the options of `spherecal calibrate`."""
-    from identification.options import non_negative, positive, seed
+    from spherecal.identification.options import non_negative, positive, seed
 
     parser.add_argument("--robot", required=True, help="nominal robot file (or 'panda')")
     parser.add_argument("--samples", required=True, help="samples.csv: fixture[,t],q1..qn [rad]")
@@ -48,9 +48,8 @@ def run(args: argparse.Namespace) -> int:
     from dataclasses import replace
 
     import numpy as np
-
-    from correction import load_robot, save_robot
-    from correction.provenance import PACKAGES, input_record, versions
+    from spherecal.correction import load_robot, save_robot
+    from spherecal.correction.provenance import PACKAGES, input_record, versions
 
     from .calibrate import calibrate
     from .dataset import read_fixtures, read_samples

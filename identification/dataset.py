@@ -31,9 +31,8 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
-
-from correction import RobotModel, atomic_write_text
-from correction.errors import SpherecalError
+from spherecal.correction import RobotModel, atomic_write_text
+from spherecal.correction.errors import SpherecalError
 
 #: Default tolerance of :meth:`Dataset.deduplicated`: max |dq| [rad] under which two samples of one
 #: fixture count as the same configuration (1e-4 rad ~ 0.1 mm at 1 m reach).

@@ -26,8 +26,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-
-from correction import RobotModel, param_jacobian, tool_point
+from spherecal.correction import RobotModel, param_jacobian, tool_point
 
 from .calibrate import SIGMA_FLOOR
 from .dataset import Dataset, FixtureSpec

@@ -31,10 +31,9 @@ from __future__ import annotations
 from dataclasses import dataclass, field, replace
 
 import numpy as np
-
-from correction import RobotModel, link_frames, param_jacobian, tool_point
-from correction.errors import SpherecalError
-from correction.perturb import ANGLE_STD, LENGTH_STD, TOOL_STD
+from spherecal.correction import RobotModel, link_frames, param_jacobian, tool_point
+from spherecal.correction.errors import SpherecalError
+from spherecal.correction.perturb import ANGLE_STD, LENGTH_STD, TOOL_STD
 
 from .dataset import Dataset, DatasetError, FixtureSpec
 from .identifiability import Identifiability, greedy_rank, predicted_std

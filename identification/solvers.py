@@ -20,8 +20,7 @@ import time
 from dataclasses import dataclass
 
 import numpy as np
-
-from correction import tool_point
+from spherecal.correction import tool_point
 
 from .problem import CalibrationProblem, prior_std
 

@@ -8,8 +8,7 @@ true model's joint Jacobian. Random seeds spread the samples over the self-motio
 from __future__ import annotations
 
 import numpy as np
-
-from correction import RobotModel, joint_jacobian, tool_point
+from spherecal.correction import RobotModel, joint_jacobian, tool_point
 
 from .dataset import Dataset, FixtureSpec
 

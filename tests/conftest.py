@@ -10,7 +10,7 @@ import pytest
 os.environ.setdefault("RERUN_ANALYTICS", "0")
 os.environ.setdefault("CI", "1")  # the Rerun viewer binary is quiet under CI
 
-from correction import RobotModel, load_robot, perturb  # noqa: E402
+from spherecal.correction import RobotModel, load_robot, perturb  # noqa: E402
 
 
 @pytest.fixture

@@ -12,7 +12,7 @@ ROOT = Path(__file__).parents[1]
 
 def test_help_lists_every_subcommand() -> None:
     out = subprocess.run(
-        [sys.executable, "-m", "validation.cli", "--help"], capture_output=True, text=True, cwd=ROOT
+        [sys.executable, "-m", "spherecal.cli", "--help"], capture_output=True, text=True, cwd=ROOT
     )
     assert out.returncode == 0
     for name in ("simulate", "calibrate", "validate", "demo", "campaign", "plan", "export"):
@@ -21,7 +21,7 @@ def test_help_lists_every_subcommand() -> None:
 
 def test_help_imports_no_heavy_dependency() -> None:
     code = (
-        "import sys, validation.cli as c; c.build_parser();"
+        "import sys, spherecal.cli as c; c.build_parser();"
         "print(sorted(m for m in ('mujoco','rerun','pyswarms','scipy','numpy') if m in sys.modules))"
     )
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, cwd=ROOT)
@@ -30,7 +30,7 @@ def test_help_imports_no_heavy_dependency() -> None:
 
 def test_subcommand_help_imports_no_heavy_dependency() -> None:
     code = (
-        "import sys, contextlib, io, validation.cli as c\n"
+        "import sys, contextlib, io, spherecal.cli as c\n"
         "for name in c.COMMANDS:\n"
         "    with contextlib.suppress(SystemExit), contextlib.redirect_stdout(io.StringIO()):\n"
         "        c.main([name, '--help'])\n"
@@ -48,7 +48,7 @@ def test_ci_runs_exactly_the_readme_test_command() -> None:
 
 
 def test_an_os_error_is_one_line_and_exit_1(capsys, monkeypatch) -> None:
-    import validation.cli as cli
+    import spherecal.cli as cli
 
     def failing(args):
         raise PermissionError(13, "Permission denied", "/root/locked/out.yaml")

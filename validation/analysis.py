@@ -29,8 +29,7 @@ from dataclasses import dataclass, field, replace
 from pathlib import Path
 
 import numpy as np
-
-from correction import atomic_write_text, registered_errors, tool_point
+from spherecal.correction import atomic_write_text, registered_errors, tool_point
 
 #: The fourth fixture of the 1-4 fixture rows (low, left of the defaults) [m].
 P4 = (0.35, -0.1, 0.2)
@@ -100,7 +99,7 @@ class CellResult:
 
 
 def _defaults() -> dict[str, tuple[float, float, float]]:
-    from validation.experiment import default_fixtures
+    from spherecal.validation.experiment import default_fixtures
 
     return {k: tuple(float(x) for x in v) for k, v in default_fixtures().items()}
 
@@ -135,19 +134,19 @@ def cells(config: AnalysisConfig, best: dict[str, tuple[float, float, float]] | 
 
 @functools.lru_cache(maxsize=1)
 def _workspace():
-    from identification.prediction import Workspace
-    from validation.experiment import nominal_robot
+    from spherecal.identification.prediction import Workspace
+    from spherecal.validation.experiment import nominal_robot
 
     return Workspace.of(nominal_robot())
 
 
 def run_set(cell: Cell, index: int, seed: tuple[int, ...], configurations: int):
     """One motion set of a cell: (measured mean, measured p95, prediction or None) [m]."""
-    from identification.calibrate import calibrate
-    from identification.dataset import Dataset
-    from identification.prediction import predict_accuracy
-    from validation.experiment import fixture_spec, nominal_robot, true_robot
-    from validation.plan import Candidate, motion_samples
+    from spherecal.identification.calibrate import calibrate
+    from spherecal.identification.dataset import Dataset
+    from spherecal.identification.prediction import predict_accuracy
+    from spherecal.validation.experiment import fixture_spec, nominal_robot, true_robot
+    from spherecal.validation.plan import Candidate, motion_samples
 
     rng = np.random.default_rng(seed)
     nominal = nominal_robot()
@@ -214,8 +213,8 @@ class Analysis:
 
 def run_analysis(config: AnalysisConfig) -> Analysis:
     """Plan on the grid, then run every cell."""
-    from validation.experiment import nominal_robot
-    from validation.plan import grid_candidates, plan
+    from spherecal.validation.experiment import nominal_robot
+    from spherecal.validation.plan import grid_candidates, plan
 
     clock = time.perf_counter()
     result = plan(nominal_robot(), grid_candidates(config.grid), 3, np.random.default_rng(config.seed))
@@ -261,7 +260,7 @@ TITLES = {
 
 def markdown(analysis: Analysis, provenance: str) -> str:
     """The document."""
-    from validation.plan_cli import format_plan
+    from spherecal.validation.plan_cli import format_plan
 
     cfg = analysis.config
     results = analysis.results
@@ -365,7 +364,7 @@ def _plan_lines(rows: list[CellResult]) -> list[str]:
 
 def write_analysis(path: str | Path, config: AnalysisConfig | None = None) -> Path:
     """Run the analysis and write the Markdown document (atomically; provenance in an HTML comment)."""
-    from validation.provenance import comment_block, provenance
+    from spherecal.validation.provenance import comment_block, provenance
 
     config = config or AnalysisConfig()
     analysis = run_analysis(config)

@@ -9,7 +9,7 @@ HELP = "Run the paper's simulated protocol (fixture sets x noise levels) and pri
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     """Register the options of `spherecal campaign`."""
-    from identification.options import non_negative, positive, seed
+    from spherecal.identification.options import non_negative, positive, seed
 
     parser.add_argument("--sets", type=int, default=10, help="motion sets per row (10)")
     parser.add_argument("--samples", type=int, default=500, help="samples per fixture in each set (500)")
@@ -39,8 +39,15 @@ def run(args: argparse.Namespace) -> int:
     """Run the campaign, print Table 2, write it as CSV and Markdown."""
     import time
 
-    from validation.campaign import FIXTURE_SETS, CampaignConfig, format_table, run_campaign, table, write_tables
-    from validation.provenance import comment_block, provenance
+    from spherecal.validation.campaign import (
+        FIXTURE_SETS,
+        CampaignConfig,
+        format_table,
+        run_campaign,
+        table,
+        write_tables,
+    )
+    from spherecal.validation.provenance import comment_block, provenance
 
     rows = tuple(r.strip() for r in args.rows.split(",") if r.strip())
     unknown = [r for r in rows if r not in FIXTURE_SETS]
@@ -60,7 +67,7 @@ def run(args: argparse.Namespace) -> int:
         )
     if args.source == "mujoco" and args.samples > round(args.seconds * 1000):
         raise SystemExit(f"spherecal campaign: error: --samples {args.samples} > {args.seconds} s of 1 kHz readings")
-    from validation.inputs import check_out_folder
+    from spherecal.validation.inputs import check_out_folder
 
     check_out_folder(args.out)
     config = CampaignConfig(

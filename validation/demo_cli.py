@@ -9,7 +9,7 @@ HELP = "End-to-end demo on the embedded Panda: simulate, calibrate, validate, re
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     """Register the options of `spherecal demo`."""
-    from identification.options import non_negative, positive, seed
+    from spherecal.identification.options import non_negative, positive, seed
 
     parser.add_argument("--seed", type=seed, default=0, help="seed of the true robot, motion and noise (0)")
     parser.add_argument("--samples", type=int, default=1500, help="samples kept per fixture (1500)")
@@ -32,7 +32,7 @@ def run(args: argparse.Namespace) -> int:
     import time
     from pathlib import Path
 
-    from validation.demo import DemoConfig, run_demo
+    from spherecal.validation.demo import DemoConfig, run_demo
 
     if (
         args.samples < 10
@@ -45,7 +45,7 @@ def run(args: argparse.Namespace) -> int:
         )
     if args.samples > round(args.seconds * 1000) and args.source == "mujoco":
         raise SystemExit(f"spherecal demo: error: --samples {args.samples} > {args.seconds} s of 1 kHz readings")
-    from validation.inputs import check_out_folder
+    from spherecal.validation.inputs import check_out_folder
 
     check_out_folder(args.out)
     start = time.perf_counter()

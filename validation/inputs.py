@@ -5,7 +5,7 @@ from __future__ import annotations
 import os
 from pathlib import Path
 
-from correction import RobotModel, SpherecalError
+from spherecal.correction import RobotModel, SpherecalError
 
 
 class ValidationInputError(SpherecalError):

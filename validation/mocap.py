@@ -17,8 +17,14 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
-
-from correction import RobotModel, SpherecalError, apply_transform, atomic_write_text, fit_rigid_transform, pose_matrix
+from spherecal.correction import (
+    RobotModel,
+    SpherecalError,
+    apply_transform,
+    atomic_write_text,
+    fit_rigid_transform,
+    pose_matrix,
+)
 
 #: The paper's motion-capture accuracy: 0.3 mm per marker (std).
 MARKER_NOISE = 0.3e-3
@@ -154,7 +160,7 @@ class SimulatedMocap:
             markers (N, M, 3) and tool points (N, 3) [m], in the robot base (world) frame.
         """
         if self._plant is None:
-            from controller.plant import build_plant
+            from spherecal.controller.plant import build_plant
 
             self._plant = build_plant(self.truth, markers=self.cluster.markers)
         sites = np.append(self._plant.marker_sites, self._plant.tool_site)

@@ -26,12 +26,11 @@ from dataclasses import dataclass, field, replace
 from pathlib import Path
 
 import numpy as np
-
-from correction import RobotModel
-from correction.errors import SpherecalError
-from identification.dataset import Dataset, FixtureSpec
-from identification.prediction import Prediction, Workspace, predict_accuracy
-from identification.synthetic import fixture_samples, project_to_point
+from spherecal.correction import RobotModel
+from spherecal.correction.errors import SpherecalError
+from spherecal.identification.dataset import Dataset, FixtureSpec
+from spherecal.identification.prediction import Prediction, Workspace, predict_accuracy
+from spherecal.identification.synthetic import fixture_samples, project_to_point
 
 MOTIONS: tuple[str, ...] = ("kinematic", "controller")
 #: Samples per candidate used for planning (each stands for ``samples / PLAN_SAMPLES`` recorded ones).
@@ -212,7 +211,7 @@ def reach_configuration(
     Raises:
         UnreachableFixtureError (from the controller package's family): no seed reaches it.
     """
-    from controller.self_motion import UnreachableFixtureError
+    from spherecal.controller.self_motion import UnreachableFixtureError
 
     q, ok = project_to_point(model, model.random_configurations(seeds, rng), centre)
     if not ok.any():
@@ -255,7 +254,12 @@ def motion_samples(
     Raises:
         FixtureInsideRobotError, UnreachableFixtureError: the candidate cannot be used.
     """
-    from controller.self_motion import SelfMotionSettings, UnreachableFixtureError, check_fixture, collect_self_motion
+    from spherecal.controller.self_motion import (
+        SelfMotionSettings,
+        UnreachableFixtureError,
+        check_fixture,
+        collect_self_motion,
+    )
 
     truth = model if truth is None else truth
     centre = candidate.position
@@ -286,7 +290,7 @@ def survey(
     count: int = PLAN_SAMPLES,
 ) -> list[Survey]:
     """Reach and self-motion coverage at every candidate (unreachable ones kept, with the reason)."""
-    from controller.exploration import joint_coverage
+    from spherecal.controller.exploration import joint_coverage
 
     out = []
     for candidate in candidates:

@@ -9,7 +9,7 @@ HELP = "Rank candidate fixture positions by the calibration accuracy they predic
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     """Register the options of `spherecal plan`."""
-    from identification.options import non_negative, positive, seed
+    from spherecal.identification.options import non_negative, positive, seed
 
     parser.add_argument("--robot", default="panda", help="nominal robot file or 'panda' (default)")
     where = parser.add_mutually_exclusive_group()
@@ -35,7 +35,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def _fail(message: str):
-    from correction.errors import SpherecalError
+    from spherecal.correction.errors import SpherecalError
 
     return SpherecalError(message)
 
@@ -45,8 +45,7 @@ def run(args: argparse.Namespace) -> int:
     import time
 
     import numpy as np
-
-    from correction import load_robot
+    from spherecal.correction import load_robot
 
     if not args.noise >= 0:
         raise _fail(f"--noise must be >= 0, got {args.noise}")
@@ -54,13 +53,13 @@ def run(args: argparse.Namespace) -> int:
         raise _fail(f"--samples must be >= 10, got {args.samples}")
     if not args.seconds > 0:
         raise _fail(f"--seconds must be > 0, got {args.seconds}")
-    from validation.inputs import check_out_file
+    from spherecal.validation.inputs import check_out_file
 
     for option, path in (("--rrd", args.rrd), ("--analysis", args.analysis)):
         if path is not None:
             check_out_file(path, option)
     if args.analysis is not None:
-        from validation.analysis import AnalysisConfig, write_analysis
+        from spherecal.validation.analysis import AnalysisConfig, write_analysis
 
         path = write_analysis(args.analysis, AnalysisConfig(seed=args.seed, workers=args.workers))
         print(f"written: {path}")
@@ -69,7 +68,7 @@ def run(args: argparse.Namespace) -> int:
     rng = np.random.default_rng(args.seed)
     if args.predict is not None:
         return _predict(args, model)
-    from validation.plan import grid_candidates, plan, read_candidates
+    from spherecal.validation.plan import grid_candidates, plan, read_candidates
 
     if args.candidates is None and args.grid is None:
         raise _fail("give --candidates C.yaml or --grid 'xmin,xmax,nx;ymin,ymax,ny;zmin,zmax,nz'")
@@ -80,7 +79,7 @@ def run(args: argparse.Namespace) -> int:
     result = plan(model, candidates, args.fixtures, rng, args.noise * 1e-3, args.samples, args.motion, args.seconds)
     print(format_plan(result))
     if args.rrd:
-        from validation.provenance import comment_block, provenance
+        from spherecal.validation.provenance import comment_block, provenance
 
         inputs = {k: v for k, v in vars(args).items() if not k.startswith("_") and k != "command"}
         path = write_recording(args.rrd, result, comment_block(provenance(args.seed, inputs)))
@@ -91,8 +90,8 @@ def run(args: argparse.Namespace) -> int:
 
 
 def _predict(args: argparse.Namespace, model) -> int:
-    from identification.dataset import read_fixtures, read_samples
-    from identification.prediction import predict_accuracy
+    from spherecal.identification.dataset import read_fixtures, read_samples
+    from spherecal.identification.prediction import predict_accuracy
 
     dataset = read_samples(args.predict, model)
     spec = read_fixtures(args.spec) if args.spec else None
@@ -148,8 +147,7 @@ def write_recording(path: str, result, provenance: str = "") -> str:
     the chosen set as larger points, the printed plan and its provenance as text; Rerun is imported
     only here."""
     import numpy as np
-
-    from validation.recording import Recording
+    from spherecal.validation.recording import Recording
 
     recording = Recording(path)
     try:

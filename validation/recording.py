@@ -30,8 +30,7 @@ import os
 from pathlib import Path
 
 import numpy as np
-
-from correction import RobotModel, apply_transform, fit_rigid_transform, link_frames, tool_point
+from spherecal.correction import RobotModel, apply_transform, fit_rigid_transform, link_frames, tool_point
 
 COLOURS = {
     "measured": (30, 30, 30),

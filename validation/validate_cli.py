@@ -9,7 +9,7 @@ HELP = "Compare nominal and calibrated models against the truth or motion-captur
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     """Register the options of `spherecal validate`."""
-    from identification.options import non_negative, seed
+    from spherecal.identification.options import non_negative, seed
 
     parser.add_argument("--truth", help="robot file of the true robot (simulation)")
     parser.add_argument("--nominal", required=True, help="robot file of the nominal model ('panda': embedded)")
@@ -30,18 +30,17 @@ def run(args: argparse.Namespace) -> int:
     from pathlib import Path
 
     import numpy as np
-
-    from correction import atomic_write_text, load_robot
-    from validation.inputs import check_models
-    from validation.mocap import read_mocap_csv
-    from validation.pipeline import record_validation, validate_models
-    from validation.provenance import provenance
+    from spherecal.correction import atomic_write_text, load_robot
+    from spherecal.validation.inputs import check_models
+    from spherecal.validation.mocap import read_mocap_csv
+    from spherecal.validation.pipeline import record_validation, validate_models
+    from spherecal.validation.provenance import provenance
 
     if args.truth is None and args.mocap is None:
         raise SystemExit("spherecal validate: error: give --truth (simulation) or --mocap (recorded data)")
     if args.configurations < 3 or not args.noise >= 0:
         raise SystemExit("spherecal validate: error: --configurations must be >= 3 and --noise >= 0")
-    from validation.inputs import check_out_file
+    from spherecal.validation.inputs import check_out_file
 
     for option, path in (("--out", args.out), ("--rrd", args.rrd)):
         if path is not None:
@@ -55,7 +54,7 @@ def run(args: argparse.Namespace) -> int:
     measurement = None if args.mocap is None else read_mocap_csv(args.mocap, n)
     self_motion = None
     if args.samples is not None:
-        from identification.dataset import read_samples
+        from spherecal.identification.dataset import read_samples
 
         dataset = read_samples(args.samples, models.get("truth", models["nominal"]))
         self_motion = {name: dataset.for_fixture(name) for name in dataset.fixture_names}
@@ -79,7 +78,7 @@ def run(args: argparse.Namespace) -> int:
         result = {"provenance": provenance(args.seed, inputs), "validation": report.to_dict()}
         print(f"report: {atomic_write_text(args.out, json.dumps(result, indent=2) + chr(10))}")
     if args.rrd or args.spawn:
-        from validation.recording import Recording
+        from spherecal.validation.recording import Recording
 
         recording = Recording(args.rrd, spawn=args.spawn, application_id="spherecal_validate")
         try:

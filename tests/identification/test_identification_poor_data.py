@@ -4,12 +4,11 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-
-from correction import load_robot, perturb, registered_errors, tool_point
-from identification.calibrate import calibrate, check_plausible
-from identification.dataset import FixtureSpec
-from identification.problem import ImplausibleCalibrationError, build_problem
-from identification.synthetic import make_dataset
+from spherecal.correction import load_robot, perturb, registered_errors, tool_point
+from spherecal.identification.calibrate import calibrate, check_plausible
+from spherecal.identification.dataset import FixtureSpec
+from spherecal.identification.problem import ImplausibleCalibrationError, build_problem
+from spherecal.identification.synthetic import make_dataset
 
 
 def _mean_error(model, true) -> float:
@@ -20,8 +19,8 @@ def _mean_error(model, true) -> float:
 def test_one_second_of_self_motion_does_not_make_the_arm_worse() -> None:
     """Regression: 1 s per fixture in MuJoCo (60 samples, 0.3 mm compliance, seed 3) once sent the
     first fit 150 deg away and the 'calibrated' arm ended 29 mm off against 7.7 mm nominal."""
-    from controller.self_motion import SelfMotionSettings, collect_self_motion
-    from validation.experiment import default_fixtures
+    from spherecal.controller.self_motion import SelfMotionSettings, collect_self_motion
+    from spherecal.validation.experiment import default_fixtures
 
     nominal = load_robot("panda")
     rng = np.random.default_rng(3)

@@ -4,10 +4,9 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-
-from correction import apply_transform, fit_rigid_transform, perturb, tool_point
-from validation.compare import ValidationSet, compare, format_comparisons, parameter_deviations
-from validation.mocap import (
+from spherecal.correction import apply_transform, fit_rigid_transform, perturb, tool_point
+from spherecal.validation.compare import ValidationSet, compare, format_comparisons, parameter_deviations
+from spherecal.validation.mocap import (
     MarkerCluster,
     MocapError,
     MocapMeasurement,
@@ -145,7 +144,7 @@ def test_marker_columns_need_a_cluster(tmp_path, truth, mocap, rng) -> None:
 
 
 def test_recording_holds_the_documented_entities(tmp_path, panda, truth, rng) -> None:
-    from validation.recording import Recording, read_entity_rows
+    from spherecal.validation.recording import Recording, read_entity_rows
 
     q = truth.random_configurations(40, rng)
     recording = Recording(tmp_path / "r.rrd")

@@ -6,17 +6,16 @@ from dataclasses import replace
 
 import numpy as np
 import pytest
-
-from controller.compensation import (
+from spherecal.controller.compensation import (
     CompensationError,
     ModelMismatchError,
     compensate,
     corrected_ik,
     nominal_ik_controller,
 )
-from controller.ik import UnreachableError
-from correction import RobotModel, perturb, to_standard, tool_point, tool_pose
-from correction.errors import SpherecalError
+from spherecal.controller.ik import UnreachableError
+from spherecal.correction import RobotModel, perturb, to_standard, tool_point, tool_pose
+from spherecal.correction.errors import SpherecalError
 
 
 @pytest.fixture
@@ -175,7 +174,7 @@ def test_a_controller_whose_posture_jumps_is_named_and_best_effort_is_flagged(ro
 
 
 def test_differential_ik_flow_is_a_controller_model(robots):
-    from controller.compensation import DifferentialIKFlow
+    from spherecal.controller.compensation import DifferentialIKFlow
 
     nominal, calibrated, rng = robots
     q_goal, q_seed = _case(calibrated, rng, spread=0.1)

@@ -3,10 +3,9 @@
 from __future__ import annotations
 
 import numpy as np
-
-from controller.ik import ik
-from controller.plant import build_plant
-from correction import perturb, rpy_matrix, tool_point, tool_pose
+from spherecal.controller.ik import ik
+from spherecal.controller.plant import build_plant
+from spherecal.correction import perturb, rpy_matrix, tool_point, tool_pose
 
 HOME = np.array([0.0, -0.785, 0.0, -2.356, 0.0, 1.571, 0.785])
 

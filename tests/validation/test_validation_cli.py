@@ -6,8 +6,7 @@ import json
 
 import numpy as np
 import pytest
-
-from correction import (
+from spherecal.correction import (
     dump_robot,
     load_robot,
     perturb,
@@ -17,8 +16,9 @@ from correction import (
     to_standard,
     tool_point,
 )
-from validation.cli import main
-from validation.mocap import MocapMeasurement, write_mocap_csv
+from spherecal.validation.mocap import MocapMeasurement, write_mocap_csv
+
+from spherecal.cli import main
 
 
 @pytest.fixture

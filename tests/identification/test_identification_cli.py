@@ -9,13 +9,13 @@ from pathlib import Path
 import numpy as np
 import pytest
 import yaml
+from spherecal.correction import load_robot, perturb, save_robot
+from spherecal.identification.dataset import write_fixtures, write_samples
+from spherecal.identification.synthetic import make_dataset
 
-from correction import load_robot, perturb, save_robot
-from identification.dataset import write_fixtures, write_samples
-from identification.synthetic import make_dataset
-from validation.cli import main
+from spherecal.cli import main
 
-ROOT = Path(__file__).parents[1]
+ROOT = Path(__file__).parents[2]
 HEADER = "fixture,q1,q2,q3,q4,q5,q6,q7\n"
 
 
@@ -99,7 +99,7 @@ def test_bad_input_one_line_exit_1_no_output(inputs, tmp_path, capsys, samples, 
 
 def test_lm_path_imports_no_simulator_viewer_or_swarm(inputs, tmp_path) -> None:
     code = (
-        "import sys; from validation.cli import main;"
+        "import sys; from spherecal.cli import main;"
         f"main(['calibrate','--robot','panda','--samples',{str(inputs / 'samples.csv')!r},"
         f"'--fixtures',{str(inputs / 'fixtures.yaml')!r},'--out',{str(tmp_path / 'c.yaml')!r}]);"
         "print(sorted(m for m in ('mujoco','rerun','pyswarms') if m in sys.modules), file=sys.stderr)"

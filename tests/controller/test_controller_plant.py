@@ -5,9 +5,9 @@ from __future__ import annotations
 import mujoco
 import numpy as np
 import pytest
+from spherecal.controller.plant import build_plant
+from spherecal.correction import link_frames, to_standard, tool_point
 
-from controller.plant import build_plant
-from correction import link_frames, to_standard, tool_point
 from tests.conftest import perturbed
 
 
@@ -52,7 +52,7 @@ def test_plant_settings_and_fixtures(panda):
 
 
 def test_engaged_fixture_holds_tool_point(panda, rng):
-    from controller.self_motion import reach_fixture
+    from spherecal.controller.self_motion import reach_fixture
 
     centre = np.array([0.5, 0.0, 0.4])
     plant = build_plant(panda, {"A": centre})
@@ -69,7 +69,7 @@ def test_engaged_fixture_holds_tool_point(panda, rng):
 def test_names_with_xml_characters_compile(panda):
     from dataclasses import replace
 
-    from controller.plant import build_mjcf
+    from spherecal.controller.plant import build_mjcf
 
     text = build_mjcf(replace(panda, name='arm "x" & <y>'), fixtures={"a--b": np.zeros(3), 'c"': np.ones(3)})
     import xml.etree.ElementTree as ET

@@ -12,13 +12,13 @@ import sys
 
 #: subcommand -> module with ``HELP``, ``add_arguments(parser)`` and ``run(args) -> int``.
 COMMANDS: dict[str, str] = {
-    "simulate": "controller.cli",
-    "calibrate": "identification.cli",
-    "validate": "validation.validate_cli",
-    "demo": "validation.demo_cli",
-    "campaign": "validation.campaign_cli",
-    "plan": "validation.plan_cli",
-    "export": "controller.export_cli",
+    "simulate": "spherecal.controller.cli",
+    "calibrate": "spherecal.identification.cli",
+    "validate": "spherecal.validation.validate_cli",
+    "demo": "spherecal.validation.demo_cli",
+    "campaign": "spherecal.validation.campaign_cli",
+    "plan": "spherecal.validation.plan_cli",
+    "export": "spherecal.controller.export_cli",
 }
 
 
@@ -50,7 +50,7 @@ def _version() -> str:
 def main(argv: list[str] | None = None) -> int:
     """Run one subcommand; spherecal's own errors print one line and exit 1."""
     args = build_parser().parse_args(argv)  # --help and usage errors end here, before numpy loads
-    from correction.errors import SpherecalError
+    from spherecal.correction.errors import SpherecalError
     try:
         return int(args._run(args) or 0)
     except SpherecalError as error:

@@ -5,10 +5,9 @@ from __future__ import annotations
 import numpy as np
 import pytest
 import qpsolvers
-
-from controller.nullspace import NullSpaceController
-from controller.qp_ik import ControllerFallbackWarning, QPSolveError, build_problem, velocity_bounds
-from correction import joint_jacobian, tool_point
+from spherecal.controller.nullspace import NullSpaceController
+from spherecal.controller.qp_ik import ControllerFallbackWarning, QPSolveError, build_problem, velocity_bounds
+from spherecal.correction import joint_jacobian, tool_point
 
 Q0 = np.array([0.1, -0.3, 0.2, -2.0, 0.1, 1.8, 0.8])
 

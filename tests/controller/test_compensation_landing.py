@@ -17,7 +17,7 @@ landing is the plant's tool site. The calibrated model is either
 The calibration's own accuracy is its mean tool-point error against the true model on 1000
 random configurations.
 
-Run the 200-target table: ``python -m tests.test_compensation_landing [perturbed]`` (or the slow
+Run the 200-target table: ``python -m tests.controller.test_compensation_landing [perturbed]`` (or the slow
 test with ``-s``); the quick test runs 12 targets.
 """
 
@@ -98,7 +98,7 @@ def _servo(plant, q_start: np.ndarray, q_cmd: np.ndarray) -> tuple[np.ndarray, f
 
 def calibrated_model(nominal, true, rng: np.random.Generator, calibration: str):
     """The calibrated model and a one-line description of how it was made (see module docstring)."""
-    from correction import perturb
+    from spherecal.correction import perturb
 
     if calibration == "perturbed":
         model = perturb(true, rng, CALIBRATION_LENGTH_STD, CALIBRATION_ANGLE_STD, CALIBRATION_LENGTH_STD)
@@ -106,9 +106,9 @@ def calibrated_model(nominal, true, rng: np.random.Generator, calibration: str):
                        f"{np.rad2deg(CALIBRATION_ANGLE_STD):g} deg, {CALIBRATION_LENGTH_STD * 1e3:g} mm tool)")
     if calibration != "identified":
         raise ValueError(f"calibration: expected 'identified' or 'perturbed', got {calibration!r}")
-    from identification.calibrate import calibrate
-    from identification.dataset import FixtureSpec
-    from identification.synthetic import PANDA_FIXTURES, make_dataset
+    from spherecal.identification.calibrate import calibrate
+    from spherecal.identification.dataset import FixtureSpec
+    from spherecal.identification.synthetic import PANDA_FIXTURES, make_dataset
 
     dataset, _ = make_dataset(true, per_fixture=SAMPLES_PER_FIXTURE, rng=rng, noise=FIXTURE_NOISE)
     positions = {name: np.asarray(centre, dtype=float) for name, centre in PANDA_FIXTURES.items()}
@@ -123,8 +123,8 @@ def calibrated_model(nominal, true, rng: np.random.Generator, calibration: str):
 def _setup(seed: int, calibration: str):
     """Seeded generator, nominal, true and calibrated models, its description, the true plant, and the
     calibration's accuracy [m] (mean tool-point error against the truth on 1000 random configurations)."""
-    from controller.plant import build_plant
-    from correction import load_robot, perturb, tool_point
+    from spherecal.controller.plant import build_plant
+    from spherecal.correction import load_robot, perturb, tool_point
 
     rng = np.random.default_rng(seed)
     nominal = load_robot("panda")
@@ -138,9 +138,9 @@ def _setup(seed: int, calibration: str):
 
 def landing_table(count: int, seed: int = 20261122, calibration: str = "identified") -> LandingTable:
     """Command ``count`` random reachable targets three ways on the true plant (see module docstring)."""
-    from controller.compensation import compensate, corrected_ik, nominal_ik_controller
-    from controller.ik import UnreachableError
-    from correction import tool_point
+    from spherecal.controller.compensation import compensate, corrected_ik, nominal_ik_controller
+    from spherecal.controller.ik import UnreachableError
+    from spherecal.correction import tool_point
 
     rng, nominal, true, calibrated, description, plant, accuracy_random = _setup(seed, calibration)
     lower, upper = nominal.lower + LIMIT_INSET, nominal.upper - LIMIT_INSET
@@ -207,11 +207,11 @@ def qp_landing_table(count: int, seed: int = 20261122, calibration: str = "ident
     """
     import warnings
 
-    from controller.compensation import DifferentialIKFlow, compensate
-    from controller.ik import UnreachableError
-    from controller.nullspace import NullSpaceController
-    from controller.qp_ik import ControllerFallbackWarning
-    from correction import tool_point
+    from spherecal.controller.compensation import DifferentialIKFlow, compensate
+    from spherecal.controller.ik import UnreachableError
+    from spherecal.controller.nullspace import NullSpaceController
+    from spherecal.controller.qp_ik import ControllerFallbackWarning
+    from spherecal.correction import tool_point
 
     rng, nominal, true, calibrated, description, plant, accuracy = _setup(seed, calibration)
     nominal_qp, calibrated_qp = NullSpaceController(nominal), NullSpaceController(calibrated)
@@ -298,7 +298,7 @@ if __name__ == "__main__":
 
     start = time.perf_counter()
     args = sys.argv[1:]
-    if args[:1] == ["qp"]:  # python -m tests.test_compensation_landing qp [COUNT]
+    if args[:1] == ["qp"]:  # python -m tests.controller.test_compensation_landing qp [COUNT]
         print(qp_landing_table(int(args[1]) if len(args) > 1 else 50).text())
     else:
         print(landing_table(200, calibration=(args or ["identified"])[0]).text())

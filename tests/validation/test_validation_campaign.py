@@ -4,8 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-
-from validation.campaign import (
+from spherecal.validation.campaign import (
     CampaignConfig,
     TaskResult,
     format_table,
@@ -74,7 +73,7 @@ def test_campaign_is_the_same_on_one_or_two_workers(tmp_path) -> None:
 
 @pytest.mark.slow
 def test_small_real_campaign_is_reproducible(tmp_path) -> None:
-    from validation.campaign import run_task
+    from spherecal.validation.campaign import run_task
 
     config = CampaignConfig(sets=2, samples=150, configurations=500, fixture_sets=("P1", "Pall"))
     first = run_campaign(config, workers=2, progress=False)

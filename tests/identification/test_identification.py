@@ -7,12 +7,11 @@ import re
 
 import numpy as np
 import pytest
-
-from correction import load_robot, perturb, registered_errors, to_standard, tool_point
-from identification.calibrate import calibrate
-from identification.dataset import Dataset, DatasetError, FixtureSpec
-from identification.problem import UnidentifiableError, build_problem
-from identification.synthetic import make_dataset, project_to_point
+from spherecal.correction import load_robot, perturb, registered_errors, to_standard, tool_point
+from spherecal.identification.calibrate import calibrate
+from spherecal.identification.dataset import Dataset, DatasetError, FixtureSpec
+from spherecal.identification.problem import UnidentifiableError, build_problem
+from spherecal.identification.synthetic import make_dataset, project_to_point
 
 
 @pytest.fixture(scope="module")
@@ -153,7 +152,7 @@ def test_known_positions_fix_the_gauge(truth, clean) -> None:
 
 
 def test_distance_between_known_positions_is_checked_then_dropped(truth, clean, tmp_path) -> None:
-    from identification.dataset import read_fixtures
+    from spherecal.identification.dataset import read_fixtures
 
     panda, true = truth
     dataset, spec = clean
@@ -175,7 +174,7 @@ def test_scale_warning_states_the_scale_error_it_leaves() -> None:
     and the warning says the reported std exclude it (over seeds the std miss it: d5 0.05 vs 0.11 mm)."""
     import re
 
-    from identification.problem import scale_centre
+    from spherecal.identification.problem import scale_centre
 
     panda = load_robot("panda")
     centre = np.array([0.5, 0.1, 0.0])
@@ -221,7 +220,7 @@ def test_wrong_distance_is_flagged_not_written_silently(truth, clean) -> None:
 )
 def test_millimetres_typed_for_metres_are_refused(truth, clean, tmp_path, text, field) -> None:
     # used to "calibrate" with 200 m residuals and write the file
-    from identification.dataset import read_fixtures
+    from spherecal.identification.dataset import read_fixtures
 
     panda, _ = truth
     dataset, _ = clean

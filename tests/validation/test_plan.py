@@ -4,9 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-
-from validation.cli import main
-from validation.plan import (
+from spherecal.validation.plan import (
     Candidate,
     CandidateError,
     grid_candidates,
@@ -15,7 +13,9 @@ from validation.plan import (
     read_candidates,
     restricted,
 )
-from validation.plan_cli import format_plan
+from spherecal.validation.plan_cli import format_plan
+
+from spherecal.cli import main
 
 REACHABLE = {"A": [0.5, -0.25, 0.5], "B": [0.5, 0.0, 0.4], "C": [0.45, 0.25, 0.45]}
 
@@ -100,7 +100,7 @@ def test_restricted_window_inside_limits(panda):
 
 
 def test_joint_window_limits_the_self_motion(panda):
-    from correction import tool_point
+    from spherecal.correction import tool_point
 
     rng = np.random.default_rng(1)
     window = np.array([1, 0.1, 0.1, 1, 1, 1, 1.0])
@@ -135,7 +135,7 @@ def test_cli_plan_and_too_few_reachable(tmp_path, capsys):
     assert main(["plan", "--candidates", str(path), "--fixtures", "1", "--samples", "100", "--rrd", str(rrd)]) == 0
     out = capsys.readouterr().out
     assert "best set" in out and "unreachable" in out and rrd.stat().st_size > 0
-    from validation.recording import read_entity_rows
+    from spherecal.validation.recording import read_entity_rows
 
     rows = read_entity_rows(rrd)
     assert rows.get("plan/candidates") == 1 and rows.get("plan/best") == 1 and rows.get("plan/table") == 1
@@ -144,8 +144,8 @@ def test_cli_plan_and_too_few_reachable(tmp_path, capsys):
 
 
 def test_cli_predict_from_a_data_set(tmp_path, capsys, panda):
-    from identification.dataset import write_fixtures, write_samples
-    from identification.synthetic import make_dataset
+    from spherecal.identification.dataset import write_fixtures, write_samples
+    from spherecal.identification.synthetic import make_dataset
 
     dataset, spec = make_dataset(panda, {k: np.array(v) for k, v in REACHABLE.items()}, 60, np.random.default_rng(2))
     write_samples(tmp_path / "samples.csv", dataset)
@@ -160,8 +160,8 @@ def test_cli_predict_from_a_data_set(tmp_path, capsys, panda):
 def test_plan_beats_defaults_and_ranks_a_p3_like_set_last(panda):
     """On a small grid: the plan's best three fixtures measure better than the defaults (6 sets each), and
     the defaults with joints 2 and 3 held to 10 % are predicted and measured worst."""
-    from validation.analysis import P3_LIKE, AnalysisConfig, Cell, run_cells
-    from validation.experiment import default_fixtures
+    from spherecal.validation.analysis import P3_LIKE, AnalysisConfig, Cell, run_cells
+    from spherecal.validation.experiment import default_fixtures
 
     result = plan(panda, grid_candidates("0.3,0.6,2;-0.4,0.4,3;0.2,0.6,2"), 3, np.random.default_rng(0))
     best = tuple((s.candidate.name, tuple(s.candidate.position)) for s in result.surveys
@@ -178,7 +178,7 @@ def test_plan_beats_defaults_and_ranks_a_p3_like_set_last(panda):
 
 
 def test_plan_output_under_a_file_is_refused_before_planning(tmp_path, capsys):
-    from validation.cli import main
+    from spherecal.cli import main
 
     blocker = tmp_path / "blocker"
     blocker.write_text("x\n")

@@ -4,22 +4,21 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-
-from controller.cli import DEFAULT_FIXTURES
-from controller.exploration import Ramp, joint_coverage
-from controller.self_motion import (
+from spherecal.controller.cli import DEFAULT_FIXTURES
+from spherecal.controller.exploration import Ramp, joint_coverage
+from spherecal.controller.self_motion import (
     FixtureInsideRobotError,
     SelfMotionSettings,
     UnreachableFixtureError,
     collect_self_motion,
     reach_fixture,
 )
-from correction import perturb, tool_point
+from spherecal.correction import perturb, tool_point
 
 
 @pytest.fixture(scope="module")
 def short_run():
-    from correction import load_robot
+    from spherecal.correction import load_robot
 
     panda = load_robot("panda")
     rng = np.random.default_rng(11)

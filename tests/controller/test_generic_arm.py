@@ -3,10 +3,9 @@
 from __future__ import annotations
 
 import numpy as np
-
-from correction import RobotModel, perturb, registered_errors, tool_point
-from identification.calibrate import calibrate
-from identification.synthetic import make_dataset
+from spherecal.correction import RobotModel, perturb, registered_errors, tool_point
+from spherecal.identification.calibrate import calibrate
+from spherecal.identification.synthetic import make_dataset
 
 HALF_PI = np.pi / 2
 #: A UR5-like arm (standard DH), with a tool point off the last axis.
@@ -24,7 +23,7 @@ UR5 = RobotModel(
 
 
 def test_six_joint_arm_self_motion_stays_on_its_fixture() -> None:
-    from controller.self_motion import SelfMotionSettings, collect_self_motion
+    from spherecal.controller.self_motion import SelfMotionSettings, collect_self_motion
 
     rng = np.random.default_rng(0)
     true = perturb(UR5, rng)
@@ -55,8 +54,7 @@ def test_base_column_of_a_standard_arm_with_a_shoulder_offset_is_vertical() -> N
     from dataclasses import replace
 
     import pytest
-
-    from controller.self_motion import FixtureInsideRobotError, check_fixture
+    from spherecal.controller.self_motion import FixtureInsideRobotError, check_fixture
 
     arm = replace(UR5, a=[0.3, -0.425, -0.39225, 0.0, 0.0, 0.0])  # an industrial arm's shoulder offset
     check_fixture(arm, "P1", np.array([0.3, 0.0, 0.2]))  # 0.3 m from the column: was refused
@@ -69,7 +67,7 @@ def test_locked_joint_is_held_and_the_others_explore(panda) -> None:
     """lower == upper (a joint locked for the campaign) crashed the reach IK and made the QP infeasible."""
     from dataclasses import replace
 
-    from controller.self_motion import SelfMotionSettings, collect_self_motion
+    from spherecal.controller.self_motion import SelfMotionSettings, collect_self_motion
 
     lower, upper = panda.lower.copy(), panda.upper.copy()
     lower[6] = upper[6] = 0.0

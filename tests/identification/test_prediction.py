@@ -5,11 +5,10 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-
-from correction import param_jacobian, registered_errors, tool_point
-from identification.identifiability import normal_inverse, predicted_std
-from identification.prediction import Workspace, predict_accuracy, remove_rigid_motion
-from identification.synthetic import make_dataset
+from spherecal.correction import param_jacobian, registered_errors, tool_point
+from spherecal.identification.identifiability import normal_inverse, predicted_std
+from spherecal.identification.prediction import Workspace, predict_accuracy, remove_rigid_motion
+from spherecal.identification.synthetic import make_dataset
 
 FIXTURES = {"P1": (0.5, -0.25, 0.5), "P2": (0.5, 0.0, 0.4), "P3": (0.45, 0.25, 0.45)}
 
@@ -75,8 +74,8 @@ def test_known_distances_remove_the_scale_error(panda, data, workspace):
 
 
 def test_restricted_motion_is_predicted_worse(panda, data, workspace):
-    from identification.dataset import Dataset
-    from validation.plan import Candidate, motion_samples
+    from spherecal.identification.dataset import Dataset
+    from spherecal.validation.plan import Candidate, motion_samples
 
     dataset, spec = data
     rng = np.random.default_rng(5)
@@ -93,8 +92,8 @@ def test_restricted_motion_is_predicted_worse(panda, data, workspace):
 @pytest.mark.slow
 def test_predicted_mean_within_25_percent_of_a_10_set_campaign(panda):
     """Two and three fixtures, distances known, 0.3 mm: prediction from one data set vs 10 calibrations."""
-    from identification.calibrate import calibrate
-    from validation.experiment import default_fixtures, true_robot
+    from spherecal.identification.calibrate import calibrate
+    from spherecal.validation.experiment import default_fixtures, true_robot
 
     workspace = Workspace.of(panda, 1000)
     for k in (2, 3):

@@ -6,10 +6,10 @@ import xml.etree.ElementTree as ET
 
 import numpy as np
 import pytest
+from spherecal.correction import load_robot, save_robot, tool_point
 
-from correction import load_robot, save_robot, tool_point
+from spherecal.cli import main
 from tests.conftest import perturbed
-from validation.cli import main
 
 
 @pytest.fixture
@@ -91,7 +91,7 @@ def test_unwritable_out_is_one_line_error(tmp_path, calibrated_file, capsys, whe
 
 
 def test_urdf_export_of_a_six_joint_arm_takes_effort_and_velocity(tmp_path, capsys):
-    from tests.test_generic_arm import UR5
+    from tests.controller.test_generic_arm import UR5
 
     robot = save_robot(UR5, tmp_path / "ur5.yaml")
     out = tmp_path / "ur5.urdf"

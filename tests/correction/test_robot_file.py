@@ -9,11 +9,11 @@ import pytest
 import yaml
 from hypothesis import given, settings
 from hypothesis import strategies as st
+from spherecal.correction import RobotFileError, load_robot, save_robot, to_standard
 
-from correction import RobotFileError, load_robot, save_robot, to_standard
 from tests.conftest import perturbed
 
-PANDA_TEXT = (Path(__file__).parents[1] / "correction" / "data" / "panda.yaml").read_text()
+PANDA_TEXT = (Path(__file__).parents[2] / "correction" / "data" / "panda.yaml").read_text()
 
 
 def test_embedded_panda_is_the_published_one(panda) -> None:

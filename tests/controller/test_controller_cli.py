@@ -4,10 +4,10 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from spherecal.correction import load_robot
+from spherecal.identification.dataset import read_fixtures, read_samples
 
-from correction import load_robot
-from identification.dataset import read_fixtures, read_samples
-from validation.cli import main
+from spherecal.cli import main
 
 
 def _simulate(tmp_path, *extra):
@@ -92,7 +92,7 @@ def test_arm_without_self_motion_is_refused(tmp_path, capsys, panda):
     """A point fixture leaves n - 3 degrees of freedom: a 3-joint arm cannot move at all."""
     from dataclasses import replace
 
-    from correction import save_robot, tool_point
+    from spherecal.correction import save_robot, tool_point
 
     arm = replace(panda, **{k: getattr(panda, k)[:3] for k in ("a", "alpha", "d", "theta", "lower", "upper")},
                   tool=[0.3, 0.0, 0.0])

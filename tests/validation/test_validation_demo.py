@@ -8,9 +8,9 @@ from pathlib import Path
 
 import pytest
 
-from validation.cli import main
+from spherecal.cli import main
 
-ROOT = Path(__file__).parents[1]
+ROOT = Path(__file__).parents[2]
 SECONDS, SAMPLES, CONFIGURATIONS = 1.0, 60, 200
 
 
@@ -23,7 +23,7 @@ def demo(tmp_path_factory):
 
 
 def test_short_demo_writes_everything_and_its_recording_holds_the_documented_entities(demo, capsys) -> None:
-    from validation.recording import read_entity_rows
+    from spherecal.validation.recording import read_entity_rows
 
     out, args = demo
     assert main(args) == 0
@@ -121,8 +121,8 @@ def test_campaign_refuses_more_samples_than_readings(tmp_path) -> None:
 def test_default_demo_meets_its_accuracy_figures(tmp_path) -> None:
     """The default demo (seed 0, 0.3 mm fixture noise, 0.3 mm mocap): calibrated <= 0.1 mm against the
     exact tool point where nominal is >= 2 mm, and against the mocap at its noise floor."""
-    from validation.demo import DemoConfig, run_demo
-    from validation.pipeline import RANDOM_SET
+    from spherecal.validation.demo import DemoConfig, run_demo
+    from spherecal.validation.pipeline import RANDOM_SET
 
     result = run_demo(DemoConfig(out=tmp_path, rrd=False), say=lambda line: None)
     random = result.report.comparison(RANDOM_SET)

@@ -5,8 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
-
-from correction.rigid import apply_transform, fit_rigid_transform, registered_errors
+from spherecal.correction.rigid import apply_transform, fit_rigid_transform, registered_errors
 
 
 def test_recovers_a_known_transform_exactly(rng) -> None:

@@ -1,0 +1,7 @@
+"""``python -m spherecal``: the same as the ``spherecal`` command."""
+
+import sys
+
+from spherecal.cli import main
+
+sys.exit(main())

@@ -1,0 +1,60 @@
+"""The installed distribution puts one top-level name on ``sys.path``: ``spherecal``."""
+
+from __future__ import annotations
+
+import ast
+import subprocess
+import sys
+import sysconfig
+import zipfile
+from importlib import metadata
+from pathlib import Path, PurePosixPath
+
+import pytest
+
+ROOT = Path(__file__).parents[1]
+
+
+def _installed() -> metadata.Distribution:
+    """The distribution in site-packages (not the ``.egg-info`` of a checkout on the path)."""
+    paths = [sysconfig.get_paths()["purelib"], sysconfig.get_paths()["platlib"]]
+    found = list(metadata.distributions(name="spherecal", path=paths))
+    if not found:  # pragma: no cover - the suite is meant to run on an installed spherecal
+        pytest.skip("spherecal is not installed in this environment")
+    return found[0]
+
+
+def _top_level(files: list[str]) -> set[str]:
+    names = set()
+    for name in files:
+        top = PurePosixPath(name).parts[0]
+        if top.endswith((".dist-info", ".egg-info", ".pth")) or top in ("..", "__pycache__"):
+            continue
+        names.add(top.removesuffix(".py"))
+    return names
+
+
+def test_the_installed_distribution_has_no_top_level_name_but_spherecal() -> None:
+    dist = _installed()
+    names = _top_level([str(f) for f in dist.files or ()])
+    for hook in [n for n in names if n.startswith("__editable__")]:
+        # An editable install ships an import hook instead of the files: read what it maps.
+        names.discard(hook)
+        tree = ast.parse((Path(dist.locate_file(hook + ".py"))).read_text())
+        for node in ast.walk(tree):
+            if isinstance(node, ast.AnnAssign) and getattr(node.target, "id", "") == "MAPPING":
+                names |= {key.split(".")[0] for key in ast.literal_eval(node.value)}
+    assert names == {"spherecal"}, names
+
+
+def test_a_built_wheel_has_no_top_level_name_but_spherecal(tmp_path) -> None:
+    pytest.importorskip("setuptools")
+    code = "import sys; from setuptools import build_meta; print(build_meta.build_wheel(sys.argv[1]))"
+    out = subprocess.run([sys.executable, "-c", code, str(tmp_path)], cwd=ROOT, capture_output=True, text=True)
+    assert out.returncode == 0, out.stderr[-2000:]
+    wheel = tmp_path / out.stdout.strip().splitlines()[-1]
+    names = zipfile.ZipFile(wheel).namelist()
+    assert _top_level(names) == {"spherecal"}
+    for package in ("correction", "identification", "controller", "validation"):
+        assert f"spherecal/{package}/__init__.py" in names
+    assert "spherecal/correction/data/panda.yaml" in names
