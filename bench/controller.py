@@ -18,6 +18,7 @@ from pathlib import Path
 import bench_common  # noqa: F401  (first: import path, BLAS threads)
 import numpy as np  # noqa: E402
 import qpsolvers  # noqa: E402
+
 from spherecal.controller.cli import DEFAULT_FIXTURES  # noqa: E402
 from spherecal.controller.nullspace import NullSpaceController  # noqa: E402
 from spherecal.controller.self_motion import SelfMotionSettings, collect_self_motion  # noqa: E402

@@ -17,6 +17,7 @@ from pathlib import Path
 
 import bench_common  # noqa: F401  (first: import path, BLAS threads)
 import numpy as np  # noqa: E402
+
 from spherecal.correction import load_robot, perturb, registered_errors, tool_point  # noqa: E402
 from spherecal.identification.calibrate import calibrate
 from spherecal.identification.problem import ImplausibleCalibrationError  # noqa: E402

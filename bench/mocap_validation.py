@@ -14,6 +14,7 @@ from pathlib import Path
 
 import bench_common  # first: import path, BLAS threads
 import numpy as np  # noqa: E402
+
 from spherecal.correction import load_robot, perturb  # noqa: E402
 from spherecal.validation.mocap import SimulatedMocap, random_mocap_transform  # noqa: E402
 from spherecal.validation.pipeline import validate_models  # noqa: E402

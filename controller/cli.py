@@ -48,7 +48,7 @@ def _fixtures(path: str | None) -> dict:
 
     if path is None:
         return {k: np.array(v, dtype=float) for k, v in DEFAULT_FIXTURES.items()}
-    from spherecal.identification.dataset import read_fixtures
+    from spherecal.correction.fixtures import read_fixtures
 
     spec = read_fixtures(path)
     missing = [name for name in spec.names if name not in spec.positions]
@@ -86,8 +86,10 @@ def run(args: argparse.Namespace) -> int:
 
     import numpy as np
     import qpsolvers
+
     from spherecal.correction import atomic_write_text, dump_robot, load_robot, perturb
-    from spherecal.identification.dataset import FixtureSpec, format_fixtures, format_samples
+    from spherecal.correction.fixtures import FixtureSpec, format_fixtures
+    from spherecal.correction.samples_csv import format_samples
 
     from .self_motion import SelfMotionSettings, collect_self_motion
 

@@ -30,6 +30,7 @@ from collections.abc import Callable
 from dataclasses import dataclass, replace
 
 import numpy as np
+
 from spherecal.correction import RobotModel, tool_point, tool_pose
 from spherecal.correction.errors import SpherecalError
 

@@ -9,6 +9,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+
 from spherecal.correction import RobotModel, frames, joint_jacobian, tool_point, tool_pose
 from spherecal.correction.errors import SpherecalError
 

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import mujoco
 import numpy as np
+
 from spherecal.correction import RobotModel
 
 from .plant import TIMESTEP, build_plant

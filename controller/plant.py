@@ -14,6 +14,7 @@ from xml.sax.saxutils import quoteattr
 
 import mujoco
 import numpy as np
+
 from spherecal.correction import RobotModel, link_frames
 from spherecal.correction.urdf import xml_comment
 

@@ -25,6 +25,7 @@ from dataclasses import dataclass
 import numpy as np
 import qpsolvers
 import scipy.sparse as sparse
+
 from spherecal.correction.errors import SpherecalError
 
 #: Defaults of the controller.

@@ -16,6 +16,7 @@ from dataclasses import dataclass, field, replace
 
 import mujoco
 import numpy as np
+
 from spherecal.correction import RobotModel, frames
 from spherecal.correction.errors import SpherecalError
 
@@ -121,8 +122,8 @@ class SelfMotionRun:
     settings: SelfMotionSettings = field(default_factory=SelfMotionSettings)
 
     def dataset(self):
-        """The kept samples as an :class:`identification.dataset.Dataset` (with times)."""
-        from spherecal.identification.dataset import Dataset
+        """The kept samples as an :class:`spherecal.correction.samples.Dataset` (with times)."""
+        from spherecal.correction.samples import Dataset
 
         return Dataset(labels=self.labels, q=self.q, t=self.t, fixture_names=self.fixture_names)
 

@@ -1,4 +1,5 @@
-"""Kinematic model of a serial arm: parameters, robot files, batched FK and Jacobians.
+"""Kinematic model of a serial arm: parameters, robot files, batched FK and Jacobians, and the
+spherical-joint data files (samples and fixtures).
 
 This is what a controller imports: it depends on nothing else of spherecal.
 """
@@ -6,6 +7,7 @@ This is what a controller imports: it depends on nothing else of spherecal.
 from .atomic import atomic_write_bytes, atomic_write_text
 from .conversion import convert, to_modified, to_standard
 from .errors import SpherecalError
+from .fixtures import FixtureSpec, format_fixtures, read_fixtures, write_fixtures
 from .kinematics import (
     Frames,
     frames,
@@ -26,8 +28,19 @@ from .robot_file import (
     robot_to_dict,
     save_robot,
 )
+from .samples import Dataset, DatasetError
+from .samples_csv import format_samples, read_samples, write_samples
 
 __all__ = [
+    "Dataset",
+    "DatasetError",
+    "FixtureSpec",
+    "format_fixtures",
+    "format_samples",
+    "read_fixtures",
+    "read_samples",
+    "write_fixtures",
+    "write_samples",
     "Frames",
     "RobotFileError",
     "RobotModel",

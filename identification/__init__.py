@@ -2,7 +2,8 @@
 
 The public names are loaded lazily (``identification.cli`` must import nothing heavy)::
 
-    from spherecal.identification import read_samples, read_fixtures, build_problem, CalibrationResult
+    from spherecal.identification import build_problem, CalibrationResult
+    from spherecal.correction import read_samples, read_fixtures   # the data files are the base layer's
     from spherecal.identification.calibrate import calibrate   # (the submodule shares the function's name)
 """
 
@@ -12,13 +13,6 @@ import importlib
 from typing import Any
 
 _EXPORTS: dict[str, str] = {
-    "Dataset": "dataset",
-    "DatasetError": "dataset",
-    "FixtureSpec": "dataset",
-    "read_samples": "dataset",
-    "write_samples": "dataset",
-    "read_fixtures": "dataset",
-    "write_fixtures": "dataset",
     "CalibrationProblem": "problem",
     "UnidentifiableError": "problem",
     "build_problem": "problem",

@@ -6,9 +6,11 @@ import time
 from dataclasses import dataclass, field
 
 import numpy as np
-from spherecal.correction import RobotModel, param_jacobian, registered_errors, tool_point
 
-from .dataset import Dataset, FixtureSpec
+from spherecal.correction import RobotModel, param_jacobian, registered_errors, tool_point
+from spherecal.correction.fixtures import FixtureSpec
+from spherecal.correction.samples import Dataset
+
 from .identifiability import Identifiability, predicted_std
 from .problem import (
     GAUGE,

@@ -48,11 +48,13 @@ def run(args: argparse.Namespace) -> int:
     from dataclasses import replace
 
     import numpy as np
+
     from spherecal.correction import load_robot, save_robot
+    from spherecal.correction.fixtures import read_fixtures
     from spherecal.correction.provenance import PACKAGES, input_record, versions
+    from spherecal.correction.samples_csv import read_samples
 
     from .calibrate import calibrate
-    from .dataset import read_fixtures, read_samples
 
     clock = time.perf_counter()
     if args.max_samples is not None and args.max_samples < 1:

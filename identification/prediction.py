@@ -26,10 +26,12 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+
 from spherecal.correction import RobotModel, param_jacobian, tool_point
+from spherecal.correction.fixtures import FixtureSpec
+from spherecal.correction.samples import Dataset
 
 from .calibrate import SIGMA_FLOOR
-from .dataset import Dataset, FixtureSpec
 from .identifiability import Identifiability, normal_inverse
 from .problem import NOISE, CalibrationProblem, anchor_spread, build_problem, format_value, prior_std, prune
 

@@ -31,11 +31,13 @@ from __future__ import annotations
 from dataclasses import dataclass, field, replace
 
 import numpy as np
+
 from spherecal.correction import RobotModel, link_frames, param_jacobian, tool_point
 from spherecal.correction.errors import SpherecalError
+from spherecal.correction.fixtures import FixtureSpec
 from spherecal.correction.perturb import ANGLE_STD, LENGTH_STD, TOOL_STD
+from spherecal.correction.samples import Dataset, DatasetError
 
-from .dataset import Dataset, DatasetError, FixtureSpec
 from .identifiability import Identifiability, greedy_rank, predicted_std
 
 #: Joint-1 parameters that move every tool point rigidly (the gauge against unknown centres).

@@ -20,6 +20,7 @@ import time
 from dataclasses import dataclass
 
 import numpy as np
+
 from spherecal.correction import tool_point
 
 from .problem import CalibrationProblem, prior_std

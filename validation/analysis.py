@@ -29,6 +29,7 @@ from dataclasses import dataclass, field, replace
 from pathlib import Path
 
 import numpy as np
+
 from spherecal.correction import atomic_write_text, registered_errors, tool_point
 
 #: The fourth fixture of the 1-4 fixture rows (low, left of the defaults) [m].
@@ -142,8 +143,8 @@ def _workspace():
 
 def run_set(cell: Cell, index: int, seed: tuple[int, ...], configurations: int):
     """One motion set of a cell: (measured mean, measured p95, prediction or None) [m]."""
+    from spherecal.correction.samples import Dataset
     from spherecal.identification.calibrate import calibrate
-    from spherecal.identification.dataset import Dataset
     from spherecal.identification.prediction import predict_accuracy
     from spherecal.validation.experiment import fixture_spec, nominal_robot, true_robot
     from spherecal.validation.plan import Candidate, motion_samples

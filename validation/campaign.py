@@ -30,6 +30,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
+
 from spherecal.correction import SpherecalError, atomic_write_text
 
 #: The paper's simulated Table 2 (mm): row -> (mean of average error, mean of maximal error).

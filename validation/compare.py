@@ -15,6 +15,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+
 from spherecal.correction import RobotModel, registered_errors, tool_point
 
 #: Validation configurations drawn uniformly inside the joint limits (the paper's "large random set").

@@ -9,6 +9,7 @@ from dataclasses import dataclass, field, replace
 from pathlib import Path
 
 import numpy as np
+
 from spherecal.correction import RobotModel, atomic_write_text, save_robot, tool_point
 
 from .experiment import calibrate_from, default_fixtures, motion_set, nominal_robot, true_robot
@@ -152,7 +153,8 @@ def _inputs(config: DemoConfig) -> dict:
 
 def write_results(config: DemoConfig, result: DemoResult, data, fixtures: dict[str, np.ndarray]) -> dict[str, Path]:
     """Samples, fixtures, truth, calibrated model, report JSON and the recording, each with provenance."""
-    from spherecal.identification.dataset import format_fixtures, format_samples
+    from spherecal.correction.fixtures import format_fixtures
+    from spherecal.correction.samples_csv import format_samples
 
     out = Path(config.out)
     info = provenance(config.seed, _inputs(config))

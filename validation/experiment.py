@@ -9,6 +9,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+
 from spherecal.correction import RobotModel, load_robot, perturb
 
 
@@ -36,8 +37,8 @@ class MotionData:
     """Calibration data of one simulated experiment.
 
     Attributes:
-        dataset: the recorded samples (:class:`identification.dataset.Dataset`).
-        spec: the fixtures (:class:`identification.dataset.FixtureSpec`), distances exact.
+        dataset: the recorded samples (:class:`spherecal.correction.samples.Dataset`).
+        spec: the fixtures (:class:`spherecal.correction.fixtures.FixtureSpec`), distances exact.
         trajectory: the MuJoCo run (controller's result) when simulated with dynamics, else None.
     """
 
@@ -48,7 +49,7 @@ class MotionData:
 
 def fixture_spec(fixtures: dict[str, np.ndarray], known_distances: bool):
     """Fixtures with unknown centres; with ``known_distances``, every pairwise distance (exact)."""
-    from spherecal.identification.dataset import FixtureSpec
+    from spherecal.correction.fixtures import FixtureSpec
 
     names = tuple(fixtures)
     distances = []

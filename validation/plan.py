@@ -26,9 +26,11 @@ from dataclasses import dataclass, field, replace
 from pathlib import Path
 
 import numpy as np
+
 from spherecal.correction import RobotModel
 from spherecal.correction.errors import SpherecalError
-from spherecal.identification.dataset import Dataset, FixtureSpec
+from spherecal.correction.fixtures import FixtureSpec
+from spherecal.correction.samples import Dataset
 from spherecal.identification.prediction import Prediction, Workspace, predict_accuracy
 from spherecal.identification.synthetic import fixture_samples, project_to_point
 

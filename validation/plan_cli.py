@@ -45,6 +45,7 @@ def run(args: argparse.Namespace) -> int:
     import time
 
     import numpy as np
+
     from spherecal.correction import load_robot
 
     if not args.noise >= 0:
@@ -90,7 +91,8 @@ def run(args: argparse.Namespace) -> int:
 
 
 def _predict(args: argparse.Namespace, model) -> int:
-    from spherecal.identification.dataset import read_fixtures, read_samples
+    from spherecal.correction.fixtures import read_fixtures
+    from spherecal.correction.samples_csv import read_samples
     from spherecal.identification.prediction import predict_accuracy
 
     dataset = read_samples(args.predict, model)
@@ -147,6 +149,7 @@ def write_recording(path: str, result, provenance: str = "") -> str:
     the chosen set as larger points, the printed plan and its provenance as text; Rerun is imported
     only here."""
     import numpy as np
+
     from spherecal.validation.recording import Recording
 
     recording = Recording(path)

@@ -30,6 +30,7 @@ import os
 from pathlib import Path
 
 import numpy as np
+
 from spherecal.correction import RobotModel, apply_transform, fit_rigid_transform, link_frames, tool_point
 
 COLOURS = {

@@ -30,6 +30,7 @@ def run(args: argparse.Namespace) -> int:
     from pathlib import Path
 
     import numpy as np
+
     from spherecal.correction import atomic_write_text, load_robot
     from spherecal.validation.inputs import check_models
     from spherecal.validation.mocap import read_mocap_csv
@@ -54,7 +55,7 @@ def run(args: argparse.Namespace) -> int:
     measurement = None if args.mocap is None else read_mocap_csv(args.mocap, n)
     self_motion = None
     if args.samples is not None:
-        from spherecal.identification.dataset import read_samples
+        from spherecal.correction.samples_csv import read_samples
 
         dataset = read_samples(args.samples, models.get("truth", models["nominal"]))
         self_motion = {name: dataset.for_fixture(name) for name in dataset.fixture_names}

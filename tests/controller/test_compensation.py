@@ -6,6 +6,7 @@ from dataclasses import replace
 
 import numpy as np
 import pytest
+
 from spherecal.controller.compensation import (
     CompensationError,
     ModelMismatchError,

@@ -4,10 +4,11 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from spherecal.correction import load_robot
-from spherecal.identification.dataset import read_fixtures, read_samples
 
 from spherecal.cli import main
+from spherecal.correction import load_robot
+from spherecal.correction.fixtures import read_fixtures
+from spherecal.correction.samples_csv import read_samples
 
 
 def _simulate(tmp_path, *extra):

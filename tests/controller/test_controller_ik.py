@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import numpy as np
+
 from spherecal.controller.ik import ik
 from spherecal.controller.plant import build_plant
 from spherecal.correction import perturb, rpy_matrix, tool_point, tool_pose

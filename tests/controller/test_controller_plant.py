@@ -5,9 +5,9 @@ from __future__ import annotations
 import mujoco
 import numpy as np
 import pytest
+
 from spherecal.controller.plant import build_plant
 from spherecal.correction import link_frames, to_standard, tool_point
-
 from tests.conftest import perturbed
 
 

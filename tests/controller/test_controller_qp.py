@@ -5,6 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 import qpsolvers
+
 from spherecal.controller.nullspace import NullSpaceController
 from spherecal.controller.qp_ik import ControllerFallbackWarning, QPSolveError, build_problem, velocity_bounds
 from spherecal.correction import joint_jacobian, tool_point

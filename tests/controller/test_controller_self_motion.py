@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+
 from spherecal.controller.cli import DEFAULT_FIXTURES
 from spherecal.controller.exploration import Ramp, joint_coverage
 from spherecal.controller.self_motion import (

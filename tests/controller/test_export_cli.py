@@ -6,9 +6,9 @@ import xml.etree.ElementTree as ET
 
 import numpy as np
 import pytest
-from spherecal.correction import load_robot, save_robot, tool_point
 
 from spherecal.cli import main
+from spherecal.correction import load_robot, save_robot, tool_point
 from tests.conftest import perturbed
 
 

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import numpy as np
+
 from spherecal.correction import RobotModel, perturb, registered_errors, tool_point
 from spherecal.identification.calibrate import calibrate
 from spherecal.identification.synthetic import make_dataset
@@ -54,6 +55,7 @@ def test_base_column_of_a_standard_arm_with_a_shoulder_offset_is_vertical() -> N
     from dataclasses import replace
 
     import pytest
+
     from spherecal.controller.self_motion import FixtureInsideRobotError, check_fixture
 
     arm = replace(UR5, a=[0.3, -0.425, -0.39225, 0.0, 0.0, 0.0])  # an industrial arm's shoulder offset

@@ -7,9 +7,9 @@ import xml.etree.ElementTree as ET
 import mujoco
 import numpy as np
 import pytest
+
 from spherecal.correction import to_standard, tool_point, tool_pose
 from spherecal.correction.urdf import ExportError, robot_to_urdf
-
 from tests.conftest import perturbed
 
 

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+
 from spherecal.correction import (
     RobotModel,
     joint_jacobian,
@@ -14,7 +15,6 @@ from spherecal.correction import (
     tool_point,
     tool_pose,
 )
-
 from tests.conftest import perturbed
 
 # MuJoCo Menagerie's franka_emika_panda/panda_nohand.xml: body pos and quat (w x y z) in

@@ -5,6 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
+
 from spherecal.correction.rigid import apply_transform, fit_rigid_transform, registered_errors
 
 

@@ -9,8 +9,8 @@ import pytest
 import yaml
 from hypothesis import given, settings
 from hypothesis import strategies as st
-from spherecal.correction import RobotFileError, load_robot, save_robot, to_standard
 
+from spherecal.correction import RobotFileError, load_robot, save_robot, to_standard
 from tests.conftest import perturbed
 
 PANDA_TEXT = (Path(__file__).parents[2] / "correction" / "data" / "panda.yaml").read_text()

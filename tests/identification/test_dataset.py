@@ -4,15 +4,10 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from spherecal.identification.dataset import (
-    Dataset,
-    DatasetError,
-    FixtureSpec,
-    read_fixtures,
-    read_samples,
-    write_fixtures,
-    write_samples,
-)
+
+from spherecal.correction.fixtures import FixtureSpec, read_fixtures, write_fixtures
+from spherecal.correction.samples import Dataset, DatasetError
+from spherecal.correction.samples_csv import read_samples, write_samples
 
 HEADER = "fixture,q1,q2,q3,q4,q5,q6,q7\n"
 GOOD = "P1,0,0,0,-1,0,1,0\n"

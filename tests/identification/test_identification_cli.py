@@ -9,11 +9,12 @@ from pathlib import Path
 import numpy as np
 import pytest
 import yaml
-from spherecal.correction import load_robot, perturb, save_robot
-from spherecal.identification.dataset import write_fixtures, write_samples
-from spherecal.identification.synthetic import make_dataset
 
 from spherecal.cli import main
+from spherecal.correction import load_robot, perturb, save_robot
+from spherecal.correction.fixtures import write_fixtures
+from spherecal.correction.samples_csv import write_samples
+from spherecal.identification.synthetic import make_dataset
 
 ROOT = Path(__file__).parents[2]
 HEADER = "fixture,q1,q2,q3,q4,q5,q6,q7\n"

@@ -4,9 +4,10 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+
 from spherecal.correction import load_robot, perturb, registered_errors, tool_point
+from spherecal.correction.fixtures import FixtureSpec
 from spherecal.identification.calibrate import calibrate, check_plausible
-from spherecal.identification.dataset import FixtureSpec
 from spherecal.identification.problem import ImplausibleCalibrationError, build_problem
 from spherecal.identification.synthetic import make_dataset
 

@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+
 from spherecal.correction import param_jacobian, registered_errors, tool_point
 from spherecal.identification.identifiability import normal_inverse, predicted_std
 from spherecal.identification.prediction import Workspace, predict_accuracy, remove_rigid_motion
@@ -74,7 +75,7 @@ def test_known_distances_remove_the_scale_error(panda, data, workspace):
 
 
 def test_restricted_motion_is_predicted_worse(panda, data, workspace):
-    from spherecal.identification.dataset import Dataset
+    from spherecal.correction.samples import Dataset
     from spherecal.validation.plan import Candidate, motion_samples
 
     dataset, spec = data

@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+
+from spherecal.cli import main
 from spherecal.validation.plan import (
     Candidate,
     CandidateError,
@@ -14,8 +16,6 @@ from spherecal.validation.plan import (
     restricted,
 )
 from spherecal.validation.plan_cli import format_plan
-
-from spherecal.cli import main
 
 REACHABLE = {"A": [0.5, -0.25, 0.5], "B": [0.5, 0.0, 0.4], "C": [0.45, 0.25, 0.45]}
 
@@ -144,7 +144,8 @@ def test_cli_plan_and_too_few_reachable(tmp_path, capsys):
 
 
 def test_cli_predict_from_a_data_set(tmp_path, capsys, panda):
-    from spherecal.identification.dataset import write_fixtures, write_samples
+    from spherecal.correction.fixtures import write_fixtures
+    from spherecal.correction.samples_csv import write_samples
     from spherecal.identification.synthetic import make_dataset
 
     dataset, spec = make_dataset(panda, {k: np.array(v) for k, v in REACHABLE.items()}, 60, np.random.default_rng(2))

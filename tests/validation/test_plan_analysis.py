@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import numpy as np
+
 from spherecal.validation.analysis import P3_LIKE, Analysis, AnalysisConfig, Cell, cells, markdown, run_cells
 
 

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+
 from spherecal.correction import apply_transform, fit_rigid_transform, perturb, tool_point
 from spherecal.validation.compare import ValidationSet, compare, format_comparisons, parameter_deviations
 from spherecal.validation.mocap import (

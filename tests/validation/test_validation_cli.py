@@ -6,6 +6,8 @@ import json
 
 import numpy as np
 import pytest
+
+from spherecal.cli import main
 from spherecal.correction import (
     dump_robot,
     load_robot,
@@ -17,8 +19,6 @@ from spherecal.correction import (
     tool_point,
 )
 from spherecal.validation.mocap import MocapMeasurement, write_mocap_csv
-
-from spherecal.cli import main
 
 
 @pytest.fixture

@@ -1,0 +1,221 @@
+"""Fixtures (``fixtures.yaml``): what is known about the sockets besides the samples.
+
+``fixtures.yaml``: every fixture by name, with its centre in the base frame when it is known
+(metres), and optional known centre-to-centre distances (metres)::
+
+    fixtures:
+      P1: {}
+      P2: {position: [0.5, 0.1, 0.3]}
+    distances:
+      - [P1, P2, 0.5]
+
+Errors are :class:`~spherecal.correction.samples.DatasetError`, one line naming the file, the row
+(1-based line number) and the field. The writer is atomic (temporary file, rename).
+"""
+
+from __future__ import annotations
+
+import math
+import os
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from spherecal.correction.atomic import atomic_write_text
+from spherecal.correction.samples import Dataset, DatasetError
+
+
+# ------------------------------------------------------------------------------ fixtures.yaml
+@dataclass(frozen=True, eq=False)
+class FixtureSpec:
+    """What is known about the fixtures besides the samples.
+
+    Attributes:
+        names: every fixture, in file order.
+        positions: known centres in the base frame, name -> (3,) [m].
+        distances: known centre-to-centre distances ``(name_a, name_b, metres)``.
+        extras: other top-level keys of the file, written back unchanged.
+        source: file the spec came from (for messages), or "".
+        rows: file line of ``"fixtures.P1"`` and ``"distances[k]"`` entries (for messages).
+    """
+
+    names: tuple[str, ...] = ()
+    positions: dict[str, np.ndarray] = field(default_factory=dict)
+    distances: list[tuple[str, str, float]] = field(default_factory=list)
+    extras: dict = field(default_factory=dict)
+    source: str = ""
+    rows: dict[str, int] = field(default_factory=dict)
+
+    def _row(self, key: str) -> str:
+        return f"row {self.rows[key]}, " if key in self.rows else ""
+
+    @staticmethod
+    def unknown(names: tuple[str, ...] | list[str]) -> FixtureSpec:
+        """A spec of fixtures with nothing known about them."""
+        return FixtureSpec(names=tuple(names))
+
+    def check_against(self, dataset: Dataset) -> None:
+        """Raise :class:`DatasetError` if a known position or distance names a fixture without samples."""
+        have = set(dataset.fixture_names)
+        where = self.source or "fixtures"
+        for name in self.positions:
+            if name not in have:
+                raise DatasetError(
+                    f"{where}: {self._row('fixtures.' + name)}field 'fixtures.{name}.position': "
+                    f"fixture {name!r} has no samples"
+                    f"{' in ' + dataset.source if dataset.source else ''}"
+                )
+        for k, (a, b, _) in enumerate(self.distances):
+            for name in (a, b):
+                if name not in have:
+                    raise DatasetError(
+                        f"{where}: {self._row(f'distances[{k}]')}field 'distances[{k}]': "
+                        f"fixture {name!r} has no samples"
+                        f"{' in ' + dataset.source if dataset.source else ''}"
+                    )
+
+
+def _node_line(node: Any, *path: Any) -> int:
+    """1-based line of the YAML node at ``path`` (keys and indices), or of the deepest node found."""
+    import yaml
+
+    for key in path:
+        if isinstance(node, yaml.MappingNode):
+            match = [v for k, v in node.value if getattr(k, "value", None) == key]
+            if not match:
+                break
+            node = match[-1]
+        elif isinstance(node, yaml.SequenceNode) and isinstance(key, int) and key < len(node.value):
+            node = node.value[key]
+        else:
+            break
+    return node.start_mark.line + 1
+
+
+def _duplicate_keys(node: Any, where: str) -> None:
+    import yaml
+
+    if isinstance(node, yaml.MappingNode):
+        seen: set[Any] = set()
+        for key, value in node.value:
+            if key.value in seen:
+                raise DatasetError(f"{where}: row {key.start_mark.line + 1}, field {key.value!r}: duplicate key")
+            seen.add(key.value)
+            _duplicate_keys(value, where)
+    elif isinstance(node, yaml.SequenceNode):
+        for value in node.value:
+            _duplicate_keys(value, where)
+
+
+def _plain_name(name: Any) -> Any:
+    """A fixture numbered in YAML (``1: {}``) is named ``"1"``, as in samples.csv; other keys unchanged."""
+    return str(name) if isinstance(name, int) and not isinstance(name, bool) else name
+
+
+def read_fixtures(path: str | os.PathLike) -> FixtureSpec:
+    """Read and check ``fixtures.yaml``.
+
+    Raises:
+        DatasetError: unreadable file, invalid YAML, duplicate keys, a fixture entry that is not
+            a mapping or has an unknown key, a position that is not 3 finite numbers, a distance
+            that is not ``[name, name, metres > 0]`` or names an unlisted fixture.
+    """
+    import yaml
+
+    path = Path(path)
+    try:
+        text = path.read_text(encoding="utf-8-sig")  # a spreadsheet's byte-order mark is not data
+    except (OSError, UnicodeDecodeError) as error:
+        raise DatasetError(f"{path}: cannot read: {getattr(error, 'strerror', None) or error}") from None
+    try:
+        root = yaml.compose(text, Loader=yaml.SafeLoader)
+        data = yaml.safe_load(text)
+    except yaml.YAMLError as error:
+        mark = getattr(error, "problem_mark", None)
+        row = f"row {mark.line + 1}" if mark is not None else "row ?"
+        raise DatasetError(f"{path}: {row}, field '': invalid YAML: {getattr(error, 'problem', error)}") from None
+    if data is None:
+        raise DatasetError(f"{path}: row 1, field 'fixtures': empty file")
+    _duplicate_keys(root, str(path))
+
+    def fail(message: str, *where: Any) -> DatasetError:
+        field_name = ".".join(str(w) if not isinstance(w, int) else f"[{w}]" for w in where).replace(".[", "[")
+        return DatasetError(f"{path}: row {_node_line(root, *where)}, field '{field_name}': {message}")
+
+    if not isinstance(data, dict):
+        raise fail(f"expected a mapping at the top level, got {type(data).__name__}")
+    fixtures = data.get("fixtures")
+    if not isinstance(fixtures, dict) or not fixtures:
+        raise fail("expected a non-empty mapping of fixture names", "fixtures")
+    fixtures = {_plain_name(name): entry for name, entry in fixtures.items()}
+    names: list[str] = []
+    positions: dict[str, np.ndarray] = {}
+    for name, entry in fixtures.items():
+        if not isinstance(name, str) or not name.strip() or "," in name:
+            raise fail(f"fixture name must be a non-empty string without commas, got {name!r}", "fixtures", name)
+        names.append(name)
+        entry = {} if entry is None else entry
+        if not isinstance(entry, dict):
+            raise fail(f"expected a mapping ({{}} or {{position: [x, y, z]}}), got {entry!r}", "fixtures", name)
+        for key in entry:
+            if key != "position":
+                raise fail(f"unknown key {key!r} (expected 'position')", "fixtures", name, key)
+        if "position" in entry:
+            value = entry["position"]
+            ok = isinstance(value, list) and len(value) == 3
+            ok = ok and all(isinstance(v, (int, float)) and not isinstance(v, bool) for v in value)
+            if not ok or not all(math.isfinite(v) for v in value):
+                raise fail(f"expected 3 finite numbers [m], got {value!r}", "fixtures", name, "position")
+            positions[name] = np.array(value, dtype=float)
+    distances: list[tuple[str, str, float]] = []
+    raw = data.get("distances") or []
+    if not isinstance(raw, list):
+        raise fail("expected a list of [name, name, metres]", "distances")
+    seen_pairs: set[frozenset[str]] = set()
+    for k, item in enumerate(raw):
+        if not isinstance(item, list) or len(item) != 3:
+            raise fail(f"expected [name, name, metres], got {item!r}", "distances", k)
+        a, b, value = _plain_name(item[0]), _plain_name(item[1]), item[2]
+        for j, name in enumerate((a, b)):
+            if name not in fixtures:
+                raise fail(f"fixture {name!r} is not listed under 'fixtures'", "distances", k, j)
+        if a == b:
+            raise fail(f"a distance needs two different fixtures, got {a!r} twice", "distances", k)
+        if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
+            raise fail(f"expected a finite distance [m], got {value!r}", "distances", k, 2)
+        if value <= 0:
+            raise fail(f"distance must be > 0 m, got {value!r}", "distances", k, 2)
+        pair = frozenset((a, b))
+        if pair in seen_pairs:
+            raise fail(f"distance between {a!r} and {b!r} given twice", "distances", k)
+        seen_pairs.add(pair)
+        distances.append((a, b, float(value)))
+    extras = {k: v for k, v in data.items() if k not in ("fixtures", "distances")}
+    rows = {f"fixtures.{name}": _node_line(root, "fixtures", name) for name in names}
+    rows.update({f"distances[{k}]": _node_line(root, "distances", k) for k in range(len(distances))})
+    return FixtureSpec(tuple(names), positions, distances, extras, source=str(path), rows=rows)
+
+
+def format_fixtures(spec: FixtureSpec) -> str:
+    """YAML text of a fixture spec (floats exact)."""
+    import yaml
+
+    fixtures: dict[str, Any] = {}
+    for name in spec.names:
+        fixtures[name] = {"position": [float(v) for v in spec.positions[name]]} if name in spec.positions else {}
+    data: dict[str, Any] = {"fixtures": fixtures}
+    if spec.distances:
+        data["distances"] = [[a, b, float(v)] for a, b, v in spec.distances]
+    data.update(spec.extras)
+    body = yaml.safe_dump(data, sort_keys=False, default_flow_style=None, width=1000)
+    return "# spherecal fixtures: centres in the base frame and distances, metres\n" + body
+
+
+def write_fixtures(path: str | os.PathLike, spec: FixtureSpec) -> Path:
+    """Write ``fixtures.yaml`` atomically (temporary file, rename)."""
+    for name in list(spec.positions) + [n for a, b, _ in spec.distances for n in (a, b)]:
+        if name not in spec.names:
+            raise DatasetError(f"{path}: field 'fixtures': {name!r} is used but not listed in names")
+    return atomic_write_text(path, format_fixtures(spec))
