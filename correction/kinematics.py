@@ -204,27 +204,27 @@ def param_jacobian(
     rot_x = _cross(np.moveaxis(f.x, 1, 0), np.moveaxis(lever, 1, 0))  # (3, n+1, N)
     rot_z = _cross(np.moveaxis(f.z, 1, 0), np.moveaxis(lever, 1, 0))
     rot_x, rot_z = np.moveaxis(rot_x, 0, 1), np.moveaxis(rot_z, 0, 1)  # (n+1, 3, N)
-    joints = jac[: 4 * n].reshape(n, 4, 3, count)
+    lay = model.layout
+    joints = jac[lay.joints].reshape(n, len(lay.joint_fields), 3, count)
+    a, alpha, d, theta = (lay.joint_fields.index(name) for name in ("a", "alpha", "d", "theta"))
     if model.convention == "modified":
-        joints[:, 0] = f.x[:-1]
-        joints[:, 1] = rot_x[:-1]
-        joints[:, 2] = f.z[1:]
-        joints[:, 3] = rot_z[1:]
+        joints[:, a] = f.x[:-1]
+        joints[:, alpha] = rot_x[:-1]
+        joints[:, d] = f.z[1:]
+        joints[:, theta] = rot_z[1:]
     else:
-        joints[:, 0] = f.x[1:]
-        joints[:, 1] = rot_x[1:]
-        joints[:, 2] = f.z[:-1]
-        joints[:, 3] = rot_z[:-1]
-    jac[4 * n] = f.x[-1]
-    jac[4 * n + 1] = f.y[-1]
-    jac[4 * n + 2] = f.z[-1]
-    jac[4 * n + 3 : 4 * n + 6] = np.eye(3)[:, :, None]
+        joints[:, a] = f.x[1:]
+        joints[:, alpha] = rot_x[1:]
+        joints[:, d] = f.z[:-1]
+        joints[:, theta] = rot_z[:-1]
+    jac[lay.tool] = np.stack([f.x[-1], f.y[-1], f.z[-1]])
+    jac[lay.base_xyz] = np.eye(3)[:, :, None]
     roll, pitch, yaw = model.base_rpy
     cy, sy, cp, sp = np.cos(yaw), np.sin(yaw), np.cos(pitch), np.sin(pitch)
     base_axes = np.array([[cy * cp, sy * cp, -sp], [-sy, cy, 0.0], [0.0, 0.0, 1.0]])
     base_lever = p - model.base_xyz[:, None]
-    for k in range(3):
-        jac[4 * n + 6 + k] = _cross(base_axes[k][:, None], base_lever)
+    for k, row in enumerate(range(lay.base_rpy.start, lay.base_rpy.stop)):
+        jac[row] = _cross(base_axes[k][:, None], base_lever)
     out = np.ascontiguousarray(jac.transpose(2, 1, 0))
     if single:
         out, p = out[0], p[:, 0]

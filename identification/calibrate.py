@@ -18,7 +18,6 @@ from .problem import (
     CalibrationProblem,
     ImplausibleCalibrationError,
     build_problem,
-    format_value,
     prior_std,
     prune,
     samples_location,
@@ -130,7 +129,8 @@ class CalibrationResult:
             f"  {'parameter':<9} {'change':>14} {'std':>14}",
         ]
         for name, start, end, std in self.changes():
-            lines.append(f"  {name:<9} {format_value(name, end - start):>14} {format_value(name, std):>14}")
+            fmt = self.model.layout.format
+            lines.append(f"  {name:<9} {fmt(name, end - start):>14} {fmt(name, std):>14}")
         groups: dict[str, list[str]] = {}
         for name, reason in self.fixed.items():
             groups.setdefault(reason, []).append(name)
@@ -257,8 +257,8 @@ def check_plausible(problem: CalibrationProblem, params: np.ndarray, max_change:
     q = model.random_configurations(PLAUSIBILITY_CONFIGURATIONS, np.random.default_rng(0))
     change = float(registered_errors(tool_point(model.with_params(params), q), tool_point(model, q)).mean())
     prior = prior_std(model)
-    gauge = GAUGE[model.convention] + tuple(name for name in model.param_names if name.startswith("base_"))
-    prior[[model.param_index(name) for name in gauge]] = 0.0
+    prior[[model.param_index(name) for name in GAUGE[model.convention]]] = 0.0
+    prior[model.layout.base] = 0.0
     typical = float(np.sqrt(((param_jacobian(model, q) * prior) ** 2).sum(axis=(1, 2))).mean())
     if change <= max_change * typical:
         return
@@ -271,7 +271,7 @@ def check_plausible(problem: CalibrationProblem, params: np.ndarray, max_change:
         f"{samples_location(dataset)}, field '{name}': the fit moves the tool point "
         f"{change * 1e3:.1f} mm from the nominal model (mean over the workspace; a real arm's errors move it "
         f"about {typical * 1e3:.1f} mm, limit {max_change:g}x), changing {name} by "
-        f"{format_value(name, params[free[worst]] - model.params[free[worst]])}: the samples do not determine "
+        f"{model.layout.format(name, params[free[worst]] - model.params[free[worst]])}: the samples do not determine "
         f"the parameters; record more self-motion (wider joint ranges, more fixtures or known distances)"
     )
 

@@ -29,11 +29,12 @@ import numpy as np
 
 from spherecal.correction import RobotModel, param_jacobian, tool_point
 from spherecal.correction.fixtures import FixtureSpec
+from spherecal.correction.layout import ParameterLayout
 from spherecal.correction.samples import Dataset
 
 from .calibrate import SIGMA_FLOOR
 from .identifiability import Identifiability, normal_inverse
-from .problem import NOISE, CalibrationProblem, anchor_spread, build_problem, format_value, prior_std, prune
+from .problem import NOISE, CalibrationProblem, anchor_spread, build_problem, prior_std, prune
 
 #: A parameter whose predicted std exceeds this share of its prior spread is "weakly determined".
 WEAK_SHARE = 0.3
@@ -104,6 +105,7 @@ class Prediction:
         identifiability: singular values and condition number of the column-scaled Jacobian.
         errors: (N, D) sampled error magnitudes [m] (configurations x draws), for plots.
         warnings: the calibration problem's warnings (scale from the nominal model, unused fixtures).
+        layout: the model's parameter layout (kinds and display units of ``std``).
     """
 
     mean: float
@@ -118,6 +120,7 @@ class Prediction:
     identifiability: Identifiability
     errors: np.ndarray
     warnings: tuple[str, ...] = ()
+    layout: ParameterLayout | None = None
 
     def summary(self) -> str:
         """A few lines for humans (mm, deg)."""
@@ -132,7 +135,7 @@ class Prediction:
         ]
         lines.append("singular values (column-scaled): " + " ".join(f"{v:.3g}" for v in s))
         if self.weak:
-            weak = ", ".join(f"{n} ({format_value(n, self.std[n])})" for n in self.weak)
+            weak = ", ".join(f"{n} ({self.layout.format(n, self.std[n])})" for n in self.weak)
             lines.append(f"weakly determined (std > {WEAK_SHARE:.0%} of the prior spread): {weak}")
         pruned = [n for n, why in self.fixed.items() if why.startswith("barely excited")]
         if pruned:
@@ -228,6 +231,7 @@ def predict_accuracy(
         identifiability=Identifiability.of(pruned.jacobian(x)),
         errors=errors,
         warnings=pruned.warnings,
+        layout=model.layout,
     )
 
 

@@ -35,7 +35,6 @@ import numpy as np
 from spherecal.correction import RobotModel, link_frames, param_jacobian, tool_point
 from spherecal.correction.errors import SpherecalError
 from spherecal.correction.fixtures import FixtureSpec
-from spherecal.correction.perturb import ANGLE_STD, LENGTH_STD, TOOL_STD
 from spherecal.correction.samples import Dataset, DatasetError
 
 from .identifiability import Identifiability, greedy_rank, predicted_std
@@ -60,22 +59,7 @@ class ImplausibleCalibrationError(SpherecalError):
 
 def prior_std(model: RobotModel) -> np.ndarray:
     """(P,) prior spread of every parameter: 1 mm on lengths and tool, 0.2 deg on angles."""
-    n = model.n_joints
-    std = np.empty(model.n_params)
-    std[: 4 * n] = np.tile([LENGTH_STD, ANGLE_STD, LENGTH_STD, ANGLE_STD], n)
-    std[4 * n : 4 * n + 3] = TOOL_STD
-    std[4 * n + 3 : 4 * n + 6] = LENGTH_STD
-    std[4 * n + 6 :] = ANGLE_STD
-    return std
-
-
-def _is_angle(name: str) -> bool:
-    return name.startswith(("alpha", "theta", "base_r", "base_p", "base_y"))
-
-
-def format_value(name: str, value: float) -> str:
-    """A parameter value or deviation for humans: mm for lengths, deg for angles."""
-    return f"{np.rad2deg(value):.4g} deg" if _is_angle(name) else f"{value * 1e3:.4g} mm"
+    return model.layout.spread()
 
 
 @dataclass(frozen=True, eq=False)
@@ -287,9 +271,9 @@ def anchor_spread(model: RobotModel, q: np.ndarray, point: np.ndarray) -> float:
     jac, points = param_jacobian(model, q, return_point=True)
     radial = points.mean(axis=0) - point
     grad = (radial / np.linalg.norm(radial)) @ jac.mean(axis=0)  # (P,)
-    names = model.param_names
-    skip = set(GAUGE[model.convention]) | {n for n in names if n.startswith("base_")}
-    prior = np.array([0.0 if n in skip else s for n, s in zip(names, prior_std(model), strict=True)])
+    prior = prior_std(model)
+    prior[[model.param_index(name) for name in GAUGE[model.convention]]] = 0.0
+    prior[model.layout.base] = 0.0
     return max(float(np.linalg.norm(grad * prior)), 1e-9)
 
 
@@ -455,9 +439,8 @@ def build_problem(
             f"{spec.source or 'fixtures'} lists {', '.join(unused)} but {dataset.source or 'the samples'} has no "
             f"samples there; ignored"
         )
-    for name in names:
-        if name.startswith("base_"):
-            fixed[name] = "base placement: not observable from spherical-joint data"
+    for name in model.layout.names[model.layout.base]:
+        fixed[name] = "base placement: not observable from spherical-joint data"
     known = {name: np.asarray(p, float) for name, p in spec.positions.items() if name in names_fixtures}
     if len(known) == 1 and not spec.distances:
         (lone,) = known
@@ -593,9 +576,10 @@ def prune(
         if ratio[worst] <= 1.0:
             break
         name = names[problem.free[keep[worst]]]
+        fmt = problem.model.layout.format
         fixed[name] = (
-            f"barely excited: predicted std {format_value(name, std[worst])} at {sigma * 1e3:.3g} mm residual noise "
-            f"exceeds the prior spread {format_value(name, prior[problem.free[keep[worst]]])}"
+            f"barely excited: predicted std {fmt(name, std[worst])} at {sigma * 1e3:.3g} mm residual noise "
+            f"exceeds the prior spread {fmt(name, prior[problem.free[keep[worst]]])}"
         )
         keep = np.delete(keep, worst)
     if keep.size == fp:

@@ -17,6 +17,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from spherecal.correction import RobotModel, registered_errors, tool_point
+from spherecal.correction.layout import ParameterLayout
 
 #: Validation configurations drawn uniformly inside the joint limits (the paper's "large random set").
 RANDOM_CONFIGURATIONS = 5000
@@ -153,24 +154,27 @@ class ParameterDeviations:
     """Identified minus true parameters (the paper's Fig. 3).
 
     Attributes:
-        names: (P,) parameter names.
+        layout: the parameter layout (names, kinds, display units).
         nominal: (P,) nominal minus truth [m, rad].
         calibrated: (P,) calibrated minus truth [m, rad].
     """
 
-    names: tuple[str, ...]
+    layout: ParameterLayout
     nominal: np.ndarray
     calibrated: np.ndarray
 
-    @staticmethod
-    def is_angle(name: str) -> bool:
+    @property
+    def names(self) -> tuple[str, ...]:
+        """(P,) parameter names."""
+        return self.layout.names
+
+    def is_angle(self, name: str) -> bool:
         """True for angular parameters (shown in degrees), false for lengths (shown in mm)."""
-        return name.startswith(("alpha", "theta", "base_roll", "base_pitch", "base_yaw"))
+        return self.layout.is_angle(name)
 
     def display(self, values: np.ndarray) -> np.ndarray:
         """(P,) values in display units: mm for lengths, degrees for angles."""
-        scale = np.array([np.rad2deg(1.0) if self.is_angle(n) else 1e3 for n in self.names])
-        return np.asarray(values) * scale
+        return np.asarray(values) * self.layout.display_scale()
 
     def format(self) -> str:
         """One line per parameter: nominal and calibrated deviation from the truth (mm or deg)."""
@@ -184,7 +188,7 @@ class ParameterDeviations:
 def parameter_deviations(nominal: RobotModel, calibrated: RobotModel, truth: RobotModel) -> ParameterDeviations:
     """Deviations of the nominal and calibrated parameters from the truth (same convention and size)."""
     return ParameterDeviations(
-        names=truth.param_names,
+        layout=truth.layout,
         nominal=nominal.params - truth.params,
         calibrated=calibrated.params - truth.params,
     )
