@@ -15,8 +15,8 @@ from typing import Any
 _EXPORTS: dict[str, str] = {
     "CalibrationProblem": "problem",
     "UnidentifiableError": "problem",
-    "build_problem": "problem",
-    "prune": "problem",
+    "build_problem": "build",
+    "prune": "pruning",
     "CalibrationResult": "calibrate",
     "solve_lm": "solvers",
     "solve_pso": "solvers",
