@@ -15,6 +15,7 @@ from .build import build_problem
 from .identifiability import Identifiability, predicted_std
 from .problem import GAUGE, NOISE, CalibrationProblem, ImplausibleCalibrationError, prior_std, samples_location
 from .pruning import prune
+from .selfcheck import SelfCheck, self_check
 from .solvers import solve_lm, solve_pso
 
 METHODS: tuple[str, ...] = ("lm", "pso", "pso+lm")
@@ -50,6 +51,7 @@ class CalibrationResult:
         timings: stage -> wall time [s].
         problem: the final problem (inspectable).
         x: (F,) its solution.
+        selfcheck: the statistical self-check (:mod:`.selfcheck`), None when it was not run.
     """
 
     model: RobotModel
@@ -67,6 +69,7 @@ class CalibrationResult:
     timings: dict[str, float] = field(default_factory=dict)
     problem: CalibrationProblem | None = None
     x: np.ndarray | None = None
+    selfcheck: SelfCheck | None = None
 
     @staticmethod
     def _stats(r: np.ndarray) -> tuple[float, float]:
@@ -106,6 +109,7 @@ class CalibrationResult:
             "condition_number": float(self.condition_number),
             "std": {k: float(v) for k, v in self.std.items()},
             "warnings": list(self.warnings),
+            **({"self_check": self.selfcheck.block()} if self.selfcheck is not None else {}),
             "timings_s": {k: float(v) for k, v in self.timings.items()},
         }
 
@@ -133,6 +137,8 @@ class CalibrationResult:
         for name, c in self.centres.items():
             lines.append(f"centre {name} [m]: {np.array2string(np.asarray(c), precision=6)}")
         lines.extend(f"warning: {w}" for w in self.warnings)
+        if self.selfcheck is not None:
+            lines.extend(self.selfcheck.lines())
         return "\n".join(lines)
 
 
@@ -147,6 +153,8 @@ def calibrate(
     noise: float = NOISE,
     pso_options: dict | None = None,
     max_change: float = MAX_CHANGE,
+    check: bool = True,
+    force: bool = False,
 ) -> CalibrationResult:
     """Identify the parameters of ``nominal`` that put every sample's tool point on its fixture.
 
@@ -171,12 +179,15 @@ def calibrate(
         DatasetError, UnidentifiableError: see :func:`build_problem`.
         ImplausibleCalibrationError: the fit moved the tool point ``max_change`` times further than
             a real arm's errors do (see :func:`check_plausible`).
+        InconsistentDataError: the self-check failed (not with ``force``): one line naming the
+            inconsistent distance, position or fixture, or the failed figure.
     """
     if method not in METHODS:
         raise ValueError(f"unknown method {method!r}, expected one of {METHODS}")
     timings: dict[str, float] = {}
     clock = time.perf_counter()
     problem = build_problem(nominal, dataset, spec, noise=noise)
+    built = problem
     before = np.linalg.norm(problem.sample_errors(problem.x0), axis=1)
     timings["build"] = time.perf_counter() - clock
     x = problem.x0 if start is None else problem.start_from(start)
@@ -203,10 +214,17 @@ def calibrate(
     std_values = predicted_std(jac, sigma)
     ident = Identifiability.of(jac)
     params, centres = problem.unpack(x)
+    timings["covariance"] = time.perf_counter() - clock
+    clock = time.perf_counter()
+    checked = self_check(problem, x, nominal, built) if check else None
+    timings["self_check"] = time.perf_counter() - clock
+    if checked is not None and not force:
+        checked.raise_if_inconsistent()
+    clock = time.perf_counter()
     check_plausible(problem, params, max_change)
     model = problem.model.with_params(params)
     after = np.linalg.norm(problem.sample_errors(x), axis=1)
-    timings["covariance"] = time.perf_counter() - clock
+    timings["plausibility"] = time.perf_counter() - clock
     warnings = list(problem.warnings)
     if sigma > NOISE_RATIO * noise:
         warnings.append(_noise_warning(problem, x, sigma, noise))
@@ -228,6 +246,7 @@ def calibrate(
         timings=timings,
         problem=problem,
         x=x,
+        selfcheck=checked,
     )
 
 
