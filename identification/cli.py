@@ -31,6 +31,12 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         help="refuse a fit that moves the tool point more than this many times what a real arm's errors "
         "(1 mm, 0.2 deg) typically do (4: about 24 mm on the Panda)",
     )
+    parser.add_argument(
+        "--force",
+        action="store_true",
+        help="write the result even when the self-check finds the data inconsistent (every failed check is "
+        "recorded in the file's calibration.self_check block)",
+    )
     parser.add_argument("--out", required=True, help="calibrated robot file to write (YAML)")
 
 
@@ -77,6 +83,7 @@ def run(args: argparse.Namespace) -> int:
         loss=args.loss,
         noise=args.noise,
         max_change=args.max_change,
+        force=args.force,
     )
     block = result.block()
     block["duplicates_dropped"] = dropped
@@ -92,6 +99,7 @@ def run(args: argparse.Namespace) -> int:
         "max_samples": args.max_samples,
         "dedup_tol_rad": args.dedup_tol,
         "max_change": args.max_change,
+        "force": args.force,
     }
     block["seed"] = args.seed
     block["versions"] = versions(PACKAGES[:4] + (("pyswarms",) if "pso" in args.method else ()))

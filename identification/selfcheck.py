@@ -59,6 +59,8 @@ LEVEL_FACTOR = 2.0
 ALPHA = 1e-3
 #: A left-out group must also disagree by this multiple of the noise (per coordinate, RMS) to be a culprit.
 GROUP_FACTOR = 2.0
+#: With a robust loss, samples farther from their centre than this multiple of the median are outliers.
+OUTLIER = 4.0
 #: Failed groups explaining within this share of the best one contend for the culprit.
 CONTENDERS = 0.1
 #: ... and of two contenders of one size, the better must explain this much more (chi-square units).
@@ -172,6 +174,7 @@ def self_check(
     x: np.ndarray,
     nominal: RobotModel,
     built: CalibrationProblem | None = None,
+    loss: str = "linear",
 ) -> SelfCheck:
     """Check a solved calibration against its own data, its stated accuracies and the nominal model.
 
@@ -181,16 +184,27 @@ def self_check(
         nominal: the nominal robot (the prediction's start and reference).
         built: the problem as built, before pruning (the prediction prunes it again at the noise it
             judges with); default ``problem``.
+        loss: the fit's loss; with a robust one (``soft_l1``, ``huber``) the samples it discounted
+            (distance to their centre above :data:`OUTLIER` x the median) are left out of the checks.
 
     Returns:
         The :class:`SelfCheck` (call :meth:`SelfCheck.raise_if_inconsistent` to refuse).
     """
     noise = problem.noise
+    excluded = 0
+    if loss != "linear":
+        distance = np.linalg.norm(problem.sample_errors(x), axis=1)
+        inliers = distance <= OUTLIER * np.median(distance)
+        excluded = int((~inliers).sum())
+        if excluded and all(
+            np.any(inliers[problem.dataset.fixture_index == j]) for j in range(len(problem.dataset.fixture_names))
+        ):
+            problem = replace(problem, dataset=problem.dataset.select(inliers), _cache={})
     r = problem.residuals(x)
     dof = max(problem.n_residuals - problem.n_unknowns, 1)
     sigma = float(np.sqrt(r @ r / dof))
     findings = _geometry(problem, x)
-    findings.append(_level(problem, r, sigma, dof))
+    findings.append(_level(problem, r, sigma, dof, excluded))
     jac, res, groups, kinds, spread = _augmented(problem, x, r)
     _, _, left = leave_out(jac, res, groups, spread=spread)
     checkable = sum(1 for g in left.values() if g.dof > 0)
@@ -209,9 +223,7 @@ def _name_culprit(groups: list[Finding], noise: float) -> list[Finding]:
     distance before a position before a fixture's samples: the simplest explanation) is the culprit,
     unless a second one of its size comes within :data:`MARGIN` of it (then none is).
     """
-    failed = [
-        f for f in groups if not f.passed and f.figures["sigma_rest_mm"] <= LEVEL_FACTOR * noise * 1e3
-    ]
+    failed = [f for f in groups if not f.passed and f.figures["sigma_rest_mm"] <= LEVEL_FACTOR * noise * 1e3]
     if not failed:
         return groups
 
@@ -293,7 +305,7 @@ def _geometry(problem: CalibrationProblem, x: np.ndarray) -> list[Finding]:
 
 
 # ------------------------------------------------------------------------------- residual level
-def _level(problem: CalibrationProblem, r: np.ndarray, sigma: float, dof: int) -> Finding:
+def _level(problem: CalibrationProblem, r: np.ndarray, sigma: float, dof: int, excluded: int) -> Finding:
     noise = problem.noise
     dataset = problem.dataset
     per_axis = r[: 3 * dataset.n_samples].reshape(-1, 3)
@@ -310,6 +322,7 @@ def _level(problem: CalibrationProblem, r: np.ndarray, sigma: float, dof: int) -
         "dof": dof,
         "log10_p_high": log10_chi2_sf(statistic, dof),
         "per_fixture_std_mm": {k: v * 1e3 for k, v in per_fixture.items()},
+        "outliers_excluded": excluded,
     }
     worst = max(per_fixture, key=per_fixture.get)
     text = (
@@ -379,9 +392,7 @@ def _augmented(problem: CalibrationProblem, x: np.ndarray, r: np.ndarray):
     return full, res, groups, kinds, spread
 
 
-def _group_finding(
-    problem: CalibrationProblem, name: str, kind: tuple, group: LeftOut, checkable: int
-) -> Finding:
+def _group_finding(problem: CalibrationProblem, name: str, kind: tuple, group: LeftOut, checkable: int) -> Finding:
     what, key, weight, stated = kind
     spec, dataset = problem.spec, problem.dataset
     where = spec.source or "fixtures"

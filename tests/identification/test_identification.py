@@ -203,14 +203,19 @@ def test_listed_fixture_without_samples_is_reported(truth, clean) -> None:
 
 
 def test_wrong_distance_is_flagged_not_written_silently(truth, clean) -> None:
-    # a 10 mm typo in one distance used to give a 3 mm-off model with no word (residual 2 mm vs 0.3 expected)
+    # a 10 mm typo in one distance used to give a 3 mm-off model with no word (residual 2 mm vs 0.3 expected);
+    # now the self-check refuses it, and with force the warning still names the most strained distance
+    from spherecal.identification.selfcheck import InconsistentDataError
+
     panda, _ = truth
     dataset, spec = clean
     small = dataset.select(np.arange(0, dataset.n_samples, 5))
     assert not any("residual noise" in w for w in calibrate(panda, small, spec).warnings)
     (a, b, value), *rest = spec.distances
     typo = FixtureSpec(spec.names, distances=[(a, b, value + 0.01), *rest])
-    warning = next((w for w in calibrate(panda, small, typo).warnings if "residual noise" in w), "")
+    with pytest.raises(InconsistentDataError, match=rf"distance {a}-{b} .* disagrees with the samples by 9\.9"):
+        calibrate(panda, small, typo)
+    warning = next((w for w in calibrate(panda, small, typo, force=True).warnings if "residual noise" in w), "")
     assert f"the most strained distance is {a}-{b}" in warning, warning
 
 
@@ -258,7 +263,11 @@ def test_robust_loss_resists_slips(truth, clean) -> None:
     q[slipped] += np.random.default_rng(8).normal(0, 0.02, (9, 7))  # 2 % of samples off by ~1 cm
     q = np.clip(q, panda.lower, panda.upper)
     bad = Dataset(dataset.labels, q)
-    plain = _accuracy(calibrate(panda, bad, spec).model, true).mean()
+    from spherecal.identification.selfcheck import InconsistentDataError
+
+    with pytest.raises(InconsistentDataError, match="residual noise"):  # the plain fit is refused
+        calibrate(panda, bad, spec)
+    plain = _accuracy(calibrate(panda, bad, spec, force=True).model, true).mean()
     robust = _accuracy(calibrate(panda, bad, spec, loss="soft_l1", noise=1e-4).model, true).mean()
     assert robust < 0.5 * plain
 
@@ -273,8 +282,10 @@ def test_pso_is_seeded_quiet_and_restores_numpy_state(truth, clean, tmp_path, mo
     expected = np.random.random()  # noqa: NPY002
     np.random.seed(123)  # noqa: NPY002
     options = {"particles": 20, "iterations": 30, "samples_per_fixture": 40}
-    a = calibrate(panda, dataset, spec, method="pso", seed=5, pso_options=options)
-    b = calibrate(panda, dataset, spec, method="pso", seed=5, pso_options=options)
+    # 30 iterations do not converge: the self-check refuses the result (force returns it for the test)
+    a = calibrate(panda, dataset, spec, method="pso", seed=5, pso_options=options, force=True)
+    b = calibrate(panda, dataset, spec, method="pso", seed=5, pso_options=options, force=True)
+    assert not a.selfcheck.consistent
     assert np.random.random() == expected  # noqa: NPY002
     assert np.array_equal(a.model.params, b.model.params)
     assert list(tmp_path.iterdir()) == []  # no report.log

@@ -1,0 +1,227 @@
+"""False-alarm rate of the calibration self-check, and its verdict on real recordings.
+
+Simulated (``identification.synthetic.make_dataset``: kinematic, fast): for every seed, a true robot
+(``perturb``: 1 mm, 0.2 deg), the three Panda fixtures moved by up to 5 cm at random, then ten cases: 1, 2
+or 3 fixtures, with and without their known distances (1 fixture: without), noise-free and 0.3 mm noise,
+declared noise 0.3 mm (the default). The self-check must fire at most once in 100 calibrations.
+
+Real (``--real``): the MUKCa Panda recordings in /work/shared/data/mukca (a 3D-printed ball held in the
+gripper, hand-guided into two printed sockets 50 mm apart, several placements): every placement alone
+(two fixtures ``<placement>_h0/_h1``, their 0.050 m distance) and all placements together, for
+panda_2_clean and panda_4_clean, at the default noise 0.3 mm and at 0.2 mm. None may be refused.
+
+A small reader of MUKCa's ``hole_0.csv`` / ``hole_1.csv`` (7 joint angles [rad] per row, no header) is
+here, not the `spherecal import` command. The ball centre (the tool point) is the fixed joints of
+MUKCa's ``urdf/panda.urdf`` from ``panda_link7`` (the embedded Panda's last modified-DH frame: Franka's
+DH table and the URDF agree) to ``ball_link``: flange 0.107 m, hand -45 deg about z, TCP 0.1034 m, ball
+offset.
+
+    .venv/bin/python bench/selfcheck_false_alarms.py [--seeds 100] [--real] [--per-fixture 300]
+
+Prints a summary and writes ``bench/selfcheck_false_alarms.json`` (seeds, cases, how many fired, which check).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+import time
+import xml.etree.ElementTree as ET
+from pathlib import Path
+
+import bench_common  # noqa: F401  (first: one BLAS thread)
+import numpy as np
+
+from spherecal.correction import RobotModel, load_robot, perturb
+from spherecal.correction.fixtures import FixtureSpec
+from spherecal.correction.samples import Dataset
+from spherecal.identification.calibrate import calibrate
+from spherecal.identification.synthetic import PANDA_FIXTURES, make_dataset
+
+ROOT = Path("/work/shared/data/mukca")
+#: Socket centre distance of the printed plate [m].
+HOLE_DISTANCE = 0.050
+
+
+def _transform(xyz: list[float], rpy: list[float]) -> np.ndarray:
+    roll, pitch, yaw = rpy
+    cx, sx, cy, sy, cz, sz = np.cos(roll), np.sin(roll), np.cos(pitch), np.sin(pitch), np.cos(yaw), np.sin(yaw)
+    rx = np.array([[1, 0, 0], [0, cx, -sx], [0, sx, cx]])
+    ry = np.array([[cy, 0, sy], [0, 1, 0], [-sy, 0, cy]])
+    rz = np.array([[cz, -sz, 0], [sz, cz, 0], [0, 0, 1]])
+    out = np.eye(4)
+    out[:3, :3] = rz @ ry @ rx  # URDF: fixed-axis roll, pitch, yaw
+    out[:3, 3] = xyz
+    return out
+
+
+def ball_tool(
+    urdf: Path = ROOT / "urdf" / "panda.urdf", parent: str = "panda_link7", tip: str = "ball_link"
+) -> np.ndarray:
+    """(3,) the ball centre in ``parent``'s frame [m]: the fixed joints from ``parent`` to ``tip`` composed.
+
+    The embedded Panda's last modified-DH frame is ``panda_link7`` (Franka's DH table and URDF agree).
+    """
+    by_child = {j.find("child").get("link"): j for j in ET.parse(urdf).getroot().iter("joint")}
+    chain, link = [], tip
+    while link != parent:  # walk up from the tip: a link has one parent joint, possibly many children
+        joint = by_child[link]
+        if joint.get("type") != "fixed":
+            raise ValueError(f"{urdf}: joint {joint.get('name')} between {parent} and {tip} is not fixed")
+        chain.append(joint)
+        link = joint.find("parent").get("link")
+    pose = np.eye(4)
+    for joint in reversed(chain):
+        origin = joint.find("origin")
+        xyz = [float(v) for v in (origin.get("xyz") or "0 0 0").split()]
+        rpy = [float(v) for v in (origin.get("rpy") or "0 0 0").split()]
+        pose = pose @ _transform(xyz, rpy)
+    return pose[:3, 3]
+
+
+def mukca_panda() -> RobotModel:
+    """The embedded nominal Panda with its tool point at the MUKCa ball centre."""
+    from dataclasses import replace
+
+    return replace(load_robot("panda"), tool=ball_tool())
+
+
+def placements(robot: str) -> list[str]:
+    """Placements recorded for ``robot`` (folder names), sorted."""
+    return sorted(p.name for p in (ROOT / "data" / robot).iterdir() if (p / "hole_0.csv").exists())
+
+
+def mukca_dataset(robot: str, chosen: list[str] | None = None) -> tuple[Dataset, FixtureSpec]:
+    """Samples and fixtures of the placements ``chosen`` (all when None) of ``robot``."""
+    labels, rows = [], []
+    names, distances = [], []
+    for placement in chosen or placements(robot):
+        pair = []
+        for hole in (0, 1):
+            q = np.loadtxt(ROOT / "data" / robot / placement / f"hole_{hole}.csv", delimiter=",", ndmin=2)
+            name = f"{placement}_h{hole}"
+            labels += [name] * len(q)
+            rows.append(q)
+            names.append(name)
+            pair.append(name)
+        distances.append((pair[0], pair[1], HOLE_DISTANCE))
+    dataset = Dataset(labels=np.array(labels), q=np.concatenate(rows), fixture_names=tuple(names))
+    return dataset, FixtureSpec(names=tuple(names), distances=distances, source=f"mukca/{robot}")
+
+
+# ------------------------------------------------------------------------------------ simulated
+CASES: tuple[tuple[int, bool], ...] = ((1, False), (2, False), (2, True), (3, False), (3, True))
+NOISES: tuple[float, ...] = (0.0, 3e-4)
+
+
+def simulated(seeds: int, per_fixture: int) -> dict:
+    """Run every case on ``seeds`` seeds; returns the JSON record."""
+    panda = load_robot("panda")
+    fired, runs, walls = [], 0, []
+    for seed in range(seeds):
+        rng = np.random.default_rng(1000 + seed)
+        true = perturb(panda, rng)
+        centres = {k: np.asarray(c) + rng.uniform(-0.05, 0.05, 3) for k, c in PANDA_FIXTURES.items()}
+        for noise in NOISES:
+            dataset, spec = make_dataset(true, centres, per_fixture, rng, noise)
+            for count, with_distances in CASES:
+                names = dataset.fixture_names[:count]
+                subset = dataset.select(np.flatnonzero(np.isin(dataset.labels, names)))
+                distances = [d for d in spec.distances if d[0] in names and d[1] in names] if with_distances else []
+                clock = time.perf_counter()
+                result = calibrate(panda, subset, FixtureSpec(names=names, distances=distances), force=True)
+                walls.append(time.perf_counter() - clock)
+                runs += 1
+                check = result.selfcheck
+                if not check.consistent:
+                    fired.append(
+                        {
+                            "seed": seed,
+                            "noise_mm": noise * 1e3,
+                            "fixtures": count,
+                            "distances": with_distances,
+                            "checks": [f.check for f in check.failed],
+                            "refusal": check.refusal,
+                        }
+                    )
+                    print(f"  fired: seed {seed} noise {noise * 1e3:g} mm {count} fixtures distances {with_distances}: "
+                          f"{check.refusal}")
+        print(f"seed {seed}: {runs} calibrations, {len(fired)} fired", flush=True)
+    by_check: dict[str, int] = {}
+    for record in fired:
+        for name in record["checks"]:
+            key = name.split(" ")[0]
+            by_check[key] = by_check.get(key, 0) + 1
+    return {
+        "seeds": seeds,
+        "per_fixture": per_fixture,
+        "cases": [{"fixtures": c, "distances": d, "noise_mm": n * 1e3} for n in NOISES for c, d in CASES],
+        "calibrations": runs,
+        "fired": len(fired),
+        "rate": len(fired) / max(runs, 1),
+        "fired_by_check": by_check,
+        "fired_runs": fired,
+        "calibrate_s": {"median": float(np.median(walls)), "p90": float(np.percentile(walls, 90))},
+    }
+
+
+# ------------------------------------------------------------------------------------ real
+def real(noises: tuple[float, ...] = (3e-4, 2e-4)) -> list[dict]:
+    """Every placement alone and all together, per robot and declared noise; returns the JSON rows."""
+    panda = mukca_panda()
+    rows = []
+    for robot in ("panda_2_clean", "panda_4_clean"):
+        for chosen in [[p] for p in placements(robot)] + [None]:
+            dataset, spec = mukca_dataset(robot, chosen)
+            for noise in noises:
+                result = calibrate(panda, dataset, spec, noise=noise, force=True)
+                check = result.selfcheck
+                figures = {f.check: f.figures for f in check.findings}
+                row = {
+                    "robot": robot,
+                    "placements": chosen or "all",
+                    "samples": dataset.n_samples,
+                    "noise_declared_mm": noise * 1e3,
+                    "residual_std_mm": check.sigma * 1e3,
+                    "predicted_mean_mm": figures["prediction"]["predicted_mean_mm"],
+                    "nominal_expected_mm": figures["prediction"]["nominal_expected_mean_mm"],
+                    "refused": not check.consistent,
+                    "refusal": check.refusal,
+                }
+                rows.append(row)
+                print(
+                    f"{robot:<14} {str(chosen[0] if chosen else 'all'):<13} {dataset.n_samples:4d} samples  noise "
+                    f"{noise * 1e3:.1f} mm: residual {row['residual_std_mm']:.3f} mm, predicted "
+                    f"{row['predicted_mean_mm']:.3f} mm (nominal {row['nominal_expected_mm']:.2f} mm)  "
+                    f"{'REFUSED: ' + check.refusal if row['refused'] else 'written'}"
+                )
+    return rows
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--seeds", type=int, default=100)
+    parser.add_argument("--per-fixture", type=int, default=300)
+    parser.add_argument("--real", action="store_true", help="also the real MUKCa recordings")
+    parser.add_argument("--no-simulated", action="store_true")
+    args = parser.parse_args()
+    out = Path(__file__).with_suffix(".json")
+    record = json.loads(out.read_text()) if out.exists() else {}
+    record["command"] = " ".join(sys.argv)
+    if not args.no_simulated:
+        record["simulated"] = simulated(args.seeds, args.per_fixture)
+        sim = record["simulated"]
+        print(
+            f"simulated: {sim['seeds']} seeds x {len(sim['cases'])} cases = {sim['calibrations']} calibrations, "
+            f"fired {sim['fired']} ({sim['rate']:.2%}) by check {sim['fired_by_check']}; calibrate median "
+            f"{sim['calibrate_s']['median']:.2f} s"
+        )
+    if args.real:
+        record["real"] = real()
+        print(f"real: {sum(r['refused'] for r in record['real'])} refused of {len(record['real'])}")
+    out.write_text(json.dumps(record, indent=2))
+
+
+if __name__ == "__main__":
+    main()
