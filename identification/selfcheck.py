@@ -20,7 +20,7 @@ Run on every calibration (:func:`self_check`), its findings travel with the resu
 * **prediction**: the predicted mean tool-point error of the result (:func:`predict_accuracy`) at
   the larger of the declared and the measured noise, against the error the nominal model is expected
   to have (the prior spread, 1 mm and 0.2 deg, through the same workspace): a calibration that cannot
-  be expected to beat nominal by :data:`BEAT` is refused. The larger noise, because the residuals
+  be expected to beat nominal with a margin (:data:`BEAT`) is refused. The larger noise, because the residuals
   cannot refute a declared noise from below: play that the fit absorbs into the parameters, or a
   fixture that moved between recordings, leaves small residuals and a wrong model.
 
@@ -65,8 +65,11 @@ OUTLIER = 4.0
 CONTENDERS = 0.1
 #: ... and of two contenders of one size, the better must explain this much more (chi-square units).
 MARGIN = 10.0
-#: The predicted mean error must be below this share of the nominal model's expected error.
-BEAT = 1.0
+#: The predicted mean error must be below this share of the nominal model's expected error: a 2x margin,
+#: because one arm's nominal error varies about the expectation (4.7 mm against 5.2 mm expected for the
+#: arm of the tests) and the prediction assumes independent noise (correlated compliance noise in
+#: MuJoCo at 5 mm: 2.9 mm reached, 1.8 mm predicted).
+BEAT = 0.5
 
 
 class InconsistentDataError(SpherecalError):
@@ -439,13 +442,13 @@ def _group_finding(problem: CalibrationProblem, name: str, kind: tuple, group: L
             a, b, declared = spec.distances[key]
             text = (
                 f"{where}: {spec._row(f'distances[{key}]')}field 'distances[{key}]': distance {a}-{b} "
-                f"({declared:.6g} m) disagrees with the samples by {size * 1e3:.3g} mm (its stated accuracy "
+                f"({declared:.6g} m) disagrees with the samples by {size * 1e3:.3f} mm (its stated accuracy "
                 f"{stated * 1e3:.3g} mm, socket play {SOCKET_STD * 1e3:.2g} mm, the fit's {fit_std * 1e3:.2g} mm)"
             )
         else:
             text = (
                 f"{where}: {spec._row('fixtures.' + key)}field 'fixtures.{key}.position': the samples put {key} "
-                f"{size * 1e3:.3g} mm from its known position (its stated accuracy {stated * 1e3:.3g} mm, socket "
+                f"{size * 1e3:.3f} mm from its known position (its stated accuracy {stated * 1e3:.3g} mm, socket "
                 f"play {SOCKET_STD * 1e3:.2g} mm, the fit's {fit_std * 1e3:.2g} mm)"
             )
     return Finding(name, not significant, text, figures)
@@ -485,7 +488,7 @@ def _prediction(nominal: RobotModel, built: CalibrationProblem, noise: float) ->
     return Finding(
         "prediction",
         False,
-        f"{samples_location(built.dataset)}: the calibration cannot be expected to beat the nominal model: {text}; "
-        f"record more self-motion, more fixtures or known distances, or with less play",
+        f"{samples_location(built.dataset)}: the calibration cannot be expected to beat the nominal model: {text} "
+        f"(at most {BEAT:g}x needed); record more self-motion, more fixtures or known distances, or with less play",
         figures,
     )

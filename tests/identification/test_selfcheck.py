@@ -1,0 +1,259 @@
+"""The calibration self-check: leave-one-out against explicit refits, the slips it must refuse (each
+with its culprit), clean and real data that it must let through, and `calibrate --force`."""
+
+from __future__ import annotations
+
+import re
+from dataclasses import replace
+from pathlib import Path
+
+import numpy as np
+import pytest
+import yaml
+
+from spherecal.correction import load_robot, perturb, registered_errors, tool_point
+from spherecal.correction.fixtures import FixtureSpec
+from spherecal.correction.samples import Dataset
+from spherecal.identification.calibrate import calibrate
+from spherecal.identification.leave_out import leave_out
+from spherecal.identification.selfcheck import InconsistentDataError
+from spherecal.identification.synthetic import PANDA_FIXTURES, make_dataset
+
+
+@pytest.fixture(scope="module")
+def arm():
+    panda = load_robot("panda")
+    return panda, perturb(panda, np.random.default_rng(1))
+
+
+@pytest.fixture(scope="module")
+def noisy(arm):
+    """3 x 300 samples at 0.3 mm noise, every distance known."""
+    return make_dataset(arm[1], per_fixture=300, rng=np.random.default_rng(3), noise=3e-4)
+
+
+def _error(model, true) -> float:
+    q = true.random_configurations(2000, np.random.default_rng(5))
+    return float(registered_errors(tool_point(model, q), tool_point(true, q)).mean())
+
+
+# ----------------------------------------------------------------------------- leave one out
+def test_leave_out_matches_explicit_refits() -> None:
+    rng = np.random.default_rng(0)
+    a = rng.normal(size=(60, 5))
+    a[:, 4] = 0.0
+    a[50:53, 4] = rng.normal(size=3)  # only rows 50-52 see unknown 4: that group is checked on 2 rows
+    y = a @ rng.normal(size=5) + rng.normal(0, 0.1, 60)
+    x = np.linalg.lstsq(a, y, rcond=None)[0]
+    r = a @ x - y  # residual at the solution, Jacobian a
+    groups = {"block": np.arange(10), "row": np.array([20]), "alone": np.array([50, 51, 52])}
+    ssr, rank, left = leave_out(a, r, groups)
+    assert ssr == pytest.approx(r @ r) and rank == 5
+    for name, rows in groups.items():
+        keep = np.setdiff1d(np.arange(60), rows)
+        x_rest = np.linalg.lstsq(a[keep], y[keep], rcond=None)[0]
+        rest = left[name]
+        assert rest.ssr_rest == pytest.approx(np.sum((a[keep] @ x_rest - y[keep]) ** 2), rel=1e-9)
+        assert rest.delta_ssr == pytest.approx(r @ r - rest.ssr_rest, rel=1e-9)
+        if name != "alone":  # unknown 4 is free without the group: its prediction there is arbitrary
+            assert np.allclose(rest.predicted, a[rows] @ x_rest - y[rows], atol=1e-10)
+    assert left["block"].dof == 10 and left["row"].dof == 1 and left["alone"].dof == 2
+
+
+# ------------------------------------------------------------------------------ clean data
+@pytest.mark.parametrize("fixtures", [1, 2, 3])
+def test_clean_data_is_written(arm, noisy, fixtures) -> None:
+    panda, true = arm
+    dataset, spec = noisy
+    names = dataset.fixture_names[:fixtures]
+    subset = dataset.select(np.flatnonzero(np.isin(dataset.labels, names)))
+    distances = [d for d in spec.distances if d[0] in names and d[1] in names]
+    result = calibrate(panda, subset, FixtureSpec(names, distances=distances))
+    check = result.selfcheck
+    assert check.consistent and check.refusal == ""
+    block = result.block()["self_check"]
+    assert block["verdict"] == "consistent" and block["failed"] == []
+    assert 0.8 < block["checks"]["residual level"]["ratio"] < 1.2
+    assert _error(result.model, true) < 0.5 * _error(panda, true)
+    assert "self-check: consistent" in result.summary()
+
+
+def test_a_single_distance_is_reported_unchecked(arm, noisy) -> None:
+    # two fixtures and their distance: the distance alone sets the scale, nothing can check it
+    panda, _ = arm
+    dataset, spec = noisy
+    subset = dataset.select(np.flatnonzero(np.isin(dataset.labels, ["P1", "P2"])))
+    result = calibrate(panda, subset, FixtureSpec(("P1", "P2"), distances=spec.distances[:1]))
+    finding = next(f for f in result.selfcheck.findings if f.check == "distance P1-P2")
+    assert finding.passed and finding.figures == {"unchecked": True}
+    assert any(line.startswith("  unchecked: distance P1-P2") for line in result.selfcheck.lines())
+
+
+# ------------------------------------------------------------------------------ the slips
+def test_a_2mm_typo_in_a_distance_is_refused_by_name(arm, noisy) -> None:
+    panda, _ = arm
+    dataset, spec = noisy
+    (a, b, value), *rest = spec.distances
+    typo = FixtureSpec(spec.names, distances=[(a, b, value + 0.002), *rest], source="fixtures.yaml")
+    with pytest.raises(InconsistentDataError) as error:
+        calibrate(panda, dataset, typo)
+    message = str(error.value)
+    assert message.startswith("fixtures.yaml: field 'distances[0]': distance P1-P2")
+    assert re.search(r"disagrees with the samples by (1\.9[5-9]|2\.0\d)\d mm", message), message
+    assert "its stated accuracy 0.001 mm" in message
+    assert "\n" not in message
+
+
+def test_a_known_position_2mm_off_is_refused_by_name(arm, noisy) -> None:
+    panda, _ = arm
+    dataset, spec = noisy
+    positions = {k: np.asarray(c, float) for k, c in PANDA_FIXTURES.items()}
+    calibrate(panda, dataset, FixtureSpec(spec.names, positions=dict(positions)))  # exact: written
+    positions["P2"] = positions["P2"] + np.array([0.002, 0.0, 0.0])
+    with pytest.raises(
+        InconsistentDataError, match=r"field 'fixtures.P2.position': the samples put P2 (1\.9[5-9]|2\.0\d)\d mm"
+    ):
+        calibrate(panda, dataset, FixtureSpec(spec.names, positions=positions))
+
+
+@pytest.mark.parametrize("distances", [True, False])
+def test_samples_of_two_arms_are_refused_naming_the_fixture(arm, noisy, distances) -> None:
+    panda, _ = arm
+    dataset, spec = noisy
+    other, _ = make_dataset(perturb(panda, np.random.default_rng(11)), per_fixture=300, rng=np.random.default_rng(4))
+    mine, theirs = dataset.labels != "P3", other.labels == "P3"
+    mixed = Dataset(
+        np.concatenate([dataset.labels[mine], other.labels[theirs]]),
+        np.concatenate([dataset.q[mine], other.q[theirs]]),
+        fixture_names=dataset.fixture_names,
+    )
+    known = FixtureSpec(spec.names, distances=spec.distances if distances else [])
+    with pytest.raises(
+        InconsistentDataError, match=r"field 'fixture': the samples at fixture P3 disagree with the other"
+    ):
+        calibrate(panda, mixed, known)
+
+
+def test_two_fixtures_declared_1mm_apart_are_refused(arm, noisy) -> None:
+    panda, _ = arm
+    dataset, spec = noisy
+    (a, b, _), *rest = spec.distances
+    with pytest.raises(InconsistentDataError, match=r"field 'distances\[0\]': distance P1-P2 is 1 mm: fixtures closer"):
+        calibrate(panda, dataset, FixtureSpec(spec.names, distances=[(a, b, 0.001), *rest]))
+
+
+def test_noise_declared_far_too_small_is_refused_with_the_figure(arm, noisy) -> None:
+    panda, _ = arm
+    dataset, spec = noisy
+    with pytest.raises(
+        InconsistentDataError, match=r"residual noise 0\.\d+ mm per axis is \d\.\d+x the declared 0\.05 mm"
+    ):
+        calibrate(panda, dataset, spec, noise=5e-5)
+
+
+def test_an_honest_large_noise_is_judged_at_the_declared_noise(arm, noisy) -> None:
+    # 0.3 mm data declared at 5 mm: written (the result is good), but its accuracy is judged at 5 mm
+    panda, true = arm
+    dataset, spec = noisy
+    result = calibrate(panda, dataset, spec, noise=5e-3)
+    prediction = next(f for f in result.selfcheck.findings if f.check == "prediction").figures
+    assert prediction["noise_used_mm"] == pytest.approx(5.0)
+    assert prediction["predicted_mean_mm"] > 10 * 1e3 * _error(result.model, true)
+    level = next(f for f in result.selfcheck.findings if f.check == "residual level")
+    assert "accuracy is judged at the declared noise" in level.message
+
+
+def test_data_that_cannot_beat_nominal_is_refused(arm) -> None:
+    # 20 samples at one fixture with 10 mm noise, honestly declared: the fit is worse than nominal
+    panda, true = arm
+    dataset, _ = make_dataset(true, {"P1": PANDA_FIXTURES["P1"]}, 20, np.random.default_rng(3), noise=1e-2)
+    forced = calibrate(panda, dataset, noise=1e-2, force=True)
+    assert _error(forced.model, true) > _error(panda, true)
+    with pytest.raises(InconsistentDataError, match=r"cannot be expected to beat the nominal model: predicted mean"):
+        calibrate(panda, dataset, noise=1e-2)
+
+
+def test_a_fixture_whose_samples_hardly_move_the_arm_is_refused(arm, noisy) -> None:
+    panda, _ = arm
+    dataset, spec = noisy
+    q = dataset.q.copy()
+    still = dataset.labels == "P2"
+    q[still] = q[still][0] + np.random.default_rng(0).normal(0, 1e-3, (still.sum(), 7))
+    with pytest.raises(InconsistentDataError, match=r"the samples at fixture P2 hardly move the arm"):
+        calibrate(panda, Dataset(dataset.labels, q), FixtureSpec(spec.names))
+
+
+# ------------------------------------------------------------------------------ command line
+def test_cli_refuses_with_one_line_and_force_writes_the_failures(arm, noisy, tmp_path, capsys) -> None:
+    from spherecal.cli import main
+    from spherecal.correction.fixtures import write_fixtures
+    from spherecal.correction.samples_csv import write_samples
+
+    _, _ = arm
+    dataset, spec = noisy
+    small = dataset.select(np.arange(0, dataset.n_samples, 3))
+    (a, b, value), *rest = spec.distances
+    write_samples(tmp_path / "samples.csv", small)
+    write_fixtures(tmp_path / "fixtures.yaml", replace(spec, distances=[(a, b, value + 0.002), *rest]))
+    args = [
+        "calibrate",
+        "--robot",
+        "panda",
+        "--samples",
+        str(tmp_path / "samples.csv"),
+        "--fixtures",
+        str(tmp_path / "fixtures.yaml"),
+        "--out",
+        str(tmp_path / "cal.yaml"),
+    ]
+    assert main(args) == 1
+    err = capsys.readouterr().err.strip()
+    assert "\n" not in err
+    assert err.startswith("spherecal calibrate: error: ") and "distance P1-P2" in err and "disagrees" in err
+    assert not (tmp_path / "cal.yaml").exists()
+    assert main([*args, "--force"]) == 0
+    block = yaml.safe_load((tmp_path / "cal.yaml").read_text())["calibration"]
+    assert block["options"]["force"] is True
+    assert block["self_check"]["verdict"] == "inconsistent"
+    assert any("distance P1-P2" in line for line in block["self_check"]["failed"])
+    assert "FAILED: " in capsys.readouterr().out
+
+
+# ------------------------------------------------------------------------------ real data
+def _mukca() -> Path | None:
+    for base in Path(__file__).resolve().parents:
+        for candidate in (base / "shared" / "data" / "mukca", base / "tests" / "data" / "mukca"):
+            if (candidate / "data" / "panda_2_clean").is_dir():
+                return candidate / "data"
+    return None
+
+
+def _panda_ball():
+    """The embedded Panda with MUKCa's ball centre as tool point: their urdf/panda.urdf from panda_link7
+    (flange 0.107 m, hand rotated -45 deg about z, TCP 0.1034 m, ball offset), written out here."""
+    c, s = np.cos(-np.pi / 4), np.sin(-np.pi / 4)
+    ball = np.array([7.773732033005863e-05, -4.214022515884392e-05, 0.030128297908475325])
+    tool = np.array([0.0, 0.0, 0.107]) + np.array([[c, -s, 0], [s, c, 0], [0, 0, 1]]) @ (
+        np.array([0, 0, 0.1034]) + ball
+    )
+    return replace(load_robot("panda"), tool=tool)
+
+
+@pytest.mark.parametrize("placement", ["front_center", None])
+def test_real_recordings_are_not_refused(placement) -> None:
+    root = _mukca()
+    if root is None:
+        pytest.skip("the MUKCa recordings (shared/data/mukca) are not beside this checkout")
+    robot = root / "panda_2_clean"
+    chosen = [placement] if placement else sorted(p.name for p in robot.iterdir() if p.is_dir())
+    labels, rows, distances = [], [], []
+    for name in chosen:
+        for hole in (0, 1):
+            q = np.loadtxt(robot / name / f"hole_{hole}.csv", delimiter=",", ndmin=2)
+            labels += [f"{name}_h{hole}"] * len(q)
+            rows.append(q)
+        distances.append((f"{name}_h0", f"{name}_h1", 0.05))
+    dataset = Dataset(np.array(labels), np.concatenate(rows))
+    result = calibrate(_panda_ball(), dataset, FixtureSpec(dataset.fixture_names, distances=distances))
+    assert result.selfcheck.consistent
+    assert 0.05e-3 < result.selfcheck.sigma < 0.3e-3  # real residuals: 0.1-0.2 mm per axis
