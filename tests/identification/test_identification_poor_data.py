@@ -35,8 +35,11 @@ def test_one_second_of_self_motion_does_not_make_the_arm_worse() -> None:
     distances = [
         (a, b, float(np.linalg.norm(fixtures[a] - fixtures[b]))) for i, a in enumerate(names) for b in names[i + 1 :]
     ]
-    result = calibrate(nominal, run.dataset(), FixtureSpec(names=names, distances=distances))
+    result = calibrate(nominal, run.dataset(), FixtureSpec(names=names, distances=distances), force=True)
     assert _mean_error(result.model, true) < _mean_error(nominal, true)
+    # but so little data cannot be trusted to: the self-check refuses it without force (predicted 4.3 mm
+    # against 5.2 mm expected of nominal, a 2x margin asked; 2 s at seed 5 ends worse than nominal)
+    assert [f.check for f in result.selfcheck.failed] == ["prediction"]
     # what it could not see stayed at nominal, and says why
     assert any(reason.startswith("barely excited") for reason in result.fixed.values())
 
