@@ -16,7 +16,10 @@ MUKCa's ``urdf/panda.urdf`` from ``panda_link7`` (the embedded Panda's last modi
 DH table and the URDF agree) to ``ball_link``: flange 0.107 m, hand -45 deg about z, TCP 0.1034 m, ball
 offset.
 
-    .venv/bin/python bench/selfcheck_false_alarms.py [--seeds 100] [--real] [--per-fixture 300]
+MuJoCo (``--mujoco N``): N seeds of `spherecal simulate`'s protocol (3 fixtures, 20 s, 500 samples, 0.3 mm
+compliance noise, correlated over 0.05 s), with and without the known distances.
+
+    .venv/bin/python bench/selfcheck_false_alarms.py [--seeds 100] [--per-fixture 300] [--mujoco 10] [--real]
 
 Prints a summary and writes ``bench/selfcheck_false_alarms.json`` (seeds, cases, how many fired, which check).
 """
@@ -145,8 +148,10 @@ def simulated(seeds: int, per_fixture: int) -> dict:
                             "refusal": check.refusal,
                         }
                     )
-                    print(f"  fired: seed {seed} noise {noise * 1e3:g} mm {count} fixtures distances {with_distances}: "
-                          f"{check.refusal}")
+                    print(
+                        f"  fired: seed {seed} noise {noise * 1e3:g} mm {count} fixtures distances {with_distances}: "
+                        f"{check.refusal}"
+                    )
         print(f"seed {seed}: {runs} calibrations, {len(fired)} fired", flush=True)
     by_check: dict[str, int] = {}
     for record in fired:
@@ -164,6 +169,36 @@ def simulated(seeds: int, per_fixture: int) -> dict:
         "fired_runs": fired,
         "calibrate_s": {"median": float(np.median(walls)), "p90": float(np.percentile(walls, 90))},
     }
+
+
+# ------------------------------------------------------------------------------------ MuJoCo
+def mujoco(runs: int) -> dict:
+    """``runs`` seeds of `spherecal simulate`'s protocol (MuJoCo, 3 default fixtures, 20 s, 500 samples,
+    0.3 mm compliance noise), calibrated with and without the known distances."""
+    from spherecal.controller.self_motion import SelfMotionSettings, collect_self_motion
+    from spherecal.validation.experiment import default_fixtures
+
+    panda = load_robot("panda")
+    fired, count = [], 0
+    for seed in range(runs):
+        rng = np.random.default_rng(2000 + seed)
+        true = perturb(panda, rng)
+        fixtures = default_fixtures()
+        run = collect_self_motion(true, panda, fixtures, rng, SelfMotionSettings(noise=3e-4))
+        names = tuple(fixtures)
+        distances = [
+            (a, b, float(np.linalg.norm(fixtures[a] - fixtures[b])))
+            for i, a in enumerate(names)
+            for b in names[i + 1 :]
+        ]
+        for known in (distances, []):
+            check = calibrate(panda, run.dataset(), FixtureSpec(names, distances=known), force=True).selfcheck
+            count += 1
+            if not check.consistent:
+                fired.append({"seed": seed, "distances": bool(known), "refusal": check.refusal})
+            verdict = "ok" if check.consistent else "FIRED " + check.refusal
+            print(f"mujoco seed {seed} distances {bool(known)}: {verdict}")
+    return {"runs": runs, "calibrations": count, "fired": len(fired), "fired_runs": fired}
 
 
 # ------------------------------------------------------------------------------------ real
@@ -205,6 +240,7 @@ def main() -> None:
     parser.add_argument("--per-fixture", type=int, default=300)
     parser.add_argument("--real", action="store_true", help="also the real MUKCa recordings")
     parser.add_argument("--no-simulated", action="store_true")
+    parser.add_argument("--mujoco", type=int, default=0, help="also this many MuJoCo-simulated seeds (~10 s each)")
     args = parser.parse_args()
     out = Path(__file__).with_suffix(".json")
     record = json.loads(out.read_text()) if out.exists() else {}
@@ -217,6 +253,9 @@ def main() -> None:
             f"fired {sim['fired']} ({sim['rate']:.2%}) by check {sim['fired_by_check']}; calibrate median "
             f"{sim['calibrate_s']['median']:.2f} s"
         )
+    if args.mujoco:
+        record["mujoco"] = mujoco(args.mujoco)
+        print(f"mujoco: {record['mujoco']['fired']} fired of {record['mujoco']['calibrations']}")
     if args.real:
         record["real"] = real()
         print(f"real: {sum(r['refused'] for r in record['real'])} refused of {len(record['real'])}")
