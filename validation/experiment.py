@@ -100,17 +100,19 @@ def _mujoco_motion(truth, nominal, fixtures, samples, noise, rng, seconds) -> Mo
     return MotionData(run.dataset(), fixture_spec(fixtures, len(fixtures) > 1), run)
 
 
-def calibrate_from(nominal: RobotModel, data: MotionData, start: RobotModel | None = None):
+def calibrate_from(nominal: RobotModel, data: MotionData, start: RobotModel | None = None, force: bool = False):
     """Calibrate ``nominal`` from the data with identification's default method (``lm``).
 
     Args:
         nominal: the model calibrated (fixed parameters and a pinned single fixture come from it).
         data: the samples and fixture spec.
         start: start of the optimisation (default ``nominal``).
+        force: return the result even when its self-check refuses it (the failures are in
+            ``result.selfcheck``); otherwise the refusal is raised.
 
     Returns:
         The :class:`identification.calibrate.CalibrationResult` (``.model`` is the calibrated robot).
     """
     from spherecal.identification.calibrate import calibrate
 
-    return calibrate(nominal, data.dataset, data.spec, start=start)
+    return calibrate(nominal, data.dataset, data.spec, start=start, force=force)
