@@ -1,7 +1,8 @@
-"""The ``spherecal`` command line: one subcommand per job, each living in its package.
+"""The ``spherecal`` command line: one subcommand per job, registered in :data:`COMMANDS`.
 
-Only argparse is imported here and by each package's ``cli`` module; a subcommand imports
-numpy, MuJoCo, Rerun or pyswarms when it runs, so start-up stays short.
+The subcommands live in :mod:`spherecal.commands` (the command-line layer on top of the packages;
+no library module imports it). Only argparse is imported while the parser is built; a subcommand
+imports numpy, MuJoCo, Rerun or pyswarms when it runs, so start-up stays short.
 """
 
 from __future__ import annotations
@@ -12,13 +13,13 @@ import sys
 
 #: subcommand -> module with ``HELP``, ``add_arguments(parser)`` and ``run(args) -> int``.
 COMMANDS: dict[str, str] = {
-    "simulate": "spherecal.controller.cli",
-    "calibrate": "spherecal.identification.cli",
-    "validate": "spherecal.validation.validate_cli",
-    "demo": "spherecal.validation.demo_cli",
-    "campaign": "spherecal.validation.campaign_cli",
-    "plan": "spherecal.validation.plan_cli",
-    "export": "spherecal.controller.export_cli",
+    "simulate": "spherecal.commands.simulate",
+    "calibrate": "spherecal.commands.calibrate",
+    "validate": "spherecal.commands.validate",
+    "demo": "spherecal.commands.demo",
+    "campaign": "spherecal.commands.campaign",
+    "plan": "spherecal.commands.plan",
+    "export": "spherecal.commands.export",
 }
 
 

@@ -261,7 +261,7 @@ TITLES = {
 
 def markdown(analysis: Analysis, provenance: str) -> str:
     """The document."""
-    from spherecal.validation.plan_cli import format_plan
+    from spherecal.validation.plan_report import format_plan
 
     cfg = analysis.config
     results = analysis.results

@@ -27,7 +27,7 @@ def true_robot(nominal: RobotModel, rng: np.random.Generator) -> RobotModel:
 def default_fixtures() -> dict[str, np.ndarray]:
     """The three fixture centres P1, P2, P3 in the base frame [m]: ``spherecal simulate``'s defaults
     (chosen by the controller for joint coverage under self-motion)."""
-    from spherecal.controller.cli import DEFAULT_FIXTURES
+    from spherecal.controller.self_motion import DEFAULT_FIXTURES
 
     return {name: np.asarray(centre, dtype=float) for name, centre in DEFAULT_FIXTURES.items()}
 

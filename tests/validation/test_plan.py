@@ -15,7 +15,7 @@ from spherecal.validation.plan import (
     read_candidates,
     restricted,
 )
-from spherecal.validation.plan_cli import format_plan
+from spherecal.validation.plan_report import format_plan
 
 REACHABLE = {"A": [0.5, -0.25, 0.5], "B": [0.5, 0.0, 0.4], "C": [0.45, 0.25, 0.45]}
 

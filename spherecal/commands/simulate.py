@@ -6,15 +6,6 @@ import argparse
 
 HELP = "Simulate self-motion at spherical-joint fixtures on a perturbed (true) robot and write samples."
 
-#: Default fixtures [m], base frame: over the front of the Panda's workspace, chosen by the
-#: coverage table (every joint >= 30% of its range in 20 s with coverage exploration).
-DEFAULT_FIXTURES: dict[str, tuple[float, float, float]] = {
-    "P1": (0.5, -0.25, 0.5),
-    "P2": (0.5, 0.0, 0.4),
-    "P3": (0.45, 0.25, 0.45),
-}
-
-
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     """Register the options of `spherecal simulate`."""
     parser.add_argument("--out", required=True, help="output directory (samples.csv, fixtures.yaml, truth.yaml)")
@@ -47,6 +38,8 @@ def _fixtures(path: str | None) -> dict:
     import numpy as np
 
     if path is None:
+        from spherecal.controller.self_motion import DEFAULT_FIXTURES  # MuJoCo: only when simulating
+
         return {k: np.array(v, dtype=float) for k, v in DEFAULT_FIXTURES.items()}
     from spherecal.correction.fixtures import read_fixtures
 
@@ -87,11 +80,10 @@ def run(args: argparse.Namespace) -> int:
     import numpy as np
     import qpsolvers
 
+    from spherecal.controller.self_motion import SelfMotionSettings, collect_self_motion
     from spherecal.correction import atomic_write_text, dump_robot, load_robot, perturb
     from spherecal.correction.fixtures import FixtureSpec, format_fixtures
     from spherecal.correction.samples_csv import format_samples
-
-    from .self_motion import SelfMotionSettings, collect_self_motion
 
     _check_args(args)
     if args.solver not in qpsolvers.available_solvers:

@@ -9,7 +9,7 @@ HELP = "Compare nominal and calibrated models against the truth or motion-captur
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     """Register the options of `spherecal validate`."""
-    from spherecal.identification.options import non_negative, seed
+    from spherecal.options import non_negative, seed
 
     parser.add_argument("--truth", help="robot file of the true robot (simulation)")
     parser.add_argument("--nominal", required=True, help="robot file of the nominal model ('panda': embedded)")

@@ -9,7 +9,7 @@ HELP = "Run the paper's simulated protocol (fixture sets x noise levels) and pri
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     """Register the options of `spherecal campaign`."""
-    from spherecal.identification.options import non_negative, positive, seed
+    from spherecal.options import non_negative, positive, seed
 
     parser.add_argument("--sets", type=int, default=10, help="motion sets per row (10)")
     parser.add_argument("--samples", type=int, default=500, help="samples per fixture in each set (500)")

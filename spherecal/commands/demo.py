@@ -9,7 +9,7 @@ HELP = "End-to-end demo on the embedded Panda: simulate, calibrate, validate, re
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     """Register the options of `spherecal demo`."""
-    from spherecal.identification.options import non_negative, positive, seed
+    from spherecal.options import non_negative, positive, seed
 
     parser.add_argument("--seed", type=seed, default=0, help="seed of the true robot, motion and noise (0)")
     parser.add_argument("--samples", type=int, default=1500, help="samples kept per fixture (1500)")

@@ -9,7 +9,7 @@ HELP = "Identify DH parameters from spherical-joint samples and write a calibrat
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     """Register the options of `spherecal calibrate`."""
-    from spherecal.identification.options import non_negative, positive, seed
+    from spherecal.options import non_negative, positive, seed
 
     parser.add_argument("--robot", required=True, help="nominal robot file (or 'panda')")
     parser.add_argument("--samples", required=True, help="samples.csv: fixture[,t],q1..qn [rad]")
@@ -53,8 +53,7 @@ def run(args: argparse.Namespace) -> int:
     from spherecal.correction.fixtures import read_fixtures
     from spherecal.correction.provenance import PACKAGES, input_record, versions
     from spherecal.correction.samples_csv import read_samples
-
-    from .calibrate import calibrate
+    from spherecal.identification.calibrate import calibrate
 
     clock = time.perf_counter()
     if args.max_samples is not None and args.max_samples < 1:
