@@ -19,6 +19,7 @@ import numpy as np
 
 from spherecal.correction import RobotModel, frames
 from spherecal.correction.errors import SpherecalError
+from spherecal.correction.samples import Dataset
 
 from .exploration import COVERAGE_PERIOD, RANDOM_PERIOD, Ramp, joint_coverage, make_exploration
 from .ik import ik
@@ -132,7 +133,6 @@ class SelfMotionRun:
 
     def dataset(self):
         """The kept samples as an :class:`spherecal.correction.samples.Dataset` (with times)."""
-        from spherecal.correction.samples import Dataset
 
         return Dataset(labels=self.labels, q=self.q, t=self.t, fixture_names=self.fixture_names)
 

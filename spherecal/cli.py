@@ -10,6 +10,7 @@ from __future__ import annotations
 import argparse
 import importlib
 import sys
+from importlib.metadata import PackageNotFoundError, version
 
 #: subcommand -> module with ``HELP``, ``add_arguments(parser)`` and ``run(args) -> int``.
 COMMANDS: dict[str, str] = {
@@ -40,7 +41,6 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 def _version() -> str:
-    from importlib.metadata import PackageNotFoundError, version
 
     try:
         return version("spherecal")
@@ -51,7 +51,7 @@ def _version() -> str:
 def main(argv: list[str] | None = None) -> int:
     """Run one subcommand; spherecal's own errors print one line and exit 1."""
     args = build_parser().parse_args(argv)  # --help and usage errors end here, before numpy loads
-    from spherecal.correction.errors import SpherecalError
+    from spherecal.correction.errors import SpherecalError  # numpy: not at --help (start-up)
     try:
         return int(args._run(args) or 0)
     except SpherecalError as error:

@@ -2,6 +2,10 @@
 
 from __future__ import annotations
 
+import numpy as np
+
+from spherecal.validation.recording import Recording
+
 
 def format_plan(result) -> str:
     """The ranked candidate table and the chosen set (mm, %)."""
@@ -50,9 +54,7 @@ def write_recording(path: str, result, provenance: str = "") -> str:
     """The candidates coloured by predicted error alone (green good, red poor, grey unreachable),
     the chosen set as larger points, the printed plan and its provenance as text; Rerun is imported
     only here."""
-    import numpy as np
 
-    from spherecal.validation.recording import Recording
 
     recording = Recording(path)
     try:
