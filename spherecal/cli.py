@@ -26,12 +26,14 @@ COMMANDS: dict[str, str] = {
 
 def build_parser() -> argparse.ArgumentParser:
     """The top-level parser with every subcommand registered."""
-    parser = argparse.ArgumentParser(
+    from spherecal.options import Parser
+
+    parser = Parser(
         prog="spherecal",
         description="Kinematic calibration of a redundant arm from spherical-joint self-motion.",
     )
     parser.add_argument("--version", action="version", version=f"%(prog)s {_version()}")
-    sub = parser.add_subparsers(dest="command", metavar="COMMAND", required=True)
+    sub = parser.add_subparsers(dest="command", metavar="COMMAND", required=True, parser_class=Parser)
     for name, module_name in COMMANDS.items():
         module = importlib.import_module(module_name)
         command = sub.add_parser(name, help=module.HELP, description=module.HELP)
@@ -49,12 +51,18 @@ def _version() -> str:
 
 
 def main(argv: list[str] | None = None) -> int:
-    """Run one subcommand; spherecal's own errors print one line and exit 1."""
-    args = build_parser().parse_args(argv)  # --help and usage errors end here, before numpy loads
+    """Run one subcommand; return its exit status. Every refusal (a bad option, bad input, a file that
+    cannot be read or written) prints one line and returns 1."""
+    try:
+        args = build_parser().parse_args(argv)  # --help and bad options end here, before numpy loads
+    except SystemExit as done:
+        return done.code if isinstance(done.code, int) else 1
     from spherecal.correction.errors import SpherecalError  # numpy: not at --help (start-up)
+    from spherecal.options import OptionError
+
     try:
         return int(args._run(args) or 0)
-    except SpherecalError as error:
+    except (SpherecalError, OptionError) as error:
         print(f"spherecal {args.command}: error: {error}", file=sys.stderr)
         return 1
     except OSError as error:  # a file that cannot be read or written: one line, not a traceback
@@ -65,11 +73,6 @@ def main(argv: list[str] | None = None) -> int:
         print(f"spherecal {args.command}: interrupted", file=sys.stderr)
         return 130
 
-
-def not_yet_available(name: str) -> int:
-    """What a subcommand that is not built yet does: say so and exit 2."""
-    print(f"spherecal {name}: not yet available in this version", file=sys.stderr)
-    return 2
 
 
 if __name__ == "__main__":

@@ -4,14 +4,16 @@ from __future__ import annotations
 
 import argparse
 
+from spherecal.options import fail
+
 HELP = "Rank candidate fixture positions by the calibration accuracy they predict."
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     """Register the options of `spherecal plan`."""
-    from spherecal.options import non_negative, positive, seed
+    from spherecal.options import add_per_fixture, add_robot, add_seconds, add_seed, count, noise_mm
 
-    parser.add_argument("--robot", default="panda", help="nominal robot file or 'panda' (default)")
+    add_robot(parser)
     where = parser.add_mutually_exclusive_group()
     where.add_argument("--candidates", default=None,
                        help="YAML: candidates: {C1: {position: [x, y, z], joint_range: [share per joint]}} [m]")
@@ -21,23 +23,34 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     where.add_argument("--analysis", default=None, metavar="MARKDOWN",
                        help="instead of planning: regenerate the experiment-design analysis into this file "
                             "(docs/experiment_design.md)")
-    parser.add_argument("--spec", default=None, help="fixtures.yaml of --predict (known positions, distances)")
-    parser.add_argument("--fixtures", type=int, default=3, help="number of fixtures wanted, 1..4 (default 3)")
-    parser.add_argument("--noise", type=non_negative, default=0.3, help="fixture noise std per axis [mm] (default 0.3)")
-    parser.add_argument("--samples", type=int, default=500, help="samples to be recorded per fixture (default 500)")
+    parser.add_argument("--fixtures", default=None, action=_FixturesOption, metavar="FIXTURES_YAML",
+                        help="fixtures.yaml of --predict: known positions [m] and distances [m]")
+    parser.add_argument("--spec", dest="fixtures", default=None, help=argparse.SUPPRESS)  # the old name
+    parser.add_argument("--fixture-count", type=count(1), default=3, metavar="N",
+                        help="number of fixtures wanted, 1..4 (default 3)")
+    parser.add_argument("--noise", type=noise_mm, default=0.3, help="fixture noise std per axis [mm] (default 0.3)")
+    add_per_fixture(parser, 500, "samples to be recorded per fixture")
     parser.add_argument("--motion", choices=("kinematic", "controller"), default="kinematic",
                         help="self-motion at a candidate: kinematic projection (default, the whole manifold) or "
                              "the null-space controller on the MuJoCo plant for --seconds")
-    parser.add_argument("--seconds", type=positive, default=3.0, help="controller self-motion per candidate [s] (3)")
-    parser.add_argument("--seed", type=seed, default=0, help="seed of everything random (default 0)")
+    add_seconds(parser, 3.0, "controller self-motion per candidate")
+    add_seed(parser)
     parser.add_argument("--rrd", default=None, help="write a Rerun recording of the candidates coloured by score")
-    parser.add_argument("--workers", type=int, default=2, help="worker processes of --analysis (2)")
+    parser.add_argument("--workers", type=count(1), default=2, help="worker processes of --analysis (default 2)")
 
 
-def _fail(message: str):
-    from spherecal.correction.errors import SpherecalError
+class _FixturesOption(argparse.Action):
+    """``--fixtures``: a fixtures.yaml file, as in every command. Its old meaning here, a count
+    (``--fixtures 3``), still works with a deprecation warning (now ``--fixture-count``)."""
 
-    return SpherecalError(message)
+    def __call__(self, parser, namespace, values, option_string=None):
+        if values.strip().isdigit():
+            from spherecal.options import warn
+
+            warn("--fixtures N (a count) is deprecated in plan, use --fixture-count N; --fixtures names a file")
+            namespace.fixture_count = int(values)
+        else:
+            namespace.fixtures = values
 
 
 def run(args: argparse.Namespace) -> int:
@@ -48,12 +61,8 @@ def run(args: argparse.Namespace) -> int:
 
     from spherecal.correction import load_robot
 
-    if not args.noise >= 0:
-        raise _fail(f"--noise must be >= 0, got {args.noise}")
-    if args.samples < 10:
-        raise _fail(f"--samples must be >= 10, got {args.samples}")
-    if not args.seconds > 0:
-        raise _fail(f"--seconds must be > 0, got {args.seconds}")
+    if args.per_fixture < 10:
+        raise fail(f"--per-fixture must be >= 10, got {args.per_fixture}")
     from spherecal.validation.inputs import check_out_file
 
     for option, path in (("--rrd", args.rrd), ("--analysis", args.analysis)):
@@ -72,12 +81,14 @@ def run(args: argparse.Namespace) -> int:
     from spherecal.validation.plan import grid_candidates, plan, read_candidates
 
     if args.candidates is None and args.grid is None:
-        raise _fail("give --candidates C.yaml or --grid 'xmin,xmax,nx;ymin,ymax,ny;zmin,zmax,nz'")
+        raise fail("give --candidates C.yaml or --grid 'xmin,xmax,nx;ymin,ymax,ny;zmin,zmax,nz'")
     candidates = read_candidates(args.candidates, model.n_joints) if args.candidates else grid_candidates(args.grid)
-    if not 1 <= args.fixtures <= 4:
-        raise _fail(f"--fixtures must be in 1..4, got {args.fixtures}")
+    if not 1 <= args.fixture_count <= 4:
+        raise fail(f"--fixture-count must be in 1..4, got {args.fixture_count}")
     start = time.perf_counter()
-    result = plan(model, candidates, args.fixtures, rng, args.noise * 1e-3, args.samples, args.motion, args.seconds)
+    result = plan(
+        model, candidates, args.fixture_count, rng, args.noise * 1e-3, args.per_fixture, args.motion, args.seconds
+    )
     from spherecal.validation.plan_report import format_plan, write_recording
 
     print(format_plan(result))
@@ -98,6 +109,6 @@ def _predict(args: argparse.Namespace, model) -> int:
     from spherecal.identification.prediction import predict_accuracy
 
     dataset = read_samples(args.predict, model)
-    spec = read_fixtures(args.spec) if args.spec else None
+    spec = read_fixtures(args.fixtures) if args.fixtures else None
     print(predict_accuracy(model, dataset, spec, noise=args.noise * 1e-3).summary())
     return 0
