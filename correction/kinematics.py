@@ -67,19 +67,24 @@ def frames(model: RobotModel, q: np.ndarray) -> Frames:
     angle = q + model.theta
     cos_q, sin_q = np.cos(angle).T, np.sin(angle).T
     cos_a, sin_a = np.cos(model.alpha), np.sin(model.alpha)
+    cos_b, sin_b = np.cos(model.beta), np.sin(model.beta)
     modified = model.convention == "modified"
     for i in range(n):
         x, y, z, o = xs[i], ys[i], zs[i], os_[i]
         c, s = cos_q[i], sin_q[i]
-        if modified:  # Rx(alpha) Lx(a) Rz(theta+q) Lz(d)
+        if modified:  # Rx(alpha) Lx(a) Ry(beta) Rz(theta+q) Lz(d)
             o = o + model.a[i] * x
             y, z = cos_a[i] * y + sin_a[i] * z, cos_a[i] * z - sin_a[i] * y
+            if model.beta[i] != 0.0:
+                x, z = cos_b[i] * x - sin_b[i] * z, sin_b[i] * x + cos_b[i] * z
             x, y = c * x + s * y, c * y - s * x
             o = o + model.d[i] * z
-        else:  # Rz(theta+q) Lz(d) Lx(a) Rx(alpha)
+        else:  # Rz(theta+q) Lz(d) Lx(a) Rx(alpha) Ry(beta)
             x, y = c * x + s * y, c * y - s * x
             o = o + model.d[i] * z + model.a[i] * x
             y, z = cos_a[i] * y + sin_a[i] * z, cos_a[i] * z - sin_a[i] * y
+            if model.beta[i] != 0.0:
+                x, z = cos_b[i] * x - sin_b[i] * z, sin_b[i] * x + cos_b[i] * z
         xs[i + 1], ys[i + 1], zs[i + 1], os_[i + 1] = x, y, z, o
     return Frames(xs, ys, zs, os_)
 
@@ -137,12 +142,17 @@ def tool_point(model: RobotModel, q: np.ndarray) -> np.ndarray:
     for i in reversed(range(model.n_joints)):
         c, s = cos_q[i], sin_q[i]
         ca, sa = np.cos(model.alpha[i]), np.sin(model.alpha[i])
-        if modified:  # Rx(alpha) Lx(a) Rz(theta+q) Lz(d)
+        beta = model.beta[i]
+        if modified:  # Rx(alpha) Lx(a) Ry(beta) Rz(theta+q) Lz(d)
             z = z + model.d[i]
             x, y = c * x - s * y, s * x + c * y
+            if beta != 0.0:
+                x, z = np.cos(beta) * x + np.sin(beta) * z, np.cos(beta) * z - np.sin(beta) * x
             x = x + model.a[i]
             y, z = ca * y - sa * z, sa * y + ca * z
-        else:  # Rz(theta+q) Lz(d) Lx(a) Rx(alpha)
+        else:  # Rz(theta+q) Lz(d) Lx(a) Rx(alpha) Ry(beta)
+            if beta != 0.0:
+                x, z = np.cos(beta) * x + np.sin(beta) * z, np.cos(beta) * z - np.sin(beta) * x
             y, z = ca * y - sa * z, sa * y + ca * z
             x = x + model.a[i]
             z = z + model.d[i]

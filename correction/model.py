@@ -47,6 +47,9 @@ class RobotModel:
         tool: (3,) tool point in the last frame [m].
         base_xyz, base_rpy: (3,) base placement [m], [rad].
         extras: other top-level keys of the robot file, written back unchanged.
+        beta: (n,) Hayati rotations about ``y`` [rad] (zeros when not given): ``modified``
+            ``Rx(alpha) Lx(a) Ry(beta) Rz(theta+q) Lz(d)``, ``standard``
+            ``Rz(theta+q) Lz(d) Lx(a) Rx(alpha) Ry(beta)`` (nearly parallel axes).
     """
 
     name: str
@@ -61,6 +64,7 @@ class RobotModel:
     base_xyz: np.ndarray = field(default_factory=lambda: np.zeros(3))
     base_rpy: np.ndarray = field(default_factory=lambda: np.zeros(3))
     extras: dict = field(default_factory=dict)
+    beta: np.ndarray = field(default_factory=lambda: np.zeros(0))
 
     def __post_init__(self) -> None:
         if self.convention not in CONVENTIONS:
@@ -70,7 +74,7 @@ class RobotModel:
         n = np.size(self.a)
         if n < 1:
             raise ValueError("a robot needs at least one joint")
-        for name in ("a", "alpha", "d", "theta", "lower", "upper"):
+        for name in ("a", "alpha", "d", "theta", "lower", "upper", "beta"):
             object.__setattr__(self, name, _frozen_array(getattr(self, name), (n,), name))
         for name in ("tool", "base_xyz", "base_rpy"):
             object.__setattr__(self, name, _frozen_array(getattr(self, name), (3,), name))
