@@ -221,7 +221,7 @@ def urdf_model(tree: UrdfTree, tip_link: str | None = None, base_link: str | Non
         frames = link_frames(model, np.zeros(model.n_joints))[1:]
         inertials, payload = _inertials(tree, base, joints, list(frames), poses)
         extras["inertials"], extras["payload"] = inertials, payload
-    skew = [names[k] for k in dh["parallel"] if dh["beta"][k] != 0.0 or abs(np.sin(dh["alpha"][k])) > 0.0]
+    skew = [names[k] for k in dh["parallel"] if max(abs(dh["beta"][k]), abs(np.sin(dh["alpha"][k]))) > 1e-12]
     if skew:
         warnings.warn(
             f"{tree.source}: joints {', '.join(skew)} turn about axes nearly parallel to the previous joint's: "

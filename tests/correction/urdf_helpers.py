@@ -11,7 +11,7 @@ DATA = Path(__file__).resolve().parents[1] / "data" / "urdf"
 COMPILER = {"discardvisual": "true", "fusestatic": "false", "boundmass": "1e-3", "boundinertia": "1e-6"}
 
 
-def mujoco_ready(text: str) -> str:
+def mujoco_ready(text: str, **compiler: str) -> str:
     """URDF text without <visual>/<collision> (their mesh files are not shipped) and with a
     <mujoco><compiler .../></mujoco> element that keeps fixed links as bodies."""
     root = ET.fromstring(text)
@@ -22,18 +22,18 @@ def mujoco_ready(text: str) -> str:
     for element in root.findall("mujoco"):
         root.remove(element)
     extension = ET.SubElement(root, "mujoco")
-    ET.SubElement(extension, "compiler", COMPILER)
+    ET.SubElement(extension, "compiler", {**COMPILER, **compiler})
     return ET.tostring(root, encoding="unicode")
 
 
 class MujocoUrdf:
     """A URDF compiled by MuJoCo; positions of a link's body for joint angles given by name."""
 
-    def __init__(self, text: str):
+    def __init__(self, text: str, **compiler: str):
         import mujoco
 
         self._mujoco = mujoco
-        self.model = mujoco.MjModel.from_xml_string(mujoco_ready(text))
+        self.model = mujoco.MjModel.from_xml_string(mujoco_ready(text, **compiler))
         self.data = mujoco.MjData(self.model)
 
     def body_pose(self, link: str, names: list[str], q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
