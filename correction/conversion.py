@@ -38,6 +38,7 @@ def to_standard(model: RobotModel) -> RobotModel:
         a=np.append(model.a[1:], 0.0),
         alpha=np.append(model.alpha[1:], 0.0),
         beta=np.append(model.beta[1:], 0.0),
+        hayati=tuple(j - 1 for j in model.hayati if j >= 1),
         base_xyz=base[:3, 3],
         base_rpy=matrix_rpy(base[:3, :3]),
     )
@@ -54,6 +55,7 @@ def to_modified(model: RobotModel) -> RobotModel:
         a=np.insert(model.a[:-1], 0, 0.0),
         alpha=np.insert(model.alpha[:-1], 0, 0.0),
         beta=np.insert(model.beta[:-1], 0, 0.0),
+        hayati=tuple(j + 1 for j in model.hayati if j + 1 < model.n_joints),
         tool=tool,
     )
 

@@ -196,6 +196,11 @@ def param_jacobian(
     * standard: ``dtheta = z_{i-1} x (p - o_{i-1})``, ``dd = z_{i-1}``, ``da = x_i``,
       ``dalpha = x_i x (p - o_i)``.
 
+    Hayati angles (columns after the joints' block, see :attr:`RobotModel.layout`): modified
+    ``dbeta = y' x (p - o_i + d_i z_i)`` with ``y' = sin(theta_i+q_i) x_i + cos(theta_i+q_i) y_i``
+    (the ``y`` axis before ``Rz``); standard ``dbeta = y_i x (p - o_i)``, and there ``a`` and
+    ``alpha`` act along ``x' = cos(beta_i) x_i + sin(beta_i) z_i`` (the ``x`` axis before ``Ry``).
+
     Args:
         q: (N, n) joint angles [rad].
         return_point: also return the (N, 3) tool point.
@@ -203,7 +208,7 @@ def param_jacobian(
     Returns:
         (N, 3, P) ``d p / d params`` [m/m and m/rad], and the tool point if asked.
     """
-    _, single = _as_batch(model, q)
+    q2, single = _as_batch(model, q)
     f = frames(model, q)
     n = model.n_joints
     p = _tool_point(model, f)
@@ -214,19 +219,34 @@ def param_jacobian(
     rot_x = _cross(np.moveaxis(f.x, 1, 0), np.moveaxis(lever, 1, 0))  # (3, n+1, N)
     rot_z = _cross(np.moveaxis(f.z, 1, 0), np.moveaxis(lever, 1, 0))
     rot_x, rot_z = np.moveaxis(rot_x, 0, 1), np.moveaxis(rot_z, 0, 1)  # (n+1, 3, N)
+    rot_y = np.moveaxis(_cross(np.moveaxis(f.y, 1, 0), np.moveaxis(lever, 1, 0)), 0, 1)
     lay = model.layout
     joints = jac[lay.joints].reshape(n, len(lay.joint_fields), 3, count)
     a, alpha, d, theta = (lay.joint_fields.index(name) for name in ("a", "alpha", "d", "theta"))
+    hayati = list(lay.hayati)
     if model.convention == "modified":
         joints[:, a] = f.x[:-1]
         joints[:, alpha] = rot_x[:-1]
         joints[:, d] = f.z[1:]
         joints[:, theta] = rot_z[1:]
+        if hayati:  # Ry(beta) about y before Rz(theta+q), through o_i - d_i z_i
+            k = np.array(hayati) + 1
+            angle = (q2[:, hayati] + model.theta[hayati]).T[:, None, :]  # (h, 1, N)
+            axis = np.sin(angle) * f.x[k] + np.cos(angle) * f.y[k]
+            arm = lever[k] + model.d[hayati][:, None, None] * f.z[k]
+            jac[lay.beta] = np.moveaxis(_cross(np.moveaxis(axis, 1, 0), np.moveaxis(arm, 1, 0)), 0, 1)
     else:
         joints[:, a] = f.x[1:]
         joints[:, alpha] = rot_x[1:]
         joints[:, d] = f.z[:-1]
         joints[:, theta] = rot_z[:-1]
+        if hayati:  # Ry(beta) last, about y_i through o_i; a and alpha act along x before it
+            k = np.array(hayati) + 1
+            cb, sb = np.cos(model.beta[hayati])[:, None, None], np.sin(model.beta[hayati])[:, None, None]
+            x_before = cb * f.x[k] + sb * f.z[k]
+            joints[hayati, a] = x_before
+            joints[hayati, alpha] = np.moveaxis(_cross(np.moveaxis(x_before, 1, 0), np.moveaxis(lever[k], 1, 0)), 0, 1)
+            jac[lay.beta] = rot_y[k]
     jac[lay.tool] = np.stack([f.x[-1], f.y[-1], f.z[-1]])
     jac[lay.base_xyz] = np.eye(3)[:, :, None]
     roll, pitch, yaw = model.base_rpy

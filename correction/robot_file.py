@@ -6,7 +6,7 @@ Schema (other top-level keys are kept in :attr:`RobotModel.extras` and written b
     convention: modified          # or: standard
     joints:                       # base to flange, metres and radians
       - {a: 0.0, alpha: 0.0, d: 0.333, theta: 0.0, lower: -2.8973, upper: 2.8973}
-                                  # optional per joint: beta (Hayati, radians; see RobotModel)
+                                  # optional per joint: beta (Hayati angle, radians; see RobotModel)
     tool: [0.0, 0.0, 0.107]       # tool point in the last joint's frame, metres
     base: {xyz: [0, 0, 0], rpy: [0, 0, 0]}   # optional
 """
@@ -26,7 +26,7 @@ from .errors import SpherecalError
 from .model import CONVENTIONS, JOINT_FIELDS, RobotModel
 
 JOINT_KEYS: tuple[str, ...] = JOINT_FIELDS + ("lower", "upper")
-#: Optional per-joint keys (zero when absent; written only when some joint has a non-zero value).
+#: Optional per-joint key: a joint with ``beta`` carries a Hayati angle (see RobotModel.hayati).
 OPTIONAL_JOINT_KEYS: tuple[str, ...] = ("beta",)
 _KNOWN_KEYS = ("name", "convention", "joints", "tool", "base")
 #: Robots shipped inside the package, loadable by name.
@@ -85,6 +85,7 @@ def robot_from_dict(data: Any, source: str = "<robot>") -> RobotModel:
     if not isinstance(joints, list) or not joints:
         raise RobotFileError(f"{source}: joints: expected a non-empty list of joint mappings")
     columns: dict[str, list[float]] = {key: [] for key in JOINT_KEYS + OPTIONAL_JOINT_KEYS}
+    hayati: list[int] = []
     for i, joint in enumerate(joints):
         where = f"{source}: joints[{i}]"
         if not isinstance(joint, dict):
@@ -94,8 +95,9 @@ def robot_from_dict(data: Any, source: str = "<robot>") -> RobotModel:
             if key not in joint:
                 raise RobotFileError(f"{where}: missing key '{key}'")
             columns[key].append(_number(joint[key], f"{where}.{key}"))
-        for key in OPTIONAL_JOINT_KEYS:
-            columns[key].append(_number(joint.get(key, 0.0), f"{where}.{key}"))
+        columns["beta"].append(_number(joint.get("beta", 0.0), f"{where}.beta"))
+        if "beta" in joint:
+            hayati.append(i)
         if columns["lower"][-1] > columns["upper"][-1]:
             raise RobotFileError(
                 f"{where}: lower ({columns['lower'][-1]}) > upper ({columns['upper'][-1]})"
@@ -120,6 +122,7 @@ def robot_from_dict(data: Any, source: str = "<robot>") -> RobotModel:
         lower=columns["lower"],
         upper=columns["upper"],
         beta=columns["beta"],
+        hayati=tuple(hayati),
         tool=tool,
         base_xyz=base_xyz,
         base_rpy=base_rpy,
@@ -166,8 +169,10 @@ def _plain(value: Any) -> Any:
 
 def robot_to_dict(model: RobotModel) -> dict:
     """The robot-file mapping of a model (plain Python types, exact floats)."""
-    keys = JOINT_KEYS + tuple(k for k in OPTIONAL_JOINT_KEYS if getattr(model, k).any())
-    joints = [{key: float(getattr(model, key)[i]) for key in keys} for i in range(model.n_joints)]
+    joints = []
+    for i in range(model.n_joints):
+        keys = JOINT_KEYS[:2] + ("beta",) + JOINT_KEYS[2:] if i in model.hayati else JOINT_KEYS
+        joints.append({key: float(getattr(model, key)[i]) for key in keys})
     data: dict[str, Any] = {
         "name": model.name,
         "convention": model.convention,

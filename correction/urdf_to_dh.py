@@ -212,7 +212,8 @@ def urdf_model(tree: UrdfTree, tip_link: str | None = None, base_link: str | Non
     }
     model = RobotModel(
         name=tree.name or os.path.basename(tree.source), convention="modified", a=dh["a"], alpha=dh["alpha"],
-        d=dh["d"], theta=dh["theta"], beta=dh["beta"], lower=lower, upper=upper, tool=dh["tool"],
+        d=dh["d"], theta=dh["theta"], beta=dh["beta"], hayati=tuple(dh["parallel"]), lower=lower, upper=upper,
+        tool=dh["tool"],
         base_xyz=dh["base"][:3, 3], base_rpy=matrix_rpy(dh["base"][:3, :3]), extras=extras,
     )
     if tree.inertials:
