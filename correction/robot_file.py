@@ -130,13 +130,26 @@ def robot_from_dict(data: Any, source: str = "<robot>") -> RobotModel:
     )
 
 
-def load_robot(path_or_name: str | os.PathLike) -> RobotModel:
-    """Load a robot file, or an embedded robot by name (``"panda"``).
+def load_robot(
+    path_or_name: str | os.PathLike, tip_link: str | None = None, base_link: str | None = None
+) -> RobotModel:
+    """Load a robot file, a URDF (``.urdf``), or an embedded robot by name (``"panda"``).
+
+    Args:
+        path_or_name: YAML robot file, URDF file or embedded name.
+        tip_link, base_link: URDF only: the chain to convert (see :func:`correction.urdf_to_dh.load_urdf`).
 
     Raises:
-        RobotFileError: unreadable file, invalid YAML or an invalid field (one line).
+        RobotFileError: unreadable file, invalid YAML or URDF, an invalid field (one line).
     """
     key = str(path_or_name)
+    if key.lower().endswith(".urdf"):
+        from .urdf_to_dh import load_urdf  # here, not at the top: urdf_to_dh imports this module
+
+        return load_urdf(path_or_name, tip_link=tip_link, base_link=base_link)
+    for option, value in (("tip link", tip_link), ("base link", base_link)):
+        if value is not None:
+            raise RobotFileError(f"{key}: a {option} ({value!r}) is only for a URDF robot description (.urdf)")
     if key in EMBEDDED_ROBOTS and not Path(key).exists():
         text = resources.files(__package__).joinpath("data", EMBEDDED_ROBOTS[key]).read_text()
         return robot_from_dict(yaml.safe_load(text), source=key)

@@ -40,3 +40,17 @@ def positive(text: str) -> float:
     if value <= 0:
         raise argparse.ArgumentTypeError(f"expected a number > 0, got {text!r}")
     return value
+
+
+def add_urdf_links(parser: argparse.ArgumentParser) -> None:
+    """``--tip-link`` and ``--base-link``: which chain of a ``--robot`` URDF is the arm."""
+    parser.add_argument("--tip-link", default=None, metavar="NAME",
+                        help="URDF robot: the link whose origin is the tool point, the ball centre "
+                        "(default: the end of the longest chain)")
+    parser.add_argument("--base-link", default=None, metavar="NAME",
+                        help="URDF robot: the link whose frame is the world (default: the root link)")
+
+
+def urdf_links(args: argparse.Namespace) -> dict:
+    """Keyword arguments ``tip_link``, ``base_link`` of ``correction.load_robot`` from the options."""
+    return {"tip_link": getattr(args, "tip_link", None), "base_link": getattr(args, "base_link", None)}

@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import argparse
 
+from spherecal import options as _options
+
 HELP = "Identify DH parameters from spherical-joint samples and write a calibrated robot file."
 
 
@@ -11,7 +13,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     """Register the options of `spherecal calibrate`."""
     from spherecal.options import non_negative, positive, seed
 
-    parser.add_argument("--robot", required=True, help="nominal robot file (or 'panda')")
+    parser.add_argument("--robot", required=True, help="nominal robot file, URDF (.urdf) or 'panda'")
+    _options.add_urdf_links(parser)
     parser.add_argument("--samples", required=True, help="samples.csv: fixture[,t],q1..qn [rad]")
     parser.add_argument("--fixtures", help="fixtures.yaml: known positions and distances [m]")
     parser.add_argument("--method", choices=("lm", "pso", "pso+lm"), default="lm", help="solver (default lm)")
@@ -60,7 +63,7 @@ def run(args: argparse.Namespace) -> int:
         raise SystemExit("spherecal calibrate: error: --max-samples must be >= 1")
     if not args.noise > 0 or not args.dedup_tol >= 0 or not args.max_change > 0:
         raise SystemExit("spherecal calibrate: error: --noise and --max-change must be > 0, --dedup-tol >= 0")
-    nominal = load_robot(args.robot)
+    nominal = load_robot(args.robot, **_options.urdf_links(args))
     dataset = read_samples(args.samples, nominal)
     spec = read_fixtures(args.fixtures) if args.fixtures else None
     read = len(dataset.labels)

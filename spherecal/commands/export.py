@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import argparse
 
+from spherecal import options as _options
+
 HELP = "Export a calibrated robot file as URDF, MJCF or YAML."
 FORMATS = ("urdf", "mjcf", "yaml")
 
@@ -11,6 +13,7 @@ FORMATS = ("urdf", "mjcf", "yaml")
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     """Register the options of `spherecal export`."""
     parser.add_argument("robot", metavar="CAL.yaml", help="robot file to export (calibrated or nominal), or 'panda'")
+    _options.add_urdf_links(parser)
     parser.add_argument("--format", choices=FORMATS, required=True, help="output format")
     parser.add_argument("--out", required=True, metavar="FILE", help="output file (written atomically)")
     parser.add_argument(
@@ -124,7 +127,7 @@ def run(args: argparse.Namespace) -> int:
     from spherecal.correction import atomic_write_text, load_robot
     from spherecal.correction.urdf import ExportError
 
-    model = load_robot(args.robot)
+    model = load_robot(args.robot, **_options.urdf_links(args))
     effort, velocity = _limits(args.effort, "--effort"), _limits(args.velocity, "--velocity")
     header = provenance_header(args.robot, args.format)
     if args.into is not None:

@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import argparse
 
+from spherecal import options as _options
+
 HELP = "Rank candidate fixture positions by the calibration accuracy they predict."
 
 
@@ -11,7 +13,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     """Register the options of `spherecal plan`."""
     from spherecal.options import non_negative, positive, seed
 
-    parser.add_argument("--robot", default="panda", help="nominal robot file or 'panda' (default)")
+    parser.add_argument("--robot", default="panda", help="nominal robot file, URDF (.urdf) or 'panda' (default)")
+    _options.add_urdf_links(parser)
     where = parser.add_mutually_exclusive_group()
     where.add_argument("--candidates", default=None,
                        help="YAML: candidates: {C1: {position: [x, y, z], joint_range: [share per joint]}} [m]")
@@ -65,7 +68,7 @@ def run(args: argparse.Namespace) -> int:
         path = write_analysis(args.analysis, AnalysisConfig(seed=args.seed, workers=args.workers))
         print(f"written: {path}")
         return 0
-    model = load_robot(args.robot)
+    model = load_robot(args.robot, **_options.urdf_links(args))
     rng = np.random.default_rng(args.seed)
     if args.predict is not None:
         return _predict(args, model)

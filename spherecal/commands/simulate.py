@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import argparse
 
+from spherecal import options as _options
+
 HELP = "Simulate self-motion at spherical-joint fixtures on a perturbed (true) robot and write samples."
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
@@ -18,7 +20,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="fixture compliance std per axis [m] moving the physical point (default 0.0003)")
     parser.add_argument("--fixtures", default=None,
                         help="fixtures.yaml giving the true centre (position) of every fixture [m]")
-    parser.add_argument("--robot", default="panda", help="nominal robot file or 'panda' (default)")
+    parser.add_argument("--robot", default="panda", help="nominal robot file, URDF (.urdf) or 'panda' (default)")
+    _options.add_urdf_links(parser)
     parser.add_argument("--length-std", type=float, default=1e-3, help="true-robot a, d error std [m]")
     parser.add_argument("--angle-std-deg", type=float, default=0.2, help="true-robot alpha, theta error std [deg]")
     parser.add_argument("--tool-std", type=float, default=1e-3, help="true-robot tool point error std [m]")
@@ -88,7 +91,7 @@ def run(args: argparse.Namespace) -> int:
     _check_args(args)
     if args.solver not in qpsolvers.available_solvers:
         raise _fail(f"--solver {args.solver!r} is not installed; have {', '.join(qpsolvers.available_solvers)}")
-    nominal = load_robot(args.robot)
+    nominal = load_robot(args.robot, **_options.urdf_links(args))
     if nominal.n_joints < 4:  # the tool point pinned leaves n - 3 degrees of freedom
         raise _fail(f"--robot {args.robot}: {nominal.n_joints} joints have no self-motion at a spherical joint "
                     "(needs at least 4)")

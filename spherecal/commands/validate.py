@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import argparse
 
+from spherecal import options as _options
+
 HELP = "Compare nominal and calibrated models against the truth or motion-capture data."
 
 
@@ -22,6 +24,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--out", help="write the report as JSON (metres) to this file")
     parser.add_argument("--rrd", help="save a Rerun recording to this file")
     parser.add_argument("--spawn", action="store_true", help="stream to a live Rerun viewer")
+    _options.add_urdf_links(parser)
 
 
 def run(args: argparse.Namespace) -> int:
@@ -49,7 +52,7 @@ def run(args: argparse.Namespace) -> int:
     files = {"nominal": args.nominal, "calibrated": args.calibrated}
     if args.truth is not None:
         files["truth"] = args.truth
-    models = {role: load_robot(path) for role, path in files.items()}
+    models = {role: load_robot(path, **_options.urdf_links(args)) for role, path in files.items()}
     check_models(models, files)
     n = models["nominal"].n_joints
     measurement = None if args.mocap is None else read_mocap_csv(args.mocap, n)
