@@ -78,6 +78,9 @@ class RobotModel:
         n = np.size(self.a)
         if n < 1:
             raise ValueError("a robot needs at least one joint")
+        if not self.hayati and np.size(self.beta) != n and not np.any(self.beta):
+            # no Hayati joint: a zero beta of another length (a copy with fewer joints) means none
+            object.__setattr__(self, "beta", np.zeros(n))
         for name in ("a", "alpha", "d", "theta", "lower", "upper", "beta"):
             object.__setattr__(self, name, _frozen_array(getattr(self, name), (n,), name))
         for name in ("tool", "base_xyz", "base_rpy"):
