@@ -31,6 +31,7 @@ from dataclasses import replace
 import numpy as np
 
 from .conversion import convert
+from .kinematics import link_frames
 from .model import RobotModel, matrix_rpy
 from .robot_file import RobotFileError
 from .urdf_read import MOVABLE, UrdfTree, chain, read_urdf
@@ -217,8 +218,6 @@ def urdf_model(tree: UrdfTree, tip_link: str | None = None, base_link: str | Non
         base_xyz=dh["base"][:3, 3], base_rpy=matrix_rpy(dh["base"][:3, :3]), extras=extras,
     )
     if tree.inertials:
-        from .kinematics import link_frames
-
         frames = link_frames(model, np.zeros(model.n_joints))[1:]
         inertials, payload = _inertials(tree, base, joints, list(frames), poses)
         extras["inertials"], extras["payload"] = inertials, payload
