@@ -165,12 +165,27 @@ def add_deprecated(parser: argparse.ArgumentParser, old: str, new: str, type, co
 
 # ------------------------------------------------------------------------------ common options
 def add_robot(parser: argparse.ArgumentParser, default: str | None = "panda") -> None:
-    """``--robot``: a robot file, or ``panda`` for the embedded one."""
-    what = "nominal robot: a robot file (YAML) or 'panda' (embedded)"
+    """``--robot``: a robot file, a URDF (with ``--tip-link``, ``--base-link``), or ``panda``."""
+    what = "nominal robot: a robot file (YAML), a URDF (.urdf) or 'panda' (embedded)"
     if default is None:
         parser.add_argument("--robot", required=True, help=what)
     else:
         parser.add_argument("--robot", default=default, help=f"{what} (default {default})")
+    add_urdf_links(parser)
+
+
+def add_urdf_links(parser: argparse.ArgumentParser) -> None:
+    """``--tip-link`` and ``--base-link``: which chain of a ``--robot`` URDF is the arm."""
+    parser.add_argument("--tip-link", default=None, metavar="NAME",
+                        help="URDF robot: the link whose origin is the tool point, the ball centre "
+                        "(default: the end of the longest chain)")
+    parser.add_argument("--base-link", default=None, metavar="NAME",
+                        help="URDF robot: the link whose frame is the world (default: the root link)")
+
+
+def urdf_links(args: argparse.Namespace) -> dict:
+    """Keyword arguments ``tip_link``, ``base_link`` of ``correction.load_robot`` from the options."""
+    return {"tip_link": getattr(args, "tip_link", None), "base_link": getattr(args, "base_link", None)}
 
 
 def add_seed(parser: argparse.ArgumentParser, what: str = "everything random") -> None:

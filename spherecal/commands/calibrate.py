@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import argparse
 
+from spherecal.options import urdf_links
+
 HELP = "Identify DH parameters from spherical-joint samples and write a calibrated robot file."
 
 
@@ -68,7 +70,7 @@ def run(args: argparse.Namespace) -> int:
     clock = time.perf_counter()
     noise = args.noise * 1e-3  # [m] from here on
     dedup_tol = DEDUP_TOL if args.dedup_deg is None else float(np.deg2rad(args.dedup_deg))  # [rad]
-    nominal = load_robot(args.robot)
+    nominal = load_robot(args.robot, **urdf_links(args))
     dataset = read_samples(args.samples, nominal)
     spec = read_fixtures(args.fixtures) if args.fixtures else None
     read = len(dataset.labels)

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import argparse
 
-from spherecal.options import fail
+from spherecal.options import fail, urdf_links
 
 HELP = "Rank candidate fixture positions by the calibration accuracy they predict."
 
@@ -74,7 +74,7 @@ def run(args: argparse.Namespace) -> int:
         path = write_analysis(args.analysis, AnalysisConfig(seed=args.seed, workers=args.workers))
         print(f"written: {path}")
         return 0
-    model = load_robot(args.robot)
+    model = load_robot(args.robot, **urdf_links(args))
     rng = np.random.default_rng(args.seed)
     if args.predict is not None:
         return _predict(args, model)

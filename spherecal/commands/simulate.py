@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import argparse
 
-from spherecal.options import fail
+from spherecal.options import fail, urdf_links
 
 HELP = "Simulate self-motion at spherical-joint fixtures on a perturbed (true) robot and write samples."
 
@@ -84,7 +84,7 @@ def run(args: argparse.Namespace) -> int:
     _check_args(args)
     if args.solver not in qpsolvers.available_solvers:
         raise fail(f"--solver {args.solver!r} is not installed; have {', '.join(qpsolvers.available_solvers)}")
-    nominal = load_robot(args.robot)
+    nominal = load_robot(args.robot, **urdf_links(args))
     if nominal.n_joints < 4:  # the tool point pinned leaves n - 3 degrees of freedom
         raise fail(f"--robot {args.robot}: {nominal.n_joints} joints have no self-motion at a spherical joint "
                     "(needs at least 4)")

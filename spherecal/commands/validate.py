@@ -4,18 +4,19 @@ from __future__ import annotations
 
 import argparse
 
-from spherecal.options import fail
+from spherecal.options import fail, urdf_links
 
 HELP = "Compare nominal and calibrated models against the truth or motion-capture data."
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     """Register the options of `spherecal validate`."""
-    from spherecal.options import add_deprecated, add_seed, count, noise_mm
+    from spherecal.options import add_deprecated, add_seed, add_urdf_links, count, noise_mm
 
     parser.add_argument("--truth", help="robot file of the true robot (simulation)")
     parser.add_argument("--nominal", required=True, help="robot file of the nominal model ('panda': embedded)")
     parser.add_argument("--calibrated", required=True, help="robot file of the calibrated model")
+    add_urdf_links(parser)
     parser.add_argument("--mocap", help="recorded mocap CSV: [t,] q1..qn, x, y, z (tool point in the mocap frame, m)")
     parser.add_argument("--samples", help="samples.csv of the self-motion sets to validate on as well (simulation)")
     parser.add_argument("--configurations", type=count(3), default=5000,
@@ -52,7 +53,7 @@ def run(args: argparse.Namespace) -> int:
     files = {"nominal": args.nominal, "calibrated": args.calibrated}
     if args.truth is not None:
         files["truth"] = args.truth
-    models = {role: load_robot(path) for role, path in files.items()}
+    models = {role: load_robot(path, **urdf_links(args)) for role, path in files.items()}
     check_models(models, files)
     n = models["nominal"].n_joints
     measurement = None if args.mocap is None else read_mocap_csv(args.mocap, n)
