@@ -7,9 +7,9 @@ socket to the next moves it by centimetres within a second. So:
 
 1. the tool point is averaged into ``bin`` intervals (10 ms) and a bin is *still* when every bin
    within ``window / 2`` of it lies within ``still_radius`` of it;
-2. a run of still bins lasting at least ``min_duration`` with at least ``min_configurations``
-   distinct configurations is one fixture; everything between them (transport, pauses in the air)
-   is dropped;
+2. a run of still bins, less half a window at each end (the ball entering and leaving the socket),
+   lasting at least ``min_duration`` with at least ``min_configurations`` distinct configurations
+   is one fixture; everything between them (transport, pauses in the air) is dropped;
 3. a fixture whose points lie further than ``max_spread`` from their mean (a drift) or two fixtures
    whose mean points are closer than ``min_separation`` (one socket visited twice, or two sockets
    that cannot be told apart) is refused: label such a recording by hand (a ``fixture`` column).
@@ -127,6 +127,9 @@ def segment(
     runs = np.flatnonzero(np.diff(np.concatenate([[0], still.astype(np.int8), [0]])))
     found: list[Segment] = []
     for a, b in zip(runs[0::2], runs[1::2], strict=True):
+        a, b = a + half, b - half  # entering and leaving the socket
+        if b <= a:
+            continue
         if times[b - 1] + BIN - times[a] < s.min_duration:
             continue
         lo, hi = starts[a], starts[b] if b < len(starts) else len(t)
