@@ -64,7 +64,7 @@ class Segment:
     Attributes:
         name: fixture name (``S1``, ``S2``, ...).
         rows: (K,) sample indices in the recording.
-        start, end: time span [s].
+        start, end: time span [s] since the first sample of the recording.
         centre: (3,) mean nominal tool point [m].
         spread_mean, spread_max: mean and largest distance of the nominal tool points from ``centre`` [m].
     """
@@ -143,8 +143,8 @@ def segment(
             Segment(
                 f"S{len(found) + 1}",
                 rows,
-                float(t[lo]),
-                float(t[hi - 1]),
+                float(t[lo] - t[0]),
+                float(t[hi - 1] - t[0]),
                 centre,
                 float(spread.mean()),
                 float(spread.max()),
