@@ -36,9 +36,8 @@ def read_bag(path: str | os.PathLike, model: RobotModel, topic: str = TOPIC) -> 
             ``position`` does not match its ``name``, a missing joint (named), an angle outside
             the limits.
     """
-    # rosbags (and its storage back-ends) load in ~0.3 s: imported only when a bag is read
-    from rosbags.highlevel import AnyReader, AnyReaderError
-    from rosbags.typesys import Stores, get_typestore
+    from rosbags.highlevel import AnyReader, AnyReaderError  # rosbags loads in ~0.3 s: only when a bag is read
+    from rosbags.typesys import Stores, get_typestore  # (same)
 
     path = Path(path)
     if not path.exists():

@@ -20,6 +20,7 @@ from spherecal.correction.model import RobotModel
 from spherecal.correction.samples import Dataset, DatasetError
 from spherecal.correction.samples_csv import write_samples
 
+from .bag import read_bag
 from .importers import MUKCA_DISTANCE, Recording, RecordingError, read_joint_csv, read_mukca
 from .segment import Segment, SegmentSettings, format_segments, labels_of, segment
 
@@ -95,8 +96,6 @@ def check_out_dir(out: str | os.PathLike, inputs: list[str | os.PathLike]) -> No
 def read_source(source: str | os.PathLike, fmt: str, model: RobotModel, options: ImportOptions) -> Recording:
     """The recording at ``source`` (labels for MUKCa and a CSV with a fixture column)."""
     if fmt == "bag":
-        from .bag import read_bag
-
         return read_bag(source, model, options.topic)
     if fmt == "csv":
         return read_joint_csv(source, model)

@@ -63,7 +63,6 @@ def run(args: argparse.Namespace) -> int:
 
     from spherecal.correction import load_robot
     from spherecal.correction.provenance import PACKAGES, input_record, versions
-
     from spherecal.identification.import_recording import ImportOptions, import_recording
     from spherecal.identification.segment import SegmentSettings
 

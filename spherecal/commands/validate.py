@@ -65,7 +65,7 @@ def run(args: argparse.Namespace) -> int:
     models = {role: load_robot(path) for role, path in files.items()}
     check_models(models, files)
     if args.truth is None and args.mocap is None:
-        from spherecal.validation.socket_cli import run_sockets
+        from spherecal.commands.validate_sockets import run_sockets
 
         return run_sockets(args, models)
     n = models["nominal"].n_joints
