@@ -90,7 +90,8 @@ def run(args: argparse.Namespace) -> int:
         "source": str(args.source),
         "format": args.format,
         "robot": input_record(args.robot),
-        "options": {k: v for k, v in vars(options).items() if k != "segmentation"} | vars(options.segmentation),
+        "options": _relevant(args.format, {k: v for k, v in vars(options).items() if k != "segmentation"})
+        | (vars(options.segmentation) if args.format != "mukca" else {}),
         "versions": versions(PACKAGES[:1] + (("rosbags",) if args.format == "bag" else ())),
     }
     inputs = [args.robot] if args.robot != "panda" else []
@@ -98,3 +99,9 @@ def run(args: argparse.Namespace) -> int:
     print(result.format())
     print(f"wrote {args.out}/samples.csv and {args.out}/fixtures.yaml in {time.perf_counter() - clock:.2f} s")
     return 0
+
+
+def _relevant(fmt: str, options: dict) -> dict:
+    """The options that shaped an import of ``fmt`` (for the provenance block)."""
+    drop = {"mukca": ("topic", "rate"), "bag": ("distance", "rate"), "csv": ("distance", "topic")}[fmt]
+    return {k: v for k, v in options.items() if k not in drop}

@@ -17,6 +17,8 @@ from spherecal.cli import main
 from spherecal.correction import load_robot, tool_point
 from spherecal.correction.fixtures import read_fixtures
 from spherecal.correction.samples_csv import read_samples
+from spherecal.identification.importers import RecordingError, match_joints
+from spherecal.validation.recording import read_entity_rows
 
 from .urdf_chain import GEN3LITE, GEN3LITE_BALL, chain_point
 
@@ -135,12 +137,17 @@ def test_calibration_on_one_placement_holds_on_the_others(imported, capsys) -> N
             str(imported / "all/fixtures.yaml"),
             "--out",
             str(imported / "v.json"),
+            "--rrd",
+            str(imported / "v.rrd"),
         ]
     )
     assert code == 0
     printed = capsys.readouterr().out
     assert "front_center_h0 (fit)" in printed and "test MAE" in printed
     report = json.loads((imported / "v.json").read_text())["sockets"]
+    rows = read_entity_rows(imported / "v.rrd")
+    assert rows["sockets/nominal"] == rows["sockets/calibrated"] == 1
+    assert rows["plots/spread/calibrated"] == len(read_samples(imported / "all/samples.csv", load_robot(PANDA)).labels)
     held = report["held_out"]
     # measured on these files: nominal 6.30 mm, calibrated 0.33 mm (MUKCa's own: 7.79 -> 0.347 on all placements)
     assert held["nominal"]["test_mae"] > 5e-3
@@ -257,3 +264,24 @@ def test_bad_input_is_one_line_and_writes_nothing(tmp_path, capsys) -> None:
     assert [p.name for p in out.iterdir()] == ["keep.txt"]
     (out / "keep.txt").unlink()  # an empty folder is fine
     assert main(argv) == 0 and sorted(p.name for p in out.iterdir()) == ["fixtures.yaml", "samples.csv"]
+
+
+def test_joints_are_matched_by_name_whatever_the_order_and_extras() -> None:
+    names = [
+        "panda_finger_joint1",
+        "panda_joint3",
+        "panda_joint1",
+        "panda_joint2",
+        "panda_joint7",
+        "panda_joint4",
+        "panda_joint6",
+        "panda_joint5",
+        "panda_finger_joint2",
+    ]
+    index, matched = match_joints(names, load_robot("panda"), "rec")  # the embedded franka_panda: panda_joint*
+    assert [names[i] for i in index] == [f"panda_joint{k}" for k in range(1, 8)] == matched
+    assert [names[i] for i in match_joints(names, load_robot(PANDA), "rec")[0]] == matched
+    with pytest.raises(RecordingError, match=r"^rec, field 'panda_joint5': joint 'panda_joint5' of franka_panda"):
+        match_joints([n for n in names if n != "panda_joint5"], load_robot("panda"), "rec")
+    kinova = load_robot(KINOVA)
+    assert list(match_joints([f"joint_{k}" for k in range(6, 0, -1)], kinova, "rec")[0]) == [5, 4, 3, 2, 1, 0]
