@@ -77,7 +77,13 @@ def read_bag(path: str | os.PathLike, model: RobotModel, topic: str = TOPIC) -> 
                 stamps.append(seconds if seconds > 0 else timestamp * 1e-9)
                 values.append(q)
                 rows.append(where)
-    except AnyReaderError as error:
+    except RecordingError:
+        raise
+    except (AnyReaderError, OSError) as error:
+        raise RecordingError(f"{path}: cannot read the bag: {error}") from None
+    except Exception as error:  # rosbags' own reader and deserialisation errors have no common base
+        if not type(error).__module__.startswith("rosbags"):
+            raise
         raise RecordingError(f"{path}: cannot read the bag: {error}") from None
     if not values:
         raise RecordingError(f"{path}: field '--topic': no messages on {topic!r}")

@@ -99,6 +99,12 @@ def test_ambiguous_drifting_or_incomplete_recordings_are_refused(recording, tmp_
     assert "field 'panda_joint4'" in _refused(argv, capsys)
     argv[1] = str(bag)
     assert "no topic '/joints'" in _refused(argv + ["--topic", "/joints"], capsys)
+    (tmp_path / "junk.bag").write_text("not a bag\n")
+    argv[1] = str(tmp_path / "junk.bag")
+    assert "junk.bag: cannot read the bag" in _refused(argv, capsys)
+    (tmp_path / "empty").mkdir()
+    argv[1] = str(tmp_path / "empty")
+    assert "empty: cannot read the bag" in _refused(argv, capsys)
     assert not (tmp_path / "out").exists()
     csv = tmp_path / "back.csv"
     csv.write_text(
