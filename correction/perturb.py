@@ -35,4 +35,6 @@ def perturb(
         The perturbed model, same convention and joint limits.
     """
     std = model.layout.spread(length_std, angle_std, tool_std, base=base)
+    for name in model.layout.held(model.convention):  # Hayati: this d stays at zero
+        std[model.layout.index(name)] = 0.0
     return model.with_params(model.params + rng.normal(0.0, 1.0, model.n_params) * std)

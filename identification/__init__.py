@@ -1,6 +1,6 @@
 """Identification: spherical-joint samples in, calibrated robot parameters out.
 
-The public names are loaded lazily (``identification.cli`` must import nothing heavy)::
+The public names are loaded lazily (importing the package loads no numpy)::
 
     from spherecal.identification import build_problem, CalibrationResult
     from spherecal.correction import read_samples, read_fixtures   # the data files are the base layer's

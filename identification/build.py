@@ -140,6 +140,8 @@ def build_problem(
         )
     for name in model.layout.names[model.layout.base]:
         fixed[name] = "base placement: not observable from spherical-joint data"
+    for name in model.layout.held(model.convention):
+        fixed[name] = "Hayati: held at zero beside a beta (nearly parallel axes)"
     known = {name: np.asarray(p, float) for name, p in spec.positions.items() if name in names_fixtures}
     if len(known) == 1 and not spec.distances:
         (lone,) = known
@@ -217,7 +219,7 @@ def build_problem(
     n = model.n_joints
     rank_of = {name: k for k, name in enumerate(("tool_x", "tool_y", "tool_z"))}
     for i in range(n, 0, -1):
-        for f in ("a", "alpha", "d", "theta"):
+        for f in ("a", "alpha", "beta", "d", "theta"):
             rank_of[f"{f}{i}"] = len(rank_of)
     order = np.concatenate([np.arange(fp, jac.shape[1]), np.argsort([rank_of[names[i]] for i in candidates])])
     accepted, rejected = greedy_rank(jac, order, rank_tol)

@@ -57,7 +57,7 @@ def gauge_left(model: RobotModel, dataset: Dataset, known: list[np.ndarray]) -> 
     place (``w x c + v = 0``) are invisible; one parameter per such direction is fixed (pivoted QR,
     preferring ``theta1, d1, alpha1, a1``).
     """
-    from scipy.linalg import qr
+    from scipy.linalg import qr  # scipy: loaded only when this path runs (start-up)
 
     gauge = list(GAUGE[model.convention])[::-1]  # theta1, d1, alpha1, a1 (preference to fix)
     q = dataset.q[np.linspace(0, dataset.n_samples - 1, min(dataset.n_samples, 12)).astype(int)]
