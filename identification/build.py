@@ -226,8 +226,7 @@ def build_problem(
     centre_cols = np.arange(fp, jac.shape[1])
     if np.any(~np.isin(centre_cols, accepted)):
         raise UnidentifiableError(
-            f"{samples_location(dataset)}, field 'fixture': "
-            f"the fixture centres are not determined by the samples"
+            f"{samples_location(dataset)}, field 'fixture': the fixture centres are not determined by the samples"
         )
     for col, coef in rejected.items():
         weights = np.abs(coef) * np.linalg.norm(jac, axis=0)
@@ -244,5 +243,3 @@ def build_problem(
     ordered_fixed = {name: fixed[name] for name in names if name in fixed}
     problem = replace(problem, free=candidates[keep], fixed=ordered_fixed)
     return replace(problem, identifiability=Identifiability.of(problem.jacobian(problem.x0)))
-
-

@@ -9,12 +9,12 @@ Run on every calibration (:func:`self_check`), its findings travel with the resu
   chi-square with the fit's degrees of freedom ``3 K + distances - unknowns``) and per fixture;
   refused above :data:`LEVEL_FACTOR` x ``noise`` (a factor, not the chi-square's tail: real
   recordings are not Gaussian, see below);
-* **leave one out** (:mod:`.leave_out`, linearised): every known distance, every known position
+* **leave one out** (:mod:`.consistency`, :mod:`.leave_out`, linearised): every known distance, every known position
   (freed: three unknowns with a prior of its stated accuracy) and every fixture's samples, refitted
   without them; the disagreement in mm and ``dSSR / sigma^2 ~ chi2(dof)`` with ``sigma`` the larger
   of the declared noise and the residual std of the rest. A group is inconsistent when that test's
-  p-value is below :data:`ALPHA` over the number of groups (Bonferroni) and its disagreement exceeds
-  :data:`GROUP_FACTOR` x ``sigma`` per coordinate (so that a fixture recorded with a little more
+  p-value is below :data:`.consistency.ALPHA` over the number of groups (Bonferroni) and its disagreement exceeds
+  :data:`.consistency.GROUP_FACTOR` x ``sigma`` per coordinate (so that a fixture recorded with a little more
   play than the others, which hundreds of samples make "significant", is not a culprit). A group with
   nothing to check it against (the one distance that sets the scale) is reported as unchecked;
 * **prediction**: the predicted mean tool-point error of the result (:func:`predict_accuracy`) at
@@ -30,146 +30,32 @@ accuracy) or, without one, the figure that failed.
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field, replace
+from dataclasses import replace
 
 import numpy as np
 
 from spherecal.correction import RobotModel
-from spherecal.correction.errors import SpherecalError
 
-from .leave_out import LeftOut, leave_out
-from .problem import DISTANCE_STD, CalibrationProblem, prior_std, samples_location
+from .consistency import augmented, group_finding, log10_chi2_sf, name_culprit
+from .leave_out import leave_out
+from .problem import CalibrationProblem, samples_location
+from .selfcheck_result import Finding, InconsistentDataError, SelfCheck
 
-#: Stated accuracy of a known fixture position [m] (fixtures.yaml has no field for it yet).
-POSITION_STD = DISTANCE_STD
-#: Std per axis [m] of where a ball realises its socket's centre (play, printed or machined shape): a
-#: known distance or position is compared with the samples within it, besides its stated accuracy. The
-#: real MUKCa plate (8 placements, one printed plate) shows 0.11 mm: its 50 mm distances disagree with
-#: each other by 0.17 mm rms, of which the fit explains 0.05 mm.
-SOCKET_STD = 1e-4
-#: Typical refit change of a centre [m], for :func:`.leave_out.leave_out`'s runaway test.
-CENTRE_SPREAD = 0.05
+__all__ = ["Finding", "InconsistentDataError", "SelfCheck", "self_check", "nominal_expected"]
+
 #: Fixtures closer than this are degenerate (one socket under two names, or a typo) [m].
 MIN_SEPARATION = 0.02
 #: A fixture whose largest joint range is below this hardly moves the arm [rad] (2 deg).
 MIN_MOTION = float(np.deg2rad(2.0))
 #: Residual std per coordinate above this multiple of the declared noise is refused.
 LEVEL_FACTOR = 2.0
-#: Family-wise false-alarm probability of the leave-one-out tests (Gaussian noise at the declared level).
-ALPHA = 1e-3
-#: A left-out group must also disagree by this multiple of the noise (per coordinate, RMS) to be a culprit.
-GROUP_FACTOR = 2.0
 #: With a robust loss, samples farther from their centre than this multiple of the median are outliers.
 OUTLIER = 4.0
-#: Failed groups explaining within this share of the best one contend for the culprit.
-CONTENDERS = 0.1
-#: ... and of two contenders of one size, the better must explain this much more (chi-square units).
-MARGIN = 10.0
 #: The predicted mean error must be below this share of the nominal model's expected error: a 2x margin,
 #: because one arm's nominal error varies about the expectation (4.7 mm against 5.2 mm expected for the
 #: arm of the tests) and the prediction assumes independent noise (correlated compliance noise in
 #: MuJoCo at 5 mm: 2.9 mm reached, 1.8 mm predicted).
 BEAT = 0.5
-
-
-class InconsistentDataError(SpherecalError):
-    """The samples, fixtures and declared noise contradict each other, or the result cannot beat nominal."""
-
-
-@dataclass(frozen=True)
-class Finding:
-    """One check.
-
-    Attributes:
-        check: what was checked (``"residual level"``, ``"distance P1-P2"``, ``"position P2"``,
-            ``"fixture P3"``, ``"prediction"``, ``"separation P1-P2"``, ``"motion P2"``).
-        passed: False when the check failed (True also for ``unchecked`` findings).
-        message: one line for humans (the refusal's text when it failed).
-        figures: plain numbers (mm where the key says so).
-        culprit: a failure that names the one input to fix.
-    """
-
-    check: str
-    passed: bool
-    message: str
-    figures: dict = field(default_factory=dict)
-    culprit: bool = False
-
-
-@dataclass(frozen=True)
-class SelfCheck:
-    """Every finding of the self-check and the verdict.
-
-    Attributes:
-        findings: all checks, in the order they ran.
-        noise: declared noise per coordinate [m].
-        sigma: residual std per coordinate of the fit [m].
-    """
-
-    findings: tuple[Finding, ...]
-    noise: float
-    sigma: float
-
-    @property
-    def failed(self) -> tuple[Finding, ...]:
-        return tuple(f for f in self.findings if not f.passed)
-
-    @property
-    def consistent(self) -> bool:
-        return not self.failed
-
-    @property
-    def culprit(self) -> Finding | None:
-        """The failed check that names the one input to fix, if there is one."""
-        return next((f for f in self.failed if f.culprit), None)
-
-    @property
-    def refusal(self) -> str:
-        """The one line of a refusal ("" when consistent): the culprit, else the failed level or
-        prediction figure, else the most inconsistent group with the note that no single one explains it."""
-        failed = self.failed
-        if not failed:
-            return ""
-        if self.culprit is not None:
-            return self.culprit.message
-        figures = [f for f in failed if f.check in ("residual level", "prediction")]
-        if figures:
-            return figures[0].message
-        worst = max(failed, key=lambda f: f.figures.get("statistic", 0.0) - f.figures.get("dof", 0))
-        others = len(failed) - 1
-        return f"{worst.message}; {others} other check(s) failed too and no single one explains the data"
-
-    def raise_if_inconsistent(self) -> None:
-        """Raises :class:`InconsistentDataError` with :attr:`refusal` unless consistent."""
-        if not self.consistent:
-            raise InconsistentDataError(self.refusal)
-
-    def block(self) -> dict:
-        """Plain data for the ``calibration:`` block of the written file."""
-        return {
-            "verdict": "consistent" if self.consistent else "inconsistent",
-            "noise_declared_mm": self.noise * 1e3,
-            "residual_std_mm": self.sigma * 1e3,
-            "failed": [f.message for f in self.failed],
-            "checks": {f.check: {"passed": f.passed, **f.figures} for f in self.findings},
-        }
-
-    def lines(self) -> list[str]:
-        """A few lines for the printed summary."""
-        head = "consistent" if self.consistent else f"INCONSISTENT ({len(self.failed)} failed)"
-        lines = [f"self-check: {head}"]
-        lines += [f"  {f.message}" for f in self.findings if f.check in ("residual level", "prediction") and f.passed]
-        worst = _worst_group(self.findings)
-        if worst is not None:
-            lines.append(f"  most inconsistent left out: {worst.message}")
-        lines += [f"  unchecked: {f.message}" for f in self.findings if f.figures.get("unchecked")]
-        lines += [f"  FAILED: {f.message}" for f in self.failed]
-        return lines
-
-
-def _worst_group(findings: tuple[Finding, ...]) -> Finding | None:
-    groups = [f for f in findings if "log10_p" in f.figures and f.passed and not f.figures.get("unchecked")]
-    return min(groups, key=lambda f: f.figures["log10_p"]) if groups else None
 
 
 def self_check(
@@ -208,46 +94,13 @@ def self_check(
     sigma = float(np.sqrt(r @ r / dof))
     findings = _geometry(problem, x)
     findings.append(_level(problem, r, sigma, dof, excluded))
-    jac, res, groups, kinds, spread = _augmented(problem, x, r)
+    jac, res, groups, kinds, spread = augmented(problem, x, r)
     _, _, left = leave_out(jac, res, groups, spread=spread)
     checkable = sum(1 for g in left.values() if g.dof > 0)
-    groups = [_group_finding(problem, name, kinds[name], group, checkable) for name, group in left.items()]
-    findings += _name_culprit(groups, problem.noise)
+    groups = [group_finding(problem, name, kinds[name], group, checkable) for name, group in left.items()]
+    findings += name_culprit(groups, problem.noise, LEVEL_FACTOR)
     findings.append(_prediction(nominal, built or problem, max(noise, sigma)))
     return SelfCheck(findings=tuple(findings), noise=noise, sigma=sigma)
-
-
-def _name_culprit(groups: list[Finding], noise: float) -> list[Finding]:
-    """Mark the one failed group that explains the data's inconsistency, if there is one.
-
-    Candidates are the failed groups whose removal leaves the rest at most :data:`LEVEL_FACTOR` x
-    the noise; what removing them explains beyond noise (``dSSR / sigma^2 - dof``) ranks them.
-    Those within :data:`CONTENDERS` of the best explain about as much: the smallest of them (a
-    distance before a position before a fixture's samples: the simplest explanation) is the culprit,
-    unless a second one of its size comes within :data:`MARGIN` of it (then none is).
-    """
-    failed = [f for f in groups if not f.passed and f.figures["sigma_rest_mm"] <= LEVEL_FACTOR * noise * 1e3]
-    if not failed:
-        return groups
-
-    def excess(f: Finding) -> float:
-        return f.figures["explained"]
-
-    best = max(excess(f) for f in failed)
-    contenders = [f for f in failed if excess(f) >= (1.0 - CONTENDERS) * best]
-    smallest = min(f.figures["rows"] for f in contenders)
-    same = sorted((f for f in contenders if f.figures["rows"] == smallest), key=excess, reverse=True)
-    if len(same) > 1 and excess(same[0]) - excess(same[1]) < MARGIN:
-        return groups
-    return [replace(f, culprit=True) if f is same[0] else f for f in groups]
-
-
-def log10_chi2_sf(statistic: float, dof: int) -> float:
-    """log10 of the chi-square survival function (floored at -300: beyond, the data are plainly inconsistent)."""
-    # function-level: scipy loads slowly (scipy.special is already loaded by the solver; scipy.stats adds 0.4 s)
-    from scipy.special import gammaincc
-
-    return float(np.log10(max(gammaincc(dof / 2.0, max(statistic, 0.0) / 2.0), 1e-300)))
 
 
 # ------------------------------------------------------------------------------------ geometry
@@ -345,113 +198,6 @@ def _level(problem: CalibrationProblem, r: np.ndarray, sigma: float, dof: int, e
         f"moved, or the noise declared too small (--noise)",
         figures,
     )
-
-
-# ------------------------------------------------------------------------------- leave one out
-def _augmented(problem: CalibrationProblem, x: np.ndarray, r: np.ndarray):
-    """Jacobian and residuals with every known position freed (3 unknowns, a prior row each), and the groups.
-
-    Returns:
-        (M', F') Jacobian, (M',) residuals, group name -> rows, group name -> kind, and (F',) the
-        typical change of each unknown (prior spread; :data:`CENTRE_SPREAD` for centres).
-    """
-    dataset, spec = problem.dataset, problem.spec
-    names = dataset.fixture_names
-    known = [n for n in names if n not in problem.free_centres and n not in problem.pinned]
-    jac = problem.jacobian(x)
-    m, f = jac.shape
-    count = dataset.n_samples
-    weight = problem.noise / POSITION_STD
-    extra = np.zeros((m + 3 * len(known), 3 * len(known)))
-    _, centres = problem.unpack(x)
-    for k, name in enumerate(known):
-        j = names.index(name)
-        rows = np.flatnonzero(dataset.fixture_index == j)
-        for axis in range(3):
-            extra[3 * rows + axis, 3 * k + axis] = -1.0
-        for d, (a, b, _) in enumerate(spec.distances):
-            if name in (a, b):
-                delta = centres[names.index(a)] - centres[names.index(b)]
-                sign = 1.0 if name == a else -1.0
-                extra[3 * count + d, 3 * k : 3 * k + 3] = sign * problem.distance_weight * delta / np.linalg.norm(delta)
-        extra[m + 3 * k : m + 3 * k + 3, 3 * k : 3 * k + 3] = weight * np.eye(3)
-    full = np.hstack([np.vstack([jac, np.zeros((3 * len(known), f))]), extra])
-    res = np.concatenate([r, np.zeros(3 * len(known))])
-    groups: dict[str, np.ndarray] = {}
-    kinds: dict[str, tuple] = {}
-    for d, (a, b, _) in enumerate(spec.distances):
-        groups[f"distance {a}-{b}"] = np.array([3 * count + d])
-        kinds[f"distance {a}-{b}"] = ("distance", d, problem.distance_weight, DISTANCE_STD)
-    for k, name in enumerate(known):
-        groups[f"position {name}"] = m + 3 * k + np.arange(3)
-        kinds[f"position {name}"] = ("position", name, weight, POSITION_STD)
-    if len(names) > 1:
-        for j, name in enumerate(names):
-            rows = np.flatnonzero(dataset.fixture_index == j)
-            groups[f"fixture {name}"] = (3 * rows[:, None] + np.arange(3)).ravel()
-            kinds[f"fixture {name}"] = ("fixture", name, name in problem.free_centres, 0.0)
-    centres = full.shape[1] - problem.n_free_params
-    spread = np.concatenate([prior_std(problem.model)[problem.free], np.full(centres, CENTRE_SPREAD)])
-    return full, res, groups, kinds, spread
-
-
-def _group_finding(problem: CalibrationProblem, name: str, kind: tuple, group: LeftOut, checkable: int) -> Finding:
-    what, key, weight, stated = kind
-    spec, dataset = problem.spec, problem.dataset
-    where = spec.source or "fixtures"
-    if group.dof <= 0:
-        text = f"{name}: the data cannot check it (it alone determines what it constrains)"
-        return Finding(name, True, text, {"unchecked": True})
-    scale = max(problem.noise, group.sigma_rest)
-    if what == "fixture":
-        statistic = max(group.delta_ssr, 0.0) / scale**2
-    else:  # the constraint's value as the rest predicts it, against its stated accuracy, socket play and the fit
-        play = SOCKET_STD**2 * (2.0 if what == "distance" else 1.0)
-        variance = stated**2 + play + group.fit_var * (scale / weight) ** 2
-        statistic = float(np.sum((group.predicted / weight) ** 2 / variance))
-    log10_p = log10_chi2_sf(statistic, group.dof)
-    excess = float(np.sqrt(statistic / group.dof))  # per checked row, in standard deviations
-    figures = {
-        "statistic": statistic,
-        "dof": group.dof,
-        "rows": group.rows,
-        "log10_p": log10_p,
-        "excess": excess,
-        "sigma_rest_mm": group.sigma_rest * 1e3,
-        "explained": max(group.delta_ssr, 0.0) / scale**2 - group.dof,  # residual removed beyond noise
-    }
-    significant = log10_p < np.log10(ALPHA / max(checkable, 1)) and excess > GROUP_FACTOR
-    if what == "fixture":
-        predicted = group.predicted.reshape(-1, 3)
-        if weight:  # its centre is an unknown: judge the shape of its samples, not where the rest put it
-            predicted = predicted - predicted.mean(axis=0)
-        size = float(np.sqrt(np.mean(np.sum(predicted**2, axis=1))))
-        figures["disagreement_rms_mm"] = size * 1e3
-        rows = dataset.select(np.flatnonzero(dataset.labels == key))
-        text = (
-            f"{samples_location(rows)}, field 'fixture': the samples at fixture {key} disagree with the other "
-            f"fixtures by {size * 1e3:.3g} mm rms (the others alone: residual {group.sigma_rest * 1e3:.3g} mm per "
-            f"axis): samples of another arm, a fixture that moved, or a wrong label"
-        )
-    else:
-        value = group.predicted / weight
-        size = float(np.linalg.norm(value))
-        fit_std = float(np.sqrt(group.fit_var.mean())) * scale / weight
-        figures.update({"disagreement_mm": size * 1e3, "stated_accuracy_mm": stated * 1e3, "fit_std_mm": fit_std * 1e3})
-        if what == "distance":
-            a, b, declared = spec.distances[key]
-            text = (
-                f"{where}: {spec._row(f'distances[{key}]')}field 'distances[{key}]': distance {a}-{b} "
-                f"({declared:.6g} m) disagrees with the samples by {size * 1e3:.3f} mm (its stated accuracy "
-                f"{stated * 1e3:.3g} mm, socket play {SOCKET_STD * 1e3:.2g} mm, the fit's {fit_std * 1e3:.2g} mm)"
-            )
-        else:
-            text = (
-                f"{where}: {spec._row('fixtures.' + key)}field 'fixtures.{key}.position': the samples put {key} "
-                f"{size * 1e3:.3f} mm from its known position (its stated accuracy {stated * 1e3:.3g} mm, socket "
-                f"play {SOCKET_STD * 1e3:.2g} mm, the fit's {fit_std * 1e3:.2g} mm)"
-            )
-    return Finding(name, not significant, text, figures)
 
 
 # --------------------------------------------------------------------------------- prediction

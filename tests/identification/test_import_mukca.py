@@ -196,22 +196,21 @@ def test_kinova_calibrated_on_one_placement_beats_the_nominal_on_another(tmp_pat
         )
         == 0
     )
-    assert (
-        main(
-            [
-                "calibrate",
-                "--robot",
-                str(KINOVA),
-                "--samples",
-                str(tmp_path / "train/samples.csv"),
-                "--fixtures",
-                str(tmp_path / "train/fixtures.yaml"),
-                "--out",
-                str(tmp_path / "cal.yaml"),
-            ]
-        )
-        == 0
-    )
+    calibrate = [
+        "calibrate",
+        "--robot",
+        str(KINOVA),
+        "--samples",
+        str(tmp_path / "train/samples.csv"),
+        "--fixtures",
+        str(tmp_path / "train/fixtures.yaml"),
+        "--out",
+        str(tmp_path / "cal.yaml"),
+    ]
+    # the Gen3 lite fits its own sockets to 2.6 mm per axis, 8.7x the declared 0.3 mm (and at an honest
+    # 3 mm it cannot be expected to beat nominal): the self-check refuses it; --force writes it anyway
+    assert main(calibrate) == 1 and not (tmp_path / "cal.yaml").exists()
+    assert main([*calibrate, "--force"]) == 0
     assert (
         main(
             [

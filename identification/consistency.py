@@ -1,0 +1,178 @@
+"""Leave-one-out consistency of a calibration's constraints: every known distance, every known position
+(freed: three unknowns with a prior row of its stated accuracy) and every fixture's samples, refitted
+without them (:func:`.leave_out.leave_out`, linearised), and the one that explains an inconsistency.
+
+A distance or position is judged by its value as the rest of the data predicts it, against its stated
+accuracy, the socket play (:data:`SOCKET_STD`) and the fit's covariance; a fixture's samples by
+``dSSR / sigma^2 ~ chi2(dof)``, ``sigma`` the larger of the declared noise and the residual std of the
+rest. A group fails when its p-value is below :data:`ALPHA` over the number of checkable groups
+(Bonferroni) and it disagrees by more than :data:`GROUP_FACTOR` standard deviations per checked row.
+"""
+
+from __future__ import annotations
+
+from dataclasses import replace
+
+import numpy as np
+
+from .leave_out import LeftOut
+from .problem import DISTANCE_STD, CalibrationProblem, prior_std, samples_location
+from .selfcheck_result import Finding
+
+#: Stated accuracy of a known fixture position [m] (fixtures.yaml has no field for it yet).
+POSITION_STD = DISTANCE_STD
+#: Std per axis [m] of where a ball realises its socket's centre (play, printed or machined shape): a
+#: known distance or position is compared with the samples within it, besides its stated accuracy. The
+#: real MUKCa plate (8 placements, one printed plate) shows 0.11 mm: its 50 mm distances disagree with
+#: each other by 0.17 mm rms, of which the fit explains 0.05 mm.
+SOCKET_STD = 1e-4
+#: Typical refit change of a centre [m], for :func:`.leave_out.leave_out`'s runaway test.
+CENTRE_SPREAD = 0.05
+#: Family-wise false-alarm probability of the leave-one-out tests (Gaussian noise at the declared level).
+ALPHA = 1e-3
+#: A left-out group must also disagree by this multiple of the noise (per coordinate, RMS) to be a culprit.
+GROUP_FACTOR = 2.0
+#: Failed groups explaining within this share of the best one contend for the culprit.
+CONTENDERS = 0.1
+#: ... and of two contenders of one size, the better must explain this much more (chi-square units).
+MARGIN = 10.0
+
+
+def log10_chi2_sf(statistic: float, dof: int) -> float:
+    """log10 of the chi-square survival function (floored at -300: beyond, the data are plainly inconsistent)."""
+    # function-level: scipy loads slowly (scipy.special is already loaded by the solver; scipy.stats adds 0.4 s)
+    from scipy.special import gammaincc
+
+    return float(np.log10(max(gammaincc(dof / 2.0, max(statistic, 0.0) / 2.0), 1e-300)))
+
+
+# ------------------------------------------------------------------------------- leave one out
+def augmented(problem: CalibrationProblem, x: np.ndarray, r: np.ndarray):
+    """Jacobian and residuals with every known position freed (3 unknowns, a prior row each), and the groups.
+
+    Returns:
+        (M', F') Jacobian, (M',) residuals, group name -> rows, group name -> kind, and (F',) the
+        typical change of each unknown (prior spread; :data:`CENTRE_SPREAD` for centres).
+    """
+    dataset, spec = problem.dataset, problem.spec
+    names = dataset.fixture_names
+    known = [n for n in names if n not in problem.free_centres and n not in problem.pinned]
+    jac = problem.jacobian(x)
+    m, f = jac.shape
+    count = dataset.n_samples
+    weight = problem.noise / POSITION_STD
+    extra = np.zeros((m + 3 * len(known), 3 * len(known)))
+    _, centres = problem.unpack(x)
+    for k, name in enumerate(known):
+        j = names.index(name)
+        rows = np.flatnonzero(dataset.fixture_index == j)
+        for axis in range(3):
+            extra[3 * rows + axis, 3 * k + axis] = -1.0
+        for d, (a, b, _) in enumerate(spec.distances):
+            if name in (a, b):
+                delta = centres[names.index(a)] - centres[names.index(b)]
+                sign = 1.0 if name == a else -1.0
+                extra[3 * count + d, 3 * k : 3 * k + 3] = sign * problem.distance_weight * delta / np.linalg.norm(delta)
+        extra[m + 3 * k : m + 3 * k + 3, 3 * k : 3 * k + 3] = weight * np.eye(3)
+    full = np.hstack([np.vstack([jac, np.zeros((3 * len(known), f))]), extra])
+    res = np.concatenate([r, np.zeros(3 * len(known))])
+    groups: dict[str, np.ndarray] = {}
+    kinds: dict[str, tuple] = {}
+    for d, (a, b, _) in enumerate(spec.distances):
+        groups[f"distance {a}-{b}"] = np.array([3 * count + d])
+        kinds[f"distance {a}-{b}"] = ("distance", d, problem.distance_weight, DISTANCE_STD)
+    for k, name in enumerate(known):
+        groups[f"position {name}"] = m + 3 * k + np.arange(3)
+        kinds[f"position {name}"] = ("position", name, weight, POSITION_STD)
+    if len(names) > 1:
+        for j, name in enumerate(names):
+            rows = np.flatnonzero(dataset.fixture_index == j)
+            groups[f"fixture {name}"] = (3 * rows[:, None] + np.arange(3)).ravel()
+            kinds[f"fixture {name}"] = ("fixture", name, name in problem.free_centres, 0.0)
+    centres = full.shape[1] - problem.n_free_params
+    spread = np.concatenate([prior_std(problem.model)[problem.free], np.full(centres, CENTRE_SPREAD)])
+    return full, res, groups, kinds, spread
+
+
+def group_finding(problem: CalibrationProblem, name: str, kind: tuple, group: LeftOut, checkable: int) -> Finding:
+    what, key, weight, stated = kind
+    spec, dataset = problem.spec, problem.dataset
+    where = spec.source or "fixtures"
+    if group.dof <= 0:
+        text = f"{name}: the data cannot check it (it alone determines what it constrains)"
+        return Finding(name, True, text, {"unchecked": True})
+    scale = max(problem.noise, group.sigma_rest)
+    if what == "fixture":
+        statistic = max(group.delta_ssr, 0.0) / scale**2
+    else:  # the constraint's value as the rest predicts it, against its stated accuracy, socket play and the fit
+        play = SOCKET_STD**2 * (2.0 if what == "distance" else 1.0)
+        variance = stated**2 + play + group.fit_var * (scale / weight) ** 2
+        statistic = float(np.sum((group.predicted / weight) ** 2 / variance))
+    log10_p = log10_chi2_sf(statistic, group.dof)
+    excess = float(np.sqrt(statistic / group.dof))  # per checked row, in standard deviations
+    figures = {
+        "statistic": statistic,
+        "dof": group.dof,
+        "rows": group.rows,
+        "log10_p": log10_p,
+        "excess": excess,
+        "sigma_rest_mm": group.sigma_rest * 1e3,
+        "explained": max(group.delta_ssr, 0.0) / scale**2 - group.dof,  # residual removed beyond noise
+    }
+    significant = log10_p < np.log10(ALPHA / max(checkable, 1)) and excess > GROUP_FACTOR
+    if what == "fixture":
+        predicted = group.predicted.reshape(-1, 3)
+        if weight:  # its centre is an unknown: judge the shape of its samples, not where the rest put it
+            predicted = predicted - predicted.mean(axis=0)
+        size = float(np.sqrt(np.mean(np.sum(predicted**2, axis=1))))
+        figures["disagreement_rms_mm"] = size * 1e3
+        rows = dataset.select(np.flatnonzero(dataset.labels == key))
+        text = (
+            f"{samples_location(rows)}, field 'fixture': the samples at fixture {key} disagree with the other "
+            f"fixtures by {size * 1e3:.3g} mm rms (the others alone: residual {group.sigma_rest * 1e3:.3g} mm per "
+            f"axis): samples of another arm, a fixture that moved, or a wrong label"
+        )
+    else:
+        value = group.predicted / weight
+        size = float(np.linalg.norm(value))
+        fit_std = float(np.sqrt(group.fit_var.mean())) * scale / weight
+        figures.update({"disagreement_mm": size * 1e3, "stated_accuracy_mm": stated * 1e3, "fit_std_mm": fit_std * 1e3})
+        if what == "distance":
+            a, b, declared = spec.distances[key]
+            text = (
+                f"{where}: {spec._row(f'distances[{key}]')}field 'distances[{key}]': distance {a}-{b} "
+                f"({declared:.6g} m) disagrees with the samples by {size * 1e3:.3f} mm (its stated accuracy "
+                f"{stated * 1e3:.3g} mm, socket play {SOCKET_STD * 1e3:.2g} mm, the fit's {fit_std * 1e3:.2g} mm)"
+            )
+        else:
+            text = (
+                f"{where}: {spec._row('fixtures.' + key)}field 'fixtures.{key}.position': the samples put {key} "
+                f"{size * 1e3:.3f} mm from its known position (its stated accuracy {stated * 1e3:.3g} mm, socket "
+                f"play {SOCKET_STD * 1e3:.2g} mm, the fit's {fit_std * 1e3:.2g} mm)"
+            )
+    return Finding(name, not significant, text, figures)
+
+
+def name_culprit(groups: list[Finding], noise: float, level_factor: float) -> list[Finding]:
+    """Mark the one failed group that explains the data's inconsistency, if there is one.
+
+    Candidates are the failed groups whose removal leaves the rest at most ``level_factor`` x the
+    noise; what removing them explains beyond noise (``dSSR / sigma^2 - dof``) ranks them.
+    Those within :data:`CONTENDERS` of the best explain about as much: the smallest of them (a
+    distance before a position before a fixture's samples: the simplest explanation) is the culprit,
+    unless a second one of its size comes within :data:`MARGIN` of it (then none is).
+    """
+    failed = [f for f in groups if not f.passed and f.figures["sigma_rest_mm"] <= level_factor * noise * 1e3]
+    if not failed:
+        return groups
+
+    def excess(f: Finding) -> float:
+        return f.figures["explained"]
+
+    best = max(excess(f) for f in failed)
+    contenders = [f for f in failed if excess(f) >= (1.0 - CONTENDERS) * best]
+    smallest = min(f.figures["rows"] for f in contenders)
+    same = sorted((f for f in contenders if f.figures["rows"] == smallest), key=excess, reverse=True)
+    if len(same) > 1 and excess(same[0]) - excess(same[1]) < MARGIN:
+        return groups
+    return [replace(f, culprit=True) if f is same[0] else f for f in groups]

@@ -1,0 +1,108 @@
+"""What the calibration self-check found: one :class:`Finding` per check, the :class:`SelfCheck` verdict,
+and the refusal (:class:`InconsistentDataError`, one line)."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+from spherecal.correction.errors import SpherecalError
+
+
+class InconsistentDataError(SpherecalError):
+    """The samples, fixtures and declared noise contradict each other, or the result cannot beat nominal."""
+
+
+@dataclass(frozen=True)
+class Finding:
+    """One check.
+
+    Attributes:
+        check: what was checked (``"residual level"``, ``"distance P1-P2"``, ``"position P2"``,
+            ``"fixture P3"``, ``"prediction"``, ``"separation P1-P2"``, ``"motion P2"``).
+        passed: False when the check failed (True also for ``unchecked`` findings).
+        message: one line for humans (the refusal's text when it failed).
+        figures: plain numbers (mm where the key says so).
+        culprit: a failure that names the one input to fix.
+    """
+
+    check: str
+    passed: bool
+    message: str
+    figures: dict = field(default_factory=dict)
+    culprit: bool = False
+
+
+@dataclass(frozen=True)
+class SelfCheck:
+    """Every finding of the self-check and the verdict.
+
+    Attributes:
+        findings: all checks, in the order they ran.
+        noise: declared noise per coordinate [m].
+        sigma: residual std per coordinate of the fit [m].
+    """
+
+    findings: tuple[Finding, ...]
+    noise: float
+    sigma: float
+
+    @property
+    def failed(self) -> tuple[Finding, ...]:
+        return tuple(f for f in self.findings if not f.passed)
+
+    @property
+    def consistent(self) -> bool:
+        return not self.failed
+
+    @property
+    def culprit(self) -> Finding | None:
+        """The failed check that names the one input to fix, if there is one."""
+        return next((f for f in self.failed if f.culprit), None)
+
+    @property
+    def refusal(self) -> str:
+        """The one line of a refusal ("" when consistent): the culprit, else the failed level or
+        prediction figure, else the most inconsistent group with the note that no single one explains it."""
+        failed = self.failed
+        if not failed:
+            return ""
+        if self.culprit is not None:
+            return self.culprit.message
+        figures = [f for f in failed if f.check in ("residual level", "prediction")]
+        if figures:
+            return figures[0].message
+        worst = max(failed, key=lambda f: f.figures.get("statistic", 0.0) - f.figures.get("dof", 0))
+        others = len(failed) - 1
+        return f"{worst.message}; {others} other check(s) failed too and no single one explains the data"
+
+    def raise_if_inconsistent(self) -> None:
+        """Raises :class:`InconsistentDataError` with :attr:`refusal` unless consistent."""
+        if not self.consistent:
+            raise InconsistentDataError(self.refusal)
+
+    def block(self) -> dict:
+        """Plain data for the ``calibration:`` block of the written file."""
+        return {
+            "verdict": "consistent" if self.consistent else "inconsistent",
+            "noise_declared_mm": self.noise * 1e3,
+            "residual_std_mm": self.sigma * 1e3,
+            "failed": [f.message for f in self.failed],
+            "checks": {f.check: {"passed": f.passed, **f.figures} for f in self.findings},
+        }
+
+    def lines(self) -> list[str]:
+        """A few lines for the printed summary."""
+        head = "consistent" if self.consistent else f"INCONSISTENT ({len(self.failed)} failed)"
+        lines = [f"self-check: {head}"]
+        lines += [f"  {f.message}" for f in self.findings if f.check in ("residual level", "prediction") and f.passed]
+        worst = _worst_group(self.findings)
+        if worst is not None:
+            lines.append(f"  most inconsistent left out: {worst.message}")
+        lines += [f"  unchecked: {f.message}" for f in self.findings if f.figures.get("unchecked")]
+        lines += [f"  FAILED: {f.message}" for f in self.failed]
+        return lines
+
+
+def _worst_group(findings: tuple[Finding, ...]) -> Finding | None:
+    groups = [f for f in findings if "log10_p" in f.figures and f.passed and not f.figures.get("unchecked")]
+    return min(groups, key=lambda f: f.figures["log10_p"]) if groups else None
