@@ -97,7 +97,16 @@ class SelfCheck:
         lines += [f"  {f.message}" for f in self.findings if f.check in ("residual level", "prediction") and f.passed]
         worst = _worst_group(self.findings)
         if worst is not None:
-            lines.append(f"  most inconsistent left out: {worst.message}")
+            figures = worst.figures
+            size = (
+                f"{figures['disagreement_mm']:.3g} mm"
+                if "disagreement_mm" in figures
+                else (f"{figures.get('disagreement_rms_mm', 0.0):.3g} mm rms")
+            )
+            lines.append(
+                f"  closest to failing when left out: {worst.check}, {size} from what the rest predicts "
+                f"(p = 10^{figures['log10_p']:.1f}, {figures['excess']:.2g} std per row)"
+            )
         lines += [f"  unchecked: {f.message}" for f in self.findings if f.figures.get("unchecked")]
         lines += [f"  FAILED: {f.message}" for f in self.failed]
         return lines
