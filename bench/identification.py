@@ -21,6 +21,7 @@ import numpy as np  # noqa: E402
 from spherecal.correction import load_robot, perturb, registered_errors, tool_point  # noqa: E402
 from spherecal.identification.calibrate import calibrate
 from spherecal.identification.problem import ImplausibleCalibrationError  # noqa: E402
+from spherecal.identification.selfcheck import InconsistentDataError  # noqa: E402
 from spherecal.identification.synthetic import make_dataset  # noqa: E402
 
 
@@ -67,11 +68,13 @@ def table(panda, true) -> list[dict]:
                 clock = time.perf_counter()
                 try:
                     result = calibrate(panda, dataset, spec, method=method, start=start)
-                except ImplausibleCalibrationError as error:  # the guard refused the fit: say so, go on
+                except (ImplausibleCalibrationError, InconsistentDataError) as error:  # refused: say why, go on
                     wall = time.perf_counter() - clock
                     rows.append({"noise_mm": noise * 1e3, "start": start_name, "method": method, "refused": str(error)})
+                    text = str(error)
+                    why = text.split(": the fit ")[1].split(":")[0] if ": the fit " in text else text.split(": ", 1)[1]
                     print(f"{label:<10} {start_name:<8} {method:<7} {'refused':>9} {'':>9} {'':>8} {'':>9} {wall:7.2f}"
-                          f"  ({str(error).split(': the fit ')[1].split(':')[0]})")
+                          f"  ({why[:110]})")
                     continue
                 wall = time.perf_counter() - clock
                 points = tool_point(result.model, q)
