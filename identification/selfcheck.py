@@ -195,7 +195,7 @@ def _level(problem: CalibrationProblem, r: np.ndarray, sigma: float, dof: int, e
         f"{samples_location(dataset)}: residual noise {sigma * 1e3:.3g} mm per axis is {sigma / noise:.3g}x the "
         f"declared {noise * 1e3:.3g} mm (limit {LEVEL_FACTOR:g}x; worst fixture {worst} {per_fixture[worst] * 1e3:.3g} "
         f"mm) and no single fixture, distance or position explains it: samples of another arm, a fixture that "
-        f"moved, or the noise declared too small (--noise)",
+        f"moved, a fit that did not converge, or the noise declared too small (--noise)",
         figures,
     )
 
