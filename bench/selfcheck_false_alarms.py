@@ -5,8 +5,8 @@ Simulated (``identification.synthetic.make_dataset``: kinematic, fast): for ever
 or 3 fixtures, with and without their known distances (1 fixture: without), noise-free and 0.3 mm noise,
 declared noise 0.3 mm (the default). The self-check must fire at most once in 100 calibrations.
 
-Real (``--real``): the MUKCa Panda recordings in /work/shared/data/mukca (a 3D-printed ball held in the
-gripper, hand-guided into two printed sockets 50 mm apart, several placements): every placement alone
+Real (``--real``): the MUKCa Panda recordings in ``shared/data/mukca`` beside the checkout (a 3D-printed
+ball held in the gripper, hand-guided into two printed sockets 50 mm apart, several placements): every placement alone
 (two fixtures ``<placement>_h0/_h1``, their 0.050 m distance) and all placements together, for
 panda_2_clean and panda_4_clean, at the default noise 0.3 mm and at 0.2 mm. None may be refused.
 
@@ -42,7 +42,16 @@ from spherecal.correction.samples import Dataset
 from spherecal.identification.calibrate import calibrate
 from spherecal.identification.synthetic import PANDA_FIXTURES, make_dataset
 
-ROOT = Path("/work/shared/data/mukca")
+
+def _find_mukca() -> Path:
+    """``shared/data/mukca`` beside this checkout or one of its parents (the full recordings)."""
+    for base in Path(__file__).resolve().parents:
+        if (base / "shared" / "data" / "mukca" / "data").is_dir():
+            return base / "shared" / "data" / "mukca"
+    return Path("../shared/data/mukca")
+
+
+ROOT = _find_mukca()
 #: Socket centre distance of the printed plate [m].
 HOLE_DISTANCE = 0.050
 
