@@ -156,11 +156,13 @@ class ParameterDeviations:
         names: (P,) parameter names.
         nominal: (P,) nominal minus truth [m, rad].
         calibrated: (P,) calibrated minus truth [m, rad].
+        held: parameters held at nominal and left out of the rows (see :meth:`identifiable`).
     """
 
     names: tuple[str, ...]
     nominal: np.ndarray
     calibrated: np.ndarray
+    held: tuple[str, ...] = ()
 
     @staticmethod
     def is_angle(name: str) -> bool:
@@ -175,10 +177,41 @@ class ParameterDeviations:
     def format(self) -> str:
         """One line per parameter: nominal and calibrated deviation from the truth (mm or deg)."""
         nominal, calibrated = self.display(self.nominal), self.display(self.calibrated)
-        lines = [f"{'parameter':<11} {'unit':<4} {'nominal-truth':>14} {'calibrated-truth':>17}"]
+        lines = [f"{'parameter':<14} {'unit':<4} {'nominal-truth':>14} {'calibrated-truth':>17}"]
         for name, a, b in zip(self.names, nominal, calibrated, strict=True):
-            lines.append(f"{name:<11} {'deg' if self.is_angle(name) else 'mm':<4} {a:14.4f} {b:17.4f}")
+            lines.append(f"{name:<14} {'deg' if self.is_angle(name) else 'mm':<4} {a:14.4f} {b:17.4f}")
+        if self.held:
+            lines.append(f"held at nominal (not determined by the data, not compared): {', '.join(self.held)}")
         return "\n".join(lines)
+
+    def identifiable(self, fixed: dict[str, str]) -> ParameterDeviations:
+        """The rows a calibration can be judged on: parameters fixed at nominal (``fixed``: name ->
+        reason, the calibrated file's ``calibration.fixed``) are left out and listed in ``held``, and
+        a length fixed as "redundant with" one other length is added to it (``d7 + tool_z``)."""
+        groups = sum_groups(fixed)
+        index = {n: i for i, n in enumerate(self.names)}
+        names, rows = [], []
+        for name in self.names:
+            if name in fixed:
+                continue
+            members = groups.get(name, [name])
+            names.append(" + ".join(members))
+            rows.append([index[m] for m in members])
+        nominal = np.array([self.nominal[r].sum() for r in rows])
+        calibrated = np.array([self.calibrated[r].sum() for r in rows])
+        return ParameterDeviations(tuple(names), nominal, calibrated, tuple(n for n in self.names if n in fixed))
+
+
+def sum_groups(fixed: dict[str, str]) -> dict[str, list[str]]:
+    """Identified length -> the lengths only identifiable in its sum, itself last (``{"tool_z": ["d7",
+    "tool_z"]}``), from the reasons ``"redundant with <one length>"`` that calibration gives."""
+    groups: dict[str, list[str]] = {}
+    for name, reason in fixed.items():
+        partner = reason.removeprefix("redundant with ").strip()
+        if reason.startswith("redundant with ") and "," not in partner:
+            if not (ParameterDeviations.is_angle(name) or ParameterDeviations.is_angle(partner)):
+                groups.setdefault(partner, []).append(name)
+    return {k: [*v, k] for k, v in groups.items()}
 
 
 def parameter_deviations(nominal: RobotModel, calibrated: RobotModel, truth: RobotModel) -> ParameterDeviations:

@@ -1,0 +1,88 @@
+"""Render a spherecal recording as the viewer opens it, to a PNG (the picture check of a layout).
+
+    python bench/screenshot.py spherecal-demo/demo.rrd --out shot.png [--size 1600x1000] [--tab 2]
+
+Needs a display stack: ``apt-get install xvfb mesa-vulkan-drivers`` (Mesa's software Vulkan under
+a virtual X server); it runs ``xvfb-run rerun FILE.rrd --screenshot-to shot.png``. With ``--tab K``
+the recording's blueprint is re-sent with tab ``K`` of the result panel in front (0: the first), so
+every tab can be checked without clicking. Exits 1 with one line when the stack is missing.
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import shutil
+import subprocess
+import sys
+import tempfile
+from pathlib import Path
+
+os.environ.setdefault("RERUN_ANALYTICS", "0")
+
+
+def viewer() -> str | None:
+    """The ``rerun`` viewer next to this Python, or on PATH."""
+    here = Path(sys.executable).with_name("rerun")
+    return str(here) if here.exists() else shutil.which("rerun")
+
+
+def display_stack_missing() -> str | None:
+    """Why no screenshot can be taken here, or None."""
+    if shutil.which("xvfb-run") is None:
+        return "xvfb-run not found (apt-get install xvfb mesa-vulkan-drivers)"
+    if viewer() is None:
+        return "the rerun viewer is not installed (pip install rerun-sdk)"
+    return None
+
+
+def screenshot(rrd: str | os.PathLike, out: str | os.PathLike, size: str = "1600x1000", timeout: float = 180) -> Path:
+    """Open ``rrd`` in the viewer under Xvfb and save what it shows to ``out`` (PNG); returns ``out``."""
+    out = Path(out).resolve()
+    out.unlink(missing_ok=True)
+    width, height = (int(v) for v in size.split("x"))
+    env = {**os.environ, "CI": "1", "RUST_LOG": "error"}  # no analytics notice, no log toasts over the views
+    command = ["xvfb-run", "-a", "-s", f"-screen 0 {width + 64}x{height + 64}x24", viewer(), str(rrd),
+               "--window-size", size, "--hide-welcome-screen", "--screenshot-to", str(out)]
+    with tempfile.TemporaryDirectory() as home:  # the viewer's own settings and caches stay out of $HOME
+        done = subprocess.run(command, env={**env, "HOME": home}, capture_output=True, text=True, timeout=timeout,
+                              cwd=home)
+    if not out.exists():
+        raise RuntimeError(f"the viewer wrote no screenshot (exit {done.returncode}): {done.stderr.strip()[-400:]}")
+    return out
+
+
+def with_tab(rrd: str | os.PathLike, tab: int, folder: Path) -> Path:
+    """A copy of ``rrd`` whose blueprint shows tab ``tab`` of the result panel first."""
+    import rerun as rr
+
+    from spherecal.validation.blueprint import build_blueprint
+    from spherecal.validation.recording import read_contents
+
+    contents, title, application_id = read_contents(rrd)
+    copy = folder / f"tab{tab}.rrd"
+    shutil.copyfile(rrd, copy)
+    stream = rr.RecordingStream(application_id)
+    stream.save(folder / "blueprint.rbl")
+    stream.send_blueprint(build_blueprint(contents, title, active_tab=tab), make_active=True, make_default=True)
+    stream.flush()
+    stream.disconnect()
+    return copy
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("rrd", help="the recording (.rrd)")
+    parser.add_argument("--out", default="shot.png", help="PNG to write (shot.png)")
+    parser.add_argument("--size", default="1600x1000", help="window size in points, WxH (1600x1000)")
+    args = parser.parse_args(argv)
+    missing = display_stack_missing()
+    if missing:
+        print(f"screenshot: error: {missing}", file=sys.stderr)
+        return 1
+    print(screenshot(args.rrd, args.out, args.size))
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
