@@ -161,6 +161,33 @@ def record_validation(recording, report: ValidationReport, models: dict[str, Rob
     recording.text("validation", text, "Validation table (mm)")
 
 
+def record_validate_run(recording, report: ValidationReport, models: dict[str, RobotModel], drawn: str) -> None:
+    """What ``spherecal validate`` records: the robot ``models[drawn]`` through the self-motion sets
+    (else the first 300 configurations of the first set, 0.5 s each) on ``time``, the fixture centres
+    and parameter changes of the calibrated file's ``calibration:`` block when it has one, the errors,
+    and the joint coverage per self-motion set."""
+    calibrated = models["calibrated"]
+    block = calibrated.extras.get("calibration") or {}
+    centres = block.get("fixture_centres") or {}
+    if centres:
+        recording.fixtures(list(centres), np.array(list(centres.values()), dtype=float))
+    motion = [s for s in report.sets if s.name.startswith("self-motion ")]
+    if motion:
+        q = np.concatenate([s.q for s in motion])
+        recording.self_motion(models[drawn], np.arange(len(q)) * 0.02, q)
+    else:
+        q = report.sets[0].q[:300]
+        recording.self_motion(models[drawn], np.arange(len(q)) * 0.5, q)
+    record_validation(recording, report, {"nominal": models["nominal"], "calibrated": calibrated})
+    if block.get("identified"):
+        truth = models.get("truth")
+        record_parameters(recording, models["nominal"], calibrated, block["identified"], block.get("std") or {},
+                          block.get("fixed") or {}, truth)
+    if motion:
+        per_fixture = {s.name.removeprefix("self-motion "): s.q for s in motion}
+        recording.coverage(per_fixture, calibrated.lower, calibrated.upper)
+
+
 def record_parameters(
     recording,
     nominal: RobotModel,

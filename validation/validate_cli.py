@@ -34,7 +34,7 @@ def run(args: argparse.Namespace) -> int:
     from spherecal.correction import atomic_write_text, load_robot
     from spherecal.validation.inputs import check_models
     from spherecal.validation.mocap import read_mocap_csv
-    from spherecal.validation.pipeline import record_validation, validate_models
+    from spherecal.validation.pipeline import record_validate_run, validate_models
     from spherecal.validation.provenance import provenance
 
     if args.truth is None and args.mocap is None:
@@ -81,11 +81,11 @@ def run(args: argparse.Namespace) -> int:
     if args.rrd or args.spawn:
         from spherecal.validation.recording import Recording
 
-        recording = Recording(args.rrd, spawn=args.spawn, application_id="spherecal_validate")
+        drawn = "truth" if "truth" in models else "calibrated"
+        title = f"{'True' if drawn == 'truth' else 'Calibrated'} robot and fixtures, validation configurations"
+        recording = Recording(args.rrd, spawn=args.spawn, application_id="spherecal_validate", title=title)
         try:
-            record_validation(recording, report, {"nominal": models["nominal"], "calibrated": models["calibrated"]})
-            q = np.concatenate([s.q for s in report.sets[1:]]) if len(report.sets) > 1 else report.sets[0].q
-            recording.coverage(q, models["nominal"].lower, models["nominal"].upper)
+            record_validate_run(recording, report, models, drawn)
         except BaseException:
             recording.abort()
             raise
