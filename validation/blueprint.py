@@ -35,7 +35,7 @@ def camera(box):
     box = np.asarray(box, dtype=float)
     centre, size = box.mean(axis=0), max(float(np.linalg.norm(box[1] - box[0])), 0.05)
     direction = np.array([1.0, -1.3, 0.8]) / np.linalg.norm([1.0, -1.3, 0.8])
-    return rrb.EyeControls3D(position=centre + 1.5 * size * direction, look_target=centre, eye_up=(0, 0, 1))
+    return rrb.EyeControls3D(position=centre + 1.2 * size * direction, look_target=centre, eye_up=(0, 0, 1))
 
 
 def build_blueprint(contents: dict[str, dict[str, str]], title: str, bounds: dict | None = None, active_tab: int = 0):
@@ -57,6 +57,12 @@ def build_blueprint(contents: dict[str, dict[str, str]], title: str, bounds: dic
     def eye(origin):
         return camera(bounds[origin]) if origin in bounds else None
 
+    def area(origin):
+        if origin not in bounds:
+            return None
+        (x0, y0, _), (x1, y1, _) = bounds[origin]
+        return rrb.VisualBounds2D(x_range=(x0, x1), y_range=(y0, y1))
+
     tabs = []
     for section, tab in TABS.items():
         views = contents.get(section) or {}
@@ -74,7 +80,8 @@ def build_blueprint(contents: dict[str, dict[str, str]], title: str, bounds: dic
             tabs.append(rrb.Vertical(*[rrb.BarChartView(origin=f"residuals/{k}", name=n) for k, n in views.items()],
                                      name=tab))
         elif section == "parameters":
-            tabs.append(rrb.Vertical(*[rrb.Spatial2DView(origin=f"parameters/{k}", name=n)
+            tabs.append(rrb.Vertical(*[rrb.Spatial2DView(origin=f"parameters/{k}", name=n,
+                                                         visual_bounds=area(f"parameters/{k}"))
                                        for k, n in views.items()], name=tab))
         elif section == "coverage":
             tabs.append(rrb.Grid(*[rrb.BarChartView(origin=f"coverage/{k}", name=n) for k, n in views.items()],

@@ -30,6 +30,7 @@ quiet with ``CI=1`` in its environment or after ``rerun analytics disable``.
 
 from __future__ import annotations
 
+import json
 import os
 from pathlib import Path
 
@@ -37,7 +38,7 @@ import numpy as np
 
 from spherecal.correction import RobotModel, link_frames, tool_point
 
-from .recording_shapes import capsules, colour_ramp, histogram, parameter_bars
+from .recording_shapes import BAR_HEIGHT, capsules, colour_ramp, histogram, parameter_bars
 
 COLOURS = {
     "measured": (30, 30, 30),
@@ -81,6 +82,7 @@ class Recording:
             raise ValueError("a recording needs an .rrd path or spawn=True")
         self.rr = _rerun()
         self.stream = self.rr.RecordingStream(application_id)
+        self.application_id = application_id
         self.path = None if rrd is None else Path(rrd)
         self.contents: dict[str, dict[str, str]] = {"world": {}}
         self.title = title
@@ -174,9 +176,8 @@ class Recording:
         if top is None:
             top = float(np.quantile(mm, 0.99)) if mm.size else 1.0
         rr = self.rr
-        self.stream.log(
-            f"errors/{key}/points", rr.Points3D(points, radii=0.006, colors=colour_ramp(mm / top)), static=True
-        )
+        dots = rr.Points3D(points, radii=rr.Radius.ui_points(2.5), colors=colour_ramp(mm / top))
+        self.stream.log(f"errors/{key}/points", dots, static=True)
         low, high = points.min(axis=0), points.max(axis=0)
         steps = np.linspace(0.0, 1.0, 21)
         scale = np.column_stack([np.full(21, high[0] + 0.15), np.full(21, 0.5 * (low[1] + high[1])),
@@ -188,9 +189,10 @@ class Recording:
             rr.Points3D(scale, radii=0.03, colors=colour_ramp(steps), labels=labels, show_labels=True),
             static=True,
         )
-        counts, centres, width = histogram(mm)
-        self.stream.log(f"errors/{key}/histogram", rr.BarChart(counts, abscissa=centres, widths=width), static=True)
-        self.extend_bounds(f"errors/{key}", np.vstack([points, scale]))
+        counts, left, width = histogram(mm)
+        self.stream.log(f"errors/{key}/histogram", rr.BarChart(counts, abscissa=left, widths=width), static=True)
+        label_room = scale[-1] + 0.4 * np.array([1.3, 1.0, 0.0]) / np.hypot(1.3, 1.0)  # the labels, to the right
+        self.extend_bounds(f"errors/{key}", np.vstack([points, scale, label_room]))
         self._note("errors", key, f"{key.capitalize()}: error, mean {mm.mean():.3f} mm")
         self.errors_against = against
 
@@ -198,8 +200,8 @@ class Recording:
         """Histograms of the calibration residuals (N,) [m] before and after calibration."""
         for key, values in (("before", before), ("after", after)):
             mm = np.asarray(values, dtype=float) * 1e3
-            counts, centres, width = histogram(mm)
-            self.stream.log(f"residuals/{key}", self.rr.BarChart(counts, abscissa=centres, widths=width), static=True)
+            counts, left, width = histogram(mm)
+            self.stream.log(f"residuals/{key}", self.rr.BarChart(counts, abscissa=left, widths=width), static=True)
             rms = float(np.sqrt(np.mean(mm**2)))
             self._note("residuals", key, f"Residuals {key} calibration [mm]: rms {rms:.3f} mm")
 
@@ -219,18 +221,23 @@ class Recording:
         rr = self.rr
         for group, shapes in parameter_bars(names, change, std, truth).items():
             base = f"parameters/{group}"
-            self.stream.log(f"{base}/bars", rr.Boxes2D(mins=shapes["mins"], sizes=shapes["sizes"],
-                                                       colors=shapes["colours"], labels=shapes["labels"]), static=True)
-            self.stream.log(f"{base}/std", rr.LineStrips2D(shapes["whiskers"], colors=(0, 0, 0), radii=0.02),
-                            static=True)
-            self.stream.log(f"{base}/zero", rr.LineStrips2D([shapes["zero"]], colors=(120, 120, 120), radii=0.01),
-                            static=True)
+            white = (235, 235, 235)
+            log = self.stream.log
+            log(f"{base}/bars", rr.Boxes2D(mins=shapes["mins"], sizes=shapes["sizes"], colors=shapes["colours"]),
+                static=True)
+            log(f"{base}/names", rr.Points2D(shapes["names"], radii=0.01, colors=white, labels=shapes["labels"],
+                                             show_labels=True), static=True)
+            log(f"{base}/std", rr.LineStrips2D(shapes["whiskers"], colors=white, radii=0.03), static=True)
+            log(f"{base}/zero", rr.LineStrips2D([shapes["zero"]], colors=(140, 140, 140), radii=0.01), static=True)
+            log(f"{base}/scale", rr.LineStrips2D([shapes["scale"]], colors=white, radii=0.04,
+                                                 labels=[shapes["scale_label"]], show_labels=True), static=True)
             if "truth" in shapes:
-                self.stream.log(f"{base}/truth", rr.Points2D(shapes["truth"], radii=0.12, colors=(0, 0, 0)),
-                                static=True)
+                log(f"{base}/truth", rr.Points2D(shapes["truth"], radii=0.12, colors=white), static=True)
             unit = "mm" if group == "lengths" else "deg"
-            what = "; black dots: the true change" if "truth" in shapes else ""
-            self._note("parameters", group, f"Change of the identified {group} [{unit}], whiskers +-1 std{what}")
+            what = ", white dot = true change" if "truth" in shapes else ""
+            self._note("parameters", group, f"{group.capitalize()} [{unit}]: change, +-1 std{what}")
+            top = BAR_HEIGHT + 1.2
+            self.bounds[base] = np.array([[-3.2, -top, 0.0], [len(shapes["labels"]) + 0.2, top, 0.0]])
 
     def coverage(self, per_fixture: dict[str, np.ndarray], lower: np.ndarray, upper: np.ndarray) -> None:
         """Share of each joint's range visited at each fixture (bars q1..qn, percent; the paper's Fig. 5).
@@ -243,8 +250,8 @@ class Recording:
         for name, q in per_fixture.items():
             q = np.atleast_2d(q)
             share = 100 * np.divide(np.ptp(q, axis=0), span, out=np.zeros(span.shape), where=span > 0)
-            self.stream.log(f"coverage/{name}", self.rr.BarChart(share, abscissa=np.arange(1, share.size + 1)),
-                            static=True)
+            chart = self.rr.BarChart(share, abscissa=np.arange(share.size) + 0.6, widths=np.full(share.size, 0.8))
+            self.stream.log(f"coverage/{name}", chart, static=True)
             self._note("coverage", name, f"Joint coverage at {name}: % of each joint's range (q1..q{share.size}), "
                                          f"lowest {share.min():.0f} %")
 
@@ -294,6 +301,10 @@ class Recording:
 
         blueprint = build_blueprint(self.contents, self.title, self.bounds)
         self.stream.send_blueprint(blueprint, make_active=True, make_default=True)
+        bounds = {k: v.tolist() for k, v in self.bounds.items()}
+        layout = {"contents": self.contents, "title": self.title, "bounds": bounds}
+        layout["application_id"] = self.application_id
+        self.stream.send_property("spherecal_layout", self.rr.AnyValues(layout=json.dumps(layout)))
         self.stream.flush()
         self.stream.disconnect()
         if self.path is None:
@@ -324,6 +335,20 @@ def read_entity_rows(path: str | os.PathLike) -> dict[str, int]:
             continue
         counts[entity] = counts.get(entity, 0) + chunk.num_rows
     return counts
+
+
+def read_layout(path: str | os.PathLike) -> dict:
+    """What a recording's blueprint was built from (``contents``, ``title``, ``bounds``,
+    ``application_id``; see :func:`validation.blueprint.build_blueprint`), or {} if it has none."""
+    from rerun.chunk import RrdReader  # function-level: see _rerun
+
+    _rerun()
+    for chunk in RrdReader(str(path)).stream().to_chunks():
+        if chunk.entity_path.endswith("spherecal_layout"):
+            batch = chunk.to_record_batch()
+            column = next(n for n in batch.schema.names if n.endswith("layout"))
+            return json.loads(batch.column(column).to_pylist()[0][0])
+    return {}
 
 
 def read_view_names(path: str | os.PathLike) -> list[str]:

@@ -4,8 +4,8 @@ from __future__ import annotations
 
 import numpy as np
 
-#: Viridis-like anchors of the error colour ramp (dark blue: small, yellow: large).
-RAMP = np.array([(68, 1, 84), (59, 82, 139), (33, 145, 140), (94, 201, 98), (253, 231, 37)], dtype=float)
+#: Anchors of the error colour ramp, all readable on the viewer's dark background (blue: small, red: large).
+RAMP = np.array([(60, 110, 240), (30, 190, 210), (90, 205, 90), (245, 215, 40), (235, 60, 40)], dtype=float)
 #: Height of the tallest bar in the parameter panels (2D view units; the labels carry the values).
 BAR_HEIGHT = 4.0
 
@@ -41,11 +41,11 @@ def colour_ramp(share: np.ndarray) -> np.ndarray:
 
 
 def histogram(values: np.ndarray, bins: int = 30) -> tuple[np.ndarray, np.ndarray, float]:
-    """Counts (bins,), bin centres (bins,) and bin width of values from 0 to their maximum."""
+    """Counts (bins,), bin left edges (bins,: Rerun's bar abscissa) and bin width of values from 0 to their maximum."""
     values = np.asarray(values, dtype=float)
     top = float(values.max()) if values.size and values.max() > 0 else 1.0
     counts, edges = np.histogram(values, bins=bins, range=(0.0, top))
-    return counts, 0.5 * (edges[:-1] + edges[1:]), float(edges[1] - edges[0])
+    return counts, edges[:-1], float(edges[1] - edges[0])
 
 
 def is_angle(name: str) -> bool:
@@ -67,8 +67,10 @@ def parameter_bars(
         truth: (P,) [m, rad] or None.
 
     Returns:
-        group -> ``mins`` (B, 2), ``sizes`` (B, 2), ``colours`` (B, 3), ``labels`` (B,), ``whiskers``
-        (B, 2, 2), ``zero`` (2, 2) and, with ``truth``, ``truth`` (B, 2).
+        group -> ``mins`` (B, 2), ``sizes`` (B, 2), ``colours`` (B, 3) of the bars, ``names`` (B, 2) and
+        ``labels`` (B,) of the parameter names beyond each bar's end, ``whiskers`` (B, 2, 2), ``zero``
+        (2, 2), ``scale`` (2, 2) a bar of the tallest height left of the chart with ``scale_label``, and
+        with ``truth``, ``truth`` (B, 2).
     """
     change, std = np.asarray(change, dtype=float), np.asarray(std, dtype=float)
     angle = np.array([is_angle(n) for n in names], dtype=bool)
@@ -86,10 +88,12 @@ def parameter_bars(
             "mins": np.column_stack([x - 0.35, np.minimum(y, 0.0)]),
             "sizes": np.column_stack([np.full_like(x, 0.7), np.abs(y)]),
             "colours": np.where((value >= 0)[:, None], [[40, 120, 220]], [[220, 60, 50]]).astype(np.uint8),
-            "labels": [f"{n}\n{v:+.3f}\n+-{s:.3f} {unit}" for n, v, s in
-                       zip(np.asarray(names)[mask], value, spread, strict=True)],
+            "names": np.column_stack([x, y + np.where(y < 0, -0.45, 0.45)]),
+            "labels": list(np.asarray(names)[mask]),
+            "scale": np.array([[-1.2, 0.0], [-1.2, -BAR_HEIGHT]]),
+            "scale_label": f"{reach:.3f} {unit}",
             "whiskers": np.stack([np.column_stack([x, y - spread * k]), np.column_stack([x, y + spread * k])], axis=1),
-            "zero": np.array([[-0.6, 0.0], [x[-1] + 0.6, 0.0]]),
+            "zero": np.array([[-1.4, 0.0], [x[-1] + 0.6, 0.0]]),
         }
         if true is not None:
             shapes["truth"] = np.column_stack([x, -true * k])

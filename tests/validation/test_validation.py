@@ -173,7 +173,7 @@ def test_recording_holds_the_documented_entities_and_its_blueprint(tmp_path, pan
     assert "Robot" in views and "Calibration table" in views
     assert "Nominal: error, mean 1.000 mm" in views and "Residuals after calibration [mm]: rms 0.100 mm" in views
     assert any(v.startswith("Joint coverage at P2") for v in views)
-    assert any(v.startswith("Change of the identified lengths [mm]") for v in views)
+    assert "Lengths [mm]: change, +-1 std, white dot = true change" in views
     assert sorted(p.name for p in tmp_path.iterdir()) == ["r.rrd"]
 
 

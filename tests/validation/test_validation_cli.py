@@ -155,4 +155,4 @@ def test_validation_of_a_calibrated_file_compares_identifiable_sums_and_records_
     assert rows["errors/calibrated/points"] == rows["parameters/lengths/bars"] == rows["tables/validation"] == 1
     views = read_view_names(rrd)
     assert any(v.startswith("True robot and fixtures") for v in views)
-    assert any(v.startswith("Change of the identified lengths [mm]") for v in views)
+    assert "Lengths [mm]: change, +-1 std, white dot = true change" in views

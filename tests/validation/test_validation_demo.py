@@ -49,7 +49,8 @@ def test_short_demo_writes_everything_and_its_recording_holds_the_documented_ent
         **{f"errors/{m}/{p}": 1 for m in ("nominal", "calibrated") for p in ("points", "colour_scale", "histogram")},
         "residuals/before": 1,
         "residuals/after": 1,
-        **{f"parameters/{g}/{p}": 1 for g in ("lengths", "angles") for p in ("bars", "std", "zero", "truth")},
+        **{f"parameters/{g}/{p}": 1 for g in ("lengths", "angles") for p in ("bars", "names", "std", "zero", "scale")},
+        **{f"parameters/{g}/truth": 1 for g in ("lengths", "angles")},
         **{f"coverage/P{i}": 1 for i in (1, 2, 3)},
         "tables/validation": 1,
         "tables/calibration": 1,
@@ -60,8 +61,8 @@ def test_short_demo_writes_everything_and_its_recording_holds_the_documented_ent
     assert any(v.startswith("True robot (simulated) and fixtures") for v in views)
     for start in ("Nominal: error, mean", "Calibrated: error, mean", "Nominal: error histogram [mm]",
                   "Residuals before calibration [mm]", "Residuals after calibration [mm]",
-                  "Change of the identified lengths [mm], whiskers +-1 std; black dots: the true change",
-                  "Change of the identified angles [deg]", "Joint coverage at P1", "Calibration table (mm, deg)"):
+                  "Lengths [mm]: change, +-1 std, white dot = true change", "Angles [deg]: change, +-1 std",
+                  "Joint coverage at P1", "Calibration table (mm, deg)"):
         assert any(v.startswith(start) for v in views), start
     readme = (ROOT / "README.md").read_text()
     section = readme.split("## Validation", 1)[1].split("\n## ", 1)[0]
