@@ -127,10 +127,12 @@ class CalibrationResult:
             f"residual [mm]   before: rms {rms_b * 1e3:.4f}  max {max_b * 1e3:.4f}"
             f"   after: rms {rms_a * 1e3:.4f}  max {max_a * 1e3:.4f}",
             f"identified {len(self.identified)} parameters, condition number {self.condition_number:.3g}",
-            f"  {'parameter':<9} {'change':>14} {'std':>14}",
+            f"  {'parameter':<9} {'unit':<4} {'change':>10} {'std':>10}",
         ]
         for name, start, end, std in self.changes():
-            lines.append(f"  {name:<9} {format_value(name, end - start):>14} {format_value(name, std):>14}")
+            unit = format_value(name, 1.0).split()[-1]  # the unit problem.format_value shows this parameter in
+            scale = np.rad2deg(1.0) if unit == "deg" else 1e3
+            lines.append(f"  {name:<9} {unit:<4} {(end - start) * scale:10.5f} {std * scale:10.5f}")
         groups: dict[str, list[str]] = {}
         for name, reason in self.fixed.items():
             groups.setdefault(reason, []).append(name)
