@@ -27,13 +27,14 @@ TABS = {
 }
 
 
-def camera(box):
-    """``rerun.blueprint.EyeControls3D`` looking at a (2, 3) bounding box [m] from the front right, above."""
+def camera(box, least: float = 0.05):
+    """``rerun.blueprint.EyeControls3D`` looking at a (2, 3) bounding box [m] from the front right, above,
+    from as far as the box is wide (at least ``least`` [m])."""
     import numpy as np
     import rerun.blueprint as rrb  # function-level: rerun is imported only when recording
 
     box = np.asarray(box, dtype=float)
-    centre, size = box.mean(axis=0), max(float(np.linalg.norm(box[1] - box[0])), 0.05)
+    centre, size = box.mean(axis=0), max(float(np.linalg.norm(box[1] - box[0])), least)
     direction = np.array([1.0, -1.3, 0.8]) / np.linalg.norm([1.0, -1.3, 0.8])
     return rrb.EyeControls3D(position=centre + 1.2 * size * direction, look_target=centre, eye_up=(0, 0, 1))
 
@@ -54,8 +55,8 @@ def build_blueprint(contents: dict[str, dict[str, str]], title: str, bounds: dic
 
     bounds = bounds or {}
 
-    def eye(origin):
-        return camera(bounds[origin]) if origin in bounds else None
+    def eye(origin, least=0.05):
+        return camera(bounds[origin], least) if origin in bounds else None
 
     def area(origin):
         if origin not in bounds:
@@ -92,7 +93,7 @@ def build_blueprint(contents: dict[str, dict[str, str]], title: str, bounds: dic
         else:
             tabs.append(rrb.Tabs(*[rrb.TextDocumentView(origin=f"tables/{k}", name=n) for k, n in views.items()],
                                  name=tab))
-    world = rrb.Spatial3DView(origin="world", contents="$origin/**", name=title, eye_controls=eye("world"))
+    world = rrb.Spatial3DView(origin="world", contents="$origin/**", name=title, eye_controls=eye("world", 1.0))
     root = rrb.Horizontal(world, rrb.Tabs(*tabs, active_tab=active_tab), column_shares=[3, 2]) if tabs else world
     return rrb.Blueprint(
         root,

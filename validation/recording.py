@@ -286,8 +286,7 @@ class Recording:
                                  show_labels=True),
                 static=True,
             )
-        self._note("sockets", fixture, f"Socket {fixture}: predicted tool points, mm from the calibrated mean "
-                                       f"(rms spread {', '.join(spreads)} mm)")
+        self._note("sockets", fixture, f"Socket {fixture} [mm]: rms spread {', '.join(spreads)}")
 
     def text(self, name: str, text: str, title: str) -> None:
         """A printed table as a text panel (``tables/<name>``)."""
