@@ -7,20 +7,14 @@ from typing import Any, Literal
 
 import numpy as np
 
+from . import layout
+from .layout import ParameterLayout, layout_for
+
 Convention = Literal["standard", "modified"]
 CONVENTIONS: tuple[str, ...] = ("standard", "modified")
 
-#: Per-joint DH fields, in the order they appear in the flat parameter vector.
-JOINT_FIELDS: tuple[str, ...] = ("a", "alpha", "d", "theta")
-TOOL_FIELDS: tuple[str, ...] = ("tool_x", "tool_y", "tool_z")
-BASE_FIELDS: tuple[str, ...] = (
-    "base_x",
-    "base_y",
-    "base_z",
-    "base_roll",
-    "base_pitch",
-    "base_yaw",
-)
+#: Per-joint DH fields, in the order they appear in the flat parameter vector (see :mod:`.layout`).
+JOINT_FIELDS: tuple[str, ...] = tuple(name for name, _ in layout.JOINT_FIELDS)
 
 
 def _frozen_array(values: Any, shape: tuple[int, ...], name: str) -> np.ndarray:
@@ -53,6 +47,12 @@ class RobotModel:
         tool: (3,) tool point in the last frame [m].
         base_xyz, base_rpy: (3,) base placement [m], [rad].
         extras: other top-level keys of the robot file, written back unchanged.
+        beta: (n,) Hayati rotations about ``y`` [rad] (zeros when not given): ``modified``
+            ``Rx(alpha) Lx(a) Ry(beta) Rz(theta+q) Lz(d)``, ``standard``
+            ``Rz(theta+q) Lz(d) Lx(a) Rx(alpha) Ry(beta)`` (nearly parallel axes). Non-zero
+            only on the ``hayati`` joints.
+        hayati: 0-based joints whose ``beta`` is a parameter (in :attr:`params`); beside each, a
+            ``d`` is held at zero (:meth:`ParameterLayout.held`).
     """
 
     name: str
@@ -67,6 +67,8 @@ class RobotModel:
     base_xyz: np.ndarray = field(default_factory=lambda: np.zeros(3))
     base_rpy: np.ndarray = field(default_factory=lambda: np.zeros(3))
     extras: dict = field(default_factory=dict)
+    beta: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    hayati: tuple[int, ...] = ()
 
     def __post_init__(self) -> None:
         if self.convention not in CONVENTIONS:
@@ -76,12 +78,19 @@ class RobotModel:
         n = np.size(self.a)
         if n < 1:
             raise ValueError("a robot needs at least one joint")
-        for name in ("a", "alpha", "d", "theta", "lower", "upper"):
+        if not self.hayati and np.size(self.beta) != n and not np.any(self.beta):
+            # no Hayati joint: a zero beta of another length (a copy with fewer joints) means none
+            object.__setattr__(self, "beta", np.zeros(n))
+        for name in ("a", "alpha", "d", "theta", "lower", "upper", "beta"):
             object.__setattr__(self, name, _frozen_array(getattr(self, name), (n,), name))
         for name in ("tool", "base_xyz", "base_rpy"):
             object.__setattr__(self, name, _frozen_array(getattr(self, name), (3,), name))
         if np.any(self.lower > self.upper):
             raise ValueError("joint limits: lower > upper")
+        object.__setattr__(self, "hayati", layout_for(n, tuple(self.hayati)).hayati)
+        others = np.setdiff1d(np.arange(n), self.hayati)
+        if np.any(self.beta[others] != 0.0):
+            raise ValueError(f"beta is non-zero on joint(s) {others[self.beta[others] != 0.0] + 1} not in hayati")
 
     # ----------------------------------------------------------------- sizes
     @property
@@ -91,21 +100,31 @@ class RobotModel:
 
     @property
     def n_params(self) -> int:
-        """Length ``P = 4 n + 3 + 6`` of the flat parameter vector."""
-        return 4 * self.n_joints + len(TOOL_FIELDS) + len(BASE_FIELDS)
+        """Length ``P`` of the flat parameter vector (see :attr:`layout`)."""
+        return self.layout.size
+
+    @property
+    def layout(self) -> ParameterLayout:
+        """Names, kinds, prior spread and slices of the flat parameter vector."""
+        return layout_for(self.n_joints, self.hayati)
 
     # ----------------------------------------------------- flat parameter view
     @property
     def param_names(self) -> tuple[str, ...]:
         """Names of the flat parameter vector: ``a1, alpha1, d1, theta1, a2, ..., tool_x,
         tool_y, tool_z, base_x, base_y, base_z, base_roll, base_pitch, base_yaw``."""
-        return param_names(self.n_joints)
+        return self.layout.names
 
     @property
     def params(self) -> np.ndarray:
         """(P,) flat parameter vector, ordered as :attr:`param_names` [m, rad]."""
-        joints = np.stack([self.a, self.alpha, self.d, self.theta], axis=1).ravel()
-        return np.concatenate([joints, self.tool, self.base_xyz, self.base_rpy])
+        lay = self.layout
+        out = np.empty(lay.size)
+        for name in lay.joint_fields:
+            out[lay.field(name)] = getattr(self, name)
+        out[lay.beta] = self.beta[list(lay.hayati)]
+        out[lay.tool], out[lay.base_xyz], out[lay.base_rpy] = self.tool, self.base_xyz, self.base_rpy
+        return out
 
     def with_params(self, params: np.ndarray) -> RobotModel:
         """A copy of this model with the flat parameter vector replaced.
@@ -116,25 +135,18 @@ class RobotModel:
         params = np.asarray(params, dtype=float)
         if params.shape != (self.n_params,):
             raise ValueError(f"params must have shape ({self.n_params},), got {params.shape}")
-        n = self.n_joints
-        joints = params[: 4 * n].reshape(n, 4)
+        lay = self.layout
+        fields = {name: params[lay.field(name)] for name in lay.joint_fields}
+        beta = np.zeros(self.n_joints)
+        beta[list(lay.hayati)] = params[lay.beta]
         return replace(
-            self,
-            a=joints[:, 0],
-            alpha=joints[:, 1],
-            d=joints[:, 2],
-            theta=joints[:, 3],
-            tool=params[4 * n : 4 * n + 3],
-            base_xyz=params[4 * n + 3 : 4 * n + 6],
-            base_rpy=params[4 * n + 6 : 4 * n + 9],
+            self, **fields, beta=beta, tool=params[lay.tool], base_xyz=params[lay.base_xyz],
+            base_rpy=params[lay.base_rpy]
         )
 
     def param_index(self, name: str) -> int:
         """Index of a named parameter (``"a3"``, ``"tool_z"``, ...) in :attr:`params`."""
-        try:
-            return self.param_names.index(name)
-        except ValueError:
-            raise KeyError(f"no parameter named {name!r} in a {self.n_joints}-joint model") from None
+        return self.layout.index(name)
 
     # -------------------------------------------------------------- helpers
     @property
@@ -167,6 +179,9 @@ class RobotModel:
             return "convention", (
                 f"{other.convention!r}, expected {self.convention!r} (convert it with correction.convert first)"
             )
+        if other.hayati != self.hayati:
+            joints = ", ".join(str(j + 1) for j in self.hayati) or "none"
+            return "beta", f"Hayati beta on joints {[j + 1 for j in other.hayati]}, expected {joints}"
         if limits:
             for name in ("lower", "upper"):
                 diff = np.abs(getattr(other, name) - getattr(self, name))
@@ -182,6 +197,7 @@ class RobotModel:
         return (
             self.convention == other.convention
             and self.n_joints == other.n_joints
+            and self.hayati == other.hayati
             and np.allclose(self.params, other.params, rtol=0.0, atol=atol)
             and np.allclose(self.lower, other.lower, rtol=0.0, atol=atol)
             and np.allclose(self.upper, other.upper, rtol=0.0, atol=atol)
@@ -190,8 +206,7 @@ class RobotModel:
 
 def param_names(n_joints: int) -> tuple[str, ...]:
     """Flat parameter names of an ``n_joints`` model (see :attr:`RobotModel.param_names`)."""
-    joints = tuple(f"{f}{i + 1}" for i in range(n_joints) for f in JOINT_FIELDS)
-    return joints + TOOL_FIELDS + BASE_FIELDS
+    return layout_for(n_joints).names
 
 
 def rpy_matrix(rpy: np.ndarray) -> np.ndarray:

@@ -4,12 +4,13 @@ from __future__ import annotations
 
 import numpy as np
 
+from .layout import ANGLE, LENGTH
 from .model import RobotModel
 
-#: The issues' default true-robot spread: lengths 1 mm, angles 0.2 deg, tool 1 mm (std).
-LENGTH_STD = 1e-3
-ANGLE_STD = float(np.deg2rad(0.2))
-TOOL_STD = 1e-3
+#: The issues' default true-robot spread: lengths 1 mm, angles 0.2 deg, tool 1 mm (std): the layout's prior.
+LENGTH_STD = LENGTH.prior_std
+ANGLE_STD = ANGLE.prior_std
+TOOL_STD = LENGTH.prior_std
 
 
 def perturb(
@@ -33,10 +34,7 @@ def perturb(
     Returns:
         The perturbed model, same convention and joint limits.
     """
-    n = model.n_joints
-    std = np.empty(model.n_params)
-    std[: 4 * n] = np.tile([length_std, angle_std, length_std, angle_std], n)
-    std[4 * n : 4 * n + 3] = tool_std
-    std[4 * n + 3 : 4 * n + 6] = length_std if base else 0.0
-    std[4 * n + 6 :] = angle_std if base else 0.0
+    std = model.layout.spread(length_std, angle_std, tool_std, base=base)
+    for name in model.layout.held(model.convention):  # Hayati: this d stays at zero
+        std[model.layout.index(name)] = 0.0
     return model.with_params(model.params + rng.normal(0.0, 1.0, model.n_params) * std)

@@ -11,18 +11,10 @@ from spherecal.correction import RobotModel, param_jacobian, registered_errors, 
 from spherecal.correction.fixtures import FixtureSpec
 from spherecal.correction.samples import Dataset
 
+from .build import build_problem
 from .identifiability import Identifiability, predicted_std
-from .problem import (
-    GAUGE,
-    NOISE,
-    CalibrationProblem,
-    ImplausibleCalibrationError,
-    build_problem,
-    format_value,
-    prior_std,
-    prune,
-    samples_location,
-)
+from .problem import GAUGE, NOISE, CalibrationProblem, ImplausibleCalibrationError, prior_std, samples_location
+from .pruning import prune
 from .solvers import solve_lm, solve_pso
 
 METHODS: tuple[str, ...] = ("lm", "pso", "pso+lm")
@@ -130,8 +122,8 @@ class CalibrationResult:
             f"  {'parameter':<9} {'unit':<4} {'change':>10} {'std':>10}",
         ]
         for name, start, end, std in self.changes():
-            unit = format_value(name, 1.0).split()[-1]  # the unit problem.format_value shows this parameter in
-            scale = np.rad2deg(1.0) if unit == "deg" else 1e3
+            layout = self.model.layout
+            scale, unit = layout.display_scale()[layout.index(name)], "deg" if layout.is_angle(name) else "mm"
             lines.append(f"  {name:<9} {unit:<4} {(end - start) * scale:10.5f} {std * scale:10.5f}")
         groups: dict[str, list[str]] = {}
         for name, reason in self.fixed.items():
@@ -259,8 +251,8 @@ def check_plausible(problem: CalibrationProblem, params: np.ndarray, max_change:
     q = model.random_configurations(PLAUSIBILITY_CONFIGURATIONS, np.random.default_rng(0))
     change = float(registered_errors(tool_point(model.with_params(params), q), tool_point(model, q)).mean())
     prior = prior_std(model)
-    gauge = GAUGE[model.convention] + tuple(name for name in model.param_names if name.startswith("base_"))
-    prior[[model.param_index(name) for name in gauge]] = 0.0
+    prior[[model.param_index(name) for name in GAUGE[model.convention]]] = 0.0
+    prior[model.layout.base] = 0.0
     typical = float(np.sqrt(((param_jacobian(model, q) * prior) ** 2).sum(axis=(1, 2))).mean())
     if change <= max_change * typical:
         return
@@ -273,7 +265,7 @@ def check_plausible(problem: CalibrationProblem, params: np.ndarray, max_change:
         f"{samples_location(dataset)}, field '{name}': the fit moves the tool point "
         f"{change * 1e3:.1f} mm from the nominal model (mean over the workspace; a real arm's errors move it "
         f"about {typical * 1e3:.1f} mm, limit {max_change:g}x), changing {name} by "
-        f"{format_value(name, params[free[worst]] - model.params[free[worst]])}: the samples do not determine "
+        f"{model.layout.format(name, params[free[worst]] - model.params[free[worst]])}: the samples do not determine "
         f"the parameters; record more self-motion (wider joint ranges, more fixtures or known distances)"
     )
 

@@ -1,6 +1,6 @@
 """Predicted accuracy of a calibration from its data, before (or without) solving it.
 
-The calibration problem of the data (:func:`identification.problem.build_problem`: same unknowns,
+The calibration problem of the data (:func:`identification.build.build_problem`: same unknowns,
 gauge, scale fixing and excitation pruning as :func:`identification.calibrate.calibrate`) is
 linearised at a generic point near the model (the rank test's point, so that accidental symmetries
 of the nominal design do not count). With fixture noise ``sigma`` per coordinate::
@@ -29,11 +29,15 @@ import numpy as np
 
 from spherecal.correction import RobotModel, param_jacobian, tool_point
 from spherecal.correction.fixtures import FixtureSpec
+from spherecal.correction.layout import ParameterLayout
 from spherecal.correction.samples import Dataset
 
+from .build import build_problem
 from .calibrate import SIGMA_FLOOR
+from .gauge import anchor_spread
 from .identifiability import Identifiability, normal_inverse
-from .problem import NOISE, CalibrationProblem, anchor_spread, build_problem, format_value, prior_std, prune
+from .problem import NOISE, CalibrationProblem, prior_std
+from .pruning import prune
 
 #: A parameter whose predicted std exceeds this share of its prior spread is "weakly determined".
 WEAK_SHARE = 0.3
@@ -104,6 +108,7 @@ class Prediction:
         identifiability: singular values and condition number of the column-scaled Jacobian.
         errors: (N, D) sampled error magnitudes [m] (configurations x draws), for plots.
         warnings: the calibration problem's warnings (scale from the nominal model, unused fixtures).
+        layout: the model's parameter layout (kinds and display units of ``std``).
     """
 
     mean: float
@@ -118,6 +123,7 @@ class Prediction:
     identifiability: Identifiability
     errors: np.ndarray
     warnings: tuple[str, ...] = ()
+    layout: ParameterLayout | None = None
 
     def summary(self) -> str:
         """A few lines for humans (mm, deg)."""
@@ -132,7 +138,7 @@ class Prediction:
         ]
         lines.append("singular values (column-scaled): " + " ".join(f"{v:.3g}" for v in s))
         if self.weak:
-            weak = ", ".join(f"{n} ({format_value(n, self.std[n])})" for n in self.weak)
+            weak = ", ".join(f"{n} ({self.layout.format(n, self.std[n])})" for n in self.weak)
             lines.append(f"weakly determined (std > {WEAK_SHARE:.0%} of the prior spread): {weak}")
         pruned = [n for n, why in self.fixed.items() if why.startswith("barely excited")]
         if pruned:
@@ -175,7 +181,7 @@ def predict_accuracy(
         The :class:`Prediction`.
 
     Raises:
-        DatasetError, UnidentifiableError: as :func:`identification.problem.build_problem`.
+        DatasetError, UnidentifiableError: as :func:`identification.build.build_problem`.
     """
     rng = np.random.default_rng(0) if rng is None else rng
     workspace = Workspace.of(model) if workspace is None else workspace
@@ -228,6 +234,7 @@ def predict_accuracy(
         identifiability=Identifiability.of(pruned.jacobian(x)),
         errors=errors,
         warnings=pruned.warnings,
+        layout=model.layout,
     )
 
 

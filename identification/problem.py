@@ -32,13 +32,12 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
-from spherecal.correction import RobotModel, link_frames, param_jacobian, tool_point
+from spherecal.correction import RobotModel, param_jacobian, tool_point
 from spherecal.correction.errors import SpherecalError
 from spherecal.correction.fixtures import FixtureSpec
-from spherecal.correction.perturb import ANGLE_STD, LENGTH_STD, TOOL_STD
-from spherecal.correction.samples import Dataset, DatasetError
+from spherecal.correction.samples import Dataset
 
-from .identifiability import Identifiability, greedy_rank, predicted_std
+from .identifiability import Identifiability
 
 #: Joint-1 parameters that move every tool point rigidly (the gauge against unknown centres).
 GAUGE: dict[str, tuple[str, ...]] = {"modified": ("a1", "alpha1", "d1", "theta1"), "standard": ("d1", "theta1")}
@@ -60,22 +59,7 @@ class ImplausibleCalibrationError(SpherecalError):
 
 def prior_std(model: RobotModel) -> np.ndarray:
     """(P,) prior spread of every parameter: 1 mm on lengths and tool, 0.2 deg on angles."""
-    n = model.n_joints
-    std = np.empty(model.n_params)
-    std[: 4 * n] = np.tile([LENGTH_STD, ANGLE_STD, LENGTH_STD, ANGLE_STD], n)
-    std[4 * n : 4 * n + 3] = TOOL_STD
-    std[4 * n + 3 : 4 * n + 6] = LENGTH_STD
-    std[4 * n + 6 :] = ANGLE_STD
-    return std
-
-
-def _is_angle(name: str) -> bool:
-    return name.startswith(("alpha", "theta", "base_r", "base_p", "base_y"))
-
-
-def format_value(name: str, value: float) -> str:
-    """A parameter value or deviation for humans: mm for lengths, deg for angles."""
-    return f"{np.rad2deg(value):.4g} deg" if _is_angle(name) else f"{value * 1e3:.4g} mm"
+    return model.layout.spread()
 
 
 @dataclass(frozen=True, eq=False)
@@ -174,7 +158,7 @@ class CalibrationProblem:
         """(F,) unknowns starting at ``model``'s parameters, free centres at its mean tool points."""
         centres = self.centres.copy()
         slot, _ = self._layout()
-        centres[slot >= 0] = _mean_points(model, self.dataset)[slot >= 0]
+        centres[slot >= 0] = mean_points(model, self.dataset)[slot >= 0]
         return self.pack(model.params, centres)
 
     def generic_point(self) -> tuple[CalibrationProblem, np.ndarray]:
@@ -260,74 +244,6 @@ class CalibrationProblem:
         return {name: centres[j] for j, name in enumerate(self.dataset.fixture_names)}
 
 
-def scale_centre(model: RobotModel) -> np.ndarray:
-    """(3,) the point on the joint-1 axis about which a uniform scale of the other lengths acts [m].
-
-    With the joint-1 gauge parameters fixed, scaling every length from joint 2 on scales the tool
-    points about this point: the frame-1 origin (modified DH) or the base origin moved ``d1``
-    along the joint-1 axis (standard DH).
-    """
-    base = model.base_transform
-    if model.convention == "modified":
-        return link_frames(model, np.zeros(model.n_joints))[1, :3, 3]
-    return base[:3, 3] + model.d[0] * base[:3, 2]
-
-
-def anchor_spread(model: RobotModel, q: np.ndarray, point: np.ndarray) -> float:
-    """Prior spread [m] of the distance between the mean tool point of ``q`` and ``point`` on ``model``.
-
-    What a scale taken from the nominal model is off by: the radius's gradient with respect to the
-    parameters times their prior spread (:func:`prior_std`; gauge and base parameters left out).
-
-    Args:
-        model: the robot.
-        q: (K, n) configurations at one fixture [rad].
-        point: (3,) the scale centre [m] (:func:`scale_centre`).
-    """
-    jac, points = param_jacobian(model, q, return_point=True)
-    radial = points.mean(axis=0) - point
-    grad = (radial / np.linalg.norm(radial)) @ jac.mean(axis=0)  # (P,)
-    names = model.param_names
-    skip = set(GAUGE[model.convention]) | {n for n in names if n.startswith("base_")}
-    prior = np.array([0.0 if n in skip else s for n, s in zip(names, prior_std(model), strict=True)])
-    return max(float(np.linalg.norm(grad * prior)), 1e-9)
-
-
-def _gauge_left(model: RobotModel, dataset: Dataset, known: list[np.ndarray]) -> list[str]:
-    """Joint-1 parameters to fix so that no rigid motion keeping the ``known`` centres stays free.
-
-    Each joint-1 gauge parameter moves every tool point by a twist ``dp = w x p + v`` (constant:
-    it acts before every joint variable). Combinations of them that keep every known centre in
-    place (``w x c + v = 0``) are invisible; one parameter per such direction is fixed (pivoted QR,
-    preferring ``theta1, d1, alpha1, a1``).
-    """
-    from scipy.linalg import qr
-
-    gauge = list(GAUGE[model.convention])[::-1]  # theta1, d1, alpha1, a1 (preference to fix)
-    q = dataset.q[np.linspace(0, dataset.n_samples - 1, min(dataset.n_samples, 12)).astype(int)]
-    jac, points = param_jacobian(model, q, return_point=True)
-    # fit (w, v) of every gauge column from dp_k = -p_k x w + v (exact for a rigid motion)
-    skew = np.zeros((points.shape[0], 3, 3))
-    skew[:, 0, 1], skew[:, 0, 2], skew[:, 1, 2] = points[:, 2], -points[:, 1], points[:, 0]
-    skew -= skew.transpose(0, 2, 1)
-    design = np.concatenate([skew, np.broadcast_to(np.eye(3), skew.shape)], axis=2).reshape(-1, 6)
-    cols = [model.param_index(name) for name in gauge]
-    twists = np.linalg.lstsq(design, jac[:, :, cols].reshape(-1, len(cols)), rcond=None)[0]  # (6, g)
-    moves = []
-    for c in known:  # displacement of each known centre under each gauge twist: w x c + v
-        moves.append(np.cross(twists[:3].T, c).T + twists[3:])
-    a = np.concatenate(moves)  # (3 * known, g)
-    s = np.linalg.svd(a, compute_uv=False)
-    rank = int(np.sum(s > 1e-9 * max(1.0, s[0]))) if s.size else 0
-    free_dims = len(cols) - rank
-    if free_dims <= 0:
-        return []
-    _, _, vt = np.linalg.svd(a)
-    null = vt[rank:]  # (free_dims, g)
-    _, _, pivots = qr(null, pivoting=True)
-    return sorted((gauge[i] for i in pivots[:free_dims]), key=GAUGE[model.convention].index)
-
-
 def samples_location(dataset: Dataset) -> str:
     """``"samples.csv: rows 2-1501"``: where a dataset came from, for one-line errors
     (``"samples: all rows"`` when it was not read from a file)."""
@@ -339,270 +255,8 @@ def samples_location(dataset: Dataset) -> str:
     return f"{dataset.source or 'samples'}: {rows}"
 
 
-def _mean_points(model: RobotModel, dataset: Dataset) -> np.ndarray:
+def mean_points(model: RobotModel, dataset: Dataset) -> np.ndarray:
     """(J, 3) mean tool point of every fixture's samples on ``model`` [m]."""
     points = tool_point(model, dataset.q)
     fixture = dataset.fixture_index
     return np.stack([points[fixture == j].mean(axis=0) for j in range(len(dataset.fixture_names))])
-
-
-def _check_inputs(dataset: Dataset, spec: FixtureSpec) -> None:
-    spec.check_against(dataset)
-    listed = set(spec.names)
-    for k, label in enumerate(dataset.labels):
-        if label not in listed:
-            raise DatasetError(
-                f"{dataset.source or 'samples'}: {dataset.row_of(k)}, field 'fixture': fixture {str(label)!r} "
-                f"is not listed in {spec.source or 'the fixtures'}"
-            )
-
-
-def _check_reach(model: RobotModel, spec: FixtureSpec) -> None:
-    """Refuse known positions and distances the arm cannot span (e.g. millimetres typed for metres).
-
-    Reach bound: ``sum |a| + sum |d| + |tool|`` from the base origin.
-    """
-    reach = float(np.abs(model.a).sum() + np.abs(model.d).sum() + np.linalg.norm(model.tool))
-    where = spec.source or "fixtures"
-    origin = model.base_transform[:3, 3]
-    for name, position in spec.positions.items():
-        gap = float(np.linalg.norm(np.asarray(position, float) - origin))
-        if gap > reach:
-            raise DatasetError(
-                f"{where}: {spec._row('fixtures.' + name)}field 'fixtures.{name}.position': {gap:.6g} m from the "
-                f"base, beyond the arm's reach ({reach:.3g} m); positions are in metres"
-            )
-    for k, (a, b, value) in enumerate(spec.distances):
-        if value > 2 * reach:
-            raise DatasetError(
-                f"{where}: {spec._row(f'distances[{k}]')}field 'distances[{k}]': {a}-{b} {value:.6g} m is more "
-                f"than the arm can span ({2 * reach:.3g} m); distances are in metres"
-            )
-
-
-def _drop_known_distances(spec: FixtureSpec, known: dict[str, np.ndarray]) -> FixtureSpec:
-    """``spec`` without distances between two known positions (they add nothing but a constant residual).
-
-    Raises:
-        DatasetError: such a distance disagrees with its positions by more than :data:`CONSISTENCY_TOL`.
-    """
-    keep = []
-    for k, (a, b, value) in enumerate(spec.distances):
-        if a not in known or b not in known:
-            keep.append((a, b, value))
-            continue
-        apart = float(np.linalg.norm(known[a] - known[b]))
-        if abs(apart - value) > CONSISTENCY_TOL:
-            raise DatasetError(
-                f"{spec.source or 'fixtures'}: {spec._row(f'distances[{k}]')}field 'distances[{k}]': "
-                f"distance {a}-{b} is {value:.6g} m but their known positions are {apart:.6g} m apart"
-            )
-    return spec if len(keep) == len(spec.distances) else replace(spec, distances=keep)
-
-
-def build_problem(
-    model: RobotModel,
-    dataset: Dataset,
-    spec: FixtureSpec | None = None,
-    nominal: RobotModel | None = None,
-    noise: float = NOISE,
-    distance_std: float = DISTANCE_STD,
-    rank_tol: float = 1e-7,
-    pin: str = "radius",
-) -> CalibrationProblem:
-    """Set up the calibration: choose the unknowns, fix the gauge, test identifiability.
-
-    Args:
-        model: start model (usually the nominal one); fixed parameters keep its values.
-        dataset: samples, (K, n) joint angles with a fixture label each.
-        spec: known positions and distances; every fixture unknown when None.
-        nominal: model whose mean tool point pins a centre when scale needs it (default ``model``).
-        noise: expected fixture noise [m]: weights the distances, tests excitation.
-        distance_std: accuracy of a known distance [m].
-        rank_tol: relative tolerance of the rank test on unit-norm columns.
-        pin: how scale is fixed when nothing else does: ``"radius"`` keeps the distance of one
-            fixture's centre from the joint-1 axis point (frame-1 origin) at its nominal value (one
-            equation: the scale gauge only); ``"centre"`` pins that centre at the mean nominal tool
-            point (the paper's choice; three equations).
-
-    Raises:
-        DatasetError: a fixture used but not listed, a distance or position naming a fixture
-            without samples, a position or distance beyond the arm's reach, a distance contradicting two
-            known positions, fewer equations than unknowns.
-        UnidentifiableError: nothing can be identified.
-    """
-    spec = FixtureSpec.unknown(dataset.fixture_names) if spec is None else spec
-    _check_inputs(dataset, spec)
-    _check_reach(model, spec)
-    nominal = model if nominal is None else nominal
-    if dataset.n_joints != model.n_joints:
-        raise DatasetError(
-            f"{dataset.source or 'samples'}: row 1, field 'q*': {dataset.n_joints} joints, "
-            f"the robot has {model.n_joints}"
-        )
-    names = model.param_names
-    names_fixtures = dataset.fixture_names
-    if all(np.ptp(dataset.for_fixture(name), axis=0).max() == 0 for name in names_fixtures):
-        raise UnidentifiableError(
-            f"{samples_location(dataset)}, field 'q*': at every fixture all samples are "
-            f"one configuration; the arm must move through its self-motion for any parameter to be identified"
-        )
-    fixed: dict[str, str] = {}
-    warnings: list[str] = []
-    unused = [name for name in spec.names if name not in names_fixtures]
-    if unused:
-        warnings.append(
-            f"{spec.source or 'fixtures'} lists {', '.join(unused)} but {dataset.source or 'the samples'} has no "
-            f"samples there; ignored"
-        )
-    for name in names:
-        if name.startswith("base_"):
-            fixed[name] = "base placement: not observable from spherical-joint data"
-    known = {name: np.asarray(p, float) for name, p in spec.positions.items() if name in names_fixtures}
-    if len(known) == 1 and not spec.distances:
-        (lone,) = known
-        warnings.append(
-            f"fixture {lone}: one known position without a known distance fixes neither the scale nor the "
-            f"joint-1 gauge; it is treated as unknown"
-        )
-        known = {}
-    if not known:
-        for name in GAUGE[model.convention]:
-            fixed[name] = "gauge: moves every tool point rigidly, indistinguishable with unknown fixture centres"
-    else:
-        for name in _gauge_left(model, dataset, list(known.values())):
-            fixed[name] = (
-                f"gauge: with {len(known)} known fixture position(s) a rigid motion about them is still "
-                f"indistinguishable"
-            )
-    spec = _drop_known_distances(spec, known)
-    centres = _mean_points(model, dataset)
-    for name, position in known.items():
-        centres[names_fixtures.index(name)] = position
-    pinned: tuple[str, ...] = ()
-    anchor = None
-    if not known and not spec.distances:
-        counts = dataset.counts()
-        pin_name = max(names_fixtures, key=lambda n: counts[n])  # first of the largest
-        j = names_fixtures.index(pin_name)
-        mean = tool_point(nominal, dataset.for_fixture(pin_name)).mean(axis=0)
-        point = scale_centre(nominal)
-        radius = float(np.linalg.norm(mean - point))
-        spread = anchor_spread(nominal, dataset.for_fixture(pin_name), point)
-        pinned = (pin_name,)
-        if pin == "centre":
-            centres[j] = mean
-            how = f"fixture {pin_name}'s centre is pinned at the mean of the nominal model's tool points"
-        else:
-            anchor = (pin_name, point, radius)
-            how = (
-                f"fixture {pin_name}'s distance from the joint-1 axis point is held at the nominal model's "
-                f"{radius:.4f} m"
-            )
-        warnings.append(
-            f"scale: no known distance and at most one known fixture position, so {how} and absolute scale comes "
-            f"from the nominal model; a real arm's errors (1 mm, 0.2 deg) make that distance wrong by about "
-            f"{spread * 1e3:.2g} mm, a {spread / radius * 100:.2g} % scale error the reported std do not include"
-        )
-    free_centres = tuple(n for n in names_fixtures if n not in known and (n not in pinned or anchor is not None))
-    candidates = np.array([i for i, n in enumerate(names) if n not in fixed], dtype=int)
-    weight = max(noise, 1e-6) / distance_std
-    problem = CalibrationProblem(
-        model,
-        dataset,
-        spec,
-        candidates,
-        dict(fixed),
-        centres,
-        free_centres,
-        pinned,
-        weight,
-        noise,
-        tuple(warnings),
-        anchor=anchor,
-    )
-    if problem.n_residuals < problem.n_unknowns:
-        raise DatasetError(
-            f"{samples_location(dataset)}, field 'fixture': {dataset.n_samples} samples give "
-            f"{problem.n_residuals} equations, fewer than the {problem.n_unknowns} unknowns "
-            f"({candidates.size} free parameters, {3 * len(free_centres)} centre coordinates)"
-        )
-    # rank test at a generic point near the start (seeded 0.1x prior perturbation), so that accidental
-    # symmetries of the nominal design (tool on the last axis, zero offsets) do not count as structural
-    jac = problem.generic_jacobian()
-    fp = candidates.size
-    # preference: centres, tool point, then joints from the last to the first
-    n = model.n_joints
-    rank_of = {name: k for k, name in enumerate(("tool_x", "tool_y", "tool_z"))}
-    for i in range(n, 0, -1):
-        for f in ("a", "alpha", "d", "theta"):
-            rank_of[f"{f}{i}"] = len(rank_of)
-    order = np.concatenate([np.arange(fp, jac.shape[1]), np.argsort([rank_of[names[i]] for i in candidates])])
-    accepted, rejected = greedy_rank(jac, order, rank_tol)
-    centre_cols = np.arange(fp, jac.shape[1])
-    if np.any(~np.isin(centre_cols, accepted)):
-        raise UnidentifiableError(
-            f"{samples_location(dataset)}, field 'fixture': "
-            f"the fixture centres are not determined by the samples"
-        )
-    for col, coef in rejected.items():
-        weights = np.abs(coef) * np.linalg.norm(jac, axis=0)
-        top = [problem.unknown_names[c] for c in np.argsort(-weights)[:3] if weights[c] > 1e-3 * weights.max()]
-        fixed[names[candidates[col]]] = (
-            f"redundant with {', '.join(top)}" if top else "no effect on the tool point for this data"
-        )
-    keep = accepted[accepted < fp]
-    if keep.size == 0:
-        raise UnidentifiableError(
-            f"{samples_location(dataset)}, field 'q*': no parameter can be identified "
-            f"from these samples (joint motion too small or too few distinct configurations)"
-        )
-    ordered_fixed = {name: fixed[name] for name in names if name in fixed}
-    problem = replace(problem, free=candidates[keep], fixed=ordered_fixed)
-    return replace(problem, identifiability=Identifiability.of(problem.jacobian(problem.x0)))
-
-
-def prune(
-    problem: CalibrationProblem, x: np.ndarray, sigma: float, jac: np.ndarray | None = None
-) -> tuple[CalibrationProblem, np.ndarray]:
-    """Fix, one at a time, the parameters whose predicted std exceeds their prior spread.
-
-    Args:
-        problem: a solved problem.
-        x: (F,) its solution.
-        sigma: residual noise [m] (estimated from the fit).
-        jac: (M, F) Jacobian that judges the excitation (default: at ``x``;
-            :meth:`CalibrationProblem.generic_jacobian` does not depend on how far a fit wandered).
-
-    Returns:
-        The problem without the barely excited parameters (they go back to the start model's value)
-        and the matching unknown vector; the inputs when nothing is pruned.
-    """
-    prior = prior_std(problem.model)
-    names = problem.model.param_names
-    params, centres = problem.unpack(x)
-    jac = problem.jacobian(x) if jac is None else jac
-    fp = problem.n_free_params
-    keep = np.arange(fp)
-    fixed = dict(problem.fixed)
-    while keep.size > 1:
-        cols = np.concatenate([keep, np.arange(fp, jac.shape[1])])
-        std = predicted_std(jac[:, cols], sigma)[: keep.size]
-        ratio = std / prior[problem.free[keep]]
-        worst = int(np.argmax(ratio))
-        if ratio[worst] <= 1.0:
-            break
-        name = names[problem.free[keep[worst]]]
-        fixed[name] = (
-            f"barely excited: predicted std {format_value(name, std[worst])} at {sigma * 1e3:.3g} mm residual noise "
-            f"exceeds the prior spread {format_value(name, prior[problem.free[keep[worst]]])}"
-        )
-        keep = np.delete(keep, worst)
-    if keep.size == fp:
-        return problem, x
-    dropped = np.setdiff1d(problem.free, problem.free[keep])
-    params[dropped] = problem.model.params[dropped]
-    fixed = {name: fixed[name] for name in names if name in fixed}
-    pruned = replace(problem, free=problem.free[keep], fixed=fixed)
-    x_new = pruned.pack(params, centres)
-    return replace(pruned, identifiability=Identifiability.of(pruned.jacobian(x_new))), x_new

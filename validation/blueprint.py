@@ -16,6 +16,8 @@ Histograms and bars are static, so they show whatever the timeline selector is o
 
 from __future__ import annotations
 
+import numpy as np
+
 #: Tab names, in order, for each section of :attr:`validation.recording.Recording.contents`.
 TABS = {
     "errors": "Errors",
@@ -30,8 +32,7 @@ TABS = {
 def camera(box, least: float = 0.05):
     """``rerun.blueprint.EyeControls3D`` looking at a (2, 3) bounding box [m] from the front right, above,
     from as far as the box is wide (at least ``least`` [m])."""
-    import numpy as np
-    import rerun.blueprint as rrb  # function-level: rerun is imported only when recording
+    import rerun.blueprint as rrb  # Rerun: heavy, only when a recording is written
 
     box = np.asarray(box, dtype=float)
     centre, size = box.mean(axis=0), max(float(np.linalg.norm(box[1] - box[0])), least)
@@ -51,7 +52,7 @@ def build_blueprint(contents: dict[str, dict[str, str]], title: str, bounds: dic
     Returns:
         A ``rerun.blueprint.Blueprint``.
     """
-    import rerun.blueprint as rrb  # function-level: rerun is imported only when recording
+    import rerun.blueprint as rrb  # Rerun: heavy, only when a recording is written
 
     bounds = bounds or {}
 

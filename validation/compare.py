@@ -17,6 +17,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from spherecal.correction import RobotModel, registered_errors, tool_point
+from spherecal.correction.layout import ANGLE, ParameterLayout, ParamKind
 
 #: Validation configurations drawn uniformly inside the joint limits (the paper's "large random set").
 RANDOM_CONFIGURATIONS = 5000
@@ -153,63 +154,100 @@ class ParameterDeviations:
     """Identified minus true parameters (the paper's Fig. 3).
 
     Attributes:
-        names: (P,) parameter names.
+        layout: the parameter layout (names, kinds, display units).
         nominal: (P,) nominal minus truth [m, rad].
         calibrated: (P,) calibrated minus truth [m, rad].
-        held: parameters held at nominal and left out of the rows (see :meth:`identifiable`).
+    """
+
+    layout: ParameterLayout
+    nominal: np.ndarray
+    calibrated: np.ndarray
+
+    @property
+    def names(self) -> tuple[str, ...]:
+        """(P,) parameter names."""
+        return self.layout.names
+
+    def is_angle(self, name: str) -> bool:
+        """True for angular parameters (shown in degrees), false for lengths (shown in mm)."""
+        return self.layout.is_angle(name)
+
+    def display(self, values: np.ndarray) -> np.ndarray:
+        """(P,) values in display units: mm for lengths, degrees for angles."""
+        return np.asarray(values) * self.layout.display_scale()
+
+    def format(self) -> str:
+        """One line per parameter: nominal and calibrated deviation from the truth (mm or deg)."""
+        return _format_rows(self.names, [self.layout.kinds[self.layout.index(n)] for n in self.names],
+                            self.display(self.nominal), self.display(self.calibrated))
+
+    def identifiable(self, fixed: dict[str, str]) -> DeviationRows:
+        """The rows a calibration can be judged on: parameters fixed at nominal (``fixed``: name ->
+        reason, the calibrated file's ``calibration.fixed``) are left out and listed as held, and a
+        length fixed as "redundant with" one other length is added to it (``d7 + tool_z``)."""
+        groups = sum_groups(fixed, self.layout)
+        names, rows = [], []
+        for name in self.names:
+            if name not in fixed:
+                names.append(" + ".join(groups.get(name, [name])))
+                rows.append([self.layout.index(m) for m in groups.get(name, [name])])
+        return DeviationRows(
+            names=tuple(names),
+            kinds=tuple(self.layout.kinds[r[0]] for r in rows),
+            nominal=np.array([self.nominal[r].sum() for r in rows]),
+            calibrated=np.array([self.calibrated[r].sum() for r in rows]),
+            held=tuple(n for n in self.names if n in fixed),
+        )
+
+
+@dataclass(frozen=True)
+class DeviationRows:
+    """Deviations from the truth of what a calibration determines (from :meth:`ParameterDeviations.identifiable`).
+
+    Attributes:
+        names: (R,) row names: a parameter, or a sum of lengths only identifiable together (``d7 + tool_z``).
+        kinds: (R,) the rows' :class:`ParamKind` (length, angle).
+        nominal, calibrated: (R,) nominal and calibrated minus truth [m, rad].
+        held: parameters held at nominal, not compared.
     """
 
     names: tuple[str, ...]
+    kinds: tuple[ParamKind, ...]
     nominal: np.ndarray
     calibrated: np.ndarray
     held: tuple[str, ...] = ()
 
-    @staticmethod
-    def is_angle(name: str) -> bool:
-        """True for angular parameters (shown in degrees), false for lengths (shown in mm)."""
-        return name.startswith(("alpha", "theta", "base_roll", "base_pitch", "base_yaw"))
+    def is_angle(self, name: str) -> bool:
+        """True for an angular row (shown in degrees), false for a length (mm)."""
+        return self.kinds[self.names.index(name)] is ANGLE
 
     def display(self, values: np.ndarray) -> np.ndarray:
-        """(P,) values in display units: mm for lengths, degrees for angles."""
-        scale = np.array([np.rad2deg(1.0) if self.is_angle(n) else 1e3 for n in self.names])
-        return np.asarray(values) * scale
+        """(R,) values in display units: mm for lengths, degrees for angles."""
+        return np.asarray(values) * np.array([k.display_scale for k in self.kinds])
 
     def format(self) -> str:
-        """One line per parameter: nominal and calibrated deviation from the truth (mm or deg)."""
-        nominal, calibrated = self.display(self.nominal), self.display(self.calibrated)
-        lines = [f"{'parameter':<14} {'unit':<4} {'nominal-truth':>14} {'calibrated-truth':>17}"]
-        for name, a, b in zip(self.names, nominal, calibrated, strict=True):
-            lines.append(f"{name:<14} {'deg' if self.is_angle(name) else 'mm':<4} {a:14.4f} {b:17.4f}")
+        """One line per row (mm or deg), then the parameters held at nominal."""
+        text = _format_rows(self.names, self.kinds, self.display(self.nominal), self.display(self.calibrated))
         if self.held:
-            lines.append(f"held at nominal (not determined by the data, not compared): {', '.join(self.held)}")
-        return "\n".join(lines)
-
-    def identifiable(self, fixed: dict[str, str]) -> ParameterDeviations:
-        """The rows a calibration can be judged on: parameters fixed at nominal (``fixed``: name ->
-        reason, the calibrated file's ``calibration.fixed``) are left out and listed in ``held``, and
-        a length fixed as "redundant with" one other length is added to it (``d7 + tool_z``)."""
-        groups = sum_groups(fixed)
-        index = {n: i for i, n in enumerate(self.names)}
-        names, rows = [], []
-        for name in self.names:
-            if name in fixed:
-                continue
-            members = groups.get(name, [name])
-            names.append(" + ".join(members))
-            rows.append([index[m] for m in members])
-        nominal = np.array([self.nominal[r].sum() for r in rows])
-        calibrated = np.array([self.calibrated[r].sum() for r in rows])
-        return ParameterDeviations(tuple(names), nominal, calibrated, tuple(n for n in self.names if n in fixed))
+            text += f"\nheld at nominal (not determined by the data, not compared): {', '.join(self.held)}"
+        return text
 
 
-def sum_groups(fixed: dict[str, str]) -> dict[str, list[str]]:
+def _format_rows(names, kinds, nominal, calibrated) -> str:
+    lines = [f"{'parameter':<14} {'unit':<4} {'nominal-truth':>14} {'calibrated-truth':>17}"]
+    for name, kind, a, b in zip(names, kinds, nominal, calibrated, strict=True):
+        lines.append(f"{name:<14} {kind.display_unit:<4} {a:14.4f} {b:17.4f}")
+    return "\n".join(lines)
+
+
+def sum_groups(fixed: dict[str, str], layout: ParameterLayout) -> dict[str, list[str]]:
     """Identified length -> the lengths only identifiable in its sum, itself last (``{"tool_z": ["d7",
     "tool_z"]}``), from the reasons ``"redundant with <one length>"`` that calibration gives."""
     groups: dict[str, list[str]] = {}
     for name, reason in fixed.items():
         partner = reason.removeprefix("redundant with ").strip()
-        if reason.startswith("redundant with ") and "," not in partner:
-            if not (ParameterDeviations.is_angle(name) or ParameterDeviations.is_angle(partner)):
+        if reason.startswith("redundant with ") and "," not in partner and partner in layout.names:
+            if not (layout.is_angle(name) or layout.is_angle(partner)):
                 groups.setdefault(partner, []).append(name)
     return {k: [*v, k] for k, v in groups.items()}
 
@@ -217,7 +255,7 @@ def sum_groups(fixed: dict[str, str]) -> dict[str, list[str]]:
 def parameter_deviations(nominal: RobotModel, calibrated: RobotModel, truth: RobotModel) -> ParameterDeviations:
     """Deviations of the nominal and calibrated parameters from the truth (same convention and size)."""
     return ParameterDeviations(
-        names=truth.param_names,
+        layout=truth.layout,
         nominal=nominal.params - truth.params,
         calibrated=calibrated.params - truth.params,
     )

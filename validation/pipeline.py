@@ -15,7 +15,7 @@ from spherecal.correction import RobotModel, tool_point
 from .compare import (
     RANDOM_CONFIGURATIONS,
     Comparison,
-    ParameterDeviations,
+    DeviationRows,
     ValidationSet,
     compare,
     format_comparisons,
@@ -33,14 +33,14 @@ class ValidationReport:
 
     Attributes:
         comparisons: one per validation set (the random workspace set first).
-        deviations: parameter deviations from the truth, when the truth is known.
+        deviations: deviations from the truth of what the calibration determines, when the truth is known.
         sets: the validation sets themselves (for recordings).
         noise: per-marker noise of the simulated mocap [m], or None for a recording.
         source: ``"simulated"`` or the mocap file.
     """
 
     comparisons: list[Comparison]
-    deviations: ParameterDeviations | None
+    deviations: DeviationRows | None
     sets: list[ValidationSet] = field(repr=False)
     noise: float | None
     source: str
@@ -208,7 +208,7 @@ def record_parameters(
         fixed: name -> reason, the parameters held at nominal.
         truth: the true robot, or None.
     """
-    groups = sum_groups(fixed)
+    groups = sum_groups(fixed, nominal.layout)
     index = {n: i for i, n in enumerate(nominal.param_names)}
     names, change, spread, true = [], [], [], []
     for name in identified:

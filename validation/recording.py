@@ -38,6 +38,7 @@ import numpy as np
 
 from spherecal.correction import RobotModel, link_frames, tool_point
 
+from .blueprint import build_blueprint
 from .recording_shapes import BAR_HEIGHT, capsules, colour_ramp, histogram, parameter_bars
 
 COLOURS = {
@@ -53,7 +54,7 @@ LINK_RADIUS, TOOL_RADIUS = 0.04, 0.012
 
 def _rerun():
     os.environ.setdefault("RERUN_ANALYTICS", "0")
-    import rerun  # function-level: rerun is heavy and only needed when recording
+    import rerun  # Rerun: heavy, only when a recording is written
 
     return rerun
 
@@ -296,8 +297,6 @@ class Recording:
     # -------------------------------------------------------------------- close
     def close(self) -> Path | None:
         """Send the blueprint, flush, close the sink and move the ``.rrd`` into place; returns its path."""
-        from .blueprint import build_blueprint
-
         blueprint = build_blueprint(self.contents, self.title, self.bounds)
         self.stream.send_blueprint(blueprint, make_active=True, make_default=True)
         bounds = {k: v.tolist() for k, v in self.bounds.items()}
@@ -324,7 +323,7 @@ def _colour(key: str) -> tuple[int, int, int]:
 
 def read_entity_rows(path: str | os.PathLike) -> dict[str, int]:
     """Rows per entity path of a saved recording (``/__properties`` left out), for tests and checks."""
-    from rerun.chunk import RrdReader  # function-level: see _rerun
+    from rerun.chunk import RrdReader  # Rerun: heavy, only when a recording is written
 
     _rerun()
     counts: dict[str, int] = {}
@@ -339,7 +338,7 @@ def read_entity_rows(path: str | os.PathLike) -> dict[str, int]:
 def read_layout(path: str | os.PathLike) -> dict:
     """What a recording's blueprint was built from (``contents``, ``title``, ``bounds``,
     ``application_id``; see :func:`validation.blueprint.build_blueprint`), or {} if it has none."""
-    from rerun.chunk import RrdReader  # function-level: see _rerun
+    from rerun.chunk import RrdReader  # Rerun: heavy, only when a recording is written
 
     _rerun()
     for chunk in RrdReader(str(path)).stream().to_chunks():
@@ -352,7 +351,7 @@ def read_layout(path: str | os.PathLike) -> dict:
 
 def read_view_names(path: str | os.PathLike) -> list[str]:
     """Display names of the views in a saved recording's blueprint (empty when it has none)."""
-    from rerun.chunk import RrdReader  # function-level: see _rerun
+    from rerun.chunk import RrdReader  # Rerun: heavy, only when a recording is written
 
     _rerun()
     reader = RrdReader(str(path))

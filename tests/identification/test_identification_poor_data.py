@@ -7,8 +7,9 @@ import pytest
 
 from spherecal.correction import load_robot, perturb, registered_errors, tool_point
 from spherecal.correction.fixtures import FixtureSpec
+from spherecal.identification.build import build_problem
 from spherecal.identification.calibrate import calibrate, check_plausible
-from spherecal.identification.problem import ImplausibleCalibrationError, build_problem
+from spherecal.identification.problem import ImplausibleCalibrationError
 from spherecal.identification.synthetic import make_dataset
 
 

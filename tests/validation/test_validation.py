@@ -195,7 +195,8 @@ def test_socket_spread_is_drawn_in_mm_around_the_calibrated_mean(tmp_path, rng) 
         f"sockets/S1/{key}{end}": 1 for key in ("nominal", "calibrated") for end in ("", "_mean")
     }
     rms = [np.sqrt(np.mean(np.sum((p - p.mean(0)) ** 2, axis=1))) * 1e3 for p in (nominal, calibrated)]
-    assert f"Socket S1 [mm]: rms spread nominal {rms[0]:.3f}, calibrated {rms[1]:.3f}" in read_view_names(tmp_path / "s.rrd")
+    name = f"Socket S1 [mm]: rms spread nominal {rms[0]:.3f}, calibrated {rms[1]:.3f}"
+    assert name in read_view_names(tmp_path / "s.rrd")
     reader = RrdReader(str(tmp_path / "s.rrd"))
     logged = {}
     for chunk in reader.stream().to_chunks():

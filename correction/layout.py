@@ -1,0 +1,207 @@
+"""The flat parameter vector of a model: names, kinds, units, prior spread and slices, in one place.
+
+Every other module asks a :class:`ParameterLayout` where a parameter lives and what it is, instead of
+computing ``4 * n + 3`` or guessing from a name prefix. Adding a parameter (a per-joint field or a
+block such as a compliance) means adding it here::
+
+    layout = model.layout                     # or layout_for(7)
+    layout.names[layout.tool]                 # ('tool_x', 'tool_y', 'tool_z')
+    layout.field("theta")                     # (n,) indices of theta1..thetan
+    layout.kinds[layout.index("alpha3")]      # ANGLE
+    layout.spread()                           # (P,) prior std [m, rad]
+
+Order of the vector: per joint ``a, alpha, d, theta`` (joint 1 first), then one Hayati angle
+``beta{j}`` per joint that has one (nearly parallel axes, see :class:`RobotModel`; none for most arms),
+then the tool point ``tool_x, tool_y, tool_z``, then the base ``base_x, base_y, base_z, base_roll,
+base_pitch, base_yaw``.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from functools import lru_cache
+
+import numpy as np
+
+
+@dataclass(frozen=True)
+class ParamKind:
+    """What a parameter is: its quantity, SI unit, display unit and prior spread.
+
+    Attributes:
+        name: ``"length"`` or ``"angle"``.
+        unit: unit in files and APIs (``"m"``, ``"rad"``).
+        display_unit: unit of printed tables (``"mm"``, ``"deg"``).
+        display_scale: factor from ``unit`` to ``display_unit``.
+        prior_std: how far a real arm's value typically sits from its design value, in ``unit``
+            (lengths 1 mm, angles 0.2 deg: the issues' true-robot spread).
+    """
+
+    name: str
+    unit: str
+    display_unit: str
+    display_scale: float
+    prior_std: float
+
+    def format(self, value: float) -> str:
+        """``value`` (in :attr:`unit`) for humans, e.g. ``"0.1234 mm"``."""
+        return f"{value * self.display_scale:.4g} {self.display_unit}"
+
+
+LENGTH = ParamKind("length", "m", "mm", 1e3, 1e-3)
+ANGLE = ParamKind("angle", "rad", "deg", float(np.rad2deg(1.0)), float(np.deg2rad(0.2)))
+
+#: Per-joint fields in vector order, with their kinds.
+JOINT_FIELDS: tuple[tuple[str, ParamKind], ...] = (("a", LENGTH), ("alpha", ANGLE), ("d", LENGTH), ("theta", ANGLE))
+#: The tool point in the last joint frame.
+TOOL_FIELDS: tuple[tuple[str, ParamKind], ...] = (("tool_x", LENGTH), ("tool_y", LENGTH), ("tool_z", LENGTH))
+#: The base placement in the world (URDF roll-pitch-yaw).
+BASE_FIELDS: tuple[tuple[str, ParamKind], ...] = (
+    ("base_x", LENGTH),
+    ("base_y", LENGTH),
+    ("base_z", LENGTH),
+    ("base_roll", ANGLE),
+    ("base_pitch", ANGLE),
+    ("base_yaw", ANGLE),
+)
+
+
+@dataclass(frozen=True, eq=False)
+class ParameterLayout:
+    """Where every parameter of an ``n_joints`` model sits in the flat vector, and what it is.
+
+    Attributes:
+        n_joints: number of joints ``n``.
+        names: (P,) parameter names (``a1, alpha1, ..., tool_x, ..., base_yaw``).
+        kinds: (P,) :class:`ParamKind` of every parameter.
+        joints: slice of the per-joint block (``len(JOINT_FIELDS) * n`` entries, joint-major).
+        hayati: 0-based joints that carry a Hayati ``beta`` (sorted).
+        beta: slice of their ``beta`` angles (``len(hayati)`` entries, in joint order).
+        tool: slice of the tool point (3).
+        base_xyz: slice of the base translation (3).
+        base_rpy: slice of the base roll-pitch-yaw (3).
+    """
+
+    n_joints: int
+    names: tuple[str, ...]
+    kinds: tuple[ParamKind, ...]
+    joints: slice
+    hayati: tuple[int, ...]
+    beta: slice
+    tool: slice
+    base_xyz: slice
+    base_rpy: slice
+
+    @property
+    def size(self) -> int:
+        """Length ``P`` of the vector."""
+        return len(self.names)
+
+    @property
+    def joint_fields(self) -> tuple[str, ...]:
+        """Per-joint field names in vector order (``a, alpha, d, theta``)."""
+        return tuple(name for name, _ in JOINT_FIELDS)
+
+    @property
+    def base(self) -> slice:
+        """Slice of the whole base placement (6)."""
+        return slice(self.base_xyz.start, self.base_rpy.stop)
+
+    def index(self, name: str) -> int:
+        """Index of a named parameter (``"a3"``, ``"tool_z"``, ...)."""
+        try:
+            return self._lookup()[name]
+        except KeyError:
+            raise KeyError(f"no parameter named {name!r} in a {self.n_joints}-joint model") from None
+
+    def field(self, name: str) -> np.ndarray:
+        """(n,) indices of one per-joint field (``"a"``, ``"theta"``, ...) for joints 1..n."""
+        k = self.joint_fields.index(name)
+        return self.joints.start + k + len(JOINT_FIELDS) * np.arange(self.n_joints)
+
+    def joint_of(self, index: int) -> int | None:
+        """0-based joint of a per-joint parameter (``beta`` included), None for the tool and the base."""
+        if self.joints.start <= index < self.joints.stop:
+            return (index - self.joints.start) // len(JOINT_FIELDS)
+        if self.beta.start <= index < self.beta.stop:
+            return self.hayati[index - self.beta.start]
+        return None
+
+    def held(self, convention: str) -> tuple[str, ...]:
+        """Names of the ``d`` held at zero beside each ``beta``: Hayati's rule that the joint whose
+        frame is tilted by ``beta`` has no offset along the (nearly) parallel axis. ``standard``:
+        ``Rz(theta+q) Lz(d) Lx(a) Rx(alpha) Ry(beta)``, the same joint's ``d``; ``modified``:
+        ``Rx(alpha) Lx(a) Ry(beta) Rz(theta+q) Lz(d)`` is the standard one shifted by a joint, so
+        the previous joint's ``d``."""
+        shift = 1 if convention == "modified" else 0
+        return tuple(f"d{j + 1 - shift}" for j in self.hayati if j - shift >= 0)
+
+    def is_angle(self, name: str) -> bool:
+        """True for angular parameters (radians), False for lengths (metres)."""
+        return self.kinds[self.index(name)] is ANGLE
+
+    def mask(self, kind: ParamKind) -> np.ndarray:
+        """(P,) True where the parameter is of ``kind``."""
+        return np.array([k is kind for k in self.kinds])
+
+    def display_scale(self) -> np.ndarray:
+        """(P,) factors from file units to table units (1e3 for m -> mm, 57.3 for rad -> deg)."""
+        return np.array([k.display_scale for k in self.kinds])
+
+    def format(self, name: str, value: float) -> str:
+        """A value or deviation of parameter ``name`` for humans: mm for lengths, deg for angles."""
+        return self.kinds[self.index(name)].format(value)
+
+    def spread(
+        self,
+        length: float = LENGTH.prior_std,
+        angle: float = ANGLE.prior_std,
+        tool: float = LENGTH.prior_std,
+        base: bool = True,
+    ) -> np.ndarray:
+        """(P,) std of every parameter [m, rad]: the prior of a calibration, or a simulated arm's errors.
+
+        Args:
+            length: std of the joints' lengths and the base translation [m].
+            angle: std of the joints' angles and the base rotation [rad].
+            tool: std of each tool-point coordinate [m].
+            base: False to give the base placement zero spread.
+        """
+        std = np.array([length if k is LENGTH else angle for k in self.kinds])
+        std[self.tool] = tool
+        if not base:
+            std[self.base] = 0.0
+        return std
+
+    def _lookup(self) -> dict[str, int]:
+        return _name_index(self.names)
+
+
+@lru_cache(maxsize=64)
+def _name_index(names: tuple[str, ...]) -> dict[str, int]:
+    return {name: i for i, name in enumerate(names)}
+
+
+@lru_cache(maxsize=64)
+def layout_for(n_joints: int, hayati: tuple[int, ...] = ()) -> ParameterLayout:
+    """The (shared, immutable) layout of an ``n_joints`` model with Hayati ``beta`` on the 0-based
+    joints ``hayati``."""
+    hayati = tuple(sorted(int(j) for j in hayati))
+    if any(not 0 <= j < n_joints for j in hayati) or len(set(hayati)) != len(hayati):
+        raise ValueError(f"hayati joints must be distinct indices in 0..{n_joints - 1}, got {hayati}")
+    joints = [(f"{name}{i + 1}", kind) for i in range(n_joints) for name, kind in JOINT_FIELDS]
+    joints += [(f"beta{i + 1}", ANGLE) for i in hayati]
+    entries = joints + list(TOOL_FIELDS) + list(BASE_FIELDS)
+    j = len(joints)
+    k = len(JOINT_FIELDS) * n_joints
+    return ParameterLayout(
+        n_joints=n_joints,
+        names=tuple(name for name, _ in entries),
+        kinds=tuple(kind for _, kind in entries),
+        joints=slice(0, k),
+        hayati=hayati,
+        beta=slice(k, j),
+        tool=slice(j, j + 3),
+        base_xyz=slice(j + 3, j + 6),
+        base_rpy=slice(j + 6, j + 9),
+    )
