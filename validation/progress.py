@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import shutil
 import sys
 from contextlib import contextmanager
 
@@ -23,7 +24,9 @@ def progress_bar(total: float, desc: str, unit: str, quiet: bool = False, decima
     from tqdm import tqdm  # function-level: only the commands that show progress need it
 
     disable = quiet or not sys.stderr.isatty()
-    with tqdm(total=total, desc=desc, unit=unit, file=sys.stderr, disable=disable, leave=True,
+    size = shutil.get_terminal_size((100, 20))  # a terminal that reports 0 x 0 (a pty) would hide the bar
+    with tqdm(total=total, desc=desc, unit=unit, file=sys.stderr, disable=disable, leave=True, ncols=size.columns,
+              nrows=size.lines,
               bar_format=f"{{desc}}: {{percentage:3.0f}}%|{{bar}}| {{n:.{decimals}f}}/{{total:.{decimals}f}} {{unit}} "
               "[{elapsed}<{remaining}]",
               ) as bar:
