@@ -291,7 +291,8 @@ class Recording:
 
     def text(self, name: str, text: str, title: str) -> None:
         """A printed table as a text panel (``tables/<name>``)."""
-        self.stream.log(f"tables/{name}", self.rr.TextDocument(text), static=True)
+        document = self.rr.TextDocument(f"```\n{text}\n```", media_type=self.rr.MediaType.MARKDOWN)  # monospace
+        self.stream.log(f"tables/{name}", document, static=True)
         self._note("tables", name, title)
 
     # -------------------------------------------------------------------- close

@@ -41,6 +41,7 @@ def run(args: argparse.Namespace) -> int:
     from spherecal.validation.inputs import check_models
     from spherecal.validation.mocap import read_mocap_csv
     from spherecal.validation.pipeline import record_validate_run, validate_models
+    from spherecal.validation.progress import progress_bar
     from spherecal.validation.provenance import provenance
 
     if args.truth is None and args.mocap is None:
@@ -64,16 +65,19 @@ def run(args: argparse.Namespace) -> int:
         dataset = read_samples(args.samples, models.get("truth", models["nominal"]))
         self_motion = {name: dataset.for_fixture(name) for name in dataset.fixture_names}
 
-    report = validate_models(
-        models["nominal"],
-        models["calibrated"],
-        np.random.default_rng(args.seed),
-        truth=models.get("truth"),
-        measurement=measurement,
-        self_motion=self_motion,
-        configurations=args.configurations,
-        noise=args.mocap_noise * 1e-3,
-    )
+    total = args.configurations + sum(len(q) for q in (self_motion or {}).values()) if measurement is None else 0
+    with progress_bar(total, "validation", "configurations", quiet=measurement is not None) as advance:
+        report = validate_models(
+            models["nominal"],
+            models["calibrated"],
+            np.random.default_rng(args.seed),
+            truth=models.get("truth"),
+            measurement=measurement,
+            self_motion=self_motion,
+            configurations=args.configurations,
+            noise=args.mocap_noise * 1e-3,
+            progress=advance,
+        )
     print(report.format())
     if report.deviations is not None:
         print("\nparameter deviations from the truth:\n" + report.deviations.format())
