@@ -15,6 +15,7 @@ from importlib.metadata import PackageNotFoundError, version
 #: subcommand -> module with ``HELP``, ``add_arguments(parser)`` and ``run(args) -> int``.
 COMMANDS: dict[str, str] = {
     "simulate": "spherecal.commands.simulate",
+    "import": "spherecal.commands.import_data",
     "calibrate": "spherecal.commands.calibrate",
     "validate": "spherecal.commands.validate",
     "demo": "spherecal.commands.demo",

@@ -21,12 +21,18 @@ UNITS = {
     "--seconds": "s",
     "--grid": "m",
     "--distance": "m",
+    "--still-radius": "mm",
+    "--max-spread": "mm",
+    "--min-separation": "mm",
+    "--window": "s",
+    "--min-duration": "s",
+    "--rate": "Hz",
 }
 #: options that are counts, names, files or factors (no physical unit).
 UNITLESS = {"--seed", "--per-fixture", "--max-per-fixture", "--configurations", "--sets", "--workers",
             "--fixture-count", "--max-change", "--method", "--loss", "--mode", "--solver", "--source",
             "--protocol", "--rows", "--motion", "--format", "--prefix", "--effort", "--velocity", "--topic",
-            "--tip-link", "--base-link", "--convention", "--model", "--max-per-segment"}
+            "--tip-link", "--base-link", "--convention", "--model", "--max-per-segment", "--min-configurations"}
 
 
 def _options() -> list[tuple[str, argparse.Action]]:
@@ -53,7 +59,8 @@ def test_every_physical_option_states_its_unit_and_the_units_agree() -> None:
         # a bracketed unit, wherever it appears, is one of the command line's units
         for unit in re.findall(r"\[([a-zA-Z/]+)\]", action.help or ""):
             # (rad, rad/s and Nm: the units inside files, which stay SI)
-            assert unit in {"mm", "m", "deg", "s", "rad", "rad/s", "Nm"}, f"spherecal {command} {option}: [{unit}]"
+            allowed = {"mm", "m", "deg", "s", "Hz", "rad", "rad/s", "Nm"}
+            assert unit in allowed, f"spherecal {command} {option}: [{unit}]"
     assert {"--noise", "--mocap-noise", "--seconds"} <= seen
 
 

@@ -1,4 +1,8 @@
-"""`spherecal validate`: Compare nominal and calibrated models against the truth or motion-capture data."""
+"""`spherecal validate`: Compare nominal and calibrated models against the truth, mocap data or socket samples.
+
+Without ``--truth`` and ``--mocap``, ``--samples`` (and ``--fixtures``) alone: the socket-only check of
+:mod:`spherecal.validation.sockets` (tool-point spread per socket, known-distance errors).
+"""
 
 from __future__ import annotations
 
@@ -6,7 +10,7 @@ import argparse
 
 from spherecal.options import fail, urdf_links
 
-HELP = "Compare nominal and calibrated models against the truth or motion-capture data."
+HELP = "Compare nominal and calibrated models against the truth, motion-capture data or socket samples alone."
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
@@ -18,7 +22,12 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--calibrated", required=True, help="robot file of the calibrated model")
     add_urdf_links(parser)
     parser.add_argument("--mocap", help="recorded mocap CSV: [t,] q1..qn, x, y, z (tool point in the mocap frame, m)")
-    parser.add_argument("--samples", help="samples.csv of the self-motion sets to validate on as well (simulation)")
+    parser.add_argument(
+        "--samples",
+        help="samples.csv: with --truth, self-motion sets to validate on as well; alone (no --truth, no --mocap), "
+        "socket samples NOT used in the fit: spread per socket and known-distance errors, no mocap needed",
+    )
+    parser.add_argument("--fixtures", help="fixtures.yaml of --samples (known distances [m]) for the socket-only check")
     parser.add_argument("--configurations", type=count(3), default=5000,
                         help="random workspace configurations (default 5000)")
     parser.add_argument("--mocap-noise", type=noise_mm, default=0.3,
@@ -44,8 +53,10 @@ def run(args: argparse.Namespace) -> int:
     from spherecal.validation.progress import progress_bar
     from spherecal.validation.provenance import provenance
 
-    if args.truth is None and args.mocap is None:
-        raise fail("give --truth (simulation) or --mocap (recorded data)")
+    if args.truth is None and args.mocap is None and args.samples is None:
+        raise fail("give --truth (simulation), --mocap (recorded data) or --samples (socket-only)")
+    if args.fixtures is not None and (args.truth is not None or args.mocap is not None or args.samples is None):
+        raise fail("--fixtures goes with --samples alone (socket-only check)")
     from spherecal.validation.inputs import check_out_file
 
     for option, path in (("--out", args.out), ("--rrd", args.rrd)):
@@ -56,6 +67,10 @@ def run(args: argparse.Namespace) -> int:
         files["truth"] = args.truth
     models = {role: load_robot(path, **urdf_links(args)) for role, path in files.items()}
     check_models(models, files)
+    if args.truth is None and args.mocap is None:
+        from spherecal.commands.validate_sockets import run_sockets
+
+        return run_sockets(args, models)
     n = models["nominal"].n_joints
     measurement = None if args.mocap is None else read_mocap_csv(args.mocap, n)
     self_motion = None

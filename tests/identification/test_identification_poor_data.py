@@ -28,9 +28,7 @@ def test_one_second_of_self_motion_does_not_make_the_arm_worse() -> None:
     rng = np.random.default_rng(3)
     true = perturb(nominal, rng)
     fixtures = default_fixtures()
-    run = collect_self_motion(
-        true, nominal, fixtures, rng, SelfMotionSettings(seconds=1.0, samples=60, noise=3e-4)
-    )
+    run = collect_self_motion(true, nominal, fixtures, rng, SelfMotionSettings(seconds=1.0, samples=60, noise=3e-4))
     names = tuple(fixtures)
     distances = [
         (a, b, float(np.linalg.norm(fixtures[a] - fixtures[b]))) for i, a in enumerate(names) for b in names[i + 1 :]
