@@ -40,14 +40,16 @@ def camera(box, least: float = 0.05):
     return rrb.EyeControls3D(position=centre + 1.2 * size * direction, look_target=centre, eye_up=(0, 0, 1))
 
 
-def build_blueprint(contents: dict[str, dict[str, str]], title: str, bounds: dict | None = None, active_tab: int = 0):
+def build_blueprint(
+    contents: dict[str, dict[str, str]], title: str, bounds: dict | None = None, active_tab: int | None = None
+):
     """The blueprint of a recording.
 
     Args:
         contents: section -> {key: view name} of what was logged (see :class:`Recording`).
         title: name of the main 3D view.
         bounds: view origin -> (2, 3) bounding box of its contents [m]: the 3D views' cameras.
-        active_tab: the result tab in front.
+        active_tab: the result tab in front (default: "Socket spread" when there is one, else the first).
 
     Returns:
         A ``rerun.blueprint.Blueprint``.
@@ -89,12 +91,15 @@ def build_blueprint(contents: dict[str, dict[str, str]], title: str, bounds: dic
             tabs.append(rrb.Grid(*[rrb.BarChartView(origin=f"coverage/{k}", name=n) for k, n in views.items()],
                                  name=tab))
         elif section == "sockets":
-            tabs.append(rrb.Grid(*[rrb.Spatial3DView(origin=f"sockets/{k}", name=n) for k, n in views.items()],
-                                 name=tab))
+            tabs.append(rrb.Grid(*[rrb.Spatial3DView(origin=f"sockets/{k}", name=n, eye_controls=eye(f"sockets/{k}"))
+                                   for k, n in views.items()], name=tab))
         else:
             tabs.append(rrb.Tabs(*[rrb.TextDocumentView(origin=f"tables/{k}", name=n) for k, n in views.items()],
                                  name=tab))
     world = rrb.Spatial3DView(origin="world", contents="$origin/**", name=title, eye_controls=eye("world", 1.0))
+    if active_tab is None:
+        shown = [section for section in TABS if contents.get(section)]
+        active_tab = shown.index("sockets") if "sockets" in shown else 0
     root = rrb.Horizontal(world, rrb.Tabs(*tabs, active_tab=active_tab), column_shares=[3, 2]) if tabs else world
     return rrb.Blueprint(
         root,

@@ -273,21 +273,20 @@ class Recording:
             if points.ndim != 2 or points.shape[1] != 3 or len(points) == 0:
                 raise ValueError(f"socket {fixture}: {key} points must have shape (N, 3), got {points.shape}")
         centre = sets["calibrated"].mean(axis=0)
-        spreads = []
         for key, points in sets.items():
             mm = (points - centre) * 1e3
             mean = mm.mean(axis=0)
             rms = float(np.sqrt(np.mean(np.sum((mm - mean) ** 2, axis=1))))
-            spreads.append(f"{key} {rms:.3f}")
-            self.stream.log(f"sockets/{fixture}/{key}", self.rr.Points3D(mm, radii=0.03, colors=_colour(key)),
-                            static=True)
+            dots = self.rr.Points3D(mm, radii=self.rr.Radius.ui_points(2.0), colors=_colour(key))
+            self.stream.log(f"sockets/{fixture}/{key}", dots, static=True)
+            self.extend_bounds(f"sockets/{fixture}", mm)
             self.stream.log(
                 f"sockets/{fixture}/{key}_mean",
-                self.rr.Points3D(mean[None], radii=0.15, colors=_colour(key), labels=[f"{key} mean, rms {rms:.3f} mm"],
-                                 show_labels=True),
+                self.rr.Points3D(mean[None], radii=self.rr.Radius.ui_points(6.0), colors=_colour(key),
+                                 labels=[f"{key} mean, rms {rms:.3f} mm"], show_labels=True),
                 static=True,
             )
-        self._note("sockets", fixture, f"Socket {fixture} [mm]: rms spread {', '.join(spreads)}")
+        self._note("sockets", fixture, f"Socket {fixture} [mm]")
 
     def text(self, name: str, text: str, title: str) -> None:
         """A printed table as a text panel (``tables/<name>``)."""
