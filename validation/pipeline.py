@@ -82,6 +82,7 @@ class ValidationReport:
                 "names": list(d.names),
                 "nominal_minus_truth": d.nominal.tolist(),
                 "calibrated_minus_truth": d.calibrated.tolist(),
+                "held_at_nominal": list(d.held),
             }
         return out
 

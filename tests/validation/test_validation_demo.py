@@ -31,6 +31,12 @@ def test_short_demo_writes_everything_and_its_recording_holds_the_documented_ent
     assert "mocap floor" in text and f"recording: {out / 'demo.rrd'}" in text
     headline = re.search(r"nominal ([\d.]+) mm -> calibrated ([\d.]+) mm against the exact", text)
     assert float(headline[2]) < float(headline[1])
+    # the RMS deviation counts what the calibration determines: held parameters out, d7 + tool_z as one
+    report = json.loads((out / "demo.json").read_text())["validation"]["parameter_deviations"]
+    assert "d7 + tool_z" in report["names"] and not {"d7", "tool_z", "a1", "theta1", "base_x"} & set(report["names"])
+    lengths = re.search(r"(\d+) lengths [\d.]+ -> [\d.]+ mm; (\d+) angles", text)
+    assert int(lengths[1]) + int(lengths[2]) == len(report["names"])
+    assert {"a1", "d7", "theta7", "base_yaw"} <= set(report["held_at_nominal"])
     names = sorted(p.name for p in out.iterdir())
     expected = ["calibrated.yaml", "demo.json", "demo.rrd", "fixtures.yaml", "mocap.csv", "samples.csv", "truth.yaml"]
     assert names == expected
