@@ -29,15 +29,15 @@ TABS = {
 }
 
 
-def camera(box, least: float = 0.05):
+def camera(box, least: float = 0.05, distance: float = 1.2):
     """``rerun.blueprint.EyeControls3D`` looking at a (2, 3) bounding box [m] from the front right, above,
-    from as far as the box is wide (at least ``least`` [m])."""
+    from ``distance`` times as far as the box is wide (at least ``least`` [m])."""
     import rerun.blueprint as rrb  # Rerun: heavy, only when a recording is written
 
     box = np.asarray(box, dtype=float)
     centre, size = box.mean(axis=0), max(float(np.linalg.norm(box[1] - box[0])), least)
     direction = np.array([1.0, -1.3, 0.8]) / np.linalg.norm([1.0, -1.3, 0.8])
-    return rrb.EyeControls3D(position=centre + 1.2 * size * direction, look_target=centre, eye_up=(0, 0, 1))
+    return rrb.EyeControls3D(position=centre + distance * size * direction, look_target=centre, eye_up=(0, 0, 1))
 
 
 def build_blueprint(
@@ -58,8 +58,8 @@ def build_blueprint(
 
     bounds = bounds or {}
 
-    def eye(origin, least=0.05):
-        return camera(bounds[origin], least) if origin in bounds else None
+    def eye(origin, least=0.05, distance=1.2):
+        return camera(bounds[origin], least, distance) if origin in bounds else None
 
     def area(origin):
         if origin not in bounds:
@@ -96,7 +96,7 @@ def build_blueprint(
         else:
             tabs.append(rrb.Tabs(*[rrb.TextDocumentView(origin=f"tables/{k}", name=n) for k, n in views.items()],
                                  name=tab))
-    world = rrb.Spatial3DView(origin="world", contents="$origin/**", name=title, eye_controls=eye("world", 1.0))
+    world = rrb.Spatial3DView(origin="world", contents="$origin/**", name=title, eye_controls=eye("world", 1.0, 0.9))
     if active_tab is None:
         shown = [section for section in TABS if contents.get(section)]
         active_tab = shown.index("sockets") if "sockets" in shown else 0
