@@ -17,7 +17,7 @@ from __future__ import annotations
 import numpy as np
 
 from .gravity import InertialsError, gravity_torques, inertials_of
-from .kinematics import joint_jacobian, tool_point
+from .kinematics import _rigid_joint_jacobian, tool_point
 from .model import RobotModel
 
 #: Fixed-point iterations of :func:`motor_angles` (each gains a factor c |dtau/dq| ~ 1e-3).
@@ -75,8 +75,9 @@ def link_angles(model: RobotModel, q: np.ndarray, compliance: np.ndarray | None 
 
 
 def elastic_tool_point(model: RobotModel, q: np.ndarray, compliance: np.ndarray | None = None) -> np.ndarray:
-    """(N, 3) tool point [m] of measured angles ``q`` (N, n): the geometric tool point at the link angles."""
-    return tool_point(model, link_angles(model, q, compliance))
+    """(N, 3) tool point [m] of measured angles ``q`` (N, n): the geometric tool point at the link angles
+    (what :func:`correction.tool_point` gives for a model carrying ``compliance``)."""
+    return tool_point(model if compliance is None else with_compliance(model, compliance), q)
 
 
 def compliance_jacobian(model: RobotModel, q: np.ndarray, compliance: np.ndarray | None = None) -> np.ndarray:
@@ -84,7 +85,7 @@ def compliance_jacobian(model: RobotModel, q: np.ndarray, compliance: np.ndarray
     evaluated at the measured angles, which do not depend on ``c``)."""
     q = np.atleast_2d(np.asarray(q, dtype=float))
     tau = gravity_torques(model, q)
-    return -joint_jacobian(model, link_angles(model, q, compliance)) * tau[:, None, :]
+    return -_rigid_joint_jacobian(model, link_angles(model, q, compliance)) * tau[:, None, :]
 
 
 def motor_angles(model: RobotModel, q_link: np.ndarray, compliance: np.ndarray | None = None) -> np.ndarray:

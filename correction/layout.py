@@ -11,11 +11,14 @@ block such as a compliance) means adding it here::
     layout.spread()                           # (P,) prior std [m, rad]
 
 Order of the vector: per joint ``a, alpha, d, theta`` (joint 1 first), then the tool point
-``tool_x, tool_y, tool_z``, then the base ``base_x, base_y, base_z, base_roll, base_pitch, base_yaw``.
+``tool_x, tool_y, tool_z``, then the base ``base_x, base_y, base_z, base_roll, base_pitch, base_yaw``,
+then, for an elastic model only (``layout_for(n, elastic=True)``: its robot file has a ``compliance:``
+list), the joint compliances ``c1 .. cn`` [rad/Nm].
 """
 
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass
 from functools import lru_cache
 
@@ -48,6 +51,9 @@ class ParamKind:
 
 LENGTH = ParamKind("length", "m", "mm", 1e3, 1e-3)
 ANGLE = ParamKind("angle", "rad", "deg", float(np.rad2deg(1.0)), float(np.deg2rad(0.2)))
+#: A joint's compliance under load (:mod:`correction.elastic`): arm joints are 1e4-1e5 Nm/rad stiff,
+#: so 1e-4 rad/Nm (1e4 Nm/rad) is the prior spread about rigid.
+COMPLIANCE = ParamKind("compliance", "rad/Nm", "urad/Nm", 1e6, 1e-4)
 
 #: Per-joint fields in vector order, with their kinds.
 JOINT_FIELDS: tuple[tuple[str, ParamKind], ...] = (("a", LENGTH), ("alpha", ANGLE), ("d", LENGTH), ("theta", ANGLE))
@@ -76,6 +82,7 @@ class ParameterLayout:
         tool: slice of the tool point (3).
         base_xyz: slice of the base translation (3).
         base_rpy: slice of the base roll-pitch-yaw (3).
+        compliance: slice of the joint compliances ``c1 .. cn`` (empty for a rigid model).
     """
 
     n_joints: int
@@ -85,6 +92,12 @@ class ParameterLayout:
     tool: slice
     base_xyz: slice
     base_rpy: slice
+    compliance: slice = dataclasses.field(default_factory=lambda: slice(0, 0))
+
+    @property
+    def elastic(self) -> bool:
+        """True when the vector carries joint compliances."""
+        return self.compliance.stop > self.compliance.start
 
     @property
     def size(self) -> int:
@@ -124,7 +137,9 @@ class ParameterLayout:
         return self.kinds[self.index(name)] is ANGLE
 
     def mask(self, kind: ParamKind) -> np.ndarray:
-        """(P,) True where the parameter is of ``kind``."""
+        """(P,) True where the parameter is of ``kind``.
+
+        Kinds other than lengths and angles (compliances) keep their own prior whatever the arguments."""
         return np.array([k is kind for k in self.kinds])
 
     def display_scale(self) -> np.ndarray:
@@ -150,7 +165,7 @@ class ParameterLayout:
             tool: std of each tool-point coordinate [m].
             base: False to give the base placement zero spread.
         """
-        std = np.array([length if k is LENGTH else angle for k in self.kinds])
+        std = np.array([length if k is LENGTH else angle if k is ANGLE else k.prior_std for k in self.kinds])
         std[self.tool] = tool
         if not base:
             std[self.base] = 0.0
@@ -166,10 +181,11 @@ def _name_index(names: tuple[str, ...]) -> dict[str, int]:
 
 
 @lru_cache(maxsize=64)
-def layout_for(n_joints: int) -> ParameterLayout:
-    """The (shared, immutable) layout of an ``n_joints`` model."""
+def layout_for(n_joints: int, elastic: bool = False) -> ParameterLayout:
+    """The (shared, immutable) layout of an ``n_joints`` model (with compliances ``c1..cn`` if ``elastic``)."""
     joints = [(f"{name}{i + 1}", kind) for i in range(n_joints) for name, kind in JOINT_FIELDS]
-    entries = joints + list(TOOL_FIELDS) + list(BASE_FIELDS)
+    compliance = [(f"c{i + 1}", COMPLIANCE) for i in range(n_joints)] if elastic else []
+    entries = joints + list(TOOL_FIELDS) + list(BASE_FIELDS) + compliance
     j = len(joints)
     return ParameterLayout(
         n_joints=n_joints,
@@ -179,4 +195,5 @@ def layout_for(n_joints: int) -> ParameterLayout:
         tool=slice(j, j + 3),
         base_xyz=slice(j + 3, j + 6),
         base_rpy=slice(j + 6, j + 9),
+        compliance=slice(j + 9, j + 9 + len(compliance)),
     )

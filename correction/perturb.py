@@ -35,4 +35,5 @@ def perturb(
         The perturbed model, same convention and joint limits.
     """
     std = model.layout.spread(length_std, angle_std, tool_std, base=base)
+    std[model.layout.compliance] = 0.0  # geometric errors only: an elastic truth states its compliance
     return model.with_params(model.params + rng.normal(0.0, 1.0, model.n_params) * std)

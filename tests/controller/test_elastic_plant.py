@@ -5,6 +5,7 @@ from dataclasses import replace
 import mujoco
 import numpy as np
 import pytest
+
 from spherecal.controller.plant import build_plant
 from spherecal.correction import SpherecalError, load_robot, tool_point
 from spherecal.correction.elastic import elastic_tool_point, link_angles, with_compliance

@@ -5,6 +5,7 @@ from dataclasses import replace
 import mujoco
 import numpy as np
 import pytest
+
 from spherecal.correction import RobotModel, link_frames, load_robot, rpy_matrix
 from spherecal.correction.gravity import InertialsError, gravity_torques, inertials_of
 
