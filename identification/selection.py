@@ -102,11 +102,12 @@ class ModelSelection:
             dh, el, gain, se = self.stats()
             lines.append(
                 f"cross-validation, leave one of {len(self.folds)} groups out ({self.samples_per_fixture} samples per "
-                f"fixture per fit, {self.seconds:.2f} s): held-out error [mm] dh {dh * 1e3:.4f}, elastic {el * 1e3:.4f}, "
-                f"gain {gain * 1e3:.4f} +- {se * 1e3:.4f}"
+                f"fixture per fit, {self.seconds:.2f} s): held-out error [mm] dh {dh * 1e3:.4f}, "
+                f"elastic {el * 1e3:.4f}, gain {gain * 1e3:.4f} +- {se * 1e3:.4f}"
             )
             for k, name in enumerate(self.folds):
-                lines.append(f"  {name:<16} dh {self.errors['dh'][k] * 1e3:.4f}  elastic {self.errors['elastic'][k] * 1e3:.4f}")
+                dh_k, el_k = self.errors["dh"][k] * 1e3, self.errors["elastic"][k] * 1e3
+                lines.append(f"  {name:<16} dh {dh_k:.4f}  elastic {el_k:.4f}")
         return "\n".join(lines)
 
     def block(self) -> dict:
