@@ -65,3 +65,28 @@ def test_simulate_stiffness_writes_the_compliance_and_refuses_bad_values(tmp_pat
     assert main(["simulate", "--out", str(bad), "--stiffness", "-5"]) == 1
     err = capsys.readouterr().err.strip().splitlines()
     assert err[-1].startswith("spherecal simulate: error: --stiffness '-5'") and not bad.exists()
+
+
+def test_export_urdf_says_it_drops_the_compliance_mjcf_keeps_it(tmp_path, capsys):
+    from spherecal.cli import main
+    from spherecal.correction import save_robot
+
+    save_robot(with_compliance(load_robot("panda"), COMPLIANCE), tmp_path / "el.yaml")
+    assert main(["export", str(tmp_path / "el.yaml"), "--format", "urdf", "--out", str(tmp_path / "el.urdf")]) == 0
+    lines = capsys.readouterr().out.strip().splitlines()
+    assert lines[-1].startswith("spherecal export: a URDF cannot express joint compliance (c2 3.33e-05")
+    assert main(["export", str(tmp_path / "el.yaml"), "--format", "mjcf", "--out", str(tmp_path / "el.xml")]) == 0
+    assert 'name="flex3"' in (tmp_path / "el.xml").read_text()
+    assert "cannot express" not in capsys.readouterr().out
+
+
+def test_ik_on_the_elastic_model_puts_the_sagging_plant_on_target():
+    from spherecal.controller.ik import ik
+
+    model = with_compliance(load_robot("panda"), COMPLIANCE)
+    target = np.array([0.5, -0.1, 0.35])
+    result = ik(model, target, np.array([0.0, -0.3, 0.0, -2.2, 0.0, 2.0, 0.8]))
+    assert result.converged
+    landed = build_plant(model).tool_points(result.q[None])[0]  # MuJoCo's sagged links, not our formula
+    assert np.linalg.norm(landed - target) < 1e-6
+    assert np.linalg.norm(tool_point(load_robot("panda"), result.q) - target) > 1e-4  # rigid IK would miss

@@ -58,7 +58,8 @@ def test_cli_records_the_choice_and_refuses_elastic_without_masses(tmp_path, cap
     _, dataset, spec = _data(C_TRUE, 1e-4, seed=13)
     write_samples(tmp_path / "s.csv", dataset)
     write_fixtures(tmp_path / "f.yaml", spec)
-    args = ["calibrate", "--robot", "panda", "--samples", str(tmp_path / "s.csv"), "--fixtures", str(tmp_path / "f.yaml")]
+    args = ["calibrate", "--robot", "panda", "--samples", str(tmp_path / "s.csv"),
+            "--fixtures", str(tmp_path / "f.yaml")]
     assert main([*args, "--model", "elastic", "--out", str(tmp_path / "el.yaml")]) == 0
     out = yaml.safe_load((tmp_path / "el.yaml").read_text())
     assert out["calibration"]["model_selection"]["chosen"] == "elastic" and len(out["compliance"]) == 7
