@@ -96,7 +96,8 @@ def evaluate(robot: str, dataset: Dataset, spec: FixtureSpec, nominal) -> dict:
         train_spec = FixtureSpec(names=train.fixture_names,
                                  distances=[d for d in spec.distances if _placement(d[0]) != held])
         clock = time.perf_counter()
-        models = {"dh": _fit(rigid(nominal), train, train_spec), "elastic": _fit(elastic_start(nominal), train, train_spec)}
+        models = {"dh": _fit(rigid(nominal), train, train_spec),
+                  "elastic": _fit(elastic_start(nominal), train, train_spec)}
         choice = select_model("auto", _fit, nominal, train, train_spec, samples=10**6)
         models["auto"] = models[choice.chosen]
         row = {"placement": held, "auto_chose": choice.chosen, "seconds": time.perf_counter() - clock}
@@ -144,7 +145,8 @@ def main(argv: list[str] | None = None) -> int:
               f"(fold spread {s['auto_minus_dh_standard_error_m'] * 1e3:.4f} mm); auto chose "
               f"{', '.join(r['auto_chose'] for r in result['folds'])}")
         for r in result["folds"]:
-            print(f"    {r['placement']:<14} dh {r['dh']['mae_m'] * 1e3:.4f}  elastic {r['elastic']['mae_m'] * 1e3:.4f}  "
+            print(f"    {r['placement']:<14} dh {r['dh']['mae_m'] * 1e3:.4f}  "
+                  f"elastic {r['elastic']['mae_m'] * 1e3:.4f}  "
                   f"auto({r['auto_chose']}) {r['auto']['mae_m'] * 1e3:.4f}")
         c = ", ".join(f"{n} {v['value'] * 1e6:.1f} +- {v['std'] * 1e6:.1f}" for n, v in
                       result["compliance_all_placements"].items() if v["std"] is not None)

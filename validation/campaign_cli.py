@@ -31,6 +31,11 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--seconds", type=positive, default=20.0, help="MuJoCo self-motion per fixture, s (20)")
     parser.add_argument("--rows", default="P1,P2,P3,Pall", help="fixture sets (P1,P2,P3,Pall)")
     parser.add_argument("--seed", type=seed, default=0, help="base seed (0); every set is seeded from it")
+    parser.add_argument("--stiffness", default=None, metavar="K[,K...]",
+                        help="elastic true robot: joint stiffness [Nm/rad], one value or one per joint, 0 = rigid "
+                             "(e.g. 0,3e4,3e4,3e4,0,0,0); rows get an E")
+    parser.add_argument("--model", choices=("dh", "elastic", "auto"), default="dh",
+                        help="model calibrated (dh: default, the paper's; elastic; auto: cross-validated choice)")
     parser.add_argument("--workers", type=int, default=2, help="worker processes (2)")
     parser.add_argument("--out", default="spherecal-campaign", help="folder for table2.csv and table2.md")
 
@@ -70,7 +75,16 @@ def run(args: argparse.Namespace) -> int:
     from spherecal.validation.inputs import check_out_folder
 
     check_out_folder(args.out)
+    from spherecal.controller.cli import _stiffness  # the same K[,K...] syntax as simulate --stiffness
+    from spherecal.correction import SpherecalError
+
+    try:
+        stiffness = _stiffness(args.stiffness, 7) or ()
+    except SpherecalError as error:
+        raise SystemExit(f"spherecal campaign: error: {error}") from None
     config = CampaignConfig(
+        stiffness=tuple(stiffness),
+        model=args.model,
         sets=args.sets,
         samples=args.samples,
         configurations=args.configurations,

@@ -181,12 +181,18 @@ class ParameterDeviations:
         nominal, calibrated = self.display(self.nominal), self.display(self.calibrated)
         lines = [f"{'parameter':<11} {'unit':<4} {'nominal-truth':>14} {'calibrated-truth':>17}"]
         for name, a, b in zip(self.names, nominal, calibrated, strict=True):
-            lines.append(f"{name:<11} {'deg' if self.is_angle(name) else 'mm':<4} {a:14.4f} {b:17.4f}")
+            unit = self.layout.kinds[self.layout.index(name)].display_unit
+            lines.append(f"{name:<11} {unit:<7} {a:14.4f} {b:17.4f}")
         return "\n".join(lines)
 
 
 def parameter_deviations(nominal: RobotModel, calibrated: RobotModel, truth: RobotModel) -> ParameterDeviations:
-    """Deviations of the nominal and calibrated parameters from the truth (same convention and size)."""
+    """Deviations of the nominal and calibrated parameters from the truth (same convention; when one of them
+    is elastic, the others count as rigid: compliance 0)."""
+    if len({nominal.n_params, calibrated.n_params, truth.n_params}) > 1:
+        from spherecal.correction.elastic import compliance_of, with_compliance
+
+        nominal, calibrated, truth = (with_compliance(m, compliance_of(m)) for m in (nominal, calibrated, truth))
     return ParameterDeviations(
         layout=truth.layout,
         nominal=nominal.params - truth.params,
