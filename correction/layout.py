@@ -51,9 +51,10 @@ class ParamKind:
 
 LENGTH = ParamKind("length", "m", "mm", 1e3, 1e-3)
 ANGLE = ParamKind("angle", "rad", "deg", float(np.rad2deg(1.0)), float(np.deg2rad(0.2)))
-#: A joint's compliance under load (:mod:`correction.elastic`): arm joints are 1e4-1e5 Nm/rad stiff,
-#: so 1e-4 rad/Nm (1e4 Nm/rad) is the prior spread about rigid.
-COMPLIANCE = ParamKind("compliance", "rad/Nm", "urad/Nm", 1e6, 1e-4)
+#: A joint's compliance under load (:mod:`correction.elastic`): arm joints are 1e4-1e5 Nm/rad stiff, so
+#: the prior spread about rigid is 3e-5 rad/Nm (3.3e4 Nm/rad, the middle of that range on a log scale). A
+#: compliance the data cannot pin down better than that (a wrist joint carrying a few Nm) is not identified.
+COMPLIANCE = ParamKind("compliance", "rad/Nm", "urad/Nm", 1e6, 3e-5)
 
 #: Per-joint fields in vector order, with their kinds.
 JOINT_FIELDS: tuple[tuple[str, ParamKind], ...] = (("a", LENGTH), ("alpha", ANGLE), ("d", LENGTH), ("theta", ANGLE))
