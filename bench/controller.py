@@ -19,9 +19,12 @@ import bench_common  # noqa: F401  (first: import path, BLAS threads)
 import numpy as np  # noqa: E402
 import qpsolvers  # noqa: E402
 
-from spherecal.controller.cli import DEFAULT_FIXTURES  # noqa: E402
 from spherecal.controller.nullspace import NullSpaceController  # noqa: E402
-from spherecal.controller.self_motion import SelfMotionSettings, collect_self_motion  # noqa: E402
+from spherecal.controller.self_motion import (  # noqa: E402
+    DEFAULT_FIXTURES,  # noqa: E402
+    SelfMotionSettings,
+    collect_self_motion,
+)
 from spherecal.correction import load_robot, perturb  # noqa: E402
 
 

@@ -1,7 +1,7 @@
 """Controller: MuJoCo plant built from DH parameters, QP differential IK, self-motion.
 
 Public names are loaded lazily (PEP 562) so that ``spherecal --help``, which imports
-``controller.cli``, does not import numpy or MuJoCo.
+``spherecal.commands``, does not import numpy or MuJoCo.
 """
 
 from __future__ import annotations

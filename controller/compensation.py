@@ -26,6 +26,7 @@ relative change of that correction: a few iterations reach ``1e-10`` m.
 
 from __future__ import annotations
 
+import warnings
 from collections.abc import Callable
 from dataclasses import dataclass, replace
 
@@ -192,7 +193,7 @@ class DifferentialIKFlow:
     """
 
     def __init__(self, seconds: float = 4.0, tol: float = 1e-11, dt: float | None = None):
-        from .plant import TIMESTEP
+        from .plant import TIMESTEP  # MuJoCo: only the closed-loop path needs it
 
         self.seconds, self.tol, self.dt = seconds, tol, TIMESTEP if dt is None else dt
         self._controllers: dict[int, object] = {}
@@ -200,10 +201,9 @@ class DifferentialIKFlow:
 
     def __call__(self, model: RobotModel, target: np.ndarray, q_seed: np.ndarray,
                  orientation: np.ndarray | None = None) -> np.ndarray:
-        import warnings
 
-        from .nullspace import NullSpaceController
-        from .qp_ik import ControllerFallbackWarning
+        from .nullspace import NullSpaceController  # MuJoCo and OSQP: only the closed-loop path needs them
+        from .qp_ik import ControllerFallbackWarning  # OSQP: only the closed-loop path needs it
 
         if orientation is not None:
             raise SpherecalError("orientation: DifferentialIKFlow models position-only controllers")

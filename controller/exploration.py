@@ -8,9 +8,11 @@ projects ``q_r`` into the null space of the tool-point task.
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
+
+from .ik import ik
 
 MODES: tuple[str, ...] = ("coverage", "random")
 #: Defaults: exploration speed [rad/s], decision periods [s], ramp duration [s], histogram bins.
@@ -124,9 +126,7 @@ class CoverageExploration:
         self._joint = -1
 
     def _find_goal(self, q: np.ndarray, j: int, value: float) -> np.ndarray | None:
-        from dataclasses import replace
 
-        from .ik import ik
 
         lower, upper = self.lower.copy(), self.upper.copy()
         lower[j] = upper[j] = value

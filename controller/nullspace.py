@@ -58,7 +58,7 @@ class NullSpaceController:
         limit_gain: float = LIMIT_GAIN,
         dt: float = TIMESTEP,
     ):
-        import qpsolvers
+        import qpsolvers  # qpsolvers: only a non-persistent solver goes through it
 
         if solver not in qpsolvers.available_solvers:
             raise QPSolveError(f"QP solver {solver!r} is not installed; have {', '.join(qpsolvers.available_solvers)}")

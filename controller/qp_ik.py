@@ -137,7 +137,7 @@ class PersistentOSQP:
     """
 
     def __init__(self, n: int, m_task: int = 3, **settings):
-        import osqp
+        import osqp  # OSQP: loaded with the first persistent solver (start-up)
 
         self.n, self.m_task = n, m_task
         rows = m_task + 1

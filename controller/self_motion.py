@@ -19,12 +19,22 @@ import numpy as np
 
 from spherecal.correction import RobotModel, frames
 from spherecal.correction.errors import SpherecalError
+from spherecal.correction.samples import Dataset
 
 from .exploration import COVERAGE_PERIOD, RANDOM_PERIOD, Ramp, joint_coverage, make_exploration
 from .ik import ik
 from .nullspace import NullSpaceController
 from .plant import TIMESTEP, build_plant
 from .qp_ik import LIMIT_MARGIN
+
+#: Default fixtures [m], base frame: over the front of the Panda's workspace, chosen by the
+#: coverage table (every joint >= 30% of its range in 20 s with coverage exploration).
+DEFAULT_FIXTURES: dict[str, tuple[float, float, float]] = {
+    "P1": (0.5, -0.25, 0.5),
+    "P2": (0.5, 0.0, 0.4),
+    "P3": (0.45, 0.25, 0.45),
+}
+
 
 #: Start of the reaching IK (the Panda's "ready" pose) and reach settings.
 HOME = np.array([0.0, -0.785, 0.0, -2.356, 0.0, 1.571, 0.785])
@@ -123,7 +133,6 @@ class SelfMotionRun:
 
     def dataset(self):
         """The kept samples as an :class:`spherecal.correction.samples.Dataset` (with times)."""
-        from spherecal.correction.samples import Dataset
 
         return Dataset(labels=self.labels, q=self.q, t=self.t, fixture_names=self.fixture_names)
 

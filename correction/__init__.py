@@ -31,6 +31,7 @@ from .robot_file import (
 )
 from .samples import Dataset, DatasetError
 from .samples_csv import format_samples, read_samples, write_samples
+from .urdf_to_dh import NearlyParallelAxesWarning, load_urdf
 
 __all__ = [
     "Dataset",
@@ -44,6 +45,7 @@ __all__ = [
     "write_samples",
     "Frames",
     "InertialsError",
+    "NearlyParallelAxesWarning",
     "RobotFileError",
     "RobotModel",
     "SpherecalError",
@@ -60,6 +62,7 @@ __all__ = [
     "joint_jacobian",
     "link_frames",
     "load_robot",
+    "load_urdf",
     "matrix_rpy",
     "param_jacobian",
     "param_names",

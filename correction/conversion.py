@@ -4,7 +4,8 @@ A modified chain ``B prod_i [Rx(alpha_i) Lx(a_i) Rz(theta_i+q_i) Lz(d_i)] t`` re
 ``B Rx(alpha_1) Lx(a_1) prod_i [Rz(theta_i+q_i) Lz(d_i) Lx(a_{i+1}) Rx(alpha_{i+1})] t``
 with ``a_{n+1} = alpha_{n+1} = 0``: the first joint's ``a, alpha`` move into the base.
 The other way, the last standard joint's trailing ``Lx(a_n) Rx(alpha_n)`` moves into the
-tool point. Both keep every tool point, for every configuration, exactly.
+tool point. A Hayati ``Ry(beta)`` travels with its ``Lx(a) Rx(alpha)``: modified joint ``i+1``'s
+``beta`` is standard joint ``i``'s. Both keep every tool point, for every configuration, exactly.
 """
 
 from __future__ import annotations
@@ -16,22 +17,28 @@ import numpy as np
 from .model import RobotModel, matrix_rpy
 
 
-def _link_x(a: float, alpha: float) -> np.ndarray:
-    """(4, 4) ``Lx(a) Rx(alpha)`` (equal to ``Rx(alpha) Lx(a)``: both act along x)."""
+def _link_x(a: float, alpha: float, beta: float = 0.0) -> np.ndarray:
+    """(4, 4) ``Lx(a) Rx(alpha) Ry(beta)`` (``Lx(a) Rx(alpha) = Rx(alpha) Lx(a)``: both act along x)."""
     c, s = np.cos(alpha), np.sin(alpha)
-    return np.array([[1.0, 0, 0, a], [0, c, -s, 0], [0, s, c, 0], [0, 0, 0, 1.0]])
+    pose = np.array([[1.0, 0, 0, a], [0, c, -s, 0], [0, s, c, 0], [0, 0, 0, 1.0]])
+    if beta != 0.0:
+        cb, sb = np.cos(beta), np.sin(beta)
+        pose = pose @ np.array([[cb, 0, sb, 0], [0, 1.0, 0, 0], [-sb, 0, cb, 0], [0, 0, 0, 1.0]])
+    return pose
 
 
 def to_standard(model: RobotModel) -> RobotModel:
     """The same arm in standard DH; the first joint's ``a, alpha`` go into the base."""
     if model.convention == "standard":
         return model
-    base = model.base_transform @ _link_x(model.a[0], model.alpha[0])
+    base = model.base_transform @ _link_x(model.a[0], model.alpha[0], model.beta[0])
     return replace(
         model,
         convention="standard",
         a=np.append(model.a[1:], 0.0),
         alpha=np.append(model.alpha[1:], 0.0),
+        beta=np.append(model.beta[1:], 0.0),
+        hayati=tuple(j - 1 for j in model.hayati if j >= 1),
         base_xyz=base[:3, 3],
         base_rpy=matrix_rpy(base[:3, :3]),
     )
@@ -41,12 +48,14 @@ def to_modified(model: RobotModel) -> RobotModel:
     """The same arm in modified DH; the last joint's ``a, alpha`` go into the tool point."""
     if model.convention == "modified":
         return model
-    tool = (_link_x(model.a[-1], model.alpha[-1]) @ np.append(model.tool, 1.0))[:3]
+    tool = (_link_x(model.a[-1], model.alpha[-1], model.beta[-1]) @ np.append(model.tool, 1.0))[:3]
     return replace(
         model,
         convention="modified",
         a=np.insert(model.a[:-1], 0, 0.0),
         alpha=np.insert(model.alpha[:-1], 0, 0.0),
+        beta=np.insert(model.beta[:-1], 0, 0.0),
+        hayati=tuple(j + 1 for j in model.hayati if j + 1 < model.n_joints),
         tool=tool,
     )
 

@@ -22,6 +22,7 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+import yaml
 
 from spherecal.correction.atomic import atomic_write_text
 from spherecal.correction.samples import Dataset, DatasetError
@@ -79,7 +80,6 @@ class FixtureSpec:
 
 def _node_line(node: Any, *path: Any) -> int:
     """1-based line of the YAML node at ``path`` (keys and indices), or of the deepest node found."""
-    import yaml
 
     for key in path:
         if isinstance(node, yaml.MappingNode):
@@ -95,7 +95,6 @@ def _node_line(node: Any, *path: Any) -> int:
 
 
 def _duplicate_keys(node: Any, where: str) -> None:
-    import yaml
 
     if isinstance(node, yaml.MappingNode):
         seen: set[Any] = set()
@@ -122,7 +121,6 @@ def read_fixtures(path: str | os.PathLike) -> FixtureSpec:
             a mapping or has an unknown key, a position that is not 3 finite numbers, a distance
             that is not ``[name, name, metres > 0]`` or names an unlisted fixture.
     """
-    import yaml
 
     path = Path(path)
     try:
@@ -200,7 +198,6 @@ def read_fixtures(path: str | os.PathLike) -> FixtureSpec:
 
 def format_fixtures(spec: FixtureSpec) -> str:
     """YAML text of a fixture spec (floats exact)."""
-    import yaml
 
     fixtures: dict[str, Any] = {}
     for name in spec.names:

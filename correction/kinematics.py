@@ -78,19 +78,24 @@ def frames(model: RobotModel, q: np.ndarray) -> Frames:
     angle = q + model.theta
     cos_q, sin_q = np.cos(angle).T, np.sin(angle).T
     cos_a, sin_a = np.cos(model.alpha), np.sin(model.alpha)
+    cos_b, sin_b = np.cos(model.beta), np.sin(model.beta)
     modified = model.convention == "modified"
     for i in range(n):
         x, y, z, o = xs[i], ys[i], zs[i], os_[i]
         c, s = cos_q[i], sin_q[i]
-        if modified:  # Rx(alpha) Lx(a) Rz(theta+q) Lz(d)
+        if modified:  # Rx(alpha) Lx(a) Ry(beta) Rz(theta+q) Lz(d)
             o = o + model.a[i] * x
             y, z = cos_a[i] * y + sin_a[i] * z, cos_a[i] * z - sin_a[i] * y
+            if model.beta[i] != 0.0:
+                x, z = cos_b[i] * x - sin_b[i] * z, sin_b[i] * x + cos_b[i] * z
             x, y = c * x + s * y, c * y - s * x
             o = o + model.d[i] * z
-        else:  # Rz(theta+q) Lz(d) Lx(a) Rx(alpha)
+        else:  # Rz(theta+q) Lz(d) Lx(a) Rx(alpha) Ry(beta)
             x, y = c * x + s * y, c * y - s * x
             o = o + model.d[i] * z + model.a[i] * x
             y, z = cos_a[i] * y + sin_a[i] * z, cos_a[i] * z - sin_a[i] * y
+            if model.beta[i] != 0.0:
+                x, z = cos_b[i] * x - sin_b[i] * z, sin_b[i] * x + cos_b[i] * z
         xs[i + 1], ys[i + 1], zs[i + 1], os_[i + 1] = x, y, z, o
     return Frames(xs, ys, zs, os_)
 
@@ -149,12 +154,17 @@ def tool_point(model: RobotModel, q: np.ndarray) -> np.ndarray:
     for i in reversed(range(model.n_joints)):
         c, s = cos_q[i], sin_q[i]
         ca, sa = np.cos(model.alpha[i]), np.sin(model.alpha[i])
-        if modified:  # Rx(alpha) Lx(a) Rz(theta+q) Lz(d)
+        beta = model.beta[i]
+        if modified:  # Rx(alpha) Lx(a) Ry(beta) Rz(theta+q) Lz(d)
             z = z + model.d[i]
             x, y = c * x - s * y, s * x + c * y
+            if beta != 0.0:
+                x, z = np.cos(beta) * x + np.sin(beta) * z, np.cos(beta) * z - np.sin(beta) * x
             x = x + model.a[i]
             y, z = ca * y - sa * z, sa * y + ca * z
-        else:  # Rz(theta+q) Lz(d) Lx(a) Rx(alpha)
+        else:  # Rz(theta+q) Lz(d) Lx(a) Rx(alpha) Ry(beta)
+            if beta != 0.0:
+                x, z = np.cos(beta) * x + np.sin(beta) * z, np.cos(beta) * z - np.sin(beta) * x
             y, z = ca * y - sa * z, sa * y + ca * z
             x = x + model.a[i]
             z = z + model.d[i]
@@ -216,6 +226,10 @@ def param_jacobian(
     * standard: ``dtheta = z_{i-1} x (p - o_{i-1})``, ``dd = z_{i-1}``, ``da = x_i``,
       ``dalpha = x_i x (p - o_i)``.
 
+    Hayati angles (columns after the joints' block, see :attr:`RobotModel.layout`): modified
+    ``dbeta = y' x (p - o_i + d_i z_i)`` with ``y' = sin(theta_i+q_i) x_i + cos(theta_i+q_i) y_i``
+    (the ``y`` axis before ``Rz``); standard ``dbeta = y_i x (p - o_i)``, and there ``a`` and
+    ``alpha`` act along ``x' = cos(beta_i) x_i + sin(beta_i) z_i`` (the ``x`` axis before ``Ry``).
     Elastic model: the columns above at the link angles (the torque's own dependence on the
     geometry is neglected: a 1 mm change moves tau by ~1e-3 of itself), then ``d p / d c_i =
     -J_q(q_link)[:, i] tau_i(q)`` (exact: tau is taken at the measured angles).
@@ -239,19 +253,34 @@ def param_jacobian(
     rot_x = _cross(np.moveaxis(f.x, 1, 0), np.moveaxis(lever, 1, 0))  # (3, n+1, N)
     rot_z = _cross(np.moveaxis(f.z, 1, 0), np.moveaxis(lever, 1, 0))
     rot_x, rot_z = np.moveaxis(rot_x, 0, 1), np.moveaxis(rot_z, 0, 1)  # (n+1, 3, N)
+    rot_y = np.moveaxis(_cross(np.moveaxis(f.y, 1, 0), np.moveaxis(lever, 1, 0)), 0, 1)
     lay = model.layout
     joints = jac[lay.joints].reshape(n, len(lay.joint_fields), 3, count)
     a, alpha, d, theta = (lay.joint_fields.index(name) for name in ("a", "alpha", "d", "theta"))
+    hayati = list(lay.hayati)
     if model.convention == "modified":
         joints[:, a] = f.x[:-1]
         joints[:, alpha] = rot_x[:-1]
         joints[:, d] = f.z[1:]
         joints[:, theta] = rot_z[1:]
+        if hayati:  # Ry(beta) about y before Rz(theta+q), through o_i - d_i z_i
+            k = np.array(hayati) + 1
+            angle = (q_link[:, hayati] + model.theta[hayati]).T[:, None, :]  # (h, 1, N)
+            axis = np.sin(angle) * f.x[k] + np.cos(angle) * f.y[k]
+            arm = lever[k] + model.d[hayati][:, None, None] * f.z[k]
+            jac[lay.beta] = np.moveaxis(_cross(np.moveaxis(axis, 1, 0), np.moveaxis(arm, 1, 0)), 0, 1)
     else:
         joints[:, a] = f.x[1:]
         joints[:, alpha] = rot_x[1:]
         joints[:, d] = f.z[:-1]
         joints[:, theta] = rot_z[:-1]
+        if hayati:  # Ry(beta) last, about y_i through o_i; a and alpha act along x before it
+            k = np.array(hayati) + 1
+            cb, sb = np.cos(model.beta[hayati])[:, None, None], np.sin(model.beta[hayati])[:, None, None]
+            x_before = cb * f.x[k] + sb * f.z[k]
+            joints[hayati, a] = x_before
+            joints[hayati, alpha] = np.moveaxis(_cross(np.moveaxis(x_before, 1, 0), np.moveaxis(lever[k], 1, 0)), 0, 1)
+            jac[lay.beta] = rot_y[k]
     jac[lay.tool] = np.stack([f.x[-1], f.y[-1], f.z[-1]])
     jac[lay.base_xyz] = np.eye(3)[:, :, None]
     roll, pitch, yaw = model.base_rpy

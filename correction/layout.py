@@ -10,10 +10,11 @@ block such as a compliance) means adding it here::
     layout.kinds[layout.index("alpha3")]      # ANGLE
     layout.spread()                           # (P,) prior std [m, rad]
 
-Order of the vector: per joint ``a, alpha, d, theta`` (joint 1 first), then the tool point
-``tool_x, tool_y, tool_z``, then the base ``base_x, base_y, base_z, base_roll, base_pitch, base_yaw``,
-then, for an elastic model only (``layout_for(n, elastic=True)``: its robot file has a ``compliance:``
-list), the joint compliances ``c1 .. cn`` [rad/Nm].
+Order of the vector: per joint ``a, alpha, d, theta`` (joint 1 first), then one Hayati angle
+``beta{j}`` per joint that has one (nearly parallel axes, see :class:`RobotModel`; none for most arms),
+then the tool point ``tool_x, tool_y, tool_z``, then the base ``base_x, base_y, base_z, base_roll,
+base_pitch, base_yaw``, then, for an elastic model only (``layout_for(n, elastic=True)``: its robot file
+has a ``compliance:`` list), the joint compliances ``c1 .. cn`` [rad/Nm].
 """
 
 from __future__ import annotations
@@ -80,6 +81,8 @@ class ParameterLayout:
         names: (P,) parameter names (``a1, alpha1, ..., tool_x, ..., base_yaw``).
         kinds: (P,) :class:`ParamKind` of every parameter.
         joints: slice of the per-joint block (``len(JOINT_FIELDS) * n`` entries, joint-major).
+        hayati: 0-based joints that carry a Hayati ``beta`` (sorted).
+        beta: slice of their ``beta`` angles (``len(hayati)`` entries, in joint order).
         tool: slice of the tool point (3).
         base_xyz: slice of the base translation (3).
         base_rpy: slice of the base roll-pitch-yaw (3).
@@ -90,6 +93,8 @@ class ParameterLayout:
     names: tuple[str, ...]
     kinds: tuple[ParamKind, ...]
     joints: slice
+    hayati: tuple[int, ...]
+    beta: slice
     tool: slice
     base_xyz: slice
     base_rpy: slice
@@ -128,19 +133,28 @@ class ParameterLayout:
         return self.joints.start + k + len(JOINT_FIELDS) * np.arange(self.n_joints)
 
     def joint_of(self, index: int) -> int | None:
-        """0-based joint of a per-joint parameter, None for the tool and the base."""
+        """0-based joint of a per-joint parameter (``beta`` included), None for the tool and the base."""
         if self.joints.start <= index < self.joints.stop:
             return (index - self.joints.start) // len(JOINT_FIELDS)
+        if self.beta.start <= index < self.beta.stop:
+            return self.hayati[index - self.beta.start]
         return None
+
+    def held(self, convention: str) -> tuple[str, ...]:
+        """Names of the ``d`` held at zero beside each ``beta``: Hayati's rule that the joint whose
+        frame is tilted by ``beta`` has no offset along the (nearly) parallel axis. ``standard``:
+        ``Rz(theta+q) Lz(d) Lx(a) Rx(alpha) Ry(beta)``, the same joint's ``d``; ``modified``:
+        ``Rx(alpha) Lx(a) Ry(beta) Rz(theta+q) Lz(d)`` is the standard one shifted by a joint, so
+        the previous joint's ``d``."""
+        shift = 1 if convention == "modified" else 0
+        return tuple(f"d{j + 1 - shift}" for j in self.hayati if j - shift >= 0)
 
     def is_angle(self, name: str) -> bool:
         """True for angular parameters (radians), False for lengths (metres)."""
         return self.kinds[self.index(name)] is ANGLE
 
     def mask(self, kind: ParamKind) -> np.ndarray:
-        """(P,) True where the parameter is of ``kind``.
-
-        Kinds other than lengths and angles (compliances) keep their own prior whatever the arguments."""
+        """(P,) True where the parameter is of ``kind``."""
         return np.array([k is kind for k in self.kinds])
 
     def display_scale(self) -> np.ndarray:
@@ -182,17 +196,25 @@ def _name_index(names: tuple[str, ...]) -> dict[str, int]:
 
 
 @lru_cache(maxsize=64)
-def layout_for(n_joints: int, elastic: bool = False) -> ParameterLayout:
-    """The (shared, immutable) layout of an ``n_joints`` model (with compliances ``c1..cn`` if ``elastic``)."""
+def layout_for(n_joints: int, hayati: tuple[int, ...] = (), elastic: bool = False) -> ParameterLayout:
+    """The (shared, immutable) layout of an ``n_joints`` model with Hayati ``beta`` on the 0-based
+    joints ``hayati`` (and the compliances ``c1..cn`` if ``elastic``)."""
+    hayati = tuple(sorted(int(j) for j in hayati))
+    if any(not 0 <= j < n_joints for j in hayati) or len(set(hayati)) != len(hayati):
+        raise ValueError(f"hayati joints must be distinct indices in 0..{n_joints - 1}, got {hayati}")
     joints = [(f"{name}{i + 1}", kind) for i in range(n_joints) for name, kind in JOINT_FIELDS]
+    joints += [(f"beta{i + 1}", ANGLE) for i in hayati]
     compliance = [(f"c{i + 1}", COMPLIANCE) for i in range(n_joints)] if elastic else []
     entries = joints + list(TOOL_FIELDS) + list(BASE_FIELDS) + compliance
     j = len(joints)
+    k = len(JOINT_FIELDS) * n_joints
     return ParameterLayout(
         n_joints=n_joints,
         names=tuple(name for name, _ in entries),
         kinds=tuple(kind for _, kind in entries),
-        joints=slice(0, j),
+        joints=slice(0, k),
+        hayati=hayati,
+        beta=slice(k, j),
         tool=slice(j, j + 3),
         base_xyz=slice(j + 3, j + 6),
         base_rpy=slice(j + 6, j + 9),

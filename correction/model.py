@@ -47,6 +47,12 @@ class RobotModel:
         tool: (3,) tool point in the last frame [m].
         base_xyz, base_rpy: (3,) base placement [m], [rad].
         extras: other top-level keys of the robot file, written back unchanged.
+        beta: (n,) Hayati rotations about ``y`` [rad] (zeros when not given): ``modified``
+            ``Rx(alpha) Lx(a) Ry(beta) Rz(theta+q) Lz(d)``, ``standard``
+            ``Rz(theta+q) Lz(d) Lx(a) Rx(alpha) Ry(beta)`` (nearly parallel axes). Non-zero
+            only on the ``hayati`` joints.
+        hayati: 0-based joints whose ``beta`` is a parameter (in :attr:`params`); beside each, a
+            ``d`` is held at zero (:meth:`ParameterLayout.held`).
     """
 
     name: str
@@ -61,6 +67,8 @@ class RobotModel:
     base_xyz: np.ndarray = field(default_factory=lambda: np.zeros(3))
     base_rpy: np.ndarray = field(default_factory=lambda: np.zeros(3))
     extras: dict = field(default_factory=dict)
+    beta: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    hayati: tuple[int, ...] = ()
 
     def __post_init__(self) -> None:
         if self.convention not in CONVENTIONS:
@@ -70,12 +78,19 @@ class RobotModel:
         n = np.size(self.a)
         if n < 1:
             raise ValueError("a robot needs at least one joint")
-        for name in ("a", "alpha", "d", "theta", "lower", "upper"):
+        if not self.hayati and np.size(self.beta) != n and not np.any(self.beta):
+            # no Hayati joint: a zero beta of another length (a copy with fewer joints) means none
+            object.__setattr__(self, "beta", np.zeros(n))
+        for name in ("a", "alpha", "d", "theta", "lower", "upper", "beta"):
             object.__setattr__(self, name, _frozen_array(getattr(self, name), (n,), name))
         for name in ("tool", "base_xyz", "base_rpy"):
             object.__setattr__(self, name, _frozen_array(getattr(self, name), (3,), name))
         if np.any(self.lower > self.upper):
             raise ValueError("joint limits: lower > upper")
+        object.__setattr__(self, "hayati", layout_for(n, tuple(self.hayati)).hayati)
+        others = np.setdiff1d(np.arange(n), self.hayati)
+        if np.any(self.beta[others] != 0.0):
+            raise ValueError(f"beta is non-zero on joint(s) {others[self.beta[others] != 0.0] + 1} not in hayati")
 
     # ----------------------------------------------------------------- sizes
     @property
@@ -92,7 +107,7 @@ class RobotModel:
     def layout(self) -> ParameterLayout:
         """Names, kinds, prior spread and slices of the flat parameter vector (with the joint compliances
         ``c1..cn`` when ``extras`` has a ``compliance`` list: an elastic model, :mod:`.elastic`)."""
-        return layout_for(self.n_joints, "compliance" in self.extras)
+        return layout_for(self.n_joints, self.hayati, "compliance" in self.extras)
 
     # ----------------------------------------------------- flat parameter view
     @property
@@ -108,6 +123,7 @@ class RobotModel:
         out = np.empty(lay.size)
         for name in lay.joint_fields:
             out[lay.field(name)] = getattr(self, name)
+        out[lay.beta] = self.beta[list(lay.hayati)]
         out[lay.tool], out[lay.base_xyz], out[lay.base_rpy] = self.tool, self.base_xyz, self.base_rpy
         if lay.elastic:
             out[lay.compliance] = np.asarray(self.extras["compliance"], dtype=float).reshape(self.n_joints)
@@ -124,10 +140,13 @@ class RobotModel:
             raise ValueError(f"params must have shape ({self.n_params},), got {params.shape}")
         lay = self.layout
         fields = {name: params[lay.field(name)] for name in lay.joint_fields}
+        beta = np.zeros(self.n_joints)
+        beta[list(lay.hayati)] = params[lay.beta]
         if lay.elastic:
             fields["extras"] = {**self.extras, "compliance": [float(v) for v in params[lay.compliance]]}
         return replace(
-            self, **fields, tool=params[lay.tool], base_xyz=params[lay.base_xyz], base_rpy=params[lay.base_rpy]
+            self, **fields, beta=beta, tool=params[lay.tool], base_xyz=params[lay.base_xyz],
+            base_rpy=params[lay.base_rpy]
         )
 
     def param_index(self, name: str) -> int:
@@ -165,6 +184,9 @@ class RobotModel:
             return "convention", (
                 f"{other.convention!r}, expected {self.convention!r} (convert it with correction.convert first)"
             )
+        if other.hayati != self.hayati:
+            joints = ", ".join(str(j + 1) for j in self.hayati) or "none"
+            return "beta", f"Hayati beta on joints {[j + 1 for j in other.hayati]}, expected {joints}"
         if limits:
             for name in ("lower", "upper"):
                 diff = np.abs(getattr(other, name) - getattr(self, name))
@@ -181,6 +203,7 @@ class RobotModel:
             self.convention == other.convention
             and self.n_joints == other.n_joints
             and self.n_params == other.n_params
+            and self.hayati == other.hayati
             and np.allclose(self.params, other.params, rtol=0.0, atol=atol)
             and np.allclose(self.lower, other.lower, rtol=0.0, atol=atol)
             and np.allclose(self.upper, other.upper, rtol=0.0, atol=atol)

@@ -6,6 +6,7 @@ Schema (other top-level keys are kept in :attr:`RobotModel.extras` and written b
     convention: modified          # or: standard
     joints:                       # base to flange, metres and radians
       - {a: 0.0, alpha: 0.0, d: 0.333, theta: 0.0, lower: -2.8973, upper: 2.8973}
+                                  # optional per joint: beta (Hayati angle, radians; see RobotModel)
     tool: [0.0, 0.0, 0.107]       # tool point in the last joint's frame, metres
     base: {xyz: [0, 0, 0], rpy: [0, 0, 0]}   # optional
 """
@@ -25,6 +26,8 @@ from .errors import SpherecalError
 from .model import CONVENTIONS, JOINT_FIELDS, RobotModel
 
 JOINT_KEYS: tuple[str, ...] = JOINT_FIELDS + ("lower", "upper")
+#: Optional per-joint key: a joint with ``beta`` carries a Hayati angle (see RobotModel.hayati).
+OPTIONAL_JOINT_KEYS: tuple[str, ...] = ("beta",)
 _KNOWN_KEYS = ("name", "convention", "joints", "tool", "base")
 #: Robots shipped inside the package, loadable by name.
 EMBEDDED_ROBOTS: dict[str, str] = {"panda": "panda.yaml", "franka_panda": "panda.yaml"}
@@ -81,16 +84,20 @@ def robot_from_dict(data: Any, source: str = "<robot>") -> RobotModel:
     joints = data["joints"]
     if not isinstance(joints, list) or not joints:
         raise RobotFileError(f"{source}: joints: expected a non-empty list of joint mappings")
-    columns: dict[str, list[float]] = {key: [] for key in JOINT_KEYS}
+    columns: dict[str, list[float]] = {key: [] for key in JOINT_KEYS + OPTIONAL_JOINT_KEYS}
+    hayati: list[int] = []
     for i, joint in enumerate(joints):
         where = f"{source}: joints[{i}]"
         if not isinstance(joint, dict):
             raise RobotFileError(f"{where}: expected a mapping, got {joint!r}")
-        _no_unknown_keys(joint, JOINT_KEYS, where)
+        _no_unknown_keys(joint, JOINT_KEYS + OPTIONAL_JOINT_KEYS, where)
         for key in JOINT_KEYS:
             if key not in joint:
                 raise RobotFileError(f"{where}: missing key '{key}'")
             columns[key].append(_number(joint[key], f"{where}.{key}"))
+        columns["beta"].append(_number(joint.get("beta", 0.0), f"{where}.beta"))
+        if "beta" in joint:
+            hayati.append(i)
         if columns["lower"][-1] > columns["upper"][-1]:
             raise RobotFileError(
                 f"{where}: lower ({columns['lower'][-1]}) > upper ({columns['upper'][-1]})"
@@ -114,6 +121,8 @@ def robot_from_dict(data: Any, source: str = "<robot>") -> RobotModel:
         theta=columns["theta"],
         lower=columns["lower"],
         upper=columns["upper"],
+        beta=columns["beta"],
+        hayati=tuple(hayati),
         tool=tool,
         base_xyz=base_xyz,
         base_rpy=base_rpy,
@@ -121,13 +130,26 @@ def robot_from_dict(data: Any, source: str = "<robot>") -> RobotModel:
     )
 
 
-def load_robot(path_or_name: str | os.PathLike) -> RobotModel:
-    """Load a robot file, or an embedded robot by name (``"panda"``).
+def load_robot(
+    path_or_name: str | os.PathLike, tip_link: str | None = None, base_link: str | None = None
+) -> RobotModel:
+    """Load a robot file, a URDF (``.urdf``), or an embedded robot by name (``"panda"``).
+
+    Args:
+        path_or_name: YAML robot file, URDF file or embedded name.
+        tip_link, base_link: URDF only: the chain to convert (see :func:`correction.urdf_to_dh.load_urdf`).
 
     Raises:
-        RobotFileError: unreadable file, invalid YAML or an invalid field (one line).
+        RobotFileError: unreadable file, invalid YAML or URDF, an invalid field (one line).
     """
     key = str(path_or_name)
+    if key.lower().endswith(".urdf"):
+        from .urdf_to_dh import load_urdf  # here, not at the top: urdf_to_dh imports this module
+
+        return load_urdf(path_or_name, tip_link=tip_link, base_link=base_link)
+    for option, value in (("tip link", tip_link), ("base link", base_link)):
+        if value is not None:
+            raise RobotFileError(f"{key}: a {option} ({value!r}) is only for a URDF robot description (.urdf)")
     if key in EMBEDDED_ROBOTS and not Path(key).exists():
         text = resources.files(__package__).joinpath("data", EMBEDDED_ROBOTS[key]).read_text()
         return robot_from_dict(yaml.safe_load(text), source=key)
@@ -160,9 +182,10 @@ def _plain(value: Any) -> Any:
 
 def robot_to_dict(model: RobotModel) -> dict:
     """The robot-file mapping of a model (plain Python types, exact floats)."""
-    joints = [
-        {key: float(getattr(model, key)[i]) for key in JOINT_KEYS} for i in range(model.n_joints)
-    ]
+    joints = []
+    for i in range(model.n_joints):
+        keys = JOINT_KEYS[:2] + ("beta",) + JOINT_KEYS[2:] if i in model.hayati else JOINT_KEYS
+        joints.append({key: float(getattr(model, key)[i]) for key in keys})
     data: dict[str, Any] = {
         "name": model.name,
         "convention": model.convention,

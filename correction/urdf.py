@@ -4,23 +4,25 @@ The joint origins reproduce the DH chain exactly (to floating-point rounding) in
 conventions, the base placement included. Kinematics only: no visuals, collisions or
 inertials (a stack that needs masses keeps its own and takes the joint origins from here).
 
-Links and joints (``P`` is the prefix, ``panda_`` by default, ``n`` the joint count)::
+Links and joints (``P`` is the prefix, ``panda_`` by default, ``n`` the joint count), Franka's
+names for a Panda (``panda_link0..8``, ``panda_joint1..7``, the flange ``panda_link8``)::
 
-    P{base}  --fixed: base_xyz, base_rpy-->  Plink0            (DH frame 0)
-    Plink{i-1}  --revolute Pjoint{i}, axis z-->  Plink{i}      i = 1..n
-    Plink{n}  --fixed-->  Pflange                              (DH frame n)
-    Pflange  --fixed: xyz = tool-->  Ptool                     (the tool point)
+    P{base}  --fixed Pbase_joint: base_xyz, base_rpy-->  Plink0      (DH frame 0)
+    Plink{i-1}  --revolute Pjoint{i}, axis z-->  Plink{i}            i = 1..n
+    Plink{n}  --fixed Pjoint{n+1}-->  Plink{n+1}                     (the tool point)
 
-* ``modified``: ``Rx(alpha) Lx(a) Rz(theta) Lz(d)`` is joint ``i``'s origin (the joint
-  angle ``Rz(q)`` commutes with ``Lz(d)``), so ``Plink{i}`` is DH frame ``i`` exactly, as
-  in Franka's own description, and ``Pflange`` coincides with ``Plink{n}``.
-* ``standard``: ``Rz(theta+q) Lz(d) Lx(a) Rx(alpha)`` turns first, so joint ``i``'s origin
-  is the previous joint's trailing ``Lz(d) Lx(a) Rx(alpha)`` followed by ``Rz(theta)``;
-  ``Plink{i}`` is DH frame ``i-1`` turned by ``theta_i + q_i``, and the last joint's
-  trailing part goes into ``Pflange``.
+* ``modified``: ``Rx(alpha) Lx(a) Ry(beta) Rz(theta) Lz(d)`` is joint ``i``'s origin (the
+  joint angle ``Rz(q)`` commutes with ``Lz(d)``), so ``Plink{i}`` is DH frame ``i`` exactly,
+  as in Franka's own description, and ``Plink{n+1}`` is the tool point along it (Franka's
+  flange ``panda_link8``, 0.107 m along ``z7``, for the nominal Panda).
+* ``standard``: ``Rz(theta+q) Lz(d) Lx(a) Rx(alpha) Ry(beta)`` turns first, so joint ``i``'s
+  origin is the previous joint's trailing ``Lz(d) Lx(a) Rx(alpha) Ry(beta)`` followed by
+  ``Rz(theta)``; ``Plink{i}`` is DH frame ``i-1`` turned by ``theta_i + q_i``, and the last
+  joint's trailing part goes into ``Pjoint{n+1}``.
 
-In both, ``Ptool`` has the pose of :func:`correction.tool_pose` (orientation of the last DH
-frame, origin at the tool point). Floats are written with ``repr``: nothing is rounded.
+In both, ``Plink{n+1}`` has the pose of :func:`correction.tool_pose` (orientation of the last
+DH frame, origin at the tool point). Floats are written with ``repr``: nothing is rounded.
+To change only the joint origins of the user's own URDF, see :mod:`correction.urdf_into`.
 """
 
 from __future__ import annotations
@@ -77,6 +79,11 @@ def _rot_z(angle: float) -> np.ndarray:
     return np.array([[c, -s, 0.0, 0.0], [s, c, 0.0, 0.0], [0.0, 0.0, 1.0, 0.0], [0.0, 0.0, 0.0, 1.0]])
 
 
+def _rot_y(angle: float) -> np.ndarray:
+    c, s = np.cos(angle), np.sin(angle)
+    return np.array([[c, 0.0, s, 0.0], [0.0, 1.0, 0.0, 0.0], [-s, 0.0, c, 0.0], [0.0, 0.0, 0.0, 1.0]])
+
+
 def _shift(x: float = 0.0, z: float = 0.0) -> np.ndarray:
     pose = np.eye(4)
     pose[0, 3], pose[2, 3] = x, z
@@ -98,9 +105,11 @@ def joint_origins(model: RobotModel) -> tuple[np.ndarray, np.ndarray]:
     origins = np.empty((n, 4, 4))
     if model.convention == "modified":
         for i in range(n):
-            origins[i] = _rot_x(model.alpha[i]) @ _shift(x=model.a[i]) @ _rot_z(model.theta[i]) @ _shift(z=model.d[i])
+            origins[i] = (_rot_x(model.alpha[i]) @ _shift(x=model.a[i]) @ _rot_y(model.beta[i])
+                          @ _rot_z(model.theta[i]) @ _shift(z=model.d[i]))
         return origins, np.eye(4)
-    trailing = [_shift(z=model.d[i]) @ _shift(x=model.a[i]) @ _rot_x(model.alpha[i]) for i in range(n)]
+    trailing = [_shift(z=model.d[i]) @ _shift(x=model.a[i]) @ _rot_x(model.alpha[i]) @ _rot_y(model.beta[i])
+                for i in range(n)]
     origins[0] = _rot_z(model.theta[0])
     for i in range(1, n):
         origins[i] = trailing[i - 1] @ _rot_z(model.theta[i])
@@ -181,7 +190,7 @@ def robot_to_urdf(
     ]
     if mujoco:
         lines.append("  " + MUJOCO_EXTENSION)
-    links = [f"{p}base"] + [f"{p}link{i}" for i in range(n + 1)] + [f"{p}flange", f"{p}tool"]
+    links = [f"{p}base"] + [f"{p}link{i}" for i in range(n + 2)]
     lines += [f"  <link name={quoteattr(name)}/>" for name in links]
 
     def fixed(name: str, parent: str, child: str, origin: str) -> None:
@@ -202,8 +211,9 @@ def robot_to_urdf(
             f'effort="{_f(effort[i])}" velocity="{_f(velocity[i])}"/>'
         )
         lines.append("  </joint>")
-    fixed(f"{p}flange_joint", f"{p}link{n}", f"{p}flange", _origin(flange))
-    fixed(f"{p}tool_joint", f"{p}flange", f"{p}tool", f'<origin xyz="{_triple(model.tool)}" rpy="0.0 0.0 0.0"/>')
+    tool = flange.copy()
+    tool[:3, 3] = flange[:3, :3] @ model.tool + flange[:3, 3]
+    fixed(f"{p}joint{n + 1}", f"{p}link{n}", f"{p}link{n + 1}", _origin(tool))
     lines.append("</robot>")
     return "\n".join(lines) + "\n"
 

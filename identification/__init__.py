@@ -1,6 +1,6 @@
 """Identification: spherical-joint samples in, calibrated robot parameters out.
 
-The public names are loaded lazily (``identification.cli`` must import nothing heavy)::
+The public names are loaded lazily (importing the package loads no numpy)::
 
     from spherecal.identification import build_problem, CalibrationResult
     from spherecal.correction import read_samples, read_fixtures   # the data files are the base layer's
@@ -15,8 +15,8 @@ from typing import Any
 _EXPORTS: dict[str, str] = {
     "CalibrationProblem": "problem",
     "UnidentifiableError": "problem",
-    "build_problem": "problem",
-    "prune": "problem",
+    "build_problem": "build",
+    "prune": "pruning",
     "CalibrationResult": "calibrate",
     "solve_lm": "solvers",
     "solve_pso": "solvers",

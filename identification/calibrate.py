@@ -11,17 +11,10 @@ from spherecal.correction import RobotModel, param_jacobian, registered_errors, 
 from spherecal.correction.fixtures import FixtureSpec
 from spherecal.correction.samples import Dataset
 
+from .build import build_problem
 from .identifiability import Identifiability, predicted_std
-from .problem import (
-    GAUGE,
-    NOISE,
-    CalibrationProblem,
-    ImplausibleCalibrationError,
-    build_problem,
-    prior_std,
-    prune,
-    samples_location,
-)
+from .problem import GAUGE, NOISE, CalibrationProblem, ImplausibleCalibrationError, prior_std, samples_location
+from .pruning import prune
 from .solvers import solve_lm, solve_pso
 
 METHODS: tuple[str, ...] = ("lm", "pso", "pso+lm")

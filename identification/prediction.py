@@ -1,6 +1,6 @@
 """Predicted accuracy of a calibration from its data, before (or without) solving it.
 
-The calibration problem of the data (:func:`identification.problem.build_problem`: same unknowns,
+The calibration problem of the data (:func:`identification.build.build_problem`: same unknowns,
 gauge, scale fixing and excitation pruning as :func:`identification.calibrate.calibrate`) is
 linearised at a generic point near the model (the rank test's point, so that accidental symmetries
 of the nominal design do not count). With fixture noise ``sigma`` per coordinate::
@@ -32,9 +32,12 @@ from spherecal.correction.fixtures import FixtureSpec
 from spherecal.correction.layout import ParameterLayout
 from spherecal.correction.samples import Dataset
 
+from .build import build_problem
 from .calibrate import SIGMA_FLOOR
+from .gauge import anchor_spread
 from .identifiability import Identifiability, normal_inverse
-from .problem import NOISE, CalibrationProblem, anchor_spread, build_problem, prior_std, prune
+from .problem import NOISE, CalibrationProblem, prior_std
+from .pruning import prune
 
 #: A parameter whose predicted std exceeds this share of its prior spread is "weakly determined".
 WEAK_SHARE = 0.3
@@ -178,7 +181,7 @@ def predict_accuracy(
         The :class:`Prediction`.
 
     Raises:
-        DatasetError, UnidentifiableError: as :func:`identification.problem.build_problem`.
+        DatasetError, UnidentifiableError: as :func:`identification.build.build_problem`.
     """
     rng = np.random.default_rng(0) if rng is None else rng
     workspace = Workspace.of(model) if workspace is None else workspace

@@ -63,7 +63,7 @@ def solve_lm(
         tol: ``ftol``, ``xtol`` and ``gtol``.
         max_nfev: evaluation budget (scipy's default when None).
     """
-    from scipy.optimize import least_squares
+    from scipy.optimize import least_squares  # scipy: loaded only when a solve runs (start-up)
 
     if loss not in LOSSES:
         raise ValueError(f"unknown loss {loss!r}, expected one of {LOSSES}")
@@ -174,7 +174,7 @@ def solve_pso(
         return np.array([cost(row) for row in swarm])
 
     with _quiet_pyswarms():
-        import pyswarms
+        import pyswarms  # pyswarms: heavy and optional, only for method 'pso'
 
         state = np.random.get_state()  # noqa: NPY002 (pyswarms draws from the global state)
         np.random.seed(seed)  # noqa: NPY002

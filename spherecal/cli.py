@@ -1,7 +1,8 @@
-"""The ``spherecal`` command line: one subcommand per job, each living in its package.
+"""The ``spherecal`` command line: one subcommand per job, registered in :data:`COMMANDS`.
 
-Only argparse is imported here and by each package's ``cli`` module; a subcommand imports
-numpy, MuJoCo, Rerun or pyswarms when it runs, so start-up stays short.
+The subcommands live in :mod:`spherecal.commands` (the command-line layer on top of the packages;
+no library module imports it). Only argparse is imported while the parser is built; a subcommand
+imports numpy, MuJoCo, Rerun or pyswarms when it runs, so start-up stays short.
 """
 
 from __future__ import annotations
@@ -9,27 +10,31 @@ from __future__ import annotations
 import argparse
 import importlib
 import sys
+from importlib.metadata import PackageNotFoundError, version
 
 #: subcommand -> module with ``HELP``, ``add_arguments(parser)`` and ``run(args) -> int``.
 COMMANDS: dict[str, str] = {
-    "simulate": "spherecal.controller.cli",
-    "calibrate": "spherecal.identification.cli",
-    "validate": "spherecal.validation.validate_cli",
-    "demo": "spherecal.validation.demo_cli",
-    "campaign": "spherecal.validation.campaign_cli",
-    "plan": "spherecal.validation.plan_cli",
-    "export": "spherecal.controller.export_cli",
+    "simulate": "spherecal.commands.simulate",
+    "import": "spherecal.commands.import_data",
+    "calibrate": "spherecal.commands.calibrate",
+    "validate": "spherecal.commands.validate",
+    "demo": "spherecal.commands.demo",
+    "campaign": "spherecal.commands.campaign",
+    "plan": "spherecal.commands.plan",
+    "export": "spherecal.commands.export",
 }
 
 
 def build_parser() -> argparse.ArgumentParser:
     """The top-level parser with every subcommand registered."""
-    parser = argparse.ArgumentParser(
+    from spherecal.options import Parser
+
+    parser = Parser(
         prog="spherecal",
         description="Kinematic calibration of a redundant arm from spherical-joint self-motion.",
     )
     parser.add_argument("--version", action="version", version=f"%(prog)s {_version()}")
-    sub = parser.add_subparsers(dest="command", metavar="COMMAND", required=True)
+    sub = parser.add_subparsers(dest="command", metavar="COMMAND", required=True, parser_class=Parser)
     for name, module_name in COMMANDS.items():
         module = importlib.import_module(module_name)
         command = sub.add_parser(name, help=module.HELP, description=module.HELP)
@@ -39,7 +44,6 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 def _version() -> str:
-    from importlib.metadata import PackageNotFoundError, version
 
     try:
         return version("spherecal")
@@ -48,12 +52,18 @@ def _version() -> str:
 
 
 def main(argv: list[str] | None = None) -> int:
-    """Run one subcommand; spherecal's own errors print one line and exit 1."""
-    args = build_parser().parse_args(argv)  # --help and usage errors end here, before numpy loads
-    from spherecal.correction.errors import SpherecalError
+    """Run one subcommand; return its exit status. Every refusal (a bad option, bad input, a file that
+    cannot be read or written) prints one line and returns 1."""
+    try:
+        args = build_parser().parse_args(argv)  # --help and bad options end here, before numpy loads
+    except SystemExit as done:
+        return done.code if isinstance(done.code, int) else 1
+    from spherecal.correction.errors import SpherecalError  # numpy: not at --help (start-up)
+    from spherecal.options import OptionError
+
     try:
         return int(args._run(args) or 0)
-    except SpherecalError as error:
+    except (SpherecalError, OptionError) as error:
         print(f"spherecal {args.command}: error: {error}", file=sys.stderr)
         return 1
     except OSError as error:  # a file that cannot be read or written: one line, not a traceback
@@ -64,11 +74,6 @@ def main(argv: list[str] | None = None) -> int:
         print(f"spherecal {args.command}: interrupted", file=sys.stderr)
         return 130
 
-
-def not_yet_available(name: str) -> int:
-    """What a subcommand that is not built yet does: say so and exit 2."""
-    print(f"spherecal {name}: not yet available in this version", file=sys.stderr)
-    return 2
 
 
 if __name__ == "__main__":

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import ast
+import shutil
 import subprocess
 import sys
 import sysconfig
@@ -49,12 +50,18 @@ def test_the_installed_distribution_has_no_top_level_name_but_spherecal() -> Non
 
 def test_a_built_wheel_has_no_top_level_name_but_spherecal(tmp_path) -> None:
     pytest.importorskip("setuptools")
+    source = tmp_path / "source"  # a copy: the build leaves build/ and *.egg-info beside pyproject.toml
+    for name in ("pyproject.toml", "README.md"):
+        source.mkdir(exist_ok=True)
+        shutil.copy(ROOT / name, source / name)
+    for name in ("spherecal", "correction", "identification", "controller", "validation"):
+        shutil.copytree(ROOT / name, source / name, ignore=shutil.ignore_patterns("__pycache__"))
     code = "import sys; from setuptools import build_meta; print(build_meta.build_wheel(sys.argv[1]))"
-    out = subprocess.run([sys.executable, "-c", code, str(tmp_path)], cwd=ROOT, capture_output=True, text=True)
+    out = subprocess.run([sys.executable, "-c", code, str(tmp_path)], cwd=source, capture_output=True, text=True)
     assert out.returncode == 0, out.stderr[-2000:]
     wheel = tmp_path / out.stdout.strip().splitlines()[-1]
     names = zipfile.ZipFile(wheel).namelist()
     assert _top_level(names) == {"spherecal"}
-    for package in ("correction", "identification", "controller", "validation"):
+    for package in ("correction", "identification", "controller", "validation", "commands"):
         assert f"spherecal/{package}/__init__.py" in names
     assert "spherecal/correction/data/panda.yaml" in names

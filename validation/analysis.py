@@ -22,6 +22,7 @@ Regenerate ``docs/experiment_design.md``::
 
 from __future__ import annotations
 
+import argparse
 import functools
 import time
 from concurrent.futures import ProcessPoolExecutor
@@ -31,6 +32,13 @@ from pathlib import Path
 import numpy as np
 
 from spherecal.correction import atomic_write_text, registered_errors, tool_point
+from spherecal.correction.samples import Dataset
+from spherecal.identification.calibrate import calibrate
+from spherecal.identification.prediction import Workspace, predict_accuracy
+from spherecal.validation.experiment import default_fixtures, fixture_spec, nominal_robot, true_robot
+from spherecal.validation.plan import Candidate, grid_candidates, motion_samples, plan
+from spherecal.validation.plan_report import format_plan
+from spherecal.validation.provenance import comment_block, provenance
 
 #: The fourth fixture of the 1-4 fixture rows (low, left of the defaults) [m].
 P4 = (0.35, -0.1, 0.2)
@@ -100,7 +108,6 @@ class CellResult:
 
 
 def _defaults() -> dict[str, tuple[float, float, float]]:
-    from spherecal.validation.experiment import default_fixtures
 
     return {k: tuple(float(x) for x in v) for k, v in default_fixtures().items()}
 
@@ -135,19 +142,12 @@ def cells(config: AnalysisConfig, best: dict[str, tuple[float, float, float]] | 
 
 @functools.lru_cache(maxsize=1)
 def _workspace():
-    from spherecal.identification.prediction import Workspace
-    from spherecal.validation.experiment import nominal_robot
 
     return Workspace.of(nominal_robot())
 
 
 def run_set(cell: Cell, index: int, seed: tuple[int, ...], configurations: int):
     """One motion set of a cell: (measured mean, measured p95, prediction or None) [m]."""
-    from spherecal.correction.samples import Dataset
-    from spherecal.identification.calibrate import calibrate
-    from spherecal.identification.prediction import predict_accuracy
-    from spherecal.validation.experiment import fixture_spec, nominal_robot, true_robot
-    from spherecal.validation.plan import Candidate, motion_samples
 
     rng = np.random.default_rng(seed)
     nominal = nominal_robot()
@@ -214,8 +214,6 @@ class Analysis:
 
 def run_analysis(config: AnalysisConfig) -> Analysis:
     """Plan on the grid, then run every cell."""
-    from spherecal.validation.experiment import nominal_robot
-    from spherecal.validation.plan import grid_candidates, plan
 
     clock = time.perf_counter()
     result = plan(nominal_robot(), grid_candidates(config.grid), 3, np.random.default_rng(config.seed))
@@ -261,7 +259,6 @@ TITLES = {
 
 def markdown(analysis: Analysis, provenance: str) -> str:
     """The document."""
-    from spherecal.validation.plan_cli import format_plan
 
     cfg = analysis.config
     results = analysis.results
@@ -365,7 +362,6 @@ def _plan_lines(rows: list[CellResult]) -> list[str]:
 
 def write_analysis(path: str | Path, config: AnalysisConfig | None = None) -> Path:
     """Run the analysis and write the Markdown document (atomically; provenance in an HTML comment)."""
-    from spherecal.validation.provenance import comment_block, provenance
 
     config = config or AnalysisConfig()
     analysis = run_analysis(config)
@@ -375,7 +371,6 @@ def write_analysis(path: str | Path, config: AnalysisConfig | None = None) -> Pa
 
 def main(argv: list[str] | None = None) -> int:
     """``python -m validation.analysis [OUT] [--sets N] [--workers N]``."""
-    import argparse
 
     parser = argparse.ArgumentParser(prog="python -m validation.analysis", description=__doc__.splitlines()[0])
     parser.add_argument("out", nargs="?", default="docs/experiment_design.md")

@@ -24,6 +24,7 @@ from __future__ import annotations
 import csv
 import io
 import os
+import time
 from collections.abc import Callable
 from concurrent.futures import ProcessPoolExecutor
 from dataclasses import dataclass
@@ -32,6 +33,9 @@ from pathlib import Path
 import numpy as np
 
 from spherecal.correction import SpherecalError, atomic_write_text
+
+from .experiment import calibrate_from, default_fixtures, motion_set, nominal_robot, true_robot
+from .pipeline import RANDOM_SET, validate_models
 
 #: The paper's simulated Table 2 (mm): row -> (mean of average error, mean of maximal error).
 PAPER_TABLE2 = {
@@ -133,10 +137,7 @@ def tasks(config: CampaignConfig) -> list[Task]:
 
 def run_task(task: Task) -> TaskResult:
     """Simulate one motion set on a fresh true robot, calibrate, validate (runs in a worker)."""
-    import time
 
-    from .experiment import default_fixtures, motion_set, nominal_robot, true_robot
-    from .pipeline import RANDOM_SET, validate_models
 
     clock = time.perf_counter()
     rng = np.random.default_rng(task.seed)
@@ -178,8 +179,6 @@ def _calibrate(model: str, nominal, start, data):
     from spherecal.identification.calibrate import calibrate
     from spherecal.identification.selection import elastic_start, rigid, select_model
 
-    from .experiment import calibrate_from
-
     if model == "auto":
         def fit(begin, dataset, spec):
             return calibrate(begin, dataset, spec).model
@@ -197,7 +196,7 @@ def run_campaign(
     Returns:
         The results sorted by (row order, set index): independent of scheduling.
     """
-    from tqdm import tqdm
+    from tqdm import tqdm  # tqdm: only when a progress bar is shown
 
     todo = tasks(config)
     bar = tqdm(total=len(todo), desc="campaign", unit="set", disable=not progress)

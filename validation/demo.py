@@ -11,11 +11,14 @@ from pathlib import Path
 import numpy as np
 
 from spherecal.correction import RobotModel, atomic_write_text, save_robot, tool_point
+from spherecal.correction.fixtures import format_fixtures
+from spherecal.correction.samples_csv import format_samples
 
 from .experiment import calibrate_from, default_fixtures, motion_set, nominal_robot, true_robot
 from .mocap import MARKER_NOISE, MocapMeasurement, write_mocap_csv
 from .pipeline import RANDOM_SET, ValidationReport, record_validation, validate_models
 from .provenance import comment_block, provenance
+from .recording import Recording
 
 #: Self-motion per fixture [s] and samples kept per fixture. The fixture compliance of the plant is
 #: correlated in time (a new offset every 0.2 s), so the information grows with the duration, not with
@@ -153,8 +156,6 @@ def _inputs(config: DemoConfig) -> dict:
 
 def write_results(config: DemoConfig, result: DemoResult, data, fixtures: dict[str, np.ndarray]) -> dict[str, Path]:
     """Samples, fixtures, truth, calibrated model, report JSON and the recording, each with provenance."""
-    from spherecal.correction.fixtures import format_fixtures
-    from spherecal.correction.samples_csv import format_samples
 
     out = Path(config.out)
     info = provenance(config.seed, _inputs(config))
@@ -183,7 +184,6 @@ def write_results(config: DemoConfig, result: DemoResult, data, fixtures: dict[s
 
 def write_recording(config: DemoConfig, result: DemoResult, data, fixtures: dict[str, np.ndarray]) -> Path | None:
     """The demo's Rerun recording (entity paths in :mod:`validation.recording`)."""
-    from .recording import Recording
 
     recording = Recording(Path(config.out) / "demo.rrd" if config.rrd else None, spawn=config.spawn)
     try:

@@ -11,6 +11,9 @@ from dataclasses import dataclass
 import numpy as np
 
 from spherecal.correction import RobotModel, load_robot, perturb
+from spherecal.correction.fixtures import FixtureSpec
+from spherecal.identification.calibrate import calibrate
+from spherecal.identification.synthetic import make_dataset
 
 
 def nominal_robot() -> RobotModel:
@@ -27,7 +30,7 @@ def true_robot(nominal: RobotModel, rng: np.random.Generator) -> RobotModel:
 def default_fixtures() -> dict[str, np.ndarray]:
     """The three fixture centres P1, P2, P3 in the base frame [m]: ``spherecal simulate``'s defaults
     (chosen by the controller for joint coverage under self-motion)."""
-    from spherecal.controller.cli import DEFAULT_FIXTURES
+    from spherecal.controller.self_motion import DEFAULT_FIXTURES  # MuJoCo: only a simulation needs it (start-up)
 
     return {name: np.asarray(centre, dtype=float) for name, centre in DEFAULT_FIXTURES.items()}
 
@@ -49,7 +52,6 @@ class MotionData:
 
 def fixture_spec(fixtures: dict[str, np.ndarray], known_distances: bool):
     """Fixtures with unknown centres; with ``known_distances``, every pairwise distance (exact)."""
-    from spherecal.correction.fixtures import FixtureSpec
 
     names = tuple(fixtures)
     distances = []
@@ -83,7 +85,6 @@ def motion_set(
         seconds: simulated time per fixture [s] (MuJoCo).
     """
     if source == "synthetic":
-        from spherecal.identification.synthetic import make_dataset
 
         dataset, _ = make_dataset(truth, fixtures, samples, rng, noise)
         return MotionData(dataset, fixture_spec(fixtures, len(fixtures) > 1))
@@ -93,7 +94,10 @@ def motion_set(
 
 
 def _mujoco_motion(truth, nominal, fixtures, samples, noise, rng, seconds) -> MotionData:
-    from spherecal.controller.self_motion import SelfMotionSettings, collect_self_motion
+    from spherecal.controller.self_motion import (  # MuJoCo: only a simulation needs it (start-up)
+        SelfMotionSettings,
+        collect_self_motion,
+    )
 
     settings = SelfMotionSettings(seconds=seconds, samples=samples, noise=noise)
     run = collect_self_motion(truth, nominal, fixtures, rng, settings)
@@ -111,6 +115,5 @@ def calibrate_from(nominal: RobotModel, data: MotionData, start: RobotModel | No
     Returns:
         The :class:`identification.calibrate.CalibrationResult` (``.model`` is the calibrated robot).
     """
-    from spherecal.identification.calibrate import calibrate
 
     return calibrate(nominal, data.dataset, data.spec, start=start)

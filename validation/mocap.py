@@ -161,7 +161,7 @@ class SimulatedMocap:
             markers (N, M, 3) and tool points (N, 3) [m], in the robot base (world) frame.
         """
         if self._plant is None:
-            from spherecal.controller.plant import build_plant
+            from spherecal.controller.plant import build_plant  # MuJoCo: only a simulation needs it (start-up)
 
             self._plant = build_plant(self.truth, markers=self.cluster.markers)
         sites = np.append(self._plant.marker_sites, self._plant.tool_site)

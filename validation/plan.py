@@ -22,11 +22,14 @@ from __future__ import annotations
 
 import itertools
 import math
+import time
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 
 import numpy as np
+import yaml
 
+from spherecal.controller.exploration import joint_coverage
 from spherecal.correction import RobotModel
 from spherecal.correction.errors import SpherecalError
 from spherecal.correction.fixtures import FixtureSpec
@@ -164,7 +167,6 @@ def read_candidates(path: str | Path, n_joints: int) -> list[Candidate]:
     Raises:
         CandidateError: unreadable file, no candidates, a bad position or joint range.
     """
-    import yaml
 
     path = Path(path)
     try:
@@ -213,6 +215,7 @@ def reach_configuration(
     Raises:
         UnreachableFixtureError (from the controller package's family): no seed reaches it.
     """
+    # MuJoCo: only a simulation needs it (start-up)
     from spherecal.controller.self_motion import UnreachableFixtureError
 
     q, ok = project_to_point(model, model.random_configurations(seeds, rng), centre)
@@ -256,6 +259,7 @@ def motion_samples(
     Raises:
         FixtureInsideRobotError, UnreachableFixtureError: the candidate cannot be used.
     """
+    # MuJoCo: only a simulation needs it (start-up)
     from spherecal.controller.self_motion import (
         SelfMotionSettings,
         UnreachableFixtureError,
@@ -292,7 +296,6 @@ def survey(
     count: int = PLAN_SAMPLES,
 ) -> list[Survey]:
     """Reach and self-motion coverage at every candidate (unreachable ones kept, with the reason)."""
-    from spherecal.controller.exploration import joint_coverage
 
     out = []
     for candidate in candidates:
@@ -378,7 +381,6 @@ def plan(
     Raises:
         CandidateError: no candidates, or ``fixtures`` outside 1..4.
     """
-    import time
 
     if not candidates:
         raise CandidateError("no candidate fixture positions given")

@@ -43,7 +43,7 @@ COLOURS = {
 
 def _rerun():
     os.environ.setdefault("RERUN_ANALYTICS", "0")
-    import rerun
+    import rerun  # Rerun: heavy, only when a recording is written
 
     return rerun
 
@@ -190,7 +190,7 @@ def _colour(key: str) -> tuple[int, int, int]:
 
 def read_entity_rows(path: str | os.PathLike) -> dict[str, int]:
     """Rows per entity path of a saved recording (``/__properties`` left out), for tests and checks."""
-    from rerun.chunk import RrdReader
+    from rerun.chunk import RrdReader  # Rerun: heavy, only when a recording is written
 
     _rerun()
     counts: dict[str, int] = {}

@@ -13,7 +13,7 @@ from spherecal.correction.samples_csv import read_samples
 
 def _simulate(tmp_path, *extra):
     out = tmp_path / "out"
-    code = main(["simulate", "--out", str(out), "--seconds", "0.5", "--samples", "40", "--seed", "4", *extra])
+    code = main(["simulate", "--out", str(out), "--seconds", "0.5", "--per-fixture", "40", "--seed", "4", *extra])
     return code, out
 
 
@@ -71,7 +71,7 @@ def test_bad_fixtures_exit_nonzero_and_write_nothing(tmp_path, capsys, text, mes
     assert not out.exists()
 
 
-@pytest.mark.parametrize("args", [["--seconds", "0"], ["--samples", "100000"], ["--noise", "-1"],
+@pytest.mark.parametrize("args", [["--seconds", "0"], ["--per-fixture", "100000"], ["--noise", "-1"],
                                   ["--seconds", "inf"], ["--noise", "inf"], ["--length-std", "nan"],
                                   ["--seed", "-1"], ["--seconds", "0.0004"],
                                   ["--solver", "nope"], ["--robot", "missing.yaml"]])
@@ -83,7 +83,7 @@ def test_bad_options_exit_nonzero_and_write_nothing(tmp_path, capsys, args):
 
 def test_out_below_a_file_fails_before_simulating(tmp_path, capsys):
     (tmp_path / "plain").write_text("x")
-    code = main(["simulate", "--out", str(tmp_path / "plain" / "sub"), "--seconds", "0.5", "--samples", "10"])
+    code = main(["simulate", "--out", str(tmp_path / "plain" / "sub"), "--seconds", "0.5", "--per-fixture", "10"])
     err = capsys.readouterr().err.strip()
     assert code == 1 and err.startswith("spherecal simulate: error: --out") and "\n" not in err
     assert "P1" not in err and sorted(p.name for p in tmp_path.iterdir()) == ["plain"]

@@ -5,9 +5,9 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from spherecal.controller.cli import DEFAULT_FIXTURES
 from spherecal.controller.exploration import Ramp, joint_coverage
 from spherecal.controller.self_motion import (
+    DEFAULT_FIXTURES,
     FixtureInsideRobotError,
     SelfMotionSettings,
     UnreachableFixtureError,

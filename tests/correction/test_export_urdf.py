@@ -24,7 +24,7 @@ def _mujoco_tool(text, q, prefix="panda_"):
     """(N, 3) positions and (N, 3, 3) orientations of the tool body in MuJoCo."""
     mj = mujoco.MjModel.from_xml_string(text)
     data = mujoco.MjData(mj)
-    body = mujoco.mj_name2id(mj, mujoco.mjtObj.mjOBJ_BODY, f"{prefix}tool")
+    body = mujoco.mj_name2id(mj, mujoco.mjtObj.mjOBJ_BODY, f"{prefix}link8")  # Franka's flange
     assert body >= 0
     points, rotations = np.empty((len(q), 3)), np.empty((len(q), 3, 3))
     for k, qk in enumerate(q):
@@ -55,7 +55,7 @@ def test_floats_are_written_exactly_and_names_carry_the_prefix(panda, rng):
     root = ET.fromstring(robot_to_urdf(model, prefix="left_"))
     joints = {j.get("name"): j for j in root.iter("joint")}
     links = {link.get("name") for link in root.iter("link")}
-    assert {f"left_link{i}" for i in range(8)} | {"left_base", "left_flange", "left_tool"} == links
+    assert {f"left_link{i}" for i in range(9)} | {"left_base"} == links
     revolute = [joints[f"left_joint{i + 1}"] for i in range(7)]
     assert all(j.get("type") == "revolute" and j.find("axis").get("xyz") == "0 0 1" for j in revolute)
     limits = np.array([[float(j.find("limit").get(k)) for k in ("lower", "upper")] for j in revolute])
@@ -63,7 +63,7 @@ def test_floats_are_written_exactly_and_names_carry_the_prefix(panda, rng):
     base = joints["left_base_joint"].find("origin")
     np.testing.assert_array_equal([float(v) for v in base.get("xyz").split()], model.base_xyz)
     np.testing.assert_array_equal([float(v) for v in base.get("rpy").split()], model.base_rpy)
-    tool = joints["left_tool_joint"].find("origin")
+    tool = joints["left_joint8"].find("origin")  # modified DH: the tool point in link 7 as written
     np.testing.assert_array_equal([float(v) for v in tool.get("xyz").split()], model.tool)
 
 

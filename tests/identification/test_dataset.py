@@ -166,7 +166,7 @@ def test_byte_order_mark_is_not_part_of_the_header(tmp_path, panda) -> None:
 
 
 def test_unlisted_fixture_message_names_it_plainly(tmp_path, panda, rng) -> None:
-    from spherecal.identification.problem import build_problem
+    from spherecal.identification.build import build_problem
 
     path = tmp_path / "s.csv"
     path.write_text(HEADER + GOOD + "P9,0,0,0,-1,0,1,0\n")

@@ -11,8 +11,9 @@ import pytest
 from spherecal.correction import load_robot, perturb, registered_errors, to_standard, tool_point
 from spherecal.correction.fixtures import FixtureSpec
 from spherecal.correction.samples import Dataset, DatasetError
+from spherecal.identification.build import build_problem
 from spherecal.identification.calibrate import calibrate
-from spherecal.identification.problem import UnidentifiableError, build_problem
+from spherecal.identification.problem import UnidentifiableError
 from spherecal.identification.synthetic import make_dataset, project_to_point
 
 
@@ -176,7 +177,7 @@ def test_scale_warning_states_the_scale_error_it_leaves() -> None:
     and the warning says the reported std exclude it (over seeds the std miss it: d5 0.05 vs 0.11 mm)."""
     import re
 
-    from spherecal.identification.problem import scale_centre
+    from spherecal.identification.gauge import scale_centre
 
     panda = load_robot("panda")
     centre = np.array([0.5, 0.1, 0.0])

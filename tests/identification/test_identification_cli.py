@@ -35,7 +35,7 @@ def inputs(tmp_path_factory):
 def test_calibrate_writes_a_robot_file_with_its_provenance(inputs, tmp_path, capsys) -> None:
     out = tmp_path / "cal.yaml"
     args = ["calibrate", "--robot", str(inputs / "robot.yaml"), "--samples", str(inputs / "samples.csv")]
-    code = main(args + ["--fixtures", str(inputs / "fixtures.yaml"), "--max-samples", "150", "--out", str(out)])
+    code = main(args + ["--fixtures", str(inputs / "fixtures.yaml"), "--max-per-fixture", "150", "--out", str(out)])
     assert code == 0
     printed = capsys.readouterr().out
     assert "residual [mm]" in printed and "fixed" in printed

@@ -7,8 +7,9 @@ import pytest
 
 from spherecal.correction import load_robot, perturb, registered_errors, tool_point
 from spherecal.correction.fixtures import FixtureSpec
+from spherecal.identification.build import build_problem
 from spherecal.identification.calibrate import calibrate, check_plausible
-from spherecal.identification.problem import ImplausibleCalibrationError, build_problem
+from spherecal.identification.problem import ImplausibleCalibrationError
 from spherecal.identification.synthetic import make_dataset
 
 
@@ -27,9 +28,7 @@ def test_one_second_of_self_motion_does_not_make_the_arm_worse() -> None:
     rng = np.random.default_rng(3)
     true = perturb(nominal, rng)
     fixtures = default_fixtures()
-    run = collect_self_motion(
-        true, nominal, fixtures, rng, SelfMotionSettings(seconds=1.0, samples=60, noise=3e-4)
-    )
+    run = collect_self_motion(true, nominal, fixtures, rng, SelfMotionSettings(seconds=1.0, samples=60, noise=3e-4))
     names = tuple(fixtures)
     distances = [
         (a, b, float(np.linalg.norm(fixtures[a] - fixtures[b]))) for i, a in enumerate(names) for b in names[i + 1 :]

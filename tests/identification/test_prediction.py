@@ -110,6 +110,8 @@ def test_predicted_mean_within_25_percent_of_a_10_set_campaign(panda):
             q = truth.random_configurations(2000, rng)
             measured.append(registered_errors(tool_point(model, q), tool_point(truth, q)).mean())
         ratio = predicted / np.mean(measured)
-        print(f"{k} fixtures: predicted {predicted * 1e3:.4f} mm, measured {np.mean(measured) * 1e3:.4f} mm, "
-              f"ratio {ratio:.2f}")
+        print(
+            f"{k} fixtures: predicted {predicted * 1e3:.4f} mm, measured {np.mean(measured) * 1e3:.4f} mm, "
+            f"ratio {ratio:.2f}"
+        )
         assert 0.75 < ratio < 1.25

@@ -15,7 +15,7 @@ from spherecal.validation.plan import (
     read_candidates,
     restricted,
 )
-from spherecal.validation.plan_cli import format_plan
+from spherecal.validation.plan_report import format_plan
 
 REACHABLE = {"A": [0.5, -0.25, 0.5], "B": [0.5, 0.0, 0.4], "C": [0.45, 0.25, 0.45]}
 
@@ -78,7 +78,7 @@ def test_bad_candidates_raise_one_line(tmp_path, panda, text, field):
         ["--candidates", "EMPTY"],
         ["--candidates", "MISSING"],
         ["--grid", "0,1,2;0,1"],
-        ["--grid", "0.5,0.5,1;0,0,1;0.4,0.4,1", "--fixtures", "5"],
+        ["--grid", "0.5,0.5,1;0,0,1;0.4,0.4,1", "--fixture-count", "5"],
         [],
     ],
 )
@@ -132,14 +132,15 @@ def test_unreachable_candidates_are_reported(panda):
 def test_cli_plan_and_too_few_reachable(tmp_path, capsys):
     path = _yaml(tmp_path, "candidates:\n  A: {position: [0.5, -0.25, 0.5]}\n  far: {position: [2, 0, 0]}\n")
     rrd = tmp_path / "plan.rrd"
-    assert main(["plan", "--candidates", str(path), "--fixtures", "1", "--samples", "100", "--rrd", str(rrd)]) == 0
+    args = ["plan", "--candidates", str(path), "--fixture-count", "1", "--per-fixture", "100", "--rrd", str(rrd)]
+    assert main(args) == 0
     out = capsys.readouterr().out
     assert "best set" in out and "unreachable" in out and rrd.stat().st_size > 0
     from spherecal.validation.recording import read_entity_rows
 
     rows = read_entity_rows(rrd)
     assert rows.get("plan/candidates") == 1 and rows.get("plan/best") == 1 and rows.get("plan/table") == 1
-    assert main(["plan", "--candidates", str(path), "--fixtures", "2"]) == 1
+    assert main(["plan", "--candidates", str(path), "--fixture-count", "2"]) == 1
     assert "no plan" in capsys.readouterr().out
 
 
@@ -151,7 +152,7 @@ def test_cli_predict_from_a_data_set(tmp_path, capsys, panda):
     dataset, spec = make_dataset(panda, {k: np.array(v) for k, v in REACHABLE.items()}, 60, np.random.default_rng(2))
     write_samples(tmp_path / "samples.csv", dataset)
     write_fixtures(tmp_path / "fixtures.yaml", spec)
-    args = ["plan", "--predict", str(tmp_path / "samples.csv"), "--spec", str(tmp_path / "fixtures.yaml")]
+    args = ["plan", "--predict", str(tmp_path / "samples.csv"), "--fixtures", str(tmp_path / "fixtures.yaml")]
     assert main(args) == 0
     out = capsys.readouterr().out
     assert "predicted tool-point error" in out and "condition number" in out

@@ -115,8 +115,6 @@ def test_output_under_a_file_is_refused_before_anything_is_written(files, tmp_pa
 @pytest.mark.parametrize("command", ["calibrate", "validate", "plan", "demo", "campaign"])
 def test_negative_seed_is_a_usage_error(command, capsys) -> None:
     # numpy refuses negative seeds: every one of these died with "ValueError: expected non-negative integer"
-    with pytest.raises(SystemExit) as info:
-        main([command, "--seed", "-1"])
-    assert info.value.code == 2
+    assert main([command, "--seed", "-1"]) == 1
     assert "--seed: expected an integer >= 0, got '-1'" in capsys.readouterr().err
 

@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import argparse
 
+from spherecal.options import add_urdf_links, urdf_links
+
 HELP = "Export a calibrated robot file as URDF, MJCF or YAML."
 FORMATS = ("urdf", "mjcf", "yaml")
 
@@ -11,8 +13,17 @@ FORMATS = ("urdf", "mjcf", "yaml")
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     """Register the options of `spherecal export`."""
     parser.add_argument("robot", metavar="CAL.yaml", help="robot file to export (calibrated or nominal), or 'panda'")
+    add_urdf_links(parser)
     parser.add_argument("--format", choices=FORMATS, required=True, help="output format")
     parser.add_argument("--out", required=True, metavar="FILE", help="output file (written atomically)")
+    parser.add_argument(
+        "--into",
+        default=None,
+        metavar="ORIGINAL.urdf",
+        help="urdf only: write the calibration into this URDF of the same arm, changing only the joint "
+        "origins of the calibrated chain and of the fixed joint into the tip link (meshes, inertials, "
+        "gripper, limits, names kept)",
+    )
     parser.add_argument(
         "--prefix",
         default=None,
@@ -89,13 +100,45 @@ def export_text(model, output_format: str, prefix: str | None = None, header: st
     raise ExportError(f"--format: unknown format {output_format!r}, expected one of {FORMATS}")
 
 
+def into_text(model, into: str, out: str, header: str = "") -> str:
+    """The URDF ``into`` with the calibrated joint origins (:func:`correction.urdf_into.urdf_into`).
+
+    Raises:
+        correction.urdf.ExportError: ``out`` is ``into``, or ``into`` does not match the model.
+    """
+    import os
+    from pathlib import Path
+
+    from spherecal.correction.urdf import ExportError
+    from spherecal.correction.urdf_into import urdf_into
+
+    source = Path(into)
+    try:
+        text = source.read_text(encoding="utf-8")
+    except (OSError, UnicodeDecodeError) as error:
+        raise ExportError(f"{into}: cannot read: {getattr(error, 'strerror', None) or error}") from None
+    if Path(out).resolve() == source.resolve() or (Path(out).exists() and os.path.samefile(out, source)):
+        raise ExportError(f"--out: {out} is the --into file; write the calibrated URDF to another file")
+    return urdf_into(model, text, str(source), header)
+
+
 def run(args: argparse.Namespace) -> int:
     """Load, validate and export; nothing is written unless the whole document was built."""
     from spherecal.correction import atomic_write_text, load_robot
+    from spherecal.correction.urdf import ExportError
 
-    model = load_robot(args.robot)
+    model = load_robot(args.robot, **urdf_links(args))
     effort, velocity = _limits(args.effort, "--effort"), _limits(args.velocity, "--velocity")
-    text = export_text(model, args.format, args.prefix, provenance_header(args.robot, args.format), effort, velocity)
+    header = provenance_header(args.robot, args.format)
+    if args.into is not None:
+        if args.format != "urdf":
+            raise ExportError(f"--into: only the urdf format takes it, not {args.format}")
+        for option, value in (("--prefix", args.prefix), ("--effort", effort), ("--velocity", velocity)):
+            if value is not None:
+                raise ExportError(f"{option}: not with --into (the URDF keeps its own names and limits)")
+        text = into_text(model, args.into, args.out, header)
+    else:
+        text = export_text(model, args.format, args.prefix, header, effort, velocity)
     path = atomic_write_text(args.out, text)
     print(f"spherecal export: wrote {args.format} of {model.name!r} ({model.convention} DH) to {path}")
     from spherecal.correction.elastic import compliance_of

@@ -4,21 +4,26 @@ from __future__ import annotations
 
 import argparse
 
+from spherecal.options import fail
+
 HELP = "End-to-end demo on the embedded Panda: simulate, calibrate, validate, record."
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     """Register the options of `spherecal demo`."""
-    from spherecal.identification.options import non_negative, positive, seed
+    from spherecal.options import add_per_fixture, add_seconds, add_seed, count, noise_mm
 
-    parser.add_argument("--seed", type=seed, default=0, help="seed of the true robot, motion and noise (0)")
-    parser.add_argument("--samples", type=int, default=1500, help="samples kept per fixture (1500)")
+    add_seed(parser, "the true robot, motion and noise")
+    add_per_fixture(parser, 1500)
     parser.add_argument(
-        "--noise", type=non_negative, default=0.3, help="fixture noise in the calibration data, mm std (0.3)"
+        "--noise", type=noise_mm, default=0.3,
+        help="fixture noise std per axis in the calibration data [mm] (default 0.3)",
     )
-    parser.add_argument("--mocap-noise", type=non_negative, default=0.3, help="mocap noise per marker, mm std (0.3)")
-    parser.add_argument("--seconds", type=positive, default=60.0, help="simulated self-motion per fixture, s (60)")
-    parser.add_argument("--configurations", type=int, default=5000, help="random validation configurations (5000)")
+    parser.add_argument("--mocap-noise", type=noise_mm, default=0.3,
+                        help="motion-capture marker noise std [mm] (default 0.3)")
+    add_seconds(parser, 60.0, "simulated self-motion per fixture")
+    parser.add_argument("--configurations", type=count(3), default=5000,
+                        help="random validation configurations (default 5000)")
     parser.add_argument(
         "--source", choices=("mujoco", "synthetic"), default="mujoco", help="motion: MuJoCo self-motion (default)"
     )
@@ -34,24 +39,17 @@ def run(args: argparse.Namespace) -> int:
 
     from spherecal.validation.demo import DemoConfig, run_demo
 
-    if (
-        args.samples < 10
-        or not args.seconds > 0
-        or args.configurations < 3
-        or not (args.noise >= 0 and args.mocap_noise >= 0)
-    ):
-        raise SystemExit(
-            "spherecal demo: error: need --samples >= 10, --seconds > 0, --configurations >= 3, noises >= 0"
-        )
-    if args.samples > round(args.seconds * 1000) and args.source == "mujoco":
-        raise SystemExit(f"spherecal demo: error: --samples {args.samples} > {args.seconds} s of 1 kHz readings")
+    if args.per_fixture < 10:
+        raise fail(f"--per-fixture must be >= 10, got {args.per_fixture}")
+    if args.per_fixture > round(args.seconds * 1000) and args.source == "mujoco":
+        raise fail(f"--per-fixture {args.per_fixture} > {args.seconds:g} s of 1 kHz readings")
     from spherecal.validation.inputs import check_out_folder
 
     check_out_folder(args.out)
     start = time.perf_counter()
     config = DemoConfig(
         seed=args.seed,
-        samples=args.samples,
+        samples=args.per_fixture,
         noise=args.noise * 1e-3,
         mocap_noise=args.mocap_noise * 1e-3,
         seconds=args.seconds,

@@ -4,17 +4,21 @@ from __future__ import annotations
 
 import argparse
 
+from spherecal.options import fail
+
 HELP = "Run the paper's simulated protocol (fixture sets x noise levels) and print its error table."
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     """Register the options of `spherecal campaign`."""
-    from spherecal.identification.options import non_negative, positive, seed
+    from spherecal.options import add_per_fixture, add_seconds, add_seed, count, noise_mm
 
-    parser.add_argument("--sets", type=int, default=10, help="motion sets per row (10)")
-    parser.add_argument("--samples", type=int, default=500, help="samples per fixture in each set (500)")
-    parser.add_argument("--configurations", type=int, default=5000, help="random validation configurations (5000)")
-    parser.add_argument("--noise", type=non_negative, default=0.3, help="fixture noise of the noisy rows, mm std (0.3)")
+    parser.add_argument("--sets", type=count(1), default=10, help="motion sets per row (default 10)")
+    add_per_fixture(parser, 500, "samples per fixture in each set")
+    parser.add_argument("--configurations", type=count(3), default=5000,
+                        help="random validation configurations (default 5000)")
+    parser.add_argument("--noise", type=noise_mm, default=0.3,
+                        help="fixture noise std per axis of the noisy rows [mm] (default 0.3)")
     parser.add_argument(
         "--source",
         choices=("synthetic", "mujoco"),
@@ -28,15 +32,15 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         help="realistic: perturbed true robot, calibrated from nominal (default); paper: true = nominal, "
         "started from a perturbed model, as the paper's simulation",
     )
-    parser.add_argument("--seconds", type=positive, default=20.0, help="MuJoCo self-motion per fixture, s (20)")
+    add_seconds(parser, 20.0, "MuJoCo self-motion per fixture")
     parser.add_argument("--rows", default="P1,P2,P3,Pall", help="fixture sets (P1,P2,P3,Pall)")
-    parser.add_argument("--seed", type=seed, default=0, help="base seed (0); every set is seeded from it")
+    add_seed(parser, "the campaign (every set is seeded from it)")
     parser.add_argument("--stiffness", default=None, metavar="K[,K...]",
                         help="elastic true robot: joint stiffness [Nm/rad], one value or one per joint, 0 = rigid "
                              "(e.g. 0,3e4,3e4,3e4,0,0,0); rows get an E")
     parser.add_argument("--model", choices=("dh", "elastic", "auto"), default="dh",
                         help="model calibrated (dh: default, the paper's; elastic; auto: cross-validated choice)")
-    parser.add_argument("--workers", type=int, default=2, help="worker processes (2)")
+    parser.add_argument("--workers", type=count(1), default=2, help="worker processes (default 2)")
     parser.add_argument("--out", default="spherecal-campaign", help="folder for table2.csv and table2.md")
 
 
@@ -57,36 +61,22 @@ def run(args: argparse.Namespace) -> int:
     rows = tuple(r.strip() for r in args.rows.split(",") if r.strip())
     unknown = [r for r in rows if r not in FIXTURE_SETS]
     if unknown or not rows:
-        raise SystemExit(f"spherecal campaign: error: --rows: unknown {unknown}, choose from {list(FIXTURE_SETS)}")
-    if (
-        args.sets < 1
-        or args.samples < 10
-        or args.configurations < 3
-        or not args.noise >= 0
-        or args.workers < 1
-        or not args.seconds > 0
-    ):
-        raise SystemExit(
-            "spherecal campaign: error: need --sets >= 1, --samples >= 10, --configurations >= 3, --noise >= 0, "
-            "--workers >= 1, --seconds > 0"
-        )
-    if args.source == "mujoco" and args.samples > round(args.seconds * 1000):
-        raise SystemExit(f"spherecal campaign: error: --samples {args.samples} > {args.seconds} s of 1 kHz readings")
+        raise fail(f"--rows: unknown {unknown}, choose from {list(FIXTURE_SETS)}")
+    if args.per_fixture < 10:
+        raise fail(f"--per-fixture must be >= 10, got {args.per_fixture}")
+    if args.source == "mujoco" and args.per_fixture > round(args.seconds * 1000):
+        raise fail(f"--per-fixture {args.per_fixture} > {args.seconds:g} s of 1 kHz readings")
     from spherecal.validation.inputs import check_out_folder
 
     check_out_folder(args.out)
-    from spherecal.controller.cli import _stiffness  # the same K[,K...] syntax as simulate --stiffness
-    from spherecal.correction import SpherecalError
+    from spherecal.commands.simulate import _stiffness  # the same K[,K...] syntax as simulate --stiffness
 
-    try:
-        stiffness = _stiffness(args.stiffness, 7) or ()
-    except SpherecalError as error:
-        raise SystemExit(f"spherecal campaign: error: {error}") from None
+    stiffness = _stiffness(args.stiffness, 7) or ()  # the campaign's arm is the embedded Panda
     config = CampaignConfig(
         stiffness=tuple(stiffness),
         model=args.model,
         sets=args.sets,
-        samples=args.samples,
+        samples=args.per_fixture,
         configurations=args.configurations,
         seconds=args.seconds,
         source=args.source,

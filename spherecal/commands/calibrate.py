@@ -4,32 +4,39 @@ from __future__ import annotations
 
 import argparse
 
+from spherecal.options import urdf_links
+
 HELP = "Identify DH parameters from spherical-joint samples and write a calibrated robot file."
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     """Register the options of `spherecal calibrate`."""
-    from spherecal.identification.options import non_negative, positive, seed
+    from spherecal.options import add_deprecated, add_robot, add_seed, count, non_negative, positive, positive_noise_mm
 
-    parser.add_argument("--robot", required=True, help="nominal robot file (or 'panda')")
+    add_robot(parser, default=None)
     parser.add_argument("--samples", required=True, help="samples.csv: fixture[,t],q1..qn [rad]")
     parser.add_argument("--fixtures", help="fixtures.yaml: known positions and distances [m]")
     parser.add_argument("--method", choices=("lm", "pso", "pso+lm"), default="lm", help="solver (default lm)")
-    parser.add_argument("--max-samples", type=int, default=None, help="keep at most N samples per fixture (random)")
-    parser.add_argument("--seed", type=seed, default=0, help="seed of subsampling and PSO (default 0)")
+    parser.add_argument("--max-per-fixture", type=count(1), default=None, metavar="N",
+                        help="keep at most N samples per fixture (random; default all)")
+    add_deprecated(parser, "--max-samples", "--max-per-fixture", count(1))
+    add_seed(parser, "subsampling and PSO")
     parser.add_argument("--loss", choices=("linear", "soft_l1", "huber"), default="linear", help="lm loss")
     parser.add_argument(
-        "--noise", type=positive, default=3e-4, help="expected fixture noise [m] (robust-loss scale; default 0.0003)"
+        "--noise", type=positive_noise_mm, default=0.3,
+        help="expected fixture noise std per axis [mm] (robust-loss scale, residual check; default 0.3)",
     )
     parser.add_argument(
-        "--dedup-tol", type=non_negative, default=1e-4, help="drop samples within this of an earlier one [rad] (1e-4)"
+        "--dedup-deg", type=non_negative, default=None,
+        help="drop samples within this of an earlier one, every joint [deg] (default 0.00573 = 1e-4 rad)",
     )
+    add_deprecated(parser, "--dedup-tol", "--dedup-deg", non_negative, convert=_rad_to_deg)
     parser.add_argument(
         "--max-change",
         type=positive,
         default=4.0,
         help="refuse a fit that moves the tool point more than this many times what a real arm's errors "
-        "(1 mm, 0.2 deg) typically do (4: about 24 mm on the Panda)",
+        "(1 mm, 0.2 deg) typically do (a factor; 4: about 24 mm on the Panda)",
     )
     parser.add_argument(
         "--model",
@@ -40,6 +47,10 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         "<placement>_h<k>) better than dh by more than the fold-to-fold spread",
     )
     parser.add_argument("--out", required=True, help="calibrated robot file to write (YAML)")
+
+
+def _rad_to_deg(value: float) -> float:
+    return value * 180.0 / 3.141592653589793
 
 
 def run(args: argparse.Namespace) -> int:
@@ -60,26 +71,24 @@ def run(args: argparse.Namespace) -> int:
     from spherecal.correction import load_robot, save_robot
     from spherecal.correction.fixtures import read_fixtures
     from spherecal.correction.provenance import PACKAGES, input_record, versions
+    from spherecal.correction.samples import DEDUP_TOL
     from spherecal.correction.samples_csv import read_samples
-
-    from .calibrate import calibrate
-    from .selection import elastic_start, rigid, select_model
+    from spherecal.identification.calibrate import calibrate
+    from spherecal.identification.selection import elastic_start, rigid, select_model
 
     clock = time.perf_counter()
-    if args.max_samples is not None and args.max_samples < 1:
-        raise SystemExit("spherecal calibrate: error: --max-samples must be >= 1")
-    if not args.noise > 0 or not args.dedup_tol >= 0 or not args.max_change > 0:
-        raise SystemExit("spherecal calibrate: error: --noise and --max-change must be > 0, --dedup-tol >= 0")
-    nominal = load_robot(args.robot)
+    noise = args.noise * 1e-3  # [m] from here on
+    dedup_tol = DEDUP_TOL if args.dedup_deg is None else float(np.deg2rad(args.dedup_deg))  # [rad]
+    nominal = load_robot(args.robot, **urdf_links(args))
     dataset = read_samples(args.samples, nominal)
     spec = read_fixtures(args.fixtures) if args.fixtures else None
     read = len(dataset.labels)
-    dataset = dataset.deduplicated(args.dedup_tol)
+    dataset = dataset.deduplicated(dedup_tol)
     dropped = read - dataset.n_samples
-    dataset = dataset.subsampled(args.max_samples, np.random.default_rng(args.seed))
+    dataset = dataset.subsampled(args.max_per_fixture, np.random.default_rng(args.seed))
 
     def fit(start, data, fixtures):  # a cross-validation fold: lm, the user's loss and noise
-        return calibrate(start, data, fixtures, loss=args.loss, noise=args.noise, max_change=args.max_change).model
+        return calibrate(start, data, fixtures, loss=args.loss, noise=noise, max_change=args.max_change).model
 
     selection = select_model(args.model, fit, nominal, dataset, spec, seed=args.seed)
     start = elastic_start(nominal) if selection.chosen == "elastic" else rigid(nominal)
@@ -90,7 +99,7 @@ def run(args: argparse.Namespace) -> int:
         method=args.method,
         seed=args.seed,
         loss=args.loss,
-        noise=args.noise,
+        noise=noise,
         max_change=args.max_change,
     )
     block = result.block()
@@ -106,9 +115,9 @@ def run(args: argparse.Namespace) -> int:
         block["inputs"]["fixtures"] = input_record(args.fixtures)
     block["options"] = {
         "loss": args.loss,
-        "noise_m": args.noise,
-        "max_samples": args.max_samples,
-        "dedup_tol_rad": args.dedup_tol,
+        "noise_m": noise,
+        "max_per_fixture": args.max_per_fixture,
+        "dedup_tol_rad": float(dedup_tol),
         "max_change": args.max_change,
         "model": args.model,
     }
@@ -123,6 +132,6 @@ def run(args: argparse.Namespace) -> int:
     print(result.summary())
     print(selection.summary())
     if dropped:
-        print(f"dropped {dropped} duplicate samples (within {args.dedup_tol:g} rad)")
+        print(f"dropped {dropped} duplicate samples (within {np.rad2deg(dedup_tol):.3g} deg)")
     print(f"wrote {args.out} in {time.perf_counter() - clock:.2f} s")
     return 0

@@ -4,33 +4,30 @@ from __future__ import annotations
 
 import argparse
 
+from spherecal.options import fail, urdf_links
+
 HELP = "Simulate self-motion at spherical-joint fixtures on a perturbed (true) robot and write samples."
-
-#: Default fixtures [m], base frame: over the front of the Panda's workspace, chosen by the
-#: coverage table (every joint >= 30% of its range in 20 s with coverage exploration).
-DEFAULT_FIXTURES: dict[str, tuple[float, float, float]] = {
-    "P1": (0.5, -0.25, 0.5),
-    "P2": (0.5, 0.0, 0.4),
-    "P3": (0.45, 0.25, 0.45),
-}
-
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     """Register the options of `spherecal simulate`."""
-    parser.add_argument("--out", required=True, help="output directory (samples.csv, fixtures.yaml, truth.yaml)")
-    parser.add_argument("--seed", type=int, default=0, help="seed of everything random (default 0)")
-    parser.add_argument("--seconds", type=float, default=20.0, help="self-motion per fixture [s] (default 20)")
-    parser.add_argument("--samples", type=int, default=500, help="samples kept per fixture (default 500)")
+    from spherecal.options import add_per_fixture, add_robot, add_seed, noise_mm, non_negative, spread_mm
+
+    parser.add_argument("--out", required=True, help="output folder (samples.csv, fixtures.yaml, truth.yaml)")
+    add_seed(parser)
+    parser.add_argument("--seconds", type=non_negative, default=20.0, help="self-motion per fixture [s] (default 20)")
+    add_per_fixture(parser, 500)
     parser.add_argument("--mode", choices=("coverage", "random"), default="coverage",
                         help="exploration of the null space (default coverage; random is the paper's)")
-    parser.add_argument("--noise", type=float, default=0.0003,
-                        help="fixture compliance std per axis [m] moving the physical point (default 0.0003)")
+    parser.add_argument("--noise", type=noise_mm, default=0.3,
+                        help="fixture compliance std per axis moving the physical point [mm] (default 0.3)")
     parser.add_argument("--fixtures", default=None,
                         help="fixtures.yaml giving the true centre (position) of every fixture [m]")
-    parser.add_argument("--robot", default="panda", help="nominal robot file or 'panda' (default)")
-    parser.add_argument("--length-std", type=float, default=1e-3, help="true-robot a, d error std [m]")
-    parser.add_argument("--angle-std-deg", type=float, default=0.2, help="true-robot alpha, theta error std [deg]")
-    parser.add_argument("--tool-std", type=float, default=1e-3, help="true-robot tool point error std [m]")
+    add_robot(parser)
+    parser.add_argument("--length-std", type=spread_mm, default=1.0, help="true-robot a, d error std [mm] (default 1)")
+    parser.add_argument("--angle-std-deg", type=non_negative, default=0.2,
+                        help="true-robot alpha, theta error std [deg] (default 0.2)")
+    parser.add_argument("--tool-std", type=spread_mm, default=1.0,
+                        help="true-robot tool point error std [mm] (default 1)")
     parser.add_argument("--known-distances", action="store_true",
                         help="write the true centre-to-centre distances into fixtures.yaml")
     parser.add_argument("--stiffness", default=None, metavar="K[,K...]",
@@ -41,24 +38,20 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--solver", default="osqp", help="QP solver (qpsolvers name; osqp is persistent)")
 
 
-def _fail(message: str):
-    from spherecal.correction.errors import SpherecalError
-
-    return SpherecalError(message)
-
-
 def _fixtures(path: str | None) -> dict:
     """name -> (3,) true centres, from ``path`` or the defaults."""
     import numpy as np
 
     if path is None:
+        from spherecal.controller.self_motion import DEFAULT_FIXTURES  # MuJoCo: only when simulating
+
         return {k: np.array(v, dtype=float) for k, v in DEFAULT_FIXTURES.items()}
     from spherecal.correction.fixtures import read_fixtures
 
     spec = read_fixtures(path)
     missing = [name for name in spec.names if name not in spec.positions]
     if missing:
-        raise _fail(f"{path}: field 'fixtures.{missing[0]}.position': simulate needs the true centre of every "
+        raise fail(f"{path}: field 'fixtures.{missing[0]}.position': simulate needs the true centre of every "
                     "fixture")
     return {name: spec.positions[name] for name in spec.names}
 
@@ -72,33 +65,29 @@ def _stiffness(text: str | None, n: int):
     try:
         values = [float(v) for v in text.split(",")]
     except ValueError:
-        raise _fail(f"--stiffness {text!r}: expected numbers [Nm/rad] separated by commas") from None
+        raise fail(f"--stiffness {text!r}: expected numbers [Nm/rad] separated by commas") from None
     if len(values) == 1:
         values = values * n
     if len(values) != n or not all(math.isfinite(v) and v >= 0 for v in values):
-        raise _fail(f"--stiffness {text!r}: expected 1 or {n} finite values >= 0 [Nm/rad] (0 = rigid)")
+        raise fail(f"--stiffness {text!r}: expected 1 or {n} finite values >= 0 [Nm/rad] (0 = rigid)")
     return values
 
 
 def _check_args(args: argparse.Namespace) -> None:
-    import math
     from pathlib import Path
 
-    if args.seed < 0:
-        raise _fail(f"--seed must be >= 0 (numpy seeds are non-negative), got {args.seed}")
-    if not (args.seconds >= 0.001 and math.isfinite(args.seconds)):
-        raise _fail(f"--seconds must be finite and >= 0.001 (one 1 kHz step), got {args.seconds}")
-    if not 1 <= args.samples <= int(round(args.seconds * 1000)):
-        raise _fail(f"--samples must be in 1..{int(round(args.seconds * 1000))} (1 kHz x seconds), got {args.samples}")
-    for name in ("noise", "length_std", "angle_std_deg", "tool_std"):
-        if not (getattr(args, name) >= 0 and math.isfinite(getattr(args, name))):
-            raise _fail(f"--{name.replace('_', '-')} must be finite and >= 0, got {getattr(args, name)}")
+    if not args.seconds >= 0.001:
+        raise fail(f"--seconds must be >= 0.001 (one 1 kHz step), got {args.seconds}")
+    if not 1 <= args.per_fixture <= int(round(args.seconds * 1000)):
+        raise fail(
+            f"--per-fixture must be in 1..{int(round(args.seconds * 1000))} (1 kHz x seconds), got {args.per_fixture}"
+        )
     out = Path(args.out)
     if out.exists() and not out.is_dir():
-        raise _fail(f"--out {out}: exists and is not a directory")
+        raise fail(f"--out {out}: exists and is not a directory")
     blocker = next((p for p in out.parents if p.exists() and not p.is_dir()), None)
     if blocker is not None:  # found before the simulation runs, not when the files are written
-        raise _fail(f"--out {out}: {blocker} is not a directory")
+        raise fail(f"--out {out}: {blocker} is not a directory")
 
 
 def run(args: argparse.Namespace) -> int:
@@ -109,22 +98,21 @@ def run(args: argparse.Namespace) -> int:
     import numpy as np
     import qpsolvers
 
+    from spherecal.controller.self_motion import SelfMotionSettings, collect_self_motion
     from spherecal.correction import atomic_write_text, dump_robot, load_robot, perturb
     from spherecal.correction.fixtures import FixtureSpec, format_fixtures
     from spherecal.correction.samples_csv import format_samples
 
-    from .self_motion import SelfMotionSettings, collect_self_motion
-
     _check_args(args)
     if args.solver not in qpsolvers.available_solvers:
-        raise _fail(f"--solver {args.solver!r} is not installed; have {', '.join(qpsolvers.available_solvers)}")
-    nominal = load_robot(args.robot)
+        raise fail(f"--solver {args.solver!r} is not installed; have {', '.join(qpsolvers.available_solvers)}")
+    nominal = load_robot(args.robot, **urdf_links(args))
     if nominal.n_joints < 4:  # the tool point pinned leaves n - 3 degrees of freedom
-        raise _fail(f"--robot {args.robot}: {nominal.n_joints} joints have no self-motion at a spherical joint "
+        raise fail(f"--robot {args.robot}: {nominal.n_joints} joints have no self-motion at a spherical joint "
                     "(needs at least 4)")
     fixtures = _fixtures(args.fixtures)
     rng = np.random.default_rng(args.seed)
-    true = perturb(nominal, rng, args.length_std, np.deg2rad(args.angle_std_deg), args.tool_std)
+    true = perturb(nominal, rng, args.length_std * 1e-3, np.deg2rad(args.angle_std_deg), args.tool_std * 1e-3)
     stiffness = _stiffness(args.stiffness, nominal.n_joints)
     if stiffness is not None:
         from spherecal.correction.elastic import with_compliance
@@ -134,8 +122,8 @@ def run(args: argparse.Namespace) -> int:
     from spherecal.correction.elastic import compliance_of
 
     compliance_of(true)  # a compliance without inertials: one line naming the field, before simulating
-    settings = SelfMotionSettings(seconds=args.seconds, samples=args.samples, mode=args.mode, noise=args.noise,
-                                  solver=args.solver)
+    settings = SelfMotionSettings(seconds=args.seconds, samples=args.per_fixture, mode=args.mode,
+                                  noise=args.noise * 1e-3, solver=args.solver)
     result = collect_self_motion(true, nominal, fixtures, rng, settings)
 
     names = result.fixture_names
@@ -155,7 +143,7 @@ def run(args: argparse.Namespace) -> int:
     try:
         out.mkdir(parents=True, exist_ok=True)
     except OSError as error:
-        raise _fail(f"--out {out}: cannot create the directory: {error.strerror or error}") from None
+        raise fail(f"--out {out}: cannot create the directory: {error.strerror or error}") from None
     atomic_write_text(out / "samples.csv", samples_text)
     atomic_write_text(out / "fixtures.yaml", fixtures_text)
     atomic_write_text(out / "truth.yaml", truth_text)
@@ -182,8 +170,8 @@ def _provenance(args: argparse.Namespace, settings, result) -> dict:
         "nominal_robot": str(args.robot),
         "fixtures_file": None if args.fixtures is None else str(args.fixtures),
         "versions": versions(),
-        "perturbation": {"length_std": args.length_std, "angle_std_deg": args.angle_std_deg,
-                         "tool_std": args.tool_std, "stiffness": args.stiffness},
+        "perturbation": {"length_std_m": args.length_std * 1e-3, "angle_std_deg": args.angle_std_deg,
+                         "tool_std_m": args.tool_std * 1e-3, "stiffness_nm_per_rad": args.stiffness},
         "settings": {"seconds": settings.seconds, "samples": settings.samples, "mode": settings.mode,
                      "noise": settings.noise, "solver": settings.solver, "timestep": 0.001},
         "fixtures": {name: [float(v) for v in c] for name, c in zip(result.fixture_names, result.fixture_centres,

@@ -1,24 +1,39 @@
-"""`spherecal validate`: Compare nominal and calibrated models against the truth or motion-capture data."""
+"""`spherecal validate`: Compare nominal and calibrated models against the truth, mocap data or socket samples.
+
+Without ``--truth`` and ``--mocap``, ``--samples`` (and ``--fixtures``) alone: the socket-only check of
+:mod:`spherecal.validation.sockets` (tool-point spread per socket, known-distance errors).
+"""
 
 from __future__ import annotations
 
 import argparse
 
-HELP = "Compare nominal and calibrated models against the truth or motion-capture data."
+from spherecal.options import fail, urdf_links
+
+HELP = "Compare nominal and calibrated models against the truth, motion-capture data or socket samples alone."
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     """Register the options of `spherecal validate`."""
-    from spherecal.identification.options import non_negative, seed
+    from spherecal.options import add_deprecated, add_seed, add_urdf_links, count, noise_mm
 
     parser.add_argument("--truth", help="robot file of the true robot (simulation)")
     parser.add_argument("--nominal", required=True, help="robot file of the nominal model ('panda': embedded)")
     parser.add_argument("--calibrated", required=True, help="robot file of the calibrated model")
+    add_urdf_links(parser)
     parser.add_argument("--mocap", help="recorded mocap CSV: [t,] q1..qn, x, y, z (tool point in the mocap frame, m)")
-    parser.add_argument("--samples", help="samples.csv of the self-motion sets to validate on as well (simulation)")
-    parser.add_argument("--configurations", type=int, default=5000, help="random workspace configurations (5000)")
-    parser.add_argument("--noise", type=non_negative, default=0.3, help="simulated marker noise std [mm] (0.3)")
-    parser.add_argument("--seed", type=seed, default=0, help="seed of the simulated mocap (0)")
+    parser.add_argument(
+        "--samples",
+        help="samples.csv: with --truth, self-motion sets to validate on as well; alone (no --truth, no --mocap), "
+        "socket samples NOT used in the fit: spread per socket and known-distance errors, no mocap needed",
+    )
+    parser.add_argument("--fixtures", help="fixtures.yaml of --samples (known distances [m]) for the socket-only check")
+    parser.add_argument("--configurations", type=count(3), default=5000,
+                        help="random workspace configurations (default 5000)")
+    parser.add_argument("--mocap-noise", type=noise_mm, default=0.3,
+                        help="simulated motion-capture marker noise std [mm] (default 0.3)")
+    add_deprecated(parser, "--noise", "--mocap-noise", noise_mm)
+    add_seed(parser, "the simulated mocap")
     parser.add_argument("--out", help="write the report as JSON (metres) to this file")
     parser.add_argument("--rrd", help="save a Rerun recording to this file")
     parser.add_argument("--spawn", action="store_true", help="stream to a live Rerun viewer")
@@ -37,10 +52,10 @@ def run(args: argparse.Namespace) -> int:
     from spherecal.validation.pipeline import record_validation, validate_models
     from spherecal.validation.provenance import provenance
 
-    if args.truth is None and args.mocap is None:
-        raise SystemExit("spherecal validate: error: give --truth (simulation) or --mocap (recorded data)")
-    if args.configurations < 3 or not args.noise >= 0:
-        raise SystemExit("spherecal validate: error: --configurations must be >= 3 and --noise >= 0")
+    if args.truth is None and args.mocap is None and args.samples is None:
+        raise fail("give --truth (simulation), --mocap (recorded data) or --samples (socket-only)")
+    if args.fixtures is not None and (args.truth is not None or args.mocap is not None or args.samples is None):
+        raise fail("--fixtures goes with --samples alone (socket-only check)")
     from spherecal.validation.inputs import check_out_file
 
     for option, path in (("--out", args.out), ("--rrd", args.rrd)):
@@ -49,8 +64,12 @@ def run(args: argparse.Namespace) -> int:
     files = {"nominal": args.nominal, "calibrated": args.calibrated}
     if args.truth is not None:
         files["truth"] = args.truth
-    models = {role: load_robot(path) for role, path in files.items()}
+    models = {role: load_robot(path, **urdf_links(args)) for role, path in files.items()}
     check_models(models, files)
+    if args.truth is None and args.mocap is None:
+        from spherecal.commands.validate_sockets import run_sockets
+
+        return run_sockets(args, models)
     n = models["nominal"].n_joints
     measurement = None if args.mocap is None else read_mocap_csv(args.mocap, n)
     self_motion = None
@@ -68,7 +87,7 @@ def run(args: argparse.Namespace) -> int:
         measurement=measurement,
         self_motion=self_motion,
         configurations=args.configurations,
-        noise=args.noise * 1e-3,
+        noise=args.mocap_noise * 1e-3,
     )
     print(report.format())
     if report.deviations is not None:

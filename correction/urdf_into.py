@@ -1,0 +1,167 @@
+"""A calibrated model written into the user's own URDF: only joint origins change.
+
+The calibrated arm keeps every link frame of the original URDF attached to the same joint
+axis: for revolute joint ``k`` the pose ``M_k`` of its child link in DH frame ``k`` is taken
+from the original file (converted with :func:`correction.urdf_to_dh.urdf_model`), and the child
+link is placed at ``DH_k^cal(q = 0) M_k``. Joint ``k``'s ``<origin>`` is then what puts it
+there from its parent link (fixed joints in between are kept as they are), and the fixed joint
+into the tip link gets the calibrated tool point. Nothing else in the text is touched: the
+new ``xyz``/``rpy`` values are substituted in place, comments, meshes, inertials, limits,
+names, the gripper and the formatting stay byte for byte; one provenance comment is added
+before ``<robot>``.
+"""
+
+from __future__ import annotations
+
+import re
+import warnings
+
+import numpy as np
+
+from .conversion import to_modified
+from .kinematics import link_frames, tool_point
+from .model import RobotModel, matrix_rpy
+from .rigid import registered_errors
+from .urdf import ExportError, _triple, provenance_comment, xml_comment
+from .urdf_read import MOVABLE, parse_urdf
+from .urdf_to_dh import NearlyParallelAxesWarning, urdf_model
+
+#: Largest tool-point distance [m] (after the best rigid fit) between the calibrated model and the
+#: URDF's nominal arm: beyond it the URDF is another robot (a calibration moves millimetres).
+SAME_ROBOT_TOL = 0.05
+
+_COMMENT = re.compile(r"<!--.*?-->", re.S)
+_JOINT_OPEN = re.compile(r"<joint\b[^>]*?\bname\s*=\s*([\"'])(.*?)\1[^>]*>", re.S)
+_ORIGIN = re.compile(r"<origin\b[^>]*?/>", re.S)
+
+
+def _masked(text: str) -> str:
+    """``text`` with every comment blanked out (same length): searches skip commented-out XML."""
+    return _COMMENT.sub(lambda m: " " * len(m.group(0)), text)
+
+
+def _set_attribute(tag: str, name: str, value: str) -> str:
+    pattern = re.compile(rf"(\b{name}\s*=\s*)([\"'])(.*?)\2", re.S)
+    if pattern.search(tag):
+        return pattern.sub(lambda m: f"{m.group(1)}{m.group(2)}{value}{m.group(2)}", tag, count=1)
+    return tag[:-2].rstrip() + f' {name}="{value}"/>'
+
+
+def replace_origins(text: str, origins: dict[str, np.ndarray], source: str = "<urdf>") -> str:
+    """URDF text with the ``<origin>`` of the named joints set to the given poses, all else kept.
+
+    Args:
+        text: the URDF document.
+        origins: joint name -> (4, 4) origin in its parent link frame [m].
+        source: file name for error messages.
+    """
+    masked = _masked(text)
+    edits: list[tuple[int, int, str]] = []
+    for match in _JOINT_OPEN.finditer(masked):
+        name = match.group(2)
+        if name not in origins:
+            continue
+        end = masked.find("</joint>", match.end())
+        if end < 0:
+            raise ExportError(f"{source}: joint {name!r}: no closing </joint>")
+        pose = origins[name]
+        xyz, rpy = _triple(pose[:3, 3]), _triple(matrix_rpy(pose[:3, :3]))
+        origin = _ORIGIN.search(masked, match.end(), end)
+        if origin is None:
+            indent = re.search(r"\n([ \t]*)<", masked[match.end():end])
+            pad = "\n" + (indent.group(1) if indent else "  ")
+            edits.append((match.end(), match.end(), f'{pad}<origin xyz="{xyz}" rpy="{rpy}"/>'))
+        else:
+            tag = _set_attribute(_set_attribute(text[origin.start():origin.end()], "xyz", xyz), "rpy", rpy)
+            edits.append((origin.start(), origin.end(), tag))
+    found = {m.group(2) for m in _JOINT_OPEN.finditer(masked)}
+    missing = [name for name in origins if name not in found]
+    if missing:
+        raise ExportError(f"{source}: joint {missing[0]!r} not found in the text")
+    for start, stop, new in sorted(edits, reverse=True):
+        text = text[:start] + new + text[stop:]
+    return text
+
+
+def _check_same_arm(model: RobotModel, nominal: RobotModel, source: str) -> None:
+    names = model.extras.get("joint_names")
+    if model.n_joints != nominal.n_joints:
+        raise ExportError(
+            f"{source}: chain {nominal.extras['urdf']['base_link']!r} -> {nominal.extras['urdf']['tip_link']!r} "
+            f"has {nominal.n_joints} revolute joints, the calibrated model {model.n_joints}"
+        )
+    if names is not None and list(names) != nominal.extras["joint_names"]:
+        raise ExportError(
+            f"{source}: joint names {nominal.extras['joint_names']} differ from the calibrated model's {list(names)}"
+        )
+    q = model.random_configurations(200, np.random.default_rng(0))
+    error = registered_errors(tool_point(model, q), tool_point(nominal, q)).max()
+    if error > SAME_ROBOT_TOL:
+        raise ExportError(
+            f"{source}: not the calibrated robot: tool points {error * 1e3:.0f} mm apart "
+            f"(more than {SAME_ROBOT_TOL * 1e3:.0f} mm after the best rigid fit)"
+        )
+
+
+def urdf_into(model: RobotModel, text: str, source: str = "<urdf>", header: str = "") -> str:
+    """The user's URDF text with the joint origins of the calibrated chain (and of the fixed
+    joint into the tip link) changed so that its forward kinematics is ``model``'s.
+
+    Args:
+        model: the calibrated robot; ``extras["urdf"]`` (from a URDF import) names the base and
+            tip links, otherwise the URDF's root and the end of its longest chain are used.
+        text: the original URDF document.
+        source: its file name, for error messages.
+        header: comment lines (inputs, versions) for the provenance comment.
+
+    Raises:
+        ExportError: a chain that does not match the model (joint count, names, geometry), or
+            a tip link that is the child of the last revolute joint (nowhere to put the tool).
+    """
+    links = model.extras.get("urdf") or {}
+    tree = parse_urdf(text, source)
+    with warnings.catch_warnings():  # the user was told about parallel axes when the model was imported
+        warnings.simplefilter("ignore", NearlyParallelAxesWarning)
+        nominal = urdf_model(tree, links.get("tip_link"), links.get("base_link"))
+    base, tip = nominal.extras["urdf"]["base_link"], nominal.extras["urdf"]["tip_link"]
+    _check_same_arm(model, nominal, source)
+    calibrated = to_modified(model)
+    joints = tree.path(base, tip)
+    movable = [j for j in joints if j.type in MOVABLE]
+    if joints[-1].type != "fixed":
+        raise ExportError(f"{source}: tip link {tip!r} is the child of joint {joints[-1].name!r}: "
+                          "a calibrated tool point needs a fixed joint into the tip link")
+    zero = np.zeros(model.n_joints)
+    dh_nominal, dh_calibrated = link_frames(nominal, zero)[1:], link_frames(calibrated, zero)[1:]
+    poses = tree.world_poses(base)  # nominal link poses at q = 0, in the base link frame
+    placed = {base: np.eye(4)}
+    origins: dict[str, np.ndarray] = {}
+    for joint in joints:
+        parent = placed[joint.parent]
+        if joint.type in MOVABLE:
+            k = movable.index(joint)
+            child = dh_calibrated[k] @ np.linalg.solve(dh_nominal[k], poses[joint.child])
+            origins[joint.name] = np.linalg.solve(parent, child)
+        elif joint is joints[-1]:
+            # The tip: its nominal orientation in the last DH frame, its origin at the calibrated tool point.
+            in_dh = np.linalg.solve(dh_nominal[-1], poses[tip])
+            in_dh[:3, 3] = calibrated.tool
+            child = dh_calibrated[-1] @ in_dh
+            origins[joint.name] = np.linalg.solve(parent, child)
+        else:
+            child = parent @ joint.origin
+        placed[joint.child] = child
+    written = replace_origins(text, origins, source)
+    # Self-check: the written file, read back as any URDF, is the calibrated model.
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", NearlyParallelAxesWarning)
+        check = urdf_model(parse_urdf(written, source), tip, base)
+    q = model.random_configurations(100, np.random.default_rng(1))
+    error = np.abs(tool_point(check, q) - tool_point(model, q)).max()
+    if error > 1e-9:
+        raise ExportError(f"{source}: the calibrated model's DH frames do not follow this URDF's joints "
+                          f"(written file off by {error * 1e3:.3g} mm)")
+    comment = xml_comment(f"joint origins of {', '.join(origins)} written by spherecal\n{header}") + "\n"
+    comment += provenance_comment(model) + "\n"
+    start = _masked(written).find("<robot")
+    return written[:start] + comment + written[start:]

@@ -1,0 +1,267 @@
+"""Reading a URDF: the tree of links and joints, the revolute chain between two links.
+
+Only kinematics (and, when present, ``<inertial>``) is read: ``<visual>`` and ``<collision>``
+are ignored, so a URDF whose mesh files are not shipped is still a valid robot description.
+Every pose is evaluated at the URDF's zero configuration (all joint values 0).
+"""
+
+from __future__ import annotations
+
+import math
+import os
+import xml.etree.ElementTree as ET
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from .model import pose_matrix
+from .robot_file import RobotFileError
+
+MOVABLE = ("revolute", "continuous")
+KNOWN_TYPES = ("revolute", "continuous", "prismatic", "fixed", "floating", "planar")
+
+
+@dataclass(frozen=True)
+class UrdfJoint:
+    """One ``<joint>``: its origin (4, 4) in the parent link frame [m], unit axis (3,)."""
+
+    name: str
+    type: str
+    parent: str
+    child: str
+    origin: np.ndarray
+    axis: np.ndarray
+    lower: float | None = None
+    upper: float | None = None
+
+
+@dataclass(frozen=True)
+class Inertial:
+    """A link's mass [kg] and centre of mass (3,) in the link frame [m]."""
+
+    mass: float
+    com: np.ndarray
+
+
+@dataclass(frozen=True)
+class UrdfTree:
+    """A parsed URDF: links, joints by child link, the root link."""
+
+    source: str
+    name: str
+    links: tuple[str, ...]
+    joints: dict[str, UrdfJoint]  # by child link name
+    root: str
+    inertials: dict[str, Inertial] = field(default_factory=dict)
+
+    def children(self, link: str) -> list[UrdfJoint]:
+        """Joints whose parent is ``link``, in file order."""
+        return [j for j in self.joints.values() if j.parent == link]
+
+    def path(self, base: str, tip: str) -> list[UrdfJoint] | None:
+        """Joints from ``base`` down to ``tip`` (None when ``tip`` is not below ``base``)."""
+        joints: list[UrdfJoint] = []
+        link = tip
+        while link != base:
+            joint = self.joints.get(link)
+            if joint is None:
+                return None
+            joints.append(joint)
+            link = joint.parent
+        return joints[::-1]
+
+    def world_poses(self, base: str) -> dict[str, np.ndarray]:
+        """(4, 4) pose of every link below ``base`` (``base`` included) in ``base``'s frame, q = 0."""
+        poses = {base: np.eye(4)}
+        stack = [base]
+        while stack:
+            link = stack.pop()
+            for joint in self.children(link):
+                poses[joint.child] = poses[link] @ joint.origin
+                stack.append(joint.child)
+        return poses
+
+    def depth_first_tip(self, base: str) -> str:
+        """The end of the longest chain (most joints) below ``base``; the first in file order on a tie."""
+        best, best_depth = base, 0
+        stack = [(base, 0)]
+        while stack:
+            link, depth = stack.pop(0)
+            if depth > best_depth:
+                best, best_depth = link, depth
+            stack[:0] = [(j.child, depth + 1) for j in self.children(link)]
+        return best
+
+
+def _floats(text: str | None, count: int, default: list[float], where: str) -> list[float]:
+    if text is None:
+        return default
+    parts = text.split()
+    try:
+        values = [float(v) for v in parts]
+    except ValueError:
+        raise RobotFileError(f"{where}: expected {count} numbers, got {text!r}") from None
+    if len(values) != count or not all(math.isfinite(v) for v in values):
+        raise RobotFileError(f"{where}: expected {count} finite numbers, got {text!r}")
+    return values
+
+
+def _origin(element: ET.Element | None, where: str) -> np.ndarray:
+    """(4, 4) of an ``<origin xyz rpy>`` (identity when absent)."""
+    if element is None:
+        return np.eye(4)
+    xyz = _floats(element.get("xyz"), 3, [0.0] * 3, f"{where} <origin xyz>")
+    rpy = _floats(element.get("rpy"), 3, [0.0] * 3, f"{where} <origin rpy>")
+    return pose_matrix(np.array(xyz), np.array(rpy))
+
+
+def _name(element: ET.Element, where: str) -> str:
+    name = element.get("name")
+    if not name:
+        raise RobotFileError(f"{where}: <{element.tag}> without a name")
+    return name
+
+
+def _link_ref(joint: ET.Element, tag: str, where: str) -> str:
+    ref = joint.find(tag)
+    if ref is None or not ref.get("link"):
+        raise RobotFileError(f"{where}: missing <{tag} link=...>")
+    return ref.get("link")
+
+
+def _joint(element: ET.Element, source: str) -> UrdfJoint:
+    name = _name(element, f"{source}: <joint>")
+    where = f"{source}: joint {name!r}"
+    kind = element.get("type")
+    if kind not in KNOWN_TYPES:
+        raise RobotFileError(f"{where}: unknown type {kind!r} (expected one of {', '.join(KNOWN_TYPES)})")
+    axis_element = element.find("axis")
+    axis = np.array(_floats(axis_element.get("xyz") if axis_element is not None else None, 3, [1.0, 0.0, 0.0],
+                            f"{where} <axis xyz>"))
+    lower = upper = None
+    if kind in ("revolute", "prismatic"):
+        norm = float(np.linalg.norm(axis))
+        if norm < 1e-12:
+            raise RobotFileError(f"{where}: <axis xyz> is the zero vector")
+        axis = axis / norm
+    if kind == "revolute":
+        limit = element.find("limit")
+        if limit is None:
+            raise RobotFileError(f"{where}: a revolute joint needs <limit lower upper>")
+        lower, upper = (_floats(limit.get(k, "0"), 1, [0.0], f"{where} <limit {k}>")[0] for k in ("lower", "upper"))
+        if lower > upper:
+            raise RobotFileError(f"{where}: <limit> lower ({lower}) > upper ({upper})")
+    return UrdfJoint(name, kind, _link_ref(element, "parent", where), _link_ref(element, "child", where),
+                     _origin(element.find("origin"), where), axis, lower, upper)
+
+
+def _inertial(link: ET.Element, name: str, source: str) -> Inertial | None:
+    element = link.find("inertial")
+    if element is None:
+        return None
+    where = f"{source}: link {name!r} <inertial>"
+    mass_element = element.find("mass")
+    mass = _floats(mass_element.get("value") if mass_element is not None else None, 1, [0.0], f"{where} <mass>")[0]
+    if mass < 0.0:
+        raise RobotFileError(f"{where} <mass>: negative mass {mass}")
+    com = _origin(element.find("origin"), where)[:3, 3]
+    return Inertial(mass, com)
+
+
+def parse_urdf(text: str, source: str = "<urdf>") -> UrdfTree:
+    """Parse URDF text into a tree.
+
+    Raises:
+        RobotFileError: invalid XML, a joint naming an unknown link, a link with two parents,
+            a loop, several roots (one line naming ``source`` and the element).
+    """
+    try:
+        root = ET.fromstring(text)
+    except ET.ParseError as error:
+        raise RobotFileError(f"{source}: invalid XML: {error}") from None
+    if root.tag != "robot":
+        raise RobotFileError(f"{source}: expected a <robot> root element, got <{root.tag}>")
+    links: list[str] = []
+    inertials: dict[str, Inertial] = {}
+    for element in root.findall("link"):
+        name = _name(element, f"{source}: <link>")
+        if name in links:
+            raise RobotFileError(f"{source}: link {name!r} is defined twice")
+        links.append(name)
+        inertial = _inertial(element, name, source)
+        if inertial is not None:
+            inertials[name] = inertial
+    if not links:
+        raise RobotFileError(f"{source}: no <link> elements")
+    joints: dict[str, UrdfJoint] = {}
+    names: set[str] = set()
+    for element in root.findall("joint"):
+        joint = _joint(element, source)
+        if joint.name in names:
+            raise RobotFileError(f"{source}: joint {joint.name!r} is defined twice")
+        names.add(joint.name)
+        for role, link in (("parent", joint.parent), ("child", joint.child)):
+            if link not in links:
+                raise RobotFileError(f"{source}: joint {joint.name!r}: {role} link {link!r} is not defined")
+        if joint.child in joints:
+            raise RobotFileError(
+                f"{source}: joint {joint.name!r}: link {joint.child!r} has two parents "
+                f"({joints[joint.child].parent!r} and {joint.parent!r}): loops are not supported"
+            )
+        joints[joint.child] = joint
+    roots = [link for link in links if link not in joints]
+    if len(roots) != 1:
+        if not roots:
+            raise RobotFileError(f"{source}: every link has a parent: the joints form a loop")
+        raise RobotFileError(f"{source}: several root links ({', '.join(map(repr, roots))}): not one tree")
+    tree = UrdfTree(source, root.get("name", ""), tuple(links), joints, roots[0], inertials)
+    for link in links:  # a cycle detached from the root
+        if tree.path(roots[0], link) is None:
+            raise RobotFileError(f"{source}: link {link!r} is not connected to the root {roots[0]!r}: a loop")
+    return tree
+
+
+def read_urdf(path: str | os.PathLike) -> UrdfTree:
+    """Read and parse a URDF file (see :func:`parse_urdf`)."""
+    path = Path(path)
+    try:
+        text = path.read_text(encoding="utf-8")
+    except OSError as error:
+        raise RobotFileError(f"{path}: cannot read: {error.strerror or error}") from None
+    except UnicodeDecodeError as error:
+        raise RobotFileError(f"{path}: cannot read: not UTF-8 text (byte {error.start})") from None
+    return parse_urdf(text, str(path))
+
+
+def chain(
+    tree: UrdfTree, base_link: str | None = None, tip_link: str | None = None
+) -> tuple[str, str, list[UrdfJoint]]:
+    """The joints from ``base_link`` (default: the root) to ``tip_link`` (default: the end of
+    the longest chain below the base).
+
+    Returns:
+        ``(base, tip, joints)``: every joint on the path, fixed ones included.
+
+    Raises:
+        RobotFileError: an unknown link, a tip not below the base, a prismatic (or floating,
+            planar) joint on the path, or no revolute joint at all.
+    """
+    source = tree.source
+    base = tree.root if base_link is None else base_link
+    for option, link in (("base link", base), ("tip link", tip_link)):
+        if link is not None and link not in tree.links:
+            raise RobotFileError(f"{source}: {option} {link!r} is not a link of robot {tree.name!r}")
+    tip = tree.depth_first_tip(base) if tip_link is None else tip_link
+    joints = tree.path(base, tip)
+    if joints is None:
+        raise RobotFileError(f"{source}: tip link {tip!r} is not below base link {base!r}")
+    for joint in joints:
+        if joint.type not in MOVABLE + ("fixed",):
+            raise RobotFileError(
+                f"{source}: joint {joint.name!r}: a {joint.type} joint between {base!r} and {tip!r} "
+                "(only revolute, continuous and fixed joints can be calibrated)"
+            )
+    if not any(j.type in MOVABLE for j in joints):
+        raise RobotFileError(f"{source}: no revolute joint between {base!r} and {tip!r}")
+    return base, tip, joints

@@ -1,0 +1,195 @@
+"""One import: a recording in, ``samples.csv`` and ``fixtures.yaml`` out, together or not at all.
+
+Read (:mod:`.importers`, :mod:`.bag`), label by segmentation when the source has no labels
+(:mod:`.segment`), drop duplicates, subsample, then write both files into a temporary folder beside
+the output folder and rename it into place.
+"""
+
+from __future__ import annotations
+
+import os
+import shutil
+import tempfile
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from spherecal.correction.fixtures import FixtureSpec, write_fixtures
+from spherecal.correction.model import RobotModel
+from spherecal.correction.samples import Dataset, DatasetError
+from spherecal.correction.samples_csv import write_samples
+
+from .bag import read_bag
+from .importers import MUKCA_DISTANCE, Recording, RecordingError, read_joint_csv, read_mukca
+from .segment import Segment, SegmentSettings, format_segments, labels_of, segment
+
+FORMATS = ("mukca", "bag", "csv")
+
+
+@dataclass(frozen=True)
+class ImportOptions:
+    """How a recording is imported.
+
+    Attributes:
+        topic: bag topic of ``sensor_msgs/JointState``.
+        distance: MUKCa socket distance [m].
+        rate: sampling rate of a CSV without time stamps [Hz].
+        segmentation: thresholds of the automatic split.
+        max_per_fixture: samples kept per fixture (random, seeded), None for all.
+        dedup_tol: duplicate tolerance [rad].
+        seed: seed of the subsampling.
+    """
+
+    topic: str = "/joint_states"
+    distance: float = MUKCA_DISTANCE
+    rate: float = 1000.0
+    segmentation: SegmentSettings = field(default_factory=SegmentSettings)
+    max_per_fixture: int | None = 500
+    dedup_tol: float = 1e-4
+    seed: int = 0
+
+
+@dataclass(frozen=True)
+class ImportResult:
+    """What was imported: the dataset and fixtures written, and the segments found (if any)."""
+
+    dataset: Dataset
+    fixtures: FixtureSpec
+    read: int
+    segments: list[Segment]
+    dropped_motion: int
+    dropped_duplicates: int
+
+    def format(self) -> str:
+        """The printed report."""
+        lines = [f"read {self.read} samples"]
+        if self.segments:
+            lines.append(
+                f"segmented into {len(self.segments)} fixtures ({self.dropped_motion} samples in motion dropped):"
+            )
+            lines.append(format_segments(self.segments, self.dataset.counts()))
+        else:
+            lines += [f"{name:<24} {count:>6} samples" for name, count in self.dataset.counts().items()]
+        lines.append(f"dropped {self.dropped_duplicates} duplicates; kept {self.dataset.n_samples} samples")
+        for a, b, value in self.fixtures.distances:
+            lines.append(f"known distance {a} - {b}: {value * 1e3:.3f} mm")
+        return "\n".join(lines)
+
+
+def check_out_dir(out: str | os.PathLike, inputs: list[str | os.PathLike]) -> None:
+    """Refuse an output folder that exists and is not empty, is a file, or holds (or is) an input."""
+    out = Path(out).absolute()
+    for item in inputs:
+        item = Path(item).absolute()
+        if item == out or out in item.parents:
+            raise RecordingError(f"{out}: field '--out': holds the input {item}; choose a new folder")
+    if out.exists() and (not out.is_dir() or any(out.iterdir())):
+        raise RecordingError(f"{out}: field '--out': exists and is not an empty folder; choose a new folder")
+    for parent in out.parents:
+        if parent.exists():
+            if not parent.is_dir():
+                raise RecordingError(f"{out}: field '--out': {parent} is not a folder")
+            break
+
+
+def read_source(source: str | os.PathLike, fmt: str, model: RobotModel, options: ImportOptions) -> Recording:
+    """The recording at ``source`` (labels for MUKCa and a CSV with a fixture column)."""
+    if fmt == "bag":
+        return read_bag(source, model, options.topic)
+    if fmt == "csv":
+        return read_joint_csv(source, model)
+    raise ValueError(f"unknown format {fmt!r}")
+
+
+def label(recording: Recording, model: RobotModel, options: ImportOptions) -> tuple[Dataset, list[Segment]]:
+    """The labelled dataset: the recording's own labels, or fixtures found by :func:`.segment.segment`."""
+    if recording.labels is not None:
+        return recording.dataset(), []
+    t = recording.t
+    if t is None:
+        t = np.arange(recording.q.shape[0]) / options.rate
+    elif np.any(np.diff(t) < 0):
+        k = int(np.flatnonzero(np.diff(t) < 0)[0]) + 1
+        raise RecordingError(f"{recording.rows[k]}, field 't': time goes back ({t[k]:.6f} s after {t[k - 1]:.6f} s)")
+    segments = segment(model, recording.q, t, options.segmentation, recording.source)
+    labels = labels_of(segments, recording.q.shape[0])
+    keep = labels != ""
+    dataset = Dataset(labels=labels[keep], q=recording.q[keep], t=t[keep], source=recording.source)
+    return dataset, segments
+
+
+def import_recording(
+    source: str | os.PathLike,
+    fmt: str,
+    model: RobotModel,
+    out: str | os.PathLike,
+    options: ImportOptions = ImportOptions(),
+    inputs: list[str | os.PathLike] = (),
+    extras: dict | None = None,
+) -> ImportResult:
+    """Import a recording and write ``out/samples.csv`` and ``out/fixtures.yaml``.
+
+    Args:
+        source: the recording (see :data:`FORMATS`).
+        fmt: ``mukca``, ``bag`` or ``csv``.
+        model: the nominal robot (joint names and limits; its tool point for segmentation).
+        out: folder to create (absent or empty; never one holding an input).
+        options: see :class:`ImportOptions`.
+        inputs: other input files that ``out`` must not hold (the robot file).
+        extras: written into ``fixtures.yaml`` under ``import:`` (provenance).
+
+    Raises:
+        RecordingError, SegmentationError, DatasetError: bad input (one line); nothing is written.
+    """
+    if fmt not in FORMATS:
+        raise ValueError(f"unknown format {fmt!r}, expected one of {FORMATS}")
+    check_out_dir(out, [source, *inputs])
+    if fmt == "mukca":
+        recording, spec = read_mukca(source, model, options.distance)
+    else:
+        recording, spec = read_source(source, fmt, model, options), None
+    dataset, segments = label(recording, model, options)
+    read = recording.q.shape[0]
+    deduplicated = dataset.deduplicated(options.dedup_tol)
+    kept = deduplicated.subsampled(options.max_per_fixture, np.random.default_rng(options.seed))
+    if spec is None:
+        spec = FixtureSpec.unknown(kept.fixture_names)
+    missing = [name for name in spec.names if name not in kept.fixture_names]
+    if missing:
+        raise DatasetError(f"{source}: field 'fixture': {missing[0]!r} has no samples left")
+    block = dict(extras or {})
+    if segments:
+        block["segments"] = {
+            s.name: {"from_s": s.start, "to_s": s.end, "samples": int(len(s.rows)), "spread_max_m": s.spread_max}
+            for s in segments
+        }
+    spec = FixtureSpec(spec.names, spec.positions, spec.distances, {"import": block} if block else {})
+    _write_together(Path(out), kept, spec)
+    return ImportResult(
+        kept, spec, read, segments, read - dataset.n_samples, dataset.n_samples - deduplicated.n_samples
+    )
+
+
+def _write_together(out: Path, dataset: Dataset, spec: FixtureSpec) -> None:
+    """Write both files into a temporary folder beside ``out``, then rename it to ``out``."""
+    out = out.absolute()
+    out.parent.mkdir(parents=True, exist_ok=True)
+    stage = Path(tempfile.mkdtemp(prefix=f".{out.name}.", suffix=".tmp", dir=out.parent))
+    try:
+        write_samples(stage / "samples.csv", dataset)
+        write_fixtures(stage / "fixtures.yaml", spec)
+        os.chmod(stage, 0o777 & ~_umask())
+        os.replace(stage, out)  # an empty existing folder is replaced; a non-empty one was refused before
+    except OSError as error:
+        shutil.rmtree(stage, ignore_errors=True)
+        raise RecordingError(f"{out}: cannot write: {error.strerror or error}") from None
+    except BaseException:
+        shutil.rmtree(stage, ignore_errors=True)
+        raise
+
+
+def _umask() -> int:
+    mask = os.umask(0)
+    os.umask(mask)
+    return mask

@@ -1,0 +1,269 @@
+"""Recordings in: MUKCa socket files and joint-angle CSV files, joints matched by name.
+
+A :class:`Recording` is what a reader returns: joint angles in the robot's joint order, time
+stamps if the source has them, and fixture labels if the source has them (a MUKCa folder, a CSV
+with a ``fixture`` column); a recording without labels is split by :mod:`.segment`.
+
+Errors are :class:`RecordingError`, one line naming the file, the row and the field.
+"""
+
+from __future__ import annotations
+
+import csv
+import io
+import math
+import os
+import re
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from spherecal.correction.fixtures import FixtureSpec
+from spherecal.correction.model import RobotModel
+from spherecal.correction.samples import LIMIT_TOL, Dataset, DatasetError
+
+#: Default MUKCa socket distance [m] (their printed plate: centres 50 mm apart).
+MUKCA_DISTANCE = 0.050
+#: Header names of a time column in a joint CSV (seconds; see :func:`read_joint_csv`).
+TIME_COLUMNS = ("t", "time", "stamp", "timestamp", "%time")
+#: Time values above this are nanoseconds (ROS stamps exported as integers), not seconds.
+NANOSECONDS_ABOVE = 1e15
+
+
+class RecordingError(DatasetError):
+    """A recording that cannot be imported; one line naming the file, row and field."""
+
+
+@dataclass(frozen=True, eq=False)
+class Recording:
+    """Joint angles read from a source, in the robot's joint order.
+
+    Attributes:
+        q: (T, n) joint angles [rad].
+        t: (T,) time stamps [s], or None.
+        labels: (T,) fixture label of every sample, or None (to be segmented).
+        source: the file or folder read.
+        rows: (T,) where each sample came from, for messages (``"file: row N"``).
+    """
+
+    q: np.ndarray
+    t: np.ndarray | None
+    labels: np.ndarray | None
+    source: str
+    rows: tuple[str, ...]
+
+    def check_limits(self, model: RobotModel, names: list[str] | None = None, tol: float = LIMIT_TOL) -> None:
+        """Raise :class:`RecordingError` on the first angle outside the robot's joint limits."""
+        inside = (self.q >= model.lower - tol) & (self.q <= model.upper + tol)
+        if not inside.all():
+            k, i = np.argwhere(~inside)[0]
+            field = names[i] if names else f"q{i + 1}"
+            raise RecordingError(
+                f"{self.rows[k]}, field {field!r}: {self.q[k, i]:.6g} rad outside the joint limits "
+                f"[{model.lower[i]:.6g}, {model.upper[i]:.6g}] of {model.name}"
+            )
+
+    def dataset(self) -> Dataset:
+        """The labelled samples (labels must be set)."""
+        if self.labels is None:
+            raise ValueError("an unlabelled recording must be segmented first")
+        return Dataset(labels=self.labels, q=self.q, t=self.t, source=self.source)
+
+
+# ------------------------------------------------------------------------------ joint names
+def joint_name_candidates(model: RobotModel) -> list[list[str]]:
+    """Joint-name conventions the robot's joints may carry in a recording, most specific first.
+
+    ``extras["joint_names"]`` (a model built from a URDF, or a robot file that lists them), then
+    ``<prefix>_joint1..n`` for the robot's name and its last ``_`` part (the embedded
+    ``franka_panda`` gives ``panda_joint1..7``), then ``joint1..n``, ``joint_1..n``, ``q1..qn``.
+    """
+    n = model.n_joints
+    out: list[list[str]] = []
+    names = model.extras.get("joint_names")
+    if isinstance(names, list) and len(names) == n and all(isinstance(x, str) for x in names):
+        out.append(list(names))
+    prefixes = [model.name, model.name.split("_")[-1]] if model.name else []
+    for prefix in dict.fromkeys(prefixes):
+        out.append([f"{prefix}_joint{i + 1}" for i in range(n)])
+    out += [[f"joint{i + 1}" for i in range(n)], [f"joint_{i + 1}" for i in range(n)], [f"q{i + 1}" for i in range(n)]]
+    return out
+
+
+def match_joints(available: list[str], model: RobotModel, where: str) -> tuple[np.ndarray, list[str]]:
+    """Positions of the robot's joints in ``available`` (extra names, e.g. fingers, are ignored).
+
+    Args:
+        available: names in the recording (message ``name`` field or CSV header).
+        model: the robot.
+        where: ``"file: row N"`` for the message.
+
+    Returns:
+        ``(index, names)``: (n,) int positions in ``available`` and the matched names.
+
+    Raises:
+        RecordingError: no convention matches every joint; names the first joint missing under the
+            convention that matches most.
+    """
+    lookup = {name: k for k, name in enumerate(available)}
+    best: tuple[int, list[str]] | None = None
+    for names in joint_name_candidates(model):
+        found = [name in lookup for name in names]
+        if all(found):
+            return np.array([lookup[name] for name in names], dtype=int), names
+        if best is None or sum(found) > best[0]:
+            best = (sum(found), names)
+    assert best is not None
+    missing = next(name for name in best[1] if name not in lookup)
+    raise RecordingError(
+        f"{where}, field {missing!r}: joint {missing!r} of {model.name} not in the recording "
+        f"(has {', '.join(available[:12])}{', ...' if len(available) > 12 else ''})"
+    )
+
+
+# ------------------------------------------------------------------------------------ MUKCa
+_HOLE = re.compile(r"hole_(\d+)\.csv$")
+
+
+def _hole_files(folder: Path) -> list[tuple[int, Path]]:
+    found = [(int(m.group(1)), p) for p in folder.iterdir() if p.is_file() and (m := _HOLE.match(p.name))]
+    return sorted(found)
+
+
+def _number(text: str, where: str) -> float:
+    try:
+        value = float(text)
+    except ValueError:
+        raise RecordingError(f"{where}: expected a number, got {text.strip()!r}") from None
+    if not math.isfinite(value):
+        raise RecordingError(f"{where}: must be finite, got {text.strip()!r}")
+    return value
+
+
+def _read_text(path: Path) -> str:
+    try:
+        return path.read_text(encoding="utf-8-sig")
+    except (OSError, UnicodeDecodeError) as error:
+        raise RecordingError(f"{path}: cannot read: {getattr(error, 'strerror', None) or error}") from None
+
+
+def read_mukca(
+    path: str | os.PathLike, model: RobotModel, distance: float = MUKCA_DISTANCE
+) -> tuple[Recording, FixtureSpec]:
+    """Read a MUKCa placement folder (``hole_0.csv``, ``hole_1.csv``) or a folder of them.
+
+    Each ``hole_<k>.csv`` has no header and one configuration per row, joint angles [rad] in the
+    URDF's joint order (the robot's order). Fixtures are named ``<placement>_h<k>``; the sockets
+    of one placement are ``distance`` apart (the first two holes of each placement).
+
+    Args:
+        path: a placement folder or a folder of placement folders.
+        model: the robot (joint count and limits).
+        distance: socket centre distance [m], > 0.
+
+    Returns:
+        The labelled recording (no time stamps) and the fixtures with their known distances.
+
+    Raises:
+        RecordingError: no hole files, a row with the wrong number of fields or a bad number, an
+            angle outside the joint limits.
+    """
+    root = Path(path)
+    if not root.is_dir():
+        raise RecordingError(f"{root}: field 'SOURCE': a MUKCa source is a folder (placement or folder of them)")
+    if _hole_files(root):
+        placements = [root]
+    else:
+        placements = sorted(p for p in root.iterdir() if p.is_dir() and _hole_files(p))
+    if not placements:
+        raise RecordingError(f"{root}: field 'hole_0.csv': no hole_<k>.csv here or in its sub-folders")
+    n = model.n_joints
+    q: list[list[float]] = []
+    labels: list[str] = []
+    rows: list[str] = []
+    names: list[str] = []
+    distances: list[tuple[str, str, float]] = []
+    for folder in placements:
+        holes = _hole_files(folder)
+        for k, file in holes:
+            name = f"{folder.name}_h{k}"
+            if "," in name:
+                raise RecordingError(f"{folder}: field 'placement': a folder name with a comma cannot name a fixture")
+            before = len(q)
+            reader = csv.reader(io.StringIO(_read_text(file)))
+            for fields in reader:
+                if not fields or not "".join(fields).strip() or fields[0].lstrip().startswith("#"):
+                    continue
+                where = f"{file}: row {reader.line_num}"
+                if len(fields) != n:
+                    raise RecordingError(f"{where}, field 'q*': {len(fields)} joint angles, {model.name} has {n}")
+                q.append([_number(v, f"{where}, field 'q{i + 1}'") for i, v in enumerate(fields)])
+                labels.append(name)
+                rows.append(where)
+            if len(q) == before:
+                raise RecordingError(f"{file}: row 1, field 'q1': no configurations")
+            names.append(name)
+        if len(holes) >= 2:
+            distances.append((f"{folder.name}_h{holes[0][0]}", f"{folder.name}_h{holes[1][0]}", float(distance)))
+    recording = Recording(np.array(q, dtype=float), None, np.array(labels), str(root), tuple(rows))
+    recording.check_limits(model)
+    return recording, FixtureSpec(names=tuple(names), distances=distances)
+
+
+# -------------------------------------------------------------------------------- joint CSV
+def read_joint_csv(path: str | os.PathLike, model: RobotModel) -> Recording:
+    """Read a CSV of joint angles whose header names the joints.
+
+    Header: the robot's joint names (e.g. ``panda_joint1..7`` as franka_ros names them) or
+    ``q1..qn``, in any order, other columns (fingers, velocities) ignored; an optional time
+    column (``t``, ``time``, ``stamp``, ``timestamp`` [s]; values above 1e15 are nanoseconds) and an
+    optional ``fixture`` column (then the recording is labelled). ``samples.csv`` is such a file.
+
+    Raises:
+        RecordingError: no header, a joint missing from it, a row with a missing field or a bad
+            number, an empty fixture label, an angle outside the joint limits.
+    """
+    path = Path(path)
+    reader = csv.reader(io.StringIO(_read_text(path)))
+    header: list[str] | None = None
+    values: list[list[float]] = []
+    times: list[float] = []
+    labels: list[str] = []
+    rows: list[str] = []
+    for fields in reader:
+        if not fields or not "".join(fields).strip() or (header is not None and fields[0].lstrip().startswith("#")):
+            continue
+        where = f"{path}: row {reader.line_num}"
+        if header is None:
+            header = [f.strip() for f in fields]
+            index, names = match_joints(header, model, where)
+            time_col = next((header.index(c) for c in TIME_COLUMNS if c in header), None)
+            label_col = header.index("fixture") if "fixture" in header else None
+            continue
+        if len(fields) < len(header):
+            missing = header[len(fields)]
+            raise RecordingError(f"{where}, field {missing!r}: {len(fields)} fields, the header has {len(header)}")
+        values.append([_number(fields[i], f"{where}, field {header[i]!r}") for i in index])
+        if time_col is not None:
+            times.append(_number(fields[time_col], f"{where}, field {header[time_col]!r}"))
+        if label_col is not None:
+            label = fields[label_col].strip()
+            if not label:
+                raise RecordingError(f"{where}, field 'fixture': empty fixture name")
+            labels.append(label)
+        rows.append(where)
+    if header is None:
+        raise RecordingError(f"{path}: row 1, field 'header': empty file (expected a header naming the joints)")
+    if not values:
+        raise RecordingError(f"{path}: row 2, field {header[index[0]]!r}: no samples after the header")
+    t = None
+    if times:
+        t = np.array(times, dtype=float)
+        if np.nanmax(np.abs(t)) > NANOSECONDS_ABOVE:
+            t = t * 1e-9
+    recording = Recording(
+        np.array(values, dtype=float), t, np.array(labels) if labels else None, str(path), tuple(rows)
+    )
+    recording.check_limits(model, names)
+    return recording

@@ -1,0 +1,199 @@
+"""Split a continuous recording into fixtures: where the nominal tool point stays put, the ball is in a socket.
+
+While the ball sits in a socket, hand guiding moves the arm through its null space: the joints move
+and the (true) tool point does not. The NOMINAL tool point then moves only as slowly as the model
+error changes along the self-motion (a few mm/s on a real Panda), while carrying the ball from one
+socket to the next moves it by centimetres within a second. So:
+
+1. the tool point is averaged into ``bin`` intervals (10 ms) and a bin is *still* when every bin
+   within ``window / 2`` of it lies within ``still_radius`` of it;
+2. a run of still bins, less half a window at each end (the ball entering and leaving the socket),
+   lasting at least ``min_duration`` with at least ``min_configurations`` distinct configurations
+   is one fixture; everything between them (transport, pauses in the air) is dropped;
+3. a fixture whose points lie further than ``max_spread`` from their mean (a drift) or two fixtures
+   whose mean points are closer than ``min_separation`` (one socket visited twice, or two sockets
+   that cannot be told apart) is refused: label such a recording by hand (a ``fixture`` column).
+
+Thresholds measured on MUKCa's real Panda with its ball (nominal model): within one socket the
+nominal tool point lies on average 8 mm and at most 19 mm from its mean; the sockets are 50 mm apart.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from spherecal.correction.kinematics import tool_point
+from spherecal.correction.model import RobotModel
+from spherecal.correction.samples import DatasetError
+
+#: Bin of the stillness test [s].
+BIN = 0.01
+
+
+class SegmentationError(DatasetError):
+    """A recording that cannot be split into fixtures unambiguously (one line)."""
+
+
+@dataclass(frozen=True)
+class SegmentSettings:
+    """Thresholds of :func:`segment` (metres, seconds).
+
+    Attributes:
+        window: stillness window [s] (0.5).
+        still_radius: the tool point stays within this of itself over the window [m] (0.003).
+        min_duration: shortest fixture [s] (2.0).
+        min_configurations: fewest distinct configurations (joints 1e-3 rad apart) of a fixture (20).
+        max_spread: largest distance of a fixture's tool points from their mean [m] (0.020).
+        min_separation: smallest distance between two fixtures' mean tool points [m] (0.030).
+    """
+
+    window: float = 0.5
+    still_radius: float = 0.003
+    min_duration: float = 2.0
+    min_configurations: int = 20
+    max_spread: float = 0.020
+    min_separation: float = 0.030
+
+
+@dataclass(frozen=True)
+class Segment:
+    """One fixture found in a recording.
+
+    Attributes:
+        name: fixture name (``S1``, ``S2``, ...).
+        rows: (K,) sample indices in the recording.
+        start, end: time span [s] since the first sample of the recording.
+        centre: (3,) mean nominal tool point [m].
+        spread_mean, spread_max: mean and largest distance of the nominal tool points from ``centre`` [m].
+    """
+
+    name: str
+    rows: np.ndarray
+    start: float
+    end: float
+    centre: np.ndarray
+    spread_mean: float
+    spread_max: float
+
+
+def _distinct(q: np.ndarray, tol: float = 1e-3) -> int:
+    return int(np.unique(np.floor(q / tol), axis=0).shape[0])
+
+
+def _still_bins(points: np.ndarray, half: int, radius: float) -> np.ndarray:
+    """(B,) bool: bin ``b`` is still when bins ``b-half .. b+half`` all lie within ``radius`` of it."""
+    still = np.ones(points.shape[0], dtype=bool)
+    for offset in range(1, half + 1):
+        gap = np.linalg.norm(points[offset:] - points[:-offset], axis=1) > radius
+        still[offset:] &= ~gap
+        still[:-offset] &= ~gap
+    still[:half] = False  # a window cut by the start or the end is not known to be still
+    still[points.shape[0] - half :] = False
+    return still
+
+
+def segment(
+    model: RobotModel, q: np.ndarray, t: np.ndarray, settings: SegmentSettings = SegmentSettings(), where: str = ""
+) -> list[Segment]:
+    """Find the fixtures of a continuous recording.
+
+    Args:
+        model: the NOMINAL robot (its tool point is the one tested for stillness).
+        q: (T, n) joint angles [rad], in time order.
+        t: (T,) time stamps [s], non-decreasing.
+        settings: thresholds.
+        where: the source, for messages.
+
+    Returns:
+        The fixtures in time order, named ``S1, S2, ...``.
+
+    Raises:
+        SegmentationError: no fixture found, a fixture that drifts, two fixtures too close together.
+    """
+    where = f"{where}: " if where else ""
+    s = settings
+    points = tool_point(model, q)
+    bins = np.floor((t - t[0]) / BIN).astype(np.int64)
+    edges = np.flatnonzero(np.diff(bins)) + 1
+    starts = np.concatenate([[0], edges])
+    counts = np.diff(np.concatenate([starts, [len(t)]]))
+    centres = np.add.reduceat(points, starts, axis=0) / counts[:, None]
+    times = bins[starts] * BIN
+    # bins are indexed by time: a gap in the recording leaves no bin, so the window is counted in bins
+    half = max(1, int(round(s.window / 2 / BIN)))
+    still = _still_bins(centres, half, s.still_radius)
+    runs = np.flatnonzero(np.diff(np.concatenate([[0], still.astype(np.int8), [0]])))
+    found: list[Segment] = []
+    for a, b in zip(runs[0::2], runs[1::2], strict=True):
+        a, b = a + half, b - half  # entering and leaving the socket
+        if b <= a:
+            continue
+        if times[b - 1] + BIN - times[a] < s.min_duration:
+            continue
+        lo, hi = starts[a], starts[b] if b < len(starts) else len(t)
+        rows = np.arange(lo, hi)
+        if _distinct(q[rows]) < s.min_configurations:
+            continue
+        p = points[rows]
+        centre = p.mean(axis=0)
+        spread = np.linalg.norm(p - centre, axis=1)
+        found.append(
+            Segment(
+                f"S{len(found) + 1}",
+                rows,
+                float(t[lo] - t[0]),
+                float(t[hi - 1] - t[0]),
+                centre,
+                float(spread.mean()),
+                float(spread.max()),
+            )
+        )
+    if not found:
+        raise SegmentationError(
+            f"{where}field 'q': no fixture found (no stretch of {s.min_duration:g} s and {s.min_configurations} "
+            f"configurations where the nominal tool point stays within {s.still_radius * 1e3:g} mm over "
+            f"{s.window:g} s)"
+        )
+    for seg in found:
+        if seg.spread_max > s.max_spread:
+            raise SegmentationError(
+                f"{where}field 'q': ambiguous: the still stretch {seg.start:.2f}-{seg.end:.2f} s drifts "
+                f"{seg.spread_max * 1e3:.1f} mm from its mean (max spread {s.max_spread * 1e3:g} mm); "
+                "label the fixtures (a 'fixture' column)"
+            )
+    for i, first in enumerate(found):
+        for second in found[i + 1 :]:
+            gap = float(np.linalg.norm(first.centre - second.centre))
+            if gap < s.min_separation:
+                raise SegmentationError(
+                    f"{where}field 'q': ambiguous: still stretches {first.start:.2f}-{first.end:.2f} s and "
+                    f"{second.start:.2f}-{second.end:.2f} s are {gap * 1e3:.1f} mm apart (less than "
+                    f"{s.min_separation * 1e3:g} mm): one socket twice or two sockets too close; label the "
+                    "fixtures (a 'fixture' column)"
+                )
+    return found
+
+
+def labels_of(segments: list[Segment], count: int) -> np.ndarray:
+    """(count,) fixture name of every sample, ``""`` for samples in no fixture (dropped)."""
+    labels = np.full(count, "", dtype=object)
+    for seg in segments:
+        labels[seg.rows] = seg.name
+    return labels.astype(str)
+
+
+def format_segments(segments: list[Segment], kept: dict[str, int] | None = None) -> str:
+    """One line per fixture: samples, kept samples, time span [s], spread [mm]."""
+    lines = [
+        f"{'fixture':<8} {'samples':>8} {'kept':>6} {'from [s]':>9} {'to [s]':>9} "
+        f"{'spread mean [mm]':>17} {'max [mm]':>9}"
+    ]
+    for seg in segments:
+        k = "-" if kept is None else str(kept.get(seg.name, 0))
+        lines.append(
+            f"{seg.name:<8} {len(seg.rows):>8} {k:>6} {seg.start:>9.2f} {seg.end:>9.2f} "
+            f"{seg.spread_mean * 1e3:>17.2f} {seg.spread_max * 1e3:>9.2f}"
+        )
+    return "\n".join(lines)

@@ -1,0 +1,206 @@
+"""Command-line options shared by the subcommands: one spelling, one unit and one check per quantity.
+
+Units on the command line (each ``--help`` names them):
+
+==========================================  =======  ==========================================
+quantity                                    unit     options
+==========================================  =======  ==========================================
+noise, error spreads, tolerances of length  mm       ``--noise``, ``--mocap-noise``,
+                                                     ``--length-std``, ``--tool-std``
+positions and distances of fixtures         m        ``--grid``, ``--distance`` (as in the files)
+angles                                      deg      ``--angle-std-deg``, ``--dedup-deg``
+durations                                   s        ``--seconds``
+==========================================  =======  ==========================================
+
+``--samples`` always names a ``samples.csv`` file; a count of samples per fixture is
+``--per-fixture``. An old spelling still works the same with a deprecation warning; a value that
+looks like the old unit (``--noise 0.0003``, metres before 0.2) is refused with one line saying what
+changed, never reinterpreted.
+
+Only argparse is imported here: this module is loaded while the parsers are built (``--help``).
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+import sys
+
+#: Below this a length in millimetres is taken for the old unit (metres): 10 micrometres (0 is allowed).
+MM_FLOOR = 1e-2
+#: Above this a fixture or marker noise [mm] is not a measurement but a slip.
+MAX_NOISE_MM = 20.0
+
+
+class OptionError(Exception):
+    """An option the command cannot use; printed as one line, exit status 1."""
+
+
+def fail(message: str) -> OptionError:
+    """The error to raise for an option that parsed but cannot be used (``raise fail(...)``)."""
+    return OptionError(message)
+
+
+class Parser(argparse.ArgumentParser):
+    """An ArgumentParser whose errors are one line (``spherecal CMD: error: ...``) and exit status 1,
+    like every other refusal of spherecal."""
+
+    def error(self, message: str):  # noqa: D102 - argparse's hook
+        self.exit(1, f"{self.prog}: error: {message} (see {self.prog} --help)\n")
+
+
+# --------------------------------------------------------------------------------------- types
+def _finite(text: str) -> float:
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a number, got {text!r}") from None
+    if not math.isfinite(value):
+        raise argparse.ArgumentTypeError(f"expected a finite number, got {text!r}")
+    return value
+
+
+def non_negative(text: str) -> float:
+    """A finite number >= 0 (tolerances, spreads)."""
+    value = _finite(text)
+    if value < 0:
+        raise argparse.ArgumentTypeError(f"expected a number >= 0, got {text!r}")
+    return value
+
+
+def positive(text: str) -> float:
+    """A finite number > 0 (durations, limits)."""
+    value = _finite(text)
+    if value <= 0:
+        raise argparse.ArgumentTypeError(f"expected a number > 0, got {text!r}")
+    return value
+
+
+def seed(text: str) -> int:
+    """``--seed``: an integer >= 0 (numpy's generators refuse negative seeds)."""
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected an integer >= 0, got {text!r}") from None
+    if value < 0:
+        raise argparse.ArgumentTypeError(f"expected an integer >= 0, got {text!r}")
+    return value
+
+
+def count(minimum: int = 1):
+    """An argparse type: an integer >= ``minimum``."""
+
+    def parse(text: str) -> int:
+        try:
+            value = int(text)
+        except ValueError:
+            raise argparse.ArgumentTypeError(f"expected an integer >= {minimum}, got {text!r}") from None
+        if value < minimum:
+            raise argparse.ArgumentTypeError(f"expected an integer >= {minimum}, got {text!r}")
+        return value
+
+    return parse
+
+
+def millimetres(text: str, allow_zero: bool = True, upper: float | None = None) -> float:
+    """A length in millimetres; a value under :data:`MM_FLOOR` (but not 0) reads as the old metres."""
+    value = _finite(text)
+    if value < 0 or (value == 0 and not allow_zero):
+        raise argparse.ArgumentTypeError(f"expected a number {'>=' if allow_zero else '>'} 0 [mm], got {text!r}")
+    if 0 < value < MM_FLOOR:
+        raise argparse.ArgumentTypeError(
+            f"{text} mm is below {MM_FLOOR:g} mm: this option is in millimetres (it took metres before "
+            f"spherecal 0.2); for {value * 1e3:g} mm write {value * 1e3:g}"
+        )
+    if upper is not None and value > upper:
+        raise argparse.ArgumentTypeError(f"{text} mm is not a plausible value (at most {upper:g} mm); it is in mm")
+    return value
+
+
+def noise_mm(text: str) -> float:
+    """A noise std [mm]: 0 or 0.01 .. 20 mm (a fixture's play or a marker's noise)."""
+    return millimetres(text, upper=MAX_NOISE_MM)
+
+
+def positive_noise_mm(text: str) -> float:
+    """A noise std [mm] that must be > 0 (the expected noise of a calibration)."""
+    value = noise_mm(text)
+    if value == 0:
+        raise argparse.ArgumentTypeError(f"expected a noise > 0 [mm], got {text!r}")
+    return value
+
+
+def spread_mm(text: str) -> float:
+    """An error spread [mm] (0 allowed), at most 100 mm."""
+    return millimetres(text, upper=100.0)
+
+
+# ----------------------------------------------------------------------------- deprecations
+def warn(message: str) -> None:
+    """A one-line warning on stderr."""
+    print(f"spherecal: warning: {message}", file=sys.stderr)
+
+
+class Deprecated(argparse.Action):
+    """An old spelling that still works the same: stores into ``dest`` and warns once.
+
+    ``convert`` maps the old value to the new option's unit (e.g. rad -> deg).
+    """
+
+    def __init__(self, option_strings, dest, new: str = "", convert=None, **kwargs):
+        self.new, self.convert = new, convert
+        super().__init__(option_strings, dest, **kwargs)
+
+    def __call__(self, parser, namespace, values, option_string=None):
+        warn(f"{option_string} is deprecated, use {self.new} ({option_string} will be removed)")
+        setattr(namespace, self.dest, self.convert(values) if self.convert else values)
+
+
+def add_deprecated(parser: argparse.ArgumentParser, old: str, new: str, type, convert=None) -> None:
+    """Register ``old`` as a deprecated spelling of ``new`` (same destination, hidden from --help)."""
+    dest = new.lstrip("-").replace("-", "_")
+    parser.add_argument(old, dest=dest, type=type, action=Deprecated, new=new, convert=convert,
+                        help=argparse.SUPPRESS)
+
+
+# ------------------------------------------------------------------------------ common options
+def add_robot(parser: argparse.ArgumentParser, default: str | None = "panda") -> None:
+    """``--robot``: a robot file, a URDF (with ``--tip-link``, ``--base-link``), or ``panda``."""
+    what = "nominal robot: a robot file (YAML), a URDF (.urdf) or 'panda' (embedded)"
+    if default is None:
+        parser.add_argument("--robot", required=True, help=what)
+    else:
+        parser.add_argument("--robot", default=default, help=f"{what} (default {default})")
+    add_urdf_links(parser)
+
+
+def add_urdf_links(parser: argparse.ArgumentParser) -> None:
+    """``--tip-link`` and ``--base-link``: which chain of a ``--robot`` URDF is the arm."""
+    parser.add_argument("--tip-link", default=None, metavar="NAME",
+                        help="URDF robot: the link whose origin is the tool point, the ball centre "
+                        "(default: the end of the longest chain)")
+    parser.add_argument("--base-link", default=None, metavar="NAME",
+                        help="URDF robot: the link whose frame is the world (default: the root link)")
+
+
+def urdf_links(args: argparse.Namespace) -> dict:
+    """Keyword arguments ``tip_link``, ``base_link`` of ``correction.load_robot`` from the options."""
+    return {"tip_link": getattr(args, "tip_link", None), "base_link": getattr(args, "base_link", None)}
+
+
+def add_seed(parser: argparse.ArgumentParser, what: str = "everything random") -> None:
+    """``--seed``: an integer >= 0 (default 0)."""
+    parser.add_argument("--seed", type=seed, default=0, help=f"seed of {what} (default 0)")
+
+
+def add_per_fixture(parser: argparse.ArgumentParser, default: int, what: str = "samples kept per fixture") -> None:
+    """``--per-fixture N`` (old spelling ``--samples N``, deprecated: ``--samples`` names a file elsewhere)."""
+    parser.add_argument(
+        "--per-fixture", type=count(1), default=default, metavar="N", help=f"{what} (default {default})"
+    )
+    add_deprecated(parser, "--samples", "--per-fixture", count(1))
+
+
+def add_seconds(parser: argparse.ArgumentParser, default: float, what: str) -> None:
+    """``--seconds``: a duration [s] > 0."""
+    parser.add_argument("--seconds", type=positive, default=default, help=f"{what} [s] (default {default:g})")

@@ -1,0 +1,137 @@
+"""URDF out into the user's own file: MuJoCo compiles the written URDF and sees the calibration."""
+
+from __future__ import annotations
+
+import difflib
+import warnings
+import xml.etree.ElementTree as ET
+from dataclasses import replace
+
+import numpy as np
+import pytest
+
+from spherecal.cli import main
+from spherecal.correction import convert, perturb, save_robot, tool_point
+from spherecal.correction.urdf import ExportError, robot_to_urdf
+from spherecal.correction.urdf_into import urdf_into
+from spherecal.correction.urdf_read import parse_urdf
+from spherecal.correction.urdf_to_dh import NearlyParallelAxesWarning, urdf_model
+from tests.correction.ur5e_urdf import ur5e_urdf
+from tests.correction.urdf_helpers import DATA, MujocoUrdf
+
+ROBOTS = {"panda": "ball_link", "iiwa14": None, "gen3lite": "ball_link", "ur5e": None}
+
+
+def _text(robot: str) -> str:
+    return ur5e_urdf(skew=2e-5) if robot == "ur5e" else (DATA / f"{robot}.urdf").read_text()
+
+
+def _calibrated(robot: str, convention: str, rng):
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", NearlyParallelAxesWarning)
+        nominal = urdf_model(parse_urdf(_text(robot), robot), tip_link=ROBOTS[robot], convention=convention)
+    return nominal, perturb(nominal, rng, 1e-3, np.deg2rad(0.2), 1e-3, base=True)
+
+
+def _changed_joints(original: str, written: str) -> set[str]:
+    before, after = ET.fromstring(original), ET.fromstring(written)
+    changed = set()
+    old, new = list(before.iter()), list(after.iter())
+    assert [e.tag for e in old] == [e.tag for e in new]
+    parents = {child: parent for parent in after.iter() for child in parent}
+    for a, b in zip(old, new, strict=True):
+        if a.attrib != b.attrib or (a.text or "").strip() != (b.text or "").strip():
+            assert b.tag == "origin" and parents[b].tag == "joint", (a.tag, a.attrib, b.attrib)
+            changed.add(parents[b].get("name"))
+    return changed
+
+
+@pytest.mark.parametrize("convention", ["modified", "standard"])
+@pytest.mark.parametrize("robot", list(ROBOTS))
+def test_written_urdf_is_the_calibrated_model_for_mujoco(robot, convention, rng):
+    nominal, calibrated = _calibrated(robot, convention, rng)
+    original = _text(robot)
+    written = urdf_into(calibrated, original, robot)
+    q = calibrated.random_configurations(250, rng)
+    names, tip = calibrated.extras["joint_names"], calibrated.extras["urdf"]["tip_link"]
+    points, _ = MujocoUrdf(written).body_pose(tip, names, q)
+    error = np.linalg.norm(points - tool_point(calibrated, q), axis=1)
+    assert error.max() < 1e-12, error.max()
+    before, _ = MujocoUrdf(original).body_pose(tip, names, q)
+    assert np.linalg.norm(before - tool_point(calibrated, q), axis=1).mean() > 1e-3  # it did change
+    # Only the origins of the chain's revolute joints and of the fixed joint into the tip differ.
+    path = parse_urdf(original).path(calibrated.extras["urdf"]["base_link"], tip)
+    allowed = {j.name for j in path if j.type != "fixed"} | {path[-1].name}
+    assert _changed_joints(original, written) <= allowed
+    lines = difflib.ndiff(original.splitlines(), written.splitlines())
+    for line in lines:
+        if line.startswith(("- ", "+ ")) and "<origin" not in line:
+            assert line.startswith("+ ") and ("spherecal" in line or "<!--" in line or "calibration" in line
+                                              or "-->" in line or line.strip() in ("+",)), line
+
+
+def test_everything_but_origins_is_kept_byte_for_byte(rng):
+    _, calibrated = _calibrated("panda", "modified", rng)
+    original = _text("panda")
+    written = urdf_into(calibrated, original, "panda.urdf")
+    assert "../meshes/panda/link0.dae" in written and "<safety_controller" in written
+    assert '<!--origin rpy="0 0 0" xyz="0 0 0.1034"/-->' in _text("iiwa14")
+    iiwa_nominal, iiwa = _calibrated("iiwa14", "modified", rng)
+    kept = urdf_into(iiwa, _text("iiwa14"), "iiwa14.urdf")
+    assert '<!--origin rpy="0 0 0" xyz="0 0 0.1034"/-->' in kept  # a commented-out origin is not an origin
+    # Finger joints, limits, masses: identical elements.
+    assert _changed_joints(original, written) == {f"panda_joint{i}" for i in range(1, 8)} | {"ball_joint"}
+
+
+def test_refuses_another_chain(rng):
+    _, panda = _calibrated("panda", "modified", rng)
+    _, ur5e = _calibrated("ur5e", "modified", rng)
+    with pytest.raises(ExportError, match="7 revolute joints, the calibrated model 6"):
+        urdf_into(replace(ur5e, extras={}), _text("panda"), "panda.urdf")
+    renamed = _text("panda").replace('"panda_joint3"', '"arm_joint3"')
+    with pytest.raises(ExportError, match="joint names"):
+        urdf_into(panda, renamed, "renamed.urdf")
+    bigger = ur5e_urdf().replace("-0.425 0 0", "-0.725 0 0")
+    with pytest.raises(ExportError, match="not the calibrated robot"):
+        urdf_into(ur5e, bigger, "bigger.urdf")
+
+
+def test_bare_panda_urdf_uses_franka_names_and_flange(panda, rng):
+    q = panda.random_configurations(100, rng)
+    ours, _ = MujocoUrdf(robot_to_urdf(panda)).body_pose("panda_link8", [f"panda_joint{i}" for i in range(1, 8)], q)
+    franka, _ = MujocoUrdf(_text("panda")).body_pose("panda_link8", [f"panda_joint{i}" for i in range(1, 8)], q)
+    assert np.abs(ours - franka).max() < 1e-12
+
+
+def test_export_cli_into(tmp_path, rng, capsys):
+    _, calibrated = _calibrated("gen3lite", "standard", rng)
+    cal, into, out = tmp_path / "cal.yaml", tmp_path / "kinova.urdf", tmp_path / "calibrated.urdf"
+    save_robot(calibrated, cal)
+    into.write_text(_text("gen3lite"))
+    args = ["export", str(cal), "--format", "urdf", "--into", str(into), "--out", str(out)]
+    assert main(args) == 0
+    q = calibrated.random_configurations(200, rng)
+    points, _ = MujocoUrdf(out.read_text()).body_pose("ball_link", calibrated.extras["joint_names"], q)
+    assert np.abs(points - tool_point(calibrated, q)).max() < 1e-12
+    assert into.read_text() == _text("gen3lite")
+    # --out naming the --into file (also through a symbolic link) is refused, nothing written.
+    link = tmp_path / "link.urdf"
+    link.symlink_to(into)
+    for target in (into, link):
+        assert main(["export", str(cal), "--format", "urdf", "--into", str(into), "--out", str(target)]) == 1
+        assert "is the --into file" in capsys.readouterr().err
+    assert into.read_text() == _text("gen3lite")
+    # Another arm: one line, nothing written.
+    other = tmp_path / "other.urdf"
+    assert main(["export", str(cal), "--format", "urdf", "--into", str(DATA / "panda.urdf"), "--out", str(other)]) == 1
+    error = capsys.readouterr().err
+    assert error.count("\n") == 1 and "spherecal export: error:" in error and not other.exists()
+
+
+def test_model_in_other_convention_of_same_arm(rng):
+    nominal, calibrated = _calibrated("ur5e", "modified", rng)
+    standard = convert(calibrated, "standard")
+    written = urdf_into(standard, _text("ur5e"), "ur5e")
+    q = calibrated.random_configurations(50, rng)
+    points, _ = MujocoUrdf(written).body_pose("ball", calibrated.extras["joint_names"], q)
+    assert np.abs(points - tool_point(calibrated, q)).max() < 1e-12

@@ -1,0 +1,165 @@
+"""URDF in: MuJoCo's URDF compiler is the independent evaluator of our DH conversion."""
+
+from __future__ import annotations
+
+import warnings
+
+import numpy as np
+import pytest
+
+from spherecal.correction import load_robot, to_modified, to_standard, tool_point
+from spherecal.correction.urdf_read import parse_urdf
+from spherecal.correction.urdf_to_dh import NearlyParallelAxesWarning, load_urdf, urdf_model
+from tests.correction.ur5e_urdf import NAMES, ur5e_urdf
+from tests.correction.urdf_helpers import DATA, MujocoUrdf
+
+ROBOTS = {  # file or inline text, tip link
+    "panda": ("panda.urdf", "ball_link"),
+    "panda_flange": ("panda.urdf", "panda_link8"),
+    "iiwa14": ("iiwa14.urdf", None),
+    "gen3lite": ("gen3lite.urdf", "ball_link"),
+    "ur5e": (None, None),
+    "ur5e_skewed": (None, None),
+}
+
+
+def _text(robot: str) -> str:
+    file, _ = ROBOTS[robot]
+    if file is None:
+        return ur5e_urdf(skew=2e-5 if robot == "ur5e_skewed" else 0.0)
+    return (DATA / file).read_text()
+
+
+def _model(robot: str, convention: str):
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", NearlyParallelAxesWarning)
+        return urdf_model(parse_urdf(_text(robot), robot), tip_link=ROBOTS[robot][1], convention=convention)
+
+
+@pytest.mark.parametrize("convention", ["modified", "standard"])
+@pytest.mark.parametrize("robot", list(ROBOTS))
+def test_tool_point_equals_mujoco_urdf_compiler(robot, convention, rng):
+    model = _model(robot, convention)
+    assert model.convention == convention
+    q = model.random_configurations(250, rng)
+    points, _ = MujocoUrdf(_text(robot)).body_pose(model.extras["urdf"]["tip_link"], model.extras["joint_names"], q)
+    error = np.linalg.norm(points - tool_point(model, q), axis=1)
+    assert error.max() < 1e-12, error.max()
+    assert np.ptp(points, axis=0).min() > 0.1  # the arm really moved
+
+
+@pytest.mark.parametrize("robot", list(ROBOTS))
+def test_standard_modified_round_trip(robot, rng):
+    modified, standard = _model(robot, "modified"), _model(robot, "standard")
+    q = modified.random_configurations(200, rng)
+    assert np.abs(tool_point(to_standard(modified), q) - tool_point(modified, q)).max() < 1e-12
+    assert np.abs(tool_point(to_modified(standard), q) - tool_point(modified, q)).max() < 1e-12
+    back = to_modified(to_standard(modified))
+    np.testing.assert_allclose(back.params[3 * 0 + 4 :], modified.params[4:], atol=1e-12)
+
+
+def test_franka_urdf_gives_franka_dh():
+    model = load_urdf(DATA / "panda.urdf", tip_link="panda_link8")
+    panda = load_robot("panda")
+    for name in ("a", "alpha", "d", "theta", "beta", "lower", "upper", "tool", "base_xyz", "base_rpy"):
+        np.testing.assert_allclose(getattr(model, name), getattr(panda, name), atol=1e-15, err_msg=name)
+    assert model.extras["joint_names"] == [f"panda_joint{i}" for i in range(1, 8)]
+    assert model.extras["urdf"]["links"] == [f"panda_link{i}" for i in range(1, 8)]
+
+
+def test_parallel_axes_get_beta_only_when_skewed():
+    exact, skewed = _model("ur5e", "modified"), _model("ur5e_skewed", "modified")
+    assert exact.extras["urdf"]["parallel_joints"] == list(NAMES[2:4])
+    assert skewed.extras["urdf"]["parallel_joints"] == list(NAMES[2:4])
+    assert np.abs(exact.beta).max() < 1e-15
+    # The elbow tilt is about the link's x (into alpha), the wrist-1 tilt about y (Hayati's beta).
+    assert abs(skewed.beta[2]) < 1e-15 and abs(np.sin(skewed.alpha[2])) == pytest.approx(2e-5, rel=1e-6)
+    assert abs(skewed.beta[3]) == pytest.approx(2e-5, rel=1e-6)
+    # d of the joint before each parallel pair is held at zero, and no d blows up.
+    assert skewed.d[1] == 0.0 and skewed.d[2] == 0.0
+    assert np.abs(skewed.d).max() < 0.2 and np.abs(skewed.a).max() < 0.5
+    with pytest.warns(NearlyParallelAxesWarning, match="elbow_joint"):
+        urdf_model(parse_urdf(_text("ur5e_skewed"), "ur5e"))
+    gen3 = _model("gen3lite", "modified")
+    assert gen3.extras["urdf"]["parallel_joints"] == ["joint_3"]
+    assert 1e-6 < abs(gen3.beta[2]) < 1e-4 and np.abs(gen3.d).max() < 0.3  # 1.5708 and 3.1416 in the file
+
+
+def test_inertials_lumped_per_joint_match_mujoco_centre_of_mass(rng):
+    import mujoco
+
+    model = _model("gen3lite", "modified")
+    inertials, payload = model.extras["inertials"], model.extras["payload"]
+    assert len(inertials) == model.n_joints
+    tree = parse_urdf(_text("gen3lite"), "gen3lite")
+    below = {link for link in tree.links if link not in ("world", "kinova_base_link")}
+    total = sum(tree.inertials[k].mass for k in below if k in tree.inertials)
+    assert sum(i["mass"] for i in inertials) + payload["mass"] == pytest.approx(total, abs=1e-12)
+    assert payload["mass"] > 0.1  # the gripper
+    # World centre of mass of everything moving, from our DH frames, against MuJoCo's subtree_com.
+    from spherecal.correction import link_frames
+
+    mj = MujocoUrdf(_text("gen3lite"), boundmass="0", boundinertia="0")  # MuJoCo's masses as written
+    shoulder = mujoco.mj_name2id(mj.model, mujoco.mjtObj.mjOBJ_BODY, "shoulder_link")
+    assert mj.model.body_mass[shoulder:].sum() == pytest.approx(total, abs=1e-12)
+    for q in model.random_configurations(20, rng):
+        frames = link_frames(model, q)[1:]
+        moments = [i["mass"] * (f[:3, :3] @ i["com"] + f[:3, 3]) for i, f in zip(inertials, frames, strict=True)]
+        moments.append(payload["mass"] * (frames[-1][:3, :3] @ payload["com"] + frames[-1][:3, 3]))
+        mj.body_pose("shoulder_link", model.extras["joint_names"], q[None])
+        mujoco.mj_comPos(mj.model, mj.data)
+        # Each joint's lumped centre of mass against MuJoCo's per-body centres of mass.
+        for i, name in enumerate(model.extras["urdf"]["links"][:-1]):
+            body = mujoco.mj_name2id(mj.model, mujoco.mjtObj.mjOBJ_BODY, name)
+            theirs = mj.data.xipos[body] * mj.model.body_mass[body]
+            assert np.linalg.norm(moments[i] - theirs) < 1e-12, name
+        assert np.linalg.norm(sum(moments) / total - mj.data.subtree_com[shoulder]) < 1e-12
+
+
+@pytest.mark.parametrize(
+    ("edit", "match"),
+    [
+        (lambda t: t.replace('revolute"><parent link="upper_arm_link"', 'prismatic"><parent link="upper_arm_link"'),
+         "joint 'elbow_joint': a prismatic joint"),
+        (lambda t: t.replace('<child link="flange"/>', '<child link="wrist_2_link"/>'),
+         "link 'wrist_2_link' has two parents"),
+        (lambda t: t.replace('<parent link="forearm_link"/>', '<parent link="forarm_link"/>'),
+         "parent link 'forarm_link' is not defined"),
+        (lambda t: t.replace('type="revolute"', 'type="sliding"', 1), "unknown type 'sliding'"),
+        (lambda t: t.replace("<robot", "<robo").replace("</robot>", "</robo>"), "expected a <robot>"),
+        (lambda t: t.replace("</robot>", ""), "invalid XML"),
+    ],
+)
+def test_bad_urdf_one_line_error(edit, match, tmp_path):
+    from spherecal.correction import RobotFileError
+
+    path = tmp_path / "arm.urdf"
+    path.write_text(edit(ur5e_urdf()))
+    with pytest.raises(RobotFileError, match=match) as error:
+        load_urdf(path)
+    assert str(path) in str(error.value) and "\n" not in str(error.value)
+
+
+@pytest.mark.parametrize(
+    ("options", "match"),
+    [
+        ({"tip_link": "gripper"}, "tip link 'gripper' is not a link"),
+        ({"base_link": "wrist_1_link", "tip_link": "shoulder_link"}, "'shoulder_link' is not below base link"),
+        ({"base_link": "ball"}, "no revolute joint"),
+    ],
+)
+def test_bad_links_one_line_error(options, match, tmp_path):
+    from spherecal.correction import RobotFileError
+
+    path = tmp_path / "arm.urdf"
+    path.write_text(ur5e_urdf())
+    with pytest.raises(RobotFileError, match=match):
+        load_urdf(path, **options)
+
+
+def test_base_link_and_default_tip(tmp_path):
+    path = tmp_path / "arm.urdf"
+    path.write_text(ur5e_urdf())
+    full, sub = load_urdf(path), load_urdf(path, base_link="upper_arm_link")
+    assert full.extras["urdf"]["tip_link"] == "ball" and full.n_joints == 6
+    assert sub.n_joints == 4 and sub.extras["joint_names"] == list(NAMES[2:])

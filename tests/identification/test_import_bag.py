@@ -1,0 +1,126 @@
+"""`spherecal import` of continuous recordings: ROS 2 (sqlite3, MCAP) and ROS 1 bags, joint CSV files,
+automatic segmentation into fixtures, and the refusals (ambiguous split, drift, missing joint)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from spherecal.cli import main
+from spherecal.correction import load_robot, perturb, tool_point
+from spherecal.correction.fixtures import read_fixtures
+from spherecal.correction.samples_csv import read_samples
+
+from .recordings import Q0, stream, write_bag
+from .test_import_mukca import PANDA
+
+NAMES = [f"panda_joint{i + 1}" for i in range(7)]
+
+
+def _offset(true, distance: float) -> float:
+    """Joint-1 offset [rad] that moves the tool point of Q0 by ``distance`` [m]."""
+    p = tool_point(true, Q0[None])[0]
+    return float(2 * np.arcsin(distance / 2 / np.hypot(p[0], p[1])))
+
+
+@pytest.fixture(scope="module")
+def recording():
+    """Two sockets 50 mm apart on a perturbed 'true' Panda (the nominal tool point then moves ~2 mm)."""
+    nominal = load_robot(PANDA)
+    true = perturb(nominal, np.random.default_rng(3))
+    t, q, truth = stream(true, [0.0, _offset(true, 0.05)])
+    return true, t, q, truth
+
+
+def _check_split(out, true, t, q, truth) -> None:
+    dataset = read_samples(out / "samples.csv", load_robot(PANDA))
+    assert dataset.fixture_names == ("S1", "S2") and read_fixtures(out / "fixtures.yaml").names == ("S1", "S2")
+    row = {value: k for k, value in enumerate(t)}
+    for j, name in enumerate(("S1", "S2")):
+        rows = np.array([row[value] for value in dataset.t[dataset.labels == name]])
+        assert np.all(truth[rows] == j)  # only samples held in socket j, none from the transport
+        np.testing.assert_array_equal(dataset.for_fixture(name), q[rows])
+        assert rows.size >= 0.8 * np.count_nonzero(truth == j)  # most of the socket kept
+        centre = tool_point(true, q[truth == j][:1])[0]
+        assert np.abs(tool_point(true, q[rows]) - centre).max() < 1e-9
+
+
+@pytest.mark.parametrize("kind", ["sqlite3", "mcap", "ros1"])
+def test_a_bag_with_two_sockets_is_split_into_two_fixtures(recording, kind, tmp_path, capsys) -> None:
+    true, t, q, truth = recording
+    bag = write_bag(tmp_path / ("rec.bag" if kind == "ros1" else "rec"), kind, t, q, NAMES)
+    out = tmp_path / "out"
+    argv = ["import", str(bag), "--format", "bag", "--robot", str(PANDA), "--out", str(out)]
+    assert main(argv + ["--max-per-fixture", "100000"]) == 0
+    printed = capsys.readouterr().out
+    assert "segmented into 2 fixtures" in printed and "spread mean [mm]" in printed
+    _check_split(out, true, t, q, truth)
+
+
+def test_a_csv_without_labels_is_segmented_and_one_with_labels_is_not(recording, tmp_path) -> None:
+    true, t, q, truth = recording
+    header = "time,panda_finger_joint1," + ",".join(reversed(NAMES))
+    rows = [f"{float(t[k])!r},0.02," + ",".join(repr(float(v)) for v in q[k, ::-1]) for k in range(len(t))]
+    (tmp_path / "rec.csv").write_text(header + "\n" + "\n".join(rows) + "\n")
+    argv = ["import", str(tmp_path / "rec.csv"), "--format", "csv", "--robot", str(PANDA), "--max-per-fixture", "9999"]
+    assert main(argv + ["--out", str(tmp_path / "a")]) == 0
+    _check_split(tmp_path / "a", true, t, q, truth)
+    labels = np.where(truth < 0, "air", np.where(truth == 0, "A", "B"))
+    rows = [f"{labels[k]},{k},{','.join(repr(float(v)) for v in q[k])}" for k in range(len(t))]
+    (tmp_path / "lab.csv").write_text(
+        "fixture,sample," + ",".join(f"q{i + 1}" for i in range(7)) + "\n" + "\n".join(rows)
+    )
+    argv[1] = str(tmp_path / "lab.csv")
+    assert main(argv + ["--out", str(tmp_path / "b")]) == 0
+    dataset = read_samples(tmp_path / "b/samples.csv", load_robot(PANDA))
+    assert dataset.fixture_names == ("air", "A", "B") and dataset.t is None
+    np.testing.assert_array_equal(dataset.for_fixture("B")[:5], q[truth == 1][:5])
+
+
+def _refused(argv, capsys) -> str:
+    capsys.readouterr()
+    assert main(argv) == 1
+    err = capsys.readouterr().err.strip()
+    assert err.startswith("spherecal import: error: ") and "\n" not in err
+    return err
+
+
+def test_ambiguous_drifting_or_incomplete_recordings_are_refused(recording, tmp_path, capsys) -> None:
+    true = recording[0]
+    t, q, _ = stream(true, [0.0, _offset(true, 0.010)], seconds=3.0)  # two sockets 10 mm apart
+    bag = write_bag(tmp_path / "close", "sqlite3", t, q, NAMES)
+    argv = ["import", str(bag), "--format", "bag", "--robot", str(PANDA), "--out", str(tmp_path / "out")]
+    error = _refused(argv, capsys)
+    assert "ambiguous" in error and "mm apart" in error
+    t, q, _ = stream(true, [0.0], seconds=8.0, drift=np.array([0.008, 0.0, 0.0]))  # the socket slides 64 mm
+    argv[1] = str(write_bag(tmp_path / "drift", "mcap", t, q, NAMES))
+    assert "drifts" in _refused(argv, capsys)
+    argv[1] = str(write_bag(tmp_path / "elbow.bag", "ros1", t[:50], q[:50], NAMES[:3] + ["elbow"] + NAMES[4:]))
+    assert "field 'panda_joint4'" in _refused(argv, capsys)
+    argv[1] = str(bag)
+    assert "no topic '/joints'" in _refused(argv + ["--topic", "/joints"], capsys)
+    (tmp_path / "junk.bag").write_text("not a bag\n")
+    argv[1] = str(tmp_path / "junk.bag")
+    assert "junk.bag: cannot read the bag" in _refused(argv, capsys)
+    (tmp_path / "empty").mkdir()
+    argv[1] = str(tmp_path / "empty")
+    assert "empty: cannot read the bag" in _refused(argv, capsys)
+    assert not (tmp_path / "out").exists()
+    csv = tmp_path / "back.csv"
+    csv.write_text(
+        "t,"
+        + ",".join(NAMES)
+        + "\n"
+        + "1.0"
+        + ",0.1" * 3
+        + ",-1"
+        + ",0.1" * 3
+        + "\n0.5"
+        + ",0.1" * 3
+        + ",-1"
+        + ",0.1" * 3
+        + "\n"
+    )
+    assert "back.csv: row 3, field 't': time goes back" in _refused(
+        ["import", str(csv), "--format", "csv", "--robot", str(PANDA), "--out", str(tmp_path / "out")], capsys
+    )

@@ -1,0 +1,65 @@
+"""--robot ARM.urdf with --tip-link/--base-link through the commands: calibrate a UR5e-like URDF
+(Hayati beta on its parallel axes) from simulated samples, export into the same URDF, check in MuJoCo."""
+
+from __future__ import annotations
+
+import warnings
+
+import numpy as np
+import pytest
+
+from spherecal.cli import main
+from spherecal.correction import load_robot, perturb, registered_errors, tool_point
+from spherecal.correction.fixtures import write_fixtures
+from spherecal.correction.samples_csv import write_samples
+from spherecal.correction.urdf_to_dh import NearlyParallelAxesWarning
+from spherecal.identification.synthetic import make_dataset
+from tests.correction.ur5e_urdf import ur5e_urdf
+from tests.correction.urdf_helpers import MujocoUrdf
+
+
+@pytest.fixture
+def ur5e_file(tmp_path):
+    path = tmp_path / "ur5e.urdf"
+    path.write_text(ur5e_urdf(skew=2e-5))
+    return path
+
+
+def test_calibrate_urdf_and_export_into_it(tmp_path, ur5e_file, capsys):
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", NearlyParallelAxesWarning)
+        nominal = load_robot(ur5e_file, tip_link="ball")
+    assert nominal.hayati == (2, 3)
+    true = perturb(nominal, np.random.default_rng(3))
+    qc = nominal.random_configurations(3, np.random.default_rng(7)) * 0.5
+    centres = {f"s{k}": tool_point(true, qc[k]) for k in range(3)}
+    dataset, spec = make_dataset(true, centres, 200, np.random.default_rng(4))
+    samples = write_samples(tmp_path / "samples.csv", dataset)
+    fixtures = write_fixtures(tmp_path / "fixtures.yaml", spec)
+    cal, out = tmp_path / "cal.yaml", tmp_path / "ur5e_calibrated.urdf"
+    assert main(["calibrate", "--robot", str(ur5e_file), "--tip-link", "ball", "--samples", str(samples),
+                 "--fixtures", str(fixtures), "--out", str(cal)]) == 0
+    calibrated = load_robot(cal)
+    assert calibrated.hayati == (2, 3) and calibrated.d[1] == 0.0 and calibrated.d[2] == 0.0
+    q = true.random_configurations(500, np.random.default_rng(5))
+    assert registered_errors(tool_point(calibrated, q), tool_point(true, q)).max() < 1e-6
+    assert main(["export", str(cal), "--format", "urdf", "--into", str(ur5e_file), "--out", str(out)]) == 0
+    points, _ = MujocoUrdf(out.read_text()).body_pose("ball", calibrated.extras["joint_names"], q)
+    assert np.abs(points - tool_point(calibrated, q)).max() < 1e-12
+    capsys.readouterr()
+
+
+def test_link_options_errors_are_one_line(tmp_path, ur5e_file, capsys):
+    out = tmp_path / "x.yaml"
+    assert main(["export", str(ur5e_file), "--tip-link", "wrist_3_link", "--format", "yaml", "--out", str(out)]) == 0
+    assert load_robot(out).extras["urdf"]["tip_link"] == "wrist_3_link"
+    for args, message in (
+        (["--tip-link", "gripper"], "tip link 'gripper' is not a link"),
+        (["--base-link", "ball"], "no revolute joint"),
+    ):
+        assert main(["export", str(ur5e_file), *args, "--format", "yaml", "--out", str(tmp_path / "y.yaml")]) == 1
+        error = capsys.readouterr().err
+        assert message in error and error.count("\n") == 1 and str(ur5e_file) in error
+    assert main(["export", "panda", "--tip-link", "x", "--format", "yaml", "--out", str(tmp_path / "z.yaml")]) == 1
+    assert "only for a URDF" in capsys.readouterr().err
+    assert not (tmp_path / "y.yaml").exists() and not (tmp_path / "z.yaml").exists()

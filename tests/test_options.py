@@ -1,0 +1,117 @@
+"""One CLI idiom: units named in every --help and the same across commands; old spellings still
+work with a warning; a value in the old unit is refused in one line, never reinterpreted."""
+
+from __future__ import annotations
+
+import argparse
+import re
+
+import pytest
+
+from spherecal.cli import COMMANDS, build_parser, main
+
+#: option -> its one unit on the command line (see spherecal.options).
+UNITS = {
+    "--noise": "mm",
+    "--mocap-noise": "mm",
+    "--length-std": "mm",
+    "--tool-std": "mm",
+    "--angle-std-deg": "deg",
+    "--dedup-deg": "deg",
+    "--seconds": "s",
+    "--grid": "m",
+    "--distance": "m",
+    "--still-radius": "mm",
+    "--max-spread": "mm",
+    "--min-separation": "mm",
+    "--window": "s",
+    "--min-duration": "s",
+    "--rate": "Hz",
+}
+#: options that are counts, names, files or factors (no physical unit).
+UNITLESS = {"--seed", "--per-fixture", "--max-per-fixture", "--configurations", "--sets", "--workers",
+            "--fixture-count", "--max-change", "--method", "--loss", "--mode", "--solver", "--source",
+            "--protocol", "--rows", "--motion", "--format", "--prefix", "--effort", "--velocity", "--topic",
+            "--tip-link", "--base-link", "--convention", "--model", "--max-per-segment", "--min-configurations"}
+
+
+def _options() -> list[tuple[str, argparse.Action]]:
+    parser = build_parser()
+    sub = next(a for a in parser._actions if isinstance(a, argparse._SubParsersAction))
+    found = []
+    for name, command in sub.choices.items():
+        for action in command._actions:
+            if action.help is argparse.SUPPRESS or not action.option_strings:
+                continue
+            found += [(name, action)]
+    return found
+
+
+def test_every_physical_option_states_its_unit_and_the_units_agree() -> None:
+    seen = set()
+    for command, action in _options():
+        option = action.option_strings[-1]
+        if option in UNITS:
+            assert f"[{UNITS[option]}]" in action.help, f"spherecal {command} {option}: {action.help}"
+            seen.add(option)
+        elif isinstance(action.default, float) and option not in UNITLESS:
+            pytest.fail(f"spherecal {command} {option} is a number with no unit registered here: {action.help}")
+        # a bracketed unit, wherever it appears, is one of the command line's units
+        for unit in re.findall(r"\[([a-zA-Z/]+)\]", action.help or ""):
+            # (rad, rad/s and Nm: the units inside files, which stay SI)
+            allowed = {"mm", "m", "deg", "s", "Hz", "rad", "rad/s", "Nm"}
+            assert unit in allowed, f"spherecal {command} {option}: [{unit}]"
+    assert {"--noise", "--mocap-noise", "--seconds"} <= seen
+
+
+def test_noise_is_millimetres_in_every_command() -> None:
+    commands = {command for command, action in _options() if "--noise" in action.option_strings}
+    assert {"simulate", "calibrate", "demo", "campaign", "plan"} <= commands
+
+
+def test_samples_always_names_a_file() -> None:
+    for command, action in _options():
+        if "--samples" in action.option_strings:
+            assert action.type is None and action.metavar in (None, "SAMPLES_CSV"), command
+            assert "csv" in action.help.lower(), f"spherecal {command} --samples: {action.help}"
+
+
+@pytest.mark.parametrize(
+    ("argv", "message"),
+    [
+        (["calibrate", "--robot", "panda", "--samples", "s.csv", "--out", "o.yaml", "--noise", "0.0003"],
+         "0.0003 mm is below 0.01 mm: this option is in millimetres (it took metres before spherecal 0.2); "
+         "for 0.3 mm write 0.3"),
+        (["simulate", "--out", "o", "--noise", "0.0003"], "for 0.3 mm write 0.3"),
+        (["simulate", "--out", "o", "--length-std", "0.001"], "for 1 mm write 1"),
+        (["calibrate", "--robot", "panda", "--samples", "s.csv", "--out", "o.yaml", "--noise", "300"],
+         "300 mm is not a plausible value"),
+    ],
+)
+def test_a_value_in_the_old_unit_is_refused_in_one_line(tmp_path, capsys, monkeypatch, argv, message) -> None:
+    monkeypatch.chdir(tmp_path)
+    assert main(argv) == 1
+    err = capsys.readouterr().err
+    assert message in err and len(err.strip().splitlines()) == 1, err
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_old_spellings_still_work_with_a_warning(capsys) -> None:
+    parser = build_parser()
+    args = parser.parse_args(["plan", "--grid", "0.5,0.5,1;0,0,1;0.4,0.4,1", "--samples", "120", "--fixtures", "2"])
+    assert args.per_fixture == 120 and args.fixture_count == 2 and args.fixtures is None
+    err = capsys.readouterr().err
+    assert "--samples is deprecated, use --per-fixture" in err and "use --fixture-count" in err
+    args = parser.parse_args(["calibrate", "--robot", "panda", "--samples", "s.csv", "--out", "o.yaml",
+                              "--max-samples", "50", "--dedup-tol", "0.001"])
+    assert args.max_per_fixture == 50 and args.dedup_deg == pytest.approx(0.057295779513)
+    args = parser.parse_args(["validate", "--nominal", "n", "--calibrated", "c", "--noise", "0.5"])
+    assert args.mocap_noise == 0.5
+    err = capsys.readouterr().err
+    assert "--max-samples is deprecated" in err and "--dedup-tol is deprecated" in err
+    assert "--noise is deprecated, use --mocap-noise" in err
+
+
+def test_every_subcommand_is_registered_once() -> None:
+    assert len(COMMANDS) == len(set(COMMANDS.values()))
+    assert all(module.startswith("spherecal.commands.") for module in COMMANDS.values())

@@ -1,0 +1,199 @@
+"""Validation without motion capture: how well each model keeps a socket's tool points together.
+
+A ball held in a socket does not move, so a correct model predicts the same tool point for every
+configuration recorded there. Per fixture, the *spread* is the mean distance of the predicted tool
+points from their mean (MUKCa's "MAE"; their "test MAE" on placements not used for fitting); per
+known distance, the *distance error* is the distance between the two fixtures' mean points minus the
+known one. Both are computed for every model (nominal, calibrated) on the same samples.
+
+Fixtures named in the calibrated file's ``calibration.samples_per_fixture`` were used in the fit: they
+are marked, and the held-out summary leaves them out.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from spherecal.correction import RobotModel, tool_point
+from spherecal.correction.fixtures import FixtureSpec
+from spherecal.correction.samples import Dataset
+
+
+@dataclass(frozen=True)
+class FixtureSpread:
+    """One fixture's predicted tool points around their mean, per model.
+
+    Attributes:
+        name: fixture.
+        count: samples.
+        held_out: False when the fixture was used to calibrate.
+        mean, max: model -> mean and largest distance from the mean point [m].
+        centre: model -> (3,) mean predicted tool point [m].
+    """
+
+    name: str
+    count: int
+    held_out: bool
+    mean: dict[str, float]
+    max: dict[str, float]
+    centre: dict[str, np.ndarray]
+
+
+@dataclass(frozen=True)
+class DistanceCheck:
+    """A known distance against each model's fixture means.
+
+    Attributes:
+        a, b: fixtures.
+        known: the known distance [m].
+        held_out: False when either fixture was used to calibrate.
+        measured: model -> distance between the two mean points [m].
+    """
+
+    a: str
+    b: str
+    known: float
+    held_out: bool
+    measured: dict[str, float]
+
+    def error(self, model: str) -> float:
+        """Measured minus known [m]."""
+        return self.measured[model] - self.known
+
+
+@dataclass(frozen=True)
+class SocketReport:
+    """Spread per fixture and distance errors, per model (metres)."""
+
+    models: tuple[str, ...]
+    fixtures: list[FixtureSpread]
+    distances: list[DistanceCheck]
+    source: str
+
+    def summary(self, model: str) -> tuple[float, float | None]:
+        """Held-out mean spread [m] (mean over fixtures) and mean |distance error| [m] (None if none)."""
+        spread = [f.mean[model] for f in self.fixtures if f.held_out]
+        errors = [abs(d.error(model)) for d in self.distances if d.held_out]
+        return (float(np.mean(spread)) if spread else float("nan"), float(np.mean(errors)) if errors else None)
+
+    def format(self) -> str:
+        """The printed tables (mm)."""
+        head = " ".join(f"{m + ' mean':>16} {m + ' max':>15}" for m in self.models)
+        lines = [
+            f"tool-point spread per socket [mm] (no mocap: distance of each predicted point from the fixture's mean), "
+            f"{self.source}",
+            f"{'fixture':<22} {'samples':>7} {head}",
+        ]
+        for f in self.fixtures:
+            cells = " ".join(f"{f.mean[m] * 1e3:16.3f} {f.max[m] * 1e3:15.3f}" for m in self.models)
+            lines.append(f"{f.name + ('' if f.held_out else ' (fit)'):<22} {f.count:>7} {cells}")
+        if self.distances:
+            head = " ".join(f"{m + ' error':>16}" for m in self.models)
+            lines += [
+                "",
+                "known distances [mm] (distance between the fixtures' mean points minus the known one)",
+                f"{'fixtures':<40} {'known':>8} {head}",
+            ]
+            for d in self.distances:
+                cells = " ".join(f"{d.error(m) * 1e3:16.3f}" for m in self.models)
+                name = f"{d.a} - {d.b}" + ("" if d.held_out else " (fit)")
+                lines.append(f"{name:<40} {d.known * 1e3:8.3f} {cells}")
+        held = sum(f.held_out for f in self.fixtures)
+        lines.append("")
+        if held == 0:
+            lines.append("every fixture was used in the fit: this is no held-out check")
+        for m in self.models:
+            spread, error = self.summary(m)
+            text = "-" if error is None else f"{error * 1e3:.3f}"
+            lines.append(
+                f"held-out ({held} fixtures) {m:<11} test MAE {spread * 1e3:8.3f} mm   mean |distance error| {text} mm"
+            )
+        return "\n".join(lines)
+
+    def to_dict(self) -> dict:
+        """Plain data (metres) for a JSON result file."""
+        return {
+            "source": self.source,
+            "units": "m",
+            "fixtures": {
+                f.name: {
+                    "samples": f.count,
+                    "held_out": f.held_out,
+                    "spread_mean": f.mean,
+                    "spread_max": f.max,
+                    "centre": {m: [float(v) for v in c] for m, c in f.centre.items()},
+                }
+                for f in self.fixtures
+            },
+            "distances": [
+                {
+                    "a": d.a,
+                    "b": d.b,
+                    "known": d.known,
+                    "held_out": d.held_out,
+                    "measured": d.measured,
+                    "error": {m: d.error(m) for m in self.models},
+                }
+                for d in self.distances
+            ],
+            "held_out": {
+                m: {"test_mae": self.summary(m)[0], "distance_error_mean_abs": self.summary(m)[1]} for m in self.models
+            },
+        }
+
+
+def fitted_fixtures(model: RobotModel) -> set[str]:
+    """Fixtures a calibrated robot file says it was fitted on (empty if it does not say)."""
+    block = model.extras.get("calibration")
+    used = block.get("samples_per_fixture") if isinstance(block, dict) else None
+    return set(used) if isinstance(used, dict) else set()
+
+
+def socket_validation(
+    models: dict[str, RobotModel], dataset: Dataset, spec: FixtureSpec | None = None, fitted: set[str] = frozenset()
+) -> SocketReport:
+    """Spread per fixture and known-distance errors of each model on recorded socket samples.
+
+    Args:
+        models: model name -> model (e.g. ``{"nominal": ..., "calibrated": ...}``).
+        dataset: the samples (joint angles per fixture).
+        spec: the fixtures' known distances, or None.
+        fitted: fixtures used to calibrate (marked; left out of the held-out summary).
+
+    Returns:
+        The report; fixtures with fewer than 2 samples have zero spread.
+    """
+    fixtures = []
+    for name in dataset.fixture_names:
+        q = dataset.for_fixture(name)
+        mean, largest, centre = {}, {}, {}
+        for key, model in models.items():
+            points = tool_point(model, q)
+            centre[key] = points.mean(axis=0)
+            distance = np.linalg.norm(points - centre[key], axis=1)
+            mean[key], largest[key] = float(distance.mean()), float(distance.max())
+        fixtures.append(FixtureSpread(name, int(q.shape[0]), name not in fitted, mean, largest, centre))
+    by_name = {f.name: f for f in fixtures}
+    distances = []
+    for a, b, known in spec.distances if spec is not None else []:
+        measured = {key: float(np.linalg.norm(by_name[a].centre[key] - by_name[b].centre[key])) for key in models}
+        distances.append(DistanceCheck(a, b, known, a not in fitted and b not in fitted, measured))
+    return SocketReport(tuple(models), fixtures, distances, dataset.source)
+
+
+def record_sockets(recording, report: SocketReport, models: dict[str, RobotModel], dataset: Dataset) -> None:
+    """Log a socket validation into a :class:`validation.recording.Recording` (all of it here, one place).
+
+    ``sockets/<model>``: the predicted tool points, one class per fixture (static); ``plots/spread/<model>``:
+    every sample's distance from its fixture's mean point [mm] on the ``sample`` timeline.
+    """
+    index = dataset.fixture_index
+    for key, model in models.items():
+        points = tool_point(model, dataset.q)
+        centres = np.array([f.centre[key] for f in report.fixtures])
+        recording.stream.log(
+            f"sockets/{key}", recording.rr.Points3D(points, radii=0.0015, class_ids=index), static=True
+        )
+        recording.series(f"plots/spread/{key}", np.linalg.norm(points - centres[index], axis=1) * 1e3)
