@@ -14,6 +14,8 @@ number per joint [rad/Nm], zero for a rigid joint); the masses in ``inertials`` 
 
 from __future__ import annotations
 
+from dataclasses import replace
+
 import numpy as np
 
 from .gravity import InertialsError, gravity_torques, inertials_of
@@ -53,8 +55,6 @@ def is_elastic(model: RobotModel) -> bool:
 
 def with_compliance(model: RobotModel, compliance: np.ndarray | None) -> RobotModel:
     """A copy of ``model`` with ``extras["compliance"]`` set to (n,) [rad/Nm] (removed when None)."""
-    from dataclasses import replace
-
     extras = {k: v for k, v in model.extras.items() if k != "compliance"}
     if compliance is not None:
         extras["compliance"] = [float(v) for v in np.asarray(compliance, dtype=float).reshape(model.n_joints)]

@@ -188,8 +188,8 @@ def joint_jacobian(model: RobotModel, q: np.ndarray) -> np.ndarray:
     q2, single = _as_batch(model, q)
     jac = _rigid_joint_jacobian(model, _link_angles(model, q2))
     if "compliance" in model.extras:
-        from .elastic import compliance_of
-        from .gravity import gravity_torques  # function-level: both build on this module
+        from .elastic import compliance_of  # function-level: elastic and gravity build on this module
+        from .gravity import gravity_torques  # (a top-level import would be circular)
 
         c, h = compliance_of(model), 1e-6
         if np.any(c):

@@ -33,6 +33,9 @@ from pathlib import Path
 import numpy as np
 
 from spherecal.correction import SpherecalError, atomic_write_text
+from spherecal.correction.elastic import with_compliance
+from spherecal.identification.calibrate import calibrate
+from spherecal.identification.selection import elastic_start, rigid, select_model
 
 from .experiment import calibrate_from, default_fixtures, motion_set, nominal_robot, true_robot
 from .pipeline import RANDOM_SET, validate_models
@@ -149,8 +152,6 @@ def run_task(task: Task) -> TaskResult:
         truth, start = perturbed, nominal
     fixtures = {name: default_fixtures()[name] for name in task.fixtures}
     if any(task.config.stiffness):
-        from spherecal.correction.elastic import with_compliance
-
         k = np.asarray(task.config.stiffness, dtype=float)
         truth = with_compliance(truth, np.divide(1.0, k, out=np.zeros_like(k), where=k > 0))
     data = motion_set(
@@ -176,9 +177,6 @@ def run_task(task: Task) -> TaskResult:
 
 def _calibrate(model: str, nominal, start, data):
     """The calibrated robot of ``dh``, ``elastic`` or ``auto`` (cross-validated choice)."""
-    from spherecal.identification.calibrate import calibrate
-    from spherecal.identification.selection import elastic_start, rigid, select_model
-
     if model == "auto":
         def fit(begin, dataset, spec):
             return calibrate(begin, dataset, spec).model

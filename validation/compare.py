@@ -17,6 +17,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from spherecal.correction import RobotModel, registered_errors, tool_point
+from spherecal.correction.elastic import compliance_of, with_compliance
 from spherecal.correction.layout import ParameterLayout
 
 #: Validation configurations drawn uniformly inside the joint limits (the paper's "large random set").
@@ -190,8 +191,6 @@ def parameter_deviations(nominal: RobotModel, calibrated: RobotModel, truth: Rob
     """Deviations of the nominal and calibrated parameters from the truth (same convention; when one of them
     is elastic, the others count as rigid: compliance 0)."""
     if len({nominal.n_params, calibrated.n_params, truth.n_params}) > 1:
-        from spherecal.correction.elastic import compliance_of, with_compliance
-
         nominal, calibrated, truth = (with_compliance(m, compliance_of(m)) for m in (nominal, calibrated, truth))
     return ParameterDeviations(
         layout=truth.layout,
