@@ -42,7 +42,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         "--model",
         choices=("dh", "elastic", "auto"),
         default="auto",
-        help="dh: geometry only; elastic: geometry plus joint compliance under gravity [rad/Nm] (needs the robot "
+        help="dh: geometry only; elastic: geometry plus joint compliance under gravity (rad/Nm; needs the robot "
         "file's inertials); auto (default): elastic only when it predicts held-out fixtures (or placements "
         "<placement>_h<k>) better than dh by more than the fold-to-fold spread",
     )
