@@ -266,7 +266,8 @@ def collect_self_motion(
             if compliance is not None:
                 m.site_pos[anchor_id] = centre + compliance(t)
             mujoco.mj_step1(m, d)
-            q = d.qpos[:n]
+            plant.apply_joint_gravity()
+            q = d.qpos[plant.motor_qpos]
             q_log[s] = q
             tool_log[s] = d.site_xpos[tool_id]
             gap_log[s] = np.linalg.norm(d.site_xpos[tool_id] - d.site_xpos[anchor_id])

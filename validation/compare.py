@@ -17,6 +17,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from spherecal.correction import RobotModel, registered_errors, tool_point
+from spherecal.correction.elastic import compliance_of, with_compliance
 from spherecal.correction.layout import ANGLE, ParameterLayout, ParamKind
 
 #: Validation configurations drawn uniformly inside the joint limits (the paper's "large random set").
@@ -234,9 +235,9 @@ class DeviationRows:
 
 
 def _format_rows(names, kinds, nominal, calibrated) -> str:
-    lines = [f"{'parameter':<14} {'unit':<4} {'nominal-truth':>14} {'calibrated-truth':>17}"]
+    lines = [f"{'parameter':<14} {'unit':<7} {'nominal-truth':>14} {'calibrated-truth':>17}"]
     for name, kind, a, b in zip(names, kinds, nominal, calibrated, strict=True):
-        lines.append(f"{name:<14} {kind.display_unit:<4} {a:14.4f} {b:17.4f}")
+        lines.append(f"{name:<14} {kind.display_unit:<7} {a:14.4f} {b:17.4f}")
     return "\n".join(lines)
 
 
@@ -253,7 +254,10 @@ def sum_groups(fixed: dict[str, str], layout: ParameterLayout) -> dict[str, list
 
 
 def parameter_deviations(nominal: RobotModel, calibrated: RobotModel, truth: RobotModel) -> ParameterDeviations:
-    """Deviations of the nominal and calibrated parameters from the truth (same convention and size)."""
+    """Deviations of the nominal and calibrated parameters from the truth (same convention; when one of them
+    is elastic, the others count as rigid: compliance 0)."""
+    if len({nominal.n_params, calibrated.n_params, truth.n_params}) > 1:
+        nominal, calibrated, truth = (with_compliance(m, compliance_of(m)) for m in (nominal, calibrated, truth))
     return ParameterDeviations(
         layout=truth.layout,
         nominal=nominal.params - truth.params,

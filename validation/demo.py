@@ -147,11 +147,11 @@ def deviation_summary(report: ValidationReport) -> str:
     The rows are those of ``report.deviations``: parameters held at nominal are left out, and a
     length only identifiable in a sum counts as that sum (``d7 + tool_z``)."""
     d = report.deviations
-    angle = np.array([d.is_angle(name) for name in d.names], dtype=bool)
     parts = []
-    for label, mask, unit in (("lengths", ~angle, "mm"), ("angles", angle, "deg")):
+    for kind in dict.fromkeys(d.kinds):  # lengths, angles (and compliances of an elastic model), in order
+        mask = np.array([k is kind for k in d.kinds])
         nominal, calibrated = (np.sqrt(np.mean(d.display(v)[mask] ** 2)) for v in (d.nominal, d.calibrated))
-        parts.append(f"{mask.sum()} {label} {nominal:.4f} -> {calibrated:.4f} {unit}")
+        parts.append(f"{mask.sum()} {kind.name}s {nominal:.4f} -> {calibrated:.4f} {kind.display_unit}")
     return (
         f"identified parameters, RMS deviation from the truth (nominal -> calibrated; held at nominal left out, "
         f"{' and '.join(n for n in d.names if '+' in n) or 'no sums'} as sums): {'; '.join(parts)}"
