@@ -16,6 +16,8 @@ import mujoco
 import numpy as np
 
 from spherecal.correction import RobotModel, link_frames
+from spherecal.correction.elastic import compliance_of, link_angles
+from spherecal.correction.gravity import inertials_of
 from spherecal.correction.urdf import xml_comment
 
 #: Physical defaults of the plant (settings that keep the closed chain stable at 1 kHz).
@@ -26,6 +28,10 @@ LINK_MASS = 2.0  # [kg]
 LINK_INERTIA = 0.02  # [kg m^2] diagonal
 ARMATURE = 0.1  # [kg m^2]
 JOINT_DAMPING = 1.0  # [N m s/rad]
+ROTOR_MASS = 0.05  # [kg] motor-side body of an elastic joint (its inertia is mostly the armature)
+ROTOR_INERTIA = 1e-4  # [kg m^2] diagonal
+FLEX_ARMATURE = 0.01  # [kg m^2] of the link-side hinge of an elastic joint
+FLEX_DAMPING_RATIO = 1.0  # of the link-side hinge against a 1 kg m^2 link (no ringing at 1 kHz)
 
 
 def _num(value: float) -> str:
@@ -67,6 +73,12 @@ def joint_offsets(model: RobotModel) -> list[tuple[np.ndarray, np.ndarray, np.nd
     return out
 
 
+def stiffness_of(model: RobotModel) -> np.ndarray:
+    """(n,) joint stiffness [Nm/rad] of ``model``'s ``compliance`` (``1 / c``; 0 marks a rigid joint)."""
+    c = compliance_of(model)
+    return np.divide(1.0, c, out=np.zeros_like(c), where=c > 0)
+
+
 def build_mjcf(
     model: RobotModel,
     fixtures: dict[str, np.ndarray] | None = None,
@@ -76,6 +88,14 @@ def build_mjcf(
     velocity_gain: float = VELOCITY_GAIN,
 ) -> str:
     """MJCF text of the arm.
+
+    Elastic joints (``model.extras["compliance"]`` > 0, see :mod:`correction.elastic`): joint ``i``
+    becomes a motor-side hinge ``joint<i>`` (actuated, its angle is the recorded one) in a light body
+    ``rotor<i>``, then the link body ``link<i>`` on a second hinge ``flex<i>`` about the same axis with
+    stiffness ``1/c_i`` [Nm/rad]. Every body is gravity compensated (as a Panda's controller does at
+    the motors); :meth:`Plant.apply_joint_gravity` puts gravity back on the ``flex`` hinges only, so
+    the links sag by ``-c tau`` while the motors hold. The link masses are then the robot's
+    ``inertials`` (and ``payload``), the masses the deflection comes from.
 
     Args:
         model: the robot (nominal or a perturbed "true" robot), either convention.
@@ -92,6 +112,9 @@ def build_mjcf(
     fixtures = fixtures or {}
     n = model.n_joints
     offsets = joint_offsets(model)
+    stiffness = stiffness_of(model)
+    elastic = bool(np.any(stiffness > 0))
+    masses, coms = inertials_of(model) if elastic else (np.append(np.full(n, LINK_MASS), 0.0), np.zeros((n + 1, 3)))
     base = model.base_transform
     lines = [
         f"<mujoco model={quoteattr(model.name)}>",
@@ -114,20 +137,36 @@ def build_mjcf(
         pos, rotation, joint_pos, axis = offsets[i]
         if np.linalg.norm(pos) > 1e-6:
             lines.append(f'{indent}<geom type="capsule" size="0.025" fromto="0 0 0 {_vec(pos)}"/>')
-        lines.append(f'{indent}<body name="link{i + 1}" pos="{_vec(pos)}" quat="{_vec(_quat(rotation))}" '
-                     'gravcomp="1">')
+        placement = f'pos="{_vec(pos)}" quat="{_vec(_quat(rotation))}"'
+        hinge = f'pos="{_vec(joint_pos)}" axis="{_vec(axis)}"'
+        motor = f'<joint name="joint{i + 1}" {hinge} range="{_num(model.lower[i])} {_num(model.upper[i])}"/>'
+        if stiffness[i] > 0:
+            lines.append(f'{indent}<body name="rotor{i + 1}" {placement} gravcomp="1">')
+            lines.append(f'{indent}  <inertial pos="0 0 0" mass="{_num(ROTOR_MASS)}" '
+                         f'diaginertia="{_vec([ROTOR_INERTIA] * 3)}"/>')
+            lines.append(f"{indent}  {motor}")
+            indent += "  "
+            placement = ""
+        lines.append(f'{indent}<body name="link{i + 1}" {placement} gravcomp="1">')
         indent += "  "
         inertia = _vec([LINK_INERTIA] * 3)
-        lines.append(f'{indent}<inertial pos="0 0 0" mass="{_num(LINK_MASS)}" diaginertia="{inertia}"/>')
-        lines.append(f'{indent}<joint name="joint{i + 1}" pos="{_vec(joint_pos)}" axis="{_vec(axis)}" '
-                     f'range="{_num(model.lower[i])} {_num(model.upper[i])}"/>')
+        lines.append(f'{indent}<inertial pos="{_vec(coms[i])}" mass="{_num(masses[i])}" diaginertia="{inertia}"/>')
+        if stiffness[i] > 0:
+            damping = 2.0 * FLEX_DAMPING_RATIO * np.sqrt(stiffness[i])
+            lines.append(f'{indent}<joint name="flex{i + 1}" {hinge} stiffness="{_num(stiffness[i])}" '
+                         f'damping="{_num(damping)}" armature="{_num(FLEX_ARMATURE)}"/>')
+        else:
+            lines.append(f"{indent}{motor}")
         lines.append(f'{indent}<geom type="sphere" size="0.03" pos="{_vec(joint_pos)}"/>')
     if np.linalg.norm(model.tool) > 1e-6:
         lines.append(f'{indent}<geom type="capsule" size="0.015" fromto="0 0 0 {_vec(model.tool)}"/>')
     lines.append(f'{indent}<site name="tool" pos="{_vec(model.tool)}" rgba="0.1 0.8 0.2 1"/>')
     for m, offset in enumerate(np.zeros((0, 3)) if markers is None else np.asarray(markers, float).reshape(-1, 3)):
         lines.append(f'{indent}<site name="marker{m}" pos="{_vec(offset)}" rgba="0.2 0.4 1 1"/>')
-    for _ in range(n + 1):
+    if masses[n] > 0:
+        lines.append(f'{indent}<body name="payload" gravcomp="1"><inertial pos="{_vec(coms[n])}" '
+                     f'mass="{_num(masses[n])}" diaginertia="{_vec([1e-3] * 3)}"/></body>')
+    for _ in range(n + 1 + int(np.sum(stiffness > 0))):
         indent = indent[:-2]
         lines.append(f"{indent}</body>")
     lines.append("  </worldbody>")
@@ -158,6 +197,9 @@ class Plant:
         tool_site: site id of the tool point.
         marker_sites: (M,) site ids of ``marker0 ..``.
         fixture_sites: (F,) site ids of the fixture sites.
+        motor_qpos, motor_dofs: (n,) qpos and dof addresses of the actuated (recorded) hinges ``joint<i>``.
+        flex_qpos, flex_dofs: qpos and dof addresses of the ``flex<i>`` hinges of elastic joints.
+        flex_joints: (E,) indices ``i`` (0-based) of the elastic joints.
     """
 
     model: RobotModel
@@ -169,6 +211,11 @@ class Plant:
     tool_site: int = 0
     marker_sites: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=int))
     fixture_sites: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=int))
+    motor_qpos: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=int))
+    motor_dofs: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=int))
+    flex_qpos: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=int))
+    flex_dofs: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=int))
+    flex_joints: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=int))
 
     # ----------------------------------------------------------------------- state
     @property
@@ -176,17 +223,39 @@ class Plant:
         return self.model.n_joints
 
     @property
+    def elastic(self) -> bool:
+        """True when some joint has a compliant link-side hinge."""
+        return self.flex_dofs.size > 0
+
+    @property
     def q(self) -> np.ndarray:
-        """(n,) view of the joint angles [rad] (the joint readings)."""
-        return self.mj_data.qpos[: self.n_joints]
+        """(n,) joint readings [rad]: the motor-side angles (a view for a rigid plant, a copy otherwise)."""
+        if not self.elastic:
+            return self.mj_data.qpos[: self.n_joints]
+        return self.mj_data.qpos[self.motor_qpos]
+
+    def _set_qpos(self, data: mujoco.MjData, q: np.ndarray) -> None:
+        """Motor angles ``q`` (n,) and, for elastic joints, the link side at its static sag ``-c tau(q)``."""
+        data.qpos[self.motor_qpos] = q
+        if self.elastic:
+            sag = link_angles(self.model, q) - q
+            data.qpos[self.flex_qpos] = sag[self.flex_joints]
 
     def set_state(self, q: np.ndarray, qdot: np.ndarray | None = None) -> None:
-        """Teleport to joint angles ``q`` (n,) [rad] with velocity ``qdot`` (zero if None)."""
+        """Teleport to joint angles ``q`` (n,) [rad] with velocity ``qdot`` (zero if None); elastic joints
+        start at their static deflection."""
         n = self.n_joints
-        self.mj_data.qpos[:n] = q
-        self.mj_data.qvel[:n] = 0.0 if qdot is None else qdot
-        self.mj_data.ctrl[:n] = self.mj_data.qvel[:n]
+        self.mj_data.qvel[:] = 0.0
+        self._set_qpos(self.mj_data, np.asarray(q, dtype=float))
+        self.mj_data.qvel[self.motor_dofs] = 0.0 if qdot is None else qdot
+        self.mj_data.ctrl[:n] = self.mj_data.qvel[self.motor_dofs]
         mujoco.mj_forward(self.mj_model, self.mj_data)
+
+    def apply_joint_gravity(self) -> None:
+        """Put gravity back on the link-side hinges of elastic joints (call after ``mj_step1``: it reads
+        the gravity compensation MuJoCo just computed). A rigid plant: nothing."""
+        if self.elastic:
+            self.mj_data.qfrc_applied[self.flex_dofs] = -self.mj_data.qfrc_gravcomp[self.flex_dofs]
 
     # -------------------------------------------------------------------- fixtures
     def fixture_index(self, name: str) -> int:
@@ -231,7 +300,7 @@ class Plant:
         data = mujoco.MjData(self.mj_model)
         out = np.empty((batch.shape[0], sites.size, 3))
         for k, qk in enumerate(batch):
-            data.qpos[: self.n_joints] = qk
+            self._set_qpos(data, qk)
             mujoco.mj_kinematics(self.mj_model, data)
             out[k] = data.site_xpos[sites]
         return out[0] if q.ndim == 1 else out
@@ -241,13 +310,25 @@ class Plant:
         return self.site_positions(np.atleast_2d(q), np.array([self.tool_site]))[:, 0]
 
 
+def no_log_file() -> None:
+    """Keep MuJoCo's warnings off the disk: by default its first warning of a kind writes
+    ``MUJOCO_LOG.TXT`` into the current working directory (the user's folder); they still go to
+    the console. Idempotent; called by :func:`build_plant`."""
+    config = mujoco.MjLogConfig.get()
+    if config.logto_file:
+        config.logto_file = False
+        config.set()
+
+
 def build_plant(
     model: RobotModel,
     fixtures: dict[str, np.ndarray] | None = None,
     markers: np.ndarray | None = None,
     **options,
 ) -> Plant:
-    """Build the MuJoCo plant of ``model`` (see :func:`build_mjcf` for the arguments)."""
+    """Build the MuJoCo plant of ``model`` (see :func:`build_mjcf` for the arguments); MuJoCo writes
+    no log file from then on (:func:`no_log_file`)."""
+    no_log_file()
     fixtures = {str(k): np.asarray(v, dtype=float).reshape(3) for k, v in (fixtures or {}).items()}
     mjcf = build_mjcf(model, fixtures, markers, **options)
     mj_model = mujoco.MjModel.from_xml_string(mjcf)
@@ -264,6 +345,22 @@ def build_plant(
         tool_site=site("tool"),
         marker_sites=np.array([site(f"marker{m}") for m in range(n_markers)], dtype=int),
         fixture_sites=np.array([site(f"fixture{k}") for k in range(len(fixtures))], dtype=int),
+        **_joint_addresses(mj_model, model.n_joints),
     )
     mujoco.mj_forward(mj_model, mj_data)
     return plant
+
+
+def _joint_addresses(mj_model: mujoco.MjModel, n: int) -> dict[str, np.ndarray]:
+    """qpos / dof addresses of the motor hinges ``joint<i>`` and the elastic ``flex<i>`` hinges."""
+    joint = lambda name: mujoco.mj_name2id(mj_model, mujoco.mjtObj.mjOBJ_JOINT, name)  # noqa: E731
+    motors = [joint(f"joint{i + 1}") for i in range(n)]
+    flex = [i for i in range(n) if joint(f"flex{i + 1}") >= 0]
+    ids = [joint(f"flex{i + 1}") for i in flex]
+    return {
+        "motor_qpos": np.array([mj_model.jnt_qposadr[j] for j in motors], dtype=int),
+        "motor_dofs": np.array([mj_model.jnt_dofadr[j] for j in motors], dtype=int),
+        "flex_qpos": np.array([mj_model.jnt_qposadr[j] for j in ids], dtype=int),
+        "flex_dofs": np.array([mj_model.jnt_dofadr[j] for j in ids], dtype=int),
+        "flex_joints": np.array(flex, dtype=int),
+    }

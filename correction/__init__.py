@@ -8,6 +8,7 @@ from .atomic import atomic_write_bytes, atomic_write_text
 from .conversion import convert, to_modified, to_standard
 from .errors import SpherecalError
 from .fixtures import FixtureSpec, format_fixtures, read_fixtures, write_fixtures
+from .gravity import InertialsError, gravity_torques, has_inertials, inertials_of
 from .kinematics import (
     Frames,
     frames,
@@ -43,6 +44,7 @@ __all__ = [
     "write_fixtures",
     "write_samples",
     "Frames",
+    "InertialsError",
     "NearlyParallelAxesWarning",
     "RobotFileError",
     "RobotModel",
@@ -54,6 +56,9 @@ __all__ = [
     "dump_robot",
     "fit_rigid_transform",
     "frames",
+    "gravity_torques",
+    "has_inertials",
+    "inertials_of",
     "joint_jacobian",
     "link_frames",
     "load_robot",

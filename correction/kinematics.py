@@ -2,7 +2,9 @@
 
 All functions take joint angles ``q`` of shape (N, n) (or (n,) for one configuration, in
 which case the batch axis is dropped from the result, except by :func:`frames`, which keeps
-it as N = 1). Internally a frame is kept as its
+it as N = 1). An elastic model (``extras["compliance"]``, :mod:`.elastic`) is handled here: the tool
+point, tool pose and both Jacobians take the *measured* angles and work at the link angles
+``q - c tau(q)``; :func:`frames` and :func:`link_frames` take link angles as given. Internally a frame is kept as its
 three axes and origin, each of shape (3, N), so that every step is a handful of contiguous
 vector operations over the batch: no Python loop over samples.
 """
@@ -34,6 +36,15 @@ def _as_batch(model: RobotModel, q: np.ndarray) -> tuple[np.ndarray, bool]:
             f"q must have shape (N, {model.n_joints}) or ({model.n_joints},), got {q.shape}"
         )
     return q2, single
+
+
+def _link_angles(model: RobotModel, q: np.ndarray) -> np.ndarray:
+    """``q`` for a rigid model; the link angles ``q - c tau(q)`` of an elastic one."""
+    if "compliance" not in model.extras:
+        return q
+    from .elastic import link_angles  # function-level: elastic builds on this module
+
+    return link_angles(model, q)
 
 
 def _cross(u: np.ndarray, v: np.ndarray) -> np.ndarray:
@@ -122,7 +133,7 @@ def link_frames(model: RobotModel, q: np.ndarray) -> np.ndarray:
 def tool_pose(model: RobotModel, q: np.ndarray) -> np.ndarray:
     """(N, 4, 4) pose of the tool: orientation of the last link, origin at the tool point."""
     _, single = _as_batch(model, q)
-    f = frames(model, q)
+    f = frames(model, _link_angles(model, np.asarray(q, dtype=float)))
     pose = _homogeneous(f.x[-1], f.y[-1], f.z[-1], _tool_point(model, f))
     return pose[0] if single else pose
 
@@ -134,6 +145,7 @@ def tool_point(model: RobotModel, q: np.ndarray) -> np.ndarray:
     of a whole frame), the fast path that identification's residuals live on.
     """
     q, single = _as_batch(model, q)
+    q = _link_angles(model, q)
     angle = (q + model.theta).T
     cos_q, sin_q = np.cos(angle), np.sin(angle)
     count = q.shape[0]
@@ -169,16 +181,34 @@ def joint_jacobian(model: RobotModel, q: np.ndarray) -> np.ndarray:
         q: (N, n) joint angles [rad].
 
     Returns:
-        (N, 3, n) ``d p / d q`` [m/rad].
+        (N, 3, n) ``d p / d q`` [m/rad]. Elastic model: ``J(q_link) (I - diag(c) d tau / d q)``, the
+        torque's derivative by central differences (step 1e-6 rad: its error is ~1e-12 of the term, which
+        is itself ~1e-3 of the Jacobian).
     """
-    _, single = _as_batch(model, q)
+    q2, single = _as_batch(model, q)
+    jac = _rigid_joint_jacobian(model, _link_angles(model, q2))
+    if "compliance" in model.extras:
+        from .elastic import compliance_of  # function-level: elastic and gravity build on this module
+        from .gravity import gravity_torques  # (a top-level import would be circular)
+
+        c, h = compliance_of(model), 1e-6
+        if np.any(c):
+            n = model.n_joints
+            shift = h * np.eye(n)
+            dtau = np.stack([gravity_torques(model, q2 + shift[k]) - gravity_torques(model, q2 - shift[k])
+                             for k in range(n)], axis=2) / (2 * h)  # (N, n, n): d tau_i / d q_k
+            jac = jac - np.einsum("nxi,nik->nxk", jac * c, dtau)
+    return jac[0] if single else jac
+
+
+def _rigid_joint_jacobian(model: RobotModel, q: np.ndarray) -> np.ndarray:
+    """(N, 3, n) ``d p / d q`` of the geometric chain at link angles ``q`` (N, n) [m/rad]."""
     f = frames(model, q)
     p = _tool_point(model, f)
     axes = slice(1, None) if model.convention == "modified" else slice(0, -1)
     z = np.moveaxis(f.z[axes], 1, 0)  # (3, n, N): joint i turns about z of this frame
     lever = p[:, None, :] - np.moveaxis(f.origin[axes], 1, 0)
-    jac = np.ascontiguousarray(np.moveaxis(_cross(z, lever), 2, 0))  # (N, 3, n)
-    return jac[0] if single else jac
+    return np.ascontiguousarray(np.moveaxis(_cross(z, lever), 2, 0))  # (N, 3, n)
 
 
 def param_jacobian(
@@ -200,6 +230,9 @@ def param_jacobian(
     ``dbeta = y' x (p - o_i + d_i z_i)`` with ``y' = sin(theta_i+q_i) x_i + cos(theta_i+q_i) y_i``
     (the ``y`` axis before ``Rz``); standard ``dbeta = y_i x (p - o_i)``, and there ``a`` and
     ``alpha`` act along ``x' = cos(beta_i) x_i + sin(beta_i) z_i`` (the ``x`` axis before ``Ry``).
+    Elastic model: the columns above at the link angles (the torque's own dependence on the
+    geometry is neglected: a 1 mm change moves tau by ~1e-3 of itself), then ``d p / d c_i =
+    -J_q(q_link)[:, i] tau_i(q)`` (exact: tau is taken at the measured angles).
 
     Args:
         q: (N, n) joint angles [rad].
@@ -209,7 +242,8 @@ def param_jacobian(
         (N, 3, P) ``d p / d params`` [m/m and m/rad], and the tool point if asked.
     """
     q2, single = _as_batch(model, q)
-    f = frames(model, q)
+    q_link = _link_angles(model, q2)
+    f = frames(model, q_link)
     n = model.n_joints
     p = _tool_point(model, f)
     count = p.shape[1]
@@ -231,7 +265,7 @@ def param_jacobian(
         joints[:, theta] = rot_z[1:]
         if hayati:  # Ry(beta) about y before Rz(theta+q), through o_i - d_i z_i
             k = np.array(hayati) + 1
-            angle = (q2[:, hayati] + model.theta[hayati]).T[:, None, :]  # (h, 1, N)
+            angle = (q_link[:, hayati] + model.theta[hayati]).T[:, None, :]  # (h, 1, N)
             axis = np.sin(angle) * f.x[k] + np.cos(angle) * f.y[k]
             arm = lever[k] + model.d[hayati][:, None, None] * f.z[k]
             jac[lay.beta] = np.moveaxis(_cross(np.moveaxis(axis, 1, 0), np.moveaxis(arm, 1, 0)), 0, 1)
@@ -255,6 +289,12 @@ def param_jacobian(
     base_lever = p - model.base_xyz[:, None]
     for k, row in enumerate(range(lay.base_rpy.start, lay.base_rpy.stop)):
         jac[row] = _cross(base_axes[k][:, None], base_lever)
+    if lay.elastic:  # d p / d c_i = -J_q(q_link)[:, i] tau_i(q); exact, tau is taken at the measured angles
+        from .gravity import gravity_torques  # function-level: gravity builds on this module
+
+        tau = gravity_torques(model, q2)  # (N, n)
+        rigid = _rigid_joint_jacobian(model, q_link).transpose(2, 1, 0)  # (n, 3, N)
+        jac[lay.compliance] = -rigid * tau.T[:, None]
     out = np.ascontiguousarray(jac.transpose(2, 1, 0))
     if single:
         out, p = out[0], p[:, 0]

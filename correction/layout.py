@@ -13,11 +13,13 @@ block such as a compliance) means adding it here::
 Order of the vector: per joint ``a, alpha, d, theta`` (joint 1 first), then one Hayati angle
 ``beta{j}`` per joint that has one (nearly parallel axes, see :class:`RobotModel`; none for most arms),
 then the tool point ``tool_x, tool_y, tool_z``, then the base ``base_x, base_y, base_z, base_roll,
-base_pitch, base_yaw``.
+base_pitch, base_yaw``, then, for an elastic model only (``layout_for(n, elastic=True)``: its robot file
+has a ``compliance:`` list), the joint compliances ``c1 .. cn`` [rad/Nm].
 """
 
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass
 from functools import lru_cache
 
@@ -50,6 +52,10 @@ class ParamKind:
 
 LENGTH = ParamKind("length", "m", "mm", 1e3, 1e-3)
 ANGLE = ParamKind("angle", "rad", "deg", float(np.rad2deg(1.0)), float(np.deg2rad(0.2)))
+#: A joint's compliance under load (:mod:`correction.elastic`): arm joints are 1e4-1e5 Nm/rad stiff, so
+#: the prior spread about rigid is 3e-5 rad/Nm (3.3e4 Nm/rad, the middle of that range on a log scale). A
+#: compliance the data cannot pin down better than that (a wrist joint carrying a few Nm) is not identified.
+COMPLIANCE = ParamKind("compliance", "rad/Nm", "urad/Nm", 1e6, 3e-5)
 
 #: Per-joint fields in vector order, with their kinds.
 JOINT_FIELDS: tuple[tuple[str, ParamKind], ...] = (("a", LENGTH), ("alpha", ANGLE), ("d", LENGTH), ("theta", ANGLE))
@@ -80,6 +86,7 @@ class ParameterLayout:
         tool: slice of the tool point (3).
         base_xyz: slice of the base translation (3).
         base_rpy: slice of the base roll-pitch-yaw (3).
+        compliance: slice of the joint compliances ``c1 .. cn`` (empty for a rigid model).
     """
 
     n_joints: int
@@ -91,6 +98,12 @@ class ParameterLayout:
     tool: slice
     base_xyz: slice
     base_rpy: slice
+    compliance: slice = dataclasses.field(default_factory=lambda: slice(0, 0))
+
+    @property
+    def elastic(self) -> bool:
+        """True when the vector carries joint compliances."""
+        return self.compliance.stop > self.compliance.start
 
     @property
     def size(self) -> int:
@@ -167,7 +180,7 @@ class ParameterLayout:
             tool: std of each tool-point coordinate [m].
             base: False to give the base placement zero spread.
         """
-        std = np.array([length if k is LENGTH else angle for k in self.kinds])
+        std = np.array([length if k is LENGTH else angle if k is ANGLE else k.prior_std for k in self.kinds])
         std[self.tool] = tool
         if not base:
             std[self.base] = 0.0
@@ -183,15 +196,16 @@ def _name_index(names: tuple[str, ...]) -> dict[str, int]:
 
 
 @lru_cache(maxsize=64)
-def layout_for(n_joints: int, hayati: tuple[int, ...] = ()) -> ParameterLayout:
+def layout_for(n_joints: int, hayati: tuple[int, ...] = (), elastic: bool = False) -> ParameterLayout:
     """The (shared, immutable) layout of an ``n_joints`` model with Hayati ``beta`` on the 0-based
-    joints ``hayati``."""
+    joints ``hayati`` (and the compliances ``c1..cn`` if ``elastic``)."""
     hayati = tuple(sorted(int(j) for j in hayati))
     if any(not 0 <= j < n_joints for j in hayati) or len(set(hayati)) != len(hayati):
         raise ValueError(f"hayati joints must be distinct indices in 0..{n_joints - 1}, got {hayati}")
     joints = [(f"{name}{i + 1}", kind) for i in range(n_joints) for name, kind in JOINT_FIELDS]
     joints += [(f"beta{i + 1}", ANGLE) for i in hayati]
-    entries = joints + list(TOOL_FIELDS) + list(BASE_FIELDS)
+    compliance = [(f"c{i + 1}", COMPLIANCE) for i in range(n_joints)] if elastic else []
+    entries = joints + list(TOOL_FIELDS) + list(BASE_FIELDS) + compliance
     j = len(joints)
     k = len(JOINT_FIELDS) * n_joints
     return ParameterLayout(
@@ -204,4 +218,5 @@ def layout_for(n_joints: int, hayati: tuple[int, ...] = ()) -> ParameterLayout:
         tool=slice(j, j + 3),
         base_xyz=slice(j + 3, j + 6),
         base_rpy=slice(j + 6, j + 9),
+        compliance=slice(j + 9, j + 9 + len(compliance)),
     )

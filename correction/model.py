@@ -105,8 +105,9 @@ class RobotModel:
 
     @property
     def layout(self) -> ParameterLayout:
-        """Names, kinds, prior spread and slices of the flat parameter vector."""
-        return layout_for(self.n_joints, self.hayati)
+        """Names, kinds, prior spread and slices of the flat parameter vector (with the joint compliances
+        ``c1..cn`` when ``extras`` has a ``compliance`` list: an elastic model, :mod:`.elastic`)."""
+        return layout_for(self.n_joints, self.hayati, "compliance" in self.extras)
 
     # ----------------------------------------------------- flat parameter view
     @property
@@ -124,6 +125,8 @@ class RobotModel:
             out[lay.field(name)] = getattr(self, name)
         out[lay.beta] = self.beta[list(lay.hayati)]
         out[lay.tool], out[lay.base_xyz], out[lay.base_rpy] = self.tool, self.base_xyz, self.base_rpy
+        if lay.elastic:
+            out[lay.compliance] = np.asarray(self.extras["compliance"], dtype=float).reshape(self.n_joints)
         return out
 
     def with_params(self, params: np.ndarray) -> RobotModel:
@@ -139,6 +142,8 @@ class RobotModel:
         fields = {name: params[lay.field(name)] for name in lay.joint_fields}
         beta = np.zeros(self.n_joints)
         beta[list(lay.hayati)] = params[lay.beta]
+        if lay.elastic:
+            fields["extras"] = {**self.extras, "compliance": [float(v) for v in params[lay.compliance]]}
         return replace(
             self, **fields, beta=beta, tool=params[lay.tool], base_xyz=params[lay.base_xyz],
             base_rpy=params[lay.base_rpy]
@@ -197,6 +202,7 @@ class RobotModel:
         return (
             self.convention == other.convention
             and self.n_joints == other.n_joints
+            and self.n_params == other.n_params
             and self.hayati == other.hayati
             and np.allclose(self.params, other.params, rtol=0.0, atol=atol)
             and np.allclose(self.lower, other.lower, rtol=0.0, atol=atol)

@@ -35,6 +35,7 @@ def perturb(
         The perturbed model, same convention and joint limits.
     """
     std = model.layout.spread(length_std, angle_std, tool_std, base=base)
+    std[model.layout.compliance] = 0.0  # geometric errors only: an elastic truth states its compliance
     for name in model.layout.held(model.convention):  # Hayati: this d stays at zero
         std[model.layout.index(name)] = 0.0
     return model.with_params(model.params + rng.normal(0.0, 1.0, model.n_params) * std)

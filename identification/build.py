@@ -215,18 +215,22 @@ def build_problem(
     # symmetries of the nominal design (tool on the last axis, zero offsets) do not count as structural
     jac = problem.generic_jacobian()
     fp = candidates.size
-    # preference: centres, tool point, then joints from the last to the first
+    # preference: centres, tool point, then joints from the last to the first, then (an elastic model) the
+    # compliances from the most loaded joint (the first) on: geometry keeps what both could explain
     n = model.n_joints
     rank_of = {name: k for k, name in enumerate(("tool_x", "tool_y", "tool_z"))}
     for i in range(n, 0, -1):
         for f in ("a", "alpha", "beta", "d", "theta"):
             rank_of[f"{f}{i}"] = len(rank_of)
+    for name in model.layout.names[model.layout.compliance]:
+        rank_of[name] = len(rank_of)
     order = np.concatenate([np.arange(fp, jac.shape[1]), np.argsort([rank_of[names[i]] for i in candidates])])
     accepted, rejected = greedy_rank(jac, order, rank_tol)
     centre_cols = np.arange(fp, jac.shape[1])
     if np.any(~np.isin(centre_cols, accepted)):
         raise UnidentifiableError(
-            f"{samples_location(dataset)}, field 'fixture': the fixture centres are not determined by the samples"
+            f"{samples_location(dataset)}, field 'fixture': "
+            f"the fixture centres are not determined by the samples"
         )
     for col, coef in rejected.items():
         weights = np.abs(coef) * np.linalg.norm(jac, axis=0)
@@ -243,3 +247,5 @@ def build_problem(
     ordered_fixed = {name: fixed[name] for name in names if name in fixed}
     problem = replace(problem, free=candidates[keep], fixed=ordered_fixed)
     return replace(problem, identifiability=Identifiability.of(problem.jacobian(problem.x0)))
+
+

@@ -27,6 +27,7 @@ UNITS = {
     "--window": "s",
     "--min-duration": "s",
     "--rate": "Hz",
+    "--stiffness": "Nm/rad",
 }
 #: options that are counts, names, files or factors (no physical unit).
 UNITLESS = {"--seed", "--per-fixture", "--max-per-fixture", "--configurations", "--sets", "--workers",
@@ -58,8 +59,8 @@ def test_every_physical_option_states_its_unit_and_the_units_agree() -> None:
             pytest.fail(f"spherecal {command} {option} is a number with no unit registered here: {action.help}")
         # a bracketed unit, wherever it appears, is one of the command line's units
         for unit in re.findall(r"\[([a-zA-Z/]+)\]", action.help or ""):
-            # (rad, rad/s and Nm: the units inside files, which stay SI)
-            allowed = {"mm", "m", "deg", "s", "Hz", "rad", "rad/s", "Nm"}
+            # (rad, rad/s and Nm: the units inside files, which stay SI; Nm/rad: --stiffness, its only unit)
+            allowed = {"mm", "m", "deg", "s", "Hz", "rad", "rad/s", "Nm", "Nm/rad"}  # Nm/rad: joint stiffness
             assert unit in allowed, f"spherecal {command} {option}: [{unit}]"
     assert {"--noise", "--mocap-noise", "--seconds"} <= seen
 

@@ -33,6 +33,9 @@ from pathlib import Path
 import numpy as np
 
 from spherecal.correction import SpherecalError, atomic_write_text
+from spherecal.correction.elastic import with_compliance
+from spherecal.identification.calibrate import calibrate
+from spherecal.identification.selection import elastic_start, rigid, select_model
 
 from .experiment import calibrate_from, default_fixtures, motion_set, nominal_robot, true_robot
 from .pipeline import RANDOM_SET, validate_models
@@ -65,6 +68,10 @@ class CampaignConfig:
         seed: base seed.
         fixture_sets: names of the fixture sets to run (keys of :data:`FIXTURE_SETS`).
         noise_levels: fixture noise levels [m].
+        stiffness: (n,) joint stiffness of the true robot [Nm/rad], 0 = rigid (empty: a rigid arm); its links
+            sag under gravity (:mod:`correction.elastic`); rows get an ``E``.
+        model: what is calibrated: ``dh``, ``elastic`` or ``auto`` (identification.selection); rows other
+            than ``dh`` get ``/elastic`` or ``/auto``.
     """
 
     sets: int = 10
@@ -76,6 +83,8 @@ class CampaignConfig:
     seed: int = 0
     fixture_sets: tuple[str, ...] = tuple(FIXTURE_SETS)
     noise_levels: tuple[float, ...] = NOISE_LEVELS
+    stiffness: tuple[float, ...] = ()
+    model: str = "dh"
 
 
 @dataclass(frozen=True)
@@ -123,7 +132,9 @@ def tasks(config: CampaignConfig) -> list[Task]:
             row = level * len(names) + names.index(name)
             for index in range(config.sets):
                 seed = (config.seed, row, index)
-                out.append(Task(row_name(name, noise), FIXTURE_SETS[name], noise, index, seed, config))
+                label = row_name(name, noise) + ("E" if any(config.stiffness) else "")
+                label += "" if config.model == "dh" else f"/{config.model}"
+                out.append(Task(label, FIXTURE_SETS[name], noise, index, seed, config))
     return out
 
 
@@ -140,11 +151,14 @@ def run_task(task: Task) -> TaskResult:
     else:
         truth, start = perturbed, nominal
     fixtures = {name: default_fixtures()[name] for name in task.fixtures}
+    if any(task.config.stiffness):
+        k = np.asarray(task.config.stiffness, dtype=float)
+        truth = with_compliance(truth, np.divide(1.0, k, out=np.zeros_like(k), where=k > 0))
     data = motion_set(
         truth, start, fixtures, task.config.samples, task.noise, rng, task.config.source, task.config.seconds
     )
     try:
-        calibrated = calibrate_from(nominal, data, start=start).model
+        calibrated = _calibrate(task.config.model, nominal, start, data)
     except SpherecalError as error:  # a refusal is a result of the protocol, not a crash of the campaign
         nan = float("nan")
         return TaskResult(task.row, task.index, nan, nan, nan, nan, time.perf_counter() - clock, str(error))
@@ -159,6 +173,17 @@ def run_task(task: Task) -> TaskResult:
         nominal_mean=random.vs_exact["nominal"].mean,
         seconds=time.perf_counter() - clock,
     )
+
+
+def _calibrate(model: str, nominal, start, data):
+    """The calibrated robot of ``dh``, ``elastic`` or ``auto`` (cross-validated choice)."""
+    if model == "auto":
+        def fit(begin, dataset, spec):
+            return calibrate(begin, dataset, spec).model
+
+        model = select_model("auto", fit, nominal, data.dataset, data.spec).chosen
+    make = elastic_start if model == "elastic" else rigid
+    return calibrate_from(make(nominal), data, start=make(start)).model
 
 
 def run_campaign(

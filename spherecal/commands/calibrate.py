@@ -44,6 +44,14 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         help="write the result even when the self-check finds the data inconsistent (every failed check is "
         "recorded in the file's calibration.self_check block)",
     )
+    parser.add_argument(
+        "--model",
+        choices=("dh", "elastic", "auto"),
+        default="auto",
+        help="dh: geometry only; elastic: geometry plus joint compliance under gravity (rad/Nm; needs the robot "
+        "file's inertials); auto (default): elastic only when it predicts held-out fixtures (or placements "
+        "<placement>_h<k>) better than dh by more than the fold-to-fold spread",
+    )
     parser.add_argument("--out", required=True, help="calibrated robot file to write (YAML)")
 
 
@@ -72,6 +80,7 @@ def run(args: argparse.Namespace) -> int:
     from spherecal.correction.samples import DEDUP_TOL
     from spherecal.correction.samples_csv import read_samples
     from spherecal.identification.calibrate import calibrate
+    from spherecal.identification.selection import elastic_start, rigid, select_model
 
     clock = time.perf_counter()
     noise = args.noise * 1e-3  # [m] from here on
@@ -83,8 +92,17 @@ def run(args: argparse.Namespace) -> int:
     dataset = dataset.deduplicated(dedup_tol)
     dropped = read - dataset.n_samples
     dataset = dataset.subsampled(args.max_per_fixture, np.random.default_rng(args.seed))
+
+    def fit(start, data, fixtures):  # a cross-validation fold: lm, the user's loss and noise; no self-check
+        # (it judges the chosen calibration below, not each fold's)
+        return calibrate(
+            start, data, fixtures, loss=args.loss, noise=noise, max_change=args.max_change, check=False
+        ).model
+
+    selection = select_model(args.model, fit, nominal, dataset, spec, seed=args.seed)
+    start = elastic_start(nominal) if selection.chosen == "elastic" else rigid(nominal)
     result = calibrate(
-        nominal,
+        start,
         dataset,
         spec,
         method=args.method,
@@ -95,6 +113,9 @@ def run(args: argparse.Namespace) -> int:
         force=args.force,
     )
     block = result.block()
+    block["model_selection"] = selection.block()
+    if selection.seconds:
+        block["timings_s"]["cross_validation"] = selection.seconds
     block["duplicates_dropped"] = dropped
     block["inputs"] = {
         "robot": input_record(args.robot),
@@ -108,17 +129,19 @@ def run(args: argparse.Namespace) -> int:
         "max_per_fixture": args.max_per_fixture,
         "dedup_tol_rad": float(dedup_tol),
         "max_change": args.max_change,
+        "model": args.model,
         "force": args.force,
     }
     block["seed"] = args.seed
     block["versions"] = versions(PACKAGES[:4] + (("pyswarms",) if "pso" in args.method else ()))
     block["time"] = datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="seconds")
-    extras = {k: v for k, v in nominal.extras.items() if k != "calibration"}
+    extras = {k: v for k, v in result.model.extras.items() if k != "calibration"}  # compliance when elastic
     extras["calibration"] = block
     model = replace(result.model, extras=extras)
     header = f"calibrated by spherecal calibrate ({args.method}) from {args.samples}"
     save_robot(model, args.out, header=header)
     print(result.summary())
+    print(selection.summary())
     if dropped:
         print(f"dropped {dropped} duplicate samples (within {np.rad2deg(dedup_tol):.3g} deg)")
     print(f"wrote {args.out} in {time.perf_counter() - clock:.2f} s")

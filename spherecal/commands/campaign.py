@@ -35,6 +35,11 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     add_seconds(parser, 20.0, "MuJoCo self-motion per fixture")
     parser.add_argument("--rows", default="P1,P2,P3,Pall", help="fixture sets (P1,P2,P3,Pall)")
     add_seed(parser, "the campaign (every set is seeded from it)")
+    parser.add_argument("--stiffness", default=None, metavar="K[,K...]",
+                        help="elastic true robot: joint stiffness [Nm/rad], one value or one per joint, 0 = rigid "
+                             "(e.g. 0,3e4,3e4,3e4,0,0,0); rows get an E")
+    parser.add_argument("--model", choices=("dh", "elastic", "auto"), default="dh",
+                        help="model calibrated (dh: default, the paper's; elastic; auto: cross-validated choice)")
     parser.add_argument("--workers", type=count(1), default=2, help="worker processes (default 2)")
     parser.add_argument("--out", default="spherecal-campaign", help="folder for table2.csv and table2.md")
 
@@ -64,7 +69,12 @@ def run(args: argparse.Namespace) -> int:
     from spherecal.validation.inputs import check_out_folder
 
     check_out_folder(args.out)
+    from spherecal.commands.simulate import _stiffness  # the same K[,K...] syntax as simulate --stiffness
+
+    stiffness = _stiffness(args.stiffness, 7) or ()  # the campaign's arm is the embedded Panda
     config = CampaignConfig(
+        stiffness=tuple(stiffness),
+        model=args.model,
         sets=args.sets,
         samples=args.per_fixture,
         configurations=args.configurations,

@@ -141,4 +141,11 @@ def run(args: argparse.Namespace) -> int:
         text = export_text(model, args.format, args.prefix, header, effort, velocity)
     path = atomic_write_text(args.out, text)
     print(f"spherecal export: wrote {args.format} of {model.name!r} ({model.convention} DH) to {path}")
+    from spherecal.correction.elastic import compliance_of
+
+    compliance = compliance_of(model)
+    if args.format == "urdf" and compliance.any():
+        joints = ", ".join(f"c{i + 1} {c:.3g}" for i, c in enumerate(compliance) if c)
+        print(f"spherecal export: a URDF cannot express joint compliance ({joints} rad/Nm): this is the geometric "
+              f"part only; the yaml and mjcf formats keep the elastic model")
     return 0

@@ -30,6 +30,11 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="true-robot tool point error std [mm] (default 1)")
     parser.add_argument("--known-distances", action="store_true",
                         help="write the true centre-to-centre distances into fixtures.yaml")
+    parser.add_argument("--stiffness", default=None, metavar="K[,K...]",
+                        help="elastic joints of the true robot: stiffness [Nm/rad], one value for every joint or "
+                             "one per joint separated by commas, 0 = rigid (e.g. 0,3e4,3e4,3e4,0,0,0); links sag "
+                             "under gravity from the robot's inertials (default: the robot file's compliance, rigid "
+                             "without one)")
     parser.add_argument("--solver", default="osqp", help="QP solver (qpsolvers name; osqp is persistent)")
 
 
@@ -49,6 +54,23 @@ def _fixtures(path: str | None) -> dict:
         raise fail(f"{path}: field 'fixtures.{missing[0]}.position': simulate needs the true centre of every "
                     "fixture")
     return {name: spec.positions[name] for name in spec.names}
+
+
+def _stiffness(text: str | None, n: int):
+    """(n,) stiffness [Nm/rad] of ``--stiffness`` (0 = rigid), or None when not given."""
+    import math
+
+    if text is None:
+        return None
+    try:
+        values = [float(v) for v in text.split(",")]
+    except ValueError:
+        raise fail(f"--stiffness {text!r}: expected numbers [Nm/rad] separated by commas") from None
+    if len(values) == 1:
+        values = values * n
+    if len(values) != n or not all(math.isfinite(v) and v >= 0 for v in values):
+        raise fail(f"--stiffness {text!r}: expected 1 or {n} finite values >= 0 [Nm/rad] (0 = rigid)")
+    return values
 
 
 def _check_args(args: argparse.Namespace) -> None:
@@ -91,6 +113,15 @@ def run(args: argparse.Namespace) -> int:
     fixtures = _fixtures(args.fixtures)
     rng = np.random.default_rng(args.seed)
     true = perturb(nominal, rng, args.length_std * 1e-3, np.deg2rad(args.angle_std_deg), args.tool_std * 1e-3)
+    stiffness = _stiffness(args.stiffness, nominal.n_joints)
+    if stiffness is not None:
+        from spherecal.correction.elastic import with_compliance
+
+        compliance = np.divide(1.0, stiffness, out=np.zeros(nominal.n_joints), where=np.array(stiffness) > 0)
+        true = with_compliance(true, compliance if np.any(compliance) else None)
+    from spherecal.correction.elastic import compliance_of
+
+    compliance_of(true)  # a compliance without inertials: one line naming the field, before simulating
     settings = SelfMotionSettings(seconds=args.seconds, samples=args.per_fixture, mode=args.mode,
                                   noise=args.noise * 1e-3, solver=args.solver)
     result = collect_self_motion(true, nominal, fixtures, rng, settings)
@@ -140,7 +171,7 @@ def _provenance(args: argparse.Namespace, settings, result) -> dict:
         "fixtures_file": None if args.fixtures is None else str(args.fixtures),
         "versions": versions(),
         "perturbation": {"length_std_m": args.length_std * 1e-3, "angle_std_deg": args.angle_std_deg,
-                         "tool_std_m": args.tool_std * 1e-3},
+                         "tool_std_m": args.tool_std * 1e-3, "stiffness_nm_per_rad": args.stiffness},
         "settings": {"seconds": settings.seconds, "samples": settings.samples, "mode": settings.mode,
                      "noise": settings.noise, "solver": settings.solver, "timestep": 0.001},
         "fixtures": {name: [float(v) for v in c] for name, c in zip(result.fixture_names, result.fixture_centres,

@@ -34,10 +34,10 @@ def run_sockets(args: argparse.Namespace, models: dict[str, RobotModel]) -> int:
     if args.rrd or args.spawn:
         from spherecal.validation.recording import Recording
 
-        recording = Recording(args.rrd, spawn=args.spawn, application_id="spherecal_validate")
+        title = "Calibrated robot and sockets (recorded configurations on 'time')"
+        recording = Recording(args.rrd, spawn=args.spawn, application_id="spherecal_validate", title=title)
         try:
             record_sockets(recording, report, models, dataset)
-            recording.coverage(dataset.q, models["nominal"].lower, models["nominal"].upper)
         except BaseException:
             recording.abort()
             raise

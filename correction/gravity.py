@@ -1,0 +1,123 @@
+"""Gravity torques of a serial arm from per-link masses and centres of mass.
+
+Inertial data live in :attr:`RobotModel.extras`, exactly as a robot file's top-level blocks::
+
+    inertials:                 # one entry per joint i: the link that moves with joint i
+      - {mass: 4.970684, com: [0.003875, 0.002081, -0.04762]}   # [kg], [m] in DH frame i
+      ...
+    payload: {mass: 0.73, com: [0.0, 0.0, 0.14]}                # [kg], [m] in the last DH frame
+
+Frame ``i`` is the frame :func:`correction.link_frames` gives for link ``i`` (it moves with joint
+``i`` in both DH conventions). The payload is what the flange carries (hand, ball), rigidly on the
+last link.
+
+Sign convention: :func:`gravity_torques` returns the torque the joints must apply to hold the
+arm still against gravity (MuJoCo's ``qfrc_bias`` at zero velocity), ``tau = -sum_j J_cj^T m_j g``.
+Gravity itself pushes each joint by ``-tau``, so a compliant joint deflects by ``-c tau``.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+
+from .errors import SpherecalError
+from .kinematics import link_frames
+from .model import RobotModel
+
+#: Standard gravity in the world (base) frame [m/s^2].
+GRAVITY = (0.0, 0.0, -9.81)
+
+
+class InertialsError(SpherecalError):
+    """Missing or malformed ``inertials`` / ``payload`` data; the message names the field."""
+
+
+def _entry(value: Any, where: str) -> tuple[float, np.ndarray]:
+    if not isinstance(value, dict) or set(value) - {"mass", "com"} or "mass" not in value:
+        raise InertialsError(f"{where}: expected a mapping {{mass: kg, com: [x, y, z]}}, got {value!r}")
+    mass = value["mass"]
+    if isinstance(mass, bool) or not isinstance(mass, (int, float)) or not np.isfinite(mass) or mass < 0:
+        raise InertialsError(f"{where}.mass: expected a finite mass >= 0 [kg], got {mass!r}")
+    com = value.get("com", [0.0, 0.0, 0.0])
+    try:
+        com_array = np.asarray(com, dtype=float)
+    except (TypeError, ValueError):
+        com_array = np.empty(0)
+    if com_array.shape != (3,) or not np.all(np.isfinite(com_array)):
+        raise InertialsError(f"{where}.com: expected 3 finite numbers [m], got {com!r}")
+    return float(mass), com_array
+
+
+def inertials_of(model: RobotModel, source: str | None = None) -> tuple[np.ndarray, np.ndarray]:
+    """Link masses and centres of mass of ``model``, payload appended as an (n+1)-th body.
+
+    Args:
+        model: a robot whose ``extras`` carry ``inertials`` (and optionally ``payload``).
+        source: file name for error messages (default: the robot's name).
+
+    Returns:
+        masses (n+1,) [kg] and coms (n+1, 3) [m], entry ``i < n`` in frame ``i+1``, the last in frame n.
+
+    Raises:
+        InertialsError: no ``inertials`` block, wrong length, or a malformed entry.
+    """
+    where = source or model.name
+    block = model.extras.get("inertials")
+    n = model.n_joints
+    if not isinstance(block, list) or len(block) != n:
+        got = "none" if block is None else (f"{len(block)} entries" if isinstance(block, list) else repr(block))
+        raise InertialsError(f"{where}: field 'inertials': expected a list of {n} {{mass, com}} entries, got {got}")
+    entries = [_entry(v, f"{where}: field 'inertials[{i}]'") for i, v in enumerate(block)]
+    payload = model.extras.get("payload")
+    entries.append((0.0, np.zeros(3)) if payload is None else _entry(payload, f"{where}: field 'payload'"))
+    return np.array([m for m, _ in entries]), np.stack([c for _, c in entries])
+
+
+def has_inertials(model: RobotModel) -> bool:
+    """True when ``model.extras`` carries an ``inertials`` block."""
+    return "inertials" in model.extras
+
+
+def gravity_torques(
+    model: RobotModel,
+    q: np.ndarray,
+    masses: np.ndarray | None = None,
+    coms: np.ndarray | None = None,
+    g: np.ndarray = GRAVITY,
+) -> np.ndarray:
+    """Joint torques that hold the arm still against gravity (MuJoCo's ``qfrc_bias`` at rest).
+
+    ``tau_i = -(z_i x (S_i - M_i o_i)) . g`` with ``M_i``, ``S_i`` the mass and first moment of
+    everything joint ``i`` carries, ``z_i``, ``o_i`` its axis and a point on it (world frame).
+
+    Args:
+        model: the robot (either DH convention; base placement included).
+        q: (N, n) or (n,) joint angles [rad].
+        masses, coms: (n+1,) [kg] and (n+1, 3) [m] as :func:`inertials_of` returns them (read from
+            ``model.extras`` when None).
+        g: (3,) gravity in the world frame [m/s^2].
+
+    Returns:
+        (N, n) torques [Nm] ((n,) for a single configuration).
+    """
+    if masses is None or coms is None:
+        masses, coms = inertials_of(model)
+    q = np.asarray(q, dtype=float)
+    single = q.ndim == 1
+    poses = link_frames(model, np.atleast_2d(q))  # (N, n+1, 4, 4)
+    n = model.n_joints
+    rot, origin = poses[:, 1:, :3, :3], poses[:, 1:, :3, 3]  # frames 1..n
+    body_frame = np.minimum(np.arange(n + 1), n - 1)  # link i in frame i+1, the payload in frame n
+    centres = np.einsum("nbij,bj->nbi", rot[:, body_frame], coms) + origin[:, body_frame]  # (N, n+1, 3)
+    weighted = masses[None, :, None] * centres
+    first_moment = np.cumsum(weighted[:, ::-1], axis=1)[:, ::-1][:, :n]  # S_i: bodies i..n
+    carried = np.cumsum(masses[::-1])[::-1][:n]  # M_i
+    if model.convention == "modified":  # joint i turns about z of frame i
+        axis, point = rot[:, :, :, 2], origin
+    else:  # about z of frame i-1
+        axis, point = poses[:, :-1, :3, 2], poses[:, :-1, :3, 3]
+    lever = first_moment - carried[None, :, None] * point
+    tau = -np.einsum("nij,j->ni", np.cross(axis, lever), np.asarray(g, dtype=float))
+    return tau[0] if single else tau

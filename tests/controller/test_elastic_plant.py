@@ -1,0 +1,92 @@
+"""The elastic MuJoCo plant: links sag by -c tau under gravity while the motors (the readings) hold."""
+
+from dataclasses import replace
+
+import mujoco
+import numpy as np
+import pytest
+
+from spherecal.controller.plant import build_plant
+from spherecal.correction import SpherecalError, load_robot, tool_point
+from spherecal.correction.elastic import elastic_tool_point, link_angles, with_compliance
+
+COMPLIANCE = np.array([0.0, 1 / 3e4, 1 / 3e4, 1 / 3e4, 0.0, 0.0, 0.0])
+
+
+def test_sag_settles_where_the_elastic_model_puts_it():
+    model = with_compliance(load_robot("panda"), COMPLIANCE)
+    plant = build_plant(model)
+    assert plant.elastic and plant.flex_joints.tolist() == [1, 2, 3]
+    q0 = np.array([0.3, -0.5, 0.4, -2.0, 0.2, 1.8, 0.5])
+    plant.set_state(q0)
+    m, d = plant.mj_model, plant.mj_data
+    d.qpos[plant.flex_qpos] = 0.0  # start rigid: MuJoCo's dynamics must find the sag
+    for _ in range(3000):
+        mujoco.mj_step1(m, d)
+        plant.apply_joint_gravity()
+        d.ctrl[:] = 0.0
+        mujoco.mj_step2(m, d)
+    assert np.abs(plant.q - q0).max() < 1e-6  # the motors (readings) held
+    sag = d.qpos[plant.flex_qpos]
+    expected = (link_angles(model, plant.q) - plant.q)[[1, 2, 3]]
+    assert np.abs(sag).max() > 3e-4  # a real deflection
+    np.testing.assert_allclose(sag, expected, atol=1e-5)  # second order: tau at the measured angles
+    rigid_gap = np.linalg.norm(plant.tool_position() - tool_point(load_robot("panda"), plant.q))
+    elastic_gap = np.linalg.norm(plant.tool_position() - elastic_tool_point(model, plant.q))
+    assert rigid_gap > 3e-4 and elastic_gap < 1e-5
+
+
+def test_rigid_plant_unchanged_and_kinematics_batch_uses_the_sag():
+    panda = load_robot("panda")
+    rigid = build_plant(panda)
+    assert not rigid.elastic and "flex" not in rigid.mjcf and rigid.mj_model.nq == 7
+    model = with_compliance(panda, COMPLIANCE)
+    q = panda.random_configurations(4, np.random.default_rng(0))
+    np.testing.assert_allclose(build_plant(model).tool_points(q), elastic_tool_point(model, q), atol=1e-12)
+
+
+def test_compliance_without_inertials_is_refused():
+    panda = load_robot("panda")
+    extras = {k: v for k, v in panda.extras.items() if k not in ("inertials", "payload")}
+    with pytest.raises(SpherecalError, match="'inertials'"):
+        build_plant(with_compliance(replace(panda, extras=extras), COMPLIANCE))
+
+
+def test_simulate_stiffness_writes_the_compliance_and_refuses_bad_values(tmp_path, capsys):
+    from spherecal.cli import main
+
+    out = tmp_path / "out"
+    args = ["simulate", "--out", str(out), "--seconds", "0.3", "--samples", "20", "--seed", "2", "--noise", "0"]
+    assert main([*args, "--stiffness", "0,3e4,3e4,3e4,0,0,0"]) == 0
+    truth = load_robot(out / "truth.yaml")
+    np.testing.assert_allclose(truth.extras["compliance"], COMPLIANCE, rtol=1e-15)
+    bad = tmp_path / "bad"
+    assert main(["simulate", "--out", str(bad), "--stiffness", "3e4,1"]) == 1
+    assert main(["simulate", "--out", str(bad), "--stiffness", "-5"]) == 1
+    err = capsys.readouterr().err.strip().splitlines()
+    assert err[-1].startswith("spherecal simulate: error: --stiffness '-5'") and not bad.exists()
+
+
+def test_export_urdf_says_it_drops_the_compliance_mjcf_keeps_it(tmp_path, capsys):
+    from spherecal.cli import main
+    from spherecal.correction import save_robot
+
+    save_robot(with_compliance(load_robot("panda"), COMPLIANCE), tmp_path / "el.yaml")
+    assert main(["export", str(tmp_path / "el.yaml"), "--format", "urdf", "--out", str(tmp_path / "el.urdf")]) == 0
+    lines = capsys.readouterr().out.strip().splitlines()
+    assert lines[-1].startswith("spherecal export: a URDF cannot express joint compliance (c2 3.33e-05")
+    assert main(["export", str(tmp_path / "el.yaml"), "--format", "mjcf", "--out", str(tmp_path / "el.xml")]) == 0
+    assert 'name="flex3"' in (tmp_path / "el.xml").read_text()
+    assert "cannot express" not in capsys.readouterr().out
+
+
+def test_ik_on_the_elastic_model_puts_the_sagging_plant_on_target():
+    from spherecal.controller.ik import ik
+
+    model = with_compliance(load_robot("panda"), COMPLIANCE)
+    target = np.array([0.5, -0.1, 0.35])
+    result = ik(model, target, np.array([0.0, -0.3, 0.0, -2.2, 0.0, 2.0, 0.8]))
+    assert result.converged
+    landed = build_plant(model).tool_points(result.q[None])[0]  # MuJoCo's sagged links, not our formula
+    assert np.linalg.norm(landed - target) < 1e-6
+    assert np.linalg.norm(tool_point(load_robot("panda"), result.q) - target) > 1e-4  # rigid IK would miss

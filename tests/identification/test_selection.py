@@ -1,0 +1,85 @@
+"""Model selection by cross-validation: rigid data keeps dh, elastic data earns elastic."""
+
+import numpy as np
+import pytest
+import yaml
+
+from spherecal.cli import main
+from spherecal.correction import load_robot, perturb, save_robot, write_fixtures, write_samples
+from spherecal.correction.elastic import with_compliance
+from spherecal.identification.calibrate import calibrate
+from spherecal.identification.selection import groups_of, select_model
+from spherecal.identification.synthetic import make_dataset
+
+C_TRUE = np.array([0.0, 1 / 3e4, 1 / 3e4, 1 / 3e4, 0.0, 0.0, 0.0])
+
+
+def _fit(start, data, spec):
+    return calibrate(start, data, spec).model
+
+
+def _data(compliance, noise, seed):
+    rng = np.random.default_rng(seed)
+    truth = perturb(load_robot("panda"), rng)
+    if compliance is not None:
+        truth = with_compliance(truth, compliance)
+    dataset, spec = make_dataset(truth, per_fixture=150, rng=rng, noise=noise)
+    return truth, dataset, spec
+
+
+def test_groups_are_placements_when_names_carry_them():
+    names = ["front_h0", "front_h1", "mid-high_h0", "P1", "a_hx", "_h1"]
+    assert groups_of(names) == {"front_h0": "front", "front_h1": "front", "mid-high_h0": "mid-high", "P1": "P1",
+                                "a_hx": "a_hx", "_h1": "_h1"}
+
+
+def test_rigid_arm_keeps_dh():
+    _, dataset, spec = _data(None, 3e-4, seed=11)
+    selection = select_model("auto", _fit, load_robot("panda"), dataset, spec)
+    assert selection.chosen == "dh" and len(selection.folds) == 3
+    dh, el, gain, se = selection.stats()
+    assert gain <= se and "does not exceed" in selection.reason
+
+
+def test_elastic_arm_earns_elastic_and_recovers_compliance():
+    truth, dataset, spec = _data(C_TRUE, 1e-4, seed=12)
+    panda = load_robot("panda")
+    selection = select_model("auto", _fit, panda, dataset, spec)
+    assert selection.chosen == "elastic", selection.summary()
+    result = calibrate(with_compliance(panda, np.zeros(7)), dataset, spec)
+    for i in (2, 3, 4):
+        name = f"c{i}"
+        estimate = result.model.params[result.model.layout.index(name)]
+        assert name in result.identified and abs(estimate - C_TRUE[i - 1]) < 3 * result.std[name]
+    assert "c1" in result.fixed and "c7" in result.fixed  # no load about a vertical axis / at the wrist
+
+
+def test_cli_records_the_choice_and_refuses_elastic_without_masses(tmp_path, capsys):
+    _, dataset, spec = _data(C_TRUE, 1e-4, seed=13)
+    write_samples(tmp_path / "s.csv", dataset)
+    write_fixtures(tmp_path / "f.yaml", spec)
+    args = ["calibrate", "--robot", "panda", "--samples", str(tmp_path / "s.csv"),
+            "--fixtures", str(tmp_path / "f.yaml")]
+    assert main([*args, "--model", "elastic", "--out", str(tmp_path / "el.yaml")]) == 0
+    out = yaml.safe_load((tmp_path / "el.yaml").read_text())
+    assert out["calibration"]["model_selection"]["chosen"] == "elastic" and len(out["compliance"]) == 7
+    assert main([*args, "--model", "dh", "--out", str(tmp_path / "dh.yaml")]) == 0
+    out = yaml.safe_load((tmp_path / "dh.yaml").read_text())
+    assert "compliance" not in out and out["calibration"]["model_selection"]["chosen"] == "dh"
+    bare = load_robot("panda")
+    save_robot(bare.__class__(**{**bare.__dict__, "extras": {}}), tmp_path / "bare.yaml")
+    args[2] = str(tmp_path / "bare.yaml")
+    assert main([*args, "--model", "elastic", "--out", str(tmp_path / "x.yaml")]) == 1
+    err = capsys.readouterr().err.strip().splitlines()
+    assert "field 'inertials'" in err[-1] and not (tmp_path / "x.yaml").exists()
+
+
+@pytest.mark.parametrize("model", ["auto"])
+def test_cli_auto_prints_both_cv_errors(tmp_path, capsys, model):
+    _, dataset, spec = _data(None, 3e-4, seed=14)
+    write_samples(tmp_path / "s.csv", dataset)
+    write_fixtures(tmp_path / "f.yaml", spec)
+    assert main(["calibrate", "--robot", "panda", "--samples", str(tmp_path / "s.csv"), "--fixtures",
+                 str(tmp_path / "f.yaml"), "--model", model, "--out", str(tmp_path / "c.yaml")]) == 0
+    text = capsys.readouterr().out
+    assert "held-out error [mm] dh" in text and "elastic" in text and "model: " in text
