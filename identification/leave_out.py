@@ -31,6 +31,8 @@ import numpy as np
 
 #: Eigenvalues of the column-scaled normal matrix below this share of the largest count as zero.
 RANK_TOL = 1e-10
+#: Groups of at most this many rows get :attr:`LeftOut.fit_var`.
+SMALL = 16
 #: A refit step beyond this many ``spread`` in any unknown has run away along a gauge of the rest.
 RUNAWAY = 20.0
 
@@ -48,7 +50,8 @@ class LeftOut:
         dof_rest: the other rows' degrees of freedom (rows minus rank).
         predicted: (rows,) the group's residual at the fit without it.
         fit_var: (rows,) variance of each entry of ``predicted`` from the fit without the group, per
-            unit residual variance (the diagonal of ``A_g N_-g^+ A_g^T``).
+            unit residual variance (the diagonal of ``A_g N_-g^+ A_g^T``); empty for groups of more
+            than :data:`SMALL` rows.
     """
 
     rows: int
@@ -123,6 +126,7 @@ def leave_out(
             ssr_rest=ssr_rest,
             dof_rest=jac.shape[0] - len(rows) - rest_rank,
             predicted=r_g - a_g @ step,
-            fit_var=np.einsum("ij,jk,ik->i", a_g, rest_inverse, a_g),
+            # per-row variances only for small groups (a constraint): O(rows F^2) on a fixture's samples
+            fit_var=np.einsum("ij,jk,ik->i", a_g, rest_inverse, a_g) if len(rows) <= SMALL else np.empty(0),
         )
     return ssr, rank, out
