@@ -32,6 +32,7 @@ from pathlib import Path
 import numpy as np
 
 from spherecal.correction import RobotModel, apply_transform, fit_rigid_transform, link_frames, tool_point
+from spherecal.correction.atomic import OutputError
 
 COLOURS = {
     "measured": (30, 30, 30),
@@ -65,9 +66,13 @@ class Recording:
         self.path = None if rrd is None else Path(rrd)
         self._tmp = None
         if self.path is not None:
-            self.path.parent.mkdir(parents=True, exist_ok=True)
             self._tmp = self.path.with_name(f".{self.path.name}.tmp")
-            self.stream.save(self._tmp)
+            try:
+                self.path.parent.mkdir(parents=True, exist_ok=True)
+                self.stream.save(self._tmp)
+            except Exception as error:  # Rerun raises its own types; the user sees one line
+                self.abort()
+                raise OutputError(f"{self.path}: cannot write the recording: {_first_line(error)}") from None
         if spawn:
             self.stream.spawn(connect=self.path is None)
 
@@ -165,18 +170,29 @@ class Recording:
     # -------------------------------------------------------------------- close
     def close(self) -> Path | None:
         """Flush, close the sink and move the ``.rrd`` into place; returns its path."""
-        self.stream.flush()
-        self.stream.disconnect()
-        if self.path is None:
-            return None
-        os.replace(self._tmp, self.path)
+        try:
+            self.stream.flush()
+            self.stream.disconnect()
+            if self.path is None:
+                return None
+            os.replace(self._tmp, self.path)
+        except Exception as error:  # Rerun raises its own types; the user sees one line
+            self.abort()
+            raise OutputError(f"{self.path}: cannot write the recording: {_first_line(error)}") from None
         return self.path
 
     def abort(self) -> None:
         """Drop the recording: no file is left behind."""
-        self.stream.disconnect()
-        if self._tmp is not None:
-            self._tmp.unlink(missing_ok=True)
+        try:
+            self.stream.disconnect()
+        finally:
+            if self._tmp is not None:
+                self._tmp.unlink(missing_ok=True)
+
+
+def _first_line(error: BaseException) -> str:
+    text = str(getattr(error, "strerror", None) or error).strip()
+    return text.splitlines()[0] if text else type(error).__name__
 
 
 def _class_ids(labels) -> np.ndarray:

@@ -66,7 +66,9 @@ def run(args: argparse.Namespace) -> int:
     from spherecal.correction.samples import DEDUP_TOL
     from spherecal.correction.samples_csv import read_samples
     from spherecal.identification.calibrate import calibrate
+    from spherecal.options import planned_outputs
 
+    outputs = planned_outputs(args, {"--out": args.out})  # before any work: never over an input
     clock = time.perf_counter()
     noise = args.noise * 1e-3  # [m] from here on
     dedup_tol = DEDUP_TOL if args.dedup_deg is None else float(np.deg2rad(args.dedup_deg))  # [rad]
@@ -109,7 +111,8 @@ def run(args: argparse.Namespace) -> int:
     extras["calibration"] = block
     model = replace(result.model, extras=extras)
     header = f"calibrated by spherecal calibrate ({args.method}) from {args.samples}"
-    save_robot(model, args.out, header=header)
+    with outputs:
+        save_robot(model, outputs.stage(args.out), header=header)
     print(result.summary())
     if dropped:
         print(f"dropped {dropped} duplicate samples (within {np.rad2deg(dedup_tol):.3g} deg)")

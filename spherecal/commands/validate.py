@@ -15,7 +15,7 @@ HELP = "Compare nominal and calibrated models against the truth, motion-capture 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     """Register the options of `spherecal validate`."""
-    from spherecal.options import add_deprecated, add_seed, add_urdf_links, count, noise_mm
+    from spherecal.options import add_deprecated, add_seed, add_urdf_links, configurations, noise_mm
 
     parser.add_argument("--truth", help="robot file of the true robot (simulation)")
     parser.add_argument("--nominal", required=True, help="robot file of the nominal model ('panda': embedded)")
@@ -28,7 +28,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         "socket samples NOT used in the fit: spread per socket and known-distance errors, no mocap needed",
     )
     parser.add_argument("--fixtures", help="fixtures.yaml of --samples (known distances [m]) for the socket-only check")
-    parser.add_argument("--configurations", type=count(3), default=5000,
+    parser.add_argument("--configurations", type=configurations, default=5000,
                         help="random workspace configurations (default 5000)")
     parser.add_argument("--mocap-noise", type=noise_mm, default=0.3,
                         help="simulated motion-capture marker noise std [mm] (default 0.3)")
@@ -41,12 +41,11 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 def run(args: argparse.Namespace) -> int:
     """Load and check every input, validate, print the table, then write the outputs."""
-    import json
     from pathlib import Path
 
     import numpy as np
 
-    from spherecal.correction import atomic_write_text, load_robot
+    from spherecal.correction import load_robot
     from spherecal.validation.inputs import check_models
     from spherecal.validation.mocap import read_mocap_csv
     from spherecal.validation.pipeline import record_validation, validate_models
@@ -56,11 +55,9 @@ def run(args: argparse.Namespace) -> int:
         raise fail("give --truth (simulation), --mocap (recorded data) or --samples (socket-only)")
     if args.fixtures is not None and (args.truth is not None or args.mocap is not None or args.samples is None):
         raise fail("--fixtures goes with --samples alone (socket-only check)")
-    from spherecal.validation.inputs import check_out_file
+    from spherecal.options import planned_outputs
 
-    for option, path in (("--out", args.out), ("--rrd", args.rrd)):
-        if path is not None:
-            check_out_file(path, option)
+    outputs = planned_outputs(args, {"--out": args.out, "--rrd": args.rrd})
     files = {"nominal": args.nominal, "calibrated": args.calibrated}
     if args.truth is not None:
         files["truth"] = args.truth
@@ -69,7 +66,7 @@ def run(args: argparse.Namespace) -> int:
     if args.truth is None and args.mocap is None:
         from spherecal.commands.validate_sockets import run_sockets
 
-        return run_sockets(args, models)
+        return run_sockets(args, models, outputs)
     n = models["nominal"].n_joints
     measurement = None if args.mocap is None else read_mocap_csv(args.mocap, n)
     self_motion = None
@@ -92,23 +89,16 @@ def run(args: argparse.Namespace) -> int:
     print(report.format())
     if report.deviations is not None:
         print("\nparameter deviations from the truth:\n" + report.deviations.format())
-    if args.out:
-        inputs = {k: Path(v) if isinstance(v, str) and Path(v).is_file() else v for k, v in vars(args).items()}
-        inputs = {k: v for k, v in inputs.items() if not k.startswith("_") and k != "command"}
-        result = {"provenance": provenance(args.seed, inputs), "validation": report.to_dict()}
-        print(f"report: {atomic_write_text(args.out, json.dumps(result, indent=2) + chr(10))}")
-    if args.rrd or args.spawn:
-        from spherecal.validation.recording import Recording
+    inputs = {k: Path(v) if isinstance(v, str) and Path(v).is_file() else v for k, v in vars(args).items()}
+    inputs = {k: v for k, v in inputs.items() if not k.startswith("_") and k != "command"}
+    result = {"provenance": provenance(args.seed, inputs), "validation": report.to_dict()}
 
-        recording = Recording(args.rrd, spawn=args.spawn, application_id="spherecal_validate")
-        try:
-            record_validation(recording, report, {"nominal": models["nominal"], "calibrated": models["calibrated"]})
-            q = np.concatenate([s.q for s in report.sets[1:]]) if len(report.sets) > 1 else report.sets[0].q
-            recording.coverage(q, models["nominal"].lower, models["nominal"].upper)
-        except BaseException:
-            recording.abort()
-            raise
-        path = recording.close()
-        if path is not None:
-            print(f"recording: {path}")
+    def record(recording) -> None:
+        record_validation(recording, report, {"nominal": models["nominal"], "calibrated": models["calibrated"]})
+        q = np.concatenate([s.q for s in report.sets[1:]]) if len(report.sets) > 1 else report.sets[0].q
+        recording.coverage(q, models["nominal"].lower, models["nominal"].upper)
+
+    from spherecal.commands.validate_sockets import write_validation
+
+    write_validation(args, outputs, result, record)
     return 0
