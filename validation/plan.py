@@ -27,13 +27,13 @@ from dataclasses import dataclass, field, replace
 from pathlib import Path
 
 import numpy as np
-import yaml
 
 from spherecal.controller.exploration import joint_coverage
 from spherecal.correction import RobotModel
 from spherecal.correction.errors import SpherecalError
 from spherecal.correction.fixtures import FixtureSpec
 from spherecal.correction.samples import Dataset
+from spherecal.correction.yaml_safe import load_yaml
 from spherecal.identification.prediction import Prediction, Workspace, predict_accuracy
 from spherecal.identification.synthetic import fixture_samples, project_to_point
 
@@ -170,9 +170,10 @@ def read_candidates(path: str | Path, n_joints: int) -> list[Candidate]:
 
     path = Path(path)
     try:
-        data = yaml.safe_load(path.read_text())
-    except (OSError, UnicodeDecodeError, yaml.YAMLError) as error:
+        text = path.read_text(encoding="utf-8")
+    except (OSError, UnicodeDecodeError) as error:
         raise CandidateError(f"{path}: cannot read candidates: {str(error).splitlines()[0]}") from None
+    data, _ = load_yaml(text, str(path), CandidateError)  # bounded: size, depth, aliases; no duplicate keys
     entries = data.get("candidates") if isinstance(data, dict) else None
     if not isinstance(entries, dict) or not entries:
         raise CandidateError(
