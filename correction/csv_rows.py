@@ -1,0 +1,99 @@
+"""Reading CSV files we are handed, one physical line per record, with one-line errors.
+
+Our CSV files (``samples.csv``, mocap recordings, joint recordings) hold one record per line: a
+quoted field never spans lines. Parsing each line on its own makes every error name the line it is
+on: an unterminated quote is reported on the row where it opens (not at the end of the file, after
+reading all of it), and a field longer than the csv module's limit is one line naming its row,
+not a ``_csv.Error`` traceback. Files are read as a stream (:func:`iter_lines`), so a bad value on
+row 2 is found without reading the rest of the file.
+"""
+
+from __future__ import annotations
+
+import csv
+import os
+from collections.abc import Iterator
+from itertools import islice
+from pathlib import Path
+
+from .errors import SpherecalError
+
+
+def field_limit() -> int:
+    """The csv module's field-size limit [characters] (131072 unless changed)."""
+    return csv.field_size_limit()
+
+
+def is_skipped(line: str) -> bool:
+    """A blank (or whitespace-only) line or a ``#`` comment, both skipped by our readers."""
+    stripped = line.strip()
+    return not stripped or stripped.startswith("#")
+
+
+def parse_line(line: str, where: str, error: type[SpherecalError] = SpherecalError) -> list[str]:
+    """The fields of one CSV line.
+
+    Args:
+        line: one physical line (with or without its newline).
+        where: ``"file: row N"`` for the message.
+        error: the exception class to raise.
+
+    Raises:
+        error: an unterminated quote, a field over :func:`field_limit`, or another CSV syntax error.
+    """
+    try:
+        return next(csv.reader([line.rstrip("\r\n")], strict=True), [])
+    except csv.Error as problem:
+        text = str(problem)
+        if "field larger than field limit" in text:
+            raise error(f"{where}, field '': a field longer than the CSV limit of {field_limit()} characters") \
+                from None
+        if line.count('"') % 2 == 1 or "end of data" in text or "EOF" in text:
+            raise error(f"{where}, field '': unterminated quote (a quoted field must end on its own line)") from None
+        raise error(f"{where}, field '': CSV syntax: {text}") from None
+
+
+def open_text(path: Path, error: type[SpherecalError]):
+    """``path`` opened for reading as UTF-8 text (a byte-order mark dropped); one-line error."""
+    try:
+        return open(path, encoding="utf-8-sig", newline=None)  # noqa: SIM115 - the caller closes it
+    except OSError as problem:
+        raise error(f"{path}: cannot read: {problem.strerror or problem}") from None
+
+
+def iter_lines(path: str | os.PathLike, error: type[SpherecalError], chunk: int = 50_000) -> Iterator[list[str]]:
+    """The file's physical lines in blocks of ``chunk`` (a stream; memory stays small).
+
+    Raises:
+        error: the file cannot be opened or is not UTF-8 text (naming the file).
+    """
+    path = Path(path)
+    with open_text(path, error) as handle:
+        while True:
+            try:
+                block = list(islice(handle, chunk))
+            except UnicodeDecodeError as problem:
+                raise error(f"{path}: cannot read: not UTF-8 text ({problem.reason})") from None
+            except OSError as problem:
+                raise error(f"{path}: cannot read: {problem.strerror or problem}") from None
+            if not block:
+                return
+            yield block
+
+
+def read_rows(path: str | os.PathLike, error: type[SpherecalError], comments: bool = True
+              ) -> Iterator[tuple[int, list[str]]]:
+    """``(line number, fields)`` of every record of a CSV file, blank lines (and ``#`` comments when
+    ``comments``) skipped; line numbers are the file's (1-based).
+
+    Raises:
+        error: unreadable file, unterminated quote, a field over the limit (one line with the row).
+    """
+    number = 0
+    for block in iter_lines(path, error):
+        for line in block:
+            number += 1
+            stripped = line.strip()
+            if not stripped or (comments and stripped.startswith("#")):
+                continue
+            yield number, parse_line(line, f"{path}: row {number}", error)
