@@ -64,7 +64,7 @@ def read_samples(path: str | os.PathLike, model: RobotModel, limit_tol: float = 
     """Read and check ``samples.csv`` against a robot, as a stream of blocks of lines.
 
     A block of plain rows (no quotes, no comments, the header's number of commas on every line, no
-    line over the CSV field limit) is converted at once by numpy; any other block is parsed line by
+    line over the CSV field limit) is converted at once by numpy's C reader; any other block is parsed line by
     line with the csv module, which names the row and field of the first bad value. Either way the
     file is read block by block and an error stops the reading (a bad value on row 2 is reported
     without reading the rest). 2 M rows: about 10 s and 0.5 GB (``bench/large_samples.py``).
@@ -108,6 +108,7 @@ class _Reader:
         self.columns: list[str] | None = None
         self.has_t = False
         self.labels: list[np.ndarray] = []
+        self.names: dict[str, None] = {}
         self.values: list[np.ndarray] = []
         self.lines: list[np.ndarray] = []
 
@@ -126,27 +127,24 @@ class _Reader:
     def block(self, block: list[str], start: int) -> None:
         """Convert a block of lines (first at file line ``start``) and check it."""
         width = len(self.columns)
-        commas = width - 1
-        limit = field_limit()
-        plain = all(line.count(",") == commas and len(line) <= limit and '"' not in line and "#" not in line
-                    for line in block)
-        if plain:
-            parts = [line.split(",", 1) for line in block]
+        text = "".join(block)
+        plain = ('"' not in text and "#" not in text and text.count(",") == len(block) * (width - 1)
+                 and max(map(len, block)) <= field_limit())
+        if plain:  # numpy's C reader; a row with too few fields or a bad value: the careful reading names it
             try:
-                data = np.array(",".join(p[1] for p in parts).replace("\n", "").split(","), dtype=float)
+                data = np.loadtxt(block, delimiter=",", usecols=range(1, width), dtype=float, ndmin=2)
             except ValueError:
-                plain = False  # a bad value: the line-by-line reading below names it
-        if plain:
-            data = data.reshape(len(block), width - 1)
-            labels = [p[0].strip() for p in parts]
-            rows = np.arange(start, start + len(block))
-            if not np.isfinite(data).all() or "" in labels:
                 plain = False
+        if plain:
+            labels = [line[: line.find(",")].strip() for line in block]
+            rows = np.arange(start, start + len(block))
+            plain = data.shape[0] == len(block) and bool(np.isfinite(data).all()) and "" not in labels
         if not plain:
             labels, data, rows = self._careful(block, start)
         if len(labels) == 0:
             return
         self._check_limits(data, rows)
+        self.names.update(dict.fromkeys(labels))  # first appearance, in order
         self.labels.append(np.array(labels))
         self.values.append(data)
         self.lines.append(rows)
@@ -192,7 +190,7 @@ class _Reader:
         q = np.ascontiguousarray(data[:, 1:]) if self.has_t else data
         return Dataset(
             labels=np.concatenate(self.labels), q=q, t=data[:, 0].copy() if self.has_t else None,
-            source=str(self.path), lines=np.concatenate(self.lines),
+            fixture_names=tuple(self.names), source=str(self.path), lines=np.concatenate(self.lines),
         )
 
 

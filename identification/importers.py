@@ -9,8 +9,6 @@ Errors are :class:`RecordingError`, one line naming the file, the row and the fi
 
 from __future__ import annotations
 
-import csv
-import io
 import math
 import os
 import re
@@ -19,6 +17,7 @@ from pathlib import Path
 
 import numpy as np
 
+from spherecal.correction.csv_rows import read_rows
 from spherecal.correction.fixtures import FixtureSpec
 from spherecal.correction.model import RobotModel
 from spherecal.correction.samples import LIMIT_TOL, Dataset, DatasetError
@@ -141,13 +140,6 @@ def _number(text: str, where: str) -> float:
     return value
 
 
-def _read_text(path: Path) -> str:
-    try:
-        return path.read_text(encoding="utf-8-sig")
-    except (OSError, UnicodeDecodeError) as error:
-        raise RecordingError(f"{path}: cannot read: {getattr(error, 'strerror', None) or error}") from None
-
-
 def read_mukca(
     path: str | os.PathLike, model: RobotModel, distance: float = MUKCA_DISTANCE
 ) -> tuple[Recording, FixtureSpec]:
@@ -191,11 +183,8 @@ def read_mukca(
             if "," in name:
                 raise RecordingError(f"{folder}: field 'placement': a folder name with a comma cannot name a fixture")
             before = len(q)
-            reader = csv.reader(io.StringIO(_read_text(file)))
-            for fields in reader:
-                if not fields or not "".join(fields).strip() or fields[0].lstrip().startswith("#"):
-                    continue
-                where = f"{file}: row {reader.line_num}"
+            for line, fields in read_rows(file, RecordingError):  # streamed; blank lines, comments skipped
+                where = f"{file}: row {line}"
                 if len(fields) != n:
                     raise RecordingError(f"{where}, field 'q*': {len(fields)} joint angles, {model.name} has {n}")
                 q.append([_number(v, f"{where}, field 'q{i + 1}'") for i, v in enumerate(fields)])
@@ -225,16 +214,16 @@ def read_joint_csv(path: str | os.PathLike, model: RobotModel) -> Recording:
             number, an empty fixture label, an angle outside the joint limits.
     """
     path = Path(path)
-    reader = csv.reader(io.StringIO(_read_text(path)))
     header: list[str] | None = None
     values: list[list[float]] = []
+    blocks: list[np.ndarray] = []  # values in blocks of 50 000 rows: a long recording stays small in memory
     times: list[float] = []
     labels: list[str] = []
     rows: list[str] = []
-    for fields in reader:
-        if not fields or not "".join(fields).strip() or (header is not None and fields[0].lstrip().startswith("#")):
+    for line, fields in read_rows(path, RecordingError, comments=False):  # streamed, one line per error
+        if header is not None and fields[0].lstrip().startswith("#"):
             continue
-        where = f"{path}: row {reader.line_num}"
+        where = f"{path}: row {line}"
         if header is None:
             header = [f.strip() for f in fields]
             index, names = match_joints(header, model, where)
@@ -245,6 +234,9 @@ def read_joint_csv(path: str | os.PathLike, model: RobotModel) -> Recording:
             missing = header[len(fields)]
             raise RecordingError(f"{where}, field {missing!r}: {len(fields)} fields, the header has {len(header)}")
         values.append([_number(fields[i], f"{where}, field {header[i]!r}") for i in index])
+        if len(values) == 50_000:
+            blocks.append(np.array(values, dtype=float))
+            values.clear()
         if time_col is not None:
             times.append(_number(fields[time_col], f"{where}, field {header[time_col]!r}"))
         if label_col is not None:
@@ -255,7 +247,9 @@ def read_joint_csv(path: str | os.PathLike, model: RobotModel) -> Recording:
         rows.append(where)
     if header is None:
         raise RecordingError(f"{path}: row 1, field 'header': empty file (expected a header naming the joints)")
-    if not values:
+    if values or not blocks:
+        blocks.append(np.array(values, dtype=float).reshape(len(values), len(index)))
+    if not sum(len(b) for b in blocks):
         raise RecordingError(f"{path}: row 2, field {header[index[0]]!r}: no samples after the header")
     t = None
     if times:
@@ -263,7 +257,7 @@ def read_joint_csv(path: str | os.PathLike, model: RobotModel) -> Recording:
         if np.nanmax(np.abs(t)) > NANOSECONDS_ABOVE:
             t = t * 1e-9
     recording = Recording(
-        np.array(values, dtype=float), t, np.array(labels) if labels else None, str(path), tuple(rows)
+        np.concatenate(blocks), t, np.array(labels) if labels else None, str(path), tuple(rows)
     )
     recording.check_limits(model, names)
     return recording

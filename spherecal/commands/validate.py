@@ -47,7 +47,7 @@ def run(args: argparse.Namespace) -> int:
 
     from spherecal.correction import load_robot
     from spherecal.validation.inputs import check_models
-    from spherecal.validation.mocap import read_mocap_csv
+    from spherecal.validation.mocap import check_mocap, read_mocap_csv
     from spherecal.validation.pipeline import record_validation, validate_models
     from spherecal.validation.provenance import provenance
 
@@ -68,7 +68,10 @@ def run(args: argparse.Namespace) -> int:
 
         return run_sockets(args, models, outputs)
     n = models["nominal"].n_joints
-    measurement = None if args.mocap is None else read_mocap_csv(args.mocap, n)
+    measurement = None
+    if args.mocap is not None:
+        measurement = read_mocap_csv(args.mocap, n)
+        check_mocap(measurement, models["nominal"])
     self_motion = None
     if args.samples is not None:
         from spherecal.correction.samples_csv import read_samples
