@@ -3,7 +3,9 @@
 Writes a file of ``--rows`` rows (``fixture,t,q1..q7``, every digit of each float, as ``spherecal
 simulate`` writes them) into a temporary folder, then in a fresh subprocess per case reads it with
 ``correction.samples_csv.read_samples`` and reports the wall time and the peak resident memory
-(``resource.getrusage(RUSAGE_SELF).ru_maxrss``, the whole process: Python, numpy and the data):
+(``resource.getrusage(RUSAGE_SELF).ru_maxrss``, the whole process: Python, numpy and the data) and
+the CPU time of the reading (user + system; on a shared machine the wall time is this divided by the
+share of a core the process got):
 
 - ``read``: the whole file;
 - ``bad row 2``: the same file with a bad value on row 2 (must fail at once, not after reading all);
@@ -38,6 +40,8 @@ from spherecal.correction import load_robot
 from spherecal.correction.samples_csv import read_samples
 from spherecal.correction.samples import DatasetError
 model = load_robot("panda")
+usage0 = resource.getrusage(resource.RUSAGE_SELF)
+cpu0 = usage0.ru_utime + usage0.ru_stime
 clock = time.perf_counter()
 outcome = "skipped"
 if {path!r}:
@@ -47,8 +51,10 @@ if {path!r}:
     except DatasetError as error:
         outcome = f"error: {{error}}"[:160]
 seconds = time.perf_counter() - clock
-peak_mb = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
-print(json.dumps({{"seconds": seconds, "peak_mb": peak_mb, "outcome": outcome}}))
+usage = resource.getrusage(resource.RUSAGE_SELF)
+peak_mb = usage.ru_maxrss / 1024
+print(json.dumps({{"seconds": seconds, "cpu_seconds": usage.ru_utime + usage.ru_stime - cpu0, "peak_mb": peak_mb,
+                  "outcome": outcome}}))
 """
 
 
@@ -105,9 +111,9 @@ def main() -> None:
         results = {name: measure(file, args.reader_root) for name, file in cases.items()}
     load = subprocess.run(["uptime"], capture_output=True, text=True).stdout.strip()
     print(f"file: {args.rows} rows, {size_mb:.0f} MB (written in {written:.1f} s); reader: {args.reader_root}")
-    print(f"{'case':<10} {'read [s]':>9} {'peak RSS [MB]':>14}  outcome")
+    print(f"{'case':<10} {'wall [s]':>9} {'CPU [s]':>8} {'peak RSS [MB]':>14}  outcome")
     for name, r in results.items():
-        print(f"{name:<10} {r['seconds']:9.2f} {r['peak_mb']:14.0f}  {r['outcome']}")
+        print(f"{name:<10} {r['seconds']:9.2f} {r['cpu_seconds']:8.2f} {r['peak_mb']:14.0f}  {r['outcome']}")
     print(f"load: {load}")
     report = {"rows": args.rows, "file_mb": round(size_mb, 1), "reader_root": args.reader_root, "uptime": load,
               "cases": results, "targets": {"seconds": 15, "peak_mb": 1000}}

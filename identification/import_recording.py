@@ -80,8 +80,8 @@ def check_out_dir(out: str | os.PathLike, inputs: list[str | os.PathLike]) -> No
     """Refuse an output folder that exists and is not empty, is a file, or holds (or is) an input."""
     out = Path(out).absolute()
     for item in inputs:
-        item = Path(item).absolute()
-        if item == out or out in item.parents:
+        item = Path(item).resolve()  # links resolved: compare files, not strings
+        if item == out.resolve() or out.resolve() in item.parents:
             raise RecordingError(f"{out}: field '--out': holds the input {item}; choose a new folder")
     if out.exists() and (not out.is_dir() or any(out.iterdir())):
         raise RecordingError(f"{out}: field '--out': exists and is not an empty folder; choose a new folder")
