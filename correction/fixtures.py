@@ -25,6 +25,7 @@ import numpy as np
 import yaml
 
 from spherecal.correction.atomic import atomic_write_text
+from spherecal.correction.robot_file import MAX_LENGTH
 from spherecal.correction.samples import Dataset, DatasetError
 from spherecal.correction.yaml_safe import load_yaml
 
@@ -146,6 +147,9 @@ def read_fixtures(path: str | os.PathLike) -> FixtureSpec:
             ok = ok and all(isinstance(v, (int, float)) and not isinstance(v, bool) for v in value)
             if not ok or not all(math.isfinite(v) for v in value):
                 raise fail(f"expected 3 finite numbers [m], got {value!r}", "fixtures", name, "position")
+            if max(abs(v) for v in value) > MAX_LENGTH:
+                raise fail(f"{value!r} m is not physical (at most {MAX_LENGTH:g} m from the base; the file is in "
+                           "metres)", "fixtures", name, "position")
             positions[name] = np.array(value, dtype=float)
     distances: list[tuple[str, str, float]] = []
     raw = data.get("distances") or []
@@ -163,8 +167,9 @@ def read_fixtures(path: str | os.PathLike) -> FixtureSpec:
             raise fail(f"a distance needs two different fixtures, got {a!r} twice", "distances", k)
         if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
             raise fail(f"expected a finite distance [m], got {value!r}", "distances", k, 2)
-        if value <= 0:
-            raise fail(f"distance must be > 0 m, got {value!r}", "distances", k, 2)
+        if not 0 < value <= 2 * MAX_LENGTH:
+            raise fail(f"distance must be > 0 and at most {2 * MAX_LENGTH:g} m (the file is in metres), got "
+                       f"{value!r}", "distances", k, 2)
         pair = frozenset((a, b))
         if pair in seen_pairs:
             raise fail(f"distance between {a!r} and {b!r} given twice", "distances", k)

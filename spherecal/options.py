@@ -109,6 +109,18 @@ def count(minimum: int = 1, maximum: int | None = None):
     return parse
 
 
+def at_most(limit: float, unit: str, allow_zero: bool = False):
+    """An argparse type: a finite number > 0 (>= 0 with ``allow_zero``) and <= ``limit`` [``unit``]."""
+
+    def parse(text: str) -> float:
+        value = non_negative(text) if allow_zero else positive(text)
+        if value > limit:
+            raise argparse.ArgumentTypeError(f"expected at most {limit:g} {unit}, got {text!r}")
+        return value
+
+    return parse
+
+
 def configurations(text: str) -> int:
     """``--configurations``: 3 .. :data:`MAX_CONFIGURATIONS` random configurations."""
     return count(3, MAX_CONFIGURATIONS)(text)

@@ -221,3 +221,25 @@ def test_validate_refuses_a_calibrated_file_of_another_arm(tmp_path, panda, caps
     save_robot(edit(panda), tmp_path / "cal.yaml")
     refused(["validate", "--nominal", "panda", "--calibrated", tmp_path / "cal.yaml", "--mocap",
              tmp_path / "mocap.csv", "--out", tmp_path / "report.json"], tmp_path, capsys, message)
+
+
+@pytest.mark.parametrize(("text", "message"), [
+    ("fixtures:\n  P1: {position: [500.0, 0, 300.0]}\n", r"row 2, field 'fixtures.P1.position': \[500.0, 0, 300.0\] m"),
+    ("fixtures:\n  P1: {}\n  P2: {}\ndistances:\n  - [P1, P2, 50.0]\n", r"row 5, field 'distances\[0\]\[2\]'"),
+])
+def test_fixtures_refuse_millimetres_in_a_metres_file(tmp_path, text, message) -> None:
+    path = tmp_path / "fixtures.yaml"
+    path.write_text(text)
+    with pytest.raises(DatasetError, match=message):
+        read_fixtures(path)
+
+
+@pytest.mark.parametrize(("argv", "message"), [
+    (["import", "x", "--format", "mukca", "--robot", "panda", "--out", "o", "--distance", "50"], "at most 10 m"),
+    (["calibrate", "--robot", "panda", "--samples", "s.csv", "--out", "c.yaml", "--dedup-deg", "1e300"], "10 deg"),
+    (["simulate", "--out", "o", "--angle-std-deg", "90"], "at most 10 deg"),
+    (["plan", "--grid", "0,1e300,2;0,1,2;0,1,2"], "|max| <= 10 m"),
+])
+def test_more_out_of_range_options(tmp_path, capsys, monkeypatch, argv, message) -> None:
+    monkeypatch.chdir(tmp_path)
+    refused(argv, tmp_path, capsys, message)

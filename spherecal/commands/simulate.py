@@ -11,7 +11,7 @@ HELP = "Simulate self-motion at spherical-joint fixtures on a perturbed (true) r
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     """Register the options of `spherecal simulate`."""
-    from spherecal.options import add_per_fixture, add_robot, add_seed, duration, noise_mm, non_negative, spread_mm
+    from spherecal.options import add_per_fixture, add_robot, add_seed, at_most, duration, noise_mm, spread_mm
 
     parser.add_argument("--out", required=True, help="output folder (samples.csv, fixtures.yaml, truth.yaml)")
     add_seed(parser)
@@ -26,7 +26,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="fixtures.yaml giving the true centre (position) of every fixture [m]")
     add_robot(parser)
     parser.add_argument("--length-std", type=spread_mm, default=1.0, help="true-robot a, d error std [mm] (default 1)")
-    parser.add_argument("--angle-std-deg", type=non_negative, default=0.2,
+    parser.add_argument("--angle-std-deg", type=at_most(10.0, "deg", allow_zero=True), default=0.2,
                         help="true-robot alpha, theta error std [deg] (default 0.2)")
     parser.add_argument("--tool-std", type=spread_mm, default=1.0,
                         help="true-robot tool point error std [mm] (default 1)")
