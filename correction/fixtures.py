@@ -167,9 +167,11 @@ def read_fixtures(path: str | os.PathLike) -> FixtureSpec:
             raise fail(f"a distance needs two different fixtures, got {a!r} twice", "distances", k)
         if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
             raise fail(f"expected a finite distance [m], got {value!r}", "distances", k, 2)
-        if not 0 < value <= 2 * MAX_LENGTH:
-            raise fail(f"distance must be > 0 and at most {2 * MAX_LENGTH:g} m (the file is in metres), got "
-                       f"{value!r}", "distances", k, 2)
+        if value <= 0:
+            raise fail(f"distance must be > 0 m, got {value!r}", "distances", k, 2)
+        if value > 2 * MAX_LENGTH:
+            raise fail(f"{value!r} m is not physical (at most {2 * MAX_LENGTH:g} m; the file is in metres)",
+                       "distances", k)
         pair = frozenset((a, b))
         if pair in seen_pairs:
             raise fail(f"distance between {a!r} and {b!r} given twice", "distances", k)

@@ -61,13 +61,7 @@ def check_output(path: Path, option: str) -> None:
     """
     if path.is_dir():
         raise OutputError(f"{path}: field '{option}': is a folder, expected a file name")
-    for parent in path.absolute().parents:
-        if parent.exists():
-            if not parent.is_dir():
-                raise OutputError(f"{path}: field '{option}': {parent} is not a folder")
-            if not os.access(parent, os.W_OK | os.X_OK):
-                raise OutputError(f"{path}: field '{option}': cannot write into {parent}: permission denied")
-            return
+    _check_parents(path, option)
 
 
 def check_folder(path: PathLike, option: str) -> None:
@@ -79,7 +73,19 @@ def check_folder(path: PathLike, option: str) -> None:
     path = Path(path)
     if path.exists() and not path.is_dir():
         raise OutputError(f"{path}: field '{option}': exists and is not a folder")
-    check_output(path / "_", option)
+    _check_parents(path / "_", option, shown=path)
+
+
+def _check_parents(path: Path, option: str, shown: Path | None = None) -> None:
+    """The nearest existing parent of ``path`` is a folder we may write into."""
+    shown = path if shown is None else shown
+    for parent in path.absolute().parents:
+        if parent.exists():
+            if not parent.is_dir():
+                raise OutputError(f"{shown}: field '{option}': {parent} is not a folder")
+            if not os.access(parent, os.W_OK | os.X_OK):
+                raise OutputError(f"{shown}: field '{option}': cannot write into {parent}: permission denied")
+            return
 
 
 class OutputSet:
