@@ -226,7 +226,8 @@ def test_validate_refuses_a_calibrated_file_of_another_arm(tmp_path, panda, caps
 @pytest.mark.parametrize(("text", "message"), [
     ("fixtures:\n  P1: {position: [500.0, 0, 300.0]}\n",
      r"row 2, field 'fixtures.P1.position': \[500.0, 0, 300.0\] m"),
-    ("fixtures:\n  P1: {}\n  P2: {}\ndistances:\n  - [P1, P2, 50.0]\n", r"row 5, field 'distances\[0\]': 50.0 m is not physical"),
+    ("fixtures:\n  P1: {}\n  P2: {}\ndistances:\n  - [P1, P2, 50.0]\n",
+     r"row 5, field 'distances\[0\]': 50.0 m is not physical"),
 ])
 def test_fixtures_refuse_millimetres_in_a_metres_file(tmp_path, text, message) -> None:
     path = tmp_path / "fixtures.yaml"
