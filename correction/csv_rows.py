@@ -87,13 +87,26 @@ def read_rows(path: str | os.PathLike, error: type[SpherecalError], comments: bo
     ``comments``) skipped; line numbers are the file's (1-based).
 
     Raises:
-        error: unreadable file, unterminated quote, a field over the limit (one line with the row).
+        error: unreadable file, unterminated quote (on the row where it opens), a field over the
+            limit, a record spanning lines (one line with the row).
     """
-    number = 0
+    first = 1
     for block in iter_lines(path, error):
-        for line in block:
-            number += 1
-            stripped = line.strip()
-            if not stripped or (comments and stripped.startswith("#")):
+        reader = csv.reader(block, strict=True)
+        done = 0  # lines of the block consumed so far
+        while True:
+            try:
+                fields = next(reader)
+            except StopIteration:
+                break
+            except csv.Error:
+                parse_line(block[done], f"{path}: row {first + done}", error)  # raises, naming the problem
+                raise error(f"{path}: row {first + done}, field '': unterminated quote") from None
+            if reader.line_num - done > 1:  # a quote opened on this line and closed on a later one
+                raise error(f"{path}: row {first + done}, field '': unterminated quote (a quoted field must end "
+                            "on its own line)")
+            number, done = first + done, reader.line_num
+            if not fields or not "".join(fields).strip() or (comments and fields[0].lstrip().startswith("#")):
                 continue
-            yield number, parse_line(line, f"{path}: row {number}", error)
+            yield number, fields
+        first += len(block)

@@ -44,10 +44,10 @@ def test_yaml_bombs_deep_and_huge_documents_are_refused_at_once(tmp_path, panda,
     path = tmp_path / "input.yaml"
     path.write_text(text)
     read, error = _readers(tmp_path, panda)[reader]
-    start = time.perf_counter()
+    start = time.process_time()  # CPU time: the machine may be shared
     with pytest.raises(error, match=message) as refused_:
         read(path)
-    assert time.perf_counter() - start < 0.5  # refused before anything expands (several s of CPU otherwise)
+    assert time.process_time() - start < 1.0  # refused before anything expands or recurses
     assert "\n" not in str(refused_.value) and str(path) in str(refused_.value)
 
 
