@@ -12,9 +12,11 @@ from __future__ import annotations
 
 import csv
 import os
-from collections.abc import Iterator
+from collections.abc import Iterator, Sequence
 from itertools import islice
 from pathlib import Path
+
+import numpy as np
 
 from .errors import SpherecalError
 
@@ -92,21 +94,62 @@ def read_rows(path: str | os.PathLike, error: type[SpherecalError], comments: bo
     """
     first = 1
     for block in iter_lines(path, error):
-        reader = csv.reader(block, strict=True)
-        done = 0  # lines of the block consumed so far
-        while True:
-            try:
-                fields = next(reader)
-            except StopIteration:
-                break
-            except csv.Error:
-                parse_line(block[done], f"{path}: row {first + done}", error)  # raises, naming the problem
-                raise error(f"{path}: row {first + done}, field '': unterminated quote") from None
-            if reader.line_num - done > 1:  # a quote opened on this line and closed on a later one
-                raise error(f"{path}: row {first + done}, field '': unterminated quote (a quoted field must end "
-                            "on its own line)")
-            number, done = first + done, reader.line_num
-            if not fields or not "".join(fields).strip() or (comments and fields[0].lstrip().startswith("#")):
-                continue
-            yield number, fields
+        yield from block_rows(block, first, path, error, comments)
         first += len(block)
+
+
+def block_rows(block: list[str], first: int, path: str | os.PathLike, error: type[SpherecalError],
+               comments: bool = True) -> Iterator[tuple[int, list[str]]]:
+    """:func:`read_rows` of one block of lines whose first is line ``first`` of ``path``."""
+    reader = csv.reader(block, strict=True)
+    done = 0  # lines of the block consumed so far
+    while True:
+        try:
+            fields = next(reader)
+        except StopIteration:
+            return
+        except csv.Error:
+            parse_line(block[done], f"{path}: row {first + done}", error)  # raises, naming the problem
+            raise error(f"{path}: row {first + done}, field '': unterminated quote") from None
+        if reader.line_num - done > 1:  # a quote opened on this line and closed on a later one
+            raise error(f"{path}: row {first + done}, field '': unterminated quote (a quoted field must end "
+                        "on its own line)")
+        number, done = first + done, reader.line_num
+        if not fields or not "".join(fields).strip() or (comments and fields[0].lstrip().startswith("#")):
+            continue
+        yield number, fields
+
+
+def plain_values(block: list[str], width: int, columns: Sequence[int]) -> np.ndarray | None:
+    """(len(block), len(columns)) values of a block of plain CSV lines, converted by numpy's C reader,
+    or None when the block is not plain: a quote, a ``#``, a line without exactly ``width`` fields,
+    a line over the field limit, or a value that is not a finite number. The caller then reads the
+    block line by line (:func:`block_rows`), which names the row and field of the problem.
+    """
+    text = "".join(block)
+    if '"' in text or "#" in text or text.count(",") != len(block) * (width - 1):
+        return None
+    if max(map(len, block)) > field_limit():
+        return None
+    try:
+        data = np.loadtxt(block, delimiter=",", usecols=columns, dtype=float, ndmin=2)
+    except ValueError:
+        return None
+    if data.shape[0] != len(block) or not np.isfinite(data).all():  # a blank line skipped, nan or inf
+        return None
+    return data
+
+
+class RowNames(Sequence):
+    """``"file: row N"`` of every record, made when asked (2 M strings would take 200 MB)."""
+
+    def __init__(self, path: str | os.PathLike, lines: np.ndarray):
+        self.path, self.lines = str(path), np.asarray(lines)
+
+    def __len__(self) -> int:
+        return int(self.lines.size)
+
+    def __getitem__(self, k):
+        if isinstance(k, slice):
+            return [self[i] for i in range(*k.indices(len(self)))]
+        return f"{self.path}: row {int(self.lines[k])}"

@@ -20,7 +20,7 @@ from pathlib import Path
 import numpy as np
 
 from spherecal.correction.atomic import atomic_write_text
-from spherecal.correction.csv_rows import field_limit, is_skipped, iter_lines, parse_line
+from spherecal.correction.csv_rows import is_skipped, iter_lines, parse_line, plain_values
 from spherecal.correction.model import RobotModel
 from spherecal.correction.samples import LIMIT_TOL, Dataset, DatasetError
 
@@ -127,18 +127,12 @@ class _Reader:
     def block(self, block: list[str], start: int) -> None:
         """Convert a block of lines (first at file line ``start``) and check it."""
         width = len(self.columns)
-        text = "".join(block)
-        plain = ('"' not in text and "#" not in text and text.count(",") == len(block) * (width - 1)
-                 and max(map(len, block)) <= field_limit())
-        if plain:  # numpy's C reader; a row with too few fields or a bad value: the careful reading names it
-            try:
-                data = np.loadtxt(block, delimiter=",", usecols=range(1, width), dtype=float, ndmin=2)
-            except ValueError:
-                plain = False
+        data = plain_values(block, width, range(1, width))
+        plain = data is not None
         if plain:
             labels = [line[: line.find(",")].strip() for line in block]
             rows = np.arange(start, start + len(block))
-            plain = data.shape[0] == len(block) and bool(np.isfinite(data).all()) and "" not in labels
+            plain = "" not in labels
         if not plain:
             labels, data, rows = self._careful(block, start)
         if len(labels) == 0:

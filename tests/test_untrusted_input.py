@@ -245,3 +245,23 @@ def test_fixtures_refuse_millimetres_in_a_metres_file(tmp_path, text, message) -
 def test_more_out_of_range_options(tmp_path, capsys, monkeypatch, argv, message) -> None:
     monkeypatch.chdir(tmp_path)
     refused(argv, tmp_path, capsys, message)
+
+
+def test_joint_csv_fast_and_careful_readers_agree(tmp_path, panda) -> None:
+    # joints in another order between other columns, nanosecond stamps; a comment sends a block line by line
+    q = panda.random_configurations(30, np.random.default_rng(5))
+    order = [3, 0, 6, 1, 5, 2, 4]
+    head = ["stamp", "finger", "fixture"] + [f"panda_joint{j + 1}" for j in order]
+    body = [",".join([str(10**18 + k * 10**6), "0.04", "P1" if k < 15 else "P2"] + [repr(float(q[k, j])) for j in order])
+            for k in range(30)]
+    plain = tmp_path / "plain.csv"
+    plain.write_text("\n".join([",".join(head)] + body) + "\n")
+    careful = tmp_path / "careful.csv"
+    careful.write_text("\n".join([",".join(head)] + body[:10] + ["# a comment", '"' + body[10].replace(",", '",', 1)]
+                                 + body[11:]) + "\n")
+    a, b = read_joint_csv(plain, panda), read_joint_csv(careful, panda)
+    np.testing.assert_array_equal(a.q, q)
+    np.testing.assert_array_equal(a.t, (10**18 + np.arange(30) * 10**6) * 1e-9)
+    for name in ("q", "t", "labels"):
+        np.testing.assert_array_equal(getattr(a, name), getattr(b, name))
+    assert a.rows[12] == f"{plain}: row 14" and b.rows[12] == f"{careful}: row 15"
