@@ -252,8 +252,8 @@ def test_joint_csv_fast_and_careful_readers_agree(tmp_path, panda) -> None:
     q = panda.random_configurations(30, np.random.default_rng(5))
     order = [3, 0, 6, 1, 5, 2, 4]
     head = ["stamp", "finger", "fixture"] + [f"panda_joint{j + 1}" for j in order]
-    body = [",".join([str(10**18 + k * 10**6), "0.04", "P1" if k < 15 else "P2"] + [repr(float(q[k, j])) for j in order])
-            for k in range(30)]
+    body = [",".join([str(10**18 + k * 10**6), "0.04", "P1" if k < 15 else "P2"]
+                     + [repr(float(q[k, j])) for j in order]) for k in range(30)]
     plain = tmp_path / "plain.csv"
     plain.write_text("\n".join([",".join(head)] + body) + "\n")
     careful = tmp_path / "careful.csv"
