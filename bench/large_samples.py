@@ -9,7 +9,9 @@ share of a core the process got):
 
 - ``read``: the whole file;
 - ``bad row 2``: the same file with a bad value on row 2 (must fail at once, not after reading all);
-- ``baseline``: the subprocess importing the reader and loading the robot, reading nothing.
+- ``baseline``: the subprocess importing the reader and loading the robot, reading nothing;
+- ``import csv``: the same file through ``identification.importers.read_joint_csv`` (``spherecal
+  import --format csv``).
 
 Prints a table, the machine load (``uptime``) and writes ``bench/large_samples.json``. Targets: 2 M
 rows in <= 15 s and <= 1 GB peak.
@@ -38,8 +40,10 @@ import json, resource, sys, time
 sys.path.insert(0, {root!r})
 from spherecal.correction import load_robot
 from spherecal.correction.samples_csv import read_samples
-from spherecal.correction.samples import DatasetError
+from spherecal.correction.samples import DatasetError  # RecordingError is one
 model = load_robot("panda")
+if {importer!r}:  # `spherecal import --format csv` reads the same file as a joint recording
+    from spherecal.identification.importers import read_joint_csv as read_samples
 usage0 = resource.getrusage(resource.RUSAGE_SELF)
 cpu0 = usage0.ru_utime + usage0.ru_stime
 clock = time.perf_counter()
@@ -47,7 +51,7 @@ outcome = "skipped"
 if {path!r}:
     try:
         dataset = read_samples({path!r}, model)
-        outcome = f"{{dataset.n_samples}} samples"
+        outcome = f"{{len(dataset.q)}} samples"
     except DatasetError as error:
         outcome = f"error: {{error}}"[:160]
 seconds = time.perf_counter() - clock
@@ -77,11 +81,11 @@ def write_file(path: Path, rows: int, seed: int = 0) -> None:
             handle.writelines(lines)
 
 
-def measure(path: str, root: str) -> dict:
+def measure(path: str, root: str, importer: bool = False) -> dict:
     """Run one reading in a fresh interpreter; its JSON line."""
     start = time.perf_counter()
-    done = subprocess.run([sys.executable, "-c", CHILD.format(root=root, path=path)], capture_output=True, text=True,
-                          check=True)
+    code = CHILD.format(root=root, path=path, importer=importer)
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
     result = json.loads(done.stdout.strip().splitlines()[-1])
     result["process_seconds"] = time.perf_counter() - start
     return result
@@ -93,6 +97,7 @@ def main() -> None:
     parser.add_argument("--reader-root", default=str(ROOT),
                         help="source tree whose reader is measured (default: this one)")
     parser.add_argument("--out", default=str(HERE / "large_samples.json"))
+    parser.add_argument("--no-import", action="store_true", help="skip the `import --format csv` reader")
     args = parser.parse_args()
     with tempfile.TemporaryDirectory() as folder:
         path = Path(folder) / "samples.csv"
@@ -109,6 +114,8 @@ def main() -> None:
                 target.write(line)
         cases = {"baseline": "", "read": str(path), "bad row 2": str(bad)}
         results = {name: measure(file, args.reader_root) for name, file in cases.items()}
+        if not args.no_import:
+            results["import csv"] = measure(str(path), args.reader_root, importer=True)
     load = subprocess.run(["uptime"], capture_output=True, text=True).stdout.strip()
     print(f"file: {args.rows} rows, {size_mb:.0f} MB (written in {written:.1f} s); reader: {args.reader_root}")
     print(f"{'case':<10} {'wall [s]':>9} {'CPU [s]':>8} {'peak RSS [MB]':>14}  outcome")
