@@ -241,13 +241,25 @@ class Plant:
         return self.site_positions(np.atleast_2d(q), np.array([self.tool_site]))[:, 0]
 
 
+def no_log_file() -> None:
+    """Keep MuJoCo's warnings off the disk: by default its first warning of a kind writes
+    ``MUJOCO_LOG.TXT`` into the current working directory (the user's folder); they still go to
+    the console. Idempotent; called by :func:`build_plant`."""
+    config = mujoco.MjLogConfig.get()
+    if config.logto_file:
+        config.logto_file = False
+        config.set()
+
+
 def build_plant(
     model: RobotModel,
     fixtures: dict[str, np.ndarray] | None = None,
     markers: np.ndarray | None = None,
     **options,
 ) -> Plant:
-    """Build the MuJoCo plant of ``model`` (see :func:`build_mjcf` for the arguments)."""
+    """Build the MuJoCo plant of ``model`` (see :func:`build_mjcf` for the arguments); MuJoCo writes
+    no log file from then on (:func:`no_log_file`)."""
+    no_log_file()
     fixtures = {str(k): np.asarray(v, dtype=float).reshape(3) for k, v in (fixtures or {}).items()}
     mjcf = build_mjcf(model, fixtures, markers, **options)
     mj_model = mujoco.MjModel.from_xml_string(mjcf)

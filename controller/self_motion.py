@@ -12,6 +12,7 @@ of the fixture, never the joint readings.
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass, field, replace
 
 import mujoco
@@ -52,6 +53,8 @@ BASE_RADIUS = 0.12
 NOISE_PERIOD = 0.05
 #: How often the exploration is asked whether its goal is reached [s].
 CHECK_PERIOD = 0.05
+#: How often the optional progress callback is called [s of simulated time].
+PROGRESS_PERIOD = 0.1
 
 
 class UnreachableFixtureError(SpherecalError):
@@ -210,6 +213,7 @@ def collect_self_motion(
     fixtures: dict[str, np.ndarray],
     rng: np.random.Generator,
     settings: SelfMotionSettings | None = None,
+    progress: Callable[[float], None] | None = None,
 ) -> SelfMotionRun:
     """Run the protocol at every fixture and return what was recorded.
 
@@ -219,6 +223,8 @@ def collect_self_motion(
         fixtures: name -> (3,) true centre in the world [m], visited in order.
         rng: seeded generator (exploration, sample choice, noise, IK restarts).
         settings: :class:`SelfMotionSettings` (defaults when None).
+        progress: called with the simulated seconds done since its last call (every
+            :data:`PROGRESS_PERIOD` of simulated time, and at the end of each fixture), or None.
 
     Raises:
         FixtureInsideRobotError, UnreachableFixtureError: before anything is simulated.
@@ -238,6 +244,7 @@ def collect_self_motion(
     violation, deviation, rms, excess = (np.zeros(len(names)) for _ in range(4))
     m, d = plant.mj_model, plant.mj_data
     tool_id = plant.tool_site
+    report_every = max(int(round(PROGRESS_PERIOD / TIMESTEP)), 1)
     for k, name in enumerate(names):
         exploration = make_exploration(settings.mode, nominal_model, fixtures[name], rng, settings.speed)
         period = int(round((COVERAGE_PERIOD if settings.mode == "coverage" else RANDOM_PERIOD) / TIMESTEP))
@@ -253,6 +260,7 @@ def collect_self_motion(
         tool_log = np.empty((steps, 3))
         gap_log = np.empty(steps)
         next_decision = 0
+        reported = 0
         for s in range(steps):
             t = s * TIMESTEP
             if compliance is not None:
@@ -268,6 +276,11 @@ def collect_self_motion(
                 next_decision = s + period
             d.ctrl[:n] = controller.step(q, ramp(t, exploration.command(q)))
             mujoco.mj_step2(m, d)
+            if progress is not None and s + 1 - reported >= report_every:
+                progress((s + 1 - reported) * TIMESTEP)
+                reported = s + 1
+        if progress is not None and steps > reported:
+            progress((steps - reported) * TIMESTEP)
         plant.release()
         offset = k * settings.seconds
         chosen = np.sort(rng.choice(steps, size=keep, replace=False))

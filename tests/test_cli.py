@@ -62,3 +62,18 @@ def test_an_os_error_is_one_line_and_exit_1(capsys, monkeypatch) -> None:
     assert cli.main(["export", "panda", "--format", "yaml", "--out", "/root/locked/out.yaml"]) == 1
     err = capsys.readouterr().err
     assert err == "spherecal export: error: /root/locked/out.yaml: Permission denied\n"
+
+
+def test_readme_steps_run_in_the_venv_and_write_only_ignored_files() -> None:
+    # the steps called a bare `spherecal`, which is not on PATH after the README's two set-up commands
+    readme = (ROOT / "README.md").read_text()
+    block = readme.split("The whole method, step by step", 1)[1].split("```bash\n", 1)[1].split("```", 1)[0]
+    lines = [line for line in block.splitlines() if line.strip()]
+    assert len(lines) == 4 and all(line.startswith(".venv/bin/spherecal ") for line in lines), lines
+    written = re.findall(r"--(?:out|rrd) (\S+)", block)
+    written = [f"{w}/samples.csv" if "." not in w else w for w in written] + ["spherecal-demo/demo.rrd", "shot.png"]
+    if not (ROOT / ".git").exists():
+        return
+    for path in written:
+        check = subprocess.run(["git", "check-ignore", "-q", path], cwd=ROOT)
+        assert check.returncode == 0, f"{path} is not ignored by git"

@@ -17,7 +17,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from spherecal.correction import RobotModel, registered_errors, tool_point
-from spherecal.correction.layout import ParameterLayout
+from spherecal.correction.layout import ANGLE, ParameterLayout, ParamKind
 
 #: Validation configurations drawn uniformly inside the joint limits (the paper's "large random set").
 RANDOM_CONFIGURATIONS = 5000
@@ -178,11 +178,78 @@ class ParameterDeviations:
 
     def format(self) -> str:
         """One line per parameter: nominal and calibrated deviation from the truth (mm or deg)."""
-        nominal, calibrated = self.display(self.nominal), self.display(self.calibrated)
-        lines = [f"{'parameter':<11} {'unit':<4} {'nominal-truth':>14} {'calibrated-truth':>17}"]
-        for name, a, b in zip(self.names, nominal, calibrated, strict=True):
-            lines.append(f"{name:<11} {'deg' if self.is_angle(name) else 'mm':<4} {a:14.4f} {b:17.4f}")
-        return "\n".join(lines)
+        return _format_rows(self.names, [self.layout.kinds[self.layout.index(n)] for n in self.names],
+                            self.display(self.nominal), self.display(self.calibrated))
+
+    def identifiable(self, fixed: dict[str, str]) -> DeviationRows:
+        """The rows a calibration can be judged on: parameters fixed at nominal (``fixed``: name ->
+        reason, the calibrated file's ``calibration.fixed``) are left out and listed as held, and a
+        length fixed as "redundant with" one other length is added to it (``d7 + tool_z``)."""
+        groups = sum_groups(fixed, self.layout)
+        names, rows = [], []
+        for name in self.names:
+            if name not in fixed:
+                names.append(" + ".join(groups.get(name, [name])))
+                rows.append([self.layout.index(m) for m in groups.get(name, [name])])
+        return DeviationRows(
+            names=tuple(names),
+            kinds=tuple(self.layout.kinds[r[0]] for r in rows),
+            nominal=np.array([self.nominal[r].sum() for r in rows]),
+            calibrated=np.array([self.calibrated[r].sum() for r in rows]),
+            held=tuple(n for n in self.names if n in fixed),
+        )
+
+
+@dataclass(frozen=True)
+class DeviationRows:
+    """Deviations from the truth of what a calibration determines (from :meth:`ParameterDeviations.identifiable`).
+
+    Attributes:
+        names: (R,) row names: a parameter, or a sum of lengths only identifiable together (``d7 + tool_z``).
+        kinds: (R,) the rows' :class:`ParamKind` (length, angle).
+        nominal, calibrated: (R,) nominal and calibrated minus truth [m, rad].
+        held: parameters held at nominal, not compared.
+    """
+
+    names: tuple[str, ...]
+    kinds: tuple[ParamKind, ...]
+    nominal: np.ndarray
+    calibrated: np.ndarray
+    held: tuple[str, ...] = ()
+
+    def is_angle(self, name: str) -> bool:
+        """True for an angular row (shown in degrees), false for a length (mm)."""
+        return self.kinds[self.names.index(name)] is ANGLE
+
+    def display(self, values: np.ndarray) -> np.ndarray:
+        """(R,) values in display units: mm for lengths, degrees for angles."""
+        return np.asarray(values) * np.array([k.display_scale for k in self.kinds])
+
+    def format(self) -> str:
+        """One line per row (mm or deg), then the parameters held at nominal."""
+        text = _format_rows(self.names, self.kinds, self.display(self.nominal), self.display(self.calibrated))
+        if self.held:
+            text += f"\nheld at nominal (not determined by the data, not compared): {', '.join(self.held)}"
+        return text
+
+
+def _format_rows(names, kinds, nominal, calibrated) -> str:
+    lines = [f"{'parameter':<14} {'unit':<4} {'nominal-truth':>14} {'calibrated-truth':>17}"]
+    for name, kind, a, b in zip(names, kinds, nominal, calibrated, strict=True):
+        lines.append(f"{name:<14} {kind.display_unit:<4} {a:14.4f} {b:17.4f}")
+    return "\n".join(lines)
+
+
+def sum_groups(fixed: dict[str, str], layout: ParameterLayout) -> dict[str, list[str]]:
+    """Identified length -> the lengths only identifiable in its sum, itself last (``{"tool_z": ["d7",
+    "tool_z"]}``), from the reasons ``"redundant with <one length>"`` that calibration gives."""
+    groups: dict[str, list[str]] = {}
+    for name, reason in fixed.items():
+        partner = reason.removeprefix("redundant with ").strip()
+        if reason.startswith("redundant with ") and "," not in partner and partner in layout.names:
+            if not (layout.is_angle(name) or layout.is_angle(partner)):
+                groups.setdefault(partner, []).append(name)
+    return {k: [*v, k] for k, v in groups.items()}
 
 
 def parameter_deviations(nominal: RobotModel, calibrated: RobotModel, truth: RobotModel) -> ParameterDeviations:

@@ -17,7 +17,8 @@ from spherecal.correction.samples_csv import format_samples
 
 from .experiment import calibrate_from, default_fixtures, motion_set, nominal_robot, true_robot
 from .mocap import MARKER_NOISE, MocapMeasurement, write_mocap_csv
-from .pipeline import RANDOM_SET, ValidationReport, record_validation, validate_models
+from .pipeline import RANDOM_SET, ValidationReport, record_parameters, record_validation, validate_models
+from .progress import progress_bar
 from .provenance import comment_block, provenance
 from .recording import Recording
 
@@ -43,6 +44,7 @@ class DemoConfig:
         out: output folder.
         rrd: write ``demo.rrd`` into ``out``.
         spawn: stream to a live viewer.
+        quiet: no progress bars (they are off anyway when stderr is not a terminal).
     """
 
     seed: int = 0
@@ -55,6 +57,7 @@ class DemoConfig:
     out: Path = Path("spherecal-demo")
     rrd: bool = True
     spawn: bool = False
+    quiet: bool = False
 
 
 @dataclass
@@ -84,7 +87,11 @@ def run_demo(config: DemoConfig, say=print) -> DemoResult:
         f"[1/4] true robot: nominal Panda perturbed (seed {config.seed}); self-motion ({config.source}) at "
         f"{', '.join(fixtures)}, {config.samples} samples each, fixture noise {config.noise * 1e3:.2f} mm"
     )
-    data = motion_set(truth, nominal, fixtures, config.samples, config.noise, rng, config.source, config.seconds)
+    total = config.seconds * len(fixtures)
+    with progress_bar(total, "self-motion", "s simulated", config.quiet or config.source != "mujoco", 1) as advance:
+        data = motion_set(
+            truth, nominal, fixtures, config.samples, config.noise, rng, config.source, config.seconds, advance
+        )
     timings["motion"] = time.perf_counter() - clock
 
     say(f"[2/4] calibrating from {len(data.dataset.q)} samples, fixture distances known")
@@ -100,19 +107,23 @@ def run_demo(config: DemoConfig, say=print) -> DemoResult:
     )
     clock = time.perf_counter()
     self_motion = {name: data.dataset.for_fixture(name) for name in data.dataset.fixture_names}
-    report = validate_models(
-        nominal,
-        calibrated,
-        rng,
-        truth=truth,
-        self_motion=self_motion,
-        configurations=config.configurations,
-        noise=config.mocap_noise,
-    )
+    total = config.configurations + len(data.dataset.q)
+    with progress_bar(total, "validation", "configurations", config.quiet) as advance:
+        report = validate_models(
+            nominal,
+            calibrated,
+            rng,
+            truth=truth,
+            self_motion=self_motion,
+            configurations=config.configurations,
+            noise=config.mocap_noise,
+            fixed=calibration.fixed,
+            progress=advance,
+        )
     timings["validation"] = time.perf_counter() - clock
     result = DemoResult(truth, nominal, calibrated, report, calibration, timings=timings)
     say(report.format())
-    say(deviation_summary(report, calibration.identified))
+    say(deviation_summary(report))
     say(summary(report))
 
     say(f"[4/4] writing results to {config.out}/")
@@ -133,16 +144,21 @@ def summary(report: ValidationReport) -> str:
     )
 
 
-def deviation_summary(report: ValidationReport, identified: tuple[str, ...]) -> str:
-    """RMS deviation from the truth of the identified lengths [mm] and angles [deg] (the paper's Fig. 3)."""
+def deviation_summary(report: ValidationReport) -> str:
+    """RMS deviation from the truth of the identified lengths [mm] and angles [deg] (the paper's Fig. 3).
+
+    The rows are those of ``report.deviations``: parameters held at nominal are left out, and a
+    length only identifiable in a sum counts as that sum (``d7 + tool_z``)."""
     d = report.deviations
-    pick = np.array([name in identified for name in d.names])
-    angle = np.array([d.is_angle(name) for name in d.names])
+    angle = np.array([d.is_angle(name) for name in d.names], dtype=bool)
     parts = []
-    for label, mask, unit in (("lengths", pick & ~angle, "mm"), ("angles", pick & angle, "deg")):
+    for label, mask, unit in (("lengths", ~angle, "mm"), ("angles", angle, "deg")):
         nominal, calibrated = (np.sqrt(np.mean(d.display(v)[mask] ** 2)) for v in (d.nominal, d.calibrated))
-        parts.append(f"{label} {nominal:.4f} -> {calibrated:.4f} {unit}")
-    return f"identified parameters, RMS deviation from the truth (nominal -> calibrated): {'; '.join(parts)}"
+        parts.append(f"{mask.sum()} {label} {nominal:.4f} -> {calibrated:.4f} {unit}")
+    return (
+        f"identified parameters, RMS deviation from the truth (nominal -> calibrated; held at nominal left out, "
+        f"{' and '.join(n for n in d.names if '+' in n) or 'no sums'} as sums): {'; '.join(parts)}"
+    )
 
 
 def _inputs(config: DemoConfig) -> dict:
@@ -209,20 +225,27 @@ def write_results(config: DemoConfig, result: DemoResult, data, fixtures: dict[s
 
 def write_recording(config: DemoConfig, result: DemoResult, data, fixtures: dict[str, np.ndarray],
                     path: Path | None = None) -> Path | None:
-    """The demo's Rerun recording (entity paths in :mod:`validation.recording`), into ``path``."""
+    """The demo's Rerun recording (entity paths and layout in :mod:`validation.recording`), into ``path``
+    (the staged ``demo.rrd``), or a live viewer only."""
 
-    recording = Recording(path, spawn=config.spawn)
+    recording = Recording(path, spawn=config.spawn, title="True robot (simulated) and fixtures, self-motion on 'time'")
     try:
         recording.fixtures(list(fixtures), np.array(list(fixtures.values())))
         trajectory = data.trajectory
         if trajectory is not None:
             recording.self_motion(result.truth, trajectory.trajectory_t, trajectory.trajectory_q)
-        q, labels = data.dataset.q, data.dataset.labels
-        recording.samples(tool_point(result.truth, q), labels)
+        dataset = data.dataset
+        recording.samples(tool_point(result.truth, dataset.q), dataset.labels)
         record_validation(recording, result.report, {"nominal": result.nominal, "calibrated": result.calibrated})
-        recording.series("plots/residual/nominal", result.calibration.residual_before * 1e3)
-        recording.series("plots/residual/calibrated", result.calibration.residual_after * 1e3)
-        recording.coverage(q, result.truth.lower, result.truth.upper)
+        calibration = result.calibration
+        recording.residuals(calibration.residual_before, calibration.residual_after)
+        record_parameters(recording, result.nominal, result.calibrated, calibration.identified, calibration.std,
+                          calibration.fixed, result.truth)
+        per_fixture = {name: dataset.for_fixture(name) for name in dataset.fixture_names}
+        recording.coverage(per_fixture, result.truth.lower, result.truth.upper)
+        recording.text("calibration", calibration.summary(), "Calibration table (mm, deg)")
+        recording.text("deviations", deviation_summary(result.report) + "\n\n" + result.report.deviations.format(),
+                       "Parameter deviations from the truth (mm, deg)")
     except BaseException:
         recording.abort()
         raise

@@ -70,6 +70,7 @@ def motion_set(
     rng: np.random.Generator,
     source: str = "synthetic",
     seconds: float = 20.0,
+    progress=None,
 ) -> MotionData:
     """Calibration samples at every fixture on the true robot.
 
@@ -83,24 +84,25 @@ def motion_set(
         source: ``"synthetic"`` (kinematic projection onto the self-motion manifold) or ``"mujoco"``
             (self-motion through the QP controller on the MuJoCo plant).
         seconds: simulated time per fixture [s] (MuJoCo).
+        progress: MuJoCo only: called with the simulated seconds done since its last call, or None.
     """
     if source == "synthetic":
 
         dataset, _ = make_dataset(truth, fixtures, samples, rng, noise)
         return MotionData(dataset, fixture_spec(fixtures, len(fixtures) > 1))
     if source == "mujoco":
-        return _mujoco_motion(truth, nominal, fixtures, samples, noise, rng, seconds)
+        return _mujoco_motion(truth, nominal, fixtures, samples, noise, rng, seconds, progress)
     raise ValueError(f"unknown motion source {source!r}, expected 'synthetic' or 'mujoco'")
 
 
-def _mujoco_motion(truth, nominal, fixtures, samples, noise, rng, seconds) -> MotionData:
+def _mujoco_motion(truth, nominal, fixtures, samples, noise, rng, seconds, progress=None) -> MotionData:
     from spherecal.controller.self_motion import (  # MuJoCo: only a simulation needs it (start-up)
         SelfMotionSettings,
         collect_self_motion,
     )
 
     settings = SelfMotionSettings(seconds=seconds, samples=samples, noise=noise)
-    run = collect_self_motion(truth, nominal, fixtures, rng, settings)
+    run = collect_self_motion(truth, nominal, fixtures, rng, settings, progress=progress)
     return MotionData(run.dataset(), fixture_spec(fixtures, len(fixtures) > 1), run)
 
 

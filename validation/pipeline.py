@@ -15,11 +15,12 @@ from spherecal.correction import RobotModel, tool_point
 from .compare import (
     RANDOM_CONFIGURATIONS,
     Comparison,
-    ParameterDeviations,
+    DeviationRows,
     ValidationSet,
     compare,
     format_comparisons,
     parameter_deviations,
+    sum_groups,
 )
 from .mocap import MARKER_NOISE, MocapMeasurement, SimulatedMocap, random_mocap_transform
 
@@ -32,14 +33,14 @@ class ValidationReport:
 
     Attributes:
         comparisons: one per validation set (the random workspace set first).
-        deviations: parameter deviations from the truth, when the truth is known.
+        deviations: deviations from the truth of what the calibration determines, when the truth is known.
         sets: the validation sets themselves (for recordings).
         noise: per-marker noise of the simulated mocap [m], or None for a recording.
         source: ``"simulated"`` or the mocap file.
     """
 
     comparisons: list[Comparison]
-    deviations: ParameterDeviations | None
+    deviations: DeviationRows | None
     sets: list[ValidationSet] = field(repr=False)
     noise: float | None
     source: str
@@ -81,6 +82,7 @@ class ValidationReport:
                 "names": list(d.names),
                 "nominal_minus_truth": d.nominal.tolist(),
                 "calibrated_minus_truth": d.calibrated.tolist(),
+                "held_at_nominal": list(d.held),
             }
         return out
 
@@ -94,6 +96,8 @@ def validate_models(
     self_motion: dict[str, np.ndarray] | None = None,
     configurations: int = RANDOM_CONFIGURATIONS,
     noise: float = MARKER_NOISE,
+    fixed: dict[str, str] | None = None,
+    progress=None,
 ) -> ValidationReport:
     """Validate a calibration against motion capture.
 
@@ -110,12 +114,18 @@ def validate_models(
         self_motion: fixture name -> (K, n) recorded self-motion configurations [rad].
         configurations: number of random workspace configurations (simulation).
         noise: per-marker noise std of the simulated mocap [m].
+        fixed: parameters the calibration held at nominal (name -> reason); default: the calibrated
+            file's ``calibration.fixed``. They are left out of ``deviations``, and a length only
+            identifiable in a sum is compared as that sum (``d7 + tool_z``).
+        progress: called with the number of configurations measured after each set, or None.
 
     Returns:
         The report; ``deviations`` is set when ``truth`` is.
     """
     models = {"nominal": nominal, "calibrated": calibrated}
-    deviations = None if truth is None else parameter_deviations(nominal, calibrated, truth)
+    if fixed is None:
+        fixed = dict((calibrated.extras.get("calibration") or {}).get("fixed") or {})
+    deviations = None if truth is None else parameter_deviations(nominal, calibrated, truth).identifiable(fixed)
     if measurement is not None:
         exact = None
         if truth is not None:
@@ -131,16 +141,82 @@ def validate_models(
     for name, q in named.items():
         measured = mocap.measure(q, rng)
         sets.append(ValidationSet(name, q, measured.tool, measured.exact_tool))
+        if progress is not None:
+            progress(len(q))
     return ValidationReport(compare(models, sets), deviations, sets, noise, "simulated")
 
 
 def record_validation(recording, report: ValidationReport, models: dict[str, RobotModel]) -> None:
-    """Log a validation into a :class:`validation.recording.Recording`: the first set's measured and
-    predicted points with error vectors (Fig. 8), and its per-configuration errors per model [mm]
-    under ``plots/error/<model>`` (against the mocap, else against the exact tool point)."""
+    """Log a validation into a :class:`validation.recording.Recording`: each model's tool points on the
+    first set coloured by their error (against the exact tool point in a simulation, else the mocap),
+    with histograms, and the printed table."""
     first, comparison = report.sets[0], report.comparisons[0]
-    reference = first.measured if first.measured is not None else first.exact
-    recording.validation(reference, {key: tool_point(model, first.q) for key, model in models.items()})
-    errors = comparison.errors_mocap or comparison.errors_exact
-    for key, values in errors.items():
-        recording.series(f"plots/error/{key}", values * 1e3)
+    errors = comparison.errors_exact or comparison.errors_mocap
+    against = "the true tool point" if comparison.errors_exact else "the mocap"
+    top = max(float(np.quantile(e, 0.99)) for e in errors.values()) * 1e3  # one colour scale for all models
+    for key, model in models.items():
+        recording.workspace_errors(key, tool_point(model, first.q), errors[key], f"{against} ({first.name})", top)
+    text = report.format()
+    if report.deviations is not None:
+        text += "\n\nparameter deviations from the truth:\n" + report.deviations.format()
+    recording.text("validation", text, "Validation table (mm)")
+
+
+def record_validate_run(recording, report: ValidationReport, models: dict[str, RobotModel], drawn: str) -> None:
+    """What ``spherecal validate`` records: the robot ``models[drawn]`` through the self-motion sets
+    (else the first 300 configurations of the first set, 0.5 s each) on ``time``, the fixture centres
+    and parameter changes of the calibrated file's ``calibration:`` block when it has one, the errors,
+    and the joint coverage per self-motion set."""
+    calibrated = models["calibrated"]
+    block = calibrated.extras.get("calibration") or {}
+    centres = block.get("fixture_centres") or {}
+    if centres:
+        recording.fixtures(list(centres), np.array(list(centres.values()), dtype=float))
+    motion = [s for s in report.sets if s.name.startswith("self-motion ")]
+    if motion:
+        q = np.concatenate([s.q for s in motion])
+        recording.self_motion(models[drawn], np.arange(len(q)) * 0.02, q)
+    else:
+        q = report.sets[0].q[:300]
+        recording.self_motion(models[drawn], np.arange(len(q)) * 0.5, q)
+    record_validation(recording, report, {"nominal": models["nominal"], "calibrated": calibrated})
+    if block.get("identified"):
+        truth = models.get("truth")
+        record_parameters(recording, models["nominal"], calibrated, block["identified"], block.get("std") or {},
+                          block.get("fixed") or {}, truth)
+    if motion:
+        per_fixture = {s.name.removeprefix("self-motion "): s.q for s in motion}
+        recording.coverage(per_fixture, calibrated.lower, calibrated.upper)
+
+
+def record_parameters(
+    recording,
+    nominal: RobotModel,
+    calibrated: RobotModel,
+    identified: list[str],
+    std: dict[str, float],
+    fixed: dict[str, str],
+    truth: RobotModel | None = None,
+) -> None:
+    """Log the identified parameters' changes (calibrated minus nominal) with their std, and the true
+    changes in a simulation; a length only identifiable in a sum is shown as that sum (``d7 + tool_z``).
+
+    Args:
+        recording: a :class:`validation.recording.Recording`.
+        nominal, calibrated: the models.
+        identified: names of the identified parameters.
+        std: name -> predicted std [m, rad].
+        fixed: name -> reason, the parameters held at nominal.
+        truth: the true robot, or None.
+    """
+    groups = sum_groups(fixed, nominal.layout)
+    index = {n: i for i, n in enumerate(nominal.param_names)}
+    names, change, spread, true = [], [], [], []
+    for name in identified:
+        members = groups.get(name, [name])
+        names.append(" + ".join(members))
+        change.append(sum(calibrated.params[index[m]] - nominal.params[index[m]] for m in members))
+        spread.append(float(std.get(name, np.nan)))
+        if truth is not None:
+            true.append(sum(truth.params[index[m]] - nominal.params[index[m]] for m in members))
+    recording.parameter_changes(names, np.array(change), np.array(spread), None if truth is None else np.array(true))

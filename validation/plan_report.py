@@ -52,11 +52,10 @@ def format_plan(result) -> str:
 
 def write_recording(path: str, result, provenance: str = "") -> str:
     """The candidates coloured by predicted error alone (green good, red poor, grey unreachable),
-    the chosen set as larger points, the printed plan and its provenance as text; Rerun is imported
-    only here."""
-
-
-    recording = Recording(path)
+    the chosen set as the fixtures (labelled spheres), the printed plan and its provenance as a
+    table, in the layout of every recording (:mod:`validation.blueprint`)."""
+    title = "Candidate fixtures, coloured by predicted error"
+    recording = Recording(path, application_id="spherecal_plan", title=title)
     try:
         rr = recording.rr
         surveys = result.surveys
@@ -70,13 +69,14 @@ def write_recording(path: str, result, provenance: str = "") -> str:
             colours[ok] = np.stack([255 * share, 255 * (1 - share), 40 + 0 * share], axis=1)
         labels = [f"{s.candidate.name} {v * 1e3:.3f} mm" if np.isfinite(v) else f"{s.candidate.name} unreachable"
                   for s, v in zip(surveys, values, strict=True)]
-        recording.stream.log("plan/candidates", rr.Points3D(positions, colors=colours.astype(np.uint8),
-                                                            labels=labels, radii=0.01), static=True)
+        recording.stream.log("world/candidates", rr.Points3D(positions, colors=colours.astype(np.uint8),
+                                                             labels=labels, radii=0.01), static=True)
+        recording.extend_bounds("world", positions)
         if result.best is not None:
-            chosen = np.array([s.candidate.position for s in surveys if s.candidate.name in result.best.names])
-            recording.stream.log("plan/best", rr.Points3D(chosen, radii=0.025, colors=(40, 120, 220)), static=True)
+            chosen = [s.candidate for s in surveys if s.candidate.name in result.best.names]
+            recording.fixtures([c.name for c in chosen], np.array([c.position for c in chosen]))
         text = f"{provenance}\n\n{format_plan(result)}" if provenance else format_plan(result)
-        recording.stream.log("plan/table", rr.TextDocument(text), static=True)
+        recording.text("plan", text, "The plan: candidates ranked by predicted error (mm)")
     except BaseException:
         recording.abort()
         raise

@@ -1,38 +1,46 @@
 """Rerun recordings of a calibration and its validation (a live viewer or an ``.rrd`` file).
 
-Entity paths (documented in the README, checked by the tests):
+Every recording carries a blueprint (:mod:`validation.blueprint`): a large 3D view of the robot and
+the fixtures first, beside it one tab per kind of result that was logged. Entity paths (documented
+in the README, checked by the tests):
 
-==============================  ==============  ===========  =====================================
-path                            archetype       timeline     rows
-==============================  ==============  ===========  =====================================
-``world/fixtures``              Points3D        static       1 (one point per fixture, labelled)
-``world/robot/links``           LineStrips3D    ``time``     one per logged self-motion step
-``world/robot/tool``            Points3D        ``time``     one per logged self-motion step
-``world/samples``               Points3D        static       1 (true tool points of the samples)
-``validation/measured``         Points3D        static       1 (mocap tool points, base frame)
-``validation/nominal``          Points3D        static       1 (nominal-predicted tool points)
-``validation/calibrated``       Points3D        static       1 (calibrated-predicted tool points)
-``validation/errors/<model>``   Arrows3D        static       1 (predicted -> measured, per point)
-``plots/error/<model>``         Scalars         ``sample``   one per validation configuration [mm]
-``plots/residual``              Scalars         ``sample``   one per calibration sample [mm]
-``coverage/q<i>``               BarChart        static       1 (histogram of joint i over its range)
-==============================  ==============  ===========  =====================================
+===================================  =============  ==========  ======================================
+path                                 archetype      timeline    what
+===================================  =============  ==========  ======================================
+``world/fixtures``                   Ellipsoids3D   static      one labelled sphere per fixture
+``world/robot/arm``                  Capsules3D     ``time``    one capsule per link, per logged step
+``world/robot/tool``                 Points3D       ``time``    the tool point, per logged step
+``world/samples``                    Points3D       static      tool points of the calibration samples
+``errors/<model>/points``            Points3D       static      workspace tool points coloured by error
+``errors/<model>/colour_scale``      Points3D       static      the colour scale, labelled in mm
+``errors/<model>/histogram``         BarChart       static      error histogram [mm]
+``residuals/<before|after>``         BarChart       static      calibration residual histogram [mm]
+``parameters/<lengths|angles>/*``    2D shapes      static      change per parameter, +-1 std, truth
+``coverage/<fixture>``               BarChart       static      share of each joint's range [%]
+``sockets/<fixture>/*``              Points3D       static      predicted tool points at a socket [mm]
+``tables/<name>``                    TextDocument   static      the printed tables
+===================================  =============  ==========  ======================================
 
-Rerun is imported only when a recording is made. Saving a recording with the Python SDK writes
-no analytics file and no notice (a test checks it under an empty HOME); ``RERUN_ANALYTICS=0`` is set
-unless the user set it. The ``rerun`` 0.41 viewer binary (``--spawn``, ``rerun file.rrd``) ignores
-that variable: it stays quiet with ``CI=1`` in its environment or after ``rerun analytics disable``.
+Histograms and bars are static, so they show whatever the timeline selector is on. Rerun is imported
+only when a recording is made. Saving a recording with the Python SDK writes no analytics file and
+no notice (a test checks it under an empty HOME); ``RERUN_ANALYTICS=0`` is set unless the user set
+it. The ``rerun`` 0.41 viewer binary (``--spawn``, ``rerun file.rrd``) ignores that variable: it stays
+quiet with ``CI=1`` in its environment or after ``rerun analytics disable``.
 """
 
 from __future__ import annotations
 
+import json
 import os
 from pathlib import Path
 
 import numpy as np
 
-from spherecal.correction import RobotModel, apply_transform, fit_rigid_transform, link_frames, tool_point
+from spherecal.correction import RobotModel, link_frames, tool_point
 from spherecal.correction.atomic import OutputError
+
+from .blueprint import build_blueprint
+from .recording_shapes import BAR_HEIGHT, capsules, colour_ramp, histogram, parameter_bars
 
 COLOURS = {
     "measured": (30, 30, 30),
@@ -40,6 +48,9 @@ COLOURS = {
     "calibrated": (40, 120, 220),
     "truth": (40, 170, 80),
 }
+FIXTURE_COLOURS = [(250, 170, 20), (160, 80, 200), (20, 170, 170), (200, 90, 60), (90, 160, 40)]
+#: Capsule radius of the links and of the tool segment [m].
+LINK_RADIUS, TOOL_RADIUS = 0.04, 0.012
 
 
 def _rerun():
@@ -52,18 +63,32 @@ def _rerun():
 class Recording:
     """A Rerun recording stream that writes an ``.rrd`` file (atomically, on close) or feeds a viewer.
 
+    What is logged is remembered (``self.contents``) so that :meth:`close` sends a blueprint with a
+    view for each of them, in the same layout for every command.
+
     Args:
         rrd: output file, or None.
         spawn: also start (or connect to) a live viewer.
         application_id: the Rerun application name.
+        title: name of the main 3D view.
     """
 
-    def __init__(self, rrd: str | os.PathLike | None = None, spawn: bool = False, application_id: str = "spherecal"):
+    def __init__(
+        self,
+        rrd: str | os.PathLike | None = None,
+        spawn: bool = False,
+        application_id: str = "spherecal",
+        title: str = "Robot and fixtures",
+    ):
         if rrd is None and not spawn:
             raise ValueError("a recording needs an .rrd path or spawn=True")
         self.rr = _rerun()
         self.stream = self.rr.RecordingStream(application_id)
+        self.application_id = application_id
         self.path = None if rrd is None else Path(rrd)
+        self.contents: dict[str, dict[str, str]] = {"world": {}}
+        self.title = title
+        self.bounds: dict[str, np.ndarray] = {}
         self._tmp = None
         if self.path is not None:
             self._tmp = self.path.with_name(f".{self.path.name}.tmp")
@@ -76,101 +101,218 @@ class Recording:
         if spawn:
             self.stream.spawn(connect=self.path is None)
 
+    def _note(self, section: str, key: str, name: str) -> None:
+        self.contents.setdefault(section, {})[key] = name
+
+    def extend_bounds(self, origin: str, points: np.ndarray) -> None:
+        """Grow the (2, 3) bounding box of a 3D view's contents (its camera is aimed at it) [m]."""
+        points = np.asarray(points, dtype=float).reshape(-1, 3)
+        box = np.array([points.min(axis=0), points.max(axis=0)])
+        if origin in self.bounds:
+            box = np.array([np.minimum(box[0], self.bounds[origin][0]), np.maximum(box[1], self.bounds[origin][1])])
+        self.bounds[origin] = box
+
     # --------------------------------------------------------------------- scene
     def fixtures(self, names: list[str], positions: np.ndarray) -> None:
-        """The fixtures (ball centres) as labelled points, base frame [m]; positions (F, 3)."""
+        """The fixtures (ball centres) as labelled spheres, base frame [m]; positions (F, 3)."""
+        positions = np.asarray(positions, dtype=float).reshape(-1, 3)
+        colours = [FIXTURE_COLOURS[k % len(FIXTURE_COLOURS)] for k in range(len(positions))]
+        self.extend_bounds("world", positions)
         self.stream.log(
             "world/fixtures",
-            self.rr.Points3D(np.asarray(positions), labels=list(names), radii=0.012, colors=(250, 170, 20)),
+            self.rr.Ellipsoids3D(
+                centers=positions, half_sizes=np.full((len(positions), 3), 0.02), colors=colours,
+                labels=list(names), show_labels=True, fill_mode="solid",
+            ),
             static=True,
         )
 
     def self_motion(self, model: RobotModel, t: np.ndarray, q: np.ndarray) -> None:
-        """The robot's links (joint origins joined) and tool point per time step.
+        """The robot as a solid arm (a capsule along every link) and its tool point, animated on ``time``.
 
         Args:
-            model: the robot drawn (the true one in a simulation).
+            model: the robot drawn (the true one in a simulation, the calibrated one on real data).
             t: (T,) time stamps [s]; several fixtures may be concatenated (strictly increasing).
             q: (T, n) joint angles [rad].
         """
         origins = link_frames(model, q)[:, :, :3, 3]
         tips = tool_point(model, q)
-        strips = np.concatenate([origins, tips[:, None]], axis=1)
+        self.extend_bounds("world", origins)
+        lengths, translations, quaternions = capsules(np.concatenate([origins, tips[:, None]], axis=1))
+        segments = lengths.shape[1]
         rr = self.rr
-        times = rr.TimeColumn("time", duration=np.asarray(t, dtype=float))
-        self.stream.send_columns(
-            "world/robot/links",
-            indexes=[times],
-            columns=rr.LineStrips3D.columns(strips=strips[:, None]).partition([1] * len(strips)),
+        radii = np.full(segments, LINK_RADIUS)
+        radii[-1] = TOOL_RADIUS
+        colours = np.tile(np.array([205, 205, 210], dtype=np.uint8), (segments, 1))
+        colours[-1] = (250, 140, 30)
+        self.stream.log(
+            "world/robot/arm", rr.Capsules3D.from_fields(radii=radii, colors=colours, fill_mode="solid"), static=True
         )
+        times = rr.TimeColumn("time", duration=np.asarray(t, dtype=float))
+        columns = rr.Capsules3D.columns(
+            lengths=lengths.reshape(-1),
+            translations=translations.reshape(-1, 3),
+            quaternions=quaternions.reshape(-1, 4),
+        )
+        self.stream.send_columns("world/robot/arm", indexes=[times], columns=columns.partition([segments] * len(t)))
+        self.stream.log("world/robot/tool", rr.Points3D.from_fields(radii=0.008, colors=(250, 140, 30)), static=True)
         self.stream.send_columns("world/robot/tool", indexes=[times], columns=rr.Points3D.columns(positions=tips))
 
     def samples(self, points: np.ndarray, labels: list[str] | np.ndarray) -> None:
-        """The recorded calibration samples' tool points (N, 3) [m], labelled by fixture."""
+        """The recorded calibration samples' tool points (N, 3) [m], coloured by fixture."""
+        _, ids = np.unique(np.asarray(labels), return_inverse=True)
+        colours = np.array([FIXTURE_COLOURS[i % len(FIXTURE_COLOURS)] for i in ids], dtype=np.uint8).reshape(-1, 3)
+        self.stream.log("world/samples", self.rr.Points3D(np.asarray(points), radii=0.003, colors=colours), static=True)
+
+    # ---------------------------------------------------------------- results
+    def workspace_errors(
+        self, key: str, points: np.ndarray, errors: np.ndarray, against: str, top: float | None = None
+    ) -> None:
+        """One model's tool points coloured by their error, a labelled colour scale and a histogram.
+
+        Args:
+            key: model name (``"nominal"``, ``"calibrated"``).
+            points: (N, 3) the model's predicted tool points, base frame [m].
+            errors: (N,) their errors after registration [m].
+            against: what the errors are measured against (``"the mocap"``), for the table.
+            top: error at the top of the colour scale [mm] (give every model the same one to compare
+                them side by side); default the 99th percentile of ``errors``.
+        """
+        points, mm = np.asarray(points, dtype=float), np.asarray(errors, dtype=float) * 1e3
+        if top is None:
+            top = float(np.quantile(mm, 0.99)) if mm.size else 1.0
+        rr = self.rr
+        dots = rr.Points3D(points, radii=rr.Radius.ui_points(2.5), colors=colour_ramp(mm / top))
+        self.stream.log(f"errors/{key}/points", dots, static=True)
+        low, high = points.min(axis=0), points.max(axis=0)
+        steps = np.linspace(0.0, 1.0, 21)
+        scale = np.column_stack([np.full(21, high[0] + 0.15), np.full(21, 0.5 * (low[1] + high[1])),
+                                 low[2] + steps * (high[2] - low[2])])
+        labels = [f"{s * top:.2f} mm" if k % 5 == 0 else "" for k, s in enumerate(steps)]
+        labels[-1] = f">= {top:.2f} mm"
         self.stream.log(
-            "world/samples",
-            self.rr.Points3D(np.asarray(points), radii=0.002, class_ids=_class_ids(labels)),
+            f"errors/{key}/colour_scale",
+            rr.Points3D(scale, radii=0.03, colors=colour_ramp(steps), labels=labels, show_labels=True),
             static=True,
         )
+        counts, left, width = histogram(mm)
+        self.stream.log(f"errors/{key}/histogram", rr.BarChart(counts, abscissa=left, widths=width), static=True)
+        label_room = scale[-1] + 0.4 * np.array([1.3, 1.0, 0.0]) / np.hypot(1.3, 1.0)  # the labels, to the right
+        self.extend_bounds(f"errors/{key}", np.vstack([points, scale, label_room]))
+        self._note("errors", key, f"{key.capitalize()}: error, mean {mm.mean():.3f} mm")
+        self.errors_against = against
 
-    # ---------------------------------------------------------------- validation
-    def validation(self, measured: np.ndarray, predicted: dict[str, np.ndarray]) -> None:
-        """Measured (mocap) tool points against each model's predictions (the paper's Fig. 8).
+    def residuals(self, before: np.ndarray, after: np.ndarray) -> None:
+        """Histograms of the calibration residuals (N,) [m] before and after calibration."""
+        for key, values in (("before", before), ("after", after)):
+            mm = np.asarray(values, dtype=float) * 1e3
+            counts, left, width = histogram(mm)
+            self.stream.log(f"residuals/{key}", self.rr.BarChart(counts, abscissa=left, widths=width), static=True)
+            rms = float(np.sqrt(np.mean(mm**2)))
+            self._note("residuals", key, f"Residuals {key} calibration [mm]: rms {rms:.3f} mm")
 
-        The mocap points are brought into the base frame with the registration of the last model
-        (the calibrated one, normally); each model's points are drawn as predicted, and its error
-        vectors go from its prediction to the measurement registered onto that model.
+    def parameter_changes(
+        self, names: list[str], change: np.ndarray, std: np.ndarray, truth: np.ndarray | None = None
+    ) -> None:
+        """Bars of the identified parameters' changes (calibrated minus nominal) with +-1 std whiskers.
+
+        Lengths and angles get a panel each (mm, deg); the bar labels carry the values. With ``truth``
+        (true minus nominal, simulation) a black dot marks where each bar should end.
 
         Args:
-            measured: (N, 3) mocap tool points in the mocap frame [m].
-            predicted: model name -> (N, 3) predicted tool points in the base frame [m].
+            names: (P,) parameter names.
+            change, std: (P,) [m, rad].
+            truth: (P,) [m, rad], or None.
         """
-        measured = np.asarray(measured)
-        for key, points in predicted.items():
-            registered = apply_transform(fit_rigid_transform(measured, points), measured)
-            self.stream.log(
-                f"validation/{key}", self.rr.Points3D(points, radii=0.002, colors=_colour(key)), static=True
-            )
-            self.stream.log(
-                f"validation/errors/{key}",
-                self.rr.Arrows3D(origins=points, vectors=registered - points, colors=_colour(key)),
-                static=True,
-            )
-        self.stream.log(
-            "validation/measured", self.rr.Points3D(registered, radii=0.002, colors=COLOURS["measured"]), static=True
-        )
-
-    def series(self, path: str, values: np.ndarray) -> None:
-        """A time series on the ``sample`` timeline (one row per value), e.g. errors in mm."""
-        values = np.asarray(values, dtype=float)
         rr = self.rr
-        self.stream.send_columns(
-            path,
-            indexes=[rr.TimeColumn("sample", sequence=np.arange(len(values)))],
-            columns=rr.Scalars.columns(scalars=values),
-        )
+        for group, shapes in parameter_bars(names, change, std, truth).items():
+            base = f"parameters/{group}"
+            white = (235, 235, 235)
+            log = self.stream.log
+            log(f"{base}/bars", rr.Boxes2D(mins=shapes["mins"], sizes=shapes["sizes"], colors=shapes["colours"]),
+                static=True)
+            log(f"{base}/names", rr.Points2D(shapes["names"], radii=0.01, colors=white, labels=shapes["labels"],
+                                             show_labels=True), static=True)
+            log(f"{base}/std", rr.LineStrips2D(shapes["whiskers"], colors=white, radii=0.03), static=True)
+            log(f"{base}/zero", rr.LineStrips2D([shapes["zero"]], colors=(140, 140, 140), radii=0.01), static=True)
+            log(f"{base}/scale", rr.LineStrips2D([shapes["scale"]], colors=white, radii=0.04,
+                                                 labels=[shapes["scale_label"]], show_labels=True), static=True)
+            if "truth" in shapes:
+                log(f"{base}/truth", rr.Points2D(shapes["truth"], radii=0.12, colors=white), static=True)
+            unit = "mm" if group == "lengths" else "deg"
+            what = ", white dot = true change" if "truth" in shapes else ""
+            self._note("parameters", group, f"{group.capitalize()} [{unit}]: change, +-1 std{what}")
+            top = BAR_HEIGHT + 1.2
+            self.bounds[base] = np.array([[-3.2, -top, 0.0], [len(shapes["labels"]) + 0.2, top, 0.0]])
 
-    def coverage(self, q: np.ndarray, lower: np.ndarray, upper: np.ndarray, bins: int = 36) -> None:
-        """Per-joint histograms of the recorded angles over each joint's range (the paper's Fig. 5).
+    def coverage(self, per_fixture: dict[str, np.ndarray], lower: np.ndarray, upper: np.ndarray) -> None:
+        """Share of each joint's range visited at each fixture (bars q1..qn, percent; the paper's Fig. 5).
 
         Args:
-            q: (N, n) joint angles [rad].
+            per_fixture: fixture name -> (K, n) joint angles [rad] recorded there.
             lower, upper: (n,) joint limits [rad].
-            bins: bins per joint.
         """
-        for i in range(q.shape[1]):
-            counts, edges = np.histogram(q[:, i], bins=bins, range=(lower[i], upper[i]))
-            centres = np.rad2deg(0.5 * (edges[:-1] + edges[1:]))
+        span = np.asarray(upper) - np.asarray(lower)
+        for name, q in per_fixture.items():
+            q = np.atleast_2d(q)
+            share = 100 * np.divide(np.ptp(q, axis=0), span, out=np.zeros(span.shape), where=span > 0)
+            chart = self.rr.BarChart(share, abscissa=np.arange(share.size) + 0.6, widths=np.full(share.size, 0.8))
+            self.stream.log(f"coverage/{name}", chart, static=True)
+            self._note("coverage", name, f"Joint coverage at {name}: % of each joint's range (q1..q{share.size}), "
+                                         f"lowest {share.min():.0f} %")
+
+    def socket_spread(self, fixture: str, nominal: np.ndarray, calibrated: np.ndarray) -> None:
+        """A held-out socket: the tool points each model predicts there, in mm around the calibrated mean.
+
+        A socket-only validation has no measured position: a good model puts every configuration's
+        tool point at one point, so the spread of the predictions is its error. The points are drawn
+        in a view of their own, in millimetres from the calibrated points' mean, with each model's mean
+        as a larger labelled point (the label gives its rms spread).
+
+        Args:
+            fixture: the socket's name (entity ``sockets/<fixture>``).
+            nominal, calibrated: (N, 3) tool points predicted by each model at that socket [m].
+        """
+        sets = {"nominal": np.asarray(nominal, dtype=float), "calibrated": np.asarray(calibrated, dtype=float)}
+        for key, points in sets.items():
+            if points.ndim != 2 or points.shape[1] != 3 or len(points) == 0:
+                raise ValueError(f"socket {fixture}: {key} points must have shape (N, 3), got {points.shape}")
+        centre = sets["calibrated"].mean(axis=0)
+        for key, points in sets.items():
+            mm = (points - centre) * 1e3
+            mean = mm.mean(axis=0)
+            rms = float(np.sqrt(np.mean(np.sum((mm - mean) ** 2, axis=1))))
+            dots = self.rr.Points3D(mm, radii=self.rr.Radius.ui_points(2.0), colors=_colour(key))
+            self.stream.log(f"sockets/{fixture}/{key}", dots, static=True)
+            self.extend_bounds(f"sockets/{fixture}", mm)
             self.stream.log(
-                f"coverage/q{i + 1}",
-                self.rr.BarChart(counts, abscissa=centres, widths=np.full(bins, np.rad2deg(edges[1] - edges[0]))),
+                f"sockets/{fixture}/{key}_mean",
+                self.rr.Points3D(mean[None], radii=self.rr.Radius.ui_points(6.0), colors=_colour(key),
+                                 labels=[f"{key} mean, rms {rms:.3f} mm"], show_labels=True),
                 static=True,
             )
+        self._note("sockets", fixture, f"Socket {fixture} [mm]")
+
+    def text(self, name: str, text: str, title: str) -> None:
+        """A printed table as a text panel (``tables/<name>``)."""
+        document = self.rr.TextDocument(f"```\n{text}\n```", media_type=self.rr.MediaType.MARKDOWN)  # monospace
+        self.stream.log(f"tables/{name}", document, static=True)
+        self._note("tables", name, title)
 
     # -------------------------------------------------------------------- close
     def close(self) -> Path | None:
-        """Flush, close the sink and move the ``.rrd`` into place; returns its path."""
+        """Send the blueprint, flush, close the sink and move the ``.rrd`` into place; returns its path.
+
+        Raises:
+            OutputError: Rerun could not write the file (one line); nothing is left behind.
+        """
         try:
+            blueprint = build_blueprint(self.contents, self.title, self.bounds)
+            self.stream.send_blueprint(blueprint, make_active=True, make_default=True)
+            bounds = {k: v.tolist() for k, v in self.bounds.items()}
+            layout = {"contents": self.contents, "title": self.title, "bounds": bounds}
+            layout["application_id"] = self.application_id
+            self.stream.send_property("spherecal_layout", self.rr.AnyValues(layout=json.dumps(layout)))
             self.stream.flush()
             self.stream.disconnect()
             if self.path is None:
@@ -195,11 +337,6 @@ def _first_line(error: BaseException) -> str:
     return text.splitlines()[0] if text else type(error).__name__
 
 
-def _class_ids(labels) -> np.ndarray:
-    _, ids = np.unique(np.asarray(labels), return_inverse=True)
-    return ids.astype(np.uint16)
-
-
 def _colour(key: str) -> tuple[int, int, int]:
     return COLOURS.get(key, (120, 120, 120))
 
@@ -216,3 +353,33 @@ def read_entity_rows(path: str | os.PathLike) -> dict[str, int]:
             continue
         counts[entity] = counts.get(entity, 0) + chunk.num_rows
     return counts
+
+
+def read_layout(path: str | os.PathLike) -> dict:
+    """What a recording's blueprint was built from (``contents``, ``title``, ``bounds``,
+    ``application_id``; see :func:`validation.blueprint.build_blueprint`), or {} if it has none."""
+    from rerun.chunk import RrdReader  # Rerun: heavy, only when a recording is written
+
+    _rerun()
+    for chunk in RrdReader(str(path)).stream().to_chunks():
+        if chunk.entity_path.endswith("spherecal_layout"):
+            batch = chunk.to_record_batch()
+            column = next(n for n in batch.schema.names if n.endswith("layout"))
+            return json.loads(batch.column(column).to_pylist()[0][0])
+    return {}
+
+
+def read_view_names(path: str | os.PathLike) -> list[str]:
+    """Display names of the views in a saved recording's blueprint (empty when it has none)."""
+    from rerun.chunk import RrdReader  # Rerun: heavy, only when a recording is written
+
+    _rerun()
+    reader = RrdReader(str(path))
+    names = []
+    for store in reader.blueprints():
+        for chunk in reader.stream(store=store).to_chunks():
+            batch = chunk.to_record_batch()
+            column = "ViewBlueprint:display_name"
+            if column in batch.schema.names:
+                names += [str(v[0]) for v in batch.column(column).to_pylist() if v]
+    return names

@@ -184,16 +184,30 @@ def socket_validation(
 
 
 def record_sockets(recording, report: SocketReport, models: dict[str, RobotModel], dataset: Dataset) -> None:
-    """Log a socket validation into a :class:`validation.recording.Recording` (all of it here, one place).
-
-    ``sockets/<model>``: the predicted tool points, one class per fixture (static); ``plots/spread/<model>``:
-    every sample's distance from its fixture's mean point [mm] on the ``sample`` timeline.
+    """Log a socket validation into a :class:`validation.recording.Recording`, in the layout of every
+    recording: the calibrated robot through the recorded configurations on ``time`` and each socket
+    at its calibrated mean point (``world/*``); per socket, both models' predicted tool points in mm
+    around the calibrated mean (``sockets/<fixture>/*``, :meth:`Recording.socket_spread`); each model's
+    predicted points coloured by their distance from their socket's mean (``errors/<model>/*``, one
+    colour scale); the joint coverage per socket and the printed table.
     """
     index = dataset.fixture_index
-    for key, model in models.items():
-        points = tool_point(model, dataset.q)
+    names = [f.name for f in report.fixtures]
+    calibrated = models["calibrated"]
+    times = dataset.t if dataset.t is not None and np.all(np.diff(dataset.t) > 0) else np.arange(len(index)) * 0.02
+    recording.self_motion(calibrated, times, dataset.q)
+    labels = [f"{f.name}{'' if f.held_out else ' (fit)'}" for f in report.fixtures]
+    recording.fixtures(labels, np.array([f.centre["calibrated"] for f in report.fixtures]))
+    points = {key: tool_point(model, dataset.q) for key, model in models.items()}
+    spread = {}
+    for key, p in points.items():
         centres = np.array([f.centre[key] for f in report.fixtures])
-        recording.stream.log(
-            f"sockets/{key}", recording.rr.Points3D(points, radii=0.0015, class_ids=index), static=True
-        )
-        recording.series(f"plots/spread/{key}", np.linalg.norm(points - centres[index], axis=1) * 1e3)
+        spread[key] = np.linalg.norm(p - centres[index], axis=1)
+    for k, name in enumerate(names):
+        recording.socket_spread(name, points["nominal"][index == k], points["calibrated"][index == k])
+    top = max(float(np.quantile(e, 0.99)) for e in spread.values()) * 1e3
+    for key in models:
+        recording.workspace_errors(key, points[key], spread[key], "its socket's mean point", top)
+    recording.coverage({name: dataset.q[index == k] for k, name in enumerate(names)}, calibrated.lower,
+                       calibrated.upper)
+    recording.text("sockets", report.format(), "Socket validation table (mm)")

@@ -30,6 +30,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--out", default="spherecal-demo", help="output folder (spherecal-demo)")
     parser.add_argument("--no-rrd", action="store_true", help="do not write demo.rrd")
     parser.add_argument("--spawn", action="store_true", help="also stream to a live Rerun viewer")
+    parser.add_argument(
+        "--quiet", action="store_true", help="no progress bars (they are off anyway when stderr is not a terminal)"
+    )
 
 
 def run(args: argparse.Namespace) -> int:
@@ -55,6 +58,7 @@ def run(args: argparse.Namespace) -> int:
         out=Path(args.out),
         rrd=not args.no_rrd,
         spawn=args.spawn,
+        quiet=args.quiet,
     )
     result = run_demo(config, say=lambda line: print(line, flush=True))
     for key, path in result.files.items():

@@ -48,7 +48,8 @@ def run(args: argparse.Namespace) -> int:
     from spherecal.correction import load_robot
     from spherecal.validation.inputs import check_models
     from spherecal.validation.mocap import check_mocap, read_mocap_csv
-    from spherecal.validation.pipeline import record_validation, validate_models
+    from spherecal.validation.pipeline import record_validate_run, validate_models
+    from spherecal.validation.progress import progress_bar
     from spherecal.validation.provenance import provenance
 
     if args.truth is None and args.mocap is None and args.samples is None:
@@ -79,16 +80,19 @@ def run(args: argparse.Namespace) -> int:
         dataset = read_samples(args.samples, models.get("truth", models["nominal"]))
         self_motion = {name: dataset.for_fixture(name) for name in dataset.fixture_names}
 
-    report = validate_models(
-        models["nominal"],
-        models["calibrated"],
-        np.random.default_rng(args.seed),
-        truth=models.get("truth"),
-        measurement=measurement,
-        self_motion=self_motion,
-        configurations=args.configurations,
-        noise=args.mocap_noise * 1e-3,
-    )
+    total = args.configurations + sum(len(q) for q in (self_motion or {}).values()) if measurement is None else 0
+    with progress_bar(total, "validation", "configurations", quiet=measurement is not None) as advance:
+        report = validate_models(
+            models["nominal"],
+            models["calibrated"],
+            np.random.default_rng(args.seed),
+            truth=models.get("truth"),
+            measurement=measurement,
+            self_motion=self_motion,
+            configurations=args.configurations,
+            noise=args.mocap_noise * 1e-3,
+            progress=advance,
+        )
     print(report.format())
     if report.deviations is not None:
         print("\nparameter deviations from the truth:\n" + report.deviations.format())
@@ -96,12 +100,13 @@ def run(args: argparse.Namespace) -> int:
     inputs = {k: v for k, v in inputs.items() if not k.startswith("_") and k != "command"}
     result = {"provenance": provenance(args.seed, inputs), "validation": report.to_dict()}
 
+    drawn = "truth" if "truth" in models else "calibrated"
+    title = f"{'True' if drawn == 'truth' else 'Calibrated'} robot and fixtures, validation configurations"
+
     def record(recording) -> None:
-        record_validation(recording, report, {"nominal": models["nominal"], "calibrated": models["calibrated"]})
-        q = np.concatenate([s.q for s in report.sets[1:]]) if len(report.sets) > 1 else report.sets[0].q
-        recording.coverage(q, models["nominal"].lower, models["nominal"].upper)
+        record_validate_run(recording, report, models, drawn)
 
     from spherecal.commands.validate_sockets import write_validation
 
-    write_validation(args, outputs, result, record)
+    write_validation(args, outputs, result, record, title)
     return 0

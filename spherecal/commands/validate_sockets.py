@@ -7,7 +7,7 @@ import argparse
 from spherecal.correction import RobotModel
 
 
-def write_validation(args: argparse.Namespace, outputs, result: dict, record) -> None:
+def write_validation(args: argparse.Namespace, outputs, result: dict, record, title: str) -> None:
     """Write ``--out`` (``result`` as JSON) and ``--rrd`` (``record(recording)`` fills it) together.
 
     Both are staged in ``outputs`` (an :class:`~spherecal.correction.outputs.OutputSet` checked before
@@ -24,7 +24,7 @@ def write_validation(args: argparse.Namespace, outputs, result: dict, record) ->
             from spherecal.validation.recording import Recording
 
             recording = Recording(outputs.stage(args.rrd) if args.rrd else None, spawn=args.spawn,
-                                  application_id="spherecal_validate")
+                                  application_id="spherecal_validate", title=title)
             try:
                 record(recording)
             except BaseException:
@@ -60,7 +60,6 @@ def run_sockets(args: argparse.Namespace, models: dict[str, RobotModel], outputs
 
     def record(recording) -> None:
         record_sockets(recording, report, models, dataset)
-        recording.coverage(dataset.q, models["nominal"].lower, models["nominal"].upper)
 
-    write_validation(args, outputs, result, record)
+    write_validation(args, outputs, result, record, "Calibrated robot and sockets (recorded configurations on 'time')")
     return 0

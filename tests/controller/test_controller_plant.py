@@ -79,3 +79,22 @@ def test_names_with_xml_characters_compile(panda):
     assert [s.get("name") for s in root.iter("site") if s.get("name", "").startswith("fixture")] == [
         "fixture0", "fixture1"]
     mujoco.MjModel.from_xml_string(text)
+def test_a_mujoco_warning_writes_no_log_file_into_the_working_directory(tmp_path) -> None:
+    # MuJoCo's default warning handler appends to MUJOCO_LOG.TXT in the cwd (the user's folder)
+    import os
+    import subprocess
+    import sys
+    from pathlib import Path
+
+    code = (
+        "import numpy as np, mujoco; from spherecal.correction import load_robot;"
+        "from spherecal.controller.plant import build_plant;"
+        "p = build_plant(load_robot('panda')); p.mj_data.qvel[:] = np.nan; mujoco.mj_step(p.mj_model, p.mj_data);"
+        "print('warned', p.mj_data.warning[mujoco.mjtWarning.mjWARN_BADQVEL].number)"
+    )
+    root = str(Path(__file__).parents[2])
+    out = subprocess.run([sys.executable, "-c", code], cwd=tmp_path, capture_output=True, text=True, timeout=60,
+                         env={**os.environ, "PYTHONPATH": root})
+    assert out.returncode == 0, out.stderr
+    assert "warned 1" in out.stdout and "Nan, Inf or huge value in QVEL" in out.stdout + out.stderr
+    assert list(tmp_path.iterdir()) == []

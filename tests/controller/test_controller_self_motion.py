@@ -51,6 +51,19 @@ def test_dataset_view(short_run):
     assert data.fixture_names == ("P2",) and data.q.shape == (200, 7) and data.t is not None
 
 
+def test_progress_reports_every_simulated_second_and_changes_nothing(panda):
+    # the long motion stage was silent; the callback gets simulated seconds, summing to the total
+    true = perturb(panda, np.random.default_rng(7))
+    fixtures = {"P1": DEFAULT_FIXTURES["P1"], "P2": DEFAULT_FIXTURES["P2"]}
+    settings = SelfMotionSettings(seconds=0.35, samples=50)
+    calls: list[float] = []
+    run = collect_self_motion(true, panda, fixtures, np.random.default_rng(8), settings, progress=calls.append)
+    quiet = collect_self_motion(true, panda, fixtures, np.random.default_rng(8), settings)
+    assert len(calls) == 2 * 4  # 0.1, 0.1, 0.1, 0.05 per fixture
+    assert np.isclose(sum(calls), 0.7) and max(calls) <= 0.1 + 1e-12
+    assert np.array_equal(run.q, quiet.q)
+
+
 def test_compliance_moves_the_point_not_the_readings(panda):
     rng = np.random.default_rng(5)
     true = perturb(panda, rng)

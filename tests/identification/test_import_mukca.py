@@ -18,7 +18,7 @@ from spherecal.correction import load_robot, tool_point
 from spherecal.correction.fixtures import read_fixtures
 from spherecal.correction.samples_csv import read_samples
 from spherecal.identification.importers import RecordingError, match_joints
-from spherecal.validation.recording import read_entity_rows
+from spherecal.validation.recording import read_entity_rows, read_view_names
 
 from .urdf_chain import GEN3LITE, GEN3LITE_BALL, chain_point
 
@@ -146,8 +146,13 @@ def test_calibration_on_one_placement_holds_on_the_others(imported, capsys) -> N
     assert "front_center_h0 (fit)" in printed and "test MAE" in printed
     report = json.loads((imported / "v.json").read_text())["sockets"]
     rows = read_entity_rows(imported / "v.rrd")
-    assert rows["sockets/nominal"] == rows["sockets/calibrated"] == 1
-    assert rows["plots/spread/calibrated"] == len(read_samples(imported / "all/samples.csv", load_robot(PANDA)).labels)
+    names = report["fixtures"]
+    assert len(names) == 6 and all(rows[f"sockets/{f}/{m}"] == 1 for f in names for m in ("nominal", "calibrated"))
+    assert rows["errors/calibrated/points"] == rows["tables/sockets"] == rows["world/fixtures"] == 1
+    samples = len(read_samples(imported / "all/samples.csv", load_robot(PANDA)).labels)
+    assert rows["world/robot/arm"] == samples + 1  # the calibrated arm through every recorded configuration
+    views = read_view_names(imported / "v.rrd")
+    assert sum(v in (f"Socket {f} [mm]" for f in names) for v in views) == 6 and "Socket validation table (mm)" in views
     held = report["held_out"]
     # measured on these files: nominal 6.30 mm, calibrated 0.33 mm (MUKCa's own: 7.79 -> 0.347 on all placements)
     assert held["nominal"]["test_mae"] > 5e-3

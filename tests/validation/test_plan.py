@@ -136,10 +136,11 @@ def test_cli_plan_and_too_few_reachable(tmp_path, capsys):
     assert main(args) == 0
     out = capsys.readouterr().out
     assert "best set" in out and "unreachable" in out and rrd.stat().st_size > 0
-    from spherecal.validation.recording import read_entity_rows
+    from spherecal.validation.recording import read_entity_rows, read_view_names
 
     rows = read_entity_rows(rrd)
-    assert rows.get("plan/candidates") == 1 and rows.get("plan/best") == 1 and rows.get("plan/table") == 1
+    assert rows.get("world/candidates") == 1 and rows.get("world/fixtures") == 1 and rows.get("tables/plan") == 1
+    assert "The plan: candidates ranked by predicted error (mm)" in read_view_names(rrd)
     assert main(["plan", "--candidates", str(path), "--fixture-count", "2"]) == 1
     assert "no plan" in capsys.readouterr().out
 

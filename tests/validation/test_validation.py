@@ -144,23 +144,72 @@ def test_marker_columns_need_a_cluster(tmp_path, truth, mocap, rng) -> None:
     assert default_cluster(truth.tool).n_markers == 4
 
 
-def test_recording_holds_the_documented_entities(tmp_path, panda, truth, rng) -> None:
-    from spherecal.validation.recording import Recording, read_entity_rows
+def test_recording_holds_the_documented_entities_and_its_blueprint(tmp_path, panda, truth, rng) -> None:
+    from spherecal.validation.recording import Recording, read_entity_rows, read_view_names
 
     q = truth.random_configurations(40, rng)
-    recording = Recording(tmp_path / "r.rrd")
+    recording = Recording(tmp_path / "r.rrd", title="Robot")
     recording.fixtures(["P1", "P2"], np.zeros((2, 3)))
     recording.self_motion(truth, np.arange(40) * 0.01, q)
     recording.samples(tool_point(truth, q), ["P1"] * 20 + ["P2"] * 20)
-    recording.validation(tool_point(truth, q), {"nominal": tool_point(panda, q), "calibrated": tool_point(truth, q)})
-    recording.series("plots/error/nominal", np.ones(40))
-    recording.coverage(q, truth.lower, truth.upper)
+    errors = np.linspace(0.0, 2e-3, 40)
+    recording.workspace_errors("nominal", tool_point(panda, q), errors, "the mocap")
+    recording.residuals(np.full(30, 1e-3), np.full(30, 1e-4))
+    recording.parameter_changes(["a2", "alpha2", "d7 + tool_z"], np.array([1e-3, 1e-3, -2e-4]),
+                                np.array([1e-5, 1e-5, 1e-5]), np.array([1.1e-3, 1e-3, -2e-4]))
+    recording.coverage({"P1": q[:20], "P2": q[20:]}, truth.lower, truth.upper)
+    recording.text("calibration", "a table", "Calibration table")
     assert recording.close() == tmp_path / "r.rrd"
     rows = read_entity_rows(tmp_path / "r.rrd")
-    assert rows["world/robot/links"] == rows["world/robot/tool"] == rows["plots/error/nominal"] == 40
-    for path in ("world/fixtures", "world/samples", "validation/measured", "validation/errors/nominal", "coverage/q7"):
+    # the arm: one capsule row per time step (plus the static radii/colours), the tool point likewise
+    assert rows["world/robot/arm"] == rows["world/robot/tool"] == 41
+    single = ["world/fixtures", "world/samples", "errors/nominal/points", "errors/nominal/colour_scale",
+              "errors/nominal/histogram", "residuals/before", "residuals/after", "parameters/lengths/bars",
+              "parameters/lengths/std", "parameters/lengths/truth", "parameters/angles/bars", "coverage/P1",
+              "coverage/P2", "tables/calibration"]
+    for path in single:
         assert rows[path] == 1, path
+    views = read_view_names(tmp_path / "r.rrd")
+    assert "Robot" in views and "Calibration table" in views
+    assert "Nominal: error, mean 1.000 mm" in views and "Residuals after calibration [mm]: rms 0.100 mm" in views
+    assert any(v.startswith("Joint coverage at P2") for v in views)
+    assert "Lengths [mm]: change, +-1 std, white dot = true change" in views
     assert sorted(p.name for p in tmp_path.iterdir()) == ["r.rrd"]
+
+
+def test_socket_spread_is_drawn_in_mm_around_the_calibrated_mean(tmp_path, rng) -> None:
+    from rerun.chunk import RrdReader
+
+    from spherecal.validation.recording import Recording, read_entity_rows, read_view_names
+
+    centre = np.array([0.5, 0.1, 0.4])
+    nominal = centre + np.array([2e-3, 0.0, 0.0]) + rng.normal(0, 1e-3, (50, 3))  # 2 mm off, 1.7 mm rms spread
+    calibrated = centre + rng.normal(0, 5e-5, (50, 3))
+    recording = Recording(tmp_path / "s.rrd")
+    recording.socket_spread("S1", nominal, calibrated)
+    with pytest.raises(ValueError, match="socket S2: nominal points must have shape"):
+        recording.socket_spread("S2", nominal[:, :2], calibrated)
+    recording.close()
+    rows = read_entity_rows(tmp_path / "s.rrd")
+    assert {k: v for k, v in rows.items() if k.startswith("sockets/")} == {
+        f"sockets/S1/{key}{end}": 1 for key in ("nominal", "calibrated") for end in ("", "_mean")
+    }
+    rms = [np.sqrt(np.mean(np.sum((p - p.mean(0)) ** 2, axis=1))) * 1e3 for p in (nominal, calibrated)]
+    assert "Socket S1 [mm]" in read_view_names(tmp_path / "s.rrd")
+    reader = RrdReader(str(tmp_path / "s.rrd"))
+    logged, labels = {}, {}
+    for chunk in reader.stream().to_chunks():
+        batch = chunk.to_record_batch()
+        if chunk.entity_path.endswith("_mean"):
+            logged[chunk.entity_path] = np.array(batch.column("Points3D:positions").to_pylist()[0][0])
+            labels[chunk.entity_path] = batch.column("Points3D:labels").to_pylist()[0][0]
+    assert labels["/sockets/S1/nominal_mean"] == f"nominal mean, rms {rms[0]:.3f} mm"
+    assert labels["/sockets/S1/calibrated_mean"] == f"calibrated mean, rms {rms[1]:.3f} mm"
+    # means in mm from the calibrated mean: the calibrated one at 0, the nominal one about 2 mm along x
+    assert np.allclose(logged["/sockets/S1/calibrated_mean"], 0.0, atol=1e-9)
+    expected = (nominal.mean(0) - calibrated.mean(0)) * 1e3
+    assert np.allclose(logged["/sockets/S1/nominal_mean"], expected, atol=1e-4)
+    assert 1.0 < expected[0] < 3.0
 
 
 def test_saving_a_recording_writes_no_analytics_files(tmp_path) -> None:
@@ -171,7 +220,7 @@ def test_saving_a_recording_writes_no_analytics_files(tmp_path) -> None:
     env = {k: v for k, v in os.environ.items() if k not in ("RERUN_ANALYTICS", "XDG_CONFIG_HOME", "XDG_DATA_HOME")}
     env["HOME"] = str(tmp_path)
     code = (
-        "import numpy as np; from validation.recording import Recording;"
+        "import numpy as np; from spherecal.validation.recording import Recording;"
         f"r = Recording({str(tmp_path / 'r.rrd')!r}); r.fixtures(['P1'], np.zeros((1, 3))); r.close()"
     )
     out = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True, text=True, timeout=60)

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import re
 
 import numpy as np
 import pytest
@@ -118,3 +119,38 @@ def test_negative_seed_is_a_usage_error(command, capsys) -> None:
     assert main([command, "--seed", "-1"]) == 1
     assert "--seed: expected an integer >= 0, got '-1'" in capsys.readouterr().err
 
+
+
+def test_validation_of_a_calibrated_file_compares_identifiable_sums_and_records_the_layout(
+    files, tmp_path, capsys, panda
+) -> None:
+    from dataclasses import replace
+
+    from spherecal.validation.recording import read_entity_rows, read_view_names
+
+    truth = load_robot(files["truth"])
+    names = truth.param_names
+    # a calibration that got d7 + tool_z right but put it all into tool_z, and held a1 at nominal
+    params = truth.params.copy()
+    params[names.index("a1")] = panda.params[names.index("a1")]
+    params[names.index("tool_z")] += truth.params[names.index("d7")] - panda.params[names.index("d7")]
+    params[names.index("d7")] = panda.params[names.index("d7")]
+    fixed = {"a1": "gauge: moves every tool point rigidly", "d7": "redundant with tool_z"}
+    identified = [n for n in names if n not in fixed and not n.startswith("base")]
+    block = {"fixed": fixed, "identified": identified, "std": {n: 1e-5 for n in identified},
+             "fixture_centres": {"P1": [0.5, -0.25, 0.5], "P2": [0.5, 0.0, 0.4]}}
+    path = save_robot(replace(truth.with_params(params), extras={"calibration": block}), tmp_path / "cal.yaml")
+    rrd = tmp_path / "v.rrd"
+    args = _args({**files, "calibrated": path}, "--truth", str(files["truth"]), "--configurations", "200")
+    assert main([*args, "--rrd", str(rrd)]) == 0
+    text = capsys.readouterr().out
+    row = next(line for line in text.splitlines() if line.startswith("d7 + tool_z"))
+    assert abs(float(row.split()[-1])) < 1e-9  # the sum is exact; tool_z alone would be off by d7's error
+    assert not re.findall(r"^(tool_z|d7|a1) +mm", text, flags=re.M)  # neither alone, nor the one held
+    assert "held at nominal (not determined by the data, not compared): a1, d7" in text
+    rows = read_entity_rows(rrd)
+    assert rows["world/fixtures"] == 1 and rows["world/robot/arm"] == 201  # 200 configurations + static style
+    assert rows["errors/calibrated/points"] == rows["parameters/lengths/bars"] == rows["tables/validation"] == 1
+    views = read_view_names(rrd)
+    assert any(v.startswith("True robot and fixtures") for v in views)
+    assert "Lengths [mm]: change, +-1 std, white dot = true change" in views

@@ -23,7 +23,7 @@ def demo(tmp_path_factory):
 
 
 def test_short_demo_writes_everything_and_its_recording_holds_the_documented_entities(demo, capsys) -> None:
-    from spherecal.validation.recording import read_entity_rows
+    from spherecal.validation.recording import read_entity_rows, read_view_names
 
     out, args = demo
     assert main(args) == 0
@@ -31,6 +31,12 @@ def test_short_demo_writes_everything_and_its_recording_holds_the_documented_ent
     assert "mocap floor" in text and f"recording: {out / 'demo.rrd'}" in text
     headline = re.search(r"nominal ([\d.]+) mm -> calibrated ([\d.]+) mm against the exact", text)
     assert float(headline[2]) < float(headline[1])
+    # the RMS deviation counts what the calibration determines: held parameters out, d7 + tool_z as one
+    report = json.loads((out / "demo.json").read_text())["validation"]["parameter_deviations"]
+    assert "d7 + tool_z" in report["names"] and not {"d7", "tool_z", "a1", "theta1", "base_x"} & set(report["names"])
+    lengths = re.search(r"(\d+) lengths [\d.]+ -> [\d.]+ mm; (\d+) angles", text)
+    assert int(lengths[1]) + int(lengths[2]) == len(report["names"])
+    assert {"a1", "d7", "theta7", "base_yaw"} <= set(report["held_at_nominal"])
     names = sorted(p.name for p in out.iterdir())
     expected = ["calibrated.yaml", "demo.json", "demo.rrd", "fixtures.yaml", "mocap.csv", "samples.csv", "truth.yaml"]
     assert names == expected
@@ -44,25 +50,34 @@ def test_short_demo_writes_everything_and_its_recording_holds_the_documented_ent
     expected_rows = {
         "world/fixtures": 1,
         "world/samples": 1,
-        "world/robot/links": steps,
-        "world/robot/tool": steps,
-        "validation/measured": 1,
-        "validation/nominal": 1,
-        "validation/calibrated": 1,
-        "validation/errors/nominal": 1,
-        "validation/errors/calibrated": 1,
-        "plots/error/nominal": CONFIGURATIONS,
-        "plots/error/calibrated": CONFIGURATIONS,
-        "plots/residual/nominal": 3 * SAMPLES,
-        "plots/residual/calibrated": 3 * SAMPLES,
-        **{f"coverage/q{i}": 1 for i in range(1, 8)},
+        "world/robot/arm": steps + 1,  # one row per step, and the static radii and colours
+        "world/robot/tool": steps + 1,
+        **{f"errors/{m}/{p}": 1 for m in ("nominal", "calibrated") for p in ("points", "colour_scale", "histogram")},
+        "residuals/before": 1,
+        "residuals/after": 1,
+        **{f"parameters/{g}/{p}": 1 for g in ("lengths", "angles") for p in ("bars", "names", "std", "zero", "scale")},
+        **{f"parameters/{g}/truth": 1 for g in ("lengths", "angles")},
+        **{f"coverage/P{i}": 1 for i in (1, 2, 3)},
+        "tables/validation": 1,
+        "tables/calibration": 1,
+        "tables/deviations": 1,
     }
     assert rows == expected_rows
+    views = read_view_names(out / "demo.rrd")
+    assert any(v.startswith("True robot (simulated) and fixtures") for v in views)
+    for start in ("Nominal: error, mean", "Calibrated: error, mean", "Nominal: error histogram [mm]",
+                  "Residuals before calibration [mm]", "Residuals after calibration [mm]",
+                  "Lengths [mm]: change, +-1 std, white dot = true change", "Angles [deg]: change, +-1 std",
+                  "Joint coverage at P1", "Calibration table (mm, deg)"):
+        assert any(v.startswith(start) for v in views), start
     readme = (ROOT / "README.md").read_text()
     section = readme.split("## Validation", 1)[1].split("\n## ", 1)[0]
     for path in expected_rows:
-        documented = re.sub(r"(errors|error|residual)/(nominal|calibrated)$", r"\1/<model>", path)
-        documented = re.sub(r"q\d$", "q<i>", documented)
+        documented = re.sub(r"^errors/(nominal|calibrated)/", "errors/<model>/", path)
+        documented = re.sub(r"^residuals/(before|after)$", "residuals/<before|after>", documented)
+        documented = re.sub(r"^parameters/(lengths|angles)/.*$", "parameters/<lengths|angles>/*", documented)
+        documented = re.sub(r"^(coverage)/P\d$", r"\1/<fixture>", documented)
+        documented = re.sub(r"^tables/.*$", "tables/<name>", documented)
         assert f"`{documented}`" in section, documented
 
 

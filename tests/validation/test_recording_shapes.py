@@ -1,0 +1,58 @@
+"""The plain geometry behind the recordings: link capsules, colour ramp, histograms, parameter bars."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from spherecal.validation.recording_shapes import BAR_HEIGHT, capsules, colour_ramp, histogram, parameter_bars
+
+
+def _rotate(quaternion: np.ndarray, vector: np.ndarray) -> np.ndarray:
+    """Rotate ``vector`` by the unit quaternion (x, y, z, w) through its rotation matrix."""
+    x, y, z, w = quaternion
+    matrix = np.array([
+        [1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)],
+        [2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)],
+        [2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)],
+    ])
+    return matrix @ vector
+
+
+def test_capsules_run_from_each_point_to_the_next(rng) -> None:
+    strips = rng.normal(size=(5, 6, 3))
+    strips[0, 2] = strips[0, 1]  # a zero-length link (coincident DH origins)
+    strips[1, 3] = strips[1, 2] - np.array([0.0, 0.0, 0.4])  # straight down: the half-way formula degenerates
+    lengths, starts, quats = capsules(strips)
+    assert lengths.shape == (5, 5) and starts.shape == (5, 5, 3) and quats.shape == (5, 5, 4)
+    assert np.allclose(np.linalg.norm(quats, axis=-1), 1.0)
+    for t in range(5):
+        for k in range(5):
+            end = starts[t, k] + lengths[t, k] * _rotate(quats[t, k], np.array([0.0, 0.0, 1.0]))
+            assert np.allclose(end, strips[t, k + 1], atol=1e-12), (t, k)
+    assert lengths[0, 1] == 0.0 and np.allclose(lengths[1, 2], 0.4)
+
+
+def test_colour_ramp_and_histogram() -> None:
+    colours = colour_ramp(np.array([-1.0, 0.0, 0.5, 1.0, 7.0]))
+    assert colours.dtype == np.uint8 and colours.shape == (5, 3)
+    assert np.array_equal(colours[0], colours[1]) and np.array_equal(colours[3], colours[4])  # clipped
+    assert colours[1][2] > colours[1][0] and colours[3][0] > colours[3][2]  # blue small, red large
+    counts, left, width = histogram(np.array([0.0, 0.1, 0.2, 2.9, 3.0]), bins=3)
+    assert counts.tolist() == [3, 0, 2] and np.allclose(left, [0, 1, 2]) and width == 1.0
+
+
+def test_parameter_bars_scale_each_group_to_its_largest_value() -> None:
+    names = ["a2", "alpha2", "d7 + tool_z"]
+    change, std = np.array([1e-3, np.deg2rad(0.1), -2e-3]), np.array([1e-5, np.deg2rad(0.01), 1e-4])
+    truth = np.array([1.1e-3, np.deg2rad(0.1), -2e-3])
+    bars = parameter_bars(names, change, std, truth)
+    lengths, angles = bars["lengths"], bars["angles"]
+    assert lengths["labels"] == ["a2", "d7 + tool_z"] and angles["labels"] == ["alpha2"]
+    # y points down in Rerun's 2D view: a positive change is a bar above zero (negative y)
+    assert lengths["mins"][0, 1] < 0 and np.isclose(lengths["mins"][1, 1], 0.0)
+    reach = 2.1  # mm: |d7 + tool_z| + its std
+    assert np.allclose(lengths["sizes"][:, 1], np.array([1.0, 2.0]) * BAR_HEIGHT / reach)
+    assert lengths["scale_label"] == "2.100 mm" and angles["scale_label"] == "0.110 deg"
+    assert np.allclose(lengths["truth"][:, 1], -np.array([1.1, -2.0]) * BAR_HEIGHT / reach)
+    assert np.allclose(np.abs(np.diff(lengths["whiskers"][:, :, 1], axis=1)).ravel(),
+                       2 * np.array([0.01, 0.1]) * BAR_HEIGHT / reach)

@@ -1,0 +1,111 @@
+"""The one layout of every spherecal recording (demo, validate, plan): a Rerun blueprint.
+
+A large 3D view of the robot and the fixtures on the left (the self-motion plays on ``time``); on
+the right one tab per kind of result that was logged, each view named in plain words:
+
+* **Errors**: each model's workspace tool points coloured by their error (a labelled colour scale in
+  mm beside them), nominal and calibrated side by side, their histograms below;
+* **Residuals**: histograms of the calibration residuals before and after;
+* **Parameter changes**: bars with +-1 std whiskers, lengths [mm] and angles [deg];
+* **Joint coverage**: per fixture, the share of each joint's range visited [%];
+* **Socket spread**: per held-out socket, the predicted tool points of both models [mm];
+* **Tables**: the printed tables.
+
+Histograms and bars are static, so they show whatever the timeline selector is on.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+#: Tab names, in order, for each section of :attr:`validation.recording.Recording.contents`.
+TABS = {
+    "errors": "Errors",
+    "residuals": "Residuals",
+    "parameters": "Parameter changes",
+    "coverage": "Joint coverage",
+    "sockets": "Socket spread",
+    "tables": "Tables",
+}
+
+
+def camera(box, least: float = 0.05, distance: float = 1.2):
+    """``rerun.blueprint.EyeControls3D`` looking at a (2, 3) bounding box [m] from the front right, above,
+    from ``distance`` times as far as the box is wide (at least ``least`` [m])."""
+    import rerun.blueprint as rrb  # Rerun: heavy, only when a recording is written
+
+    box = np.asarray(box, dtype=float)
+    centre, size = box.mean(axis=0), max(float(np.linalg.norm(box[1] - box[0])), least)
+    direction = np.array([1.0, -1.3, 0.8]) / np.linalg.norm([1.0, -1.3, 0.8])
+    return rrb.EyeControls3D(position=centre + distance * size * direction, look_target=centre, eye_up=(0, 0, 1))
+
+
+def build_blueprint(
+    contents: dict[str, dict[str, str]], title: str, bounds: dict | None = None, active_tab: int | None = None
+):
+    """The blueprint of a recording.
+
+    Args:
+        contents: section -> {key: view name} of what was logged (see :class:`Recording`).
+        title: name of the main 3D view.
+        bounds: view origin -> (2, 3) bounding box of its contents [m]: the 3D views' cameras.
+        active_tab: the result tab in front (default: "Socket spread" when there is one, else the first).
+
+    Returns:
+        A ``rerun.blueprint.Blueprint``.
+    """
+    import rerun.blueprint as rrb  # Rerun: heavy, only when a recording is written
+
+    bounds = bounds or {}
+
+    def eye(origin, least=0.05, distance=1.2):
+        return camera(bounds[origin], least, distance) if origin in bounds else None
+
+    def area(origin):
+        if origin not in bounds:
+            return None
+        (x0, y0, _), (x1, y1, _) = bounds[origin]
+        return rrb.VisualBounds2D(x_range=(x0, x1), y_range=(y0, y1))
+
+    tabs = []
+    for section, tab in TABS.items():
+        views = contents.get(section) or {}
+        if not views:
+            continue
+        if section == "errors":
+            top = [
+                rrb.Spatial3DView(origin=f"errors/{k}", contents="$origin/**", name=n, eye_controls=eye(f"errors/{k}"))
+                for k, n in views.items()
+            ]
+            bottom = [rrb.BarChartView(origin=f"errors/{k}/histogram", name=f"{k.capitalize()}: error histogram [mm]")
+                      for k in views]
+            tabs.append(rrb.Vertical(rrb.Horizontal(*top), rrb.Horizontal(*bottom), row_shares=[3, 1], name=tab))
+        elif section == "residuals":
+            tabs.append(rrb.Vertical(*[rrb.BarChartView(origin=f"residuals/{k}", name=n) for k, n in views.items()],
+                                     name=tab))
+        elif section == "parameters":
+            tabs.append(rrb.Vertical(*[rrb.Spatial2DView(origin=f"parameters/{k}", name=n,
+                                                         visual_bounds=area(f"parameters/{k}"))
+                                       for k, n in views.items()], name=tab))
+        elif section == "coverage":
+            tabs.append(rrb.Grid(*[rrb.BarChartView(origin=f"coverage/{k}", name=n) for k, n in views.items()],
+                                 name=tab))
+        elif section == "sockets":
+            tabs.append(rrb.Grid(*[rrb.Spatial3DView(origin=f"sockets/{k}", name=n, eye_controls=eye(f"sockets/{k}"))
+                                   for k, n in views.items()], name=tab))
+        else:
+            tabs.append(rrb.Tabs(*[rrb.TextDocumentView(origin=f"tables/{k}", name=n) for k, n in views.items()],
+                                 name=tab))
+    world = rrb.Spatial3DView(origin="world", contents="$origin/**", name=title, eye_controls=eye("world", 1.0, 0.9))
+    if active_tab is None:
+        shown = [section for section in TABS if contents.get(section)]
+        active_tab = shown.index("sockets") if "sockets" in shown else 0
+    root = rrb.Horizontal(world, rrb.Tabs(*tabs, active_tab=active_tab), column_shares=[3, 2]) if tabs else world
+    return rrb.Blueprint(
+        root,
+        rrb.BlueprintPanel(state="collapsed"),
+        rrb.SelectionPanel(state="collapsed"),
+        rrb.TimePanel(state="collapsed", timeline="time", play_state="playing"),
+        auto_views=False,
+        auto_layout=False,
+    )

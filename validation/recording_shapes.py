@@ -1,0 +1,101 @@
+"""Plain geometry for the recordings (no Rerun here): link capsules, a colour ramp, histograms, bars."""
+
+from __future__ import annotations
+
+import numpy as np
+
+#: Anchors of the error colour ramp, all readable on the viewer's dark background (blue: small, red: large).
+RAMP = np.array([(60, 110, 240), (30, 190, 210), (90, 205, 90), (245, 215, 40), (235, 60, 40)], dtype=float)
+#: Height of the tallest bar in the parameter panels (2D view units; the labels carry the values).
+BAR_HEIGHT = 4.0
+
+
+def capsules(strips: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Capsules along the segments of poly-lines (Rerun's capsules run along +z from their origin).
+
+    Args:
+        strips: (T, K, 3) points of T poly-lines [m].
+
+    Returns:
+        lengths (T, K-1) [m], translations (T, K-1, 3) (segment starts) [m] and quaternions
+        (T, K-1, 4) (x, y, z, w) turning +z onto each segment (identity for a zero-length one).
+    """
+    start, end = strips[:, :-1], strips[:, 1:]
+    vector = end - start
+    lengths = np.linalg.norm(vector, axis=-1)
+    unit = np.divide(vector, lengths[..., None], out=np.zeros_like(vector), where=lengths[..., None] > 1e-12)
+    unit[lengths <= 1e-12] = (0.0, 0.0, 1.0)
+    # half-way quaternion from z to u: (z x u, 1 + z.u), normalised; u = -z turns about x
+    quat = np.stack([-unit[..., 1], unit[..., 0], np.zeros_like(lengths), 1.0 + unit[..., 2]], axis=-1)
+    flipped = quat[..., 3] < 1e-9
+    quat[flipped] = (1.0, 0.0, 0.0, 0.0)
+    return lengths, start, quat / np.linalg.norm(quat, axis=-1, keepdims=True)
+
+
+def colour_ramp(share: np.ndarray) -> np.ndarray:
+    """(N, 3) uint8 colours of values (N,) in [0, 1] (clipped) on the ramp :data:`RAMP`."""
+    s = np.clip(np.asarray(share, dtype=float), 0.0, 1.0) * (len(RAMP) - 1)
+    low = np.minimum(s.astype(int), len(RAMP) - 2)
+    frac = (s - low)[:, None]
+    return np.round(RAMP[low] * (1 - frac) + RAMP[low + 1] * frac).astype(np.uint8)
+
+
+def histogram(values: np.ndarray, bins: int = 30) -> tuple[np.ndarray, np.ndarray, float]:
+    """Counts (bins,), bin left edges (bins,: Rerun's bar abscissa) and bin width of values from 0 to their maximum."""
+    values = np.asarray(values, dtype=float)
+    top = float(values.max()) if values.size and values.max() > 0 else 1.0
+    counts, edges = np.histogram(values, bins=bins, range=(0.0, top))
+    return counts, edges[:-1], float(edges[1] - edges[0])
+
+
+def is_angle(name: str) -> bool:
+    """True for angular parameters (degrees in displays), false for lengths (millimetres)."""
+    return name.startswith(("alpha", "theta", "base_roll", "base_pitch", "base_yaw"))
+
+
+def parameter_bars(
+    names: list[str], change: np.ndarray, std: np.ndarray, truth: np.ndarray | None = None
+) -> dict[str, dict[str, np.ndarray | list]]:
+    """2D shapes of a bar chart with error bars, one per group (``lengths`` [mm], ``angles`` [deg]).
+
+    Bar ``k`` spans x in [k - 0.35, k + 0.35]; heights are scaled so that the largest |value| of the
+    group is :data:`BAR_HEIGHT` tall; y points down in Rerun's 2D views, so heights are negated.
+
+    Args:
+        names: (P,) parameter names.
+        change, std: (P,) [m, rad].
+        truth: (P,) [m, rad] or None.
+
+    Returns:
+        group -> ``mins`` (B, 2), ``sizes`` (B, 2), ``colours`` (B, 3) of the bars, ``names`` (B, 2) and
+        ``labels`` (B,) of the parameter names beyond each bar's end, ``whiskers`` (B, 2, 2), ``zero``
+        (2, 2), ``scale`` (2, 2) a bar of the tallest height left of the chart with ``scale_label``, and
+        with ``truth``, ``truth`` (B, 2).
+    """
+    change, std = np.asarray(change, dtype=float), np.asarray(std, dtype=float)
+    angle = np.array([is_angle(n) for n in names], dtype=bool)
+    out = {}
+    for group, mask, scale, unit in (("lengths", ~angle, 1e3, "mm"), ("angles", angle, np.rad2deg(1.0), "deg")):
+        if not mask.any():
+            continue
+        value, spread = change[mask] * scale, std[mask] * scale
+        true = None if truth is None else np.asarray(truth, dtype=float)[mask] * scale
+        reach = max(np.max(np.abs(value) + spread), 0.0 if true is None else np.max(np.abs(true)), 1e-12)
+        k = BAR_HEIGHT / reach
+        x = np.arange(mask.sum(), dtype=float)
+        y = -value * k
+        shapes = {
+            "mins": np.column_stack([x - 0.35, np.minimum(y, 0.0)]),
+            "sizes": np.column_stack([np.full_like(x, 0.7), np.abs(y)]),
+            "colours": np.where((value >= 0)[:, None], [[40, 120, 220]], [[220, 60, 50]]).astype(np.uint8),
+            "names": np.column_stack([x, y + np.where(y < 0, -0.45, 0.45)]),
+            "labels": list(np.asarray(names)[mask]),
+            "scale": np.array([[-1.2, 0.0], [-1.2, -BAR_HEIGHT]]),
+            "scale_label": f"{reach:.3f} {unit}",
+            "whiskers": np.stack([np.column_stack([x, y - spread * k]), np.column_stack([x, y + spread * k])], axis=1),
+            "zero": np.array([[-1.4, 0.0], [x[-1] + 0.6, 0.0]]),
+        }
+        if true is not None:
+            shapes["truth"] = np.column_stack([x, -true * k])
+        out[group] = shapes
+    return out
