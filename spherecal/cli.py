@@ -51,6 +51,11 @@ def _version() -> str:
         return "unknown"
 
 
+def _one_line(message: str) -> str:
+    """A refusal is one line, even when it quotes a file name holding a newline."""
+    return message.replace("\r", "\\r").replace("\n", "\\n")
+
+
 def main(argv: list[str] | None = None) -> int:
     """Run one subcommand; return its exit status. Every refusal (a bad option, bad input, a file that
     cannot be read or written) prints one line and returns 1."""
@@ -64,11 +69,11 @@ def main(argv: list[str] | None = None) -> int:
     try:
         return int(args._run(args) or 0)
     except (SpherecalError, OptionError) as error:
-        print(f"spherecal {args.command}: error: {error}", file=sys.stderr)
+        print(f"spherecal {args.command}: error: {_one_line(str(error))}", file=sys.stderr)
         return 1
     except OSError as error:  # a file that cannot be read or written: one line, not a traceback
         where = f"{error.filename}: " if error.filename else ""
-        print(f"spherecal {args.command}: error: {where}{error.strerror or error}", file=sys.stderr)
+        print(f"spherecal {args.command}: error: {_one_line(f'{where}{error.strerror or error}')}", file=sys.stderr)
         return 1
     except KeyboardInterrupt:
         print(f"spherecal {args.command}: interrupted", file=sys.stderr)

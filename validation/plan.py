@@ -27,13 +27,13 @@ from dataclasses import dataclass, field, replace
 from pathlib import Path
 
 import numpy as np
-import yaml
 
 from spherecal.controller.exploration import joint_coverage
 from spherecal.correction import RobotModel
 from spherecal.correction.errors import SpherecalError
 from spherecal.correction.fixtures import FixtureSpec
 from spherecal.correction.samples import Dataset
+from spherecal.correction.yaml_safe import load_yaml
 from spherecal.identification.prediction import Prediction, Workspace, predict_accuracy
 from spherecal.identification.synthetic import fixture_samples, project_to_point
 
@@ -149,8 +149,9 @@ def grid_candidates(text: str) -> list[Candidate]:
             lo, hi, count = float(fields[0]), float(fields[1]), int(fields[2])
         except (ValueError, IndexError):
             raise CandidateError(f"--grid {text!r}: field '{axis}': expected 'min,max,count', got {part!r}") from None
-        if len(fields) != 3 or count < 1 or not (math.isfinite(lo) and math.isfinite(hi)):
-            raise CandidateError(f"--grid {text!r}: field '{axis}': expected 'min,max,count' with count >= 1")
+        if len(fields) != 3 or count < 1 or not (abs(lo) <= 10.0 and abs(hi) <= 10.0):  # finite, metres
+            raise CandidateError(f"--grid {text!r}: field '{axis}': expected 'min,max,count', count >= 1, |min|, "
+                                 "|max| <= 10 m")
         axes.append(np.linspace(lo, hi, count) if count > 1 else np.array([(lo + hi) / 2]))
     total = math.prod(a.size for a in axes)
     if total > MAX_GRID:
@@ -170,9 +171,10 @@ def read_candidates(path: str | Path, n_joints: int) -> list[Candidate]:
 
     path = Path(path)
     try:
-        data = yaml.safe_load(path.read_text())
-    except (OSError, UnicodeDecodeError, yaml.YAMLError) as error:
+        text = path.read_text(encoding="utf-8")
+    except (OSError, UnicodeDecodeError) as error:
         raise CandidateError(f"{path}: cannot read candidates: {str(error).splitlines()[0]}") from None
+    data, _ = load_yaml(text, str(path), CandidateError)  # bounded: size, depth, aliases; no duplicate keys
     entries = data.get("candidates") if isinstance(data, dict) else None
     if not isinstance(entries, dict) or not entries:
         raise CandidateError(
@@ -184,6 +186,8 @@ def read_candidates(path: str | Path, n_joints: int) -> list[Candidate]:
         if not isinstance(entry, dict) or "position" not in entry:
             raise CandidateError(f"{where}': expected a mapping with 'position: [x, y, z]'")
         position = _vector(entry["position"], 3, f"{where}.position'")
+        if np.abs(position).max() > 10.0:
+            raise CandidateError(f"{where}.position': {position.tolist()} m is not physical (at most 10 m)")
         joint_range = None
         if entry.get("joint_range") is not None:
             joint_range = _vector(entry["joint_range"], n_joints, f"{where}.joint_range'")
