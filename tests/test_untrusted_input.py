@@ -15,8 +15,8 @@ from spherecal.correction.samples import Dataset, DatasetError
 from spherecal.correction.samples_csv import format_samples, read_samples, write_samples
 from spherecal.correction.yaml_safe import MAX_BYTES
 from spherecal.identification.importers import RecordingError, read_joint_csv
+from spherecal.validation.candidates import CandidateError, read_candidates
 from spherecal.validation.mocap import MocapError, MocapMeasurement, read_mocap_csv, write_mocap_csv
-from spherecal.validation.plan import CandidateError, read_candidates
 from tests.refusal import refused
 
 BOMB = "\n".join(

@@ -77,7 +77,8 @@ def run(args: argparse.Namespace) -> int:
     rng = np.random.default_rng(args.seed)
     if args.predict is not None:
         return _predict(args, model)
-    from spherecal.validation.plan import grid_candidates, plan, read_candidates
+    from spherecal.validation.candidates import grid_candidates, read_candidates
+    from spherecal.validation.plan import plan
 
     if args.candidates is None and args.grid is None:
         raise fail("give --candidates C.yaml or --grid 'xmin,xmax,nx;ymin,ymax,ny;zmin,zmax,nz'")

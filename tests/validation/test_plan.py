@@ -6,13 +6,10 @@ import numpy as np
 import pytest
 
 from spherecal.cli import main
+from spherecal.validation.candidates import Candidate, CandidateError, grid_candidates, read_candidates
 from spherecal.validation.plan import (
-    Candidate,
-    CandidateError,
-    grid_candidates,
     motion_samples,
     plan,
-    read_candidates,
     restricted,
 )
 from spherecal.validation.plan_report import format_plan
