@@ -10,6 +10,7 @@ from __future__ import annotations
 import argparse
 import importlib
 import sys
+import warnings
 from importlib.metadata import PackageNotFoundError, version
 
 #: subcommand -> module with ``HELP``, ``add_arguments(parser)`` and ``run(args) -> int``.
@@ -66,8 +67,13 @@ def main(argv: list[str] | None = None) -> int:
     from spherecal.correction.errors import SpherecalError  # numpy: not at --help (start-up)
     from spherecal.options import OptionError
 
+    def one_line_warning(message, category, filename, lineno, file=None, line=None) -> None:
+        print(f"spherecal {args.command}: warning: {_one_line(str(message))}", file=sys.stderr)
+
     try:
-        return int(args._run(args) or 0)
+        with warnings.catch_warnings():
+            warnings.showwarning = one_line_warning  # a warning for the user, not a source location
+            return int(args._run(args) or 0)
     except (SpherecalError, OptionError) as error:
         print(f"spherecal {args.command}: error: {_one_line(str(error))}", file=sys.stderr)
         return 1
@@ -78,7 +84,6 @@ def main(argv: list[str] | None = None) -> int:
     except KeyboardInterrupt:
         print(f"spherecal {args.command}: interrupted", file=sys.stderr)
         return 130
-
 
 
 if __name__ == "__main__":
