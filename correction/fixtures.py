@@ -25,7 +25,9 @@ import numpy as np
 import yaml
 
 from spherecal.correction.atomic import atomic_write_text
+from spherecal.correction.robot_file import MAX_LENGTH
 from spherecal.correction.samples import Dataset, DatasetError
+from spherecal.correction.yaml_safe import load_yaml
 
 
 # ------------------------------------------------------------------------------ fixtures.yaml
@@ -94,20 +96,6 @@ def _node_line(node: Any, *path: Any) -> int:
     return node.start_mark.line + 1
 
 
-def _duplicate_keys(node: Any, where: str) -> None:
-
-    if isinstance(node, yaml.MappingNode):
-        seen: set[Any] = set()
-        for key, value in node.value:
-            if key.value in seen:
-                raise DatasetError(f"{where}: row {key.start_mark.line + 1}, field {key.value!r}: duplicate key")
-            seen.add(key.value)
-            _duplicate_keys(value, where)
-    elif isinstance(node, yaml.SequenceNode):
-        for value in node.value:
-            _duplicate_keys(value, where)
-
-
 def _plain_name(name: Any) -> Any:
     """A fixture numbered in YAML (``1: {}``) is named ``"1"``, as in samples.csv; other keys unchanged."""
     return str(name) if isinstance(name, int) and not isinstance(name, bool) else name
@@ -127,16 +115,9 @@ def read_fixtures(path: str | os.PathLike) -> FixtureSpec:
         text = path.read_text(encoding="utf-8-sig")  # a spreadsheet's byte-order mark is not data
     except (OSError, UnicodeDecodeError) as error:
         raise DatasetError(f"{path}: cannot read: {getattr(error, 'strerror', None) or error}") from None
-    try:
-        root = yaml.compose(text, Loader=yaml.SafeLoader)
-        data = yaml.safe_load(text)
-    except yaml.YAMLError as error:
-        mark = getattr(error, "problem_mark", None)
-        row = f"row {mark.line + 1}" if mark is not None else "row ?"
-        raise DatasetError(f"{path}: {row}, field '': invalid YAML: {getattr(error, 'problem', error)}") from None
+    data, root = load_yaml(text, str(path), DatasetError)  # bounded: size, depth, aliases; no duplicate keys
     if data is None:
         raise DatasetError(f"{path}: row 1, field 'fixtures': empty file")
-    _duplicate_keys(root, str(path))
 
     def fail(message: str, *where: Any) -> DatasetError:
         field_name = ".".join(str(w) if not isinstance(w, int) else f"[{w}]" for w in where).replace(".[", "[")
@@ -166,6 +147,9 @@ def read_fixtures(path: str | os.PathLike) -> FixtureSpec:
             ok = ok and all(isinstance(v, (int, float)) and not isinstance(v, bool) for v in value)
             if not ok or not all(math.isfinite(v) for v in value):
                 raise fail(f"expected 3 finite numbers [m], got {value!r}", "fixtures", name, "position")
+            if max(abs(v) for v in value) > MAX_LENGTH:
+                raise fail(f"{value!r} m is not physical (at most {MAX_LENGTH:g} m from the base; the file is in "
+                           "metres)", "fixtures", name, "position")
             positions[name] = np.array(value, dtype=float)
     distances: list[tuple[str, str, float]] = []
     raw = data.get("distances") or []
@@ -185,6 +169,9 @@ def read_fixtures(path: str | os.PathLike) -> FixtureSpec:
             raise fail(f"expected a finite distance [m], got {value!r}", "distances", k, 2)
         if value <= 0:
             raise fail(f"distance must be > 0 m, got {value!r}", "distances", k, 2)
+        if value > 2 * MAX_LENGTH:
+            raise fail(f"{value!r} m is not physical (at most {2 * MAX_LENGTH:g} m; the file is in metres)",
+                       "distances", k)
         pair = frozenset((a, b))
         if pair in seen_pairs:
             raise fail(f"distance between {a!r} and {b!r} given twice", "distances", k)

@@ -24,6 +24,7 @@ import yaml
 from .atomic import atomic_write_text
 from .errors import SpherecalError
 from .model import CONVENTIONS, JOINT_FIELDS, RobotModel
+from .yaml_safe import load_yaml
 
 JOINT_KEYS: tuple[str, ...] = JOINT_FIELDS + ("lower", "upper")
 #: Optional per-joint key: a joint with ``beta`` carries a Hayati angle (see RobotModel.hayati).
@@ -33,22 +34,35 @@ _KNOWN_KEYS = ("name", "convention", "joints", "tool", "base")
 EMBEDDED_ROBOTS: dict[str, str] = {"panda": "panda.yaml", "franka_panda": "panda.yaml"}
 
 
+#: Largest length (a, d, tool, base position) a robot file may give [m]: an arm is not 10 m long.
+MAX_LENGTH = 10.0
+#: Largest angle (alpha, theta, beta, base rpy, joint limits) [rad]: two turns either way.
+MAX_ANGLE = 4 * math.pi
+_LENGTH, _ANGLE = (MAX_LENGTH, "m"), (MAX_ANGLE, "rad")
+_BOUNDS = {"a": _LENGTH, "d": _LENGTH, "alpha": _ANGLE, "theta": _ANGLE, "beta": _ANGLE, "lower": _ANGLE,
+           "upper": _ANGLE}
+
+
 class RobotFileError(SpherecalError):
     """A robot file that cannot be read; the message names the file and the field."""
 
 
-def _number(value: Any, where: str) -> float:
+def _number(value: Any, where: str, bound: tuple[float, str] | None = None) -> float:
+    """A finite number; with ``bound = (limit, unit)`` also ``|value| <= limit`` (a physical magnitude)."""
     if isinstance(value, bool) or not isinstance(value, (int, float)):
         raise RobotFileError(f"{where}: expected a number, got {value!r}")
     if not math.isfinite(value):
         raise RobotFileError(f"{where}: must be finite, got {value!r}")
+    if bound is not None and abs(value) > bound[0]:
+        raise RobotFileError(f"{where}: {value!r} {bound[1]} is not physical (at most {bound[0]:g} {bound[1]} "
+                             f"in magnitude; the file is in metres and radians)")
     return float(value)
 
 
-def _vector3(value: Any, where: str) -> list[float]:
+def _vector3(value: Any, where: str, bound: tuple[float, str] | None = None) -> list[float]:
     if not isinstance(value, (list, tuple)) or len(value) != 3:
         raise RobotFileError(f"{where}: expected a list of 3 numbers, got {value!r}")
-    return [_number(v, f"{where}[{k}]") for k, v in enumerate(value)]
+    return [_number(v, f"{where}[{k}]", bound) for k, v in enumerate(value)]
 
 
 def _no_unknown_keys(mapping: dict, known: tuple[str, ...], where: str) -> None:
@@ -94,23 +108,23 @@ def robot_from_dict(data: Any, source: str = "<robot>") -> RobotModel:
         for key in JOINT_KEYS:
             if key not in joint:
                 raise RobotFileError(f"{where}: missing key '{key}'")
-            columns[key].append(_number(joint[key], f"{where}.{key}"))
-        columns["beta"].append(_number(joint.get("beta", 0.0), f"{where}.beta"))
+            columns[key].append(_number(joint[key], f"{where}.{key}", _BOUNDS[key]))
+        columns["beta"].append(_number(joint.get("beta", 0.0), f"{where}.beta", _ANGLE))
         if "beta" in joint:
             hayati.append(i)
-        if columns["lower"][-1] > columns["upper"][-1]:
+        if not columns["lower"][-1] < columns["upper"][-1]:
             raise RobotFileError(
-                f"{where}: lower ({columns['lower'][-1]}) > upper ({columns['upper'][-1]})"
+                f"{where}.lower: must be below upper, got lower {columns['lower'][-1]} >= upper {columns['upper'][-1]}"
             )
-    tool = _vector3(data["tool"], f"{source}: tool")
+    tool = _vector3(data["tool"], f"{source}: tool", _LENGTH)
     base_xyz, base_rpy = [0.0] * 3, [0.0] * 3
     base = data.get("base")
     if base is not None:
         if not isinstance(base, dict):
             raise RobotFileError(f"{source}: base: expected a mapping with xyz and rpy, got {base!r}")
         _no_unknown_keys(base, ("xyz", "rpy"), f"{source}: base")
-        base_xyz = _vector3(base.get("xyz", [0.0] * 3), f"{source}: base.xyz")
-        base_rpy = _vector3(base.get("rpy", [0.0] * 3), f"{source}: base.rpy")
+        base_xyz = _vector3(base.get("xyz", [0.0] * 3), f"{source}: base.xyz", _LENGTH)
+        base_rpy = _vector3(base.get("rpy", [0.0] * 3), f"{source}: base.rpy", _ANGLE)
     extras = {k: v for k, v in data.items() if k not in _KNOWN_KEYS}
     return RobotModel(
         name=name,
@@ -128,6 +142,16 @@ def robot_from_dict(data: Any, source: str = "<robot>") -> RobotModel:
         base_rpy=base_rpy,
         extras=extras,
     )
+
+
+def check_robot(model: RobotModel, source: str) -> None:
+    """Apply the robot file's checks (finite, physical lengths and angles, lower < upper) to a model
+    built another way (a URDF), so every robot enters with the same ranges.
+
+    Raises:
+        RobotFileError: one line naming ``source`` and the field (``joints[i].a``, ``tool[2]``, ...).
+    """
+    robot_from_dict({k: v for k, v in robot_to_dict(model).items() if k in _KNOWN_KEYS}, source)
 
 
 def load_robot(
@@ -152,7 +176,7 @@ def load_robot(
             raise RobotFileError(f"{key}: a {option} ({value!r}) is only for a URDF robot description (.urdf)")
     if key in EMBEDDED_ROBOTS and not Path(key).exists():
         text = resources.files(__package__).joinpath("data", EMBEDDED_ROBOTS[key]).read_text()
-        return robot_from_dict(yaml.safe_load(text), source=key)
+        return robot_from_dict(load_yaml(text, key, RobotFileError)[0], source=key)
     path = Path(path_or_name)
     try:
         text = path.read_text(encoding="utf-8")
@@ -160,12 +184,7 @@ def load_robot(
         raise RobotFileError(f"{path}: cannot read: {error.strerror or error}") from None
     except UnicodeDecodeError as error:
         raise RobotFileError(f"{path}: cannot read: not UTF-8 text (byte {error.start})") from None
-    try:
-        data = yaml.safe_load(text)
-    except yaml.YAMLError as error:
-        mark = getattr(error, "problem_mark", None)
-        line = f" line {mark.line + 1}" if mark is not None else ""
-        raise RobotFileError(f"{path}:{line} invalid YAML: {getattr(error, 'problem', error)}") from None
+    data, _ = load_yaml(text, str(path), RobotFileError)  # bounded: size, depth, aliases; no duplicate keys
     return robot_from_dict(data, source=str(path))
 
 

@@ -33,7 +33,7 @@ import numpy as np
 from .conversion import convert
 from .kinematics import link_frames
 from .model import RobotModel, matrix_rpy
-from .robot_file import RobotFileError
+from .robot_file import RobotFileError, check_robot
 from .urdf_read import MOVABLE, UrdfTree, chain, read_urdf
 
 #: Angle [rad] below which consecutive axes count as parallel. A DH ``d`` grows like (offset
@@ -247,4 +247,5 @@ def load_urdf(path: str | os.PathLike, tip_link: str | None = None, base_link: s
     if convention not in ("modified", "standard"):
         raise RobotFileError(f"{path}: unknown convention {convention!r} (expected 'modified' or 'standard')")
     model = urdf_model(read_urdf(path), tip_link, base_link, convention)
+    check_robot(model, str(path))  # the robot file's ranges: lengths, angles, joint limits
     return replace(model, extras={**model.extras, "source": str(path)})

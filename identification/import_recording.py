@@ -8,8 +8,6 @@ the output folder and rename it into place.
 from __future__ import annotations
 
 import os
-import shutil
-import tempfile
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -17,6 +15,7 @@ import numpy as np
 
 from spherecal.correction.fixtures import FixtureSpec, write_fixtures
 from spherecal.correction.model import RobotModel
+from spherecal.correction.outputs import OutputSet
 from spherecal.correction.samples import Dataset, DatasetError
 from spherecal.correction.samples_csv import write_samples
 
@@ -81,8 +80,8 @@ def check_out_dir(out: str | os.PathLike, inputs: list[str | os.PathLike]) -> No
     """Refuse an output folder that exists and is not empty, is a file, or holds (or is) an input."""
     out = Path(out).absolute()
     for item in inputs:
-        item = Path(item).absolute()
-        if item == out or out in item.parents:
+        item = Path(item).resolve()  # links resolved: compare files, not strings
+        if item == out.resolve() or out.resolve() in item.parents:
             raise RecordingError(f"{out}: field '--out': holds the input {item}; choose a new folder")
     if out.exists() and (not out.is_dir() or any(out.iterdir())):
         raise RecordingError(f"{out}: field '--out': exists and is not an empty folder; choose a new folder")
@@ -145,6 +144,7 @@ def import_recording(
     if fmt not in FORMATS:
         raise ValueError(f"unknown format {fmt!r}, expected one of {FORMATS}")
     check_out_dir(out, [source, *inputs])
+    _outputs(Path(out), source, inputs)  # every output location checked before any work
     if fmt == "mukca":
         recording, spec = read_mukca(source, model, options.distance)
     else:
@@ -165,31 +165,20 @@ def import_recording(
             for s in segments
         }
     spec = FixtureSpec(spec.names, spec.positions, spec.distances, {"import": block} if block else {})
-    _write_together(Path(out), kept, spec)
+    _write_together(_outputs(Path(out), source, inputs), kept, spec)
     return ImportResult(
         kept, spec, read, segments, read - dataset.n_samples, dataset.n_samples - deduplicated.n_samples
     )
 
 
-def _write_together(out: Path, dataset: Dataset, spec: FixtureSpec) -> None:
-    """Write both files into a temporary folder beside ``out``, then rename it to ``out``."""
-    out = out.absolute()
-    out.parent.mkdir(parents=True, exist_ok=True)
-    stage = Path(tempfile.mkdtemp(prefix=f".{out.name}.", suffix=".tmp", dir=out.parent))
-    try:
-        write_samples(stage / "samples.csv", dataset)
-        write_fixtures(stage / "fixtures.yaml", spec)
-        os.chmod(stage, 0o777 & ~_umask())
-        os.replace(stage, out)  # an empty existing folder is replaced; a non-empty one was refused before
-    except OSError as error:
-        shutil.rmtree(stage, ignore_errors=True)
-        raise RecordingError(f"{out}: cannot write: {error.strerror or error}") from None
-    except BaseException:
-        shutil.rmtree(stage, ignore_errors=True)
-        raise
+def _outputs(out: Path, source, inputs) -> OutputSet:
+    """``out/samples.csv`` and ``out/fixtures.yaml``, checked against the inputs."""
+    return OutputSet({"--out": [out / "samples.csv", out / "fixtures.yaml"]}, {"SOURCE": source, "input": list(inputs)})
 
 
-def _umask() -> int:
-    mask = os.umask(0)
-    os.umask(mask)
-    return mask
+def _write_together(outputs: OutputSet, dataset: Dataset, spec: FixtureSpec) -> None:
+    """Write both files together (staged beside their destination, then renamed)."""
+    samples, fixtures = outputs.planned
+    with outputs:
+        write_samples(outputs.stage(samples), dataset)
+        write_fixtures(outputs.stage(fixtures), spec)

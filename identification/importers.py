@@ -9,8 +9,6 @@ Errors are :class:`RecordingError`, one line naming the file, the row and the fi
 
 from __future__ import annotations
 
-import csv
-import io
 import math
 import os
 import re
@@ -19,6 +17,15 @@ from pathlib import Path
 
 import numpy as np
 
+from spherecal.correction.csv_rows import (
+    RowNames,
+    block_rows,
+    is_skipped,
+    iter_lines,
+    parse_line,
+    plain_values,
+    read_rows,
+)
 from spherecal.correction.fixtures import FixtureSpec
 from spherecal.correction.model import RobotModel
 from spherecal.correction.samples import LIMIT_TOL, Dataset, DatasetError
@@ -141,13 +148,6 @@ def _number(text: str, where: str) -> float:
     return value
 
 
-def _read_text(path: Path) -> str:
-    try:
-        return path.read_text(encoding="utf-8-sig")
-    except (OSError, UnicodeDecodeError) as error:
-        raise RecordingError(f"{path}: cannot read: {getattr(error, 'strerror', None) or error}") from None
-
-
 def read_mukca(
     path: str | os.PathLike, model: RobotModel, distance: float = MUKCA_DISTANCE
 ) -> tuple[Recording, FixtureSpec]:
@@ -191,11 +191,8 @@ def read_mukca(
             if "," in name:
                 raise RecordingError(f"{folder}: field 'placement': a folder name with a comma cannot name a fixture")
             before = len(q)
-            reader = csv.reader(io.StringIO(_read_text(file)))
-            for fields in reader:
-                if not fields or not "".join(fields).strip() or fields[0].lstrip().startswith("#"):
-                    continue
-                where = f"{file}: row {reader.line_num}"
+            for line, fields in read_rows(file, RecordingError):  # streamed; blank lines, comments skipped
+                where = f"{file}: row {line}"
                 if len(fields) != n:
                     raise RecordingError(f"{where}, field 'q*': {len(fields)} joint angles, {model.name} has {n}")
                 q.append([_number(v, f"{where}, field 'q{i + 1}'") for i, v in enumerate(fields)])
@@ -225,45 +222,71 @@ def read_joint_csv(path: str | os.PathLike, model: RobotModel) -> Recording:
             number, an empty fixture label, an angle outside the joint limits.
     """
     path = Path(path)
-    reader = csv.reader(io.StringIO(_read_text(path)))
     header: list[str] | None = None
-    values: list[list[float]] = []
-    times: list[float] = []
-    labels: list[str] = []
-    rows: list[str] = []
-    for fields in reader:
-        if not fields or not "".join(fields).strip() or (header is not None and fields[0].lstrip().startswith("#")):
-            continue
-        where = f"{path}: row {reader.line_num}"
+    blocks: list[np.ndarray] = []  # [t,] joints, in blocks of 50 000 lines: a long recording stays small
+    labels: list[np.ndarray] = []
+    lines: list[np.ndarray] = []
+    first = 1
+    for block in iter_lines(path, RecordingError):  # streamed: an error stops the reading
+        start, first = first, first + len(block)
         if header is None:
-            header = [f.strip() for f in fields]
-            index, names = match_joints(header, model, where)
-            time_col = next((header.index(c) for c in TIME_COLUMNS if c in header), None)
-            label_col = header.index("fixture") if "fixture" in header else None
-            continue
+            for k, line in enumerate(block):
+                if not is_skipped(line) or line.lstrip().startswith("#"):  # comments only after the header
+                    where = f"{path}: row {start + k}"
+                    header = [f.strip() for f in parse_line(line, where, RecordingError)]
+                    index, names = match_joints(header, model, where)
+                    time_col = next((header.index(c) for c in TIME_COLUMNS if c in header), None)
+                    label_col = header.index("fixture") if "fixture" in header else None
+                    columns = ([time_col] if time_col is not None else []) + list(index)
+                    block, start = block[k + 1 :], start + k + 1
+                    break
+            if header is None or not block:
+                continue
+        data = plain_values(block, len(header), columns)
+        if data is not None:
+            found = np.arange(start, start + len(block))
+            names_ = [line.split(",")[label_col].strip() for line in block] if label_col is not None else []
+            if "" in names_:
+                data = None
+        if data is None:  # not plain: line by line, naming the row and field of the first problem
+            data, found, names_ = _careful_block(block, start, path, header, columns, label_col)
+        blocks.append(data)
+        lines.append(found)
+        labels.append(np.array(names_, dtype=str))
+    if header is None:
+        raise RecordingError(f"{path}: row 1, field 'header': empty file (expected a header naming the joints)")
+    values = np.concatenate(blocks) if blocks else np.empty((0, len(columns)))
+    if not len(values):
+        raise RecordingError(f"{path}: row 2, field {header[index[0]]!r}: no samples after the header")
+    times = values[:, 0] if time_col is not None else None
+    values = values[:, 1:] if time_col is not None else values
+    label_values = np.concatenate(labels) if label_col is not None else None
+    t = times
+    if t is not None and np.nanmax(np.abs(t)) > NANOSECONDS_ABOVE:
+        t = t * 1e-9
+    recording = Recording(
+        np.ascontiguousarray(values), t, label_values, str(path), RowNames(path, np.concatenate(lines))
+    )
+    recording.check_limits(model, names)
+    return recording
+
+
+def _careful_block(block: list[str], start: int, path: Path, header: list[str], columns: list[int],
+                   label_col: int | None) -> tuple[np.ndarray, np.ndarray, list[str]]:
+    """A block of a joint CSV line by line (csv module): values of ``columns``, lines, labels."""
+    values: list[list[float]] = []
+    found: list[int] = []
+    labels: list[str] = []
+    for line, fields in block_rows(block, start, path, RecordingError):
+        where = f"{path}: row {line}"
         if len(fields) < len(header):
             missing = header[len(fields)]
             raise RecordingError(f"{where}, field {missing!r}: {len(fields)} fields, the header has {len(header)}")
-        values.append([_number(fields[i], f"{where}, field {header[i]!r}") for i in index])
-        if time_col is not None:
-            times.append(_number(fields[time_col], f"{where}, field {header[time_col]!r}"))
+        values.append([_number(fields[i], f"{where}, field {header[i]!r}") for i in columns])
         if label_col is not None:
             label = fields[label_col].strip()
             if not label:
                 raise RecordingError(f"{where}, field 'fixture': empty fixture name")
             labels.append(label)
-        rows.append(where)
-    if header is None:
-        raise RecordingError(f"{path}: row 1, field 'header': empty file (expected a header naming the joints)")
-    if not values:
-        raise RecordingError(f"{path}: row 2, field {header[index[0]]!r}: no samples after the header")
-    t = None
-    if times:
-        t = np.array(times, dtype=float)
-        if np.nanmax(np.abs(t)) > NANOSECONDS_ABOVE:
-            t = t * 1e-9
-    recording = Recording(
-        np.array(values, dtype=float), t, np.array(labels) if labels else None, str(path), tuple(rows)
-    )
-    recording.check_limits(model, names)
-    return recording
+        found.append(line)
+    return np.array(values, dtype=float).reshape(len(found), len(columns)), np.array(found, dtype=int), labels

@@ -10,6 +10,7 @@ from __future__ import annotations
 import argparse
 import importlib
 import sys
+import warnings
 from importlib.metadata import PackageNotFoundError, version
 
 #: subcommand -> module with ``HELP``, ``add_arguments(parser)`` and ``run(args) -> int``.
@@ -51,6 +52,11 @@ def _version() -> str:
         return "unknown"
 
 
+def _one_line(message: str) -> str:
+    """A refusal is one line, even when it quotes a file name holding a newline."""
+    return message.replace("\r", "\\r").replace("\n", "\\n")
+
+
 def main(argv: list[str] | None = None) -> int:
     """Run one subcommand; return its exit status. Every refusal (a bad option, bad input, a file that
     cannot be read or written) prints one line and returns 1."""
@@ -61,19 +67,23 @@ def main(argv: list[str] | None = None) -> int:
     from spherecal.correction.errors import SpherecalError  # numpy: not at --help (start-up)
     from spherecal.options import OptionError
 
+    def one_line_warning(message, category, filename, lineno, file=None, line=None) -> None:
+        print(f"spherecal {args.command}: warning: {_one_line(str(message))}", file=sys.stderr)
+
     try:
-        return int(args._run(args) or 0)
+        with warnings.catch_warnings():
+            warnings.showwarning = one_line_warning  # a warning for the user, not a source location
+            return int(args._run(args) or 0)
     except (SpherecalError, OptionError) as error:
-        print(f"spherecal {args.command}: error: {error}", file=sys.stderr)
+        print(f"spherecal {args.command}: error: {_one_line(str(error))}", file=sys.stderr)
         return 1
     except OSError as error:  # a file that cannot be read or written: one line, not a traceback
         where = f"{error.filename}: " if error.filename else ""
-        print(f"spherecal {args.command}: error: {where}{error.strerror or error}", file=sys.stderr)
+        print(f"spherecal {args.command}: error: {_one_line(f'{where}{error.strerror or error}')}", file=sys.stderr)
         return 1
     except KeyboardInterrupt:
         print(f"spherecal {args.command}: interrupted", file=sys.stderr)
         return 130
-
 
 
 if __name__ == "__main__":

@@ -30,6 +30,12 @@ import sys
 MM_FLOOR = 1e-2
 #: Above this a fixture or marker noise [mm] is not a measurement but a slip.
 MAX_NOISE_MM = 20.0
+#: Longest simulated motion per fixture [s] (one hour; a recording of 1.8 M rows is 30 minutes).
+MAX_SECONDS = 3600.0
+#: Most random validation configurations (memory: every one is a forward kinematics of each model).
+MAX_CONFIGURATIONS = 200_000
+#: Most samples per fixture asked of a simulation (memory).
+MAX_PER_FIXTURE = 100_000
 
 
 class OptionError(Exception):
@@ -87,19 +93,45 @@ def seed(text: str) -> int:
     return value
 
 
-def count(minimum: int = 1):
-    """An argparse type: an integer >= ``minimum``."""
+def count(minimum: int = 1, maximum: int | None = None):
+    """An argparse type: an integer >= ``minimum`` (and <= ``maximum`` when given)."""
+    wanted = f"an integer >= {minimum}" if maximum is None else f"an integer in {minimum}..{maximum}"
 
     def parse(text: str) -> int:
         try:
             value = int(text)
         except ValueError:
-            raise argparse.ArgumentTypeError(f"expected an integer >= {minimum}, got {text!r}") from None
-        if value < minimum:
-            raise argparse.ArgumentTypeError(f"expected an integer >= {minimum}, got {text!r}")
+            raise argparse.ArgumentTypeError(f"expected {wanted}, got {text!r}") from None
+        if value < minimum or (maximum is not None and value > maximum):
+            raise argparse.ArgumentTypeError(f"expected {wanted}, got {text!r}")
         return value
 
     return parse
+
+
+def at_most(limit: float, unit: str, allow_zero: bool = False):
+    """An argparse type: a finite number > 0 (>= 0 with ``allow_zero``) and <= ``limit`` [``unit``]."""
+
+    def parse(text: str) -> float:
+        value = non_negative(text) if allow_zero else positive(text)
+        if value > limit:
+            raise argparse.ArgumentTypeError(f"expected at most {limit:g} {unit}, got {text!r}")
+        return value
+
+    return parse
+
+
+def configurations(text: str) -> int:
+    """``--configurations``: 3 .. :data:`MAX_CONFIGURATIONS` random configurations."""
+    return count(3, MAX_CONFIGURATIONS)(text)
+
+
+def duration(text: str) -> float:
+    """``--seconds``: a duration > 0 and at most :data:`MAX_SECONDS` [s]."""
+    value = positive(text)
+    if value > MAX_SECONDS:
+        raise argparse.ArgumentTypeError(f"expected at most {MAX_SECONDS:g} s of simulated motion, got {text!r}")
+    return value
 
 
 def millimetres(text: str, allow_zero: bool = True, upper: float | None = None) -> float:
@@ -196,11 +228,64 @@ def add_seed(parser: argparse.ArgumentParser, what: str = "everything random") -
 def add_per_fixture(parser: argparse.ArgumentParser, default: int, what: str = "samples kept per fixture") -> None:
     """``--per-fixture N`` (old spelling ``--samples N``, deprecated: ``--samples`` names a file elsewhere)."""
     parser.add_argument(
-        "--per-fixture", type=count(1), default=default, metavar="N", help=f"{what} (default {default})"
+        "--per-fixture", type=count(1, MAX_PER_FIXTURE), default=default, metavar="N",
+        help=f"{what} (default {default})",
     )
-    add_deprecated(parser, "--samples", "--per-fixture", count(1))
+    add_deprecated(parser, "--samples", "--per-fixture", count(1, MAX_PER_FIXTURE))
 
 
 def add_seconds(parser: argparse.ArgumentParser, default: float, what: str) -> None:
-    """``--seconds``: a duration [s] > 0."""
-    parser.add_argument("--seconds", type=positive, default=default, help=f"{what} [s] (default {default:g})")
+    """``--seconds``: a duration [s] > 0, at most :data:`MAX_SECONDS`."""
+    parser.add_argument("--seconds", type=duration, default=default, help=f"{what} [s] (default {default:g})")
+
+
+# ------------------------------------------------------------------------------------ outputs
+#: Options (argparse destinations) that name files a command reads: no output may be one of them.
+INPUT_OPTIONS: tuple[str, ...] = (
+    "robot", "samples", "fixtures", "mocap", "truth", "nominal", "calibrated", "candidates", "predict", "into",
+    "source",
+)
+
+
+def planned_outputs(args: argparse.Namespace, outputs: dict):
+    """The :class:`spherecal.correction.outputs.OutputSet` of a command, checked before any work.
+
+    Args:
+        args: the parsed options; every option of :data:`INPUT_OPTIONS` it has is an input.
+        outputs: option -> the file (or list of files) it will write; None for an option not given.
+
+    Raises:
+        spherecal.correction.outputs.OutputError: an output that is an input, is planned twice, is a
+            folder or lies where nothing can be written (one line naming the option and the file).
+    """
+    from spherecal.correction.outputs import OutputSet  # numpy: not at --help (start-up)
+
+    inputs = {f"--{name.replace('_', '-')}" if name != "source" else "SOURCE": getattr(args, name, None)
+              for name in INPUT_OPTIONS}
+    if getattr(args, "command", None) == "export":  # export's robot file is its positional argument
+        inputs["CAL.yaml"] = inputs.pop("--robot")
+    return OutputSet({k: v for k, v in outputs.items() if v is not None},
+                     {k: v for k, v in inputs.items() if isinstance(v, str)})
+
+
+def check_folder(path: str, option: str = "--out") -> None:
+    """Refuse an output folder that is an existing file or lies under one, before a long run."""
+    from spherecal.correction.outputs import check_folder as check
+
+    check(path, option)
+
+
+def stiffness_values(text: str | None, n: int) -> list[float] | None:
+    """(n,) joint stiffness [Nm/rad] of ``--stiffness K[,K...]`` (one value for all joints; 0 = rigid),
+    or None when not given."""
+    if text is None:
+        return None
+    try:
+        values = [float(v) for v in text.split(",")]
+    except ValueError:
+        raise fail(f"--stiffness {text!r}: expected numbers [Nm/rad] separated by commas") from None
+    if len(values) == 1:
+        values = values * n
+    if len(values) != n or not all(math.isfinite(v) and v >= 0 for v in values):
+        raise fail(f"--stiffness {text!r}: expected 1 or {n} finite values >= 0 [Nm/rad] (0 = rigid)")
+    return values

@@ -35,8 +35,9 @@ from spherecal.correction import atomic_write_text, registered_errors, tool_poin
 from spherecal.correction.samples import Dataset
 from spherecal.identification.calibrate import calibrate
 from spherecal.identification.prediction import Workspace, predict_accuracy
+from spherecal.validation.candidates import Candidate, grid_candidates
 from spherecal.validation.experiment import default_fixtures, fixture_spec, nominal_robot, true_robot
-from spherecal.validation.plan import Candidate, grid_candidates, motion_samples, plan
+from spherecal.validation.plan import motion_samples, plan
 from spherecal.validation.plan_report import format_plan
 from spherecal.validation.provenance import comment_block, provenance
 

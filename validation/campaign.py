@@ -32,8 +32,9 @@ from pathlib import Path
 
 import numpy as np
 
-from spherecal.correction import SpherecalError, atomic_write_text
+from spherecal.correction import SpherecalError
 from spherecal.correction.elastic import with_compliance
+from spherecal.correction.outputs import OutputSet
 from spherecal.identification.calibrate import calibrate
 from spherecal.identification.selection import elastic_start, rigid, select_model
 
@@ -319,10 +320,17 @@ def table_markdown(rows: list[TableRow], comment: str = "") -> str:
     return "\n".join(lines) + "\n"
 
 
-def write_tables(rows: list[TableRow], folder: str | os.PathLike, comment: str = "") -> tuple[Path, Path]:
-    """Write ``table2.csv`` and ``table2.md`` into ``folder`` (atomically)."""
+#: The files :func:`write_tables` writes into its folder.
+TABLE_FILES = ("table2.csv", "table2.md")
+
+
+def write_tables(rows: list[TableRow], folder: str | os.PathLike, comment: str = "",
+                 outputs: OutputSet | None = None) -> tuple[Path, Path]:
+    """Write ``table2.csv`` and ``table2.md`` into ``folder``, both or neither (staged in ``outputs``)."""
     folder = Path(folder)
-    return (
-        atomic_write_text(folder / "table2.csv", table_csv(rows, comment)),
-        atomic_write_text(folder / "table2.md", table_markdown(rows, comment)),
-    )
+    csv_path, md_path = (folder / name for name in TABLE_FILES)
+    outputs = OutputSet({"--out": [csv_path, md_path]}) if outputs is None else outputs
+    with outputs:
+        outputs.write_text(csv_path, table_csv(rows, comment))
+        outputs.write_text(md_path, table_markdown(rows, comment))
+    return csv_path, md_path

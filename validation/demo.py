@@ -10,8 +10,9 @@ from pathlib import Path
 
 import numpy as np
 
-from spherecal.correction import RobotModel, atomic_write_text, save_robot, tool_point
+from spherecal.correction import RobotModel, save_robot, tool_point
 from spherecal.correction.fixtures import format_fixtures
+from spherecal.correction.outputs import OutputSet, check_folder
 from spherecal.correction.samples_csv import format_samples
 
 from .experiment import calibrate_from, default_fixtures, motion_set, nominal_robot, true_robot
@@ -73,7 +74,9 @@ class DemoResult:
 
 
 def run_demo(config: DemoConfig, say=print) -> DemoResult:
-    """Run the demo; ``say`` prints progress lines."""
+    """Run the demo; ``say`` prints progress lines. The output folder is checked first, the files
+    appear together at the end (or none of them)."""
+    outputs = demo_outputs(config)
     timings: dict[str, float] = {}
     clock = time.perf_counter()
     rng = np.random.default_rng(config.seed)
@@ -126,7 +129,7 @@ def run_demo(config: DemoConfig, say=print) -> DemoResult:
 
     say(f"[4/4] writing results to {config.out}/")
     clock = time.perf_counter()
-    result.files = write_results(config, result, data, fixtures)
+    result.files = write_results(config, result, data, fixtures, outputs)
     timings["writing"] = time.perf_counter() - clock
     return result
 
@@ -171,38 +174,61 @@ def _inputs(config: DemoConfig) -> dict:
     }
 
 
-def write_results(config: DemoConfig, result: DemoResult, data, fixtures: dict[str, np.ndarray]) -> dict[str, Path]:
-    """Samples, fixtures, truth, calibrated model, report JSON and the recording, each with provenance."""
+#: The files of a demo in its folder (``recording`` only with ``rrd``).
+DEMO_FILES = {
+    "samples": "samples.csv",
+    "fixtures": "fixtures.yaml",
+    "mocap": "mocap.csv",
+    "truth": "truth.yaml",
+    "calibrated": "calibrated.yaml",
+    "report": "demo.json",
+    "recording": "demo.rrd",
+}
+
+
+def demo_outputs(config: DemoConfig) -> OutputSet:
+    """The demo's files, checked (before the run) and staged together (see :class:`correction.outputs.OutputSet`)."""
+    check_folder(config.out, "--out")
+    files = [Path(config.out) / name for key, name in DEMO_FILES.items() if key != "recording" or config.rrd]
+    return OutputSet({"--out": files})
+
+
+def write_results(config: DemoConfig, result: DemoResult, data, fixtures: dict[str, np.ndarray],
+                  outputs: OutputSet | None = None) -> dict[str, Path]:
+    """Samples, fixtures, truth, calibrated model, report JSON and the recording, each with provenance:
+    staged in ``outputs`` and renamed into place together."""
 
     out = Path(config.out)
+    outputs = demo_outputs(config) if outputs is None else outputs
     info = provenance(config.seed, _inputs(config))
     header = "spherecal demo\n" + comment_block(info)
     comment = "".join(f"# {line}\n" for line in header.splitlines())
     first = result.report.sets[0]
     measured = MocapMeasurement(q=first.q, tool=first.measured)
-    files = {
-        "samples": atomic_write_text(out / "samples.csv", comment + format_samples(data.dataset)),
-        "fixtures": atomic_write_text(out / "fixtures.yaml", comment + format_fixtures(data.spec)),
-        "mocap": write_mocap_csv(out / "mocap.csv", measured, comment=header + "\nsimulated mocap, random set"),
-        "truth": save_robot(result.truth, out / "truth.yaml", header=header + "\nthe TRUE robot of this simulation"),
-        "calibrated": save_robot(_with_block(result, info), out / "calibrated.yaml", header=header),
-    }
-    report = {
-        "provenance": info,
-        "fixtures_true_centres_m": {k: v.tolist() for k, v in fixtures.items()},
-        "timings_s": result.timings,
-        "validation": result.report.to_dict(),
-    }
-    files["report"] = atomic_write_text(out / "demo.json", json.dumps(report, indent=2) + "\n")
-    if config.rrd or config.spawn:
-        files["recording"] = write_recording(config, result, data, fixtures)
-    return {k: v for k, v in files.items() if v is not None}
+    files = {key: out / name for key, name in DEMO_FILES.items()}
+    with outputs:
+        outputs.write_text(files["samples"], comment + format_samples(data.dataset))
+        outputs.write_text(files["fixtures"], comment + format_fixtures(data.spec))
+        write_mocap_csv(outputs.stage(files["mocap"]), measured, comment=header + "\nsimulated mocap, random set")
+        save_robot(result.truth, outputs.stage(files["truth"]), header=header + "\nthe TRUE robot of this simulation")
+        save_robot(_with_block(result, info), outputs.stage(files["calibrated"]), header=header)
+        report = {
+            "provenance": info,
+            "fixtures_true_centres_m": {k: v.tolist() for k, v in fixtures.items()},
+            "timings_s": result.timings,
+            "validation": result.report.to_dict(),
+        }
+        outputs.write_text(files["report"], json.dumps(report, indent=2) + "\n")
+        if config.rrd or config.spawn:
+            write_recording(config, result, data, fixtures, outputs.stage(files["recording"]) if config.rrd else None)
+    return {k: v for k, v in files.items() if k != "recording" or config.rrd}
 
 
-def write_recording(config: DemoConfig, result: DemoResult, data, fixtures: dict[str, np.ndarray]) -> Path | None:
-    """The demo's Rerun recording (entity paths and layout in :mod:`validation.recording`)."""
+def write_recording(config: DemoConfig, result: DemoResult, data, fixtures: dict[str, np.ndarray],
+                    path: Path | None = None) -> Path | None:
+    """The demo's Rerun recording (entity paths and layout in :mod:`validation.recording`), into ``path``
+    (the staged ``demo.rrd``), or a live viewer only."""
 
-    path = Path(config.out) / "demo.rrd" if config.rrd else None
     recording = Recording(path, spawn=config.spawn, title="True robot (simulated) and fixtures, self-motion on 'time'")
     try:
         recording.fixtures(list(fixtures), np.array(list(fixtures.values())))

@@ -1,11 +1,19 @@
-"""Checks across input files before anything is computed or written."""
+"""Checks across input files before anything is computed or written.
+
+Output locations are checked by :class:`spherecal.correction.outputs.OutputSet` (the one mechanism).
+"""
 
 from __future__ import annotations
 
-import os
-from pathlib import Path
+import numpy as np
 
-from spherecal.correction import RobotModel, SpherecalError
+from spherecal.correction import RobotModel, SpherecalError, tool_point
+
+#: A model whose tool point lies further than this from the nominal one's on some configuration is
+#: not a description of the same arm [m] (as :data:`controller.compensation.MAX_MODEL_DIFFERENCE`).
+MAX_MODEL_DIFFERENCE = 0.05
+#: Configurations on which the tool points are compared (seeded: the check is reproducible).
+_PROBES = 200
 
 
 class ValidationInputError(SpherecalError):
@@ -13,7 +21,8 @@ class ValidationInputError(SpherecalError):
 
 
 def check_models(models: dict[str, RobotModel], files: dict[str, str]) -> None:
-    """Every model has the joint count and the DH convention of the nominal one.
+    """Every model describes the nominal arm: same joint count, DH convention and joint limits, and a
+    tool point within :data:`MAX_MODEL_DIFFERENCE` of the nominal one's (as ``compensate`` checks).
 
     Args:
         models: role (``"nominal"``, ``"calibrated"``, ``"truth"``) -> model; ``"nominal"`` first.
@@ -23,38 +32,17 @@ def check_models(models: dict[str, RobotModel], files: dict[str, str]) -> None:
         ValidationInputError: on the first mismatch.
     """
     reference = models["nominal"]
+    q = reference.random_configurations(_PROBES, np.random.default_rng(0))
+    nominal_tool = tool_point(reference, q)
     for role, model in models.items():
-        mismatch = reference.mismatch(model)
+        mismatch = reference.mismatch(model, limits=True)
         if mismatch is not None:
             field, what = mismatch
             raise ValidationInputError(f"{files[role]}: field {field}: {what} as in the nominal {files['nominal']}")
-
-
-def check_out_folder(path: str | os.PathLike, option: str = "--out") -> None:
-    """Refuse an output folder that is an existing file (or under one), before a long run rather than after it.
-
-    Raises:
-        ValidationInputError: ``path`` or a parent of it exists and is not a directory.
-    """
-    if Path(path).exists() and not Path(path).is_dir():
-        raise ValidationInputError(f"{path}: field '{option}': exists and is not a folder")
-    _check_parents(path, option)
-
-
-def check_out_file(path: str | os.PathLike, option: str) -> None:
-    """Refuse an output file that is an existing folder or lies under a file, before anything is written.
-
-    Raises:
-        ValidationInputError: ``path`` is a directory, or a parent of it exists and is not one.
-    """
-    if Path(path).is_dir():
-        raise ValidationInputError(f"{path}: field '{option}': is a folder, expected a file name")
-    _check_parents(path, option)
-
-
-def _check_parents(path: str | os.PathLike, option: str) -> None:
-    for parent in Path(path).absolute().parents:
-        if parent.exists():
-            if not parent.is_dir():
-                raise ValidationInputError(f"{path}: field '{option}': {parent} is not a folder")
-            return
+        gap = np.linalg.norm(tool_point(model, q) - nominal_tool, axis=1)
+        if not np.all(gap <= MAX_MODEL_DIFFERENCE):
+            worst = float(np.nanmax(np.where(np.isfinite(gap), gap, np.inf)))
+            raise ValidationInputError(
+                f"{files[role]}: field 'joints': tool point up to {worst * 1e3:.0f} mm from the nominal "
+                f"{files['nominal']}'s (more than {MAX_MODEL_DIFFERENCE * 1e3:.0f} mm: a model of another arm?)"
+            )

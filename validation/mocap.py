@@ -26,9 +26,15 @@ from spherecal.correction import (
     fit_rigid_transform,
     pose_matrix,
 )
+from spherecal.correction.csv_rows import read_rows
+from spherecal.correction.samples import LIMIT_TOL
 
 #: The paper's motion-capture accuracy: 0.3 mm per marker (std).
 MARKER_NOISE = 0.3e-3
+
+
+#: Fewest distinct configurations of a mocap recording that can validate a model.
+MIN_CONFIGURATIONS = 10
 
 
 class MocapError(SpherecalError):
@@ -123,6 +129,7 @@ class MocapMeasurement:
     exact_tool: np.ndarray | None = None
     t: np.ndarray | None = None
     source: str = "simulated"
+    lines: np.ndarray | None = None  # (N,) file line of every row (read from a file), for messages
 
     def __len__(self) -> int:
         return len(self.q)
@@ -226,15 +233,7 @@ def read_mocap_csv(path: str | os.PathLike, n_joints: int, cluster: MarkerCluste
             value: one line naming file, row and field.
     """
     path = Path(path)
-    try:
-        text = path.read_text(encoding="utf-8-sig")  # a spreadsheet's byte-order mark is not data
-    except (OSError, UnicodeDecodeError) as error:
-        raise MocapError(f"{path}: cannot read mocap file ({getattr(error, 'strerror', None) or error})") from None
-    rows = [
-        (i + 1, r)
-        for i, r in enumerate(csv.reader(text.splitlines()))
-        if "".join(r).strip() and not r[0].lstrip().startswith("#")  # blank or whitespace-only lines skipped
-    ]
+    rows = list(read_rows(path, MocapError))  # blank lines and comments skipped; one line per error
     if not rows:
         raise MocapError(f"{path}: empty mocap file, expected a header q1..q{n_joints}, x, y, z")
     header_line, header = rows[0]
@@ -269,7 +268,45 @@ def read_mocap_csv(path: str | os.PathLike, n_joints: int, cluster: MarkerCluste
     t = data[:, 0] if with_t else None
     q = data[:, int(with_t) : int(with_t) + n_joints]
     rest = data[:, int(with_t) + n_joints :]
+    lines = np.array([line for line, _ in rows[1:]])
     if n_markers is None:
-        return MocapMeasurement(q=q, tool=rest, t=t, source=str(path))
+        return MocapMeasurement(q=q, tool=rest, t=t, source=str(path), lines=lines)
     markers = rest.reshape(len(rest), n_markers, 3)
-    return MocapMeasurement(q=q, tool=cluster.tool_from_markers(markers), markers=markers, t=t, source=str(path))
+    return MocapMeasurement(q=q, tool=cluster.tool_from_markers(markers), markers=markers, t=t, source=str(path),
+                            lines=lines)
+
+
+def check_mocap(measurement: MocapMeasurement, model: RobotModel, limit_tol: float = LIMIT_TOL) -> None:
+    """Refuse a recording that cannot be of ``model``: angles outside its joint limits, tool points
+    further apart than the arm reaches (millimetres in a metres file), or fewer than
+    :data:`MIN_CONFIGURATIONS` distinct configurations (identical rows register perfectly and
+    "validate" any model at 0.000 mm).
+
+    Raises:
+        MocapError: one line naming the file, row and field.
+    """
+    m = measurement
+    source = m.source
+
+    def row(k: int) -> str:
+        return f"row {m.lines[k]}" if m.lines is not None else f"sample {k + 1}"
+
+    outside = (m.q < model.lower - limit_tol) | (m.q > model.upper + limit_tol)
+    if outside.any():
+        k, i = np.argwhere(outside)[0]
+        raise MocapError(f"{source}: {row(k)}: field q{i + 1}: {m.q[k, i]:.6g} rad outside the joint limits "
+                         f"[{model.lower[i]:.6g}, {model.upper[i]:.6g}] of {model.name}")
+    reach = float(np.sum(np.hypot(model.a, model.d)) + np.linalg.norm(model.tool))
+    offset = np.linalg.norm(m.tool - m.tool.mean(axis=0), axis=1)
+    if offset.max() > 2 * reach:  # every tool point lies within `reach` of the base: any two within 2 reach
+        k = int(np.argmax(offset))
+        raise MocapError(
+            f"{source}: {row(k)}: field x: tool point {offset[k]:.4g} m from the recording's centre, but "
+            f"{model.name} reaches at most {reach:.3g} m (the file is in metres: millimetres?)"
+        )
+    distinct = np.unique(m.q, axis=0).shape[0]
+    if distinct < MIN_CONFIGURATIONS:
+        raise MocapError(
+            f"{source}: row ?: field q1: {distinct} distinct configurations in {len(m.q)} rows, need at least "
+            f"{MIN_CONFIGURATIONS} (a registration fits fewer exactly, and every model would look perfect)"
+        )

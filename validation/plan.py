@@ -24,10 +24,8 @@ import itertools
 import math
 import time
 from dataclasses import dataclass, field, replace
-from pathlib import Path
 
 import numpy as np
-import yaml
 
 from spherecal.controller.exploration import joint_coverage
 from spherecal.correction import RobotModel
@@ -37,34 +35,15 @@ from spherecal.correction.samples import Dataset
 from spherecal.identification.prediction import Prediction, Workspace, predict_accuracy
 from spherecal.identification.synthetic import fixture_samples, project_to_point
 
+from .candidates import Candidate, CandidateError
+
 MOTIONS: tuple[str, ...] = ("kinematic", "controller")
 #: Samples per candidate used for planning (each stands for ``samples / PLAN_SAMPLES`` recorded ones).
 PLAN_SAMPLES = 120
 #: Exhaustive search over fixture subsets up to this many combinations, greedy above.
 EXHAUSTIVE_LIMIT = 300
-#: Most grid points :func:`grid_candidates` makes (each one is surveyed and scored).
-MAX_GRID = 10_000
 #: A distance is recommended when it lowers the predicted mean error by more than this share.
 DISTANCE_GAIN = 0.05
-
-
-class CandidateError(SpherecalError):
-    """A candidate list that is empty or malformed (message names the file or option and field)."""
-
-
-@dataclass(frozen=True)
-class Candidate:
-    """A candidate fixture position.
-
-    Attributes:
-        name: label (``C1`` ... or from the file).
-        position: (3,) centre in the base frame [m].
-        joint_range: (n,) share of each joint's range the self-motion may use there (None: all).
-    """
-
-    name: str
-    position: np.ndarray
-    joint_range: np.ndarray | None = None
 
 
 @dataclass(frozen=True, eq=False)
@@ -130,80 +109,6 @@ class Plan:
         scored = [s for s in self.surveys if s.alone is not None]
         rest = [s for s in self.surveys if s.alone is None]
         return sorted(scored, key=lambda s: s.alone.mean) + rest
-
-
-# ------------------------------------------------------------------------------------ candidates
-def grid_candidates(text: str) -> list[Candidate]:
-    """Candidates on a box grid ``"xmin,xmax,nx;ymin,ymax,ny;zmin,zmax,nz"`` [m], named ``C1`` ...
-
-    Raises:
-        CandidateError: not three ``min,max,count`` triples, a count < 1, more than :data:`MAX_GRID` points.
-    """
-    axes = []
-    parts = text.split(";")
-    if len(parts) != 3:
-        raise CandidateError(f"--grid {text!r}: expected 'xmin,xmax,nx;ymin,ymax,ny;zmin,zmax,nz'")
-    for axis, part in zip("xyz", parts, strict=True):
-        fields = part.split(",")
-        try:
-            lo, hi, count = float(fields[0]), float(fields[1]), int(fields[2])
-        except (ValueError, IndexError):
-            raise CandidateError(f"--grid {text!r}: field '{axis}': expected 'min,max,count', got {part!r}") from None
-        if len(fields) != 3 or count < 1 or not (math.isfinite(lo) and math.isfinite(hi)):
-            raise CandidateError(f"--grid {text!r}: field '{axis}': expected 'min,max,count' with count >= 1")
-        axes.append(np.linspace(lo, hi, count) if count > 1 else np.array([(lo + hi) / 2]))
-    total = math.prod(a.size for a in axes)
-    if total > MAX_GRID:
-        raise CandidateError(f"--grid {text!r}: field 'count': {total} points, at most {MAX_GRID}")
-    points = np.stack(np.meshgrid(*axes, indexing="ij"), axis=-1).reshape(-1, 3)
-    return [Candidate(f"C{k + 1}", p) for k, p in enumerate(points)]
-
-
-def read_candidates(path: str | Path, n_joints: int) -> list[Candidate]:
-    """Candidates from YAML: ``candidates: {C1: {position: [x, y, z], joint_range: [...]}, ...}``.
-
-    ``joint_range`` (optional) gives, per joint, the share of its range the self-motion may use.
-
-    Raises:
-        CandidateError: unreadable file, no candidates, a bad position or joint range.
-    """
-
-    path = Path(path)
-    try:
-        data = yaml.safe_load(path.read_text())
-    except (OSError, UnicodeDecodeError, yaml.YAMLError) as error:
-        raise CandidateError(f"{path}: cannot read candidates: {str(error).splitlines()[0]}") from None
-    entries = data.get("candidates") if isinstance(data, dict) else None
-    if not isinstance(entries, dict) or not entries:
-        raise CandidateError(
-            f"{path}: field 'candidates': expected a non-empty mapping name -> {{position: [x, y, z]}}"
-        )
-    out = []
-    for name, entry in entries.items():
-        where = f"{path}: field 'candidates.{name}"
-        if not isinstance(entry, dict) or "position" not in entry:
-            raise CandidateError(f"{where}': expected a mapping with 'position: [x, y, z]'")
-        position = _vector(entry["position"], 3, f"{where}.position'")
-        joint_range = None
-        if entry.get("joint_range") is not None:
-            joint_range = _vector(entry["joint_range"], n_joints, f"{where}.joint_range'")
-            if np.any(joint_range <= 0) or np.any(joint_range > 1):
-                raise CandidateError(f"{where}.joint_range': every share must be in (0, 1]")
-        unknown = set(entry) - {"position", "joint_range"}
-        if unknown:
-            raise CandidateError(f"{where}.{sorted(unknown)[0]}': unknown field")
-        out.append(Candidate(str(name), position, joint_range))
-    return out
-
-
-def _vector(value, size: int, where: str) -> np.ndarray:
-    try:
-        vector = np.asarray(value, dtype=float)
-    except (TypeError, ValueError):
-        raise CandidateError(f"{where}: expected {size} numbers, got {value!r}") from None
-    if vector.shape != (size,) or not np.all(np.isfinite(vector)):
-        raise CandidateError(f"{where}: expected {size} finite numbers, got {value!r}")
-    return vector
 
 
 # --------------------------------------------------------------------------------------- survey

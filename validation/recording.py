@@ -37,6 +37,7 @@ from pathlib import Path
 import numpy as np
 
 from spherecal.correction import RobotModel, link_frames, tool_point
+from spherecal.correction.atomic import OutputError
 
 from .blueprint import build_blueprint
 from .recording_shapes import BAR_HEIGHT, capsules, colour_ramp, histogram, parameter_bars
@@ -90,9 +91,13 @@ class Recording:
         self.bounds: dict[str, np.ndarray] = {}
         self._tmp = None
         if self.path is not None:
-            self.path.parent.mkdir(parents=True, exist_ok=True)
             self._tmp = self.path.with_name(f".{self.path.name}.tmp")
-            self.stream.save(self._tmp)
+            try:
+                self.path.parent.mkdir(parents=True, exist_ok=True)
+                self.stream.save(self._tmp)
+            except Exception as error:  # Rerun raises its own types; the user sees one line
+                self.abort()
+                raise OutputError(f"{self.path}: cannot write the recording: {_first_line(error)}") from None
         if spawn:
             self.stream.spawn(connect=self.path is None)
 
@@ -296,25 +301,40 @@ class Recording:
 
     # -------------------------------------------------------------------- close
     def close(self) -> Path | None:
-        """Send the blueprint, flush, close the sink and move the ``.rrd`` into place; returns its path."""
-        blueprint = build_blueprint(self.contents, self.title, self.bounds)
-        self.stream.send_blueprint(blueprint, make_active=True, make_default=True)
-        bounds = {k: v.tolist() for k, v in self.bounds.items()}
-        layout = {"contents": self.contents, "title": self.title, "bounds": bounds}
-        layout["application_id"] = self.application_id
-        self.stream.send_property("spherecal_layout", self.rr.AnyValues(layout=json.dumps(layout)))
-        self.stream.flush()
-        self.stream.disconnect()
-        if self.path is None:
-            return None
-        os.replace(self._tmp, self.path)
+        """Send the blueprint, flush, close the sink and move the ``.rrd`` into place; returns its path.
+
+        Raises:
+            OutputError: Rerun could not write the file (one line); nothing is left behind.
+        """
+        try:
+            blueprint = build_blueprint(self.contents, self.title, self.bounds)
+            self.stream.send_blueprint(blueprint, make_active=True, make_default=True)
+            bounds = {k: v.tolist() for k, v in self.bounds.items()}
+            layout = {"contents": self.contents, "title": self.title, "bounds": bounds}
+            layout["application_id"] = self.application_id
+            self.stream.send_property("spherecal_layout", self.rr.AnyValues(layout=json.dumps(layout)))
+            self.stream.flush()
+            self.stream.disconnect()
+            if self.path is None:
+                return None
+            os.replace(self._tmp, self.path)
+        except Exception as error:  # Rerun raises its own types; the user sees one line
+            self.abort()
+            raise OutputError(f"{self.path}: cannot write the recording: {_first_line(error)}") from None
         return self.path
 
     def abort(self) -> None:
         """Drop the recording: no file is left behind."""
-        self.stream.disconnect()
-        if self._tmp is not None:
-            self._tmp.unlink(missing_ok=True)
+        try:
+            self.stream.disconnect()
+        finally:
+            if self._tmp is not None:
+                self._tmp.unlink(missing_ok=True)
+
+
+def _first_line(error: BaseException) -> str:
+    text = str(getattr(error, "strerror", None) or error).strip()
+    return text.splitlines()[0] if text else type(error).__name__
 
 
 def _colour(key: str) -> tuple[int, int, int]:

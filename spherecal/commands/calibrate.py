@@ -11,7 +11,7 @@ HELP = "Identify DH parameters from spherical-joint samples and write a calibrat
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     """Register the options of `spherecal calibrate`."""
-    from spherecal.options import add_deprecated, add_robot, add_seed, count, non_negative, positive, positive_noise_mm
+    from spherecal.options import add_deprecated, add_robot, add_seed, at_most, count, non_negative, positive_noise_mm
 
     add_robot(parser, default=None)
     parser.add_argument("--samples", required=True, help="samples.csv: fixture[,t],q1..qn [rad]")
@@ -27,13 +27,13 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         help="expected fixture noise std per axis [mm] (robust-loss scale, residual check; default 0.3)",
     )
     parser.add_argument(
-        "--dedup-deg", type=non_negative, default=None,
+        "--dedup-deg", type=at_most(10.0, "deg", allow_zero=True), default=None,
         help="drop samples within this of an earlier one, every joint [deg] (default 0.00573 = 1e-4 rad)",
     )
     add_deprecated(parser, "--dedup-tol", "--dedup-deg", non_negative, convert=_rad_to_deg)
     parser.add_argument(
         "--max-change",
-        type=positive,
+        type=at_most(1000.0, "(a factor)"),
         default=4.0,
         help="refuse a fit that moves the tool point more than this many times what a real arm's errors "
         "(1 mm, 0.2 deg) typically do (a factor; 4: about 24 mm on the Panda)",
@@ -81,7 +81,9 @@ def run(args: argparse.Namespace) -> int:
     from spherecal.correction.samples_csv import read_samples
     from spherecal.identification.calibrate import calibrate
     from spherecal.identification.selection import elastic_start, rigid, select_model
+    from spherecal.options import planned_outputs
 
+    outputs = planned_outputs(args, {"--out": args.out})  # before any work: never over an input
     clock = time.perf_counter()
     noise = args.noise * 1e-3  # [m] from here on
     dedup_tol = DEDUP_TOL if args.dedup_deg is None else float(np.deg2rad(args.dedup_deg))  # [rad]
@@ -139,7 +141,8 @@ def run(args: argparse.Namespace) -> int:
     extras["calibration"] = block
     model = replace(result.model, extras=extras)
     header = f"calibrated by spherecal calibrate ({args.method}) from {args.samples}"
-    save_robot(model, args.out, header=header)
+    with outputs:
+        save_robot(model, outputs.stage(args.out), header=header)
     print(result.summary())
     print(selection.summary())
     if dropped:

@@ -11,11 +11,11 @@ HELP = "Run the paper's simulated protocol (fixture sets x noise levels) and pri
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     """Register the options of `spherecal campaign`."""
-    from spherecal.options import add_per_fixture, add_seconds, add_seed, count, noise_mm
+    from spherecal.options import add_per_fixture, add_seconds, add_seed, configurations, count, noise_mm
 
-    parser.add_argument("--sets", type=count(1), default=10, help="motion sets per row (default 10)")
+    parser.add_argument("--sets", type=count(1, 1000), default=10, help="motion sets per row (default 10)")
     add_per_fixture(parser, 500, "samples per fixture in each set")
-    parser.add_argument("--configurations", type=count(3), default=5000,
+    parser.add_argument("--configurations", type=configurations, default=5000,
                         help="random validation configurations (default 5000)")
     parser.add_argument("--noise", type=noise_mm, default=0.3,
                         help="fixture noise std per axis of the noisy rows [mm] (default 0.3)")
@@ -40,7 +40,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                              "(e.g. 0,3e4,3e4,3e4,0,0,0); rows get an E")
     parser.add_argument("--model", choices=("dh", "elastic", "auto"), default="dh",
                         help="model calibrated (dh: default, the paper's; elastic; auto: cross-validated choice)")
-    parser.add_argument("--workers", type=count(1), default=2, help="worker processes (default 2)")
+    parser.add_argument("--workers", type=count(1, 64), default=2, help="worker processes (default 2)")
     parser.add_argument("--out", default="spherecal-campaign", help="folder for table2.csv and table2.md")
 
 
@@ -50,6 +50,7 @@ def run(args: argparse.Namespace) -> int:
 
     from spherecal.validation.campaign import (
         FIXTURE_SETS,
+        TABLE_FILES,
         CampaignConfig,
         format_table,
         run_campaign,
@@ -66,12 +67,13 @@ def run(args: argparse.Namespace) -> int:
         raise fail(f"--per-fixture must be >= 10, got {args.per_fixture}")
     if args.source == "mujoco" and args.per_fixture > round(args.seconds * 1000):
         raise fail(f"--per-fixture {args.per_fixture} > {args.seconds:g} s of 1 kHz readings")
-    from spherecal.validation.inputs import check_out_folder
+    from pathlib import Path
 
-    check_out_folder(args.out)
-    from spherecal.commands.simulate import _stiffness  # the same K[,K...] syntax as simulate --stiffness
+    from spherecal.options import check_folder, planned_outputs, stiffness_values
 
-    stiffness = _stiffness(args.stiffness, 7) or ()  # the campaign's arm is the embedded Panda
+    check_folder(args.out)
+    outputs = planned_outputs(args, {"--out": [Path(args.out) / name for name in TABLE_FILES]})
+    stiffness = stiffness_values(args.stiffness, 7) or ()  # the campaign's arm is the embedded Panda
     config = CampaignConfig(
         stiffness=tuple(stiffness),
         model=args.model,
@@ -99,7 +101,7 @@ def run(args: argparse.Namespace) -> int:
             print(f"refused: {result.row} set {result.index}: {result.refused}")
     inputs = {k: v for k, v in vars(args).items() if not k.startswith("_") and k != "command"}
     info = provenance(args.seed, {**inputs, "wall_time_s": round(wall, 1)})
-    csv_path, md_path = write_tables(rows_out, args.out, comment_block(info))
+    csv_path, md_path = write_tables(rows_out, args.out, comment_block(info), outputs)
     print(f"written: {csv_path}, {md_path}")
     print(f"wall time {wall:.1f} s ({len(results)} sets, {args.workers} workers)")
     return 0

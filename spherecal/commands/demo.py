@@ -11,7 +11,7 @@ HELP = "End-to-end demo on the embedded Panda: simulate, calibrate, validate, re
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     """Register the options of `spherecal demo`."""
-    from spherecal.options import add_per_fixture, add_seconds, add_seed, count, noise_mm
+    from spherecal.options import add_per_fixture, add_seconds, add_seed, configurations, noise_mm
 
     add_seed(parser, "the true robot, motion and noise")
     add_per_fixture(parser, 1500)
@@ -22,7 +22,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--mocap-noise", type=noise_mm, default=0.3,
                         help="motion-capture marker noise std [mm] (default 0.3)")
     add_seconds(parser, 60.0, "simulated self-motion per fixture")
-    parser.add_argument("--configurations", type=count(3), default=5000,
+    parser.add_argument("--configurations", type=configurations, default=5000,
                         help="random validation configurations (default 5000)")
     parser.add_argument(
         "--source", choices=("mujoco", "synthetic"), default="mujoco", help="motion: MuJoCo self-motion (default)"
@@ -46,9 +46,6 @@ def run(args: argparse.Namespace) -> int:
         raise fail(f"--per-fixture must be >= 10, got {args.per_fixture}")
     if args.per_fixture > round(args.seconds * 1000) and args.source == "mujoco":
         raise fail(f"--per-fixture {args.per_fixture} > {args.seconds:g} s of 1 kHz readings")
-    from spherecal.validation.inputs import check_out_folder
-
-    check_out_folder(args.out)
     start = time.perf_counter()
     config = DemoConfig(
         seed=args.seed,

@@ -124,9 +124,11 @@ def into_text(model, into: str, out: str, header: str = "") -> str:
 
 def run(args: argparse.Namespace) -> int:
     """Load, validate and export; nothing is written unless the whole document was built."""
-    from spherecal.correction import atomic_write_text, load_robot
+    from spherecal.correction import load_robot
     from spherecal.correction.urdf import ExportError
+    from spherecal.options import planned_outputs
 
+    outputs = planned_outputs(args, {"--out": args.out})  # never over CAL.yaml or --into
     model = load_robot(args.robot, **urdf_links(args))
     effort, velocity = _limits(args.effort, "--effort"), _limits(args.velocity, "--velocity")
     header = provenance_header(args.robot, args.format)
@@ -139,7 +141,8 @@ def run(args: argparse.Namespace) -> int:
         text = into_text(model, args.into, args.out, header)
     else:
         text = export_text(model, args.format, args.prefix, header, effort, velocity)
-    path = atomic_write_text(args.out, text)
+    with outputs:
+        path = outputs.write_text(args.out, text)
     print(f"spherecal export: wrote {args.format} of {model.name!r} ({model.convention} DH) to {path}")
     from spherecal.correction.elastic import compliance_of
 

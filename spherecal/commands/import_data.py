@@ -11,7 +11,7 @@ FORMATS = ("mukca", "bag", "csv")
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     """Register the options of `spherecal import`."""
-    from spherecal.options import add_robot, add_seed, count, non_negative, positive, spread_mm
+    from spherecal.options import add_robot, add_seed, at_most, count, duration, spread_mm
 
     parser.add_argument(
         "source",
@@ -24,27 +24,28 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--out", required=True, help="folder to create with samples.csv and fixtures.yaml")
     parser.add_argument("--topic", default="/joint_states", help="bag: sensor_msgs/JointState topic (/joint_states)")
     parser.add_argument(
-        "--distance", type=positive, default=0.050,
+        "--distance", type=at_most(10.0, "m"), default=0.050,
         help="mukca: socket centre distance per placement [m] (default 0.050)",
     )
     parser.add_argument("--max-per-fixture", type=count(1), default=500, metavar="N",
                         help="keep at most N samples per fixture (default 500)")
     parser.add_argument(
-        "--dedup-deg", type=non_negative, default=None,
+        "--dedup-deg", type=at_most(10.0, "deg", allow_zero=True), default=None,
         help="drop samples within this of an earlier one, every joint [deg] (default 0.00573 = 1e-4 rad)",
     )
     add_seed(parser, "the subsampling")
     parser.add_argument(
-        "--rate", type=positive, default=1000.0, help="csv without a time column: sampling rate [Hz] (default 1000)"
+        "--rate", type=at_most(1e6, "Hz"), default=1000.0,
+        help="csv without a time column: sampling rate [Hz] (default 1000)",
     )
     group = parser.add_argument_group(
         "segmentation (bag, csv without a 'fixture' column): a fixture is where the NOMINAL tool point stays "
         "still; defaults measured on MUKCa's real Panda (nominal spread in a socket: 8 mm mean, 19 mm max)"
     )
-    group.add_argument("--window", type=positive, default=0.5, help="stillness window [s] (default 0.5)")
+    group.add_argument("--window", type=duration, default=0.5, help="stillness window [s] (default 0.5)")
     group.add_argument("--still-radius", type=spread_mm, default=3.0,
                        help="tool point within this of itself over a window [mm] (default 3)")
-    group.add_argument("--min-duration", type=positive, default=2.0, help="shortest fixture [s] (default 2)")
+    group.add_argument("--min-duration", type=duration, default=2.0, help="shortest fixture [s] (default 2)")
     group.add_argument("--min-configurations", type=count(1), default=20,
                        help="fewest distinct configurations of a fixture (default 20)")
     group.add_argument("--max-spread", type=spread_mm, default=20.0,

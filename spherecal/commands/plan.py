@@ -36,7 +36,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     add_seconds(parser, 3.0, "controller self-motion per candidate")
     add_seed(parser)
     parser.add_argument("--rrd", default=None, help="write a Rerun recording of the candidates coloured by score")
-    parser.add_argument("--workers", type=count(1), default=2, help="worker processes of --analysis (default 2)")
+    parser.add_argument("--workers", type=count(1, 64), default=2, help="worker processes of --analysis (default 2)")
 
 
 class _FixturesOption(argparse.Action):
@@ -63,22 +63,22 @@ def run(args: argparse.Namespace) -> int:
 
     if args.per_fixture < 10:
         raise fail(f"--per-fixture must be >= 10, got {args.per_fixture}")
-    from spherecal.validation.inputs import check_out_file
+    from spherecal.options import planned_outputs
 
-    for option, path in (("--rrd", args.rrd), ("--analysis", args.analysis)):
-        if path is not None:
-            check_out_file(path, option)
+    outputs = planned_outputs(args, {"--rrd": args.rrd, "--analysis": args.analysis})
     if args.analysis is not None:
         from spherecal.validation.analysis import AnalysisConfig, write_analysis
 
-        path = write_analysis(args.analysis, AnalysisConfig(seed=args.seed, workers=args.workers))
-        print(f"written: {path}")
+        with outputs:
+            write_analysis(outputs.stage(args.analysis), AnalysisConfig(seed=args.seed, workers=args.workers))
+        print(f"written: {args.analysis}")
         return 0
     model = load_robot(args.robot, **urdf_links(args))
     rng = np.random.default_rng(args.seed)
     if args.predict is not None:
         return _predict(args, model)
-    from spherecal.validation.plan import grid_candidates, plan, read_candidates
+    from spherecal.validation.candidates import grid_candidates, read_candidates
+    from spherecal.validation.plan import plan
 
     if args.candidates is None and args.grid is None:
         raise fail("give --candidates C.yaml or --grid 'xmin,xmax,nx;ymin,ymax,ny;zmin,zmax,nz'")
@@ -96,8 +96,9 @@ def run(args: argparse.Namespace) -> int:
         from spherecal.validation.provenance import comment_block, provenance
 
         inputs = {k: v for k, v in vars(args).items() if not k.startswith("_") and k != "command"}
-        path = write_recording(args.rrd, result, comment_block(provenance(args.seed, inputs)))
-        print(f"written: {path}")
+        with outputs:  # staged, renamed into place once Rerun has written it all
+            write_recording(outputs.stage(args.rrd), result, comment_block(provenance(args.seed, inputs)))
+        print(f"written: {args.rrd}")
     print(f"wall time {time.perf_counter() - start:.1f} s (survey {result.seconds['survey']:.1f} s, "
           f"scoring {result.seconds['score']:.1f} s, motion: {result.motion})")
     return 0 if result.best is not None else 1

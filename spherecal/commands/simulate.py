@@ -4,17 +4,19 @@ from __future__ import annotations
 
 import argparse
 
-from spherecal.options import fail, urdf_links
+from spherecal.options import fail, stiffness_values, urdf_links
 
+FILES = ("samples.csv", "fixtures.yaml", "truth.yaml")
 HELP = "Simulate self-motion at spherical-joint fixtures on a perturbed (true) robot and write samples."
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     """Register the options of `spherecal simulate`."""
-    from spherecal.options import add_per_fixture, add_robot, add_seed, noise_mm, non_negative, spread_mm
+    from spherecal.options import add_per_fixture, add_robot, add_seed, at_most, duration, noise_mm, spread_mm
 
     parser.add_argument("--out", required=True, help="output folder (samples.csv, fixtures.yaml, truth.yaml)")
     add_seed(parser)
-    parser.add_argument("--seconds", type=non_negative, default=20.0, help="self-motion per fixture [s] (default 20)")
+    parser.add_argument("--seconds", type=duration, default=20.0,
+                        help="self-motion per fixture [s], at most 3600 (default 20)")
     add_per_fixture(parser, 500)
     parser.add_argument("--mode", choices=("coverage", "random"), default="coverage",
                         help="exploration of the null space (default coverage; random is the paper's)")
@@ -24,7 +26,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="fixtures.yaml giving the true centre (position) of every fixture [m]")
     add_robot(parser)
     parser.add_argument("--length-std", type=spread_mm, default=1.0, help="true-robot a, d error std [mm] (default 1)")
-    parser.add_argument("--angle-std-deg", type=non_negative, default=0.2,
+    parser.add_argument("--angle-std-deg", type=at_most(10.0, "deg", allow_zero=True), default=0.2,
                         help="true-robot alpha, theta error std [deg] (default 0.2)")
     parser.add_argument("--tool-std", type=spread_mm, default=1.0,
                         help="true-robot tool point error std [mm] (default 1)")
@@ -56,25 +58,11 @@ def _fixtures(path: str | None) -> dict:
     return {name: spec.positions[name] for name in spec.names}
 
 
-def _stiffness(text: str | None, n: int):
-    """(n,) stiffness [Nm/rad] of ``--stiffness`` (0 = rigid), or None when not given."""
-    import math
-
-    if text is None:
-        return None
-    try:
-        values = [float(v) for v in text.split(",")]
-    except ValueError:
-        raise fail(f"--stiffness {text!r}: expected numbers [Nm/rad] separated by commas") from None
-    if len(values) == 1:
-        values = values * n
-    if len(values) != n or not all(math.isfinite(v) and v >= 0 for v in values):
-        raise fail(f"--stiffness {text!r}: expected 1 or {n} finite values >= 0 [Nm/rad] (0 = rigid)")
-    return values
-
-
-def _check_args(args: argparse.Namespace) -> None:
+def _check_args(args: argparse.Namespace):
+    """Check the options and the output folder; returns the checked :class:`OutputSet`."""
     from pathlib import Path
+
+    from spherecal.options import check_folder, planned_outputs
 
     if not args.seconds >= 0.001:
         raise fail(f"--seconds must be >= 0.001 (one 1 kHz step), got {args.seconds}")
@@ -83,11 +71,9 @@ def _check_args(args: argparse.Namespace) -> None:
             f"--per-fixture must be in 1..{int(round(args.seconds * 1000))} (1 kHz x seconds), got {args.per_fixture}"
         )
     out = Path(args.out)
-    if out.exists() and not out.is_dir():
-        raise fail(f"--out {out}: exists and is not a directory")
-    blocker = next((p for p in out.parents if p.exists() and not p.is_dir()), None)
-    if blocker is not None:  # found before the simulation runs, not when the files are written
-        raise fail(f"--out {out}: {blocker} is not a directory")
+    check_folder(args.out)
+    # found before the simulation runs, not when the files are written; --fixtures may be out/fixtures.yaml
+    return planned_outputs(args, {"--out": [out / name for name in FILES]})
 
 
 def run(args: argparse.Namespace) -> int:
@@ -99,11 +85,11 @@ def run(args: argparse.Namespace) -> int:
     import qpsolvers
 
     from spherecal.controller.self_motion import SelfMotionSettings, collect_self_motion
-    from spherecal.correction import atomic_write_text, dump_robot, load_robot, perturb
+    from spherecal.correction import dump_robot, load_robot, perturb
     from spherecal.correction.fixtures import FixtureSpec, format_fixtures
     from spherecal.correction.samples_csv import format_samples
 
-    _check_args(args)
+    outputs = _check_args(args)
     if args.solver not in qpsolvers.available_solvers:
         raise fail(f"--solver {args.solver!r} is not installed; have {', '.join(qpsolvers.available_solvers)}")
     nominal = load_robot(args.robot, **urdf_links(args))
@@ -113,7 +99,7 @@ def run(args: argparse.Namespace) -> int:
     fixtures = _fixtures(args.fixtures)
     rng = np.random.default_rng(args.seed)
     true = perturb(nominal, rng, args.length_std * 1e-3, np.deg2rad(args.angle_std_deg), args.tool_std * 1e-3)
-    stiffness = _stiffness(args.stiffness, nominal.n_joints)
+    stiffness = stiffness_values(args.stiffness, nominal.n_joints)
     if stiffness is not None:
         from spherecal.correction.elastic import with_compliance
 
@@ -140,13 +126,9 @@ def run(args: argparse.Namespace) -> int:
     truth_text = dump_robot(truth, header=f"true robot of `spherecal simulate --seed {args.seed}`")
 
     out = Path(args.out)
-    try:
-        out.mkdir(parents=True, exist_ok=True)
-    except OSError as error:
-        raise fail(f"--out {out}: cannot create the directory: {error.strerror or error}") from None
-    atomic_write_text(out / "samples.csv", samples_text)
-    atomic_write_text(out / "fixtures.yaml", fixtures_text)
-    atomic_write_text(out / "truth.yaml", truth_text)
+    with outputs:  # all three files or none
+        for name, text in zip(FILES, (samples_text, fixtures_text, truth_text), strict=True):
+            outputs.write_text(out / name, text)
     print(result.coverage_table(), file=sys.stderr)
     print(f"wrote {out / 'samples.csv'} ({result.q.shape[0]} samples), {out / 'fixtures.yaml'}, {out / 'truth.yaml'}")
     return 0

@@ -15,7 +15,7 @@ HELP = "Compare nominal and calibrated models against the truth, motion-capture 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     """Register the options of `spherecal validate`."""
-    from spherecal.options import add_deprecated, add_seed, add_urdf_links, count, noise_mm
+    from spherecal.options import add_deprecated, add_seed, add_urdf_links, configurations, noise_mm
 
     parser.add_argument("--truth", help="robot file of the true robot (simulation)")
     parser.add_argument("--nominal", required=True, help="robot file of the nominal model ('panda': embedded)")
@@ -28,7 +28,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         "socket samples NOT used in the fit: spread per socket and known-distance errors, no mocap needed",
     )
     parser.add_argument("--fixtures", help="fixtures.yaml of --samples (known distances [m]) for the socket-only check")
-    parser.add_argument("--configurations", type=count(3), default=5000,
+    parser.add_argument("--configurations", type=configurations, default=5000,
                         help="random workspace configurations (default 5000)")
     parser.add_argument("--mocap-noise", type=noise_mm, default=0.3,
                         help="simulated motion-capture marker noise std [mm] (default 0.3)")
@@ -41,14 +41,13 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 def run(args: argparse.Namespace) -> int:
     """Load and check every input, validate, print the table, then write the outputs."""
-    import json
     from pathlib import Path
 
     import numpy as np
 
-    from spherecal.correction import atomic_write_text, load_robot
+    from spherecal.correction import load_robot
     from spherecal.validation.inputs import check_models
-    from spherecal.validation.mocap import read_mocap_csv
+    from spherecal.validation.mocap import check_mocap, read_mocap_csv
     from spherecal.validation.pipeline import record_validate_run, validate_models
     from spherecal.validation.progress import progress_bar
     from spherecal.validation.provenance import provenance
@@ -57,11 +56,9 @@ def run(args: argparse.Namespace) -> int:
         raise fail("give --truth (simulation), --mocap (recorded data) or --samples (socket-only)")
     if args.fixtures is not None and (args.truth is not None or args.mocap is not None or args.samples is None):
         raise fail("--fixtures goes with --samples alone (socket-only check)")
-    from spherecal.validation.inputs import check_out_file
+    from spherecal.options import planned_outputs
 
-    for option, path in (("--out", args.out), ("--rrd", args.rrd)):
-        if path is not None:
-            check_out_file(path, option)
+    outputs = planned_outputs(args, {"--out": args.out, "--rrd": args.rrd})
     files = {"nominal": args.nominal, "calibrated": args.calibrated}
     if args.truth is not None:
         files["truth"] = args.truth
@@ -70,9 +67,12 @@ def run(args: argparse.Namespace) -> int:
     if args.truth is None and args.mocap is None:
         from spherecal.commands.validate_sockets import run_sockets
 
-        return run_sockets(args, models)
+        return run_sockets(args, models, outputs)
     n = models["nominal"].n_joints
-    measurement = None if args.mocap is None else read_mocap_csv(args.mocap, n)
+    measurement = None
+    if args.mocap is not None:
+        measurement = read_mocap_csv(args.mocap, n)
+        check_mocap(measurement, models["nominal"])
     self_motion = None
     if args.samples is not None:
         from spherecal.correction.samples_csv import read_samples
@@ -96,23 +96,17 @@ def run(args: argparse.Namespace) -> int:
     print(report.format())
     if report.deviations is not None:
         print("\nparameter deviations from the truth:\n" + report.deviations.format())
-    if args.out:
-        inputs = {k: Path(v) if isinstance(v, str) and Path(v).is_file() else v for k, v in vars(args).items()}
-        inputs = {k: v for k, v in inputs.items() if not k.startswith("_") and k != "command"}
-        result = {"provenance": provenance(args.seed, inputs), "validation": report.to_dict()}
-        print(f"report: {atomic_write_text(args.out, json.dumps(result, indent=2) + chr(10))}")
-    if args.rrd or args.spawn:
-        from spherecal.validation.recording import Recording
+    inputs = {k: Path(v) if isinstance(v, str) and Path(v).is_file() else v for k, v in vars(args).items()}
+    inputs = {k: v for k, v in inputs.items() if not k.startswith("_") and k != "command"}
+    result = {"provenance": provenance(args.seed, inputs), "validation": report.to_dict()}
 
-        drawn = "truth" if "truth" in models else "calibrated"
-        title = f"{'True' if drawn == 'truth' else 'Calibrated'} robot and fixtures, validation configurations"
-        recording = Recording(args.rrd, spawn=args.spawn, application_id="spherecal_validate", title=title)
-        try:
-            record_validate_run(recording, report, models, drawn)
-        except BaseException:
-            recording.abort()
-            raise
-        path = recording.close()
-        if path is not None:
-            print(f"recording: {path}")
+    drawn = "truth" if "truth" in models else "calibrated"
+    title = f"{'True' if drawn == 'truth' else 'Calibrated'} robot and fixtures, validation configurations"
+
+    def record(recording) -> None:
+        record_validate_run(recording, report, models, drawn)
+
+    from spherecal.commands.validate_sockets import write_validation
+
+    write_validation(args, outputs, result, record, title)
     return 0

@@ -7,12 +7,40 @@ import argparse
 from spherecal.correction import RobotModel
 
 
-def run_sockets(args: argparse.Namespace, models: dict[str, RobotModel]) -> int:
-    """Validate ``models`` on ``--samples`` (and ``--fixtures``): print the tables, write ``--out``, ``--rrd``."""
+def write_validation(args: argparse.Namespace, outputs, result: dict, record, title: str) -> None:
+    """Write ``--out`` (``result`` as JSON) and ``--rrd`` (``record(recording)`` fills it) together.
+
+    Both are staged in ``outputs`` (an :class:`~spherecal.correction.outputs.OutputSet` checked before
+    the validation ran) and renamed into place at the end: both files or neither, and a recording
+    that cannot be written is a one-line error before anything appears.
+    """
     import json
+
+    recording = None
+    with outputs:
+        if args.out:
+            outputs.write_text(args.out, json.dumps(result, indent=2) + "\n")
+        if args.rrd or args.spawn:
+            from spherecal.validation.recording import Recording
+
+            recording = Recording(outputs.stage(args.rrd) if args.rrd else None, spawn=args.spawn,
+                                  application_id="spherecal_validate", title=title)
+            try:
+                record(recording)
+            except BaseException:
+                recording.abort()
+                raise
+            recording.close()
+    if args.out:
+        print(f"report: {args.out}")
+    if args.rrd:
+        print(f"recording: {args.rrd}")
+
+
+def run_sockets(args: argparse.Namespace, models: dict[str, RobotModel], outputs) -> int:
+    """Validate ``models`` on ``--samples`` (and ``--fixtures``): print the tables, write ``--out``, ``--rrd``."""
     from pathlib import Path
 
-    from spherecal.correction import atomic_write_text
     from spherecal.correction.fixtures import read_fixtures
     from spherecal.correction.samples_csv import read_samples
     from spherecal.validation.provenance import provenance
@@ -26,22 +54,12 @@ def run_sockets(args: argparse.Namespace, models: dict[str, RobotModel]) -> int:
         spec.check_against(dataset)
     report = socket_validation(models, dataset, spec, fitted_fixtures(models["calibrated"]))
     print(report.format())
-    if args.out:
-        inputs = {k: Path(v) if isinstance(v, str) and Path(v).is_file() else v for k, v in vars(args).items()}
-        inputs = {k: v for k, v in inputs.items() if not k.startswith("_") and k != "command"}
-        result = {"provenance": provenance(args.seed, inputs), "sockets": report.to_dict()}
-        print(f"report: {atomic_write_text(args.out, json.dumps(result, indent=2) + chr(10))}")
-    if args.rrd or args.spawn:
-        from spherecal.validation.recording import Recording
+    inputs = {k: Path(v) if isinstance(v, str) and Path(v).is_file() else v for k, v in vars(args).items()}
+    inputs = {k: v for k, v in inputs.items() if not k.startswith("_") and k != "command"}
+    result = {"provenance": provenance(args.seed, inputs), "sockets": report.to_dict()}
 
-        title = "Calibrated robot and sockets (recorded configurations on 'time')"
-        recording = Recording(args.rrd, spawn=args.spawn, application_id="spherecal_validate", title=title)
-        try:
-            record_sockets(recording, report, models, dataset)
-        except BaseException:
-            recording.abort()
-            raise
-        path = recording.close()
-        if path is not None:
-            print(f"recording: {path}")
+    def record(recording) -> None:
+        record_sockets(recording, report, models, dataset)
+
+    write_validation(args, outputs, result, record, "Calibrated robot and sockets (recorded configurations on 'time')")
     return 0

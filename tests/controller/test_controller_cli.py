@@ -85,7 +85,7 @@ def test_out_below_a_file_fails_before_simulating(tmp_path, capsys):
     (tmp_path / "plain").write_text("x")
     code = main(["simulate", "--out", str(tmp_path / "plain" / "sub"), "--seconds", "0.5", "--per-fixture", "10"])
     err = capsys.readouterr().err.strip()
-    assert code == 1 and err.startswith("spherecal simulate: error: --out") and "\n" not in err
+    assert code == 1 and err.startswith("spherecal simulate: error: ") and "field '--out'" in err and "\n" not in err
     assert "P1" not in err and sorted(p.name for p in tmp_path.iterdir()) == ["plain"]
 
 

@@ -76,7 +76,8 @@ def test_known_distances_remove_the_scale_error(panda, data, workspace):
 
 def test_restricted_motion_is_predicted_worse(panda, data, workspace):
     from spherecal.correction.samples import Dataset
-    from spherecal.validation.plan import Candidate, motion_samples
+    from spherecal.validation.candidates import Candidate
+    from spherecal.validation.plan import motion_samples
 
     dataset, spec = data
     rng = np.random.default_rng(5)

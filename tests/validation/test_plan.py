@@ -6,13 +6,10 @@ import numpy as np
 import pytest
 
 from spherecal.cli import main
+from spherecal.validation.candidates import Candidate, CandidateError, grid_candidates, read_candidates
 from spherecal.validation.plan import (
-    Candidate,
-    CandidateError,
-    grid_candidates,
     motion_samples,
     plan,
-    read_candidates,
     restricted,
 )
 from spherecal.validation.plan_report import format_plan
@@ -63,7 +60,7 @@ def test_read_candidates(tmp_path, panda):
         ("candidates:\n  A: {position: [0.5, 0, 0.3], joint_range: [1, 1]}\n", "candidates.A.joint_range"),
         ("candidates:\n  A: {position: [0.5, 0, 0.3], joint_range: [1, 0, 1, 1, 1, 1, 1]}\n", "joint_range"),
         ("candidates:\n  A: {position: [0.5, 0, 0.3], colour: red}\n", "candidates.A.colour"),
-        ("candidates: [\n", "cannot read"),
+        ("candidates: [\n", "invalid YAML"),
     ],
 )
 def test_bad_candidates_raise_one_line(tmp_path, panda, text, field):

@@ -133,7 +133,7 @@ def test_mocap_csv_binary_byte_order_mark_crlf_whitespace_lines(tmp_path, truth,
     path.write_bytes(path.read_bytes().replace(b"\n", b"\r\n") + b"\r\n  \r\n\t\n")  # CRLF, whitespace lines
     np.testing.assert_array_equal(read_mocap_csv(path, truth.n_joints).q, q)
     path.write_bytes(b"\x89PNG\r\n\x1a\n\xf0\x90\x80")
-    with pytest.raises(MocapError, match="cannot read mocap file"):
+    with pytest.raises(MocapError, match="cannot read: not UTF-8"):
         read_mocap_csv(path, truth.n_joints)
 
 

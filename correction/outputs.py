@@ -1,0 +1,223 @@
+"""A set of output files that appear together or not at all, and never over an input.
+
+Every command that writes files builds one :class:`OutputSet` before any work: it checks each
+planned file (no folder in the way, a writable folder, not an input, not planned twice) and
+refuses with one line naming the option and the file. The files are then staged as temporary
+files beside their destination and renamed into place together at the end; on any failure the
+staged files (and the folders the set created) are removed::
+
+    outputs = OutputSet({"--out": [out / "samples.csv", out / "truth.yaml"]}, {"--fixtures": fixtures})
+    ...                                           # the long computation
+    with outputs:
+        outputs.write_text(out / "samples.csv", text)
+        write_anything(outputs.stage(out / "truth.yaml"), ...)   # a writer that takes a path
+    # here both files exist, or (an exception) neither was touched
+
+Inputs are compared as files (links resolved, ``os.path.samefile``), never as strings.
+"""
+
+from __future__ import annotations
+
+import os
+import tempfile
+from collections.abc import Iterable, Mapping
+from pathlib import Path
+
+from .atomic import OutputError, _umask
+
+PathLike = str | os.PathLike
+
+
+def _paths(value: PathLike | Iterable[PathLike] | None) -> list[Path]:
+    if value is None:
+        return []
+    if isinstance(value, (str, os.PathLike)):
+        return [Path(value)]
+    return [Path(v) for v in value if v is not None]
+
+
+def same_file(a: Path, b: Path) -> bool:
+    """True when ``a`` and ``b`` name the same file (links resolved; hard links by inode)."""
+    try:
+        if a.exists() and b.exists():
+            return os.path.samefile(a, b)
+    except OSError:
+        pass
+    return a.resolve() == b.resolve()
+
+
+def _inside(path: Path, folder: Path) -> bool:
+    try:
+        return folder.is_dir() and path.resolve().is_relative_to(folder.resolve())
+    except OSError:
+        return False
+
+
+def check_output(path: Path, option: str) -> None:
+    """Refuse an output file that is a folder, lies under a file, or whose folder cannot be written.
+
+    Raises:
+        OutputError: one line naming the option and the file.
+    """
+    if path.is_dir():
+        raise OutputError(f"{path}: field '{option}': is a folder, expected a file name")
+    _check_parents(path, option)
+
+
+def check_folder(path: PathLike, option: str) -> None:
+    """Refuse an output folder that is an existing file or lies under one (before a long run).
+
+    Raises:
+        OutputError: one line naming the option and the folder.
+    """
+    path = Path(path)
+    if path.exists() and not path.is_dir():
+        raise OutputError(f"{path}: field '{option}': exists and is not a folder")
+    _check_parents(path / "_", option, shown=path)
+
+
+def _check_parents(path: Path, option: str, shown: Path | None = None) -> None:
+    """The nearest existing parent of ``path`` is a folder we may write into."""
+    shown = path if shown is None else shown
+    for parent in path.absolute().parents:
+        if parent.exists():
+            if not parent.is_dir():
+                raise OutputError(f"{shown}: field '{option}': {parent} is not a folder")
+            if not os.access(parent, os.W_OK | os.X_OK):
+                raise OutputError(f"{shown}: field '{option}': cannot write into {parent}: permission denied")
+            return
+
+
+class OutputSet:
+    """Planned output files, checked now, staged while written and renamed into place together.
+
+    Args:
+        outputs: option -> the file (or files) it writes, e.g. ``{"--out": [dir/"a.csv", dir/"b.yaml"]}``.
+        inputs: option -> the file (or folder) it reads; an output that is one of them, or lies in
+            an input folder, is refused. ``None`` values (options not given) are skipped.
+
+    Raises:
+        OutputError: a collision or an unwritable location (one line naming the option and file).
+    """
+
+    def __init__(
+        self,
+        outputs: Mapping[str, PathLike | Iterable[PathLike] | None],
+        inputs: Mapping[str, PathLike | Iterable[PathLike] | None] | None = None,
+    ):
+        self.planned: dict[Path, str] = {}
+        self._staged: dict[Path, Path] = {}
+        self._created: list[Path] = []
+        input_paths = [(option, p) for option, value in (inputs or {}).items() for p in _paths(value) if p.exists()]
+        for option, value in outputs.items():
+            for path in _paths(value):
+                for other, known in self.planned.items():
+                    if same_file(path, other):
+                        raise OutputError(f"{path}: field '{option}': is also the output of {known}; "
+                                          "give two different files")
+                for source, item in input_paths:
+                    if same_file(path, item) or _inside(path, item):
+                        what = f"is the {source} file" if same_file(path, item) else f"is inside the {source} folder"
+                        raise OutputError(f"{path}: field '{option}': {what} {item}; an output never overwrites "
+                                          "an input")
+                check_output(path, option)
+                self.planned[path] = option
+
+    # ------------------------------------------------------------------ staging
+    def stage(self, path: PathLike) -> Path:
+        """A temporary file beside ``path`` to write it to (renamed to ``path`` by :meth:`commit`)."""
+        path = self._planned(path)
+        if path in self._staged:
+            return self._staged[path]
+        self._make_folder(path.parent)
+        try:
+            fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".staged", dir=path.parent)
+            os.close(fd)
+            os.chmod(tmp, 0o666 & ~_umask())  # mkstemp makes 0600; a result file is as open as any other
+        except OSError as error:
+            raise self._cannot_write(path, error) from None
+        self._staged[path] = Path(tmp)
+        return Path(tmp)
+
+    def write_bytes(self, path: PathLike, data: bytes) -> Path:
+        """Stage ``data`` as the content of ``path``; returns ``path`` (where it will be)."""
+        tmp = self.stage(path)
+        try:
+            with open(tmp, "wb") as handle:
+                handle.write(data)
+                handle.flush()
+                os.fsync(handle.fileno())
+        except OSError as error:
+            raise self._cannot_write(Path(path), error) from None
+        return Path(path)
+
+    def write_text(self, path: PathLike, text: str) -> Path:
+        """Stage ``text`` (UTF-8) as the content of ``path``; returns ``path``."""
+        return self.write_bytes(path, text.encode("utf-8"))
+
+    # --------------------------------------------------------------- commit / discard
+    def commit(self) -> list[Path]:
+        """Rename every staged file into place (all planned files must have been staged)."""
+        missing = [p for p in self.planned if p not in self._staged]
+        if missing:
+            self.discard()
+            raise RuntimeError(f"output {missing[0]} was planned but never written")
+        done: list[Path] = []
+        try:
+            for path, tmp in self._staged.items():
+                if not tmp.exists():
+                    raise OutputError(f"{path}: field '{self.planned[path]}': its staged copy {tmp} disappeared")
+                os.replace(tmp, path)
+                done.append(path)
+        except OSError as error:
+            self.discard()
+            raise self._cannot_write(path, error) from None
+        self._staged.clear()
+        self._created.clear()
+        return done
+
+    def discard(self) -> None:
+        """Remove every staged file and the folders this set created (when left empty)."""
+        for tmp in self._staged.values():
+            try:
+                tmp.unlink(missing_ok=True)
+            except OSError:
+                pass
+        self._staged.clear()
+        for folder in reversed(self._created):  # innermost first; a folder someone else filled stays
+            try:
+                folder.rmdir()
+            except OSError:
+                pass
+        self._created.clear()
+
+    def __enter__(self) -> OutputSet:
+        return self
+
+    def __exit__(self, kind, error, trace) -> None:
+        if kind is None:
+            self.commit()
+        else:
+            self.discard()
+
+    # ------------------------------------------------------------------ helpers
+    def _planned(self, path: PathLike) -> Path:
+        path = Path(path)
+        if path not in self.planned:
+            raise ValueError(f"{path} is not one of the planned outputs {list(map(str, self.planned))}")
+        return path
+
+    def _cannot_write(self, path: Path, error: OSError) -> OutputError:
+        return OutputError(f"{path}: field '{self.planned[path]}': cannot write: {error.strerror or error}")
+
+    def _make_folder(self, folder: Path) -> None:
+        missing = []
+        for parent in [folder, *folder.parents]:
+            if parent.exists():
+                break
+            missing.append(parent)
+        try:
+            folder.mkdir(parents=True, exist_ok=True)
+        except OSError as error:
+            raise OutputError(f"{folder}: cannot create the folder: {error.strerror or error}") from None
+        self._created.extend(reversed(missing))

@@ -1,0 +1,40 @@
+"""Shared by the refusal tests: run a command, assert one line, exit 1, inputs unchanged, nothing written."""
+
+from __future__ import annotations
+
+import os
+from pathlib import Path
+
+from spherecal.cli import main
+
+
+def snapshot(folder: Path) -> dict[str, tuple[bytes, int] | None]:
+    """Every path under ``folder``: (content, mtime in ns) of files, None for folders."""
+    found: dict[str, tuple[bytes, int] | None] = {}
+    for root, dirs, files in os.walk(folder):
+        for name in dirs:
+            found[os.path.join(root, name)] = None
+        for name in files:
+            path = os.path.join(root, name)
+            if os.path.islink(path) and not os.path.exists(path):
+                found[path] = (b"<dangling>", 0)
+                continue
+            found[path] = (Path(path).read_bytes(), os.stat(path).st_mtime_ns)
+    return found
+
+
+def refused(argv: list[str], folder: Path, capsys, *expected: str) -> str:
+    """Run ``spherecal argv``: exit status 1, one line on stderr containing every ``expected`` text,
+    and nothing under ``folder`` changed (inputs' content and mtime, no file added or removed)."""
+    before = snapshot(folder)
+    status = main([str(a) for a in argv])
+    captured = capsys.readouterr()
+    err = captured.err
+    assert status == 1, (status, err)
+    assert len(err.strip().splitlines()) == 1, err
+    assert err.startswith(f"spherecal {argv[0]}: error: "), err
+    for text in expected:
+        assert text in err, (text, err)
+    after = snapshot(folder)
+    assert after == before, sorted(set(after) ^ set(before)) or "an input changed"
+    return err

@@ -1,0 +1,189 @@
+"""Files: no output over an input (links resolved), several outputs appear together or not at all."""
+
+from __future__ import annotations
+
+import os
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from spherecal.correction import save_robot, tool_point
+from spherecal.correction.atomic import OutputError
+from spherecal.correction.fixtures import FixtureSpec, write_fixtures
+from spherecal.correction.outputs import OutputSet
+from spherecal.correction.samples import Dataset
+from spherecal.correction.samples_csv import write_samples
+from spherecal.validation.mocap import MocapMeasurement, write_mocap_csv
+from tests.refusal import refused, snapshot
+
+
+# ------------------------------------------------------------------------------- OutputSet
+def test_output_set_writes_all_files_together(tmp_path) -> None:
+    out = tmp_path / "new" / "deeper"
+    files = [out / "a.txt", out / "b.txt"]
+    outputs = OutputSet({"--out": files})
+    assert not out.exists()  # checking creates nothing
+    with outputs:
+        outputs.write_text(files[0], "one")
+        save_robot_path = outputs.stage(files[1])
+        save_robot_path.write_text("two")
+        assert not files[0].exists() and not files[1].exists()  # staged, not in place yet
+    assert files[0].read_text() == "one" and files[1].read_text() == "two"
+    assert sorted(p.name for p in out.iterdir()) == ["a.txt", "b.txt"]  # nothing staged left behind
+
+
+def test_output_set_failure_leaves_nothing(tmp_path) -> None:
+    (tmp_path / "keep.txt").write_text("old")
+    before = snapshot(tmp_path)
+    files = [tmp_path / "new" / "a.txt", tmp_path / "keep.txt"]
+    with pytest.raises(RuntimeError, match="boom"), OutputSet({"--out": files}) as outputs:
+        outputs.write_text(files[0], "one")
+        outputs.write_text(files[1], "new")
+        raise RuntimeError("boom")
+    assert snapshot(tmp_path) == before  # the old file kept, the created folder removed, no staged file
+
+
+def test_output_set_refuses_a_file_never_written(tmp_path) -> None:
+    files = [tmp_path / "a.txt", tmp_path / "b.txt"]
+    with pytest.raises(RuntimeError, match="never written"), OutputSet({"--out": files}) as outputs:
+        outputs.write_text(files[0], "one")
+    assert list(tmp_path.iterdir()) == []
+
+
+@pytest.mark.parametrize("link", ["same", "relative", "symlink", "hardlink", "symlinked folder"])
+def test_output_set_refuses_an_input_however_named(tmp_path, monkeypatch, link) -> None:
+    source = tmp_path / "in.yaml"
+    source.write_text("x")
+    monkeypatch.chdir(tmp_path)
+    if link == "same":
+        output = source
+    elif link == "relative":
+        (tmp_path / "sub").mkdir()
+        output = Path("sub/../in.yaml")
+    elif link == "symlink":
+        output = tmp_path / "alias.yaml"
+        output.symlink_to(source)
+    elif link == "hardlink":
+        output = tmp_path / "hard.yaml"
+        os.link(source, output)
+    else:
+        (tmp_path / "view").symlink_to(tmp_path, target_is_directory=True)
+        output = tmp_path / "view" / "in.yaml"
+    with pytest.raises(OutputError, match=r"field '--out': is the --robot file"):
+        OutputSet({"--out": output}, {"--robot": str(source)})
+    assert source.read_text() == "x"
+
+
+def test_output_set_refuses_one_file_planned_twice_and_bad_locations(tmp_path) -> None:
+    with pytest.raises(OutputError, match="is also the output of --out"):
+        OutputSet({"--out": tmp_path / "r.json", "--rrd": tmp_path / "." / "r.json"})
+    (tmp_path / "file").write_text("")
+    with pytest.raises(OutputError, match=r"file is not a folder"):
+        OutputSet({"--out": tmp_path / "file" / "x.csv"})
+    with pytest.raises(OutputError, match="is a folder, expected a file name"):
+        OutputSet({"--out": tmp_path})
+    with pytest.raises(OutputError, match="is inside the SOURCE folder"):
+        OutputSet({"--out": tmp_path / "x.csv"}, {"SOURCE": tmp_path})
+
+
+@pytest.mark.skipif(os.geteuid() == 0, reason="root writes anywhere")
+def test_output_set_refuses_a_folder_it_cannot_write(tmp_path) -> None:
+    locked = tmp_path / "locked"
+    locked.mkdir(mode=0o555)
+    with pytest.raises(OutputError, match="permission denied"):
+        OutputSet({"--out": locked / "a.csv"})
+
+
+# ------------------------------------------------------------------------------ commands
+@pytest.fixture
+def files(tmp_path, panda):
+    """A small set of inputs: robot files, samples, fixtures, a mocap recording."""
+    rng = np.random.default_rng(3)
+    save_robot(panda, tmp_path / "robot.yaml")
+    save_robot(panda, tmp_path / "calibrated.yaml")
+    q = panda.random_configurations(60, rng)
+    labels = np.repeat(["P1", "P2", "P3"], 20)
+    write_samples(tmp_path / "samples.csv", Dataset(labels=labels, q=q))
+    write_fixtures(tmp_path / "fixtures.yaml", FixtureSpec(("P1", "P2", "P3"), {"P1": np.array([0.5, 0.0, 0.3]),
+                                                                               "P2": np.array([0.5, 0.2, 0.3]),
+                                                                               "P3": np.array([0.4, -0.2, 0.3])}))
+    write_mocap_csv(tmp_path / "mocap.csv", MocapMeasurement(q=q, tool=tool_point(panda, q)))
+    (tmp_path / "candidates.yaml").write_text("candidates:\n  C1: {position: [0.5, 0.0, 0.3]}\n")
+    return tmp_path
+
+
+def test_simulate_never_overwrites_its_fixtures_input(files, capsys) -> None:
+    # `simulate --out DIR --fixtures DIR/fixtures.yaml` used to overwrite the input with the written one
+    refused(["simulate", "--out", files, "--fixtures", files / "fixtures.yaml", "--seconds", "1", "--per-fixture",
+             "10"], files, capsys, "fixtures.yaml: field '--out': is the --fixtures file")
+
+
+def test_simulate_refuses_before_any_work_when_one_of_its_files_cannot_be_written(files, capsys) -> None:
+    out = files / "sim"
+    (out / "truth.yaml").mkdir(parents=True)
+    refused(["simulate", "--out", out, "--seconds", "1", "--per-fixture", "10"], files, capsys,
+            "truth.yaml: field '--out': is a folder")
+
+
+@pytest.mark.parametrize(
+    ("argv", "expected"),
+    [
+        (["calibrate", "--robot", "robot.yaml", "--samples", "samples.csv", "--out", "samples.csv"],
+         "is the --samples file"),
+        (["calibrate", "--robot", "robot.yaml", "--samples", "samples.csv", "--out", "link.yaml"],
+         "is the --robot file"),
+        (["calibrate", "--robot", "robot.yaml", "--samples", "samples.csv", "--fixtures", "fixtures.yaml",
+          "--out", "./fixtures.yaml"], "is the --fixtures file"),
+        (["export", "robot.yaml", "--format", "yaml", "--out", "hard.yaml"], "is the CAL.yaml file"),
+        (["validate", "--nominal", "robot.yaml", "--calibrated", "calibrated.yaml", "--mocap", "mocap.csv",
+          "--out", "mocap.csv"], "is the --mocap file"),
+        (["validate", "--nominal", "robot.yaml", "--calibrated", "calibrated.yaml", "--mocap", "mocap.csv",
+          "--out", "r.json", "--rrd", "r.json"], "is also the output of --out"),
+        (["validate", "--nominal", "robot.yaml", "--calibrated", "calibrated.yaml", "--samples", "samples.csv",
+          "--rrd", "calibrated.yaml"], "is the --calibrated file"),
+        (["plan", "--candidates", "candidates.yaml", "--rrd", "candidates.yaml"], "is the --candidates file"),
+        (["plan", "--predict", "samples.csv", "--rrd", "samples.csv"], "is the --predict file"),
+        (["import", "samples.csv", "--format", "csv", "--robot", "robot.yaml", "--out", "."],
+         "holds the input"),
+    ],
+)
+def test_no_command_writes_over_an_input(files, capsys, monkeypatch, argv, expected) -> None:
+    monkeypatch.chdir(files)
+    (files / "link.yaml").symlink_to(files / "robot.yaml")
+    os.link(files / "robot.yaml", files / "hard.yaml")
+    refused(argv, files, capsys, expected)
+
+
+def test_demo_and_campaign_refuse_before_any_work(files, capsys) -> None:
+    (files / "demo").mkdir()
+    (files / "demo" / "demo.json").mkdir()  # one of the demo's files cannot be written
+    refused(["demo", "--out", files / "demo", "--source", "synthetic"], files, capsys,
+            "demo.json: field '--out': is a folder")
+    refused(["campaign", "--out", files / "samples.csv"], files, capsys, "field '--out': exists and is not a folder")
+
+
+def test_validate_writes_report_and_recording_together(files, capsys, monkeypatch) -> None:
+    # the report used to be written first; a recording failing after it left a report without its recording
+    import spherecal.validation.pipeline as pipeline
+
+    def broken(recording, *args, **kwargs):
+        recording.stream.log("x", recording.rr.Points3D([[0.0, 0.0, 0.0]]))  # something was recorded already
+        raise OutputError("disk full (simulated)")
+
+    monkeypatch.setattr(pipeline, "record_validate_run", broken)
+    argv = ["validate", "--nominal", files / "robot.yaml", "--calibrated", files / "calibrated.yaml",
+            "--mocap", files / "mocap.csv", "--out", files / "r.json", "--rrd", files / "r.rrd"]
+    refused(argv, files, capsys, "disk full (simulated)")
+    monkeypatch.undo()
+    from spherecal.cli import main
+
+    assert main([str(a) for a in argv]) == 0
+    assert (files / "r.json").stat().st_size > 0 and (files / "r.rrd").stat().st_size > 0
+    assert not [p for p in files.iterdir() if p.name.startswith(".")]  # nothing staged left behind
+
+
+def test_an_unwritable_recording_is_one_line_before_anything_is_written(files, capsys) -> None:
+    argv = ["validate", "--nominal", files / "robot.yaml", "--calibrated", files / "calibrated.yaml",
+            "--mocap", files / "mocap.csv", "--out", files / "r.json", "--rrd", files / "samples.csv" / "r.rrd"]
+    refused(argv, files, capsys, "r.rrd: field '--rrd':", "samples.csv is not a folder")

@@ -1,0 +1,267 @@
+"""Untrusted text and numbers: YAML bombs, duplicate keys, broken CSV, non-physical values: one line each."""
+
+from __future__ import annotations
+
+import time
+from dataclasses import replace
+
+import numpy as np
+import pytest
+import yaml
+
+from spherecal.correction import RobotFileError, dump_robot, load_robot, save_robot, tool_point
+from spherecal.correction.fixtures import read_fixtures
+from spherecal.correction.samples import Dataset, DatasetError
+from spherecal.correction.samples_csv import format_samples, read_samples, write_samples
+from spherecal.correction.yaml_safe import MAX_BYTES
+from spherecal.identification.importers import RecordingError, read_joint_csv
+from spherecal.validation.candidates import CandidateError, read_candidates
+from spherecal.validation.mocap import MocapError, MocapMeasurement, read_mocap_csv, write_mocap_csv
+from tests.refusal import refused
+
+BOMB = "\n".join(
+    ["a: &a [x, x, x, x, x, x, x, x, x, x]"]
+    + [f"{chr(98 + k)}: &{chr(98 + k)} [*{chr(97 + k)}, *{chr(97 + k)}, *{chr(97 + k)}, *{chr(97 + k)}, "
+       f"*{chr(97 + k)}, *{chr(97 + k)}, *{chr(97 + k)}, *{chr(97 + k)}, *{chr(97 + k)}, *{chr(97 + k)}]"
+       for k in range(8)]
+) + "\n"  # 10**9 values once expanded, 500 bytes of text
+DEEP = "x: " + "[" * 20000 + "]" * 20000 + "\n"
+HUGE = "x: [" + ", ".join(["0.0"] * (MAX_BYTES // 5 + 10)) + "]\n"
+
+
+def _readers(tmp_path, panda):
+    return {
+        "robot": (lambda p: load_robot(p), RobotFileError),
+        "fixtures": (lambda p: read_fixtures(p), DatasetError),
+        "candidates": (lambda p: read_candidates(p, panda.n_joints), CandidateError),
+    }
+
+
+@pytest.mark.parametrize("reader", ["robot", "fixtures", "candidates"])
+@pytest.mark.parametrize(("text", "message"), [(BOMB, "expands to more than"), (DEEP, "nested more than"),
+                                               (HUGE, "a YAML file here is at most")])
+def test_yaml_bombs_deep_and_huge_documents_are_refused_at_once(tmp_path, panda, reader, text, message) -> None:
+    path = tmp_path / "input.yaml"
+    path.write_text(text)
+    read, error = _readers(tmp_path, panda)[reader]
+    start = time.process_time()  # CPU time: the machine may be shared
+    with pytest.raises(error, match=message) as refused_:
+        read(path)
+    assert time.process_time() - start < 1.0  # refused before anything expands or recurses
+    assert "\n" not in str(refused_.value) and str(path) in str(refused_.value)
+
+
+@pytest.mark.parametrize("reader", ["robot", "fixtures", "candidates"])
+def test_a_duplicated_key_is_an_error_naming_it_and_its_row(tmp_path, panda, reader) -> None:
+    texts = {
+        "robot": dump_robot(panda).replace("name: franka_panda", "name: franka_panda\nname: other"),
+        "fixtures": "fixtures:\n  P1: {}\n  P2: {}\n  P1: {position: [0, 0, 0]}\n",
+        "candidates": "candidates:\n  C1: {position: [0.5, 0, 0.3]}\n  C1: {position: [0.4, 0, 0.3]}\n",
+    }
+    path = tmp_path / "input.yaml"
+    path.write_text(texts[reader])
+    row = next(k + 1 for k, line in enumerate(texts[reader].splitlines())
+               if line.strip().startswith(("name: other", "P1: {position", "C1: {position: [0.4")))
+    read, error = _readers(tmp_path, panda)[reader]
+    with pytest.raises(error, match=rf"row {row}, field '(name|P1|C1)': duplicate key"):
+        read(path)
+
+
+def test_a_yaml_alias_within_the_budget_still_reads(tmp_path) -> None:
+    path = tmp_path / "fixtures.yaml"
+    path.write_text("centre: &c [0.5, 0.0, 0.3]\nfixtures:\n  P1: {position: *c}\n  P2: {}\n")
+    assert read_fixtures(path).positions["P1"].tolist() == [0.5, 0.0, 0.3]
+
+
+# ----------------------------------------------------------------------------------------- CSV
+def _samples(panda, rows: int = 12) -> Dataset:
+    q = panda.random_configurations(rows, np.random.default_rng(1))
+    return Dataset(labels=np.repeat(["P1", "P2"], rows // 2), q=q, t=np.arange(rows) * 1e-3)
+
+
+def _edit_line(path, row: int, edit) -> None:
+    lines = path.read_text().splitlines(keepends=True)
+    lines[row - 1] = edit(lines[row - 1])
+    path.write_text("".join(lines))
+
+
+CSV_CASES = [
+    (lambda line: line.replace(",", ',"', 1), 3, "unterminated quote"),
+    (lambda line: line.replace(",", "," + "7" * 200_000, 1), 4, "a field longer than the CSV limit"),
+]
+
+
+@pytest.mark.parametrize(("edit", "row", "message"), CSV_CASES)
+def test_samples_csv_broken_quotes_and_huge_fields_name_their_row(tmp_path, panda, edit, row, message) -> None:
+    path = write_samples(tmp_path / "samples.csv", _samples(panda))
+    _edit_line(path, row, edit)
+    with pytest.raises(DatasetError, match=rf"row {row}, field '': {message}") as error:
+        read_samples(path, panda)
+    assert "\n" not in str(error.value)
+
+
+@pytest.mark.parametrize(("edit", "row", "message"), CSV_CASES)
+def test_mocap_and_joint_csv_broken_quotes_and_huge_fields_name_their_row(tmp_path, panda, edit, row,
+                                                                          message) -> None:
+    q = panda.random_configurations(12, np.random.default_rng(2))
+    mocap = write_mocap_csv(tmp_path / "mocap.csv", MocapMeasurement(q=q, tool=tool_point(panda, q)))
+    joints = write_samples(tmp_path / "joints.csv", _samples(panda))
+    for path, read, error in ((mocap, lambda p: read_mocap_csv(p, 7), MocapError),
+                              (joints, lambda p: read_joint_csv(p, panda), RecordingError)):
+        _edit_line(path, row, edit)
+        with pytest.raises(error, match=rf"row {row}, field '': {message}"):
+            read(path)
+
+
+def test_the_fast_and_the_careful_samples_readers_agree(tmp_path, panda) -> None:
+    # a comment or a quoted name sends a block through the csv module line by line; same result
+    data = _samples(panda, 40)
+    plain = write_samples(tmp_path / "plain.csv", data)
+    careful = tmp_path / "careful.csv"
+    text = format_samples(data).replace("\nP2,", '\n"P2",', 1)
+    careful.write_text("# comment\n" + text + "\n   \n")
+    a, b = read_samples(plain, panda), read_samples(careful, panda)
+    np.testing.assert_array_equal(a.q, data.q)  # every bit (repr of floats)
+    np.testing.assert_array_equal(a.t, data.t)
+    for name in ("q", "t", "labels"):
+        np.testing.assert_array_equal(getattr(a, name), getattr(b, name))
+    assert a.fixture_names == b.fixture_names == ("P1", "P2")
+    np.testing.assert_array_equal(b.lines, a.lines + 1)  # the comment shifts every row by one line
+
+
+@pytest.mark.parametrize(("edit", "field"), [
+    (lambda line: line.replace(line.split(",")[3], "nan"), "q2"),
+    (lambda line: line.rsplit(",", 1)[0] + "\n", "q7"),
+    (lambda line: line.rstrip("\n") + ",0.1\n", "column 10"),
+    (lambda line: "," + line.split(",", 1)[1], "fixture"),
+])
+def test_samples_csv_bad_row_named_in_a_large_block(tmp_path, panda, edit, field) -> None:
+    data = _samples(panda, 3000)
+    path = write_samples(tmp_path / "samples.csv", data)
+    _edit_line(path, 2500, edit)
+    with pytest.raises(DatasetError, match=rf"row 2500, field '{field}'"):
+        read_samples(path, panda)
+
+
+def test_a_file_name_with_a_newline_is_one_line(tmp_path, panda, capsys) -> None:
+    folder = tmp_path / "in"
+    folder.mkdir()
+    save_robot(panda, folder / "robot.yaml")
+    path = folder / "bad\nname.csv"
+    path.write_text("fixture,q1\nP1,0\n")
+    refused(["calibrate", "--robot", folder / "robot.yaml", "--samples", path, "--out", tmp_path / "cal.yaml"],
+            tmp_path, capsys, "bad\\nname.csv")
+
+
+# -------------------------------------------------------------------------------------- numbers
+@pytest.mark.parametrize(("edit", "field"), [
+    (lambda d: d["joints"][3].update(a=1e308), r"joints\[3\].a: 1e\+308 m is not physical"),
+    (lambda d: d["joints"][0].update(d=-12.0), r"joints\[0\].d: -12.0 m is not physical"),
+    (lambda d: d.update(tool=[0.0, 0.0, 20.0]), r"tool\[2\]: 20.0 m is not physical"),
+    (lambda d: d.update(base={"xyz": [0, 11, 0], "rpy": [0, 0, 0]}), r"base.xyz\[1\]"),
+    (lambda d: d["joints"][2].update(alpha=100.0), r"joints\[2\].alpha: 100.0 rad is not physical"),
+    (lambda d: d["joints"][1].update(lower=-1e6), r"joints\[1\].lower"),
+    (lambda d: d["joints"][1].update(lower=1.0, upper=1.0), r"joints\[1\].lower: must be below upper"),
+])
+def test_robot_file_refuses_non_physical_numbers(tmp_path, panda, edit, field) -> None:
+    data = yaml.safe_load(dump_robot(panda))
+    edit(data)
+    path = tmp_path / "robot.yaml"
+    path.write_text(yaml.safe_dump(data))
+    with pytest.raises(RobotFileError, match=field):
+        load_robot(path)
+
+
+@pytest.mark.parametrize(("argv", "message"), [
+    (["simulate", "--out", "o", "--seconds", "1e9"], "at most 3600 s"),
+    (["demo", "--seconds", "7200"], "at most 3600 s"),
+    (["campaign", "--seconds", "inf"], "finite"),
+    (["plan", "--grid", "0,1,2;0,1,2;0,1,2", "--seconds", "1e308"], "at most 3600 s"),
+    (["demo", "--configurations", str(10**9)], "an integer in 3..200000"),
+    (["validate", "--nominal", "panda", "--calibrated", "panda", "--configurations", str(10**9)], "3..200000"),
+    (["campaign", "--per-fixture", str(10**9)], "an integer in 1..100000"),
+    (["calibrate", "--robot", "panda", "--samples", "s.csv", "--out", "c.yaml", "--noise", "1e308"], "plausible"),
+])
+def test_out_of_range_options_are_one_line(tmp_path, capsys, monkeypatch, argv, message) -> None:
+    monkeypatch.chdir(tmp_path)
+    refused(argv, tmp_path, capsys, message)
+
+
+def _mocap_case(tmp_path, panda, kind: str):
+    q = panda.random_configurations(40, np.random.default_rng(4))
+    tool = tool_point(panda, q)
+    if kind == "millimetres":
+        tool = tool * 1e3
+    elif kind == "identical rows":
+        q, tool = np.repeat(q[:1], 40, axis=0), np.repeat(tool[:1], 40, axis=0)
+    elif kind == "outside limits":
+        q[7, 3] = 1.0
+    write_mocap_csv(tmp_path / "mocap.csv", MocapMeasurement(q=q, tool=tool))
+
+
+@pytest.mark.parametrize(("kind", "message"), [
+    ("millimetres", "m from the recording's centre, but franka_panda reaches at most"),
+    ("identical rows", "1 distinct configurations in 40 rows, need at least 10"),
+    ("outside limits", "row 9: field q4: 1 rad outside the joint limits"),
+])
+def test_validate_refuses_mocap_that_cannot_be_of_this_arm(tmp_path, panda, capsys, kind, message) -> None:
+    # millimetres in a metres file gave a 573 m "error", identical rows 0.000 mm for both models, exit 0
+    _mocap_case(tmp_path, panda, kind)
+    save_robot(panda, tmp_path / "cal.yaml")
+    refused(["validate", "--nominal", "panda", "--calibrated", tmp_path / "cal.yaml", "--mocap",
+             tmp_path / "mocap.csv", "--out", tmp_path / "report.json"], tmp_path, capsys, message)
+
+
+@pytest.mark.parametrize(("edit", "message"), [
+    (lambda m: replace(m, upper=m.upper - np.r_[0, 0, 0, 0, 0, 0, 0.5]), "field joints[6].upper"),
+    (lambda m: replace(m, tool=m.tool + np.array([0.0, 0.2, 0.0])), "tool point up to 200 mm from the nominal"),
+])
+def test_validate_refuses_a_calibrated_file_of_another_arm(tmp_path, panda, capsys, edit, message) -> None:
+    _mocap_case(tmp_path, panda, "fine")
+    save_robot(edit(panda), tmp_path / "cal.yaml")
+    refused(["validate", "--nominal", "panda", "--calibrated", tmp_path / "cal.yaml", "--mocap",
+             tmp_path / "mocap.csv", "--out", tmp_path / "report.json"], tmp_path, capsys, message)
+
+
+@pytest.mark.parametrize(("text", "message"), [
+    ("fixtures:\n  P1: {position: [500.0, 0, 300.0]}\n",
+     r"row 2, field 'fixtures.P1.position': \[500.0, 0, 300.0\] m"),
+    ("fixtures:\n  P1: {}\n  P2: {}\ndistances:\n  - [P1, P2, 50.0]\n",
+     r"row 5, field 'distances\[0\]': 50.0 m is not physical"),
+])
+def test_fixtures_refuse_millimetres_in_a_metres_file(tmp_path, text, message) -> None:
+    path = tmp_path / "fixtures.yaml"
+    path.write_text(text)
+    with pytest.raises(DatasetError, match=message):
+        read_fixtures(path)
+
+
+@pytest.mark.parametrize(("argv", "message"), [
+    (["import", "x", "--format", "mukca", "--robot", "panda", "--out", "o", "--distance", "50"], "at most 10 m"),
+    (["calibrate", "--robot", "panda", "--samples", "s.csv", "--out", "c.yaml", "--dedup-deg", "1e300"], "10 deg"),
+    (["simulate", "--out", "o", "--angle-std-deg", "90"], "at most 10 deg"),
+    (["plan", "--grid", "0,1e300,2;0,1,2;0,1,2"], "|max| <= 10 m"),
+])
+def test_more_out_of_range_options(tmp_path, capsys, monkeypatch, argv, message) -> None:
+    monkeypatch.chdir(tmp_path)
+    refused(argv, tmp_path, capsys, message)
+
+
+def test_joint_csv_fast_and_careful_readers_agree(tmp_path, panda) -> None:
+    # joints in another order between other columns, nanosecond stamps; a comment sends a block line by line
+    q = panda.random_configurations(30, np.random.default_rng(5))
+    order = [3, 0, 6, 1, 5, 2, 4]
+    head = ["stamp", "finger", "fixture"] + [f"panda_joint{j + 1}" for j in order]
+    body = [",".join([str(10**18 + k * 10**6), "0.04", "P1" if k < 15 else "P2"]
+                     + [repr(float(q[k, j])) for j in order]) for k in range(30)]
+    plain = tmp_path / "plain.csv"
+    plain.write_text("\n".join([",".join(head)] + body) + "\n")
+    careful = tmp_path / "careful.csv"
+    careful.write_text("\n".join([",".join(head)] + body[:10] + ["# a comment", '"' + body[10].replace(",", '",', 1)]
+                                 + body[11:]) + "\n")
+    a, b = read_joint_csv(plain, panda), read_joint_csv(careful, panda)
+    np.testing.assert_array_equal(a.q, q)
+    np.testing.assert_array_equal(a.t, (10**18 + np.arange(30) * 10**6) * 1e-9)
+    for name in ("q", "t", "labels"):
+        np.testing.assert_array_equal(getattr(a, name), getattr(b, name))
+    assert a.rows[12] == f"{plain}: row 14" and b.rows[12] == f"{careful}: row 15"

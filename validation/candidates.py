@@ -1,0 +1,111 @@
+"""Candidate fixture positions of a plan: from a box grid or a YAML file."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from spherecal.correction.errors import SpherecalError
+from spherecal.correction.yaml_safe import load_yaml
+
+#: Most grid points :func:`grid_candidates` makes (each one is surveyed and scored).
+MAX_GRID = 10_000
+
+
+class CandidateError(SpherecalError):
+    """A candidate list that is empty or malformed (message names the file or option and field)."""
+
+
+@dataclass(frozen=True)
+class Candidate:
+    """A candidate fixture position.
+
+    Attributes:
+        name: label (``C1`` ... or from the file).
+        position: (3,) centre in the base frame [m].
+        joint_range: (n,) share of each joint's range the self-motion may use there (None: all).
+    """
+
+    name: str
+    position: np.ndarray
+    joint_range: np.ndarray | None = None
+
+
+def grid_candidates(text: str) -> list[Candidate]:
+    """Candidates on a box grid ``"xmin,xmax,nx;ymin,ymax,ny;zmin,zmax,nz"`` [m], named ``C1`` ...
+
+    Raises:
+        CandidateError: not three ``min,max,count`` triples, a count < 1, more than :data:`MAX_GRID` points.
+    """
+    axes = []
+    parts = text.split(";")
+    if len(parts) != 3:
+        raise CandidateError(f"--grid {text!r}: expected 'xmin,xmax,nx;ymin,ymax,ny;zmin,zmax,nz'")
+    for axis, part in zip("xyz", parts, strict=True):
+        fields = part.split(",")
+        try:
+            lo, hi, count = float(fields[0]), float(fields[1]), int(fields[2])
+        except (ValueError, IndexError):
+            raise CandidateError(f"--grid {text!r}: field '{axis}': expected 'min,max,count', got {part!r}") from None
+        if len(fields) != 3 or count < 1 or not (abs(lo) <= 10.0 and abs(hi) <= 10.0):  # finite, metres
+            raise CandidateError(f"--grid {text!r}: field '{axis}': expected 'min,max,count', count >= 1, |min|, "
+                                 "|max| <= 10 m")
+        axes.append(np.linspace(lo, hi, count) if count > 1 else np.array([(lo + hi) / 2]))
+    total = math.prod(a.size for a in axes)
+    if total > MAX_GRID:
+        raise CandidateError(f"--grid {text!r}: field 'count': {total} points, at most {MAX_GRID}")
+    points = np.stack(np.meshgrid(*axes, indexing="ij"), axis=-1).reshape(-1, 3)
+    return [Candidate(f"C{k + 1}", p) for k, p in enumerate(points)]
+
+
+def read_candidates(path: str | Path, n_joints: int) -> list[Candidate]:
+    """Candidates from YAML: ``candidates: {C1: {position: [x, y, z], joint_range: [...]}, ...}``.
+
+    ``joint_range`` (optional) gives, per joint, the share of its range the self-motion may use.
+
+    Raises:
+        CandidateError: unreadable file, no candidates, a bad position or joint range.
+    """
+
+    path = Path(path)
+    try:
+        text = path.read_text(encoding="utf-8")
+    except (OSError, UnicodeDecodeError) as error:
+        raise CandidateError(f"{path}: cannot read candidates: {str(error).splitlines()[0]}") from None
+    data, _ = load_yaml(text, str(path), CandidateError)  # bounded: size, depth, aliases; no duplicate keys
+    entries = data.get("candidates") if isinstance(data, dict) else None
+    if not isinstance(entries, dict) or not entries:
+        raise CandidateError(
+            f"{path}: field 'candidates': expected a non-empty mapping name -> {{position: [x, y, z]}}"
+        )
+    out = []
+    for name, entry in entries.items():
+        where = f"{path}: field 'candidates.{name}"
+        if not isinstance(entry, dict) or "position" not in entry:
+            raise CandidateError(f"{where}': expected a mapping with 'position: [x, y, z]'")
+        position = _vector(entry["position"], 3, f"{where}.position'")
+        if np.abs(position).max() > 10.0:
+            raise CandidateError(f"{where}.position': {position.tolist()} m is not physical (at most 10 m)")
+        joint_range = None
+        if entry.get("joint_range") is not None:
+            joint_range = _vector(entry["joint_range"], n_joints, f"{where}.joint_range'")
+            if np.any(joint_range <= 0) or np.any(joint_range > 1):
+                raise CandidateError(f"{where}.joint_range': every share must be in (0, 1]")
+        unknown = set(entry) - {"position", "joint_range"}
+        if unknown:
+            raise CandidateError(f"{where}.{sorted(unknown)[0]}': unknown field")
+        out.append(Candidate(str(name), position, joint_range))
+    return out
+
+
+def _vector(value, size: int, where: str) -> np.ndarray:
+    try:
+        vector = np.asarray(value, dtype=float)
+    except (TypeError, ValueError):
+        raise CandidateError(f"{where}: expected {size} numbers, got {value!r}") from None
+    if vector.shape != (size,) or not np.all(np.isfinite(vector)):
+        raise CandidateError(f"{where}: expected {size} finite numbers, got {value!r}")
+    return vector
