@@ -53,6 +53,8 @@ def test_link_options_errors_are_one_line(tmp_path, ur5e_file, capsys):
     out = tmp_path / "x.yaml"
     assert main(["export", str(ur5e_file), "--tip-link", "wrist_3_link", "--format", "yaml", "--out", str(out)]) == 0
     assert load_robot(out).extras["urdf"]["tip_link"] == "wrist_3_link"
+    warning = capsys.readouterr().err  # the UR's parallel axes: one line, as every message of the CLI
+    assert warning.startswith("spherecal export: warning: ") and warning.count("\n") == 1 and "Hayati beta" in warning
     for args, message in (
         (["--tip-link", "gripper"], "tip link 'gripper' is not a link"),
         (["--base-link", "ball"], "no revolute joint"),
