@@ -103,7 +103,7 @@ class ModelSelection:
             lines.append(
                 f"cross-validation, leave one of {len(self.folds)} groups out ({self.samples_per_fixture} samples per "
                 f"fixture per fit, {self.seconds:.2f} s): held-out error [mm] dh {dh * 1e3:.4f}, "
-                f"elastic {el * 1e3:.4f}, gain {gain * 1e3:.4f} +- {se * 1e3:.4f}"
+                f"elastic {el * 1e3:.4f}, gain {gain * 1e3:.3g} +- {se * 1e3:.2g}"
             )
             for k, name in enumerate(self.folds):
                 dh_k, el_k = self.errors["dh"][k] * 1e3, self.errors["elastic"][k] * 1e3
@@ -194,9 +194,9 @@ def select_model(requested: str, fit, nominal: RobotModel, dataset: Dataset, spe
     selection = ModelSelection("auto", "dh", "", folds, errors, used, seconds)
     _, _, gain, se = selection.stats()
     if gain > se:
-        reason = (f"elastic predicts held-out fixtures {gain * 1e3:.4f} mm better, more than the fold spread "
-                  f"{se * 1e3:.4f} mm")
+        reason = (f"elastic predicts held-out fixtures {gain * 1e3:.3g} mm better, more than the fold spread "
+                  f"{se * 1e3:.2g} mm")
         return replace(selection, chosen="elastic", reason=reason)
-    reason = (f"elastic's held-out gain {gain * 1e3:.4f} mm does not exceed the fold spread {se * 1e3:.4f} mm; "
+    reason = (f"elastic's held-out gain {gain * 1e3:.3g} mm does not exceed the fold spread {se * 1e3:.2g} mm; "
               f"the simpler model is kept")
     return replace(selection, reason=reason)
