@@ -24,6 +24,7 @@ import yaml
 from .atomic import atomic_write_text
 from .errors import SpherecalError
 from .model import CONVENTIONS, JOINT_FIELDS, RobotModel
+from .text_input import read_text
 from .yaml_safe import load_yaml
 
 JOINT_KEYS: tuple[str, ...] = JOINT_FIELDS + ("lower", "upper")
@@ -178,12 +179,7 @@ def load_robot(
         text = resources.files(__package__).joinpath("data", EMBEDDED_ROBOTS[key]).read_text()
         return robot_from_dict(load_yaml(text, key, RobotFileError)[0], source=key)
     path = Path(path_or_name)
-    try:
-        text = path.read_text(encoding="utf-8")
-    except OSError as error:
-        raise RobotFileError(f"{path}: cannot read: {error.strerror or error}") from None
-    except UnicodeDecodeError as error:
-        raise RobotFileError(f"{path}: cannot read: not UTF-8 text (byte {error.start})") from None
+    text = read_text(path, RobotFileError)
     data, _ = load_yaml(text, str(path), RobotFileError)  # bounded: size, depth, aliases; no duplicate keys
     return robot_from_dict(data, source=str(path))
 

@@ -13,7 +13,6 @@ Errors are :class:`~spherecal.correction.samples.DatasetError`, one line naming 
 
 from __future__ import annotations
 
-import math
 import os
 from pathlib import Path
 
@@ -23,17 +22,12 @@ from spherecal.correction.atomic import atomic_write_text
 from spherecal.correction.csv_rows import is_skipped, iter_lines, parse_line, plain_values
 from spherecal.correction.model import RobotModel
 from spherecal.correction.samples import LIMIT_TOL, Dataset, DatasetError
+from spherecal.correction.text_input import finite_number
 
 
 # --------------------------------------------------------------------------------- samples.csv
 def _number(text: str, where: str) -> float:
-    try:
-        value = float(text)
-    except ValueError:
-        raise DatasetError(f"{where}: expected a number, got {text.strip()!r}") from None
-    if not math.isfinite(value):
-        raise DatasetError(f"{where}: must be finite, got {text.strip()!r}")
-    return value
+    return finite_number(text, where, DatasetError)
 
 
 def _parse_header(header: list[str], n: int, where: str) -> bool:

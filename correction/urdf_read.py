@@ -11,12 +11,12 @@ import math
 import os
 import xml.etree.ElementTree as ET
 from dataclasses import dataclass, field
-from pathlib import Path
 
 import numpy as np
 
 from .model import pose_matrix
 from .robot_file import RobotFileError
+from .text_input import read_text
 
 MOVABLE = ("revolute", "continuous")
 KNOWN_TYPES = ("revolute", "continuous", "prismatic", "fixed", "floating", "planar")
@@ -224,14 +224,7 @@ def parse_urdf(text: str, source: str = "<urdf>") -> UrdfTree:
 
 def read_urdf(path: str | os.PathLike) -> UrdfTree:
     """Read and parse a URDF file (see :func:`parse_urdf`)."""
-    path = Path(path)
-    try:
-        text = path.read_text(encoding="utf-8")
-    except OSError as error:
-        raise RobotFileError(f"{path}: cannot read: {error.strerror or error}") from None
-    except UnicodeDecodeError as error:
-        raise RobotFileError(f"{path}: cannot read: not UTF-8 text (byte {error.start})") from None
-    return parse_urdf(text, str(path))
+    return parse_urdf(read_text(path, RobotFileError), str(path))
 
 
 def chain(

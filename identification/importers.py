@@ -9,7 +9,6 @@ Errors are :class:`RecordingError`, one line naming the file, the row and the fi
 
 from __future__ import annotations
 
-import math
 import os
 import re
 from dataclasses import dataclass
@@ -29,6 +28,7 @@ from spherecal.correction.csv_rows import (
 from spherecal.correction.fixtures import FixtureSpec
 from spherecal.correction.model import RobotModel
 from spherecal.correction.samples import LIMIT_TOL, Dataset, DatasetError
+from spherecal.correction.text_input import finite_number
 
 #: Default MUKCa socket distance [m] (their printed plate: centres 50 mm apart).
 MUKCA_DISTANCE = 0.050
@@ -139,13 +139,7 @@ def _hole_files(folder: Path) -> list[tuple[int, Path]]:
 
 
 def _number(text: str, where: str) -> float:
-    try:
-        value = float(text)
-    except ValueError:
-        raise RecordingError(f"{where}: expected a number, got {text.strip()!r}") from None
-    if not math.isfinite(value):
-        raise RecordingError(f"{where}: must be finite, got {text.strip()!r}")
-    return value
+    return finite_number(text, where, RecordingError)
 
 
 def read_mukca(
