@@ -65,3 +65,14 @@ def test_link_options_errors_are_one_line(tmp_path, ur5e_file, capsys):
     assert main(["export", "panda", "--tip-link", "x", "--format", "yaml", "--out", str(tmp_path / "z.yaml")]) == 1
     assert "only for a URDF" in capsys.readouterr().err
     assert not (tmp_path / "y.yaml").exists() and not (tmp_path / "z.yaml").exists()
+
+
+def test_validate_a_calibration_of_a_urdf_arm_against_that_urdf(tmp_path, ur5e_file, capsys):
+    """--tip-link names a link of the URDF among the models; the calibrated file is a robot file."""
+    cal = tmp_path / "cal.yaml"
+    assert main(["export", str(ur5e_file), "--tip-link", "wrist_3_link", "--format", "yaml", "--out", str(cal)]) == 0
+    out = tmp_path / "report.json"
+    args = ["validate", "--nominal", str(ur5e_file), "--tip-link", "wrist_3_link", "--calibrated", str(cal),
+            "--truth", str(cal), "--configurations", "50", "--out", str(out)]
+    assert main(args) == 0, capsys.readouterr().err
+    assert out.exists()

@@ -62,7 +62,9 @@ def run(args: argparse.Namespace) -> int:
     files = {"nominal": args.nominal, "calibrated": args.calibrated}
     if args.truth is not None:
         files["truth"] = args.truth
-    models = {role: load_robot(path, **urdf_links(args)) for role, path in files.items()}
+    # --tip-link/--base-link describe the URDF among the models (a calibrated file is a robot file)
+    urdf = [role for role, path in files.items() if str(path).lower().endswith(".urdf")] or ["nominal"]
+    models = {role: load_robot(path, **(urdf_links(args) if role in urdf else {})) for role, path in files.items()}
     check_models(models, files)
     if args.truth is None and args.mocap is None:
         from spherecal.commands.validate_sockets import run_sockets
