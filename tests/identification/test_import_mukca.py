@@ -239,6 +239,23 @@ def test_kinova_calibrated_on_one_placement_beats_the_nominal_on_another(tmp_pat
     assert held["calibrated"]["test_mae"] < held["nominal"]["test_mae"]
 
 
+def test_validate_on_the_training_sockets_writes_strict_json(imported, capsys) -> None:
+    """Every fixture "(fit)": no held-out figure, written as JSON null and printed as '-', never NaN."""
+    capsys.readouterr()
+    out = imported / "fit_only.json"
+    argv = ["validate", "--nominal", str(PANDA), "--calibrated", str(imported / "cal.yaml")]
+    argv += ["--samples", str(imported / "train/samples.csv"), "--fixtures", str(imported / "train/fixtures.yaml")]
+    assert main([*argv, "--out", str(out)]) == 0
+    printed = capsys.readouterr().out
+    assert "no held-out check" in printed and "nan" not in printed.lower()
+
+    def refuse(constant: str) -> None:
+        raise ValueError(f"{out.name} holds {constant}, which is not JSON")
+
+    held = json.loads(out.read_text(), parse_constant=refuse)["sockets"]["held_out"]
+    assert held["nominal"] == held["calibrated"] == {"test_mae": None, "distance_error_mean_abs": None}
+
+
 def _refused(argv, capsys) -> str:
     capsys.readouterr()
     assert main(argv) == 1
