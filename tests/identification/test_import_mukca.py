@@ -287,6 +287,19 @@ def test_bad_input_is_one_line_and_writes_nothing(tmp_path, capsys) -> None:
     assert main(argv) == 0 and sorted(p.name for p in out.iterdir()) == ["fixtures.yaml", "samples.csv"]
 
 
+def test_a_mukca_folder_read_as_a_bag_is_named_for_what_it_is(tmp_path, capsys) -> None:
+    out = tmp_path / "out"
+    argv = ["import", str(DATA / "panda_2_clean/front_center"), "--format", "bag", "--robot", str(PANDA)]
+    err = _refused([*argv, "--out", str(out)], capsys)
+    assert "front_center: cannot read the bag: a ROS 2 bag folder holds a metadata.yaml, this one has none" in err
+    assert err.endswith("use --format mukca") and "Expected metadata file" not in err
+    (tmp_path / "notes").mkdir()
+    (tmp_path / "notes/readme.txt").write_text("no bag here\n")
+    err = _refused(["import", str(tmp_path / "notes"), *argv[2:], "--out", str(out)], capsys)
+    assert err.endswith("notes: cannot read the bag: a ROS 2 bag folder holds a metadata.yaml, this one has none")
+    assert not out.exists()
+
+
 def test_joints_are_matched_by_name_whatever_the_order_and_extras() -> None:
     names = [
         "panda_finger_joint1",
