@@ -300,6 +300,17 @@ def test_a_mukca_folder_read_as_a_bag_is_named_for_what_it_is(tmp_path, capsys) 
     assert not out.exists()
 
 
+def test_a_headerless_mukca_file_read_as_csv_says_so(tmp_path, capsys) -> None:
+    out = tmp_path / "out"
+    source = DATA / "panda_2_clean/front_center/hole_0.csv"
+    err = _refused(["import", str(source), "--format", "csv", "--robot", str(PANDA), "--out", str(out)], capsys)
+    assert err.endswith(
+        "hole_0.csv: row 1, field 'header': numbers, not a header naming the joints "
+        "(a MUKCa hole_<k>.csv? import its folder with --format mukca)"
+    )
+    assert not out.exists()
+
+
 def test_joints_are_matched_by_name_whatever_the_order_and_extras() -> None:
     names = [
         "panda_finger_joint1",
