@@ -172,6 +172,8 @@ def load_robot(
         from .urdf_to_dh import load_urdf  # here, not at the top: urdf_to_dh imports this module
 
         return load_urdf(path_or_name, tip_link=tip_link, base_link=base_link)
+    if Path(key).is_dir():  # before the link options: a folder is no robot description of any kind
+        raise RobotFileError(f"{key}: cannot read: Is a directory (expected a robot file or a .urdf)")
     for option, value in (("tip link", tip_link), ("base link", base_link)):
         if value is not None:
             raise RobotFileError(f"{key}: a {option} ({value!r}) is only for a URDF robot description (.urdf)")

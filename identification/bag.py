@@ -42,6 +42,12 @@ def read_bag(path: str | os.PathLike, model: RobotModel, topic: str = TOPIC) -> 
     path = Path(path)
     if not path.exists():
         raise RecordingError(f"{path}: cannot read: No such file or directory")
+    if path.is_dir() and not (path / "metadata.yaml").is_file():  # rosbags would say the folder is a missing file
+        mukca = any(path.glob("hole_*.csv")) or any(path.glob("*/hole_*.csv"))
+        hint = "; it holds MUKCa per-socket files: use --format mukca" if mukca else ""
+        raise RecordingError(
+            f"{path}: cannot read the bag: a ROS 2 bag folder holds a metadata.yaml, this one has none{hint}"
+        )
     stamps: list[float] = []
     rows: list[str] = []
     values: list[np.ndarray] = []

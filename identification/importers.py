@@ -228,6 +228,11 @@ def read_joint_csv(path: str | os.PathLike, model: RobotModel) -> Recording:
                 if not is_skipped(line) or line.lstrip().startswith("#"):  # comments only after the header
                     where = f"{path}: row {start + k}"
                     header = [f.strip() for f in parse_line(line, where, RecordingError)]
+                    if all(_is_number(f) for f in header):
+                        raise RecordingError(
+                            f"{where}, field 'header': numbers, not a header naming the joints "
+                            "(a MUKCa hole_<k>.csv? import its folder with --format mukca)"
+                        )
                     index, names = match_joints(header, model, where)
                     time_col = next((header.index(c) for c in TIME_COLUMNS if c in header), None)
                     label_col = header.index("fixture") if "fixture" in header else None
@@ -263,6 +268,14 @@ def read_joint_csv(path: str | os.PathLike, model: RobotModel) -> Recording:
     )
     recording.check_limits(model, names)
     return recording
+
+
+def _is_number(text: str) -> bool:
+    try:
+        float(text)
+    except ValueError:
+        return False
+    return True
 
 
 def _careful_block(block: list[str], start: int, path: Path, header: list[str], columns: list[int],

@@ -64,6 +64,13 @@ def test_link_options_errors_are_one_line(tmp_path, ur5e_file, capsys):
         assert message in error and error.count("\n") == 1 and str(ur5e_file) in error
     assert main(["export", "panda", "--tip-link", "x", "--format", "yaml", "--out", str(tmp_path / "z.yaml")]) == 1
     assert "only for a URDF" in capsys.readouterr().err
+    folder = tmp_path / "urdf"  # the folder of the URDF, not the file: named as a folder, not as a non-URDF
+    folder.mkdir()
+    z = str(tmp_path / "z.yaml")
+    assert main(["export", str(folder), "--tip-link", "ball", "--format", "yaml", "--out", z]) == 1
+    error = capsys.readouterr().err
+    assert error.endswith(f"{folder}: cannot read: Is a directory (expected a robot file or a .urdf)\n")
+    assert error.count("\n") == 1
     assert not (tmp_path / "y.yaml").exists() and not (tmp_path / "z.yaml").exists()
 
 

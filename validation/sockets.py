@@ -72,11 +72,14 @@ class SocketReport:
     distances: list[DistanceCheck]
     source: str
 
-    def summary(self, model: str) -> tuple[float, float | None]:
-        """Held-out mean spread [m] (mean over fixtures) and mean |distance error| [m] (None if none)."""
+    def summary(self, model: str) -> tuple[float | None, float | None]:
+        """Held-out mean spread [m] (mean over fixtures) and mean |distance error| [m] (each None if none).
+
+        None, not NaN: the report is JSON, and NaN is not JSON (``null`` is).
+        """
         spread = [f.mean[model] for f in self.fixtures if f.held_out]
         errors = [abs(d.error(model)) for d in self.distances if d.held_out]
-        return (float(np.mean(spread)) if spread else float("nan"), float(np.mean(errors)) if errors else None)
+        return (float(np.mean(spread)) if spread else None, float(np.mean(errors)) if errors else None)
 
     def format(self) -> str:
         """The printed tables (mm)."""
@@ -107,9 +110,8 @@ class SocketReport:
         for m in self.models:
             spread, error = self.summary(m)
             text = "-" if error is None else f"{error * 1e3:.3f}"
-            lines.append(
-                f"held-out ({held} fixtures) {m:<11} test MAE {spread * 1e3:8.3f} mm   mean |distance error| {text} mm"
-            )
+            mae = f"{'-':>8}" if spread is None else f"{spread * 1e3:8.3f}"
+            lines.append(f"held-out ({held} fixtures) {m:<11} test MAE {mae} mm   mean |distance error| {text} mm")
         return "\n".join(lines)
 
     def to_dict(self) -> dict:

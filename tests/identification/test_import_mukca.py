@@ -239,6 +239,23 @@ def test_kinova_calibrated_on_one_placement_beats_the_nominal_on_another(tmp_pat
     assert held["calibrated"]["test_mae"] < held["nominal"]["test_mae"]
 
 
+def test_validate_on_the_training_sockets_writes_strict_json(imported, capsys) -> None:
+    """Every fixture "(fit)": no held-out figure, written as JSON null and printed as '-', never NaN."""
+    capsys.readouterr()
+    out = imported / "fit_only.json"
+    argv = ["validate", "--nominal", str(PANDA), "--calibrated", str(imported / "cal.yaml")]
+    argv += ["--samples", str(imported / "train/samples.csv"), "--fixtures", str(imported / "train/fixtures.yaml")]
+    assert main([*argv, "--out", str(out)]) == 0
+    printed = capsys.readouterr().out
+    assert "no held-out check" in printed and "nan" not in printed.lower()
+
+    def refuse(constant: str) -> None:
+        raise ValueError(f"{out.name} holds {constant}, which is not JSON")
+
+    held = json.loads(out.read_text(), parse_constant=refuse)["sockets"]["held_out"]
+    assert held["nominal"] == held["calibrated"] == {"test_mae": None, "distance_error_mean_abs": None}
+
+
 def _refused(argv, capsys) -> str:
     capsys.readouterr()
     assert main(argv) == 1
@@ -268,6 +285,30 @@ def test_bad_input_is_one_line_and_writes_nothing(tmp_path, capsys) -> None:
     assert [p.name for p in out.iterdir()] == ["keep.txt"]
     (out / "keep.txt").unlink()  # an empty folder is fine
     assert main(argv) == 0 and sorted(p.name for p in out.iterdir()) == ["fixtures.yaml", "samples.csv"]
+
+
+def test_a_mukca_folder_read_as_a_bag_is_named_for_what_it_is(tmp_path, capsys) -> None:
+    out = tmp_path / "out"
+    argv = ["import", str(DATA / "panda_2_clean/front_center"), "--format", "bag", "--robot", str(PANDA)]
+    err = _refused([*argv, "--out", str(out)], capsys)
+    assert "front_center: cannot read the bag: a ROS 2 bag folder holds a metadata.yaml, this one has none" in err
+    assert err.endswith("use --format mukca") and "Expected metadata file" not in err
+    (tmp_path / "notes").mkdir()
+    (tmp_path / "notes/readme.txt").write_text("no bag here\n")
+    err = _refused(["import", str(tmp_path / "notes"), *argv[2:], "--out", str(out)], capsys)
+    assert err.endswith("notes: cannot read the bag: a ROS 2 bag folder holds a metadata.yaml, this one has none")
+    assert not out.exists()
+
+
+def test_a_headerless_mukca_file_read_as_csv_says_so(tmp_path, capsys) -> None:
+    out = tmp_path / "out"
+    source = DATA / "panda_2_clean/front_center/hole_0.csv"
+    err = _refused(["import", str(source), "--format", "csv", "--robot", str(PANDA), "--out", str(out)], capsys)
+    assert err.endswith(
+        "hole_0.csv: row 1, field 'header': numbers, not a header naming the joints "
+        "(a MUKCa hole_<k>.csv? import its folder with --format mukca)"
+    )
+    assert not out.exists()
 
 
 def test_joints_are_matched_by_name_whatever_the_order_and_extras() -> None:
