@@ -26,6 +26,7 @@ def snapshot(folder: Path) -> dict[str, tuple[bytes, int] | None]:
 def refused(argv: list[str], folder: Path, capsys, *expected: str) -> str:
     """Run ``spherecal argv``: exit status 1, one line on stderr containing every ``expected`` text,
     and nothing under ``folder`` changed (inputs' content and mtime, no file added or removed)."""
+    capsys.readouterr()  # what earlier commands of the test printed is not this refusal's
     before = snapshot(folder)
     status = main([str(a) for a in argv])
     captured = capsys.readouterr()

@@ -10,6 +10,7 @@ from spherecal.cli import main
 from spherecal.correction import load_robot, perturb, tool_point
 from spherecal.correction.fixtures import read_fixtures
 from spherecal.correction.samples_csv import read_samples
+from tests.refusal import refused
 
 from .recordings import Q0, stream, write_bag
 from .test_import_mukca import PANDA
@@ -77,12 +78,8 @@ def test_a_csv_without_labels_is_segmented_and_one_with_labels_is_not(recording,
     np.testing.assert_array_equal(dataset.for_fixture("B")[:5], q[truth == 1][:5])
 
 
-def _refused(argv, capsys) -> str:
-    capsys.readouterr()
-    assert main(argv) == 1
-    err = capsys.readouterr().err.strip()
-    assert err.startswith("spherecal import: error: ") and "\n" not in err
-    return err
+def _refused(argv, folder, capsys) -> str:
+    return refused(argv, folder, capsys).strip()
 
 
 def test_ambiguous_drifting_or_incomplete_recordings_are_refused(recording, tmp_path, capsys) -> None:
@@ -90,21 +87,21 @@ def test_ambiguous_drifting_or_incomplete_recordings_are_refused(recording, tmp_
     t, q, _ = stream(true, [0.0, _offset(true, 0.010)], seconds=3.0)  # two sockets 10 mm apart
     bag = write_bag(tmp_path / "close", "sqlite3", t, q, NAMES)
     argv = ["import", str(bag), "--format", "bag", "--robot", str(PANDA), "--out", str(tmp_path / "out")]
-    error = _refused(argv, capsys)
+    error = _refused(argv, tmp_path, capsys)
     assert "ambiguous" in error and "mm apart" in error
     t, q, _ = stream(true, [0.0], seconds=8.0, drift=np.array([0.008, 0.0, 0.0]))  # the socket slides 64 mm
     argv[1] = str(write_bag(tmp_path / "drift", "mcap", t, q, NAMES))
-    assert "drifts" in _refused(argv, capsys)
+    assert "drifts" in _refused(argv, tmp_path, capsys)
     argv[1] = str(write_bag(tmp_path / "elbow.bag", "ros1", t[:50], q[:50], NAMES[:3] + ["elbow"] + NAMES[4:]))
-    assert "field 'panda_joint4'" in _refused(argv, capsys)
+    assert "field 'panda_joint4'" in _refused(argv, tmp_path, capsys)
     argv[1] = str(bag)
-    assert "no topic '/joints'" in _refused(argv + ["--topic", "/joints"], capsys)
+    assert "no topic '/joints'" in _refused(argv + ["--topic", "/joints"], tmp_path, capsys)
     (tmp_path / "junk.bag").write_text("not a bag\n")
     argv[1] = str(tmp_path / "junk.bag")
-    assert "junk.bag: cannot read the bag" in _refused(argv, capsys)
+    assert "junk.bag: cannot read the bag" in _refused(argv, tmp_path, capsys)
     (tmp_path / "empty").mkdir()
     argv[1] = str(tmp_path / "empty")
-    assert "empty: cannot read the bag" in _refused(argv, capsys)
+    assert "empty: cannot read the bag" in _refused(argv, tmp_path, capsys)
     assert not (tmp_path / "out").exists()
     csv = tmp_path / "back.csv"
     csv.write_text(
@@ -122,5 +119,5 @@ def test_ambiguous_drifting_or_incomplete_recordings_are_refused(recording, tmp_
         + "\n"
     )
     assert "back.csv: row 3, field 't': time goes back" in _refused(
-        ["import", str(csv), "--format", "csv", "--robot", str(PANDA), "--out", str(tmp_path / "out")], capsys
+        ["import", str(csv), "--format", "csv", "--robot", str(PANDA), "--out", str(tmp_path / "out")], tmp_path, capsys
     )

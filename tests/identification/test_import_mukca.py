@@ -19,6 +19,7 @@ from spherecal.correction.fixtures import read_fixtures
 from spherecal.correction.samples_csv import read_samples
 from spherecal.identification.importers import RecordingError, match_joints
 from spherecal.validation.recording import read_entity_rows, read_view_names
+from tests.refusal import refused
 
 from .urdf_chain import GEN3LITE, GEN3LITE_BALL, chain_point
 
@@ -256,12 +257,8 @@ def test_validate_on_the_training_sockets_writes_strict_json(imported, capsys) -
     assert held["nominal"] == held["calibrated"] == {"test_mae": None, "distance_error_mean_abs": None}
 
 
-def _refused(argv, capsys) -> str:
-    capsys.readouterr()
-    assert main(argv) == 1
-    err = capsys.readouterr().err.strip()
-    assert err.startswith("spherecal import: error: ") and "\n" not in err
-    return err
+def _refused(argv, folder, capsys) -> str:
+    return refused(argv, folder, capsys).strip()
 
 
 def test_bad_input_is_one_line_and_writes_nothing(tmp_path, capsys) -> None:
@@ -271,17 +268,17 @@ def test_bad_input_is_one_line_and_writes_nothing(tmp_path, capsys) -> None:
     argv = ["import", str(source), "--format", "mukca", "--robot", str(PANDA), "--out", str(out)]
     lines = (source / "hole_1.csv").read_text().splitlines()
     (source / "hole_1.csv").write_text("\n".join(lines[:4] + [lines[4].replace(",", ",x", 1)] + lines[5:]) + "\n")
-    assert "hole_1.csv: row 5, field 'q2'" in _refused(argv, capsys)
+    assert "hole_1.csv: row 5, field 'q2'" in _refused(argv, tmp_path, capsys)
     (source / "hole_1.csv").write_text("\n".join(lines[:2] + [lines[2].rsplit(",", 1)[0]]) + "\n")
-    assert "hole_1.csv: row 3, field 'q*': 6 joint angles" in _refused(argv, capsys)
+    assert "hole_1.csv: row 3, field 'q*': 6 joint angles" in _refused(argv, tmp_path, capsys)
     (source / "hole_1.csv").write_text("0,0,0,0,0,0,0\n")  # joint 4 of a Panda is never at 0
-    assert "hole_1.csv: row 1, field 'q4'" in _refused(argv, capsys)
+    assert "hole_1.csv: row 1, field 'q4'" in _refused(argv, tmp_path, capsys)
     assert not out.exists() and [p.name for p in tmp_path.iterdir()] == ["front"]  # no staging folder left
     (source / "hole_1.csv").write_text("\n".join(lines) + "\n")
-    assert "holds the input" in _refused(argv[:-1] + [str(source)], capsys)
+    assert "holds the input" in _refused(argv[:-1] + [str(source)], tmp_path, capsys)
     out.mkdir()
     (out / "keep.txt").write_text("mine")
-    assert "exists and is not an empty folder" in _refused(argv, capsys)
+    assert "exists and is not an empty folder" in _refused(argv, tmp_path, capsys)
     assert [p.name for p in out.iterdir()] == ["keep.txt"]
     (out / "keep.txt").unlink()  # an empty folder is fine
     assert main(argv) == 0 and sorted(p.name for p in out.iterdir()) == ["fixtures.yaml", "samples.csv"]
@@ -290,12 +287,12 @@ def test_bad_input_is_one_line_and_writes_nothing(tmp_path, capsys) -> None:
 def test_a_mukca_folder_read_as_a_bag_is_named_for_what_it_is(tmp_path, capsys) -> None:
     out = tmp_path / "out"
     argv = ["import", str(DATA / "panda_2_clean/front_center"), "--format", "bag", "--robot", str(PANDA)]
-    err = _refused([*argv, "--out", str(out)], capsys)
+    err = _refused([*argv, "--out", str(out)], tmp_path, capsys)
     assert "front_center: cannot read the bag: a ROS 2 bag folder holds a metadata.yaml, this one has none" in err
     assert err.endswith("use --format mukca") and "Expected metadata file" not in err
     (tmp_path / "notes").mkdir()
     (tmp_path / "notes/readme.txt").write_text("no bag here\n")
-    err = _refused(["import", str(tmp_path / "notes"), *argv[2:], "--out", str(out)], capsys)
+    err = _refused(["import", str(tmp_path / "notes"), *argv[2:], "--out", str(out)], tmp_path, capsys)
     assert err.endswith("notes: cannot read the bag: a ROS 2 bag folder holds a metadata.yaml, this one has none")
     assert not out.exists()
 
@@ -303,7 +300,8 @@ def test_a_mukca_folder_read_as_a_bag_is_named_for_what_it_is(tmp_path, capsys) 
 def test_a_headerless_mukca_file_read_as_csv_says_so(tmp_path, capsys) -> None:
     out = tmp_path / "out"
     source = DATA / "panda_2_clean/front_center/hole_0.csv"
-    err = _refused(["import", str(source), "--format", "csv", "--robot", str(PANDA), "--out", str(out)], capsys)
+    argv = ["import", str(source), "--format", "csv", "--robot", str(PANDA), "--out", str(out)]
+    err = _refused(argv, tmp_path, capsys)
     assert err.endswith(
         "hole_0.csv: row 1, field 'header': numbers, not a header naming the joints "
         "(a MUKCa hole_<k>.csv? import its folder with --format mukca)"
