@@ -23,22 +23,8 @@ from spherecal.correction.layout import layout_for
 from spherecal.correction.urdf_read import parse_urdf
 from spherecal.correction.urdf_to_dh import NearlyParallelAxesWarning, urdf_model
 from tests.conftest import perturbed
-from tests.correction.test_kinematics import _central_difference
+from tests.correction.test_kinematics import _central_difference, _rot, _shift
 from tests.correction.ur5e_urdf import ur5e_urdf
-
-
-def _rot(axis: int, angle: float) -> np.ndarray:
-    c, s = np.cos(angle), np.sin(angle)
-    i, j = [(1, 2), (2, 0), (0, 1)][axis]
-    m = np.eye(4)
-    m[i, i], m[i, j], m[j, i], m[j, j] = c, -s, s, c
-    return m
-
-
-def _shift(axis: int, length: float) -> np.ndarray:
-    m = np.eye(4)
-    m[axis, 3] = length
-    return m
 
 
 def _reference_point(model, q: np.ndarray) -> np.ndarray:
