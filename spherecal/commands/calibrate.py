@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import math
 
 from spherecal.options import urdf_links
 
@@ -30,7 +31,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         "--dedup-deg", type=at_most(10.0, "deg", allow_zero=True), default=None,
         help="drop samples within this of an earlier one, every joint [deg] (default 0.00573 = 1e-4 rad)",
     )
-    add_deprecated(parser, "--dedup-tol", "--dedup-deg", non_negative, convert=_rad_to_deg)
+    add_deprecated(parser, "--dedup-tol", "--dedup-deg", non_negative, convert=math.degrees)
     parser.add_argument(
         "--max-change",
         type=at_most(1000.0, "(a factor)"),
@@ -53,10 +54,6 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         "<placement>_h<k>) better than dh by more than the fold-to-fold spread",
     )
     parser.add_argument("--out", required=True, help="calibrated robot file to write (YAML)")
-
-
-def _rad_to_deg(value: float) -> float:
-    return value * 180.0 / 3.141592653589793
 
 
 def run(args: argparse.Namespace) -> int:
