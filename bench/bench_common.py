@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import os
 import time
+from pathlib import Path
 
 for _variable in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS"):
     os.environ.setdefault(_variable, "1")
@@ -22,3 +23,44 @@ def median_time(function, repeats: int = 9) -> float:
         function()
         times.append(time.perf_counter() - start)
     return sorted(times)[len(times) // 2]
+
+
+# ----------------------------------------------------------------------------- MUKCa real data
+def find_mukca() -> Path:
+    """``shared/data/mukca`` beside this checkout or one of its parents (the full recordings)."""
+    for base in Path(__file__).resolve().parents:
+        if (base / "shared" / "data" / "mukca" / "data").is_dir():
+            return base / "shared" / "data" / "mukca"
+    return Path("../shared/data/mukca")
+
+
+def mukca_panda():
+    """The embedded nominal Panda (with its inertials) and its tool point at MUKCa's ball centre, taken from
+    ``tests/data/mukca/panda_ball.yaml`` (the fixed joints of MUKCa's ``panda.urdf`` after ``panda_link7``)."""
+    from dataclasses import replace
+
+    from spherecal.correction import load_robot
+
+    ball = load_robot(Path(__file__).resolve().parents[1] / "tests" / "data" / "mukca" / "panda_ball.yaml")
+    return replace(load_robot("panda"), tool=ball.tool)
+
+
+def mukca_dataset(root: Path, robot: str, model, chosen: list[str] | None = None):
+    """(Dataset, FixtureSpec) of the placements ``chosen`` (all when None) of ``robot`` under ``root``,
+    read by the importer: fixtures ``<placement>_h<k>``, each placement's two sockets 50 mm apart."""
+    from dataclasses import replace
+
+    import numpy as np
+
+    from spherecal.correction import Dataset
+    from spherecal.identification.importers import read_mukca
+
+    recording, spec = read_mukca(Path(root) / "data" / robot, model)
+    keep = np.ones(len(recording.labels), dtype=bool)
+    names = spec.names
+    if chosen is not None:
+        names = tuple(n for n in spec.names if n.rpartition("_h")[0] in chosen)
+        keep = np.isin(recording.labels, names)
+    dataset = Dataset(labels=recording.labels[keep], q=recording.q[keep], fixture_names=names, source=robot)
+    spec = replace(spec, names=names, distances=[d for d in spec.distances if d[0] in names and d[1] in names])
+    return dataset, spec

@@ -1,6 +1,6 @@
 """Elastic joints on real Pandas (MUKCa recordings): leave-one-placement-out held-out error of dh, elastic, auto.
 
-Data: /work/shared/data/mukca (MIT licence), ``data/<robot>/<placement>/hole_0.csv`` / ``hole_1.csv``
+Data: ``shared/data/mukca`` beside the checkout (MIT licence), ``data/<robot>/<placement>/hole_0.csv`` / ``hole_1.csv``
 (7 joint angles per row [rad]), sockets 50 mm apart on one plate per placement. Fixtures are named
 ``<placement>_h0`` / ``_h1`` with their 50 mm distance known, so ``auto``'s own cross-validation leaves
 one placement out.
@@ -15,7 +15,7 @@ placement the MUKCa metric (per socket: mean distance of the predicted ball cent
 placements (nested: the outer held-out placement never informs the choice). Finally the elastic model on
 all placements: identified compliances with their std.
 
-    python bench/elastic_real.py [--data /work/shared/data/mukca] [--robots panda_2_clean panda_4_clean]
+    python bench/elastic_real.py [--data ../shared/data/mukca] [--robots panda_2_clean panda_4_clean]
 
 Prints a table [mm] and writes bench/elastic_real.json.
 """
@@ -28,44 +28,14 @@ import sys
 import time
 from pathlib import Path
 
-import bench_common  # noqa: F401  (one BLAS thread)
+import bench_common  # first: one BLAS thread, before numpy loads
 import numpy as np
 
-from spherecal.correction import Dataset, FixtureSpec, load_robot, rpy_matrix, tool_point
+from spherecal.correction import Dataset, FixtureSpec, tool_point
 from spherecal.correction.provenance import versions
 from spherecal.identification.calibrate import calibrate
+from spherecal.identification.importers import MUKCA_DISTANCE
 from spherecal.identification.selection import elastic_start, rigid, select_model
-
-SOCKET_DISTANCE = 0.05  # [m] MUKCa plate
-HAND_TCP = 0.1034  # [m] panda_hand -> panda_hand_tcp
-BALL = np.array([7.773732033005863e-05, -4.214022515884392e-05, 0.030128297908475325])  # panda_hand_tcp -> ball_link
-
-
-def mukca_panda():
-    """The embedded Panda with the tool point at MUKCa's ball centre (in frame 7)."""
-    from dataclasses import replace
-
-    panda = load_robot("panda")
-    hand = rpy_matrix(np.array([0.0, 0.0, -np.pi / 4]))
-    tool = np.array([0.0, 0.0, 0.107]) + hand @ (np.array([0.0, 0.0, HAND_TCP]) + BALL)
-    return replace(panda, tool=tool)
-
-
-def load_robot_data(root: Path, robot: str) -> tuple[Dataset, FixtureSpec]:
-    """Every placement's two sockets as fixtures ``<placement>_h0/_h1`` with their known distance."""
-    labels, rows, names, distances = [], [], [], []
-    for placement in sorted(p for p in (root / "data" / robot).iterdir() if p.is_dir()):
-        for hole in (0, 1):
-            q = np.loadtxt(placement / f"hole_{hole}.csv", delimiter=",", ndmin=2)
-            if q.shape[1] != 7:
-                raise SystemExit(f"{placement / f'hole_{hole}.csv'}: {q.shape[1]} columns, expected 7")
-            name = f"{placement.name}_h{hole}"
-            names.append(name)
-            rows.append(q)
-            labels += [name] * len(q)
-        distances.append((f"{placement.name}_h0", f"{placement.name}_h1", SOCKET_DISTANCE))
-    dataset = Dataset(labels=np.array(labels), q=np.concatenate(rows), fixture_names=tuple(names), source=robot)
-    return dataset, FixtureSpec(names=tuple(names), distances=distances)
 
 
 def _fit(start, data, spec):
@@ -84,7 +54,7 @@ def held_out(model, data: Dataset) -> tuple[float, float]:
         p = points[data.labels == name]
         means.append(p.mean(axis=0))
         maes.append(float(np.linalg.norm(p - means[-1], axis=1).mean()))
-    return float(np.mean(maes)), abs(float(np.linalg.norm(means[0] - means[1])) - SOCKET_DISTANCE)
+    return float(np.mean(maes)), abs(float(np.linalg.norm(means[0] - means[1])) - MUKCA_DISTANCE)
 
 
 def evaluate(robot: str, dataset: Dataset, spec: FixtureSpec, nominal) -> dict:
@@ -125,14 +95,14 @@ def evaluate(robot: str, dataset: Dataset, spec: FixtureSpec, nominal) -> dict:
 
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--data", default="/work/shared/data/mukca", help="MUKCa subset root")
+    parser.add_argument("--data", default=str(bench_common.find_mukca()), help="MUKCa subset root")
     parser.add_argument("--robots", nargs="+", default=["panda_2_clean", "panda_4_clean"])
     args = parser.parse_args(argv)
     root = Path(args.data)
-    nominal = mukca_panda()
+    nominal = bench_common.mukca_panda()
     results = []
     for robot in args.robots:
-        dataset, spec = load_robot_data(root, robot)
+        dataset, spec = bench_common.mukca_dataset(root, robot, nominal)
         result = evaluate(robot, dataset, spec, nominal)
         results.append(result)
         s = result["summary"]

@@ -20,7 +20,7 @@ import tempfile
 import time
 from pathlib import Path
 
-import bench_common  # noqa: F401  (one BLAS thread, no Rerun analytics)
+import bench_common  # first: one BLAS thread, no Rerun analytics
 
 from spherecal.cli import main
 
@@ -98,7 +98,7 @@ def experiment(robot: Path, train: list[Path], everything: Path, work: Path, nam
 
 def main_bench() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--data", default=str(HERE.parent.parent.parent / "shared/data/mukca/data"))
+    parser.add_argument("--data", default=str(bench_common.find_mukca() / "data"))
     args = parser.parse_args()
     data = Path(args.data)
     results: dict = {}

@@ -10,11 +10,10 @@ ball held in the gripper, hand-guided into two printed sockets 50 mm apart, seve
 (two fixtures ``<placement>_h0/_h1``, their 0.050 m distance) and all placements together, for
 panda_2_clean and panda_4_clean, at the default noise 0.3 mm and at 0.2 mm. None may be refused.
 
-A small reader of MUKCa's ``hole_0.csv`` / ``hole_1.csv`` (7 joint angles [rad] per row, no header) is
-here, not the `spherecal import` command. The ball centre (the tool point) is the fixed joints of
-MUKCa's ``urdf/panda.urdf`` from ``panda_link7`` (the embedded Panda's last modified-DH frame: Franka's
-DH table and the URDF agree) to ``ball_link``: flange 0.107 m, hand -45 deg about z, TCP 0.1034 m, ball
-offset.
+The recordings are read by the importer (``identification.importers.read_mukca``, through
+``bench_common.mukca_dataset``). The ball centre (the tool point) is that of
+``tests/data/mukca/panda_ball.yaml``: the fixed joints of MUKCa's ``urdf/panda.urdf`` from ``panda_link7``
+to ``ball_link`` (flange 0.107 m, hand -45 deg about z, TCP 0.1034 m, ball offset).
 
 MuJoCo (``--mujoco N``): N seeds of `spherecal simulate`'s protocol (3 fixtures, 20 s, 500 samples, 0.3 mm
 compliance noise, correlated over 0.05 s), with and without the known distances.
@@ -30,96 +29,22 @@ import argparse
 import json
 import sys
 import time
-import xml.etree.ElementTree as ET
 from pathlib import Path
 
-import bench_common  # noqa: F401  (first: one BLAS thread)
+import bench_common  # first: one BLAS thread, before numpy loads
 import numpy as np
 
-from spherecal.correction import RobotModel, load_robot, perturb
+from spherecal.correction import load_robot, perturb
 from spherecal.correction.fixtures import FixtureSpec
-from spherecal.correction.samples import Dataset
 from spherecal.identification.calibrate import calibrate
 from spherecal.identification.synthetic import PANDA_FIXTURES, make_dataset
 
-
-def _find_mukca() -> Path:
-    """``shared/data/mukca`` beside this checkout or one of its parents (the full recordings)."""
-    for base in Path(__file__).resolve().parents:
-        if (base / "shared" / "data" / "mukca" / "data").is_dir():
-            return base / "shared" / "data" / "mukca"
-    return Path("../shared/data/mukca")
-
-
-ROOT = _find_mukca()
-#: Socket centre distance of the printed plate [m].
-HOLE_DISTANCE = 0.050
-
-
-def _transform(xyz: list[float], rpy: list[float]) -> np.ndarray:
-    roll, pitch, yaw = rpy
-    cx, sx, cy, sy, cz, sz = np.cos(roll), np.sin(roll), np.cos(pitch), np.sin(pitch), np.cos(yaw), np.sin(yaw)
-    rx = np.array([[1, 0, 0], [0, cx, -sx], [0, sx, cx]])
-    ry = np.array([[cy, 0, sy], [0, 1, 0], [-sy, 0, cy]])
-    rz = np.array([[cz, -sz, 0], [sz, cz, 0], [0, 0, 1]])
-    out = np.eye(4)
-    out[:3, :3] = rz @ ry @ rx  # URDF: fixed-axis roll, pitch, yaw
-    out[:3, 3] = xyz
-    return out
-
-
-def ball_tool(
-    urdf: Path = ROOT / "urdf" / "panda.urdf", parent: str = "panda_link7", tip: str = "ball_link"
-) -> np.ndarray:
-    """(3,) the ball centre in ``parent``'s frame [m]: the fixed joints from ``parent`` to ``tip`` composed.
-
-    The embedded Panda's last modified-DH frame is ``panda_link7`` (Franka's DH table and URDF agree).
-    """
-    by_child = {j.find("child").get("link"): j for j in ET.parse(urdf).getroot().iter("joint")}
-    chain, link = [], tip
-    while link != parent:  # walk up from the tip: a link has one parent joint, possibly many children
-        joint = by_child[link]
-        if joint.get("type") != "fixed":
-            raise ValueError(f"{urdf}: joint {joint.get('name')} between {parent} and {tip} is not fixed")
-        chain.append(joint)
-        link = joint.find("parent").get("link")
-    pose = np.eye(4)
-    for joint in reversed(chain):
-        origin = joint.find("origin")
-        xyz = [float(v) for v in (origin.get("xyz") or "0 0 0").split()]
-        rpy = [float(v) for v in (origin.get("rpy") or "0 0 0").split()]
-        pose = pose @ _transform(xyz, rpy)
-    return pose[:3, 3]
-
-
-def mukca_panda() -> RobotModel:
-    """The embedded nominal Panda with its tool point at the MUKCa ball centre."""
-    from dataclasses import replace
-
-    return replace(load_robot("panda"), tool=ball_tool())
+ROOT = bench_common.find_mukca()
 
 
 def placements(robot: str) -> list[str]:
     """Placements recorded for ``robot`` (folder names), sorted."""
     return sorted(p.name for p in (ROOT / "data" / robot).iterdir() if (p / "hole_0.csv").exists())
-
-
-def mukca_dataset(robot: str, chosen: list[str] | None = None) -> tuple[Dataset, FixtureSpec]:
-    """Samples and fixtures of the placements ``chosen`` (all when None) of ``robot``."""
-    labels, rows = [], []
-    names, distances = [], []
-    for placement in chosen or placements(robot):
-        pair = []
-        for hole in (0, 1):
-            q = np.loadtxt(ROOT / "data" / robot / placement / f"hole_{hole}.csv", delimiter=",", ndmin=2)
-            name = f"{placement}_h{hole}"
-            labels += [name] * len(q)
-            rows.append(q)
-            names.append(name)
-            pair.append(name)
-        distances.append((pair[0], pair[1], HOLE_DISTANCE))
-    dataset = Dataset(labels=np.array(labels), q=np.concatenate(rows), fixture_names=tuple(names))
-    return dataset, FixtureSpec(names=tuple(names), distances=distances, source=f"mukca/{robot}")
 
 
 # ------------------------------------------------------------------------------------ simulated
@@ -213,11 +138,11 @@ def mujoco(runs: int) -> dict:
 # ------------------------------------------------------------------------------------ real
 def real(noises: tuple[float, ...] = (3e-4, 2e-4)) -> list[dict]:
     """Every placement alone and all together, per robot and declared noise; returns the JSON rows."""
-    panda = mukca_panda()
+    panda = bench_common.mukca_panda()
     rows = []
     for robot in ("panda_2_clean", "panda_4_clean"):
         for chosen in [[p] for p in placements(robot)] + [None]:
-            dataset, spec = mukca_dataset(robot, chosen)
+            dataset, spec = bench_common.mukca_dataset(ROOT, robot, panda, chosen)
             for noise in noises:
                 result = calibrate(panda, dataset, spec, noise=noise, force=True)
                 check = result.selfcheck
