@@ -53,7 +53,7 @@ def mukca_dataset(root: Path, robot: str, model, chosen: list[str] | None = None
     import numpy as np
 
     from spherecal.correction import Dataset
-    from spherecal.identification.importers import read_mukca
+    from spherecal.identification.ingest.importers import read_mukca
 
     recording, spec = read_mukca(Path(root) / "data" / robot, model)
     keep = np.ones(len(recording.labels), dtype=bool)

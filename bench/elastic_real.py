@@ -32,9 +32,9 @@ import bench_common  # first: one BLAS thread, before numpy loads
 import numpy as np
 
 from spherecal.correction import Dataset, FixtureSpec, tool_point
-from spherecal.correction.provenance import versions
+from spherecal.correction.files.provenance import versions
 from spherecal.identification.calibrate import calibrate
-from spherecal.identification.importers import MUKCA_DISTANCE
+from spherecal.identification.ingest.importers import MUKCA_DISTANCE
 from spherecal.identification.selection import elastic_start, rigid, select_model
 
 

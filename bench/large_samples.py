@@ -39,11 +39,11 @@ CHILD = r"""
 import json, resource, sys, time
 sys.path.insert(0, {root!r})
 from spherecal.correction import load_robot
-from spherecal.correction.samples_csv import read_samples
-from spherecal.correction.samples import DatasetError  # RecordingError is one
+from spherecal.correction.files.samples_csv import read_samples
+from spherecal.correction.files.samples import DatasetError  # RecordingError is one
 model = load_robot("panda")
 if {importer!r}:  # `spherecal import --format csv` reads the same file as a joint recording
-    from spherecal.identification.importers import read_joint_csv as read_samples
+    from spherecal.identification.ingest.importers import read_joint_csv as read_samples
 usage0 = resource.getrusage(resource.RUSAGE_SELF)
 cpu0 = usage0.ru_utime + usage0.ru_stime
 clock = time.perf_counter()

@@ -21,7 +21,7 @@ from spherecal.validation.pipeline import validate_models  # noqa: E402
 
 
 def main() -> None:
-    from spherecal.validation.recording import Recording
+    from spherecal.validation.viewer.recording import Recording
 
     panda = load_robot("panda")
     rng = np.random.default_rng(0)

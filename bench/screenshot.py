@@ -40,8 +40,8 @@ def display_stack_missing() -> str | None:
 
 def tab_blueprint(rrd: str | os.PathLike, tab: int, folder: Path) -> Path:
     """A blueprint file (``.rbl``) of the recording's layout with tab ``tab`` of the result panel in front."""
-    from spherecal.validation.blueprint import build_blueprint
-    from spherecal.validation.recording import read_layout
+    from spherecal.validation.viewer.blueprint import build_blueprint
+    from spherecal.validation.viewer.recording import read_layout
 
     layout = read_layout(rrd)
     if not layout:

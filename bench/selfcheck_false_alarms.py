@@ -35,7 +35,7 @@ import bench_common  # first: one BLAS thread, before numpy loads
 import numpy as np
 
 from spherecal.correction import load_robot, perturb
-from spherecal.correction.fixtures import FixtureSpec
+from spherecal.correction.files.fixtures import FixtureSpec
 from spherecal.identification.calibrate import calibrate
 from spherecal.identification.synthetic import PANDA_FIXTURES, make_dataset
 
@@ -110,7 +110,7 @@ def mujoco(runs: int) -> dict:
     """``runs`` seeds of `spherecal simulate`'s protocol (MuJoCo, 3 default fixtures, 20 s, 500 samples,
     0.3 mm compliance noise), calibrated with and without the known distances."""
     from spherecal.controller.self_motion import SelfMotionSettings, collect_self_motion
-    from spherecal.validation.experiment import default_fixtures
+    from spherecal.validation.experiments.experiment import default_fixtures
 
     panda = load_robot("panda")
     fired, count = [], 0

@@ -17,8 +17,8 @@ import numpy as np
 
 from spherecal.correction import RobotModel, link_frames
 from spherecal.correction.elastic import compliance_of, link_angles
+from spherecal.correction.files.urdf_write import xml_comment
 from spherecal.correction.gravity import inertials_of
-from spherecal.correction.urdf import xml_comment
 
 #: Physical defaults of the plant (settings that keep the closed chain stable at 1 kHz).
 TIMESTEP = 1e-3  # [s] the Panda's 1 kHz control rate

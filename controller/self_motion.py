@@ -20,7 +20,7 @@ import numpy as np
 
 from spherecal.correction import RobotModel, frames
 from spherecal.correction.errors import SpherecalError
-from spherecal.correction.samples import Dataset
+from spherecal.correction.files.samples import Dataset
 
 from .exploration import COVERAGE_PERIOD, RANDOM_PERIOD, Ramp, joint_coverage, make_exploration
 from .ik import ik
@@ -135,7 +135,7 @@ class SelfMotionRun:
     settings: SelfMotionSettings = field(default_factory=SelfMotionSettings)
 
     def dataset(self):
-        """The kept samples as an :class:`spherecal.correction.samples.Dataset` (with times)."""
+        """The kept samples as an :class:`spherecal.correction.files.samples.Dataset` (with times)."""
 
         return Dataset(labels=self.labels, q=self.q, t=self.t, fixture_names=self.fixture_names)
 

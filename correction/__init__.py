@@ -4,10 +4,21 @@ spherical-joint data files (samples and fixtures).
 This is what a controller imports: it depends on nothing else of spherecal.
 """
 
-from .atomic import atomic_write_bytes, atomic_write_text
 from .conversion import convert, to_modified, to_standard
 from .errors import SpherecalError
-from .fixtures import FixtureSpec, format_fixtures, read_fixtures, write_fixtures
+from .files.atomic import atomic_write_bytes, atomic_write_text
+from .files.fixtures import FixtureSpec, format_fixtures, read_fixtures, write_fixtures
+from .files.robot_file import (
+    RobotFileError,
+    dump_robot,
+    load_robot,
+    robot_from_dict,
+    robot_to_dict,
+    save_robot,
+)
+from .files.samples import Dataset, DatasetError
+from .files.samples_csv import format_samples, read_samples, write_samples
+from .files.urdf_to_dh import NearlyParallelAxesWarning, load_urdf
 from .gravity import InertialsError, gravity_torques, has_inertials, inertials_of
 from .kinematics import (
     Frames,
@@ -21,17 +32,6 @@ from .kinematics import (
 from .model import RobotModel, matrix_rpy, param_names, pose_matrix, rpy_matrix
 from .perturb import perturb
 from .rigid import apply_transform, fit_rigid_transform, registered_errors
-from .robot_file import (
-    RobotFileError,
-    dump_robot,
-    load_robot,
-    robot_from_dict,
-    robot_to_dict,
-    save_robot,
-)
-from .samples import Dataset, DatasetError
-from .samples_csv import format_samples, read_samples, write_samples
-from .urdf_to_dh import NearlyParallelAxesWarning, load_urdf
 
 __all__ = [
     "Dataset",

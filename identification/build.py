@@ -12,8 +12,8 @@ from dataclasses import replace
 import numpy as np
 
 from spherecal.correction import RobotModel, tool_point
-from spherecal.correction.fixtures import FixtureSpec
-from spherecal.correction.samples import Dataset, DatasetError
+from spherecal.correction.files.fixtures import FixtureSpec
+from spherecal.correction.files.samples import Dataset, DatasetError
 
 from .gauge import anchor_spread, gauge_left, scale_centre
 from .identifiability import Identifiability, greedy_rank

@@ -8,8 +8,8 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from spherecal.correction import RobotModel, param_jacobian, registered_errors, tool_point
-from spherecal.correction.fixtures import FixtureSpec
-from spherecal.correction.samples import Dataset
+from spherecal.correction.files.fixtures import FixtureSpec
+from spherecal.correction.files.samples import Dataset
 
 from .build import build_problem
 from .identifiability import Identifiability, predicted_std

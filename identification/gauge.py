@@ -11,7 +11,7 @@ from __future__ import annotations
 import numpy as np
 
 from spherecal.correction import RobotModel, link_frames, param_jacobian
-from spherecal.correction.samples import Dataset
+from spherecal.correction.files.samples import Dataset
 
 from .problem import GAUGE
 

@@ -28,9 +28,9 @@ from dataclasses import dataclass
 import numpy as np
 
 from spherecal.correction import RobotModel, param_jacobian, tool_point
-from spherecal.correction.fixtures import FixtureSpec
+from spherecal.correction.files.fixtures import FixtureSpec
+from spherecal.correction.files.samples import Dataset
 from spherecal.correction.layout import ParameterLayout
-from spherecal.correction.samples import Dataset
 
 from .build import build_problem
 from .calibrate import SIGMA_FLOOR

@@ -34,8 +34,8 @@ import numpy as np
 
 from spherecal.correction import RobotModel, param_jacobian, tool_point
 from spherecal.correction.errors import SpherecalError
-from spherecal.correction.fixtures import FixtureSpec
-from spherecal.correction.samples import Dataset
+from spherecal.correction.files.fixtures import FixtureSpec
+from spherecal.correction.files.samples import Dataset
 
 from .identifiability import Identifiability
 

@@ -10,8 +10,8 @@ from __future__ import annotations
 import numpy as np
 
 from spherecal.correction import RobotModel, joint_jacobian, tool_point
-from spherecal.correction.fixtures import FixtureSpec
-from spherecal.correction.samples import Dataset
+from spherecal.correction.files.fixtures import FixtureSpec
+from spherecal.correction.files.samples import Dataset
 
 #: Fixture centres for the Panda [m] in its base frame: three points spread around the robot (low in
 #: front, to the side, high on the other side) with a wide self-motion, in the spirit of the paper's

@@ -248,17 +248,17 @@ INPUT_OPTIONS: tuple[str, ...] = (
 
 
 def planned_outputs(args: argparse.Namespace, outputs: dict):
-    """The :class:`spherecal.correction.outputs.OutputSet` of a command, checked before any work.
+    """The :class:`spherecal.correction.files.outputs.OutputSet` of a command, checked before any work.
 
     Args:
         args: the parsed options; every option of :data:`INPUT_OPTIONS` it has is an input.
         outputs: option -> the file (or list of files) it will write; None for an option not given.
 
     Raises:
-        spherecal.correction.outputs.OutputError: an output that is an input, is planned twice, is a
+        spherecal.correction.files.outputs.OutputError: an output that is an input, is planned twice, is a
             folder or lies where nothing can be written (one line naming the option and the file).
     """
-    from spherecal.correction.outputs import OutputSet  # numpy: not at --help (start-up)
+    from spherecal.correction.files.outputs import OutputSet  # numpy: not at --help (start-up)
 
     inputs = {f"--{name.replace('_', '-')}" if name != "source" else "SOURCE": getattr(args, name, None)
               for name in INPUT_OPTIONS}
@@ -270,7 +270,7 @@ def planned_outputs(args: argparse.Namespace, outputs: dict):
 
 def check_folder(path: str, option: str = "--out") -> None:
     """Refuse an output folder that is an existing file or lies under one, before a long run."""
-    from spherecal.correction.outputs import check_folder as check
+    from spherecal.correction.files.outputs import check_folder as check
 
     check(path, option)
 

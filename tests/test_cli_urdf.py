@@ -10,9 +10,9 @@ import pytest
 
 from spherecal.cli import main
 from spherecal.correction import load_robot, perturb, registered_errors, tool_point
-from spherecal.correction.fixtures import write_fixtures
-from spherecal.correction.samples_csv import write_samples
-from spherecal.correction.urdf_to_dh import NearlyParallelAxesWarning
+from spherecal.correction.files.fixtures import write_fixtures
+from spherecal.correction.files.samples_csv import write_samples
+from spherecal.correction.files.urdf_to_dh import NearlyParallelAxesWarning
 from spherecal.identification.synthetic import make_dataset
 from tests.correction.ur5e_urdf import ur5e_urdf
 from tests.correction.urdf_helpers import MujocoUrdf

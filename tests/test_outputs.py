@@ -9,11 +9,11 @@ import numpy as np
 import pytest
 
 from spherecal.correction import save_robot, tool_point
-from spherecal.correction.atomic import OutputError
-from spherecal.correction.fixtures import FixtureSpec, write_fixtures
-from spherecal.correction.outputs import OutputSet
-from spherecal.correction.samples import Dataset
-from spherecal.correction.samples_csv import write_samples
+from spherecal.correction.files.atomic import OutputError
+from spherecal.correction.files.fixtures import FixtureSpec, write_fixtures
+from spherecal.correction.files.outputs import OutputSet
+from spherecal.correction.files.samples import Dataset
+from spherecal.correction.files.samples_csv import write_samples
 from spherecal.validation.mocap import MocapMeasurement, write_mocap_csv
 from tests.refusal import refused, snapshot
 

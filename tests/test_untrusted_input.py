@@ -10,13 +10,13 @@ import pytest
 import yaml
 
 from spherecal.correction import RobotFileError, dump_robot, load_robot, save_robot, tool_point
-from spherecal.correction.fixtures import read_fixtures
-from spherecal.correction.samples import Dataset, DatasetError
-from spherecal.correction.samples_csv import format_samples, read_samples, write_samples
-from spherecal.correction.yaml_safe import MAX_BYTES
-from spherecal.identification.importers import RecordingError, read_joint_csv
-from spherecal.validation.candidates import CandidateError, read_candidates
+from spherecal.correction.files.fixtures import read_fixtures
+from spherecal.correction.files.samples import Dataset, DatasetError
+from spherecal.correction.files.samples_csv import format_samples, read_samples, write_samples
+from spherecal.correction.files.yaml_safe import MAX_BYTES
+from spherecal.identification.ingest.importers import RecordingError, read_joint_csv
 from spherecal.validation.mocap import MocapError, MocapMeasurement, read_mocap_csv, write_mocap_csv
+from spherecal.validation.planning.candidates import CandidateError, read_candidates
 from tests.refusal import refused
 
 BOMB = "\n".join(

@@ -1,6 +1,6 @@
 """Checks across input files before anything is computed or written.
 
-Output locations are checked by :class:`spherecal.correction.outputs.OutputSet` (the one mechanism).
+Output locations are checked by :class:`spherecal.correction.files.outputs.OutputSet` (the one mechanism).
 """
 
 from __future__ import annotations

@@ -26,8 +26,8 @@ from spherecal.correction import (
     fit_rigid_transform,
     pose_matrix,
 )
-from spherecal.correction.csv_rows import read_rows
-from spherecal.correction.samples import LIMIT_TOL
+from spherecal.correction.files.csv_rows import read_rows
+from spherecal.correction.files.samples import LIMIT_TOL
 
 #: The paper's motion-capture accuracy: 0.3 mm per marker (std).
 MARKER_NOISE = 0.3e-3

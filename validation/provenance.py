@@ -7,7 +7,7 @@ from datetime import datetime, timezone
 from pathlib import Path
 from typing import Any
 
-from spherecal.correction.provenance import PACKAGES, file_digest, versions
+from spherecal.correction.files.provenance import PACKAGES, file_digest, versions
 
 __all__ = ["PACKAGES", "comment_block", "file_digest", "provenance", "versions"]
 

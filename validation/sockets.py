@@ -17,8 +17,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from spherecal.correction import RobotModel, tool_point
-from spherecal.correction.fixtures import FixtureSpec
-from spherecal.correction.samples import Dataset
+from spherecal.correction.files.fixtures import FixtureSpec
+from spherecal.correction.files.samples import Dataset
 
 
 @dataclass(frozen=True)

@@ -72,10 +72,10 @@ def run(args: argparse.Namespace) -> int:
     import numpy as np
 
     from spherecal.correction import load_robot, save_robot
-    from spherecal.correction.fixtures import read_fixtures
-    from spherecal.correction.provenance import PACKAGES, input_record, versions
-    from spherecal.correction.samples import DEDUP_TOL
-    from spherecal.correction.samples_csv import read_samples
+    from spherecal.correction.files.fixtures import read_fixtures
+    from spherecal.correction.files.provenance import PACKAGES, input_record, versions
+    from spherecal.correction.files.samples import DEDUP_TOL
+    from spherecal.correction.files.samples_csv import read_samples
     from spherecal.identification.calibrate import calibrate
     from spherecal.identification.selection import elastic_start, rigid, select_model
     from spherecal.options import planned_outputs

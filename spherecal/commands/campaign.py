@@ -48,7 +48,7 @@ def run(args: argparse.Namespace) -> int:
     """Run the campaign, print Table 2, write it as CSV and Markdown."""
     import time
 
-    from spherecal.validation.campaign import (
+    from spherecal.validation.experiments.campaign import (
         FIXTURE_SETS,
         TABLE_FILES,
         CampaignConfig,

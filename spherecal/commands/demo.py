@@ -40,7 +40,7 @@ def run(args: argparse.Namespace) -> int:
     import time
     from pathlib import Path
 
-    from spherecal.validation.demo import DemoConfig, run_demo
+    from spherecal.validation.experiments.demo import DemoConfig, run_demo
 
     if args.per_fixture < 10:
         raise fail(f"--per-fixture must be >= 10, got {args.per_fixture}")

@@ -37,7 +37,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 def provenance_header(source: str, output_format: str) -> str:
     """Comment lines naming the input file (and its SHA-256) and the versions that wrote the export."""
-    from spherecal.correction.provenance import input_record, versions
+    from spherecal.correction.files.provenance import input_record, versions
 
     digest = input_record(source)["sha256"]
     packages = ", ".join(f"{k} {v}" for k, v in versions(("spherecal", "numpy", "scipy", "mujoco")).items())
@@ -50,7 +50,7 @@ def provenance_header(source: str, output_format: str) -> str:
 
 def _limits(text: str | None, option: str) -> list[float] | None:
     """A comma-separated option as floats (None when not given)."""
-    from spherecal.correction.urdf import ExportError
+    from spherecal.correction.files.urdf_write import ExportError
 
     if text is None:
         return None
@@ -78,7 +78,13 @@ def export_text(model, output_format: str, prefix: str | None = None, header: st
         correction.urdf.ExportError: an invalid prefix, limits or format.
     """
     from spherecal.correction import dump_robot
-    from spherecal.correction.urdf import PANDA_EFFORT, ExportError, provenance_comment, robot_to_urdf, xml_comment
+    from spherecal.correction.files.urdf_write import (
+        PANDA_EFFORT,
+        ExportError,
+        provenance_comment,
+        robot_to_urdf,
+        xml_comment,
+    )
 
     if output_format == "urdf":
         n = model.n_joints
@@ -109,8 +115,8 @@ def into_text(model, into: str, out: str, header: str = "") -> str:
     import os
     from pathlib import Path
 
-    from spherecal.correction.urdf import ExportError
-    from spherecal.correction.urdf_into import urdf_into
+    from spherecal.correction.files.urdf_into import urdf_into
+    from spherecal.correction.files.urdf_write import ExportError
 
     source = Path(into)
     try:
@@ -125,7 +131,7 @@ def into_text(model, into: str, out: str, header: str = "") -> str:
 def run(args: argparse.Namespace) -> int:
     """Load, validate and export; nothing is written unless the whole document was built."""
     from spherecal.correction import load_robot
-    from spherecal.correction.urdf import ExportError
+    from spherecal.correction.files.urdf_write import ExportError
     from spherecal.options import planned_outputs
 
     outputs = planned_outputs(args, {"--out": args.out})  # never over CAL.yaml or --into

@@ -61,10 +61,10 @@ def run(args: argparse.Namespace) -> int:
     import numpy as np
 
     from spherecal.correction import load_robot
-    from spherecal.correction.provenance import PACKAGES, input_record, versions
-    from spherecal.correction.samples import DEDUP_TOL
-    from spherecal.identification.import_recording import ImportOptions, import_recording
-    from spherecal.identification.segment import SegmentSettings
+    from spherecal.correction.files.provenance import PACKAGES, input_record, versions
+    from spherecal.correction.files.samples import DEDUP_TOL
+    from spherecal.identification.ingest.import_recording import ImportOptions, import_recording
+    from spherecal.identification.ingest.segment import SegmentSettings
     from spherecal.options import urdf_links
 
     clock = time.perf_counter()

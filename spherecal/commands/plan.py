@@ -67,7 +67,7 @@ def run(args: argparse.Namespace) -> int:
 
     outputs = planned_outputs(args, {"--rrd": args.rrd, "--analysis": args.analysis})
     if args.analysis is not None:
-        from spherecal.validation.analysis import AnalysisConfig, write_analysis
+        from spherecal.validation.planning.analysis import AnalysisConfig, write_analysis
 
         with outputs:
             write_analysis(outputs.stage(args.analysis), AnalysisConfig(seed=args.seed, workers=args.workers))
@@ -77,8 +77,8 @@ def run(args: argparse.Namespace) -> int:
     rng = np.random.default_rng(args.seed)
     if args.predict is not None:
         return _predict(args, model)
-    from spherecal.validation.candidates import grid_candidates, read_candidates
-    from spherecal.validation.plan import plan
+    from spherecal.validation.planning.candidates import grid_candidates, read_candidates
+    from spherecal.validation.planning.plan import plan
 
     if args.candidates is None and args.grid is None:
         raise fail("give --candidates C.yaml or --grid 'xmin,xmax,nx;ymin,ymax,ny;zmin,zmax,nz'")
@@ -89,7 +89,7 @@ def run(args: argparse.Namespace) -> int:
     result = plan(
         model, candidates, args.fixture_count, rng, args.noise * 1e-3, args.per_fixture, args.motion, args.seconds
     )
-    from spherecal.validation.plan_report import format_plan, write_recording
+    from spherecal.validation.planning.plan_report import format_plan, write_recording
 
     print(format_plan(result))
     if args.rrd:
@@ -105,8 +105,8 @@ def run(args: argparse.Namespace) -> int:
 
 
 def _predict(args: argparse.Namespace, model) -> int:
-    from spherecal.correction.fixtures import read_fixtures
-    from spherecal.correction.samples_csv import read_samples
+    from spherecal.correction.files.fixtures import read_fixtures
+    from spherecal.correction.files.samples_csv import read_samples
     from spherecal.identification.prediction import predict_accuracy
 
     dataset = read_samples(args.predict, model)

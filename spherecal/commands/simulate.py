@@ -48,7 +48,7 @@ def _fixtures(path: str | None) -> dict:
         from spherecal.controller.self_motion import DEFAULT_FIXTURES  # MuJoCo: only when simulating
 
         return {k: np.array(v, dtype=float) for k, v in DEFAULT_FIXTURES.items()}
-    from spherecal.correction.fixtures import read_fixtures
+    from spherecal.correction.files.fixtures import read_fixtures
 
     spec = read_fixtures(path)
     missing = [name for name in spec.names if name not in spec.positions]
@@ -86,8 +86,8 @@ def run(args: argparse.Namespace) -> int:
 
     from spherecal.controller.self_motion import SelfMotionSettings, collect_self_motion
     from spherecal.correction import dump_robot, load_robot, perturb
-    from spherecal.correction.fixtures import FixtureSpec, format_fixtures
-    from spherecal.correction.samples_csv import format_samples
+    from spherecal.correction.files.fixtures import FixtureSpec, format_fixtures
+    from spherecal.correction.files.samples_csv import format_samples
 
     outputs = _check_args(args)
     if args.solver not in qpsolvers.available_solvers:
@@ -144,7 +144,7 @@ def _provenance(args: argparse.Namespace, settings, result) -> dict:
     """The ``simulation:`` block of truth.yaml: seed, versions, inputs, settings, outcome."""
     import sys
 
-    from spherecal.correction.provenance import versions
+    from spherecal.correction.files.provenance import versions
 
     return {
         "seed": args.seed,

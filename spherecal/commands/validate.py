@@ -77,7 +77,7 @@ def run(args: argparse.Namespace) -> int:
         check_mocap(measurement, models["nominal"])
     self_motion = None
     if args.samples is not None:
-        from spherecal.correction.samples_csv import read_samples
+        from spherecal.correction.files.samples_csv import read_samples
 
         dataset = read_samples(args.samples, models.get("truth", models["nominal"]))
         self_motion = {name: dataset.for_fixture(name) for name in dataset.fixture_names}

@@ -10,7 +10,7 @@ from spherecal.correction import RobotModel
 def write_validation(args: argparse.Namespace, outputs, result: dict, record, title: str) -> None:
     """Write ``--out`` (``result`` as JSON) and ``--rrd`` (``record(recording)`` fills it) together.
 
-    Both are staged in ``outputs`` (an :class:`~spherecal.correction.outputs.OutputSet` checked before
+    Both are staged in ``outputs`` (an :class:`~spherecal.correction.files.outputs.OutputSet` checked before
     the validation ran) and renamed into place at the end: both files or neither, and a recording
     that cannot be written is a one-line error before anything appears.
     """
@@ -21,7 +21,7 @@ def write_validation(args: argparse.Namespace, outputs, result: dict, record, ti
         if args.out:
             outputs.write_text(args.out, json.dumps(result, indent=2) + "\n")
         if args.rrd or args.spawn:
-            from spherecal.validation.recording import Recording
+            from spherecal.validation.viewer.recording import Recording
 
             recording = Recording(outputs.stage(args.rrd) if args.rrd else None, spawn=args.spawn,
                                   application_id="spherecal_validate", title=title)
@@ -41,8 +41,8 @@ def run_sockets(args: argparse.Namespace, models: dict[str, RobotModel], outputs
     """Validate ``models`` on ``--samples`` (and ``--fixtures``): print the tables, write ``--out``, ``--rrd``."""
     from pathlib import Path
 
-    from spherecal.correction.fixtures import read_fixtures
-    from spherecal.correction.samples_csv import read_samples
+    from spherecal.correction.files.fixtures import read_fixtures
+    from spherecal.correction.files.samples_csv import read_samples
     from spherecal.validation.provenance import provenance
     from spherecal.validation.sockets import fitted_fixtures, record_sockets, socket_validation
 

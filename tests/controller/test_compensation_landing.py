@@ -106,7 +106,7 @@ def calibrated_model(nominal, true, rng: np.random.Generator, calibration: str):
                        f"{np.rad2deg(CALIBRATION_ANGLE_STD):g} deg, {CALIBRATION_LENGTH_STD * 1e3:g} mm tool)")
     if calibration != "identified":
         raise ValueError(f"calibration: expected 'identified' or 'perturbed', got {calibration!r}")
-    from spherecal.correction.fixtures import FixtureSpec
+    from spherecal.correction.files.fixtures import FixtureSpec
     from spherecal.identification.calibrate import calibrate
     from spherecal.identification.synthetic import PANDA_FIXTURES, make_dataset
 

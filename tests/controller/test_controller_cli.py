@@ -7,8 +7,8 @@ import pytest
 
 from spherecal.cli import main
 from spherecal.correction import load_robot
-from spherecal.correction.fixtures import read_fixtures
-from spherecal.correction.samples_csv import read_samples
+from spherecal.correction.files.fixtures import read_fixtures
+from spherecal.correction.files.samples_csv import read_samples
 
 
 def _simulate(tmp_path, *extra):

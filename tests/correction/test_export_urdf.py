@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from spherecal.correction import to_standard, tool_point, tool_pose
-from spherecal.correction.urdf import ExportError, robot_to_urdf
+from spherecal.correction.files.urdf_write import ExportError, robot_to_urdf
 from tests.conftest import perturbed
 
 

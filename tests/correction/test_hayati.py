@@ -19,9 +19,9 @@ from spherecal.correction import (
     to_standard,
     tool_point,
 )
+from spherecal.correction.files.urdf_read import parse_urdf
+from spherecal.correction.files.urdf_to_dh import NearlyParallelAxesWarning, urdf_model
 from spherecal.correction.layout import layout_for
-from spherecal.correction.urdf_read import parse_urdf
-from spherecal.correction.urdf_to_dh import NearlyParallelAxesWarning, urdf_model
 from tests.conftest import perturbed
 from tests.correction.test_kinematics import _central_difference, _rot, _shift
 from tests.correction.ur5e_urdf import ur5e_urdf

@@ -12,10 +12,10 @@ import pytest
 
 from spherecal.cli import main
 from spherecal.correction import convert, perturb, save_robot, tool_point
-from spherecal.correction.urdf import ExportError, robot_to_urdf
-from spherecal.correction.urdf_into import urdf_into
-from spherecal.correction.urdf_read import parse_urdf
-from spherecal.correction.urdf_to_dh import NearlyParallelAxesWarning, urdf_model
+from spherecal.correction.files.urdf_into import urdf_into
+from spherecal.correction.files.urdf_read import parse_urdf
+from spherecal.correction.files.urdf_to_dh import NearlyParallelAxesWarning, urdf_model
+from spherecal.correction.files.urdf_write import ExportError, robot_to_urdf
 from tests.correction.ur5e_urdf import ur5e_urdf
 from tests.correction.urdf_helpers import DATA, MujocoUrdf
 

@@ -8,8 +8,8 @@ import numpy as np
 import pytest
 
 from spherecal.correction import load_robot, to_modified, to_standard, tool_point
-from spherecal.correction.urdf_read import parse_urdf
-from spherecal.correction.urdf_to_dh import NearlyParallelAxesWarning, load_urdf, urdf_model
+from spherecal.correction.files.urdf_read import parse_urdf
+from spherecal.correction.files.urdf_to_dh import NearlyParallelAxesWarning, load_urdf, urdf_model
 from tests.correction.ur5e_urdf import NAMES, ur5e_urdf
 from tests.correction.urdf_helpers import DATA, MujocoUrdf
 

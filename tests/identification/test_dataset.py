@@ -5,9 +5,9 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from spherecal.correction.fixtures import FixtureSpec, read_fixtures, write_fixtures
-from spherecal.correction.samples import Dataset, DatasetError
-from spherecal.correction.samples_csv import read_samples, write_samples
+from spherecal.correction.files.fixtures import FixtureSpec, read_fixtures, write_fixtures
+from spherecal.correction.files.samples import Dataset, DatasetError
+from spherecal.correction.files.samples_csv import read_samples, write_samples
 
 HEADER = "fixture,q1,q2,q3,q4,q5,q6,q7\n"
 GOOD = "P1,0,0,0,-1,0,1,0\n"

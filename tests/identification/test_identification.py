@@ -9,8 +9,8 @@ import numpy as np
 import pytest
 
 from spherecal.correction import load_robot, perturb, registered_errors, to_standard, tool_point
-from spherecal.correction.fixtures import FixtureSpec
-from spherecal.correction.samples import Dataset, DatasetError
+from spherecal.correction.files.fixtures import FixtureSpec
+from spherecal.correction.files.samples import Dataset, DatasetError
 from spherecal.identification.build import build_problem
 from spherecal.identification.calibrate import calibrate
 from spherecal.identification.problem import UnidentifiableError
@@ -155,7 +155,7 @@ def test_known_positions_fix_the_gauge(truth, clean) -> None:
 
 
 def test_distance_between_known_positions_is_checked_then_dropped(truth, clean, tmp_path) -> None:
-    from spherecal.correction.fixtures import read_fixtures
+    from spherecal.correction.files.fixtures import read_fixtures
 
     panda, true = truth
     dataset, spec = clean
@@ -228,7 +228,7 @@ def test_wrong_distance_is_flagged_not_written_silently(truth, clean) -> None:
 )
 def test_millimetres_typed_for_metres_are_refused(truth, clean, tmp_path, text, field) -> None:
     # used to "calibrate" with 200 m residuals and write the file
-    from spherecal.correction.fixtures import read_fixtures
+    from spherecal.correction.files.fixtures import read_fixtures
 
     panda, _ = truth
     dataset, _ = clean

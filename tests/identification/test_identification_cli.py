@@ -12,8 +12,8 @@ import yaml
 
 from spherecal.cli import main
 from spherecal.correction import load_robot, perturb, save_robot
-from spherecal.correction.fixtures import write_fixtures
-from spherecal.correction.samples_csv import write_samples
+from spherecal.correction.files.fixtures import write_fixtures
+from spherecal.correction.files.samples_csv import write_samples
 from spherecal.identification.synthetic import make_dataset
 
 ROOT = Path(__file__).parents[2]

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from spherecal.correction import load_robot, perturb, registered_errors, tool_point
-from spherecal.correction.fixtures import FixtureSpec
+from spherecal.correction.files.fixtures import FixtureSpec
 from spherecal.identification.build import build_problem
 from spherecal.identification.calibrate import calibrate, check_plausible
 from spherecal.identification.problem import ImplausibleCalibrationError
@@ -22,7 +22,7 @@ def test_one_second_of_self_motion_does_not_make_the_arm_worse() -> None:
     """Regression: 1 s per fixture in MuJoCo (60 samples, 0.3 mm compliance, seed 3) once sent the
     first fit 150 deg away and the 'calibrated' arm ended 29 mm off against 7.7 mm nominal."""
     from spherecal.controller.self_motion import SelfMotionSettings, collect_self_motion
-    from spherecal.validation.experiment import default_fixtures
+    from spherecal.validation.experiments.experiment import default_fixtures
 
     nominal = load_robot("panda")
     rng = np.random.default_rng(3)

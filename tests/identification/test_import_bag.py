@@ -8,8 +8,8 @@ import pytest
 
 from spherecal.cli import main
 from spherecal.correction import load_robot, perturb, tool_point
-from spherecal.correction.fixtures import read_fixtures
-from spherecal.correction.samples_csv import read_samples
+from spherecal.correction.files.fixtures import read_fixtures
+from spherecal.correction.files.samples_csv import read_samples
 from tests.refusal import refused
 
 from .recordings import Q0, stream, write_bag

@@ -15,10 +15,10 @@ import pytest
 
 from spherecal.cli import main
 from spherecal.correction import load_robot, tool_point
-from spherecal.correction.fixtures import read_fixtures
-from spherecal.correction.samples_csv import read_samples
-from spherecal.identification.importers import RecordingError, match_joints
-from spherecal.validation.recording import read_entity_rows, read_view_names
+from spherecal.correction.files.fixtures import read_fixtures
+from spherecal.correction.files.samples_csv import read_samples
+from spherecal.identification.ingest.importers import RecordingError, match_joints
+from spherecal.validation.viewer.recording import read_entity_rows, read_view_names
 from tests.refusal import refused
 
 from .urdf_chain import GEN3LITE, GEN3LITE_BALL, chain_point

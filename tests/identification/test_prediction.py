@@ -75,9 +75,9 @@ def test_known_distances_remove_the_scale_error(panda, data, workspace):
 
 
 def test_restricted_motion_is_predicted_worse(panda, data, workspace):
-    from spherecal.correction.samples import Dataset
-    from spherecal.validation.candidates import Candidate
-    from spherecal.validation.plan import motion_samples
+    from spherecal.correction.files.samples import Dataset
+    from spherecal.validation.planning.candidates import Candidate
+    from spherecal.validation.planning.plan import motion_samples
 
     dataset, spec = data
     rng = np.random.default_rng(5)
@@ -95,7 +95,7 @@ def test_restricted_motion_is_predicted_worse(panda, data, workspace):
 def test_predicted_mean_within_25_percent_of_a_10_set_campaign(panda):
     """Two and three fixtures, distances known, 0.3 mm: prediction from one data set vs 10 calibrations."""
     from spherecal.identification.calibrate import calibrate
-    from spherecal.validation.experiment import default_fixtures, true_robot
+    from spherecal.validation.experiments.experiment import default_fixtures, true_robot
 
     workspace = Workspace.of(panda, 1000)
     for k in (2, 3):

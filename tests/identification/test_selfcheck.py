@@ -12,8 +12,8 @@ import pytest
 import yaml
 
 from spherecal.correction import load_robot, perturb, registered_errors, tool_point
-from spherecal.correction.fixtures import FixtureSpec
-from spherecal.correction.samples import Dataset
+from spherecal.correction.files.fixtures import FixtureSpec
+from spherecal.correction.files.samples import Dataset
 from spherecal.identification.calibrate import calibrate
 from spherecal.identification.leave_out import leave_out
 from spherecal.identification.selfcheck import InconsistentDataError
@@ -186,8 +186,8 @@ def test_a_fixture_whose_samples_hardly_move_the_arm_is_refused(arm, noisy) -> N
 # ------------------------------------------------------------------------------ command line
 def test_cli_refuses_with_one_line_and_force_writes_the_failures(arm, noisy, tmp_path, capsys) -> None:
     from spherecal.cli import main
-    from spherecal.correction.fixtures import write_fixtures
-    from spherecal.correction.samples_csv import write_samples
+    from spherecal.correction.files.fixtures import write_fixtures
+    from spherecal.correction.files.samples_csv import write_samples
 
     _, _ = arm
     dataset, spec = noisy

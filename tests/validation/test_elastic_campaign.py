@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from spherecal.validation.campaign import CampaignConfig, run_task, tasks
+from spherecal.validation.experiments.campaign import CampaignConfig, run_task, tasks
 
 
 @pytest.mark.slow

@@ -6,13 +6,13 @@ import numpy as np
 import pytest
 
 from spherecal.cli import main
-from spherecal.validation.candidates import Candidate, CandidateError, grid_candidates, read_candidates
-from spherecal.validation.plan import (
+from spherecal.validation.planning.candidates import Candidate, CandidateError, grid_candidates, read_candidates
+from spherecal.validation.planning.plan import (
     motion_samples,
     plan,
     restricted,
 )
-from spherecal.validation.plan_report import format_plan
+from spherecal.validation.planning.plan_report import format_plan
 
 REACHABLE = {"A": [0.5, -0.25, 0.5], "B": [0.5, 0.0, 0.4], "C": [0.45, 0.25, 0.45]}
 
@@ -133,7 +133,7 @@ def test_cli_plan_and_too_few_reachable(tmp_path, capsys):
     assert main(args) == 0
     out = capsys.readouterr().out
     assert "best set" in out and "unreachable" in out and rrd.stat().st_size > 0
-    from spherecal.validation.recording import read_entity_rows, read_view_names
+    from spherecal.validation.viewer.recording import read_entity_rows, read_view_names
 
     rows = read_entity_rows(rrd)
     assert rows.get("world/candidates") == 1 and rows.get("world/fixtures") == 1 and rows.get("tables/plan") == 1
@@ -143,8 +143,8 @@ def test_cli_plan_and_too_few_reachable(tmp_path, capsys):
 
 
 def test_cli_predict_from_a_data_set(tmp_path, capsys, panda):
-    from spherecal.correction.fixtures import write_fixtures
-    from spherecal.correction.samples_csv import write_samples
+    from spherecal.correction.files.fixtures import write_fixtures
+    from spherecal.correction.files.samples_csv import write_samples
     from spherecal.identification.synthetic import make_dataset
 
     dataset, spec = make_dataset(panda, {k: np.array(v) for k, v in REACHABLE.items()}, 60, np.random.default_rng(2))
@@ -160,8 +160,8 @@ def test_cli_predict_from_a_data_set(tmp_path, capsys, panda):
 def test_plan_beats_defaults_and_ranks_a_p3_like_set_last(panda):
     """On a small grid: the plan's best three fixtures measure better than the defaults (6 sets each), and
     the defaults with joints 2 and 3 held to 10 % are predicted and measured worst."""
-    from spherecal.validation.analysis import P3_LIKE, AnalysisConfig, Cell, run_cells
-    from spherecal.validation.experiment import default_fixtures
+    from spherecal.validation.experiments.experiment import default_fixtures
+    from spherecal.validation.planning.analysis import P3_LIKE, AnalysisConfig, Cell, run_cells
 
     result = plan(panda, grid_candidates("0.3,0.6,2;-0.4,0.4,3;0.2,0.6,2"), 3, np.random.default_rng(0))
     best = tuple((s.candidate.name, tuple(s.candidate.position)) for s in result.surveys

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from spherecal.validation.analysis import P3_LIKE, Analysis, AnalysisConfig, Cell, cells, markdown, run_cells
+from spherecal.validation.planning.analysis import P3_LIKE, Analysis, AnalysisConfig, Cell, cells, markdown, run_cells
 
 
 def test_cells_cover_every_axis():
@@ -21,7 +21,7 @@ def test_cells_cover_every_axis():
 
 
 def test_one_small_cell_runs_and_renders():
-    from spherecal.validation.plan import Plan
+    from spherecal.validation.planning.plan import Plan
 
     cell = Cell("noise", "tiny", (("P1", (0.5, -0.25, 0.5)), ("P2", (0.5, 0.0, 0.4))), samples=60, sets=2)
     config = AnalysisConfig(configurations=200, workers=1)

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from spherecal.validation.recording_shapes import BAR_HEIGHT, capsules, colour_ramp, histogram, parameter_bars
+from spherecal.validation.viewer.recording_shapes import BAR_HEIGHT, capsules, colour_ramp, histogram, parameter_bars
 
 
 def _rotate(quaternion: np.ndarray, vector: np.ndarray) -> np.ndarray:

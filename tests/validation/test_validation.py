@@ -145,7 +145,7 @@ def test_marker_columns_need_a_cluster(tmp_path, truth, mocap, rng) -> None:
 
 
 def test_recording_holds_the_documented_entities_and_its_blueprint(tmp_path, panda, truth, rng) -> None:
-    from spherecal.validation.recording import Recording, read_entity_rows, read_view_names
+    from spherecal.validation.viewer.recording import Recording, read_entity_rows, read_view_names
 
     q = truth.random_configurations(40, rng)
     recording = Recording(tmp_path / "r.rrd", title="Robot")
@@ -180,7 +180,7 @@ def test_recording_holds_the_documented_entities_and_its_blueprint(tmp_path, pan
 def test_socket_spread_is_drawn_in_mm_around_the_calibrated_mean(tmp_path, rng) -> None:
     from rerun.chunk import RrdReader
 
-    from spherecal.validation.recording import Recording, read_entity_rows, read_view_names
+    from spherecal.validation.viewer.recording import Recording, read_entity_rows, read_view_names
 
     centre = np.array([0.5, 0.1, 0.4])
     nominal = centre + np.array([2e-3, 0.0, 0.0]) + rng.normal(0, 1e-3, (50, 3))  # 2 mm off, 1.7 mm rms spread
@@ -220,7 +220,7 @@ def test_saving_a_recording_writes_no_analytics_files(tmp_path) -> None:
     env = {k: v for k, v in os.environ.items() if k not in ("RERUN_ANALYTICS", "XDG_CONFIG_HOME", "XDG_DATA_HOME")}
     env["HOME"] = str(tmp_path)
     code = (
-        "import numpy as np; from spherecal.validation.recording import Recording;"
+        "import numpy as np; from spherecal.validation.viewer.recording import Recording;"
         f"r = Recording({str(tmp_path / 'r.rrd')!r}); r.fixtures(['P1'], np.zeros((1, 3))); r.close()"
     )
     out = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True, text=True, timeout=60)

@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from spherecal.validation.campaign import (
+from spherecal.validation.experiments.campaign import (
     CampaignConfig,
     TaskResult,
     format_table,
@@ -74,7 +74,7 @@ def test_campaign_is_the_same_on_one_or_two_workers(tmp_path) -> None:
 
 @pytest.mark.slow
 def test_small_real_campaign_is_reproducible(tmp_path) -> None:
-    from spherecal.validation.campaign import run_task
+    from spherecal.validation.experiments.campaign import run_task
 
     config = CampaignConfig(sets=2, samples=150, configurations=500, fixture_sets=("P1", "Pall"))
     first = run_campaign(config, workers=2, progress=False)

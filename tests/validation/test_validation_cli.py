@@ -126,7 +126,7 @@ def test_validation_of_a_calibrated_file_compares_identifiable_sums_and_records_
 ) -> None:
     from dataclasses import replace
 
-    from spherecal.validation.recording import read_entity_rows, read_view_names
+    from spherecal.validation.viewer.recording import read_entity_rows, read_view_names
 
     truth = load_robot(files["truth"])
     names = truth.param_names

@@ -23,7 +23,7 @@ def demo(tmp_path_factory):
 
 
 def test_short_demo_writes_everything_and_its_recording_holds_the_documented_entities(demo, capsys) -> None:
-    from spherecal.validation.recording import read_entity_rows, read_view_names
+    from spherecal.validation.viewer.recording import read_entity_rows, read_view_names
 
     out, args = demo
     assert main(args) == 0
@@ -137,7 +137,7 @@ def test_campaign_refuses_more_samples_than_readings(tmp_path, capsys) -> None:
 def test_default_demo_meets_its_accuracy_figures(tmp_path) -> None:
     """The default demo (seed 0, 0.3 mm fixture noise, 0.3 mm mocap): calibrated <= 0.1 mm against the
     exact tool point where nominal is >= 2 mm, and against the mocap at its noise floor."""
-    from spherecal.validation.demo import DemoConfig, run_demo
+    from spherecal.validation.experiments.demo import DemoConfig, run_demo
     from spherecal.validation.pipeline import RANDOM_SET
 
     result = run_demo(DemoConfig(out=tmp_path, rrd=False), say=lambda line: None)

@@ -21,9 +21,9 @@ from typing import Any
 
 import yaml
 
+from ..errors import SpherecalError
+from ..model import CONVENTIONS, JOINT_FIELDS, RobotModel
 from .atomic import atomic_write_text
-from .errors import SpherecalError
-from .model import CONVENTIONS, JOINT_FIELDS, RobotModel
 from .text_input import read_text
 from .yaml_safe import load_yaml
 
@@ -178,7 +178,7 @@ def load_robot(
         if value is not None:
             raise RobotFileError(f"{key}: a {option} ({value!r}) is only for a URDF robot description (.urdf)")
     if key in EMBEDDED_ROBOTS and not Path(key).exists():
-        text = resources.files(__package__).joinpath("data", EMBEDDED_ROBOTS[key]).read_text()
+        text = resources.files("spherecal.correction").joinpath("data", EMBEDDED_ROBOTS[key]).read_text()
         return robot_from_dict(load_yaml(text, key, RobotFileError)[0], source=key)
     path = Path(path_or_name)
     text = read_text(path, RobotFileError)

@@ -11,7 +11,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from spherecal.correction import RobotModel, load_robot, perturb
-from spherecal.correction.fixtures import FixtureSpec
+from spherecal.correction.files.fixtures import FixtureSpec
 from spherecal.identification.calibrate import calibrate
 from spherecal.identification.synthetic import make_dataset
 
@@ -40,8 +40,8 @@ class MotionData:
     """Calibration data of one simulated experiment.
 
     Attributes:
-        dataset: the recorded samples (:class:`spherecal.correction.samples.Dataset`).
-        spec: the fixtures (:class:`spherecal.correction.fixtures.FixtureSpec`), distances exact.
+        dataset: the recorded samples (:class:`spherecal.correction.files.samples.Dataset`).
+        spec: the fixtures (:class:`spherecal.correction.files.fixtures.FixtureSpec`), distances exact.
         trajectory: the MuJoCo run (controller's result) when simulated with dynamics, else None.
     """
 

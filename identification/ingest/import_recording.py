@@ -13,11 +13,11 @@ from pathlib import Path
 
 import numpy as np
 
-from spherecal.correction.fixtures import FixtureSpec, write_fixtures
+from spherecal.correction.files.fixtures import FixtureSpec, write_fixtures
+from spherecal.correction.files.outputs import OutputSet
+from spherecal.correction.files.samples import Dataset, DatasetError
+from spherecal.correction.files.samples_csv import write_samples
 from spherecal.correction.model import RobotModel
-from spherecal.correction.outputs import OutputSet
-from spherecal.correction.samples import Dataset, DatasetError
-from spherecal.correction.samples_csv import write_samples
 
 from .bag import read_bag
 from .importers import MUKCA_DISTANCE, Recording, RecordingError, read_joint_csv, read_mukca

@@ -30,8 +30,8 @@ import numpy as np
 from spherecal.controller.exploration import joint_coverage
 from spherecal.correction import RobotModel
 from spherecal.correction.errors import SpherecalError
-from spherecal.correction.fixtures import FixtureSpec
-from spherecal.correction.samples import Dataset
+from spherecal.correction.files.fixtures import FixtureSpec
+from spherecal.correction.files.samples import Dataset
 from spherecal.identification.prediction import Prediction, Workspace, predict_accuracy
 from spherecal.identification.synthetic import fixture_samples, project_to_point
 

@@ -1,7 +1,7 @@
 """Spherical-joint samples: the :class:`Dataset` type (joint angles per fixture) and its selections.
 
-The files are :mod:`spherecal.correction.samples_csv` (``samples.csv``) and
-:mod:`spherecal.correction.fixtures` (``fixtures.yaml``). Errors are :class:`DatasetError`, one line
+The files are :mod:`spherecal.correction.files.samples_csv` (``samples.csv``) and
+:mod:`spherecal.correction.files.fixtures` (``fixtures.yaml``). Errors are :class:`DatasetError`, one line
 naming the file, the row (1-based line number) and the field.
 """
 

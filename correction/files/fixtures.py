@@ -9,7 +9,7 @@
     distances:
       - [P1, P2, 0.5]
 
-Errors are :class:`~spherecal.correction.samples.DatasetError`, one line naming the file, the row
+Errors are :class:`~spherecal.correction.files.samples.DatasetError`, one line naming the file, the row
 (1-based line number) and the field. The writer is atomic (temporary file, rename).
 """
 
@@ -24,10 +24,10 @@ from typing import Any
 import numpy as np
 import yaml
 
-from spherecal.correction.atomic import atomic_write_text
-from spherecal.correction.robot_file import MAX_LENGTH
-from spherecal.correction.samples import Dataset, DatasetError
-from spherecal.correction.yaml_safe import load_yaml
+from spherecal.correction.files.atomic import atomic_write_text
+from spherecal.correction.files.robot_file import MAX_LENGTH
+from spherecal.correction.files.samples import Dataset, DatasetError
+from spherecal.correction.files.yaml_safe import load_yaml
 
 
 # ------------------------------------------------------------------------------ fixtures.yaml

@@ -24,9 +24,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from spherecal.correction.files.samples import DatasetError
 from spherecal.correction.kinematics import tool_point
 from spherecal.correction.model import RobotModel
-from spherecal.correction.samples import DatasetError
 
 #: Bin of the stillness test [s].
 BIN = 0.01

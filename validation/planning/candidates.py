@@ -9,7 +9,7 @@ from pathlib import Path
 import numpy as np
 
 from spherecal.correction.errors import SpherecalError
-from spherecal.correction.yaml_safe import load_yaml
+from spherecal.correction.files.yaml_safe import load_yaml
 
 #: Most grid points :func:`grid_candidates` makes (each one is surveyed and scored).
 MAX_GRID = 10_000

@@ -32,13 +32,13 @@ from pathlib import Path
 import numpy as np
 
 from spherecal.correction import atomic_write_text, registered_errors, tool_point
-from spherecal.correction.samples import Dataset
+from spherecal.correction.files.samples import Dataset
 from spherecal.identification.calibrate import calibrate
 from spherecal.identification.prediction import Workspace, predict_accuracy
-from spherecal.validation.candidates import Candidate, grid_candidates
-from spherecal.validation.experiment import default_fixtures, fixture_spec, nominal_robot, true_robot
-from spherecal.validation.plan import motion_samples, plan
-from spherecal.validation.plan_report import format_plan
+from spherecal.validation.experiments.experiment import default_fixtures, fixture_spec, nominal_robot, true_robot
+from spherecal.validation.planning.candidates import Candidate, grid_candidates
+from spherecal.validation.planning.plan import motion_samples, plan
+from spherecal.validation.planning.plan_report import format_plan
 from spherecal.validation.provenance import comment_block, provenance
 
 #: The fourth fixture of the 1-4 fixture rows (low, left of the defaults) [m].

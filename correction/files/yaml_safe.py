@@ -18,7 +18,7 @@ from typing import Any
 
 import yaml
 
-from .errors import SpherecalError
+from ..errors import SpherecalError
 
 #: Largest YAML file read [bytes] (a robot or fixtures file is a few kB).
 MAX_BYTES = 1_000_000

@@ -34,12 +34,12 @@ import numpy as np
 
 from spherecal.correction import SpherecalError
 from spherecal.correction.elastic import with_compliance
-from spherecal.correction.outputs import OutputSet
+from spherecal.correction.files.outputs import OutputSet
 from spherecal.identification.calibrate import calibrate
 from spherecal.identification.selection import elastic_start, rigid, select_model
 
+from ..pipeline import RANDOM_SET, validate_models
 from .experiment import calibrate_from, default_fixtures, motion_set, nominal_robot, true_robot
-from .pipeline import RANDOM_SET, validate_models
 
 #: The paper's simulated Table 2 (mm): row -> (mean of average error, mean of maximal error).
 PAPER_TABLE2 = {

@@ -7,7 +7,7 @@ starting with ``#`` are skipped (row numbers in messages are still the file's li
     fixture,t,q1,q2,q3,q4,q5,q6,q7
     P1,0.000,0.01,-0.52,0.03,-2.11,0.02,1.63,0.79
 
-Errors are :class:`~spherecal.correction.samples.DatasetError`, one line naming the file, the row
+Errors are :class:`~spherecal.correction.files.samples.DatasetError`, one line naming the file, the row
 (1-based line number) and the field. The writer is atomic (temporary file, rename).
 """
 
@@ -18,11 +18,11 @@ from pathlib import Path
 
 import numpy as np
 
-from spherecal.correction.atomic import atomic_write_text
-from spherecal.correction.csv_rows import is_skipped, iter_lines, parse_line, plain_values
+from spherecal.correction.files.atomic import atomic_write_text
+from spherecal.correction.files.csv_rows import is_skipped, iter_lines, parse_line, plain_values
+from spherecal.correction.files.samples import LIMIT_TOL, Dataset, DatasetError
+from spherecal.correction.files.text_input import finite_number
 from spherecal.correction.model import RobotModel
-from spherecal.correction.samples import LIMIT_TOL, Dataset, DatasetError
-from spherecal.correction.text_input import finite_number
 
 
 # --------------------------------------------------------------------------------- samples.csv

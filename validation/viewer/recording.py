@@ -37,7 +37,7 @@ from pathlib import Path
 import numpy as np
 
 from spherecal.correction import RobotModel, link_frames, tool_point
-from spherecal.correction.atomic import OutputError
+from spherecal.correction.files.atomic import OutputError
 
 from .blueprint import build_blueprint
 from .recording_shapes import BAR_HEIGHT, capsules, colour_ramp, histogram, parameter_bars

@@ -16,7 +16,7 @@ from pathlib import Path
 
 import numpy as np
 
-from spherecal.correction.csv_rows import (
+from spherecal.correction.files.csv_rows import (
     RowNames,
     block_rows,
     is_skipped,
@@ -25,10 +25,10 @@ from spherecal.correction.csv_rows import (
     plain_values,
     read_rows,
 )
-from spherecal.correction.fixtures import FixtureSpec
+from spherecal.correction.files.fixtures import FixtureSpec
+from spherecal.correction.files.samples import LIMIT_TOL, Dataset, DatasetError
+from spherecal.correction.files.text_input import finite_number
 from spherecal.correction.model import RobotModel
-from spherecal.correction.samples import LIMIT_TOL, Dataset, DatasetError
-from spherecal.correction.text_input import finite_number
 
 #: Default MUKCa socket distance [m] (their printed plate: centres 50 mm apart).
 MUKCA_DISTANCE = 0.050

@@ -36,9 +36,9 @@ from xml.sax.saxutils import quoteattr
 import numpy as np
 import yaml
 
+from ..errors import SpherecalError
+from ..model import RobotModel, matrix_rpy
 from .atomic import atomic_write_text
-from .errors import SpherecalError
-from .model import RobotModel, matrix_rpy
 
 #: Franka's datasheet joint torque [N m] and velocity [rad/s] limits, used for 7-joint arms
 #: when none are given (URDF requires both on a revolute joint).

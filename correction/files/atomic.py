@@ -6,7 +6,7 @@ import os
 import tempfile
 from pathlib import Path
 
-from .errors import SpherecalError
+from ..errors import SpherecalError
 
 
 class OutputError(SpherecalError):

@@ -18,13 +18,13 @@ import warnings
 
 import numpy as np
 
-from .conversion import to_modified
-from .kinematics import link_frames, tool_point
-from .model import RobotModel, matrix_rpy
-from .rigid import registered_errors
-from .urdf import ExportError, _triple, provenance_comment, xml_comment
+from ..conversion import to_modified
+from ..kinematics import link_frames, tool_point
+from ..model import RobotModel, matrix_rpy
+from ..rigid import registered_errors
 from .urdf_read import MOVABLE, parse_urdf
 from .urdf_to_dh import NearlyParallelAxesWarning, urdf_model
+from .urdf_write import ExportError, _triple, provenance_comment, xml_comment
 
 #: Largest tool-point distance [m] (after the best rigid fit) between the calibrated model and the
 #: URDF's nominal arm: beyond it the URDF is another robot (a calibration moves millimetres).

@@ -14,7 +14,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from .model import pose_matrix
+from ..model import pose_matrix
 from .robot_file import RobotFileError
 from .text_input import read_text
 

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from spherecal.validation.recording import Recording
+from spherecal.validation.viewer.recording import Recording
 
 
 def format_plan(result) -> str:

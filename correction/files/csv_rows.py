@@ -18,7 +18,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .errors import SpherecalError
+from ..errors import SpherecalError
 
 
 def field_limit() -> int:

@@ -1,0 +1,2 @@
+"""Recordings in: MUKCa folders, joint CSV files and ROS bags, segmented into fixtures.
+"""

@@ -1,0 +1,2 @@
+"""Simulated experiments: the shared steps, campaigns and the demo.
+"""

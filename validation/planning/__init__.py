@@ -1,0 +1,2 @@
+"""Experiment planning: candidate fixtures, their ranking, and predicted against measured accuracy.
+"""

@@ -1,0 +1,2 @@
+"""The Rerun viewer: recordings, their blueprint and the plain geometry they draw.
+"""
