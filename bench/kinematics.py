@@ -14,7 +14,7 @@ import bench_common  # first: import path, BLAS threads
 import numpy as np  # noqa: E402
 
 from spherecal.correction import joint_jacobian, load_robot, param_jacobian, tool_point  # noqa: E402
-from spherecal.correction.kinematics import frames  # noqa: E402
+from spherecal.correction.chain import frames  # noqa: E402
 
 
 def main() -> None:

@@ -4,6 +4,7 @@ spherical-joint data files (samples and fixtures).
 This is what a controller imports: it depends on nothing else of spherecal.
 """
 
+from .chain import Frames, frames, link_frames
 from .conversion import convert, to_modified, to_standard
 from .errors import SpherecalError
 from .files.atomic import atomic_write_bytes, atomic_write_text
@@ -11,24 +12,16 @@ from .files.fixtures import FixtureSpec, format_fixtures, read_fixtures, write_f
 from .files.robot_file import (
     RobotFileError,
     dump_robot,
-    load_robot,
     robot_from_dict,
     robot_to_dict,
     save_robot,
 )
+from .files.robots import load_robot
 from .files.samples import Dataset, DatasetError
 from .files.samples_csv import format_samples, read_samples, write_samples
 from .files.urdf_to_dh import NearlyParallelAxesWarning, load_urdf
 from .gravity import InertialsError, gravity_torques, has_inertials, inertials_of
-from .kinematics import (
-    Frames,
-    frames,
-    joint_jacobian,
-    link_frames,
-    param_jacobian,
-    tool_point,
-    tool_pose,
-)
+from .kinematics import joint_jacobian, param_jacobian, tool_point, tool_pose
 from .model import RobotModel, matrix_rpy, param_names, pose_matrix, rpy_matrix
 from .perturb import perturb
 from .rigid import apply_transform, fit_rigid_transform, registered_errors

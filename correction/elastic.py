@@ -18,8 +18,8 @@ from dataclasses import replace
 
 import numpy as np
 
+from .chain import _rigid_joint_jacobian, rigid_tool_point
 from .gravity import InertialsError, gravity_torques, inertials_of
-from .kinematics import _rigid_joint_jacobian, tool_point
 from .model import RobotModel
 
 #: Fixed-point iterations of :func:`motor_angles` (each gains a factor c |dtau/dq| ~ 1e-3).
@@ -77,7 +77,9 @@ def link_angles(model: RobotModel, q: np.ndarray, compliance: np.ndarray | None 
 def elastic_tool_point(model: RobotModel, q: np.ndarray, compliance: np.ndarray | None = None) -> np.ndarray:
     """(N, 3) tool point [m] of measured angles ``q`` (N, n): the geometric tool point at the link angles
     (what :func:`correction.tool_point` gives for a model carrying ``compliance``)."""
-    return tool_point(model if compliance is None else with_compliance(model, compliance), q)
+    model = model if compliance is None else with_compliance(model, compliance)
+    q = np.asarray(q, dtype=float)
+    return rigid_tool_point(model, link_angles(model, q))
 
 
 def compliance_jacobian(model: RobotModel, q: np.ndarray, compliance: np.ndarray | None = None) -> np.ndarray:

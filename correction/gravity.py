@@ -22,8 +22,8 @@ from typing import Any
 
 import numpy as np
 
+from .chain import link_frames
 from .errors import SpherecalError
-from .kinematics import link_frames
 from .model import RobotModel
 
 #: Standard gravity in the world (base) frame [m/s^2].

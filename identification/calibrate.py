@@ -13,14 +13,20 @@ from spherecal.correction.files.samples import Dataset
 
 from .build import build_problem
 from .identifiability import Identifiability, predicted_std
-from .problem import GAUGE, NOISE, CalibrationProblem, ImplausibleCalibrationError, prior_std, samples_location
+from .problem import (
+    GAUGE,
+    NOISE,
+    SIGMA_FLOOR,
+    CalibrationProblem,
+    ImplausibleCalibrationError,
+    prior_std,
+    samples_location,
+)
 from .pruning import prune
 from .selfcheck import SelfCheck, self_check
 from .solvers import solve_lm, solve_pso
 
 METHODS: tuple[str, ...] = ("lm", "pso", "pso+lm")
-#: Floor of the residual noise used to judge excitation [m] (noise-free data still has rounding).
-SIGMA_FLOOR = 1e-6
 #: Largest plausible tool-point change of a calibration, in multiples of what a real arm's
 #: errors (1 mm, 0.2 deg) typically move it (about 6 mm on the Panda, so about 24 mm).
 MAX_CHANGE = 4.0

@@ -33,10 +33,9 @@ from spherecal.correction.files.samples import Dataset
 from spherecal.correction.layout import ParameterLayout
 
 from .build import build_problem
-from .calibrate import SIGMA_FLOOR
 from .gauge import anchor_spread
 from .identifiability import Identifiability, normal_inverse
-from .problem import NOISE, CalibrationProblem, prior_std
+from .problem import NOISE, SIGMA_FLOOR, CalibrationProblem, prior_std
 from .pruning import prune
 
 #: A parameter whose predicted std exceeds this share of its prior spread is "weakly determined".

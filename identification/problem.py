@@ -43,6 +43,8 @@ from .identifiability import Identifiability
 GAUGE: dict[str, tuple[str, ...]] = {"modified": ("a1", "alpha1", "d1", "theta1"), "standard": ("d1", "theta1")}
 #: Default expected fixture noise [m] (the paper's motion-capture accuracy).
 NOISE = 3e-4
+#: Floor of the residual noise used to judge excitation [m] (noise-free data still has rounding).
+SIGMA_FLOOR = 1e-6
 #: Default accuracy of a known distance [m].
 DISTANCE_STD = 1e-6
 #: Largest disagreement [m] between a known distance and the distance of two known positions.

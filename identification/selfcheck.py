@@ -38,6 +38,7 @@ from spherecal.correction import RobotModel
 
 from .consistency import augmented, group_finding, log10_chi2_sf, name_culprit
 from .leave_out import leave_out
+from .prediction import Workspace, predict_accuracy
 from .problem import CalibrationProblem, samples_location
 from .selfcheck_result import Finding, InconsistentDataError, SelfCheck
 
@@ -212,8 +213,6 @@ def nominal_expected(model: RobotModel, sensitivity: np.ndarray, draws: int = 20
 
 
 def _prediction(nominal: RobotModel, built: CalibrationProblem, noise: float) -> Finding:
-    from .prediction import Workspace, predict_accuracy  # prediction imports calibrate, which imports us
-
     workspace = Workspace.of(nominal, count=500)
     predicted = predict_accuracy(
         nominal, built.dataset, built.spec, noise=noise, workspace=workspace, problem=built, draws=100

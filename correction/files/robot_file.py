@@ -15,7 +15,6 @@ from __future__ import annotations
 
 import math
 import os
-from importlib import resources
 from pathlib import Path
 from typing import Any
 
@@ -24,8 +23,6 @@ import yaml
 from ..errors import SpherecalError
 from ..model import CONVENTIONS, JOINT_FIELDS, RobotModel
 from .atomic import atomic_write_text
-from .text_input import read_text
-from .yaml_safe import load_yaml
 
 JOINT_KEYS: tuple[str, ...] = JOINT_FIELDS + ("lower", "upper")
 #: Optional per-joint key: a joint with ``beta`` carries a Hayati angle (see RobotModel.hayati).
@@ -153,37 +150,6 @@ def check_robot(model: RobotModel, source: str) -> None:
         RobotFileError: one line naming ``source`` and the field (``joints[i].a``, ``tool[2]``, ...).
     """
     robot_from_dict({k: v for k, v in robot_to_dict(model).items() if k in _KNOWN_KEYS}, source)
-
-
-def load_robot(
-    path_or_name: str | os.PathLike, tip_link: str | None = None, base_link: str | None = None
-) -> RobotModel:
-    """Load a robot file, a URDF (``.urdf``), or an embedded robot by name (``"panda"``).
-
-    Args:
-        path_or_name: YAML robot file, URDF file or embedded name.
-        tip_link, base_link: URDF only: the chain to convert (see :func:`correction.urdf_to_dh.load_urdf`).
-
-    Raises:
-        RobotFileError: unreadable file, invalid YAML or URDF, an invalid field (one line).
-    """
-    key = str(path_or_name)
-    if key.lower().endswith(".urdf"):
-        from .urdf_to_dh import load_urdf  # here, not at the top: urdf_to_dh imports this module
-
-        return load_urdf(path_or_name, tip_link=tip_link, base_link=base_link)
-    if Path(key).is_dir():  # before the link options: a folder is no robot description of any kind
-        raise RobotFileError(f"{key}: cannot read: Is a directory (expected a robot file or a .urdf)")
-    for option, value in (("tip link", tip_link), ("base link", base_link)):
-        if value is not None:
-            raise RobotFileError(f"{key}: a {option} ({value!r}) is only for a URDF robot description (.urdf)")
-    if key in EMBEDDED_ROBOTS and not Path(key).exists():
-        text = resources.files("spherecal.correction").joinpath("data", EMBEDDED_ROBOTS[key]).read_text()
-        return robot_from_dict(load_yaml(text, key, RobotFileError)[0], source=key)
-    path = Path(path_or_name)
-    text = read_text(path, RobotFileError)
-    data, _ = load_yaml(text, str(path), RobotFileError)  # bounded: size, depth, aliases; no duplicate keys
-    return robot_from_dict(data, source=str(path))
 
 
 def _plain(value: Any) -> Any:

@@ -18,8 +18,9 @@ import warnings
 
 import numpy as np
 
+from ..chain import link_frames
 from ..conversion import to_modified
-from ..kinematics import link_frames, tool_point
+from ..kinematics import tool_point
 from ..model import RobotModel, matrix_rpy
 from ..rigid import registered_errors
 from .urdf_read import MOVABLE, parse_urdf

@@ -30,8 +30,8 @@ from dataclasses import replace
 
 import numpy as np
 
+from ..chain import link_frames
 from ..conversion import convert
-from ..kinematics import link_frames
 from ..model import RobotModel, matrix_rpy
 from .robot_file import RobotFileError, check_robot
 from .urdf_read import MOVABLE, UrdfTree, chain, read_urdf
