@@ -13,12 +13,42 @@ repository root, mapped into this package by ``pyproject.toml``):
 
 from __future__ import annotations
 
+import importlib.abc as _abc
+import importlib.util as _util
 import os as _os
+import sys as _sys
 
-# Installed (``pip install .``) the subpackages are copied into this folder. In a source checkout
-# whose root is on ``sys.path`` (``python -m pytest`` or ``python -c`` run there) this folder is found
-# before the editable install's mapping and holds only this file and the CLI: the subpackages are then
-# its siblings, so the repository root joins the package path. Nothing changes for an installed copy.
+#: The design card's folders, mapped into this package (the CLI modules live in this folder).
+SUBPACKAGES = ("correction", "identification", "controller", "validation")
+
+
+class _SourceFolders(_abc.MetaPathFinder):
+    """Finds ``spherecal.<subpackage>`` in the repository root of a source checkout, and nothing else.
+
+    Installed (``pip install .``) the subpackages are copied into this folder; an editable install
+    maps them with its own import hook. Only a source checkout imported without either (this folder
+    found first on ``sys.path``) needs this finder: it maps the four folders of
+    :data:`SUBPACKAGES` by name, so ``spherecal.tests`` or ``spherecal.bench`` never import.
+    """
+
+    def __init__(self, root: str) -> None:
+        self.root = root
+
+    def find_spec(self, fullname, path=None, target=None):  # noqa: D102 - importlib protocol
+        prefix, _, name = fullname.partition(".")
+        if prefix != __name__ or name not in SUBPACKAGES:
+            return None
+        folder = _os.path.join(self.root, name)
+        return _util.spec_from_file_location(
+            fullname, _os.path.join(folder, "__init__.py"), submodule_search_locations=[folder]
+        )
+
+
 _HERE = _os.path.dirname(_os.path.abspath(__file__))
-if not _os.path.isdir(_os.path.join(_HERE, "correction")):
-    __path__.append(_os.path.dirname(_HERE))  # type: ignore[name-defined]  # noqa: F821
+_ROOT = _os.path.dirname(_HERE)
+if not _os.path.isdir(_os.path.join(_HERE, "correction")) and all(
+    _os.path.isfile(_os.path.join(_ROOT, name, "__init__.py")) for name in SUBPACKAGES
+):
+    # Appended: an editable install's hook (earlier on the list) keeps precedence where there is one.
+    if not any(isinstance(finder, _SourceFolders) for finder in _sys.meta_path):
+        _sys.meta_path.append(_SourceFolders(_ROOT))

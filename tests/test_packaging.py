@@ -65,3 +65,34 @@ def test_a_built_wheel_has_no_top_level_name_but_spherecal(tmp_path) -> None:
     for package in ("correction", "identification", "controller", "validation", "commands"):
         assert f"spherecal/{package}/__init__.py" in names
     assert "spherecal/correction/data/panda.yaml" in names
+
+
+_PROBE = """
+import importlib, sys
+for name in ("correction", "identification", "controller", "validation", "cli", "commands"):
+    module = importlib.import_module("spherecal." + name)
+    assert module.__file__.startswith(sys.argv[1]), (name, module.__file__)
+for name in ("tests", "bench", "spherecal", "docs"):
+    try:
+        importlib.import_module("spherecal." + name)
+    except ImportError:
+        continue
+    raise SystemExit("spherecal." + name + " imports")
+print("ok")
+"""
+
+
+@pytest.mark.parametrize("hook", ["installed", "bare"])
+def test_a_source_checkout_exposes_only_the_package_folders(hook: str) -> None:
+    """Run at the repository root (as the README's test command is), ``spherecal`` maps the four
+    design-card folders and the CLI, never the root's other folders (tests, bench, the CLI folder
+    itself). ``bare``: no install hook at all (site-packages on the path for numpy and friends, but
+    its ``.pth`` import hooks not run), so the package's own finder does the mapping."""
+    if hook == "installed":
+        command = [sys.executable, "-c", _PROBE, str(ROOT)]
+    else:
+        paths = [str(ROOT), sysconfig.get_paths()["purelib"], sysconfig.get_paths()["platlib"]]
+        code = f"import sys; sys.path[:0] = {paths!r}; exec(compile({_PROBE!r}, 'probe', 'exec'))"
+        command = [sys.executable, "-S", "-c", code, str(ROOT)]
+    out = subprocess.run(command, cwd=ROOT, capture_output=True, text=True)
+    assert out.returncode == 0 and out.stdout.strip() == "ok", out.stdout + out.stderr[-2000:]
