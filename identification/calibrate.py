@@ -129,12 +129,12 @@ class CalibrationResult:
             f"residual [mm]   before: rms {rms_b * 1e3:.4f}  max {max_b * 1e3:.4f}"
             f"   after: rms {rms_a * 1e3:.4f}  max {max_a * 1e3:.4f}",
             f"identified {len(self.identified)} parameters, condition number {self.condition_number:.3g}",
-            f"  {'parameter':<9} {'unit':<4} {'change':>10} {'std':>10}",
+            f"  {'parameter':<9} {'unit':<7} {'change':>10} {'std':>10}",
         ]
         for name, start, end, std in self.changes():
-            layout = self.model.layout
-            scale, unit = layout.display_scale()[layout.index(name)], "deg" if layout.is_angle(name) else "mm"
-            lines.append(f"  {name:<9} {unit:<4} {(end - start) * scale:10.5f} {std * scale:10.5f}")
+            kind = self.model.layout.kinds[self.model.layout.index(name)]
+            scale, unit = kind.display_scale, kind.display_unit
+            lines.append(f"  {name:<9} {unit:<7} {(end - start) * scale:10.5f} {std * scale:10.5f}")
         groups: dict[str, list[str]] = {}
         for name, reason in self.fixed.items():
             groups.setdefault(reason, []).append(name)

@@ -211,12 +211,14 @@ def record_parameters(
     """
     groups = sum_groups(fixed, nominal.layout)
     index = {n: i for i, n in enumerate(nominal.param_names)}
-    names, change, spread, true = [], [], [], []
+    names, kinds, change, spread, true = [], [], [], [], []
     for name in identified:
         members = groups.get(name, [name])
         names.append(" + ".join(members))
+        kinds.append(nominal.layout.kinds[index[name]])
         change.append(sum(calibrated.params[index[m]] - nominal.params[index[m]] for m in members))
         spread.append(float(std.get(name, np.nan)))
         if truth is not None:
             true.append(sum(truth.params[index[m]] - nominal.params[index[m]] for m in members))
-    recording.parameter_changes(names, np.array(change), np.array(spread), None if truth is None else np.array(true))
+    truths = None if truth is None else np.array(true)
+    recording.parameter_changes(names, kinds, np.array(change), np.array(spread), truths)

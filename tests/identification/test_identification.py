@@ -4,15 +4,17 @@ from __future__ import annotations
 
 import logging
 import re
+from dataclasses import replace
 
 import numpy as np
 import pytest
 
 from spherecal.correction import load_robot, perturb, registered_errors, to_standard, tool_point
+from spherecal.correction.elastic import with_compliance
 from spherecal.correction.files.fixtures import FixtureSpec
 from spherecal.correction.files.samples import Dataset, DatasetError
 from spherecal.identification.build import build_problem
-from spherecal.identification.calibrate import calibrate
+from spherecal.identification.calibrate import CalibrationResult, calibrate
 from spherecal.identification.problem import UnidentifiableError
 from spherecal.identification.synthetic import make_dataset, project_to_point
 
@@ -293,3 +295,24 @@ def test_pso_is_seeded_quiet_and_restores_numpy_state(truth, clean, tmp_path, mo
     assert a.rms_after <= a.rms_before
     finished = calibrate(panda, dataset, spec, method="pso+lm", seed=5, pso_options=options)
     assert _accuracy(finished.model, true).mean() < 1e-6
+
+
+def test_the_summary_table_takes_each_unit_from_the_layout() -> None:
+    """A Hayati ``beta`` change prints in deg and a compliance change in urad/Nm (the layout's kinds),
+    never in mm because the name is not one of the usual angles."""
+    panda = load_robot("panda")
+    nominal = with_compliance(replace(panda, hayati=(2,)), np.zeros(7))
+    params = nominal.params.copy()
+    params[nominal.param_index("beta3")] += np.deg2rad(0.05)
+    params[nominal.param_index("c2")] += 2e-6
+    params[nominal.param_index("a2")] += 1e-3
+    names = ("a2", "beta3", "c2")
+    result = CalibrationResult(
+        model=nominal.with_params(params), nominal=nominal, method="lm", centres={}, identified=names, fixed={},
+        condition_number=1.0, std=dict.fromkeys(names, 0.0), residual_before=np.zeros(1),
+        residual_after=np.zeros(1), samples_per_fixture={"P1": 1}, warnings=(),
+    )
+    rows = {line.split()[0]: line.split()[1:3] for line in result.summary().splitlines() if line.startswith("  ")}
+    assert rows["a2"] == ["mm", "1.00000"]
+    assert rows["beta3"] == ["deg", "0.05000"]
+    assert rows["c2"] == ["urad/Nm", "2.00000"]

@@ -3,7 +3,9 @@
 from __future__ import annotations
 
 import numpy as np
+import pytest
 
+from spherecal.correction.layout import ANGLE, LENGTH, layout_for
 from spherecal.validation.viewer.recording_shapes import BAR_HEIGHT, capsules, colour_ramp, histogram, parameter_bars
 
 
@@ -45,7 +47,7 @@ def test_parameter_bars_scale_each_group_to_its_largest_value() -> None:
     names = ["a2", "alpha2", "d7 + tool_z"]
     change, std = np.array([1e-3, np.deg2rad(0.1), -2e-3]), np.array([1e-5, np.deg2rad(0.01), 1e-4])
     truth = np.array([1.1e-3, np.deg2rad(0.1), -2e-3])
-    bars = parameter_bars(names, change, std, truth)
+    bars = parameter_bars(names, [LENGTH, ANGLE, LENGTH], change, std, truth)
     lengths, angles = bars["lengths"], bars["angles"]
     assert lengths["labels"] == ["a2", "d7 + tool_z"] and angles["labels"] == ["alpha2"]
     # y points down in Rerun's 2D view: a positive change is a bar above zero (negative y)
@@ -56,3 +58,19 @@ def test_parameter_bars_scale_each_group_to_its_largest_value() -> None:
     assert np.allclose(lengths["truth"][:, 1], -np.array([1.1, -2.0]) * BAR_HEIGHT / reach)
     assert np.allclose(np.abs(np.diff(lengths["whiskers"][:, :, 1], axis=1)).ravel(),
                        2 * np.array([0.01, 0.1]) * BAR_HEIGHT / reach)
+
+
+def test_parameter_bars_take_each_unit_from_the_layout_not_the_name() -> None:
+    """A Hayati ``beta`` is an angle (deg) and a compliance ``c`` its own kind (urad/Nm), though
+    neither name says so: the layout's kinds decide the panel, its unit and its scale."""
+    layout = layout_for(7, hayati=(2,), elastic=True)
+    names = ["a2", "beta3", "c2"]
+    kinds = [layout.kinds[layout.index(n)] for n in names]
+    change = np.array([1e-3, np.deg2rad(0.05), 2e-6])  # 1 mm, 0.05 deg, 2 urad/Nm
+    bars = parameter_bars(names, kinds, change, np.zeros(3))
+    assert set(bars) == {"lengths", "angles", "compliances"}
+    assert bars["angles"]["labels"] == ["beta3"] and bars["angles"]["scale_label"] == "0.050 deg"
+    assert bars["compliances"]["labels"] == ["c2"] and bars["compliances"]["scale_label"] == "2.000 urad/Nm"
+    assert bars["lengths"]["scale_label"] == "1.000 mm" and bars["compliances"]["unit"] == "urad/Nm"
+    with pytest.raises(ValueError, match="kinds"):
+        parameter_bars(names, kinds[:2], change, np.zeros(3))

@@ -6,6 +6,7 @@ import numpy as np
 import pytest
 
 from spherecal.correction import apply_transform, fit_rigid_transform, perturb, tool_point
+from spherecal.correction.layout import ANGLE, LENGTH
 from spherecal.validation.compare import ValidationSet, compare, format_comparisons, parameter_deviations
 from spherecal.validation.mocap import (
     MarkerCluster,
@@ -155,7 +156,7 @@ def test_recording_holds_the_documented_entities_and_its_blueprint(tmp_path, pan
     errors = np.linspace(0.0, 2e-3, 40)
     recording.workspace_errors("nominal", tool_point(panda, q), errors, "the mocap")
     recording.residuals(np.full(30, 1e-3), np.full(30, 1e-4))
-    recording.parameter_changes(["a2", "alpha2", "d7 + tool_z"], np.array([1e-3, 1e-3, -2e-4]),
+    recording.parameter_changes(["a2", "alpha2", "d7 + tool_z"], [LENGTH, ANGLE, LENGTH], np.array([1e-3, 1e-3, -2e-4]),
                                 np.array([1e-5, 1e-5, 1e-5]), np.array([1.1e-3, 1e-3, -2e-4]))
     recording.coverage({"P1": q[:20], "P2": q[20:]}, truth.lower, truth.upper)
     recording.text("calibration", "a table", "Calibration table")

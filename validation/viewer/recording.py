@@ -38,6 +38,7 @@ import numpy as np
 
 from spherecal.correction import RobotModel, link_frames, tool_point
 from spherecal.correction.files.atomic import OutputError
+from spherecal.correction.layout import ParamKind
 
 from .blueprint import build_blueprint
 from .recording_shapes import BAR_HEIGHT, capsules, colour_ramp, histogram, parameter_bars
@@ -212,20 +213,27 @@ class Recording:
             self._note("residuals", key, f"Residuals {key} calibration [mm]: rms {rms:.3f} mm")
 
     def parameter_changes(
-        self, names: list[str], change: np.ndarray, std: np.ndarray, truth: np.ndarray | None = None
+        self,
+        names: list[str],
+        kinds: list[ParamKind],
+        change: np.ndarray,
+        std: np.ndarray,
+        truth: np.ndarray | None = None,
     ) -> None:
         """Bars of the identified parameters' changes (calibrated minus nominal) with +-1 std whiskers.
 
-        Lengths and angles get a panel each (mm, deg); the bar labels carry the values. With ``truth``
-        (true minus nominal, simulation) a black dot marks where each bar should end.
+        Each parameter kind gets a panel in its display unit from the parameter layout (lengths mm,
+        angles deg, compliances urad/Nm); the bar labels carry the values. With ``truth`` (true minus
+        nominal, simulation) a black dot marks where each bar should end.
 
         Args:
             names: (P,) parameter names.
-            change, std: (P,) [m, rad].
-            truth: (P,) [m, rad], or None.
+            kinds: (P,) their :class:`~spherecal.correction.layout.ParamKind`.
+            change, std: (P,) in each kind's unit [m, rad, rad/Nm].
+            truth: (P,) likewise, or None.
         """
         rr = self.rr
-        for group, shapes in parameter_bars(names, change, std, truth).items():
+        for group, shapes in parameter_bars(names, kinds, change, std, truth).items():
             base = f"parameters/{group}"
             white = (235, 235, 235)
             log = self.stream.log
@@ -239,7 +247,7 @@ class Recording:
                                                  labels=[shapes["scale_label"]], show_labels=True), static=True)
             if "truth" in shapes:
                 log(f"{base}/truth", rr.Points2D(shapes["truth"], radii=0.12, colors=white), static=True)
-            unit = "mm" if group == "lengths" else "deg"
+            unit = shapes["unit"]
             what = ", white dot = true change" if "truth" in shapes else ""
             self._note("parameters", group, f"{group.capitalize()} [{unit}]: change, +-1 std{what}")
             top = BAR_HEIGHT + 1.2

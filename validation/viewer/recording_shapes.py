@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from spherecal.correction.layout import ParamKind
+
 #: Anchors of the error colour ramp, all readable on the viewer's dark background (blue: small, red: large).
 RAMP = np.array([(60, 110, 240), (30, 190, 210), (90, 205, 90), (245, 215, 40), (235, 60, 40)], dtype=float)
 #: Height of the tallest bar in the parameter panels (2D view units; the labels carry the values).
@@ -48,36 +50,39 @@ def histogram(values: np.ndarray, bins: int = 30) -> tuple[np.ndarray, np.ndarra
     return counts, edges[:-1], float(edges[1] - edges[0])
 
 
-def is_angle(name: str) -> bool:
-    """True for angular parameters (degrees in displays), false for lengths (millimetres)."""
-    return name.startswith(("alpha", "theta", "base_roll", "base_pitch", "base_yaw"))
-
-
 def parameter_bars(
-    names: list[str], change: np.ndarray, std: np.ndarray, truth: np.ndarray | None = None
+    names: list[str],
+    kinds: list[ParamKind],
+    change: np.ndarray,
+    std: np.ndarray,
+    truth: np.ndarray | None = None,
 ) -> dict[str, dict[str, np.ndarray | list]]:
-    """2D shapes of a bar chart with error bars, one per group (``lengths`` [mm], ``angles`` [deg]).
+    """2D shapes of a bar chart with error bars, one group per parameter kind (``lengths`` [mm],
+    ``angles`` [deg], ``compliances`` [urad/Nm]: each kind's display unit from the parameter layout).
 
     Bar ``k`` spans x in [k - 0.35, k + 0.35]; heights are scaled so that the largest |value| of the
     group is :data:`BAR_HEIGHT` tall; y points down in Rerun's 2D views, so heights are negated.
 
     Args:
         names: (P,) parameter names.
-        change, std: (P,) [m, rad].
-        truth: (P,) [m, rad] or None.
+        kinds: (P,) their kinds (``layout.kinds[layout.index(name)]``), which give the display unit.
+        change, std: (P,) in each kind's unit [m, rad, rad/Nm].
+        truth: (P,) in each kind's unit, or None.
 
     Returns:
         group -> ``mins`` (B, 2), ``sizes`` (B, 2), ``colours`` (B, 3) of the bars, ``names`` (B, 2) and
         ``labels`` (B,) of the parameter names beyond each bar's end, ``whiskers`` (B, 2, 2), ``zero``
-        (2, 2), ``scale`` (2, 2) a bar of the tallest height left of the chart with ``scale_label``, and
-        with ``truth``, ``truth`` (B, 2).
+        (2, 2), ``scale`` (2, 2) a bar of the tallest height left of the chart with ``scale_label``,
+        ``unit`` the group's display unit, and with ``truth``, ``truth`` (B, 2).
     """
     change, std = np.asarray(change, dtype=float), np.asarray(std, dtype=float)
-    angle = np.array([is_angle(n) for n in names], dtype=bool)
+    if len(kinds) != len(names):
+        raise ValueError(f"{len(names)} parameter names but {len(kinds)} kinds")
+    groups = list(dict.fromkeys(kinds))  # in order of first appearance
     out = {}
-    for group, mask, scale, unit in (("lengths", ~angle, 1e3, "mm"), ("angles", angle, np.rad2deg(1.0), "deg")):
-        if not mask.any():
-            continue
+    for kind in groups:
+        group, scale, unit = f"{kind.name}s", kind.display_scale, kind.display_unit
+        mask = np.array([k is kind for k in kinds], dtype=bool)
         value, spread = change[mask] * scale, std[mask] * scale
         true = None if truth is None else np.asarray(truth, dtype=float)[mask] * scale
         reach = max(np.max(np.abs(value) + spread), 0.0 if true is None else np.max(np.abs(true)), 1e-12)
@@ -94,6 +99,7 @@ def parameter_bars(
             "scale_label": f"{reach:.3f} {unit}",
             "whiskers": np.stack([np.column_stack([x, y - spread * k]), np.column_stack([x, y + spread * k])], axis=1),
             "zero": np.array([[-1.4, 0.0], [x[-1] + 0.6, 0.0]]),
+            "unit": unit,
         }
         if true is not None:
             shapes["truth"] = np.column_stack([x, -true * k])
