@@ -18,7 +18,6 @@ from dataclasses import replace
 
 import numpy as np
 
-from .chain import _rigid_joint_jacobian, rigid_tool_point
 from .gravity import InertialsError, gravity_torques, inertials_of
 from .model import RobotModel
 
@@ -48,11 +47,6 @@ def compliance_of(model: RobotModel) -> np.ndarray:
     return c
 
 
-def is_elastic(model: RobotModel) -> bool:
-    """True when some joint has a non-zero compliance."""
-    return bool(np.any(compliance_of(model) != 0))
-
-
 def with_compliance(model: RobotModel, compliance: np.ndarray | None) -> RobotModel:
     """A copy of ``model`` with ``extras["compliance"]`` set to (n,) [rad/Nm] (removed when None)."""
     extras = {k: v for k, v in model.extras.items() if k != "compliance"}
@@ -72,22 +66,6 @@ def link_angles(model: RobotModel, q: np.ndarray, compliance: np.ndarray | None 
     if not np.any(c):
         return q
     return q - c * gravity_torques(model, q)
-
-
-def elastic_tool_point(model: RobotModel, q: np.ndarray, compliance: np.ndarray | None = None) -> np.ndarray:
-    """(N, 3) tool point [m] of measured angles ``q`` (N, n): the geometric tool point at the link angles
-    (what :func:`correction.tool_point` gives for a model carrying ``compliance``)."""
-    model = model if compliance is None else with_compliance(model, compliance)
-    q = np.asarray(q, dtype=float)
-    return rigid_tool_point(model, link_angles(model, q))
-
-
-def compliance_jacobian(model: RobotModel, q: np.ndarray, compliance: np.ndarray | None = None) -> np.ndarray:
-    """(N, 3, n) ``d p / d c`` [m per rad/Nm]: ``-J_q(q_link)[:, :, i] tau_i(q)`` (exact: tau is
-    evaluated at the measured angles, which do not depend on ``c``)."""
-    q = np.atleast_2d(np.asarray(q, dtype=float))
-    tau = gravity_torques(model, q)
-    return -_rigid_joint_jacobian(model, link_angles(model, q, compliance)) * tau[:, None, :]
 
 
 def motor_angles(model: RobotModel, q_link: np.ndarray, compliance: np.ndarray | None = None) -> np.ndarray:

@@ -132,14 +132,6 @@ class ParameterLayout:
         k = self.joint_fields.index(name)
         return self.joints.start + k + len(JOINT_FIELDS) * np.arange(self.n_joints)
 
-    def joint_of(self, index: int) -> int | None:
-        """0-based joint of a per-joint parameter (``beta`` included), None for the tool and the base."""
-        if self.joints.start <= index < self.joints.stop:
-            return (index - self.joints.start) // len(JOINT_FIELDS)
-        if self.beta.start <= index < self.beta.stop:
-            return self.hayati[index - self.beta.start]
-        return None
-
     def held(self, convention: str) -> tuple[str, ...]:
         """Names of the ``d`` held at zero beside each ``beta``: Hayati's rule that the joint whose
         frame is tilted by ``beta`` has no offset along the (nearly) parallel axis. ``standard``:

@@ -27,7 +27,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from spherecal.correction import RobotModel, param_jacobian, tool_point
+from spherecal.correction import RobotModel, param_jacobian
 from spherecal.correction.files.fixtures import FixtureSpec
 from spherecal.correction.files.samples import Dataset
 from spherecal.correction.layout import ParameterLayout
@@ -235,8 +235,3 @@ def predict_accuracy(
         warnings=pruned.warnings,
         layout=model.layout,
     )
-
-
-def workspace_points(model: RobotModel, workspace: Workspace) -> np.ndarray:
-    """(N, 3) tool points of the workspace configurations [m] (for plots)."""
-    return tool_point(model, workspace.q)

@@ -181,10 +181,6 @@ class CalibrationProblem:
         moved, x = self.generic_point()
         return moved.jacobian(x)
 
-    def model_at(self, x: np.ndarray) -> RobotModel:
-        """The robot of an unknown vector."""
-        return self.model.with_params(self.unpack(x)[0])
-
     # ------------------------------------------------------------------ residuals, Jacobian
     def sample_errors(self, x: np.ndarray) -> np.ndarray:
         """(K, 3) ``p(q_k) - c_j`` [m]."""

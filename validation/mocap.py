@@ -102,13 +102,6 @@ def random_mocap_transform(rng: np.random.Generator, distance: float = 2.0) -> n
     return pose_matrix(distance * direction / np.linalg.norm(direction), rpy)
 
 
-def transform_difference(estimate: np.ndarray, truth: np.ndarray) -> tuple[float, float]:
-    """Translation [m] and rotation angle [rad] between two (4, 4) rigid transforms."""
-    delta = np.linalg.inv(truth) @ estimate
-    angle = math.acos(float(np.clip((np.trace(delta[:3, :3]) - 1.0) / 2.0, -1.0, 1.0)))
-    return float(np.linalg.norm(estimate[:3, 3] - truth[:3, 3])), angle
-
-
 @dataclass(frozen=True)
 class MocapMeasurement:
     """What a motion-capture system reports for a set of robot configurations.

@@ -27,10 +27,8 @@ To change only the joint origins of the user's own URDF, see :mod:`correction.ur
 
 from __future__ import annotations
 
-import os
 import re
 from collections.abc import Sequence
-from pathlib import Path
 from xml.sax.saxutils import quoteattr
 
 import numpy as np
@@ -38,7 +36,6 @@ import yaml
 
 from ..errors import SpherecalError
 from ..model import RobotModel, matrix_rpy
-from .atomic import atomic_write_text
 
 #: Franka's datasheet joint torque [N m] and velocity [rad/s] limits, used for 7-joint arms
 #: when none are given (URDF requires both on a revolute joint).
@@ -216,8 +213,3 @@ def robot_to_urdf(
     fixed(f"{p}joint{n + 1}", f"{p}link{n}", f"{p}link{n + 1}", _origin(tool))
     lines.append("</robot>")
     return "\n".join(lines) + "\n"
-
-
-def save_urdf(model: RobotModel, path: str | os.PathLike, **options) -> Path:
-    """Write :func:`robot_to_urdf` text atomically; ``options`` are passed on."""
-    return atomic_write_text(path, robot_to_urdf(model, **options))

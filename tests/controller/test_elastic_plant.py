@@ -8,7 +8,7 @@ import pytest
 
 from spherecal.controller.plant import build_plant
 from spherecal.correction import SpherecalError, load_robot, tool_point
-from spherecal.correction.elastic import elastic_tool_point, link_angles, with_compliance
+from spherecal.correction.elastic import link_angles, with_compliance
 
 COMPLIANCE = np.array([0.0, 1 / 3e4, 1 / 3e4, 1 / 3e4, 0.0, 0.0, 0.0])
 
@@ -32,7 +32,7 @@ def test_sag_settles_where_the_elastic_model_puts_it():
     assert np.abs(sag).max() > 3e-4  # a real deflection
     np.testing.assert_allclose(sag, expected, atol=1e-5)  # second order: tau at the measured angles
     rigid_gap = np.linalg.norm(plant.tool_position() - tool_point(load_robot("panda"), plant.q))
-    elastic_gap = np.linalg.norm(plant.tool_position() - elastic_tool_point(model, plant.q))
+    elastic_gap = np.linalg.norm(plant.tool_position() - tool_point(model, plant.q))
     assert rigid_gap > 3e-4 and elastic_gap < 1e-5
 
 
@@ -42,7 +42,7 @@ def test_rigid_plant_unchanged_and_kinematics_batch_uses_the_sag():
     assert not rigid.elastic and "flex" not in rigid.mjcf and rigid.mj_model.nq == 7
     model = with_compliance(panda, COMPLIANCE)
     q = panda.random_configurations(4, np.random.default_rng(0))
-    np.testing.assert_allclose(build_plant(model).tool_points(q), elastic_tool_point(model, q), atol=1e-12)
+    np.testing.assert_allclose(build_plant(model).tool_points(q), tool_point(model, q), atol=1e-12)
 
 
 def test_compliance_without_inertials_is_refused():

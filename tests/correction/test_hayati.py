@@ -106,7 +106,7 @@ def test_conversion_and_robot_file_keep_beta(panda, rng, tmp_path):
 def test_held_d_follows_the_convention():
     lay = layout_for(6, (2, 3))
     assert lay.held("modified") == ("d2", "d3") and lay.held("standard") == ("d3", "d4")
-    assert lay.joint_of(lay.index("beta4")) == 3 and lay.is_angle("beta3")
+    assert lay.names[lay.beta] == ("beta3", "beta4") and lay.is_angle("beta3")
 
 
 def test_importer_hayati_keeps_d_small_where_plain_dh_explodes(rng):

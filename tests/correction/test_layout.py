@@ -19,8 +19,6 @@ def test_slices_names_and_kinds_agree(n: int) -> None:
         idx = lay.field(field)
         assert [lay.names[i] for i in idx] == [f"{field}{j + 1}" for j in range(n)]
         assert all(lay.kinds[i] is kind for i in idx)
-        assert [lay.joint_of(int(i)) for i in idx] == list(range(n))
-    assert lay.joint_of(lay.tool.start) is None
     assert len(set(lay.names)) == lay.size
     with pytest.raises(KeyError, match="no parameter named 'beta9'"):
         lay.index("beta9")
