@@ -5,9 +5,11 @@ One BLAS thread, as the command-line tools use, and no Rerun analytics.
 
 from __future__ import annotations
 
+import json
 import os
 import time
 from pathlib import Path
+from typing import Any
 
 for _variable in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS"):
     os.environ.setdefault(_variable, "1")
@@ -23,6 +25,17 @@ def median_time(function, repeats: int = 9) -> float:
         function()
         times.append(time.perf_counter() - start)
     return sorted(times)[len(times) // 2]
+
+
+def write_json(path: str | os.PathLike, results: dict, seed: int | None = None, inputs: dict[str, Any] | None = None,
+               indent: int = 2) -> Path:
+    """Write ``results`` as JSON under the provenance block every spherecal output carries (command,
+    time, versions, ``seed``, ``inputs`` with the digests of file inputs given as paths)."""
+    from spherecal.correction.files.provenance import provenance
+
+    path = Path(path)
+    path.write_text(json.dumps({"provenance": provenance(seed, inputs or {}), **results}, indent=indent) + "\n")
+    return path
 
 
 # ----------------------------------------------------------------------------- MUKCa real data

@@ -9,7 +9,6 @@ Targets (issue 4): <= 50 us per step with the default; <= 10 s for the 3 fixture
 
 from __future__ import annotations
 
-import json
 import platform
 import time
 import warnings
@@ -75,7 +74,7 @@ def main() -> None:
     results["three_fixtures_20s_wall_s"] = wall
     results["targets"] = {"step_median_us": 50, "three_fixtures_wall_s": 10}
     results["machine"] = {"python": platform.python_version(), "processor": platform.processor()}
-    Path(__file__).with_suffix(".json").write_text(json.dumps(results, indent=2) + "\n")
+    bench_common.write_json(Path(__file__).with_suffix(".json"), results, seed=0)
 
 
 if __name__ == "__main__":

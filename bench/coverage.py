@@ -8,7 +8,6 @@ constraint violation [mm] and the limit excess, then how many (seed, fixture) ru
 
 from __future__ import annotations
 
-import json
 import sys
 import time
 from pathlib import Path
@@ -46,7 +45,7 @@ def main(seeds: int = 5) -> None:
               f"worst violation {worst_violation * 1e3:.4f} mm")
         out[mode] = {"runs_all_joints_30pct": ok, "runs": total, "worst_violation_m": worst_violation, "rows": rows}
     out["fixtures"] = {k: list(v) for k, v in DEFAULT_FIXTURES.items()}
-    Path(__file__).with_suffix(".json").write_text(json.dumps(out, indent=2) + "\n")
+    bench_common.write_json(Path(__file__).with_suffix(".json"), out, inputs={"seeds": seeds})
 
 
 if __name__ == "__main__":

@@ -23,7 +23,6 @@ Prints a table [mm] and writes bench/elastic_real.json.
 from __future__ import annotations
 
 import argparse
-import json
 import sys
 import time
 from pathlib import Path
@@ -32,7 +31,6 @@ import bench_common  # first: one BLAS thread, before numpy loads
 import numpy as np
 
 from spherecal.correction import Dataset, FixtureSpec, tool_point
-from spherecal.correction.files.provenance import versions
 from spherecal.identification.calibrate import calibrate
 from spherecal.identification.ingest.importers import MUKCA_DISTANCE
 from spherecal.identification.selection import elastic_start, rigid, select_model
@@ -123,7 +121,7 @@ def main(argv: list[str] | None = None) -> int:
         print(f"  elastic on all placements: {c} urad/Nm; fixed: {', '.join(result['compliance_fixed'])}; "
               f"auto on all: {result['auto_on_all_placements']['chosen']}")
     out = Path(__file__).with_suffix(".json")
-    out.write_text(json.dumps({"command": " ".join(sys.argv), "versions": versions(), "results": results}, indent=1))
+    bench_common.write_json(out, {"results": results}, inputs={"data": root, "robots": args.robots}, indent=1)
     print(f"wrote {out}")
     return 0
 

@@ -6,7 +6,6 @@ Prints medians over repeats and writes ``bench/kinematics.json``. Targets (issue
 
 from __future__ import annotations
 
-import json
 import platform
 from pathlib import Path
 
@@ -43,7 +42,7 @@ def main() -> None:
     print(f"targets: tool points >= 1e6/s {'met' if ok_fk else 'MISSED'}, "
           f"parameter Jacobian >= 1e5/s {'met' if ok_jac else 'MISSED'}")
     out = Path(__file__).with_suffix(".json")
-    out.write_text(json.dumps({"batch": batch, "numpy": np.__version__, "results": results}, indent=2))
+    bench_common.write_json(out, {"batch": batch, "results": results}, seed=0)
     print(f"wrote {out}")
 
 

@@ -124,7 +124,7 @@ def main() -> None:
     print(f"load: {load}")
     report = {"rows": args.rows, "file_mb": round(size_mb, 1), "reader_root": args.reader_root, "uptime": load,
               "cases": results, "targets": {"seconds": 15, "peak_mb": 1000}}
-    Path(args.out).write_text(json.dumps(report, indent=2) + "\n")
+    bench_common.write_json(args.out, report, seed=0, inputs={"rows": args.rows, "reader_root": args.reader_root})
     print(f"written: {args.out}")
 
 

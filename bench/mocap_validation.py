@@ -8,7 +8,6 @@ stay a small multiple of it.
 
 from __future__ import annotations
 
-import json
 import tempfile
 from pathlib import Path
 
@@ -54,7 +53,7 @@ def main() -> None:
     for name, r in results.items():
         print(f"  {name:50s} {r['median_s'] * 1e3:8.1f} ms  ({r['median_s'] / base:5.1f} x baseline)")
     out = Path(__file__).with_suffix(".json")
-    out.write_text(json.dumps({"configurations": count, "results": results}, indent=2))
+    bench_common.write_json(out, {"configurations": count, "results": results}, seed=0)
     print(f"wrote {out}")
 
 

@@ -138,7 +138,7 @@ def main_bench() -> None:
             f"{mean['calibrated_distance_error_mean_abs_mm']:7.3f}"
         )
     out = Path(__file__).with_suffix(".json")
-    out.write_text(json.dumps({"mukca": results}, indent=2) + "\n")
+    bench_common.write_json(out, {"mukca": results}, inputs={"data": data})
     print(f"wrote {out}")
 
 

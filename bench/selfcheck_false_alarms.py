@@ -27,7 +27,6 @@ from __future__ import annotations
 
 import argparse
 import json
-import sys
 import time
 from pathlib import Path
 
@@ -177,8 +176,8 @@ def main() -> None:
     parser.add_argument("--mujoco", type=int, default=0, help="also this many MuJoCo-simulated seeds (~10 s each)")
     args = parser.parse_args()
     out = Path(__file__).with_suffix(".json")
-    record = json.loads(out.read_text()) if out.exists() else {}
-    record["command"] = " ".join(sys.argv)
+    record = json.loads(out.read_text()) if out.exists() else {}  # kept: parts of an earlier run not redone
+    record = {k: v for k, v in record.items() if k not in ("command", "provenance")}
     if not args.no_simulated:
         record["simulated"] = simulated(args.seeds, args.per_fixture)
         sim = record["simulated"]
@@ -193,7 +192,7 @@ def main() -> None:
     if args.real:
         record["real"] = real()
         print(f"real: {sum(r['refused'] for r in record['real'])} refused of {len(record['real'])}")
-    out.write_text(json.dumps(record, indent=2))
+    bench_common.write_json(out, record, inputs=vars(args))
 
 
 if __name__ == "__main__":

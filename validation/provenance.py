@@ -1,44 +1,8 @@
-"""What made a result file: package versions, seed, inputs (recorded in every file we write)."""
+"""The provenance block of every output, where validation code has found it so far (the one
+implementation is :mod:`spherecal.correction.files.provenance`)."""
 
 from __future__ import annotations
 
-import sys
-from datetime import datetime, timezone
-from pathlib import Path
-from typing import Any
-
-from spherecal.correction.files.provenance import PACKAGES, file_digest, versions
+from spherecal.correction.files.provenance import PACKAGES, comment_block, file_digest, provenance, versions
 
 __all__ = ["PACKAGES", "comment_block", "file_digest", "provenance", "versions"]
-
-def provenance(seed: int | None, inputs: dict[str, Any], command: list[str] | None = None) -> dict[str, Any]:
-    """The block written into every result: command line, time, versions, seed and inputs.
-
-    Args:
-        seed: the seed of the run (None when nothing random was drawn).
-        inputs: the options and input files (paths are recorded with their SHA-256).
-        command: the command line (``sys.argv`` when None).
-    """
-    recorded = {}
-    for key, value in inputs.items():
-        if isinstance(value, Path) and value.is_file():
-            recorded[key] = {"path": str(value), "sha256": file_digest(value)}
-        elif isinstance(value, Path):
-            recorded[key] = str(value)
-        else:
-            recorded[key] = value
-    return {
-        "command": " ".join(sys.argv if command is None else command),
-        "created": datetime.now(timezone.utc).isoformat(timespec="seconds"),
-        "versions": versions(),
-        "seed": seed,
-        "inputs": recorded,
-    }
-
-
-def comment_block(info: dict[str, Any]) -> str:
-    """The provenance as a few lines for ``#`` comment headers of CSV and text files."""
-    lines = [f"command: {info['command']}", f"created: {info['created']}", f"seed: {info['seed']}"]
-    lines.append("versions: " + ", ".join(f"{k} {v}" for k, v in info["versions"].items()))
-    lines.append("inputs: " + ", ".join(f"{k}={v}" for k, v in info["inputs"].items()))
-    return "\n".join(lines)

@@ -1,15 +1,36 @@
-"""What made a result file: package versions and input digests (every result file records them)."""
+"""What made an output: one provenance block, written by every command, the demo, the campaign and
+the bench scripts.
+
+The block (:func:`provenance`) is the same everywhere::
+
+    command: spherecal calibrate --robot panda --samples out/samples.csv ...
+    created: 2026-11-25T01:58:49+00:00     # UTC
+    versions: {python: 3.12.3, spherecal: 0.1.0, numpy: 2.1.3, ...}
+    seed: 0                                 # null when nothing random was drawn
+    inputs:                                 # files with their SHA-256, options as given
+      samples: {path: out/samples.csv, sha256: 9f2c...}
+      robot: {path: panda, sha256: embedded}
+      loss: linear
+
+YAML and JSON outputs hold it under a ``provenance`` key; CSV, Markdown, URDF, MJCF and the Rerun
+recordings hold :func:`comment_block` of it in their comments.
+"""
 
 from __future__ import annotations
 
 import hashlib
 import os
 import platform
+import sys
+from datetime import datetime, timezone
 from importlib.metadata import PackageNotFoundError, version
 from pathlib import Path
+from typing import Any
 
 #: Packages whose versions a result records.
-PACKAGES: tuple[str, ...] = ("spherecal", "numpy", "scipy", "mujoco", "qpsolvers", "osqp", "rerun-sdk")
+PACKAGES: tuple[str, ...] = (
+    "spherecal", "numpy", "scipy", "mujoco", "qpsolvers", "osqp", "rerun-sdk", "pyswarms", "rosbags",
+)
 
 
 def versions(packages: tuple[str, ...] = PACKAGES) -> dict[str, str]:
@@ -29,5 +50,47 @@ def file_digest(path: str | os.PathLike) -> str:
 
 
 def input_record(path: str | os.PathLike) -> dict[str, str]:
-    """``{"path", "sha256"}`` of an input file; an embedded robot (``"panda"``) is named as such."""
-    return {"path": str(path), "sha256": file_digest(path) if Path(path).is_file() else "embedded"}
+    """``{"path", "sha256"}`` of an input; one that is not a file (an embedded robot such as
+    ``"panda"``, a recording folder) has ``"sha256": "embedded"`` or ``"folder"``."""
+    kind = "folder" if Path(path).is_dir() else "embedded"
+    return {"path": str(path), "sha256": file_digest(path) if Path(path).is_file() else kind}
+
+
+def provenance(seed: int | None, inputs: dict[str, Any], command: list[str] | None = None) -> dict[str, Any]:
+    """The provenance block of an output: command line, time, versions, seed and inputs.
+
+    Args:
+        seed: the seed of the run (None when nothing random was drawn).
+        inputs: name -> input. A path (:class:`os.PathLike`) is recorded by :func:`input_record`
+            (path and SHA-256); pass file names as :class:`~pathlib.Path`. Anything else (options,
+            numbers, strings) is recorded as given.
+        command: the command line (``sys.argv``, its program path shortened to its name, when None).
+
+    Returns:
+        ``{"command", "created", "versions", "seed", "inputs"}`` (YAML- and JSON-ready).
+    """
+    if command is None:
+        command = [Path(sys.argv[0]).name, *sys.argv[1:]] if sys.argv and sys.argv[0] else []
+    recorded = {
+        key: input_record(value) if isinstance(value, os.PathLike) else value for key, value in inputs.items()
+    }
+    return {
+        "command": " ".join(str(word) for word in command),
+        "created": datetime.now(timezone.utc).isoformat(timespec="seconds"),
+        "versions": versions(),
+        "seed": seed,
+        "inputs": recorded,
+    }
+
+
+def comment_block(info: dict[str, Any]) -> str:
+    """A :func:`provenance` block as a few lines for the comments of CSV, Markdown, URDF and text files."""
+    lines = [f"command: {info['command']}", f"created: {info['created']}", f"seed: {info['seed']}"]
+    lines.append("versions: " + ", ".join(f"{k} {v}" for k, v in info["versions"].items()))
+    inputs = []
+    for key, value in info["inputs"].items():
+        if isinstance(value, dict) and set(value) == {"path", "sha256"}:
+            value = f"{value['path']} (sha256 {value['sha256']})"
+        inputs.append(f"{key}={value}")
+    lines.append("inputs: " + ", ".join(inputs))
+    return "\n".join(lines)

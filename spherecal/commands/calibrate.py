@@ -65,15 +65,15 @@ def run(args: argparse.Namespace) -> int:
     # contended ones). Set before numpy is first imported; a user's own setting wins.
     for variable in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
         os.environ.setdefault(variable, "1")
-    import datetime
     import time
     from dataclasses import replace
+    from pathlib import Path
 
     import numpy as np
 
     from spherecal.correction import load_robot, save_robot
     from spherecal.correction.files.fixtures import read_fixtures
-    from spherecal.correction.files.provenance import PACKAGES, input_record, versions
+    from spherecal.correction.files.provenance import provenance
     from spherecal.correction.files.samples import DEDUP_TOL
     from spherecal.correction.files.samples_csv import read_samples
     from spherecal.identification.calibrate import calibrate
@@ -116,13 +116,11 @@ def run(args: argparse.Namespace) -> int:
     if selection.seconds:
         block["timings_s"]["cross_validation"] = selection.seconds
     block["duplicates_dropped"] = dropped
-    block["inputs"] = {
-        "robot": input_record(args.robot),
-        "samples": input_record(args.samples),
-    }
-    if args.fixtures:
-        block["inputs"]["fixtures"] = input_record(args.fixtures)
-    block["options"] = {
+    block["provenance"] = provenance(args.seed, {
+        "robot": Path(args.robot),
+        "samples": Path(args.samples),
+        **({"fixtures": Path(args.fixtures)} if args.fixtures else {}),
+        "method": args.method,
         "loss": args.loss,
         "noise_m": noise,
         "max_per_fixture": args.max_per_fixture,
@@ -130,10 +128,7 @@ def run(args: argparse.Namespace) -> int:
         "max_change": args.max_change,
         "model": args.model,
         "force": args.force,
-    }
-    block["seed"] = args.seed
-    block["versions"] = versions(PACKAGES[:4] + (("pyswarms",) if "pso" in args.method else ()))
-    block["time"] = datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="seconds")
+    })
     extras = {k: v for k, v in result.model.extras.items() if k != "calibration"}  # compliance when elastic
     extras["calibration"] = block
     model = replace(result.model, extras=extras)

@@ -37,15 +37,12 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 def provenance_header(source: str, output_format: str) -> str:
     """Comment lines naming the input file (and its SHA-256) and the versions that wrote the export."""
-    from spherecal.correction.files.provenance import input_record, versions
+    from pathlib import Path
 
-    digest = input_record(source)["sha256"]
-    packages = ", ".join(f"{k} {v}" for k, v in versions(("spherecal", "numpy", "scipy", "mujoco")).items())
-    return (
-        f"spherecal export to {output_format} of {source}\n"
-        f"input sha256: {digest}\n"
-        f"versions: {packages}"
-    )
+    from spherecal.correction.files.provenance import comment_block, provenance
+
+    block = comment_block(provenance(None, {"robot": Path(source)}))
+    return f"spherecal export to {output_format} of {source}\n{block}"
 
 
 def _limits(text: str | None, option: str) -> list[float] | None:

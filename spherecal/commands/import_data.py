@@ -57,11 +57,12 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 def run(args: argparse.Namespace) -> int:
     """Read, label (or segment), deduplicate, subsample, then write both files together."""
     import time
+    from pathlib import Path
 
     import numpy as np
 
     from spherecal.correction import load_robot
-    from spherecal.correction.files.provenance import PACKAGES, input_record, versions
+    from spherecal.correction.files.provenance import provenance
     from spherecal.correction.files.samples import DEDUP_TOL
     from spherecal.identification.ingest.import_recording import ImportOptions, import_recording
     from spherecal.identification.ingest.segment import SegmentSettings
@@ -85,13 +86,11 @@ def run(args: argparse.Namespace) -> int:
         dedup_tol=DEDUP_TOL if args.dedup_deg is None else float(np.deg2rad(args.dedup_deg)),
         seed=args.seed,
     )
+    chosen = _relevant(args.format, {k: v for k, v in vars(options).items() if k != "segmentation"})
+    chosen |= vars(options.segmentation) if args.format != "mukca" else {}
     extras = {
-        "source": str(args.source),
         "format": args.format,
-        "robot": input_record(args.robot),
-        "options": _relevant(args.format, {k: v for k, v in vars(options).items() if k != "segmentation"})
-        | (vars(options.segmentation) if args.format != "mukca" else {}),
-        "versions": versions(PACKAGES[:1] + (("rosbags",) if args.format == "bag" else ())),
+        "provenance": provenance(args.seed, {"source": Path(args.source), "robot": Path(args.robot), **chosen}),
     }
     inputs = [args.robot] if args.robot != "panda" else []
     result = import_recording(args.source, args.format, model, args.out, options, inputs, extras)

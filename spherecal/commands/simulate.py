@@ -141,17 +141,14 @@ def _with_simulation(model, provenance: dict):
 
 
 def _provenance(args: argparse.Namespace, settings, result) -> dict:
-    """The ``simulation:`` block of truth.yaml: seed, versions, inputs, settings, outcome."""
-    import sys
+    """The ``simulation:`` block of truth.yaml: provenance (seed, versions, inputs), settings, outcome."""
+    from pathlib import Path
 
-    from spherecal.correction.files.provenance import versions
+    from spherecal.correction.files.provenance import provenance
 
+    inputs = {"robot": Path(args.robot), **({"fixtures": Path(args.fixtures)} if args.fixtures else {})}
     return {
-        "seed": args.seed,
-        "command": "spherecal simulate " + " ".join(sys.argv[2:]) if len(sys.argv) > 2 else "spherecal simulate",
-        "nominal_robot": str(args.robot),
-        "fixtures_file": None if args.fixtures is None else str(args.fixtures),
-        "versions": versions(),
+        "provenance": provenance(args.seed, inputs),
         "perturbation": {"length_std_m": args.length_std * 1e-3, "angle_std_deg": args.angle_std_deg,
                          "tool_std_m": args.tool_std * 1e-3, "stiffness_nm_per_rad": args.stiffness},
         "settings": {"seconds": settings.seconds, "samples": settings.samples, "mode": settings.mode,

@@ -27,7 +27,8 @@ def test_simulate_writes_three_readable_files(tmp_path, capsys):
     assert data.fixture_names == spec.names == ("P1", "P2", "P3")
     assert data.q.shape == (120, 7) and data.t is not None
     sim = truth.extras["simulation"]
-    assert sim["seed"] == 4 and {"numpy", "scipy", "mujoco", "spherecal"} <= set(sim["versions"])
+    made = sim["provenance"]
+    assert made["seed"] == 4 and {"numpy", "scipy", "mujoco", "spherecal"} <= set(made["versions"])
     centres = {k: np.array(v) for k, v in sim["fixtures"].items()}
     assert not spec.positions  # the centres are what calibration estimates
     for a, b, distance in spec.distances:

@@ -25,7 +25,7 @@ def test_yaml_export_round_trips_exactly(tmp_path, calibrated_file):
     out = tmp_path / "out" / "robot.yaml"
     assert main(["export", str(path), "--format", "yaml", "--out", str(out)]) == 0
     text = out.read_text()
-    assert "input sha256:" in text and "numpy" in text
+    assert f"robot={path} (sha256 " in text and "numpy" in text
     back = load_robot(out)
     assert back.same_as(model) and back.extras["calibration"]["rms_mm"] == 0.031
 

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import hashlib
 import subprocess
 import sys
 from pathlib import Path
@@ -45,8 +46,10 @@ def test_calibrate_writes_a_robot_file_with_its_provenance(inputs, tmp_path, cap
     assert block["residual_mm"]["after"]["rms"] < 1e-3
     assert {"d7", "theta7", "a1", "base_x"} <= set(block["fixed"])
     assert set(block["identified"]) <= set(block["std"])
-    assert len(block["inputs"]["samples"]["sha256"]) == 64 and "fixtures" in block["inputs"]
-    assert {"numpy", "scipy", "mujoco", "spherecal"} <= set(block["versions"]) and block["seed"] == 0
+    made = block["provenance"]
+    assert len(made["inputs"]["samples"]["sha256"]) == 64 and "fixtures" in made["inputs"]
+    assert made["inputs"]["samples"]["sha256"] == hashlib.sha256((inputs / "samples.csv").read_bytes()).hexdigest()
+    assert {"numpy", "scipy", "mujoco", "spherecal"} <= set(made["versions"]) and made["seed"] == 0
     assert set(block["fixture_centres"]) == {"P1", "P2", "P3"}
 
 
