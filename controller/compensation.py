@@ -72,7 +72,7 @@ class CompensationResult:
         command_orientation: (3, 3) orientation to send (None when none was asked).
         q: (n,) configuration the nominal controller is predicted to reach [rad].
         landing: (3,) calibrated tool point at ``q``: where the real arm ends [m].
-        position_residual: |target - landing| [m].
+        position_residual: ``|target - landing|`` [m].
         orientation_residual: angle between the target and the calibrated orientation at
             ``q`` [rad] (0 when no orientation was asked).
         iterations: controller evaluations after the first (0 when ``target`` itself is exact).

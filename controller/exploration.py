@@ -109,7 +109,7 @@ class CoverageExploration:
         model: the controller's model (nominal).
         target: (3,) fixture centre [m] (where the controller's model believes the tool is).
         rng: seeded generator.
-        speed: |q_r| far from the goal [rad/s].
+        speed: ``|q_r|`` far from the goal [rad/s].
         period: longest time spent on one goal [s].
         step: how far past the visited range a goal is set [rad].
     """

@@ -28,7 +28,7 @@ class IKResult:
 
     Attributes:
         q: (n,) joint angles inside the limits [rad] (the best found, even if not converged).
-        position_error: |p(q) - target| [m].
+        position_error: ``|p(q) - target|`` [m].
         orientation_error: rotation angle between the tool and the target orientation [rad]
             (0 when no orientation was asked).
         iterations: Gauss-Newton iterations used (over all starts).

@@ -21,7 +21,7 @@ import numpy as np
 from .gravity import InertialsError, gravity_torques, inertials_of
 from .model import RobotModel
 
-#: Fixed-point iterations of :func:`motor_angles` (each gains a factor c |dtau/dq| ~ 1e-3).
+#: Fixed-point iterations of :func:`motor_angles` (each gains a factor ``c |dtau/dq|`` ~ 1e-3).
 MOTOR_ITERATIONS = 6
 
 

@@ -73,7 +73,7 @@ class SocketReport:
     source: str
 
     def summary(self, model: str) -> tuple[float | None, float | None]:
-        """Held-out mean spread [m] (mean over fixtures) and mean |distance error| [m] (each None if none).
+        """Held-out mean spread [m] (mean over fixtures) and mean ``|distance error|`` [m] (each None if none).
 
         None, not NaN: the report is JSON, and NaN is not JSON (``null`` is).
         """

@@ -13,7 +13,7 @@ import numpy as np
 
 from spherecal.correction.errors import SpherecalError
 
-#: Default tolerance of :meth:`Dataset.deduplicated`: max |dq| [rad] under which two samples of one
+#: Default tolerance of :meth:`Dataset.deduplicated`: max ``|dq|`` [rad] under which two samples of one
 #: fixture count as the same configuration (1e-4 rad ~ 0.1 mm at 1 m reach).
 DEDUP_TOL = 1e-4
 #: Joint angles this far outside a limit [rad] are still accepted (rounding in recorders).

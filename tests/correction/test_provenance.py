@@ -20,7 +20,8 @@ def test_the_block_records_command_versions_seed_and_input_digests(tmp_path) -> 
     assert list(block) == ["command", "created", "versions", "seed", "inputs"]
     assert block["command"] == "spherecal calibrate --seed 7" and block["seed"] == 7
     assert block["versions"]["numpy"] == version("numpy") and "python" in block["versions"]
-    assert block["inputs"]["samples"] == {"path": str(samples), "sha256": hashlib.sha256(samples.read_bytes()).hexdigest()}
+    digest = hashlib.sha256(samples.read_bytes()).hexdigest()
+    assert block["inputs"]["samples"] == {"path": str(samples), "sha256": digest}
     assert block["inputs"]["robot"] == {"path": "panda", "sha256": "embedded"}
     assert block["inputs"]["folder"]["sha256"] == "folder" and block["inputs"]["loss"] == "huber"
     text = comment_block(block)

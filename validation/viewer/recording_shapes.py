@@ -60,7 +60,7 @@ def parameter_bars(
     """2D shapes of a bar chart with error bars, one group per parameter kind (``lengths`` [mm],
     ``angles`` [deg], ``compliances`` [urad/Nm]: each kind's display unit from the parameter layout).
 
-    Bar ``k`` spans x in [k - 0.35, k + 0.35]; heights are scaled so that the largest |value| of the
+    Bar ``k`` spans x in [k - 0.35, k + 0.35]; heights are scaled so that the largest ``|value|`` of the
     group is :data:`BAR_HEIGHT` tall; y points down in Rerun's 2D views, so heights are negated.
 
     Args:
