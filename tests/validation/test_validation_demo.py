@@ -70,12 +70,13 @@ def test_short_demo_writes_everything_and_its_recording_holds_the_documented_ent
                   "Lengths [mm]: change, +-1 std, white dot = true change", "Angles [deg]: change, +-1 std",
                   "Joint coverage at P1", "Calibration table (mm, deg)"):
         assert any(v.startswith(start) for v in views), start
-    readme = (ROOT / "README.md").read_text()
-    section = readme.split("## Validation", 1)[1].split("\n## ", 1)[0]
+    guide = (ROOT / "docs" / "guide.md").read_text()
+    section = guide.split("## Validation", 1)[1].split("\n## ", 1)[0]
     for path in expected_rows:
         documented = re.sub(r"^errors/(nominal|calibrated)/", "errors/<model>/", path)
         documented = re.sub(r"^residuals/(before|after)$", "residuals/<before|after>", documented)
-        documented = re.sub(r"^parameters/(lengths|angles)/.*$", "parameters/<lengths|angles>/*", documented)
+        kinds = "parameters/<lengths|angles|compliances>/*"
+        documented = re.sub(r"^parameters/(lengths|angles)/.*$", kinds, documented)
         documented = re.sub(r"^(coverage)/P\d$", r"\1/<fixture>", documented)
         documented = re.sub(r"^tables/.*$", "tables/<name>", documented)
         assert f"`{documented}`" in section, documented
