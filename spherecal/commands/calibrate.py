@@ -65,84 +65,26 @@ def run(args: argparse.Namespace) -> int:
     # contended ones). Set before numpy is first imported; a user's own setting wins.
     for variable in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
         os.environ.setdefault(variable, "1")
-    import datetime
     import time
-    from dataclasses import replace
 
-    import numpy as np
-
-    from spherecal.correction import load_robot, save_robot
-    from spherecal.correction.files.fixtures import read_fixtures
-    from spherecal.correction.files.provenance import PACKAGES, input_record, versions
     from spherecal.correction.files.samples import DEDUP_TOL
-    from spherecal.correction.files.samples_csv import read_samples
-    from spherecal.identification.calibrate import calibrate
-    from spherecal.identification.selection import elastic_start, rigid, select_model
+    from spherecal.identification.workflow import WorkflowOptions, calibrate_files
     from spherecal.options import planned_outputs
 
     outputs = planned_outputs(args, {"--out": args.out})  # before any work: never over an input
     clock = time.perf_counter()
-    noise = args.noise * 1e-3  # [m] from here on
-    dedup_tol = DEDUP_TOL if args.dedup_deg is None else float(np.deg2rad(args.dedup_deg))  # [rad]
-    nominal = load_robot(args.robot, **urdf_links(args))
-    dataset = read_samples(args.samples, nominal)
-    spec = read_fixtures(args.fixtures) if args.fixtures else None
-    read = len(dataset.labels)
-    dataset = dataset.deduplicated(dedup_tol)
-    dropped = read - dataset.n_samples
-    dataset = dataset.subsampled(args.max_per_fixture, np.random.default_rng(args.seed))
-
-    def fit(start, data, fixtures):  # a cross-validation fold: lm, the user's loss and noise; no self-check
-        # (it judges the chosen calibration below, not each fold's)
-        return calibrate(
-            start, data, fixtures, loss=args.loss, noise=noise, max_change=args.max_change, check=False
-        ).model
-
-    selection = select_model(args.model, fit, nominal, dataset, spec, seed=args.seed)
-    start = elastic_start(nominal) if selection.chosen == "elastic" else rigid(nominal)
-    result = calibrate(
-        start,
-        dataset,
-        spec,
+    options = WorkflowOptions(
         method=args.method,
-        seed=args.seed,
+        model=args.model,
         loss=args.loss,
-        noise=noise,
+        noise=args.noise * 1e-3,  # [m]
+        max_per_fixture=args.max_per_fixture,
+        dedup_tol=DEDUP_TOL if args.dedup_deg is None else math.radians(args.dedup_deg),  # [rad]
         max_change=args.max_change,
         force=args.force,
+        seed=args.seed,
     )
-    block = result.block()
-    block["model_selection"] = selection.block()
-    if selection.seconds:
-        block["timings_s"]["cross_validation"] = selection.seconds
-    block["duplicates_dropped"] = dropped
-    block["inputs"] = {
-        "robot": input_record(args.robot),
-        "samples": input_record(args.samples),
-    }
-    if args.fixtures:
-        block["inputs"]["fixtures"] = input_record(args.fixtures)
-    block["options"] = {
-        "loss": args.loss,
-        "noise_m": noise,
-        "max_per_fixture": args.max_per_fixture,
-        "dedup_tol_rad": float(dedup_tol),
-        "max_change": args.max_change,
-        "model": args.model,
-        "force": args.force,
-    }
-    block["seed"] = args.seed
-    block["versions"] = versions(PACKAGES[:4] + (("pyswarms",) if "pso" in args.method else ()))
-    block["time"] = datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="seconds")
-    extras = {k: v for k, v in result.model.extras.items() if k != "calibration"}  # compliance when elastic
-    extras["calibration"] = block
-    model = replace(result.model, extras=extras)
-    header = f"calibrated by spherecal calibrate ({args.method}) from {args.samples}"
-    with outputs:
-        save_robot(model, outputs.stage(args.out), header=header)
-    print(result.summary())
-    print(selection.summary())
-    if dropped:
-        print(f"dropped {dropped} duplicate samples (within {np.rad2deg(dedup_tol):.3g} deg)")
+    done = calibrate_files(args.robot, args.samples, args.fixtures, args.out, options, outputs, **urdf_links(args))
+    print(done.summary())
     print(f"wrote {args.out} in {time.perf_counter() - clock:.2f} s")
     return 0
