@@ -21,6 +21,7 @@ import numpy as np
 from .chain import _rigid_joint_jacobian, rigid_tool_point
 from .gravity import InertialsError, gravity_torques, inertials_of
 from .model import RobotModel
+from .scale import joint_angles
 
 #: Fixed-point iterations of :func:`motor_angles` (each gains a factor c |dtau/dq| ~ 1e-3).
 MOTOR_ITERATIONS = 6
@@ -76,16 +77,16 @@ def link_angles(model: RobotModel, q: np.ndarray, compliance: np.ndarray | None 
 
 def elastic_tool_point(model: RobotModel, q: np.ndarray, compliance: np.ndarray | None = None) -> np.ndarray:
     """(N, 3) tool point [m] of measured angles ``q`` (N, n): the geometric tool point at the link angles
-    (what :func:`correction.tool_point` gives for a model carrying ``compliance``)."""
+    (what :func:`correction.tool_point` gives for a model carrying ``compliance``; a ``scale`` applies first)."""
     model = model if compliance is None else with_compliance(model, compliance)
-    q = np.asarray(q, dtype=float)
+    q = joint_angles(model, q)
     return rigid_tool_point(model, link_angles(model, q))
 
 
 def compliance_jacobian(model: RobotModel, q: np.ndarray, compliance: np.ndarray | None = None) -> np.ndarray:
-    """(N, 3, n) ``d p / d c`` [m per rad/Nm]: ``-J_q(q_link)[:, :, i] tau_i(q)`` (exact: tau is
-    evaluated at the measured angles, which do not depend on ``c``)."""
-    q = np.atleast_2d(np.asarray(q, dtype=float))
+    """(N, 3, n) ``d p / d c`` [m per rad/Nm]: ``-J_q(q_link)[:, :, i] tau_i(q_joint)`` (exact: tau is
+    evaluated at the scaled measured angles ``q_joint``, :mod:`.scale`, which do not depend on ``c``)."""
+    q = joint_angles(model, np.atleast_2d(np.asarray(q, dtype=float)))
     tau = gravity_torques(model, q)
     return -_rigid_joint_jacobian(model, link_angles(model, q, compliance)) * tau[:, None, :]
 
