@@ -31,7 +31,7 @@ from spherecal.correction.files.samples import DEDUP_TOL, Dataset
 from spherecal.correction.files.samples_csv import read_samples
 
 from .calibrate import MAX_CHANGE, CalibrationResult, calibrate
-from .problem import NOISE
+from .problem import NOISE, PRIOR
 from .selection import ModelSelection, elastic_start, rigid, select_model
 
 
@@ -50,6 +50,7 @@ class WorkflowOptions:
         max_change: plausibility limit (:func:`.calibrate.check_plausible`), a factor.
         force: write even when the self-check finds the data inconsistent.
         seed: seeds subsampling, cross-validation and PSO.
+        prior: weight ``W`` of the prior toward the nominal model (:mod:`.problem`), 0 = plain least squares.
     """
 
     method: str = "lm"
@@ -61,6 +62,7 @@ class WorkflowOptions:
     max_change: float = MAX_CHANGE
     force: bool = False
     seed: int = 0
+    prior: float = PRIOR
 
     def record(self) -> dict:
         """The ``options`` entry of the result file (metres, radians; the seed is recorded beside it)."""
@@ -73,6 +75,7 @@ class WorkflowOptions:
             "max_change": self.max_change,
             "model": self.model,
             "force": self.force,
+            "prior": self.prior,
         }
 
 
@@ -132,14 +135,14 @@ def run_workflow(nominal: RobotModel, dataset: Dataset, spec: FixtureSpec | None
 
     def fit(begin, data, fixtures):  # a cross-validation fold: lm, the user's loss and noise, no self-check
         return calibrate(begin, data, fixtures, loss=options.loss, noise=options.noise,
-                         max_change=options.max_change, check=False).model
+                         max_change=options.max_change, check=False, prior=options.prior).model
 
     selection = select_model(options.model, fit, nominal, dataset, spec, seed=options.seed)
     make = elastic_start if selection.chosen == "elastic" else rigid
     result = calibrate(
         make(nominal), dataset, spec, method=options.method, start=None if start is None else make(start),
         seed=options.seed, loss=options.loss, noise=options.noise, max_change=options.max_change,
-        force=options.force,
+        force=options.force, prior=options.prior,
     )
     block = result.block()
     block["model_selection"] = selection.block()
