@@ -2,9 +2,14 @@
 
 All functions take joint angles ``q`` of shape (N, n) (or (n,) for one configuration, in
 which case the batch axis is dropped from the result, except by :func:`frames`, which keeps
-it as N = 1). An elastic model (``extras["compliance"]``, :mod:`.elastic`) is handled here: the tool
-point, tool pose and both Jacobians take the *measured* angles and work at the link angles
-``q - c tau(q)``; :func:`frames` and :func:`link_frames` take link angles as given. Internally a frame is kept as its
+it as N = 1). Joint angle scales (``extras["scale"]``, :mod:`.scale`) and an elastic model
+(``extras["compliance"]``, :mod:`.elastic`) are handled here, in that order: the tool point, tool pose
+and both Jacobians take the *measured* angles ``q`` and work at the link angles
+
+    q_joint = (1 + s) q                  (scale first: what the joint turns)
+    q_link  = q_joint - c tau(q_joint)   (then gravity's deflection of that joint)
+
+:func:`frames` and :func:`link_frames` take link angles as given. Internally a frame is kept as its
 three axes and origin, each of shape (3, N), so that every step is a handful of contiguous
 vector operations over the batch: no Python loop over samples.
 """
@@ -25,13 +30,32 @@ from .chain import (
 from .elastic import compliance_of, link_angles
 from .gravity import gravity_torques
 from .model import RobotModel
+from .scale import joint_angles, scale_of
 
 
 def _link_angles(model: RobotModel, q: np.ndarray) -> np.ndarray:
-    """``q`` for a rigid model; the link angles ``q - c tau(q)`` of an elastic one."""
+    """Link angles of measured angles ``q`` (N, n) [rad]: ``q_joint = (1 + s) q`` (scaled model, else ``q``),
+    then ``q_joint - c tau(q_joint)`` (elastic model, else ``q_joint``)."""
+    q = joint_angles(model, q)
     if "compliance" not in model.extras:
         return q
     return link_angles(model, q)
+
+
+def _dlink_djoint(model: RobotModel, q_joint: np.ndarray, jac: np.ndarray) -> np.ndarray:
+    """``jac`` (N, 3, n) ``d p / d q_link`` times ``d q_link / d q_joint = I - diag(c) d tau / d q_joint``
+    (unchanged for a rigid model); the torque's derivative by central differences (step 1e-6 rad: its
+    error is ~1e-12 of the term, which is itself ~1e-3 of the Jacobian)."""
+    if "compliance" not in model.extras:
+        return jac
+    c, h = compliance_of(model), 1e-6
+    if not np.any(c):
+        return jac
+    n = model.n_joints
+    shift = h * np.eye(n)
+    dtau = np.stack([gravity_torques(model, q_joint + shift[k]) - gravity_torques(model, q_joint - shift[k])
+                     for k in range(n)], axis=2) / (2 * h)  # (N, n, n): d tau_i / d q_k
+    return jac - np.einsum("nxi,nik->nxk", jac * c, dtau)
 
 
 def tool_pose(model: RobotModel, q: np.ndarray) -> np.ndarray:
@@ -60,20 +84,15 @@ def joint_jacobian(model: RobotModel, q: np.ndarray) -> np.ndarray:
         q: (N, n) joint angles [rad].
 
     Returns:
-        (N, 3, n) ``d p / d q`` [m/rad]. Elastic model: ``J(q_link) (I - diag(c) d tau / d q)``, the
+        (N, 3, n) ``d p / d q`` [m/rad]. Elastic model: ``J(q_link) (I - diag(c) d tau / d q_joint)``, the
         torque's derivative by central differences (step 1e-6 rad: its error is ~1e-12 of the term, which
-        is itself ~1e-3 of the Jacobian).
+        is itself ~1e-3 of the Jacobian); scaled model: times ``diag(1 + s)``.
     """
     q2, single = _as_batch(model, q)
-    jac = _rigid_joint_jacobian(model, _link_angles(model, q2))
-    if "compliance" in model.extras:
-        c, h = compliance_of(model), 1e-6
-        if np.any(c):
-            n = model.n_joints
-            shift = h * np.eye(n)
-            dtau = np.stack([gravity_torques(model, q2 + shift[k]) - gravity_torques(model, q2 - shift[k])
-                             for k in range(n)], axis=2) / (2 * h)  # (N, n, n): d tau_i / d q_k
-            jac = jac - np.einsum("nxi,nik->nxk", jac * c, dtau)
+    q_joint = joint_angles(model, q2)
+    jac = _dlink_djoint(model, q_joint, _rigid_joint_jacobian(model, _link_angles(model, q2)))
+    if "scale" in model.extras:
+        jac = jac * (1.0 + scale_of(model))
     return jac[0] if single else jac
 
 
@@ -98,7 +117,9 @@ def param_jacobian(
     ``alpha`` act along ``x' = cos(beta_i) x_i + sin(beta_i) z_i`` (the ``x`` axis before ``Ry``).
     Elastic model: the columns above at the link angles (the torque's own dependence on the
     geometry is neglected: a 1 mm change moves tau by ~1e-3 of itself), then ``d p / d c_i =
-    -J_q(q_link)[:, i] tau_i(q)`` (exact: tau is taken at the measured angles).
+    -J_q(q_link)[:, i] tau_i(q_joint)`` (exact: tau is taken at the scaled angles, which do not depend
+    on ``c``). Scaled model: ``d p / d s_i = J(q_link) (d q_link / d q_joint)[:, i] q_i`` (exact, the
+    compliance's torque derivative included as in :func:`joint_jacobian`).
 
     Args:
         q: (N, n) joint angles [rad].
@@ -155,10 +176,14 @@ def param_jacobian(
     base_lever = p - model.base_xyz[:, None]
     for k, row in enumerate(range(lay.base_rpy.start, lay.base_rpy.stop)):
         jac[row] = _cross(base_axes[k][:, None], base_lever)
-    if lay.elastic:  # d p / d c_i = -J_q(q_link)[:, i] tau_i(q); exact, tau is taken at the measured angles
-        tau = gravity_torques(model, q2)  # (N, n)
-        rigid = _rigid_joint_jacobian(model, q_link).transpose(2, 1, 0)  # (n, 3, N)
-        jac[lay.compliance] = -rigid * tau.T[:, None]
+    if lay.elastic or lay.scaled:
+        q_joint = joint_angles(model, q2)
+        rigid = _rigid_joint_jacobian(model, q_link)  # (N, 3, n)
+    if lay.elastic:  # d p / d c_i = -J_q(q_link)[:, i] tau_i(q_joint); exact, q_joint does not depend on c
+        tau = gravity_torques(model, q_joint)  # (N, n)
+        jac[lay.compliance] = -rigid.transpose(2, 1, 0) * tau.T[:, None]
+    if lay.scaled:  # d p / d s_i = (d p / d q_joint)[:, i] q_i
+        jac[lay.scale] = (_dlink_djoint(model, q_joint, rigid) * q2[:, None, :]).transpose(2, 1, 0)
     out = np.ascontiguousarray(jac.transpose(2, 1, 0))
     if single:
         out, p = out[0], p[:, 0]

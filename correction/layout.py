@@ -14,7 +14,9 @@ Order of the vector: per joint ``a, alpha, d, theta`` (joint 1 first), then one 
 ``beta{j}`` per joint that has one (nearly parallel axes, see :class:`RobotModel`; none for most arms),
 then the tool point ``tool_x, tool_y, tool_z``, then the base ``base_x, base_y, base_z, base_roll,
 base_pitch, base_yaw``, then, for an elastic model only (``layout_for(n, elastic=True)``: its robot file
-has a ``compliance:`` list), the joint compliances ``c1 .. cn`` [rad/Nm].
+has a ``compliance:`` list), the joint compliances ``c1 .. cn`` [rad/Nm], then, for a scaled model only
+(``layout_for(n, scaled=True)``: its robot file has a ``scale:`` list), the joint angle scales ``s1 .. sn``
+(dimensionless: the joint turns ``(1 + s_i) q_i``, :mod:`correction.scale`).
 """
 
 from __future__ import annotations
@@ -56,6 +58,9 @@ ANGLE = ParamKind("angle", "rad", "deg", float(np.rad2deg(1.0)), float(np.deg2ra
 #: the prior spread about rigid is 3e-5 rad/Nm (3.3e4 Nm/rad, the middle of that range on a log scale). A
 #: compliance the data cannot pin down better than that (a wrist joint carrying a few Nm) is not identified.
 COMPLIANCE = ParamKind("compliance", "rad/Nm", "urad/Nm", 1e6, 3e-5)
+#: A joint's angle scale (:mod:`correction.scale`): ``q_joint = (1 + s) q``. Prior spread 1e-3: a gear
+#: ratio or encoder resolution off by 0.1 % (3 mrad over a 3 rad stroke, the size of the 0.2 deg angle prior).
+SCALE = ParamKind("scale", "1", "ppm", 1e6, 1e-3)
 
 #: Per-joint fields in vector order, with their kinds.
 JOINT_FIELDS: tuple[tuple[str, ParamKind], ...] = (("a", LENGTH), ("alpha", ANGLE), ("d", LENGTH), ("theta", ANGLE))
@@ -87,6 +92,7 @@ class ParameterLayout:
         base_xyz: slice of the base translation (3).
         base_rpy: slice of the base roll-pitch-yaw (3).
         compliance: slice of the joint compliances ``c1 .. cn`` (empty for a rigid model).
+        scale: slice of the joint angle scales ``s1 .. sn`` (empty for an unscaled model).
     """
 
     n_joints: int
@@ -99,11 +105,17 @@ class ParameterLayout:
     base_xyz: slice
     base_rpy: slice
     compliance: slice = dataclasses.field(default_factory=lambda: slice(0, 0))
+    scale: slice = dataclasses.field(default_factory=lambda: slice(0, 0))
 
     @property
     def elastic(self) -> bool:
         """True when the vector carries joint compliances."""
         return self.compliance.stop > self.compliance.start
+
+    @property
+    def scaled(self) -> bool:
+        """True when the vector carries joint angle scales."""
+        return self.scale.stop > self.scale.start
 
     @property
     def size(self) -> int:
@@ -188,16 +200,19 @@ def _name_index(names: tuple[str, ...]) -> dict[str, int]:
 
 
 @lru_cache(maxsize=64)
-def layout_for(n_joints: int, hayati: tuple[int, ...] = (), elastic: bool = False) -> ParameterLayout:
+def layout_for(
+    n_joints: int, hayati: tuple[int, ...] = (), elastic: bool = False, scaled: bool = False
+) -> ParameterLayout:
     """The (shared, immutable) layout of an ``n_joints`` model with Hayati ``beta`` on the 0-based
-    joints ``hayati`` (and the compliances ``c1..cn`` if ``elastic``)."""
+    joints ``hayati`` (and the compliances ``c1..cn`` if ``elastic``, the scales ``s1..sn`` if ``scaled``)."""
     hayati = tuple(sorted(int(j) for j in hayati))
     if any(not 0 <= j < n_joints for j in hayati) or len(set(hayati)) != len(hayati):
         raise ValueError(f"hayati joints must be distinct indices in 0..{n_joints - 1}, got {hayati}")
     joints = [(f"{name}{i + 1}", kind) for i in range(n_joints) for name, kind in JOINT_FIELDS]
     joints += [(f"beta{i + 1}", ANGLE) for i in hayati]
     compliance = [(f"c{i + 1}", COMPLIANCE) for i in range(n_joints)] if elastic else []
-    entries = joints + list(TOOL_FIELDS) + list(BASE_FIELDS) + compliance
+    scale = [(f"s{i + 1}", SCALE) for i in range(n_joints)] if scaled else []
+    entries = joints + list(TOOL_FIELDS) + list(BASE_FIELDS) + compliance + scale
     j = len(joints)
     k = len(JOINT_FIELDS) * n_joints
     return ParameterLayout(
@@ -211,4 +226,5 @@ def layout_for(n_joints: int, hayati: tuple[int, ...] = (), elastic: bool = Fals
         base_xyz=slice(j + 3, j + 6),
         base_rpy=slice(j + 6, j + 9),
         compliance=slice(j + 9, j + 9 + len(compliance)),
+        scale=slice(j + 9 + len(compliance), j + 9 + len(compliance) + len(scale)),
     )

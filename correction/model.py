@@ -106,8 +106,9 @@ class RobotModel:
     @property
     def layout(self) -> ParameterLayout:
         """Names, kinds, prior spread and slices of the flat parameter vector (with the joint compliances
-        ``c1..cn`` when ``extras`` has a ``compliance`` list: an elastic model, :mod:`.elastic`)."""
-        return layout_for(self.n_joints, self.hayati, "compliance" in self.extras)
+        ``c1..cn`` when ``extras`` has a ``compliance`` list: an elastic model, :mod:`.elastic`; with the
+        joint angle scales ``s1..sn`` when it has a ``scale`` list, :mod:`.scale`)."""
+        return layout_for(self.n_joints, self.hayati, "compliance" in self.extras, "scale" in self.extras)
 
     # ----------------------------------------------------- flat parameter view
     @property
@@ -127,6 +128,8 @@ class RobotModel:
         out[lay.tool], out[lay.base_xyz], out[lay.base_rpy] = self.tool, self.base_xyz, self.base_rpy
         if lay.elastic:
             out[lay.compliance] = np.asarray(self.extras["compliance"], dtype=float).reshape(self.n_joints)
+        if lay.scaled:
+            out[lay.scale] = np.asarray(self.extras["scale"], dtype=float).reshape(self.n_joints)
         return out
 
     def with_params(self, params: np.ndarray) -> RobotModel:
@@ -142,8 +145,13 @@ class RobotModel:
         fields = {name: params[lay.field(name)] for name in lay.joint_fields}
         beta = np.zeros(self.n_joints)
         beta[list(lay.hayati)] = params[lay.beta]
+        extras = dict(self.extras)
         if lay.elastic:
-            fields["extras"] = {**self.extras, "compliance": [float(v) for v in params[lay.compliance]]}
+            extras["compliance"] = [float(v) for v in params[lay.compliance]]
+        if lay.scaled:
+            extras["scale"] = [float(v) for v in params[lay.scale]]
+        if lay.elastic or lay.scaled:
+            fields["extras"] = extras
         return replace(
             self, **fields, beta=beta, tool=params[lay.tool], base_xyz=params[lay.base_xyz],
             base_rpy=params[lay.base_rpy]

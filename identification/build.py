@@ -92,6 +92,7 @@ def build_problem(
     distance_std: float = DISTANCE_STD,
     rank_tol: float = 1e-7,
     pin: str = "radius",
+    prior_weight: float = 0.0,
 ) -> CalibrationProblem:
     """Set up the calibration: choose the unknowns, fix the gauge, test identifiability.
 
@@ -107,6 +108,9 @@ def build_problem(
             fixture's centre from the joint-1 axis point (frame-1 origin) at its nominal value (one
             equation: the scale gauge only); ``"centre"`` pins that centre at the mean nominal tool
             point (the paper's choice; three equations).
+        prior_weight: ``W`` of the prior rows toward ``model`` (:mod:`.problem`; 0: plain least squares).
+            The rank test judges the data alone: a parameter the samples cannot see is fixed, not left to
+            the prior.
 
     Raises:
         DatasetError: a fixture used but not listed, a distance or position naming a fixture
@@ -245,7 +249,10 @@ def build_problem(
             f"from these samples (joint motion too small or too few distinct configurations)"
         )
     ordered_fixed = {name: fixed[name] for name in names if name in fixed}
-    problem = replace(problem, free=candidates[keep], fixed=ordered_fixed)
+    if not np.isfinite(prior_weight) or prior_weight < 0:
+        raise ValueError(f"prior_weight must be a finite number >= 0, got {prior_weight!r}")
+    problem = replace(problem, free=candidates[keep], fixed=ordered_fixed, prior_weight=float(prior_weight),
+                      prior_centre=model.params if prior_weight > 0 else None)
     return replace(problem, identifiability=Identifiability.of(problem.jacobian(problem.x0)))
 
 

@@ -58,6 +58,8 @@ class CalibrationResult:
         problem: the final problem (inspectable).
         x: (F,) its solution.
         selfcheck: the statistical self-check (:mod:`.selfcheck`), None when it was not run.
+        effective_unknowns: effective number of unknowns of the (regularised) fit, the trace of its hat
+            matrix (:meth:`CalibrationProblem.effective_unknowns`); the unknowns' count without a prior.
     """
 
     model: RobotModel
@@ -76,6 +78,7 @@ class CalibrationResult:
     problem: CalibrationProblem | None = None
     x: np.ndarray | None = None
     selfcheck: SelfCheck | None = None
+    effective_unknowns: float | None = None
 
     @staticmethod
     def _stats(r: np.ndarray) -> tuple[float, float]:
@@ -115,6 +118,8 @@ class CalibrationResult:
             "condition_number": float(self.condition_number),
             "std": {k: float(v) for k, v in self.std.items()},
             "warnings": list(self.warnings),
+            "prior_weight": float(self.problem.prior_weight) if self.problem else 0.0,
+            "effective_unknowns": self.effective_unknowns,
             **({"self_check": self.selfcheck.block()} if self.selfcheck is not None else {}),
             "timings_s": {k: float(v) for k, v in self.timings.items()},
         }
@@ -128,11 +133,14 @@ class CalibrationResult:
             f"calibration ({self.method}): {sum(self.samples_per_fixture.values())} samples ({counts})",
             f"residual [mm]   before: rms {rms_b * 1e3:.4f}  max {max_b * 1e3:.4f}"
             f"   after: rms {rms_a * 1e3:.4f}  max {max_a * 1e3:.4f}",
-            f"identified {len(self.identified)} parameters, condition number {self.condition_number:.3g}",
+            f"identified {len(self.identified)} parameters, condition number {self.condition_number:.3g}"
+            + (f", prior weight {self.problem.prior_weight:g} ({self.effective_unknowns:.1f} effective unknowns)"
+               if self.problem is not None and self.problem.prior_weight > 0 else ""),
             f"  {'parameter':<9} {'unit':<7} {'change':>10} {'std':>10}",
         ]
         for name, start, end, std in self.changes():
-            kind = self.model.layout.kinds[self.model.layout.index(name)]
+            layout = self.model.layout
+            kind = layout.kinds[layout.index(name)]
             scale, unit = kind.display_scale, kind.display_unit
             lines.append(f"  {name:<9} {unit:<7} {(end - start) * scale:10.5f} {std * scale:10.5f}")
         groups: dict[str, list[str]] = {}
@@ -162,6 +170,7 @@ def calibrate(
     max_change: float = MAX_CHANGE,
     check: bool = True,
     force: bool = False,
+    prior: float = 0.0,
 ) -> CalibrationResult:
     """Identify the parameters of ``nominal`` that put every sample's tool point on its fixture.
 
@@ -178,6 +187,12 @@ def calibrate(
         pso_options: keyword arguments of :func:`solve_pso`.
         max_change: largest plausible tool-point change from the start model, in multiples of what
             a real arm's errors (1 mm, 0.2 deg) typically cause; a fit beyond it is refused.
+        check: run the self-check (False for a cross-validation fold: the self-check judges the
+            calibration that is written).
+        force: return the result even when the self-check refuses it.
+        prior: weight ``W`` of the prior toward ``nominal`` (:mod:`.problem`): each identified parameter's
+            deviation over its prior spread, at the declared ``noise``; 0 (default) is plain least squares
+            (the workflow and `calibrate` use :data:`.problem.PRIOR`).
 
     Returns:
         The :class:`CalibrationResult`.
@@ -193,7 +208,7 @@ def calibrate(
         raise ValueError(f"unknown method {method!r}, expected one of {METHODS}")
     timings: dict[str, float] = {}
     clock = time.perf_counter()
-    problem = build_problem(nominal, dataset, spec, noise=noise)
+    problem = build_problem(nominal, dataset, spec, noise=noise, prior_weight=prior)
     built = problem
     before = np.linalg.norm(problem.sample_errors(problem.x0), axis=1)
     timings["build"] = time.perf_counter() - clock
@@ -217,7 +232,8 @@ def calibrate(
             x, timings["lm"] = solution.x, timings["lm"] + solution.seconds
     clock = time.perf_counter()
     jac = problem.jacobian(x)
-    sigma = _sigma(problem, x)
+    edf = problem.effective_unknowns(jac)
+    sigma = _sigma(problem, x, edf)
     std_values = predicted_std(jac, sigma)
     ident = Identifiability.of(jac)
     params, centres = problem.unpack(x)
@@ -254,6 +270,7 @@ def calibrate(
         problem=problem,
         x=x,
         selfcheck=checked,
+        effective_unknowns=edf,
     )
 
 
@@ -310,8 +327,9 @@ def _noise_warning(problem: CalibrationProblem, x: np.ndarray, sigma: float, noi
     return text
 
 
-def _sigma(problem: CalibrationProblem, x: np.ndarray) -> float:
-    """Residual standard deviation per coordinate [m]: ``sqrt(|r|^2 / (M - F))``."""
-    r = problem.residuals(x)
-    dof = max(problem.n_residuals - problem.n_unknowns, 1)
+def _sigma(problem: CalibrationProblem, x: np.ndarray, unknowns: float | None = None) -> float:
+    """Residual standard deviation per coordinate [m] of the data rows: ``sqrt(|r|^2 / (M - F))``, with the
+    effective number of unknowns ``F`` of a regularised fit when given (else the count of unknowns)."""
+    r = problem.residuals(x)[~problem.prior_rows()]
+    dof = max(problem.n_data - (problem.n_unknowns if unknowns is None else unknowns), 1.0)
     return float(np.sqrt(r @ r / dof))

@@ -206,7 +206,9 @@ def predict_accuracy(
     if dropped.size:  # barely excited parameters left at nominal: the fit absorbs what it can
         cols = [int(np.flatnonzero(lin.free == i)[0]) for i in dropped]
         spread = prior_std(model)[dropped]
-        shifts.append(-inverse @ (jac.T @ ((lin.jacobian(x_lin) * rows)[:, cols] * spread)))
+        moved = np.zeros((pruned.n_residuals, len(cols)))  # their data columns in the pruned problem's rows
+        moved[~pruned.prior_rows()] = lin.jacobian(x_lin)[~lin.prior_rows()][:, cols]
+        shifts.append(-inverse @ (jac.T @ (moved * rows * spread)))
         direct.append(gains[:, dropped] * spread)
     if pruned.anchor is not None:  # the scale anchor's radius is the nominal model's, not measured
         kick = np.zeros((pruned.n_residuals, 1))

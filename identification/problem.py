@@ -4,6 +4,16 @@ Residuals (metres)::
 
     r_k = p(q_k; params) - c_j          every sample k recorded at fixture j  (3 each)
     r_d = w (|c_a - c_b| - D_ab)         every known distance                  (1 each)
+    r_i = sqrt(W) noise (x_i - x0_i) / s_i   every identified parameter i, when W > 0 (1 each)
+    r_a = w (|c_f - o| - R)              the scale anchor, when there is one  (1, last)
+
+The prior rows (MAP toward the nominal model ``x0``) weigh each identified parameter's deviation by
+its prior spread ``s_i`` (:meth:`correction.layout.ParameterLayout.spread`: 1 mm, 0.2 deg, 3e-5 rad/Nm,
+1e-3 per scale); ``W`` (``prior_weight``, ``calibrate --prior``) scales them: ``W = 1`` is the Gaussian
+posterior when the spreads and the declared ``noise`` are right, ``W = 0`` plain least squares. Because
+they are rows of the problem, the solvers, the stds, pruning, the self-check's leave-one-out and its
+prediction all see them. What the data alone can see (the rank test of :func:`build_problem`) is
+judged without them.
 
 Unknowns are the free DH/tool parameters and the centres of the fixtures whose position is not
 known. ``w = noise / distance_std`` makes a known distance as stiff as its stated accuracy.
@@ -37,7 +47,7 @@ from spherecal.correction.errors import SpherecalError
 from spherecal.correction.files.fixtures import FixtureSpec
 from spherecal.correction.files.samples import Dataset
 
-from .identifiability import Identifiability
+from .identifiability import Identifiability, normal_inverse
 
 #: Joint-1 parameters that move every tool point rigidly (the gauge against unknown centres).
 GAUGE: dict[str, tuple[str, ...]] = {"modified": ("a1", "alpha1", "d1", "theta1"), "standard": ("d1", "theta1")}
@@ -45,6 +55,14 @@ GAUGE: dict[str, tuple[str, ...]] = {"modified": ("a1", "alpha1", "d1", "theta1"
 NOISE = 3e-4
 #: Floor of the residual noise used to judge excitation [m] (noise-free data still has rounding).
 SIGMA_FLOOR = 1e-6
+#: Default weight ``W`` of the prior toward the nominal model (``calibrate --prior``; see the module
+#: docstring). ``W = 1`` would be the Gaussian posterior if the samples were independent at the declared
+#: noise; real self-motion samples are correlated (1500 samples, residual 0.1 mm per axis, far fewer
+#: independent observations), so the weight was measured on real arms (MUKCa panda_2_clean, panda_4_clean,
+#: geometric model): single placement, test MAE W 0 / 0.5 / 1 / 2 = 0.375 / 0.355 / 0.375 / 0.429 mm and
+#: 0.275 / 0.267 / 0.273 / 0.285 mm; leave one placement out flat on panda_2 (0.282 for all), 0.240 / 0.230 /
+#: 0.231 / 0.233 / 0.239 mm for W 0 / 0.25 / 0.5 / 1 / 2 on panda_4. 0.5 is inside the flat optimum of both.
+PRIOR = 0.5
 #: Default accuracy of a known distance [m].
 DISTANCE_STD = 1e-6
 #: Largest disagreement [m] between a known distance and the distance of two known positions.
@@ -84,6 +102,8 @@ class CalibrationProblem:
         identifiability: singular values and condition number of the column-scaled Jacobian.
         anchor: ``(fixture, point, radius)``: the scale gauge ``|c_fixture - point| = radius`` [m]
             (one more residual, weighted like a distance), or None.
+        prior_weight: ``W`` of the prior rows (0: none; see the module docstring).
+        prior_centre: (P,) parameters the prior pulls toward (the nominal model's), or None (``model``'s).
     """
 
     model: RobotModel
@@ -99,6 +119,8 @@ class CalibrationProblem:
     warnings: tuple[str, ...] = ()
     identifiability: Identifiability | None = None
     anchor: tuple[str, np.ndarray, float] | None = None
+    prior_weight: float = 0.0
+    prior_centre: np.ndarray | None = None
     _cache: dict = field(default_factory=dict, repr=False)
 
     # ------------------------------------------------------------------------------ sizes
@@ -111,8 +133,38 @@ class CalibrationProblem:
         return self.n_free_params + 3 * len(self.free_centres)
 
     @property
-    def n_residuals(self) -> int:
+    def n_prior(self) -> int:
+        """Number of prior rows (one per identified parameter when ``prior_weight > 0``)."""
+        return self.n_free_params if self.prior_weight > 0 else 0
+
+    @property
+    def n_data(self) -> int:
+        """Number of data rows (samples, distances, anchor): the residuals without the prior."""
         return 3 * self.dataset.n_samples + len(self.spec.distances) + (self.anchor is not None)
+
+    @property
+    def n_residuals(self) -> int:
+        return self.n_data + self.n_prior
+
+    def prior_rows(self) -> np.ndarray:
+        """(M,) True on the prior rows of :meth:`residuals` (between the distances and the anchor)."""
+        rows = np.zeros(self.n_residuals, dtype=bool)
+        start = 3 * self.dataset.n_samples + len(self.spec.distances)
+        rows[start : start + self.n_prior] = True
+        return rows
+
+    def effective_unknowns(self, jac: np.ndarray) -> float:
+        """Effective number of unknowns of the regularised fit: ``trace`` of the hat matrix of the data rows,
+        ``F - trace(J_p (J^T J)^-1 J_p^T)`` for the prior rows ``J_p`` of ``jac`` (M, F); ``F`` without a prior."""
+        if not self.n_prior:
+            return float(self.n_unknowns)
+        jp = jac[self.prior_rows()]
+        return float(self.n_unknowns - np.einsum("ij,jk,ik->", jp, normal_inverse(jac), jp))
+
+    def _prior_scale(self) -> np.ndarray:
+        """(Fp,) ``sqrt(W) noise / s_i`` of the identified parameters [m per unit of the parameter]."""
+        spread = prior_std(self.model)[self.free]
+        return np.sqrt(self.prior_weight) * max(self.noise, SIGMA_FLOOR) / spread
 
     @property
     def identified(self) -> tuple[str, ...]:
@@ -173,7 +225,8 @@ class CalibrationProblem:
         """
         model = self.model
         generic = model.params + np.random.default_rng(0).normal(0.0, 0.1, model.n_params) * prior_std(model)
-        moved = replace(self, model=model.with_params(generic), _cache={})
+        centre = model.params if self.prior_centre is None else self.prior_centre
+        moved = replace(self, model=model.with_params(generic), prior_centre=centre, _cache={})
         return moved, moved.pack(generic, self.centres)
 
     def generic_jacobian(self) -> np.ndarray:
@@ -197,13 +250,16 @@ class CalibrationProblem:
         return a, b, target, delta
 
     def residuals(self, x: np.ndarray) -> np.ndarray:
-        """(M,) residual vector [m]: samples (3 K, x y z per sample), then distances."""
+        """(M,) residual vector [m]: samples (3 K, x y z per sample), distances, prior rows, anchor."""
         sample = self.sample_errors(x).ravel()
-        if not self.spec.distances and self.anchor is None:
+        if not self.spec.distances and self.anchor is None and not self.n_prior:
             return sample
-        _, centres = self.unpack(x)
+        params, centres = self.unpack(x)
         _, _, target, delta = self._distances(centres)
         parts = [sample, self.distance_weight * (np.linalg.norm(delta, axis=1) - target)]
+        if self.n_prior:
+            centre = self.model.params if self.prior_centre is None else self.prior_centre
+            parts.append(self._prior_scale() * (params[self.free] - centre[self.free]))
         if self.anchor is not None:
             name, point, radius = self.anchor
             gap = np.linalg.norm(centres[self.dataset.fixture_names.index(name)] - point) - radius
@@ -229,6 +285,9 @@ class CalibrationProblem:
                     if slot[index] >= 0:
                         cols = slice(fp + 3 * slot[index], fp + 3 * slot[index] + 3)
                         jac[3 * count + row, cols] = sign * self.distance_weight * u
+        if self.n_prior:
+            start = 3 * count + len(self.spec.distances)
+            jac[start + np.arange(fp), np.arange(fp)] = self._prior_scale()
         if self.anchor is not None:
             name, point, _ = self.anchor
             j = self.dataset.fixture_names.index(name)

@@ -33,7 +33,8 @@ UNITS = {
 UNITLESS = {"--seed", "--per-fixture", "--max-per-fixture", "--configurations", "--sets", "--workers",
             "--fixture-count", "--max-change", "--method", "--loss", "--mode", "--solver", "--source",
             "--protocol", "--rows", "--motion", "--format", "--prefix", "--effort", "--velocity", "--topic",
-            "--tip-link", "--base-link", "--convention", "--model", "--max-per-segment", "--min-configurations"}
+            "--tip-link", "--base-link", "--convention", "--model", "--max-per-segment", "--min-configurations",
+            "--prior"}
 
 
 def _options() -> list[tuple[str, argparse.Action]]:

@@ -53,6 +53,12 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         "file's inertials); auto (default): elastic only when it predicts held-out fixtures (or placements "
         "<placement>_h<k>) better than dh by more than the fold-to-fold spread",
     )
+    parser.add_argument(
+        "--prior", type=at_most(1e6, "(a weight)", allow_zero=True), default=0.5,  # identification.problem.PRIOR
+        help="weight of the prior toward the nominal model: each parameter's change over its typical spread "
+        "(1 mm, 0.2 deg, 3e-5 rad/Nm, 1e-3 scale) at the declared --noise "
+        "(a weight; default 0.5, measured on real arms; 0: plain least squares)",
+    )
     parser.add_argument("--out", required=True, help="calibrated robot file to write (YAML)")
 
 
@@ -66,78 +72,26 @@ def run(args: argparse.Namespace) -> int:
     for variable in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
         os.environ.setdefault(variable, "1")
     import time
-    from dataclasses import replace
-    from pathlib import Path
 
-    import numpy as np
-
-    from spherecal.correction import load_robot, save_robot
-    from spherecal.correction.files.fixtures import read_fixtures
-    from spherecal.correction.files.provenance import provenance
     from spherecal.correction.files.samples import DEDUP_TOL
-    from spherecal.correction.files.samples_csv import read_samples
-    from spherecal.identification.calibrate import calibrate
-    from spherecal.identification.selection import elastic_start, rigid, select_model
+    from spherecal.identification.workflow import WorkflowOptions, calibrate_files
     from spherecal.options import planned_outputs
 
     outputs = planned_outputs(args, {"--out": args.out})  # before any work: never over an input
     clock = time.perf_counter()
-    noise = args.noise * 1e-3  # [m] from here on
-    dedup_tol = DEDUP_TOL if args.dedup_deg is None else float(np.deg2rad(args.dedup_deg))  # [rad]
-    nominal = load_robot(args.robot, **urdf_links(args))
-    dataset = read_samples(args.samples, nominal)
-    spec = read_fixtures(args.fixtures) if args.fixtures else None
-    read = len(dataset.labels)
-    dataset = dataset.deduplicated(dedup_tol)
-    dropped = read - dataset.n_samples
-    dataset = dataset.subsampled(args.max_per_fixture, np.random.default_rng(args.seed))
-
-    def fit(start, data, fixtures):  # a cross-validation fold: lm, the user's loss and noise; no self-check
-        # (it judges the chosen calibration below, not each fold's)
-        return calibrate(
-            start, data, fixtures, loss=args.loss, noise=noise, max_change=args.max_change, check=False
-        ).model
-
-    selection = select_model(args.model, fit, nominal, dataset, spec, seed=args.seed)
-    start = elastic_start(nominal) if selection.chosen == "elastic" else rigid(nominal)
-    result = calibrate(
-        start,
-        dataset,
-        spec,
+    options = WorkflowOptions(
         method=args.method,
-        seed=args.seed,
+        model=args.model,
         loss=args.loss,
-        noise=noise,
+        noise=args.noise * 1e-3,  # [m]
+        max_per_fixture=args.max_per_fixture,
+        dedup_tol=DEDUP_TOL if args.dedup_deg is None else math.radians(args.dedup_deg),  # [rad]
         max_change=args.max_change,
         force=args.force,
+        seed=args.seed,
+        prior=args.prior,
     )
-    block = result.block()
-    block["model_selection"] = selection.block()
-    if selection.seconds:
-        block["timings_s"]["cross_validation"] = selection.seconds
-    block["duplicates_dropped"] = dropped
-    block["provenance"] = provenance(args.seed, {
-        "robot": Path(args.robot),
-        "samples": Path(args.samples),
-        **({"fixtures": Path(args.fixtures)} if args.fixtures else {}),
-        "method": args.method,
-        "loss": args.loss,
-        "noise_m": noise,
-        "max_per_fixture": args.max_per_fixture,
-        "dedup_tol_rad": float(dedup_tol),
-        "max_change": args.max_change,
-        "model": args.model,
-        "force": args.force,
-    })
-    extras = {k: v for k, v in result.model.extras.items() if k != "calibration"}  # compliance when elastic
-    extras["calibration"] = block
-    model = replace(result.model, extras=extras)
-    header = f"calibrated by spherecal calibrate ({args.method}) from {args.samples}"
-    with outputs:
-        save_robot(model, outputs.stage(args.out), header=header)
-    print(result.summary())
-    print(selection.summary())
-    if dropped:
-        print(f"dropped {dropped} duplicate samples (within {np.rad2deg(dedup_tol):.3g} deg)")
+    done = calibrate_files(args.robot, args.samples, args.fixtures, args.out, options, outputs, **urdf_links(args))
+    print(done.summary())
     print(f"wrote {args.out} in {time.perf_counter() - clock:.2f} s")
     return 0

@@ -35,11 +35,10 @@ import numpy as np
 from spherecal.correction import SpherecalError
 from spherecal.correction.elastic import with_compliance
 from spherecal.correction.files.outputs import OutputSet
-from spherecal.identification.calibrate import calibrate
-from spherecal.identification.selection import elastic_start, rigid, select_model
+from spherecal.identification.workflow import WorkflowOptions, run_workflow
 
 from ..pipeline import RANDOM_SET, validate_models
-from .experiment import calibrate_from, default_fixtures, motion_set, nominal_robot, true_robot
+from .experiment import default_fixtures, motion_set, nominal_robot, true_robot
 
 #: The paper's simulated Table 2 (mm): row -> (mean of average error, mean of maximal error).
 PAPER_TABLE2 = {
@@ -177,14 +176,10 @@ def run_task(task: Task) -> TaskResult:
 
 
 def _calibrate(model: str, nominal, start, data):
-    """The calibrated robot of ``dh``, ``elastic`` or ``auto`` (cross-validated choice)."""
-    if model == "auto":
-        def fit(begin, dataset, spec):
-            return calibrate(begin, dataset, spec).model
-
-        model = select_model("auto", fit, nominal, data.dataset, data.spec).chosen
-    make = elastic_start if model == "elastic" else rigid
-    return calibrate_from(make(nominal), data, start=make(start)).model
+    """The calibrated robot of ``dh``, ``elastic`` or ``auto``: the library's one workflow
+    (identification.workflow), every sample kept, its cross-validation folds not self-checked."""
+    options = WorkflowOptions(model=model, dedup_tol=None)
+    return run_workflow(nominal, data.dataset, data.spec, options, start=start).model
 
 
 def run_campaign(

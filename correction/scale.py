@@ -1,0 +1,71 @@
+"""Per-joint angle scale: the joint's angle is its recorded angle times ``1 + s``.
+
+    q_joint = (1 + s) * q          s (n,) dimensionless, q (N, n) recorded angles [rad]
+
+An encoder or transmission whose ratio is off by ``s`` (a gear ratio, an encoder's counts per turn, a
+joint-torque sensor's elastic offset proportional to the angle) turns the recorded angle ``q`` into
+``(1 + s) q``. On an elastic model (:mod:`.elastic`) the scale comes first: the compliance deflects the
+scaled angle, ``q_link = q_joint - c tau(q_joint)`` (see ``correction.kinematics``).
+
+The scales live in ``model.extras["scale"]`` (a robot file's ``scale:`` list, one number per joint,
+zero for an exact joint); the layout carries them as ``s1 .. sn`` (:data:`.layout.SCALE`).
+"""
+
+from __future__ import annotations
+
+from dataclasses import replace
+
+import numpy as np
+
+from .errors import SpherecalError
+from .model import RobotModel
+
+
+class ScaleError(SpherecalError):
+    """A malformed ``scale`` list; the message names the field."""
+
+
+def scale_of(model: RobotModel) -> np.ndarray:
+    """(n,) joint angle scales ``s`` (dimensionless) from ``model.extras["scale"]``; zeros when absent.
+
+    Raises:
+        ScaleError: not ``n`` finite numbers, or a scale at or below -1 (a reversed or frozen joint).
+    """
+    block = model.extras.get("scale")
+    if block is None:
+        return np.zeros(model.n_joints)
+    try:
+        s = np.asarray(block, dtype=float)
+    except (TypeError, ValueError):
+        s = np.empty(0)
+    if s.shape != (model.n_joints,) or not np.all(np.isfinite(s)) or np.any(s <= -1.0):
+        raise ScaleError(
+            f"{model.name}: field 'scale': expected {model.n_joints} finite numbers above -1 (dimensionless), "
+            f"got {block!r}"
+        )
+    return s
+
+
+def with_scale(model: RobotModel, scale: np.ndarray | None) -> RobotModel:
+    """A copy of ``model`` with ``extras["scale"]`` set to (n,) dimensionless numbers (removed when None)."""
+    extras = {k: v for k, v in model.extras.items() if k != "scale"}
+    if scale is not None:
+        extras["scale"] = [float(v) for v in np.asarray(scale, dtype=float).reshape(model.n_joints)]
+    return replace(model, extras=extras)
+
+
+def joint_angles(model: RobotModel, q: np.ndarray) -> np.ndarray:
+    """Joint angles ``(1 + s) q`` of recorded angles ``q`` (N, n) or (n,) [rad]; ``q`` itself without scale."""
+    q = np.asarray(q, dtype=float)
+    if "scale" not in model.extras:
+        return q
+    s = scale_of(model)
+    return q if not np.any(s) else q * (1.0 + s)
+
+
+def recorded_angles(model: RobotModel, q_joint: np.ndarray) -> np.ndarray:
+    """The inverse of :func:`joint_angles`: recorded angles ``q_joint / (1 + s)`` [rad]."""
+    q_joint = np.asarray(q_joint, dtype=float)
+    if "scale" not in model.extras:
+        return q_joint
+    return q_joint / (1.0 + scale_of(model))

@@ -1,0 +1,189 @@
+"""One calibration workflow: dedup, subsample, model selection, calibrate, the result file's block.
+
+What ``spherecal calibrate`` does, as one library call (the command parses, calls
+:func:`calibrate_files`, prints), and what the campaign and the bench scripts call on data they
+already hold (:func:`run_workflow`)::
+
+    options = WorkflowOptions(model="auto", seed=0)
+    done = run_workflow(nominal, dataset, spec, options)
+    done.model                      # the calibrated robot, its extras["calibration"] block filled
+    print(done.summary())
+
+Cross-validation folds of the model selection are fitted with ``lm``, the user's loss and noise and
+*without* the self-check: the self-check judges the calibration that is written, not each fold's (a
+fold's refusal would only turn ``auto`` back to ``dh`` for a reason that says nothing about the models,
+and it costs a self-check per fold).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, replace
+from pathlib import Path
+
+import numpy as np
+
+from spherecal.correction import RobotModel, load_robot, save_robot
+from spherecal.correction.files.fixtures import FixtureSpec, read_fixtures
+from spherecal.correction.files.outputs import OutputSet
+from spherecal.correction.files.provenance import provenance
+from spherecal.correction.files.samples import DEDUP_TOL, Dataset
+from spherecal.correction.files.samples_csv import read_samples
+
+from .calibrate import MAX_CHANGE, CalibrationResult, calibrate
+from .problem import NOISE, PRIOR
+from .selection import ModelSelection, elastic_start, rigid, select_model
+
+
+@dataclass(frozen=True)
+class WorkflowOptions:
+    """How to calibrate (every field is recorded in the result file's ``options``).
+
+    Attributes:
+        method: ``lm``, ``pso`` or ``pso+lm``.
+        model: ``dh``, ``elastic`` or ``auto`` (:mod:`.selection`).
+        loss: ``linear``, ``soft_l1`` or ``huber``.
+        noise: expected fixture noise std per axis [m].
+        max_per_fixture: keep at most this many samples per fixture (random, seeded), None for all.
+        dedup_tol: drop a sample within this of an earlier one of its fixture, every joint [rad];
+            None keeps every sample.
+        max_change: plausibility limit (:func:`.calibrate.check_plausible`), a factor.
+        force: write even when the self-check finds the data inconsistent.
+        seed: seeds subsampling, cross-validation and PSO.
+        prior: weight ``W`` of the prior toward the nominal model (:mod:`.problem`), 0 = plain least squares.
+    """
+
+    method: str = "lm"
+    model: str = "auto"
+    loss: str = "linear"
+    noise: float = NOISE
+    max_per_fixture: int | None = None
+    dedup_tol: float | None = DEDUP_TOL
+    max_change: float = MAX_CHANGE
+    force: bool = False
+    seed: int = 0
+    prior: float = PRIOR
+
+    def record(self) -> dict:
+        """The ``options`` entry of the result file (metres, radians; the seed is recorded beside it)."""
+        return {
+            "method": self.method,
+            "loss": self.loss,
+            "noise_m": self.noise,
+            "max_per_fixture": self.max_per_fixture,
+            "dedup_tol_rad": None if self.dedup_tol is None else float(self.dedup_tol),
+            "max_change": self.max_change,
+            "model": self.model,
+            "force": self.force,
+            "prior": self.prior,
+        }
+
+
+@dataclass(frozen=True, eq=False)
+class WorkflowResult:
+    """A calibration as the workflow made it.
+
+    Attributes:
+        model: the calibrated robot; ``extras["calibration"]`` holds :attr:`block`.
+        result: the final fit (:class:`.calibrate.CalibrationResult`).
+        selection: what model selection found.
+        duplicates_dropped: samples dropped as duplicates.
+        dedup_tol: the tolerance used [rad] (None: no deduplication).
+        block: the ``calibration:`` block of the result file (plain Python).
+    """
+
+    model: RobotModel
+    result: CalibrationResult
+    selection: ModelSelection
+    duplicates_dropped: int
+    dedup_tol: float | None
+    block: dict
+
+    def summary(self) -> str:
+        """The fit's summary, the model choice, and the duplicates dropped."""
+        lines = [self.result.summary(), self.selection.summary()]
+        if self.duplicates_dropped:
+            lines.append(f"dropped {self.duplicates_dropped} duplicate samples "
+                         f"(within {np.rad2deg(self.dedup_tol):.3g} deg)")
+        return "\n".join(lines)
+
+
+def run_workflow(nominal: RobotModel, dataset: Dataset, spec: FixtureSpec | None,
+                 options: WorkflowOptions = WorkflowOptions(), start: RobotModel | None = None,
+                 inputs: dict | None = None) -> WorkflowResult:
+    """Deduplicate, subsample, select the model, calibrate and assemble the result block.
+
+    Args:
+        nominal: the robot to calibrate.
+        dataset: the samples, as read.
+        spec: known fixture positions and distances (None: all unknown).
+        options: how (:class:`WorkflowOptions`).
+        start: start of the final optimisation (default ``nominal``; rigid or elastic as chosen).
+        inputs: name -> input file (a :class:`~pathlib.Path`, recorded with its digest) or value, for
+            the provenance block (``correction.files.provenance.provenance``).
+
+    Returns:
+        The :class:`WorkflowResult`.
+
+    Raises:
+        SpherecalError: the data cannot support the calibration (see :func:`.calibrate.calibrate`).
+    """
+    read = dataset.n_samples
+    if options.dedup_tol is not None:
+        dataset = dataset.deduplicated(options.dedup_tol)
+    dropped = read - dataset.n_samples
+    dataset = dataset.subsampled(options.max_per_fixture, np.random.default_rng(options.seed))
+
+    def fit(begin, data, fixtures):  # a cross-validation fold: lm, the user's loss and noise, no self-check
+        return calibrate(begin, data, fixtures, loss=options.loss, noise=options.noise,
+                         max_change=options.max_change, check=False, prior=options.prior).model
+
+    selection = select_model(options.model, fit, nominal, dataset, spec, seed=options.seed)
+    make = elastic_start if selection.chosen == "elastic" else rigid
+    result = calibrate(
+        make(nominal), dataset, spec, method=options.method, start=None if start is None else make(start),
+        seed=options.seed, loss=options.loss, noise=options.noise, max_change=options.max_change,
+        force=options.force, prior=options.prior,
+    )
+    block = result.block()
+    block["model_selection"] = selection.block()
+    if selection.seconds:
+        block["timings_s"]["cross_validation"] = selection.seconds
+    block["duplicates_dropped"] = dropped
+    block["options"] = options.record()
+    block["provenance"] = provenance(options.seed, {**(inputs or {}), **options.record()})
+    extras = {k: v for k, v in result.model.extras.items() if k != "calibration"}  # compliance when elastic
+    extras["calibration"] = block
+    return WorkflowResult(replace(result.model, extras=extras), result, selection, dropped, options.dedup_tol,
+                          block)
+
+
+def calibrate_files(robot: str, samples: str | Path, fixtures: str | Path | None, out: str | Path,
+                    options: WorkflowOptions = WorkflowOptions(), outputs: OutputSet | None = None,
+                    **robot_options) -> WorkflowResult:
+    """Read the robot, samples and fixtures files, run :func:`run_workflow`, write ``out`` atomically.
+
+    Args:
+        robot: robot name or file (``correction.load_robot``).
+        samples: samples CSV.
+        fixtures: fixtures YAML, or None.
+        out: calibrated robot file to write (YAML).
+        options: how (:class:`WorkflowOptions`).
+        outputs: the staged outputs holding ``out`` (checked by the caller before any work); a fresh
+            one when None.
+        **robot_options: keyword arguments of ``load_robot`` (a URDF's base and tip links).
+
+    Returns:
+        The :class:`WorkflowResult`; nothing is written when it raises.
+    """
+    nominal = load_robot(robot, **robot_options)
+    dataset = read_samples(samples, nominal)
+    spec = read_fixtures(fixtures) if fixtures else None
+    inputs = {"robot": Path(robot), "samples": Path(samples)}
+    if fixtures:
+        inputs["fixtures"] = Path(fixtures)
+    done = run_workflow(nominal, dataset, spec, options, inputs=inputs)
+    header = f"calibrated by spherecal calibrate ({options.method}) from {samples}"
+    outputs = OutputSet({"--out": out}) if outputs is None else outputs
+    with outputs:
+        save_robot(done.model, outputs.stage(out), header=header)
+    return done
