@@ -93,6 +93,18 @@ class CompensationResult:
     converged: bool = True
     note: str = ""
 
+    @property
+    def uncompensated_error(self) -> float:
+        """|target - landing| [m] had the target itself been sent (the first controller evaluation)."""
+        return float(self.history[0])
+
+    @property
+    def gain(self) -> float:
+        """How much nearer the target the compensated command puts the real arm [m]
+        (:attr:`uncompensated_error` minus :attr:`position_residual`): what the calibration's full model,
+        elastic terms included, is worth to this controller at this target."""
+        return self.uncompensated_error - self.position_residual
+
 
 def _straddle(best: CompensationResult, other_command: np.ndarray, other_q: np.ndarray, target: np.ndarray,
               nominal: RobotModel, calibrated: RobotModel, q_seed: np.ndarray, controller: Controller,
