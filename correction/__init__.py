@@ -25,6 +25,7 @@ from .kinematics import joint_jacobian, link_angle_jacobian, param_jacobian, pos
 from .model import RobotModel, matrix_rpy, param_names, pose_matrix, rpy_matrix
 from .perturb import perturb
 from .rigid import apply_transform, fit_rigid_transform, registered_errors
+from .tool import ToolError, ToolSwap, with_tool
 
 __all__ = [
     "Dataset",
@@ -72,4 +73,7 @@ __all__ = [
     "to_standard",
     "tool_point",
     "tool_pose",
+    "ToolError",
+    "ToolSwap",
+    "with_tool",
 ]

@@ -66,6 +66,11 @@ def _finite(text: str) -> float:
     return value
 
 
+def finite(text: str) -> float:
+    """Any finite number (coordinates)."""
+    return _finite(text)
+
+
 def non_negative(text: str) -> float:
     """A finite number >= 0 (tolerances, spreads)."""
     value = _finite(text)
@@ -257,7 +262,7 @@ def add_seconds(parser: argparse.ArgumentParser, default: float, what: str) -> N
 #: Options (argparse destinations) that name files a command reads: no output may be one of them.
 INPUT_OPTIONS: tuple[str, ...] = (
     "robot", "samples", "fixtures", "mocap", "truth", "nominal", "calibrated", "candidates", "predict", "into",
-    "source", "inertials",
+    "source", "inertials", "urdf",
 )
 
 
@@ -276,7 +281,7 @@ def planned_outputs(args: argparse.Namespace, outputs: dict):
 
     inputs = {f"--{name.replace('_', '-')}" if name != "source" else "SOURCE": getattr(args, name, None)
               for name in INPUT_OPTIONS}
-    if getattr(args, "command", None) == "export":  # export's robot file is its positional argument
+    if getattr(args, "command", None) in ("export", "tool"):  # their robot file is the positional argument
         inputs["CAL.yaml"] = inputs.pop("--robot")
     return OutputSet({k: v for k, v in outputs.items() if v is not None},
                      {k: v for k, v in inputs.items() if isinstance(v, str)})
