@@ -31,20 +31,25 @@ AXIS_ANGLE_TOL = 1e-2
 _PROBES = (0.0, 0.4, -0.7)
 
 
+def _placed(model: RobotModel, ignore_base: bool) -> RobotModel:
+    return replace(model, base_xyz=np.zeros(3), base_rpy=np.zeros(3)) if ignore_base else model
+
+
 def _axis_lines(model: RobotModel, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """(n, 3) unit directions and (n, 3) points of the joint axes in the base frame [m]."""
-    poses = link_frames(replace(model, base_xyz=np.zeros(3), base_rpy=np.zeros(3)), q)
+    """(n, 3) unit directions and (n, 3) points of the joint axes in the world frame of ``model`` [m]."""
+    poses = link_frames(model, q)
     frames = poses[1:] if model.convention == "modified" else poses[:-1]
     return frames[:, :3, 2], frames[:, :3, 3]
 
 
-def axis_mismatch(model: RobotModel, donor: RobotModel) -> tuple[float, float]:
+def axis_mismatch(model: RobotModel, donor: RobotModel, ignore_base: bool = True) -> tuple[float, float]:
     """Largest distance [m] and angle [rad] between corresponding joint axes of two models.
 
-    The models are compared in their own base frames (the base placement is left out: it is where the
-    arm stands, not the arm), at zero angles and two other postures. Joint counts must be equal.
+    Compared at zero angles and two other postures; with ``ignore_base`` in each model's own base frame (the
+    base placement is where the arm stands, not the arm), else in the world. Joint counts must be equal.
     """
     distance, angle = 0.0, 0.0
+    model, donor = _placed(model, ignore_base), _placed(donor, ignore_base)
     for value in _PROBES:
         q = np.full(model.n_joints, value)
         z_user, p_user = _axis_lines(model, q)
@@ -59,13 +64,15 @@ def axis_mismatch(model: RobotModel, donor: RobotModel) -> tuple[float, float]:
 
 
 def transfer_inertials(model: RobotModel, donor: RobotModel, distance_tol: float = AXIS_DISTANCE_TOL,
-                       angle_tol: float = AXIS_ANGLE_TOL) -> RobotModel | None:
+                       angle_tol: float = AXIS_ANGLE_TOL, ignore_base: bool = True) -> RobotModel | None:
     """``model`` with ``donor``'s link inertials and payload, moved into ``model``'s DH frames.
 
     Args:
         model: the arm without (or with other) inertials.
         donor: a description of the same arm with an ``inertials`` block (any DH convention and frames).
         distance_tol, angle_tol: largest joint-axis distance [m] and angle [rad] (:func:`axis_mismatch`).
+        ignore_base: compare the arms in their own base frames (another description of the arm), else in the
+            world (the same arm described another way, e.g. in the other DH convention).
 
     Returns:
         The model with ``extras["inertials"]`` and ``extras["payload"]`` (masses [kg], centres of mass [m]
@@ -74,14 +81,13 @@ def transfer_inertials(model: RobotModel, donor: RobotModel, distance_tol: float
     """
     if model.n_joints != donor.n_joints:
         return None
-    distance, angle = axis_mismatch(model, donor)
+    distance, angle = axis_mismatch(model, donor, ignore_base)
     if distance > distance_tol or angle > angle_tol:
         return None
     masses, coms = inertials_of(donor)
     zero = np.zeros(model.n_joints)
-    base_free = {"base_xyz": np.zeros(3), "base_rpy": np.zeros(3)}
-    mine = link_frames(replace(model, **base_free), zero)[1:]  # (n, 4, 4): frame i of link i
-    theirs = link_frames(replace(donor, **base_free), zero)[1:]
+    mine = link_frames(_placed(model, ignore_base), zero)[1:]  # (n, 4, 4): frame i of link i
+    theirs = link_frames(_placed(donor, ignore_base), zero)[1:]
     frame = np.append(np.arange(model.n_joints), model.n_joints - 1)  # the payload rides on link n
     moved = [np.linalg.solve(mine[f], theirs[f] @ np.append(c, 1.0))[:3] for f, c in zip(frame, coms, strict=True)]
     inertials = [{"mass": float(m), "com": [float(v) for v in c]} for m, c in zip(masses[:-1], moved[:-1], strict=True)]

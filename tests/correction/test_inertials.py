@@ -113,3 +113,15 @@ def test_inertials_file_replaces_and_a_bad_one_is_one_line(tmp_path, capsys) -> 
     assert err.count("\n") == 1 and "bad.yaml" in err and not out.exists()
     assert main(["export", "panda", "--format", "yaml", "--out", str(out), "--inertials", str(good)]) == 0
     assert load_robot(out).extras["inertials"][0]["mass"] == 1.0
+
+
+def test_converting_the_convention_keeps_gravity_torques(panda, rng) -> None:
+    from spherecal.correction import convert
+
+    q = panda.random_configurations(20, rng)
+    standard = convert(panda, "standard")
+    assert standard.convention == "standard" and np.abs(gravity_torques(panda, q)).max() > 10.0
+    np.testing.assert_allclose(gravity_torques(standard, q), gravity_torques(panda, q), atol=1e-9)
+    back = convert(standard, "modified")
+    for mine, theirs in zip(back.extras["inertials"], panda.extras["inertials"], strict=True):
+        np.testing.assert_allclose(mine["com"], theirs["com"], atol=1e-12)
