@@ -25,6 +25,21 @@ def median_time(function, repeats: int = 9) -> float:
     return sorted(times)[len(times) // 2]
 
 
+def run_cli(argv: list[str]) -> str:
+    """Run ``spherecal argv`` in this process and return what it printed; stop the script if it fails."""
+    import contextlib
+    import io
+
+    from spherecal.cli import main
+
+    out = io.StringIO()
+    with contextlib.redirect_stdout(out):
+        code = main(argv)
+    if code != 0:
+        raise SystemExit(f"failed ({code}): spherecal {' '.join(argv)}\n{out.getvalue()}")
+    return out.getvalue()
+
+
 # ----------------------------------------------------------------------------- MUKCa real data
 def find_mukca() -> Path:
     """``shared/data/mukca`` beside this checkout or one of its parents (the full recordings)."""

@@ -14,8 +14,6 @@ back with `correction.load_urdf` (the ball is its tip link, panda_link8). Writes
 from __future__ import annotations
 
 import argparse
-import contextlib
-import io
 import json
 import subprocess
 import tempfile
@@ -24,22 +22,12 @@ from pathlib import Path
 import bench_common  # first: one BLAS thread, no Rerun analytics
 import numpy as np
 
-from spherecal.cli import main
 from spherecal.controller.rigid_fit import geometric_part
 from spherecal.correction import load_robot, load_urdf, tool_point
 from spherecal.correction.files.urdf_write import robot_to_urdf
 
 #: robot folder -> (training placement, MUKCa's published test MAE [mm] for it, or None)
 ROBOTS = {"panda_2_clean": ("front_center", 0.347), "panda_4_clean": ("front", 0.278)}
-
-
-def _run(argv: list[str]) -> str:
-    out = io.StringIO()
-    with contextlib.redirect_stdout(out):
-        code = main(argv)
-    if code != 0:
-        raise SystemExit(f"failed ({code}): spherecal {' '.join(argv)}\n{out.getvalue()}")
-    return out.getvalue()
 
 
 def _scores(model, dataset) -> tuple[float, float]:
@@ -59,7 +47,7 @@ def main_bench() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--data", default=str(bench_common.find_mukca()))
     args = parser.parse_args()
-    root = Path(args.data)
+    root, run = Path(args.data), bench_common.run_cli
     urdf = root / "urdf" / "panda.urdf"
     print(subprocess.run(["uptime"], capture_output=True, text=True).stdout.strip())
     results = {}
@@ -70,19 +58,19 @@ def main_bench() -> None:
                 print(f"{robot}: not found under {root}, skipped")
                 continue
             work = Path(tmp) / robot
-            _run(["import", str(folder / train), "--format", "mukca", "--robot", str(urdf), "--tip-link", "ball_link",
-                  "--out", str(work / "train")])
+            run(["import", str(folder / train), "--format", "mukca", "--robot", str(urdf), "--tip-link", "ball_link",
+                 "--out", str(work / "train")])
             held = [p.name for p in sorted(folder.iterdir()) if p.is_dir() and p.name != train]
             nominal = load_robot(urdf, tip_link="ball_link")
             dataset, _ = bench_common.mukca_dataset(root, robot, nominal, held)
             for kind in ("elastic", "auto"):
                 cal = work / f"cal_{kind}.yaml"
-                printed = _run(["calibrate", "--robot", str(urdf), "--tip-link", "ball_link", "--samples",
-                                str(work / "train/samples.csv"), "--fixtures", str(work / "train/fixtures.yaml"),
-                                "--model", kind, "--out", str(cal)])
+                printed = run(["calibrate", "--robot", str(urdf), "--tip-link", "ball_link", "--samples",
+                               str(work / "train/samples.csv"), "--fixtures", str(work / "train/fixtures.yaml"),
+                               "--model", kind, "--out", str(cal)])
                 chosen = next((line for line in printed.splitlines() if line.startswith("model:")), "model: ?")
                 exported = work / f"cal_{kind}.urdf"
-                notes = _run(["export", str(cal), "--format", "urdf", "--out", str(exported)]).splitlines()[1:]
+                notes = run(["export", str(cal), "--format", "urdf", "--out", str(exported)]).splitlines()[1:]
                 model = load_robot(cal)
                 plain = work / f"plain_{kind}.urdf"
                 plain.write_text(robot_to_urdf(geometric_part(model)))
