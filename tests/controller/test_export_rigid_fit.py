@@ -103,3 +103,13 @@ def test_real_panda_held_out_sockets_through_the_exported_urdf(tmp_path, capsys)
     full, fitted = test_mae(model), test_mae(load_urdf(out))
     plain = test_mae(geometric_part(model))
     assert fitted <= plain and fitted < full + 0.3 * (plain - full), (full, fitted, plain)
+    # --into MUKCa's own panda.urdf: the same rigid fit, read by MuJoCo at the ball
+    from tests.correction.urdf_helpers import DATA, MujocoUrdf
+
+    into = tmp_path / "into.urdf"
+    assert main(["export", str(cal), "--format", "urdf", "--into", str(DATA / "panda.urdf"), "--out", str(into)]) == 0
+    recorded = read_mukca(data / "panda_2_clean" / "front_center", model)[0].q
+    rigid = rigid_approximation(model, recorded).model
+    q = recording.q[held][:50]
+    ball, _ = MujocoUrdf(into.read_text()).body_pose("ball_link", model.extras["joint_names"], q)
+    np.testing.assert_allclose(ball, tool_point(rigid, q), atol=1e-9)
