@@ -125,3 +125,18 @@ def test_converting_the_convention_keeps_gravity_torques(panda, rng) -> None:
     back = convert(standard, "modified")
     for mine, theirs in zip(back.extras["inertials"], panda.extras["inertials"], strict=True):
         np.testing.assert_allclose(mine["com"], theirs["com"], atol=1e-12)
+
+
+def test_gen3_lite_urdf_without_masses_gets_kinovas(tmp_path, rng) -> None:
+    import warnings
+
+    text = (DATA / "gen3lite.urdf").read_text()  # MUKCa's, with Kinova's masses (checked against MuJoCo elsewhere)
+    bare = tmp_path / "gen3lite.urdf"
+    bare.write_text(re.sub(r"<inertial>.*?</inertial>", "", text, flags=re.S))
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")  # joints 2-3 nearly parallel: a Hayati beta, tested elsewhere
+        model = load_robot(bare, tip_link="ball_link")
+        reference = load_robot(DATA / "gen3lite.urdf", tip_link="ball_link")
+    assert "kinova_gen3_lite" in model.extras["inertials_source"]
+    q = model.random_configurations(20, rng)
+    np.testing.assert_allclose(gravity_torques(model, q), gravity_torques(reference, q), atol=1e-9)
