@@ -28,7 +28,7 @@ from spherecal.correction.files.urdf_write import (
     xml_comment,
 )
 
-from .rigid_fit import RigidFit, rigid_approximation
+from .rigid_fit import RigidFit, joint_side_terms, rigid_approximation
 
 FORMATS = ("urdf", "mjcf", "yaml")
 
@@ -132,12 +132,9 @@ def export_model(model: RobotModel, output_format: str, header: str = "", prefix
         for option, values in (("--effort", effort), ("--velocity", velocity)):
             if values is None and n != len(PANDA_EFFORT):
                 raise ExportError(f"{option}: no default for a {n}-joint robot, give {n} comma-separated values")
-    fit = rigid_approximation(model)
-    notes: tuple[str, ...] = ()
-    if fit.terms:
-        recorded, where = recorded_configurations(model, samples)
-        fit = rigid_approximation(model, recorded, seed=seed)
-        notes = (fit.summary(), f"rigid fit: {where}")
+    recorded, where = (None, "") if not joint_side_terms(model) else recorded_configurations(model, samples)
+    fit = rigid_approximation(model, recorded, seed=seed)
+    notes = (fit.summary(), f"rigid fit: {where}") if fit.terms else ()
     rigid = fit.model
     if into is not None:
         text = urdf_into(rigid, into[0], into[1], header)

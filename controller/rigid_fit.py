@@ -98,6 +98,13 @@ def geometric_part(model: RobotModel) -> RobotModel:
     return replace(model, extras=extras)
 
 
+def joint_side_terms(model: RobotModel) -> tuple[str, ...]:
+    """Names of the non-zero parameters of ``model`` that its :func:`geometric_part` has not (``c2``, ...)."""
+    kept = set(geometric_part(model).layout.names)
+    return tuple(name for name, value in zip(model.layout.names, model.params, strict=True)
+                 if name not in kept and value != 0.0)
+
+
 def _rms(a: np.ndarray, b: np.ndarray) -> float:
     return float(np.sqrt(np.mean(np.sum((a - b) ** 2, axis=1))))
 
@@ -116,9 +123,7 @@ def rigid_approximation(model: RobotModel, recorded: np.ndarray | None = None,
     Returns:
         :class:`RigidFit`; for a model without joint-side terms, the model itself and zero loss.
     """
-    dropped = geometric_part(model)
-    terms = tuple(name for name, value in zip(model.layout.names, model.params, strict=True)
-                  if name not in dropped.layout.names and value != 0.0)
+    dropped, terms = geometric_part(model), joint_side_terms(model)
     if not terms:
         return RigidFit(model, model, ())
     rng = np.random.default_rng(seed)
