@@ -12,6 +12,7 @@ import os
 import warnings
 from collections.abc import Callable
 from dataclasses import replace
+from functools import cache
 from importlib import resources
 from pathlib import Path
 
@@ -47,6 +48,12 @@ def _embedded(file: str, source: str) -> RobotModel:
     return robot_from_dict(load_yaml(resource.read_text(), source, RobotFileError)[0], source=source)
 
 
+@cache
+def _donor(file: str, name: str) -> RobotModel:
+    """An embedded arm as an inertials donor, read once per process (only read, never handed out)."""
+    return _embedded(file, name)
+
+
 def embedded_inertials(model: RobotModel) -> tuple[RobotModel, str] | None:
     """``model`` with the published inertials of the embedded arm whose joint axes it shares.
 
@@ -59,7 +66,7 @@ def embedded_inertials(model: RobotModel) -> tuple[RobotModel, str] | None:
     """
     best = None
     for name, (file, source) in INERTIAL_DONORS.items():
-        donor = _embedded(file, name)
+        donor = _donor(file, name)
         if donor.n_joints != model.n_joints:
             continue
         moved = transfer_inertials(model, donor)
