@@ -203,7 +203,7 @@ def add_deprecated(parser: argparse.ArgumentParser, old: str, new: str, type, co
 # ------------------------------------------------------------------------------ common options
 def add_robot(parser: argparse.ArgumentParser, default: str | None = "panda") -> None:
     """``--robot``: a robot file, a URDF (with ``--tip-link``, ``--base-link``), or ``panda``."""
-    what = "nominal robot: a robot file (YAML), a URDF (.urdf) or 'panda' (embedded)"
+    what = "nominal robot: a robot file (YAML), a URDF (.urdf) or an embedded arm: panda, fr3, iiwa14, gen3lite"
     if default is None:
         parser.add_argument("--robot", required=True, help=what)
     else:
