@@ -60,13 +60,14 @@ def provenance_header(source: str, output_format: str) -> str:
     )
 
 
-def recorded_configurations(model: RobotModel, samples: str | os.PathLike | None = None
-                            ) -> tuple[np.ndarray | None, str]:
+def recorded_configurations(model: RobotModel, samples: str | os.PathLike | None = None,
+                            folder: str | os.PathLike | None = None) -> tuple[np.ndarray | None, str]:
     """The joint angles the model was calibrated on, for the rigid fit.
 
     Args:
         samples: a samples file; None: the one the calibrated file's ``calibration.inputs.samples`` names,
-            if it still exists with the recorded SHA-256.
+            if it still exists with the recorded SHA-256 (tried as written, then beside ``folder``, the
+            calibrated file's folder, and relative to it and to its parent; the digest must match).
 
     Returns:
         ``(q (K, n) [rad] or None, one line saying where they came from)``.
@@ -81,8 +82,15 @@ def recorded_configurations(model: RobotModel, samples: str | os.PathLike | None
     path = record.get("path") if isinstance(record, dict) else None
     if not path:
         return None, "no recorded configurations (the file names no samples; --samples FILE to give them)"
-    if not Path(path).is_file() or file_digest(path) != record.get("sha256"):
+    candidates = [Path(path)]
+    if folder is not None:  # calibrated elsewhere: beside the file, or from its parent; the digest decides
+        candidates += [Path(folder) / Path(path).name]
+        if not Path(path).is_absolute():
+            candidates += [Path(folder) / path, Path(folder).parent / path]
+    found = [c for c in candidates if c.is_file() and file_digest(c) == record.get("sha256")]
+    if not found:
         return None, f"no recorded configurations ({path} is gone or changed since the calibration)"
+    path = found[0]
     try:
         q = read_samples(path, model).q
     except DatasetError as error:
@@ -93,7 +101,7 @@ def recorded_configurations(model: RobotModel, samples: str | os.PathLike | None
 def export_model(model: RobotModel, output_format: str, header: str = "", prefix: str | None = None,
                  effort: list[float] | None = None, velocity: list[float] | None = None,
                  into: tuple[str, str] | None = None, samples: str | os.PathLike | None = None,
-                 seed: int = 0) -> Export:
+                 seed: int = 0, folder: str | os.PathLike | None = None) -> Export:
     """The exported document of a model.
 
     Args:
@@ -106,6 +114,8 @@ def export_model(model: RobotModel, output_format: str, header: str = "", prefix
         into: ``(text, source)`` of the user's URDF of the same arm, whose joint origins are rewritten.
         samples: samples file for the rigid fit (default: the calibration's own, :func:`recorded_configurations`).
         seed: seed of the rigid fit's workspace samples.
+        folder: the calibrated file's folder (where a relative samples path of its calibration block is
+            looked for after the working folder).
 
     Raises:
         ExportError: an invalid format, prefix, limits, or an option the format does not take.
@@ -132,7 +142,7 @@ def export_model(model: RobotModel, output_format: str, header: str = "", prefix
         for option, values in (("--effort", effort), ("--velocity", velocity)):
             if values is None and n != len(PANDA_EFFORT):
                 raise ExportError(f"{option}: no default for a {n}-joint robot, give {n} comma-separated values")
-    recorded, where = (None, "") if not joint_side_terms(model) else recorded_configurations(model, samples)
+    recorded, where = (None, "") if not joint_side_terms(model) else recorded_configurations(model, samples, folder)
     fit = rigid_approximation(model, recorded, seed=seed)
     notes = (fit.summary(), f"rigid fit: {where}") if fit.terms else ()
     rigid = fit.model

@@ -72,6 +72,8 @@ def _into(into: str, out: str) -> tuple[str, str]:
 
 def run(args: argparse.Namespace) -> int:
     """Load, export; nothing is written unless the whole document was built."""
+    from pathlib import Path
+
     from spherecal.controller.export import export_model, provenance_header
     from spherecal.correction import load_robot
     from spherecal.options import planned_outputs
@@ -81,7 +83,7 @@ def run(args: argparse.Namespace) -> int:
     into = None if args.into is None else _into(args.into, args.out)
     exported = export_model(model, args.format, provenance_header(args.robot, args.format), args.prefix,
                             _limits(args.effort, "--effort"), _limits(args.velocity, "--velocity"), into,
-                            args.samples, args.seed)
+                            args.samples, args.seed, Path(args.robot).parent)
     with outputs:
         path = outputs.write_text(args.out, exported.text)
     print(f"spherecal export: wrote {args.format} of {model.name!r} ({model.convention} DH) to {path}")

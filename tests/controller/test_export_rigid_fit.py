@@ -3,6 +3,7 @@ MuJoCo's URDF compiler, is never farther from the full model than the URDF of th
 
 from __future__ import annotations
 
+import os
 from dataclasses import replace
 
 import mujoco
@@ -10,7 +11,7 @@ import numpy as np
 import pytest
 
 from spherecal.cli import main
-from spherecal.controller.export import export_model
+from spherecal.controller.export import export_model, recorded_configurations
 from spherecal.controller.rigid_fit import geometric_part, rigid_approximation
 from spherecal.correction import Dataset, load_robot, perturb, save_robot, tool_point, write_samples
 from spherecal.correction.elastic import with_compliance
@@ -60,6 +61,16 @@ def test_rigid_fit_urdf_is_never_worse_than_the_plain_dh_urdf(tmp_path, capsys, 
         assert dropped > 2e-4  # the compliance matters
         assert fitted <= 0.8 * dropped, (fitted, dropped)  # never worse, and here clearly better
     assert f"by {rigid_approximation(model, recorded).workspace_rms * 1e3:.3f} mm rms" in printed
+    # exported from another folder: the samples file is found beside the calibrated file by its digest
+    here = os.getcwd()
+    try:
+        os.chdir(tmp_path.parent)
+        record = {"path": "samples.csv", "sha256": input_record(samples)["sha256"]}
+        moved = replace(model, extras={**model.extras, "calibration": {"inputs": {"samples": record}}})
+        assert recorded_configurations(moved, folder=tmp_path)[0] is not None
+        assert recorded_configurations(moved)[0] is None
+    finally:
+        os.chdir(here)
 
 
 def test_rigid_model_is_exported_unchanged_and_other_formats_keep_every_term(panda, rng) -> None:
