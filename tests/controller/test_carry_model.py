@@ -7,11 +7,13 @@ from dataclasses import replace
 
 import mujoco
 import numpy as np
+import pytest
 
 from spherecal.controller.compensation import compensate
 from spherecal.controller.ik import _rotvec, ik
 from spherecal.controller.plant import build_plant
 from spherecal.correction import (
+    convert,
     load_robot,
     perturb,
     pose_jacobian,
@@ -30,8 +32,9 @@ def _elastic():
     return with_compliance(load_robot("panda"), COMPLIANCE)
 
 
-def test_pose_jacobian_matches_central_differences_of_the_elastic_pose(rng) -> None:
-    model = _elastic()
+@pytest.mark.parametrize("convention", ["modified", "standard"])
+def test_pose_jacobian_matches_central_differences_of_the_elastic_pose(rng, convention) -> None:
+    model = convert(_elastic(), convention)
     q = model.random_configurations(5, rng)
     jac = pose_jacobian(model, q)
     h = 1e-6
@@ -43,7 +46,7 @@ def test_pose_jacobian_matches_central_differences_of_the_elastic_pose(rng) -> N
             np.testing.assert_allclose(jac[i, :3, k], (plus[:3, 3] - minus[:3, 3]) / (2 * h), atol=1e-8)
             turn = _rotvec(plus[:3, :3] @ minus[:3, :3].T) / (2 * h)  # world angular velocity per unit rate
             np.testing.assert_allclose(jac[i, 3:, k], turn, atol=1e-8)
-    rigid = pose_jacobian(load_robot("panda"), q)
+    rigid = pose_jacobian(convert(load_robot("panda"), convention), q)
     assert np.abs(rigid[:, 3:] - jac[:, 3:]).max() > 1e-4  # the elastic terms are in the angular rows too
     np.testing.assert_allclose(pose_jacobian(model, q[0]), jac[0])
 
