@@ -38,6 +38,21 @@ def write_json(path: str | os.PathLike, results: dict, seed: int | None = None, 
     return path
 
 
+def run_cli(argv: list[str]) -> str:
+    """Run ``spherecal argv`` in this process and return what it printed; stop the script if it fails."""
+    import contextlib
+    import io
+
+    from spherecal.cli import main
+
+    out = io.StringIO()
+    with contextlib.redirect_stdout(out):
+        code = main(argv)
+    if code != 0:
+        raise SystemExit(f"failed ({code}): spherecal {' '.join(argv)}\n{out.getvalue()}")
+    return out.getvalue()
+
+
 # ----------------------------------------------------------------------------- MUKCa real data
 def find_mukca() -> Path:
     """``shared/data/mukca`` beside this checkout or one of its parents (the full recordings)."""

@@ -93,6 +93,18 @@ class CompensationResult:
     converged: bool = True
     note: str = ""
 
+    @property
+    def uncompensated_error(self) -> float:
+        """|target - landing| [m] had the target itself been sent (the first controller evaluation)."""
+        return float(self.history[0])
+
+    @property
+    def gain(self) -> float:
+        """How much nearer the target the compensated command puts the real arm [m]
+        (:attr:`uncompensated_error` minus :attr:`position_residual`): what the calibration's full model,
+        elastic terms included, is worth to this controller at this target."""
+        return self.uncompensated_error - self.position_residual
+
 
 def _straddle(best: CompensationResult, other_command: np.ndarray, other_q: np.ndarray, target: np.ndarray,
               nominal: RobotModel, calibrated: RobotModel, q_seed: np.ndarray, controller: Controller,
@@ -136,9 +148,17 @@ def check_models(nominal: RobotModel, calibrated: RobotModel, source: str = "cal
 def _check_difference(nominal: RobotModel, calibrated: RobotModel, q: np.ndarray, source: str) -> None:
     gap = float(np.linalg.norm(tool_point(nominal, q) - tool_point(calibrated, q)))
     if gap > MAX_MODEL_DIFFERENCE:
+        tools = float(np.linalg.norm(nominal.tool - calibrated.tool))
+        swapped = replace(calibrated, tool=nominal.tool)  # the same arm with the controller's tool?
+        same_tool = float(np.linalg.norm(tool_point(nominal, q) - tool_point(swapped, q)))
+        why = (f"its tool point is {tools * 1e3:.0f} mm from the controller model's in the last frame: a calibration "
+               f"ends at its own tool (the ball); put the controller's tool on it first: "
+               f"correction.with_tool(calibrated, {np.round(nominal.tool, 6).tolist()}) or `spherecal tool CAL.yaml "
+               f"--offset {' '.join(f'{v:g}' for v in nominal.tool)} --out NEW.yaml`"
+               if same_tool <= MAX_MODEL_DIFFERENCE else "not a calibration of this robot")
         raise ModelMismatchError(
             f"{source}: tool point differs from the controller's model by {gap * 1e3:.0f} mm at the seed "
-            f"(more than {MAX_MODEL_DIFFERENCE * 1e3:.0f} mm: not a calibration of this robot)"
+            f"(more than {MAX_MODEL_DIFFERENCE * 1e3:.0f} mm): {why}"
         )
 
 

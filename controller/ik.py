@@ -10,7 +10,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from spherecal.correction import RobotModel, frames, joint_jacobian, tool_point, tool_pose
+from spherecal.correction import RobotModel, joint_jacobian, pose_jacobian, tool_point, tool_pose
 from spherecal.correction.errors import SpherecalError
 
 #: Position tolerance [m] and orientation tolerance [rad] of a converged solution.
@@ -65,14 +65,11 @@ def _rotvec(rotation: np.ndarray) -> np.ndarray:
 def _error_and_jacobian(model: RobotModel, q: np.ndarray, target: np.ndarray, orientation: np.ndarray | None
                         ) -> tuple[np.ndarray, np.ndarray]:
     """Task error (3,) or (6,) [m, rad] and its Jacobian d(p, omega)/dq (3 or 6, n)."""
-    jac_p = joint_jacobian(model, q)
     if orientation is None:
-        return target - tool_point(model, q), jac_p
-    pose = tool_pose(model, q)
-    z = frames(model, q[None]).z[:, :, 0]  # (n+1, 3): joint i turns about z of frame i (modified) or i-1
-    axes = z[1:] if model.convention == "modified" else z[:-1]
+        return target - tool_point(model, q), joint_jacobian(model, q)
+    pose = tool_pose(model, q)  # the full model: an elastic one at its link angles
     err_o = _rotvec(orientation @ pose[:3, :3].T)
-    return np.concatenate([target - pose[:3, 3], err_o]), np.vstack([jac_p, axes.T])
+    return np.concatenate([target - pose[:3, 3], err_o]), pose_jacobian(model, q)
 
 
 def _solve_from(model: RobotModel, q: np.ndarray, target: np.ndarray, orientation: np.ndarray | None,

@@ -21,10 +21,11 @@ from .files.samples import Dataset, DatasetError
 from .files.samples_csv import format_samples, read_samples, write_samples
 from .files.urdf_to_dh import NearlyParallelAxesWarning, load_urdf
 from .gravity import InertialsError, gravity_torques, has_inertials, inertials_of
-from .kinematics import joint_jacobian, param_jacobian, tool_point, tool_pose
+from .kinematics import joint_jacobian, link_angle_jacobian, param_jacobian, pose_jacobian, tool_point, tool_pose
 from .model import RobotModel, matrix_rpy, param_names, pose_matrix, rpy_matrix
 from .perturb import perturb
 from .rigid import apply_transform, fit_rigid_transform, registered_errors
+from .tool import ToolError, ToolSwap, with_tool
 
 __all__ = [
     "Dataset",
@@ -53,6 +54,7 @@ __all__ = [
     "has_inertials",
     "inertials_of",
     "joint_jacobian",
+    "link_angle_jacobian",
     "link_frames",
     "load_robot",
     "load_urdf",
@@ -60,6 +62,7 @@ __all__ = [
     "param_jacobian",
     "param_names",
     "perturb",
+    "pose_jacobian",
     "pose_matrix",
     "registered_errors",
     "robot_from_dict",
@@ -70,4 +73,7 @@ __all__ = [
     "to_standard",
     "tool_point",
     "tool_pose",
+    "ToolError",
+    "ToolSwap",
+    "with_tool",
 ]

@@ -5,7 +5,8 @@ A modified chain ``B prod_i [Rx(alpha_i) Lx(a_i) Rz(theta_i+q_i) Lz(d_i)] t`` re
 with ``a_{n+1} = alpha_{n+1} = 0``: the first joint's ``a, alpha`` move into the base.
 The other way, the last standard joint's trailing ``Lx(a_n) Rx(alpha_n)`` moves into the
 tool point. A Hayati ``Ry(beta)`` travels with its ``Lx(a) Rx(alpha)``: modified joint ``i+1``'s
-``beta`` is standard joint ``i``'s. Both keep every tool point, for every configuration, exactly.
+``beta`` is standard joint ``i``'s. Both keep every tool point, for every configuration, exactly, and move
+the link inertials into the new link frames (gravity torques unchanged).
 """
 
 from __future__ import annotations
@@ -14,6 +15,8 @@ from dataclasses import replace
 
 import numpy as np
 
+from .gravity import has_inertials
+from .inertials import transfer_inertials
 from .model import RobotModel, matrix_rpy
 
 
@@ -31,6 +34,10 @@ def to_standard(model: RobotModel) -> RobotModel:
     """The same arm in standard DH; the first joint's ``a, alpha`` go into the base."""
     if model.convention == "standard":
         return model
+    return _inertials_moved(_to_standard(model), model)
+
+
+def _to_standard(model: RobotModel) -> RobotModel:
     base = model.base_transform @ _link_x(model.a[0], model.alpha[0], model.beta[0])
     return replace(
         model,
@@ -48,6 +55,10 @@ def to_modified(model: RobotModel) -> RobotModel:
     """The same arm in modified DH; the last joint's ``a, alpha`` go into the tool point."""
     if model.convention == "modified":
         return model
+    return _inertials_moved(_to_modified(model), model)
+
+
+def _to_modified(model: RobotModel) -> RobotModel:
     tool = (_link_x(model.a[-1], model.alpha[-1], model.beta[-1]) @ np.append(model.tool, 1.0))[:3]
     return replace(
         model,
@@ -67,6 +78,17 @@ def convert(model: RobotModel, convention: str) -> RobotModel:
     if convention == "modified":
         return to_modified(model)
     raise ValueError(f"unknown convention {convention!r}")
+
+
+def _inertials_moved(converted: RobotModel, model: RobotModel) -> RobotModel:
+    """``converted`` with ``model``'s link inertials moved into its own link frames (a link's frame differs
+    between the conventions: standard frame ``i`` sits on joint ``i+1``'s axis, modified frame ``i`` on joint
+    ``i``'s), so that gravity torques do not change with the convention."""
+    if not has_inertials(model):
+        return converted
+    moved = transfer_inertials(converted, model, ignore_base=False)
+    assert moved is not None  # the same axes by construction
+    return moved
 
 
 

@@ -23,6 +23,7 @@ COMMANDS: dict[str, str] = {
     "campaign": "spherecal.commands.campaign",
     "plan": "spherecal.commands.plan",
     "export": "spherecal.commands.export",
+    "tool": "spherecal.commands.tool",
 }
 
 

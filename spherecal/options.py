@@ -66,6 +66,11 @@ def _finite(text: str) -> float:
     return value
 
 
+def finite(text: str) -> float:
+    """Any finite number (coordinates)."""
+    return _finite(text)
+
+
 def non_negative(text: str) -> float:
     """A finite number >= 0 (tolerances, spreads)."""
     value = _finite(text)
@@ -198,7 +203,7 @@ def add_deprecated(parser: argparse.ArgumentParser, old: str, new: str, type, co
 # ------------------------------------------------------------------------------ common options
 def add_robot(parser: argparse.ArgumentParser, default: str | None = "panda") -> None:
     """``--robot``: a robot file, a URDF (with ``--tip-link``, ``--base-link``), or ``panda``."""
-    what = "nominal robot: a robot file (YAML), a URDF (.urdf) or 'panda' (embedded)"
+    what = "nominal robot: a robot file (YAML), a URDF (.urdf) or an embedded arm: panda, fr3, iiwa14, gen3lite"
     if default is None:
         parser.add_argument("--robot", required=True, help=what)
     else:
@@ -213,11 +218,25 @@ def add_urdf_links(parser: argparse.ArgumentParser) -> None:
                         "(default: the end of the longest chain)")
     parser.add_argument("--base-link", default=None, metavar="NAME",
                         help="URDF robot: the link whose frame is the world (default: the root link)")
+    parser.add_argument("--inertials", default=None, metavar="FILE",
+                        help="link masses for gravity torques: a YAML file with an 'inertials' list, one "
+                        "{mass: kg, com: [x, y, z] metres in DH frame i} per joint, and an optional 'payload' "
+                        "(correction.files.inertials_file); default: the robot's own, else those of the "
+                        "embedded arm (Panda, FR3, iiwa14, Gen3 lite) whose joint axes it shares")
 
 
 def urdf_links(args: argparse.Namespace) -> dict:
-    """Keyword arguments ``tip_link``, ``base_link`` of ``correction.load_robot`` from the options."""
-    return {"tip_link": getattr(args, "tip_link", None), "base_link": getattr(args, "base_link", None)}
+    """Keyword arguments ``tip_link``, ``base_link``, ``inertials`` and ``report`` (print the one line saying
+    where the inertials came from) of ``correction.load_robot`` from the options."""
+    return {"tip_link": getattr(args, "tip_link", None), "base_link": getattr(args, "base_link", None),
+            "inertials": getattr(args, "inertials", None), "report": _report(args)}
+
+
+def _report(args: argparse.Namespace):
+    """A printer of one library note, prefixed with the command's name."""
+    command = getattr(args, "command", None)
+    prefix = f"spherecal {command}: " if command else "spherecal: "
+    return lambda line: print(prefix + line)
 
 
 def add_seed(parser: argparse.ArgumentParser, what: str = "everything random") -> None:
@@ -243,7 +262,7 @@ def add_seconds(parser: argparse.ArgumentParser, default: float, what: str) -> N
 #: Options (argparse destinations) that name files a command reads: no output may be one of them.
 INPUT_OPTIONS: tuple[str, ...] = (
     "robot", "samples", "fixtures", "mocap", "truth", "nominal", "calibrated", "candidates", "predict", "into",
-    "source",
+    "source", "inertials", "urdf",
 )
 
 
@@ -262,7 +281,7 @@ def planned_outputs(args: argparse.Namespace, outputs: dict):
 
     inputs = {f"--{name.replace('_', '-')}" if name != "source" else "SOURCE": getattr(args, name, None)
               for name in INPUT_OPTIONS}
-    if getattr(args, "command", None) == "export":  # export's robot file is its positional argument
+    if getattr(args, "command", None) in ("export", "tool"):  # their robot file is the positional argument
         inputs["CAL.yaml"] = inputs.pop("--robot")
     return OutputSet({k: v for k, v in outputs.items() if v is not None},
                      {k: v for k, v in inputs.items() if isinstance(v, str)})

@@ -94,3 +94,9 @@ def comment_block(info: dict[str, Any]) -> str:
         inputs.append(f"{key}={value}")
     lines.append("inputs: " + ", ".join(inputs))
     return "\n".join(lines)
+
+
+def matches_record(path: str | os.PathLike, record: dict[str, Any]) -> bool:
+    """True when ``path`` is a file whose SHA-256 is the one an input record (:func:`input_record`) holds:
+    the same file a result was made from."""
+    return Path(path).is_file() and file_digest(path) == record.get("sha256")

@@ -29,7 +29,11 @@ JOINT_KEYS: tuple[str, ...] = JOINT_FIELDS + ("lower", "upper")
 OPTIONAL_JOINT_KEYS: tuple[str, ...] = ("beta",)
 _KNOWN_KEYS = ("name", "convention", "joints", "tool", "base")
 #: Robots shipped inside the package, loadable by name.
-EMBEDDED_ROBOTS: dict[str, str] = {"panda": "panda.yaml", "franka_panda": "panda.yaml"}
+EMBEDDED_ROBOTS: dict[str, str] = {
+    "panda": "panda.yaml", "franka_panda": "panda.yaml", "fr3": "fr3.yaml", "franka_fr3": "fr3.yaml",
+    "iiwa14": "iiwa14.urdf", "kuka_iiwa14": "iiwa14.urdf",
+    "gen3lite": "gen3lite.urdf", "kinova_gen3_lite": "gen3lite.urdf",
+}
 
 
 #: Largest length (a, d, tool, base position) a robot file may give [m]: an arm is not 10 m long.

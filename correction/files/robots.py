@@ -1,30 +1,90 @@
-"""Any robot description by path or name: a robot file (YAML), a URDF, or an embedded robot."""
+"""Any robot description by path or name: a robot file (YAML), a URDF, or an embedded robot.
+
+Link inertials (for gravity torques and the elastic model), in this order: an ``inertials`` file given by
+the caller (:mod:`.inertials_file`); the description's own (a robot file's ``inertials:`` block, a URDF's
+``<inertial>`` elements); else those of an embedded arm whose joint axes the chain shares
+(:func:`embedded_inertials`: the Panda, FR3, iiwa14 and Gen3 lite, each file citing its source and licence).
+"""
 
 from __future__ import annotations
 
 import os
+import warnings
+from collections.abc import Callable
+from dataclasses import replace
+from functools import cache
 from importlib import resources
 from pathlib import Path
 
+import numpy as np
+
+from ..gravity import has_inertials
+from ..inertials import transfer_inertials
 from ..model import RobotModel
+from .inertials_file import with_inertials_file
 from .robot_file import EMBEDDED_ROBOTS, RobotFileError, robot_from_dict
 from .text_input import read_text
-from .urdf_to_dh import load_urdf
+from .urdf_to_dh import NearlyParallelAxesWarning, load_urdf
 from .yaml_safe import load_yaml
 
+#: Tool link of each embedded URDF (the flange; the Gen3 lite's gripper tool frame).
+URDF_TIPS: dict[str, str] = {"iiwa14.urdf": "iiwa_link_ee_kuka", "gen3lite.urdf": "tool_frame"}
+#: Embedded arms whose published inertials a matching chain receives: name -> (file, source in one line).
+INERTIAL_DONORS: dict[str, tuple[str, str]] = {
+    "franka_panda": ("panda.yaml", "Gaz et al. 2019 via franka_ros, Apache-2.0"),
+    "franka_fr3": ("fr3.yaml", "franka_description, Apache-2.0"),
+    "kuka_iiwa14": ("iiwa14.urdf", "Drake's iiwa14 model, BSD-3-Clause"),
+    "kinova_gen3_lite": ("gen3lite.urdf", "Kinova's description via MUKCa, MIT / BSD-3-Clause"),
+}
 
-def load_robot(
-    path_or_name: str | os.PathLike, tip_link: str | None = None, base_link: str | None = None
-) -> RobotModel:
-    """Load a robot file, a URDF (``.urdf``), or an embedded robot by name (``"panda"``).
 
-    Args:
-        path_or_name: YAML robot file, URDF file or embedded name.
-        tip_link, base_link: URDF only: the chain to convert (see :func:`correction.urdf_to_dh.load_urdf`).
+def _embedded(file: str, source: str) -> RobotModel:
+    """An embedded robot description by file name."""
+    resource = resources.files("spherecal.correction").joinpath("data", file)
+    if file.endswith(".urdf"):
+        with resources.as_file(resource) as path, warnings.catch_warnings():
+            warnings.simplefilter("ignore", NearlyParallelAxesWarning)  # the Gen3 lite's joints 2-3
+            return load_urdf(path, tip_link=URDF_TIPS[file])
+    return robot_from_dict(load_yaml(resource.read_text(), source, RobotFileError)[0], source=source)
 
-    Raises:
-        RobotFileError: unreadable file, invalid YAML or URDF, an invalid field (one line).
+
+@cache
+def _donor(file: str, name: str) -> RobotModel:
+    """An embedded arm as an inertials donor, read once per process (only read, never handed out)."""
+    return _embedded(file, name)
+
+
+def embedded_inertials(model: RobotModel) -> tuple[RobotModel, str] | None:
+    """``model`` with the published inertials of the embedded arm whose joint axes it shares.
+
+    Among the embedded arms of the same joint count whose axes coincide with ``model``'s (within
+    :data:`correction.inertials.AXIS_DISTANCE_TOL` and ``AXIS_ANGLE_TOL``), the one with the closest joint
+    limits (the Panda and the FR3 share their geometry, not their limits).
+
+    Returns:
+        ``(model with inertials, one line naming the arm and the source)``, or None when no arm matches.
     """
+    best = None
+    for name, (file, source) in INERTIAL_DONORS.items():
+        donor = _donor(file, name)
+        if donor.n_joints != model.n_joints:
+            continue
+        moved = transfer_inertials(model, donor)
+        if moved is None:
+            continue
+        gap = float(np.abs(donor.lower - model.lower).sum() + np.abs(donor.upper - model.upper).sum())
+        if best is None or gap < best[0]:
+            best = (gap, name, source, moved)
+    if best is None:
+        return None
+    _, name, source, moved = best
+    label = f"{name} ({source}; data/{INERTIAL_DONORS[name][0]})"
+    moved = replace(moved, extras={**moved.extras, "inertials_source": f"embedded {label}"})
+    return moved, (f"{model.name}: no link inertials in the description; its joint axes match the embedded {name}, "
+                   f"whose published inertials it takes ({source}); --inertials FILE to give your own")
+
+
+def _load(path_or_name: str | os.PathLike, tip_link: str | None, base_link: str | None) -> RobotModel:
     key = str(path_or_name)
     if key.lower().endswith(".urdf"):
         return load_urdf(path_or_name, tip_link=tip_link, base_link=base_link)
@@ -34,9 +94,38 @@ def load_robot(
         if value is not None:
             raise RobotFileError(f"{key}: a {option} ({value!r}) is only for a URDF robot description (.urdf)")
     if key in EMBEDDED_ROBOTS and not Path(key).exists():
-        text = resources.files("spherecal.correction").joinpath("data", EMBEDDED_ROBOTS[key]).read_text()
-        return robot_from_dict(load_yaml(text, key, RobotFileError)[0], source=key)
+        return _embedded(EMBEDDED_ROBOTS[key], key)
     path = Path(path_or_name)
     text = read_text(path, RobotFileError)
     data, _ = load_yaml(text, str(path), RobotFileError)  # bounded: size, depth, aliases; no duplicate keys
     return robot_from_dict(data, source=str(path))
+
+
+def load_robot(
+    path_or_name: str | os.PathLike, tip_link: str | None = None, base_link: str | None = None,
+    inertials: str | os.PathLike | None = None, report: Callable[[str], None] | None = None,
+) -> RobotModel:
+    """Load a robot file, a URDF (``.urdf``), or an embedded robot by name (``"panda"``, ``"fr3"``).
+
+    Args:
+        path_or_name: YAML robot file, URDF file or embedded name.
+        tip_link, base_link: URDF only: the chain to convert (see :func:`correction.urdf_to_dh.load_urdf`).
+        inertials: an inertials file (:mod:`.inertials_file`) whose masses replace the description's.
+        report: called with one line when the inertials come from a matching embedded arm
+            (:func:`embedded_inertials`); the commands print it.
+
+    Raises:
+        RobotFileError: unreadable file, invalid YAML or URDF, an invalid field (one line).
+        InertialsError: an invalid inertials file (one line naming the file and the field).
+    """
+    model = _load(path_or_name, tip_link, base_link)
+    if inertials is not None:
+        return with_inertials_file(model, inertials)
+    if has_inertials(model):
+        return model
+    matched = embedded_inertials(model)
+    if matched is None:
+        return model
+    if report is not None:
+        report(matched[1])
+    return matched[0]

@@ -66,8 +66,9 @@ def test_cli_records_the_choice_and_refuses_elastic_without_masses(tmp_path, cap
     assert main([*args, "--model", "dh", "--out", str(tmp_path / "dh.yaml")]) == 0
     out = yaml.safe_load((tmp_path / "dh.yaml").read_text())
     assert "compliance" not in out and out["calibration"]["model_selection"]["chosen"] == "dh"
-    bare = load_robot("panda")
-    save_robot(bare.__class__(**{**bare.__dict__, "extras": {}}), tmp_path / "bare.yaml")
+    bare = load_robot("panda")  # without masses, and 5 mm off the Panda so no embedded arm lends it theirs
+    save_robot(bare.__class__(**{**bare.__dict__, "d": bare.d + np.eye(7)[2] * 0.005, "extras": {}}),
+               tmp_path / "bare.yaml")
     args[2] = str(tmp_path / "bare.yaml")
     assert main([*args, "--model", "elastic", "--out", str(tmp_path / "x.yaml")]) == 1
     err = capsys.readouterr().err.strip().splitlines()

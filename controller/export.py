@@ -1,0 +1,150 @@
+"""Export a (calibrated) robot model as URDF, MJCF or the robot file (YAML).
+
+* ``urdf`` (:func:`correction.files.urdf_write.robot_to_urdf`, or the user's own URDF with only its joint
+  origins rewritten, :func:`correction.files.urdf_into.urdf_into`): kinematics only, so a model with
+  joint-side terms (compliance, ...) is written as its best rigid approximation (:mod:`.rigid_fit`), and
+  :attr:`Export.notes` says how much that loses.
+* ``mjcf``: the controller's plant (:func:`controller.plant.build_mjcf`; elastic joints kept as flexible
+  hinges): bodies ``link0..n``, hinges ``joint1..n``, site ``tool``.
+* ``yaml``: the robot file, every term kept.
+"""
+
+from __future__ import annotations
+
+import os
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from spherecal.correction import DatasetError, RobotModel, dump_robot, read_samples
+from spherecal.correction.files.provenance import comment_block, matches_record, provenance
+from spherecal.correction.files.urdf_into import urdf_into
+from spherecal.correction.files.urdf_write import (
+    PANDA_EFFORT,
+    ExportError,
+    provenance_comment,
+    robot_to_urdf,
+    xml_comment,
+)
+
+from .rigid_fit import RigidFit, joint_side_terms, rigid_approximation
+
+FORMATS = ("urdf", "mjcf", "yaml")
+
+
+@dataclass(frozen=True)
+class Export:
+    """An exported document.
+
+    Attributes:
+        text: the document.
+        notes: lines for the user (what the URDF could not carry and what that costs, where the recorded
+            configurations came from).
+        fit: the rigid approximation written to a URDF (None for the other formats).
+    """
+
+    text: str
+    notes: tuple[str, ...] = ()
+    fit: RigidFit | None = None
+
+
+def provenance_header(source: str, output_format: str) -> str:
+    """Comment lines naming the input file (and its SHA-256) and the versions that wrote the export."""
+    block = comment_block(provenance(None, {"robot": Path(source)}))
+    return f"spherecal export to {output_format} of {source}\n{block}"
+
+
+def recorded_configurations(model: RobotModel, samples: str | os.PathLike | None = None,
+                            folder: str | os.PathLike | None = None) -> tuple[np.ndarray | None, str]:
+    """The joint angles the model was calibrated on, for the rigid fit.
+
+    Args:
+        samples: a samples file; None: the one the calibrated file's ``calibration.provenance.inputs.samples`` names,
+            if it still exists with the recorded SHA-256 (tried as written, then beside ``folder``, the
+            calibrated file's folder, and relative to it and to its parent; the digest must match).
+
+    Returns:
+        ``(q (K, n) [rad] or None, one line saying where they came from)``.
+
+    Raises:
+        DatasetError: an unreadable ``samples`` file (one line naming file, row and field).
+    """
+    if samples is not None:
+        q = read_samples(samples, model).q
+        return q, f"{len(q)} recorded configurations from {samples}"
+    made = (model.extras.get("calibration") or {}).get("provenance") or {}
+    record = (made.get("inputs") or {}).get("samples") or {}
+    path = record.get("path") if isinstance(record, dict) else None
+    if not path:
+        return None, "no recorded configurations (the file names no samples; --samples FILE to give them)"
+    candidates = [Path(path)]
+    if folder is not None:  # calibrated elsewhere: beside the file, or from its parent; the digest decides
+        candidates += [Path(folder) / Path(path).name]
+        if not Path(path).is_absolute():
+            candidates += [Path(folder) / path, Path(folder).parent / path]
+    found = [c for c in candidates if matches_record(c, record)]
+    if not found:
+        return None, f"no recorded configurations ({path} is gone or changed since the calibration)"
+    path = found[0]
+    try:
+        q = read_samples(path, model).q
+    except DatasetError as error:
+        return None, f"no recorded configurations ({error})"
+    return q, f"{len(q)} recorded configurations from {path} (the calibration's samples)"
+
+
+def export_model(model: RobotModel, output_format: str, header: str = "", prefix: str | None = None,
+                 effort: list[float] | None = None, velocity: list[float] | None = None,
+                 into: tuple[str, str] | None = None, samples: str | os.PathLike | None = None,
+                 seed: int = 0, folder: str | os.PathLike | None = None) -> Export:
+    """The exported document of a model.
+
+    Args:
+        model: the (calibrated) model.
+        output_format: ``urdf``, ``mjcf`` or ``yaml`` (see the module docstring).
+        header: comment lines on top (inputs, versions: :func:`provenance_header`).
+        prefix: URDF name prefix (``panda_`` when None); refused for the other formats.
+        effort, velocity: (n,) URDF joint limits [N m], [rad/s]; Franka's for a 7-joint arm when None,
+            required for other arms; refused for the other formats and with ``into``.
+        into: ``(text, source)`` of the user's URDF of the same arm, whose joint origins are rewritten.
+        samples: samples file for the rigid fit (default: the calibration's own, :func:`recorded_configurations`).
+        seed: seed of the rigid fit's workspace samples.
+        folder: the calibrated file's folder (where a relative samples path of its calibration block is
+            looked for after the working folder).
+
+    Raises:
+        ExportError: an invalid format, prefix, limits, or an option the format does not take.
+    """
+    if output_format not in FORMATS:
+        raise ExportError(f"--format: unknown format {output_format!r}, expected one of {FORMATS}")
+    if output_format != "urdf":
+        for option, value in (("--prefix", prefix), ("--effort", effort), ("--velocity", velocity),
+                              ("--into", into), ("--samples", samples)):
+            if value is not None:
+                raise ExportError(f"{option}: only the urdf format takes it, not {output_format}")
+        if output_format == "yaml":
+            return Export(dump_robot(model, header=header))
+        from spherecal.controller.plant import build_mjcf  # mujoco: the plant module imports it
+
+        comments = [xml_comment(header)] if header.strip() else []
+        return Export("\n".join(comments + [provenance_comment(model), build_mjcf(model)]))
+    if into is not None:
+        for option, value in (("--prefix", prefix), ("--effort", effort), ("--velocity", velocity)):
+            if value is not None:
+                raise ExportError(f"{option}: not with --into (the URDF keeps its own names and limits)")
+    else:
+        n = model.n_joints
+        for option, values in (("--effort", effort), ("--velocity", velocity)):
+            if values is None and n != len(PANDA_EFFORT):
+                raise ExportError(f"{option}: no default for a {n}-joint robot, give {n} comma-separated values")
+    recorded, where = (None, "") if not joint_side_terms(model) else recorded_configurations(model, samples, folder)
+    fit = rigid_approximation(model, recorded, seed=seed)
+    notes = (fit.summary(), f"rigid fit: {where}") if fit.terms else ()
+    rigid = fit.model
+    if into is not None:
+        text = urdf_into(rigid, into[0], into[1], header)
+    else:
+        text = robot_to_urdf(rigid, prefix="panda_" if prefix is None else prefix, effort=effort,
+                             velocity=velocity, header=header)
+    return Export(text, notes, fit)

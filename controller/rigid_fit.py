@@ -1,0 +1,175 @@
+"""The best rigid approximation of a calibrated model: what a URDF (kinematics only) can carry.
+
+A URDF has joint origins and nothing else: no joint compliance, no other joint-side term of the
+calibrated model (:attr:`correction.RobotModel.layout` blocks after the base). Dropping those terms from
+the model loses what they correct. Instead the geometric parameters (DH, Hayati, tool, base) are refitted
+so that the rigid chain's tool points match the FULL model's over the recorded configurations and a
+workspace sample around them (a recorded configuration plus N(0, :data:`SPREAD`) per joint, clipped to the
+limits; uniform inside the limits when there are no recorded configurations)::
+
+    min_g  sum_k |tool_point(rigid(g), q_k) - tool_point(full, q_k)|^2
+
+by Gauss-Newton on :func:`correction.param_jacobian` (columns scaled by the layout's prior spread, minimum-
+norm steps: the DH redundancies stay at the calibrated values). The loss is then measured on a second,
+independent draw of the same workspace, and over the whole joint range. The rigid fit is never worse than the
+dropped model on the fitted configurations (it starts there and only accepts steps that lower the cost).
+
+Why around the recorded configurations, not the whole joint range: a rigid chain cannot follow gravity
+sag everywhere, so it has to choose where to be right. Measured on MUKCa's real Pandas (``bench/
+export_rigid.py``, elastic model trained on one placement, test MAE on the other placements' sockets [mm]):
+full model 0.353 / 0.242 (panda_2_clean / panda_4_clean), compliance dropped 0.444 / 0.415, refitted over
+the whole joint range 0.499 / 0.521 (worse than dropping), refitted around the recordings with a spread of
+0.1 / 0.2 / 0.3 / 0.5 rad 0.366 / 0.358 / 0.361 / 0.376 and 0.259 / 0.254 / 0.251 / 0.261.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, replace
+
+import numpy as np
+
+from spherecal.correction import RobotModel, param_jacobian, tool_point
+
+#: Workspace configurations drawn for the fit, and as many again to measure the loss.
+WORKSPACE_SAMPLES = 2000
+#: Spread of the workspace sample around the recorded configurations, per joint [rad] (17 deg).
+SPREAD = 0.3
+#: Gauss-Newton iterations at most, and the relative cost decrease below which it stops.
+ITERATIONS = 30
+RELATIVE_TOL = 1e-10
+
+
+@dataclass(frozen=True)
+class RigidFit:
+    """Outcome of :func:`rigid_approximation`.
+
+    Attributes:
+        model: the rigid model (the geometric part of the full model, refitted; no joint-side terms).
+        dropped: the full model with its joint-side terms simply removed (what a URDF held before).
+        terms: names of the non-zero joint-side parameters the URDF cannot express (``c2``, ...); empty: exact.
+        fit_rms, dropped_fit_rms: rms tool-point distance to the full model over the fitted configurations [m].
+        workspace_rms, workspace_max: rms and largest distance over an independent workspace sample [m].
+        dropped_workspace_rms: the same for the dropped model [m].
+        recorded: number of recorded configurations in the fit.
+        workspace: number of workspace configurations in the fit (and in the loss sample).
+        seed: seed of both workspace samples.
+        full_range_rms, dropped_full_range_rms: rms distance to the full model over configurations uniform in
+            the joint limits, of the fit and of the dropped model [m] (where the arm was not calibrated).
+    """
+
+    model: RobotModel
+    dropped: RobotModel
+    terms: tuple[str, ...]
+    fit_rms: float = 0.0
+    dropped_fit_rms: float = 0.0
+    workspace_rms: float = 0.0
+    workspace_max: float = 0.0
+    dropped_workspace_rms: float = 0.0
+    recorded: int = 0
+    workspace: int = 0
+    seed: int = 0
+    full_range_rms: float = 0.0
+    dropped_full_range_rms: float = 0.0
+
+    def summary(self) -> str:
+        """One line: what the rigid approximation loses against the full model, in mm."""
+        if not self.terms:
+            return "the model is rigid: the URDF carries all of it"
+        names = ", ".join(self.terms)
+        where = (f"within {SPREAD:g} rad of the {self.recorded} recorded ones" if self.recorded
+                 else "uniform in the joint limits")
+        return (f"a URDF cannot carry {names}: wrote the best rigid fit to the full model; it differs from it by "
+                f"{self.workspace_rms * 1e3:.3f} mm rms (max {self.workspace_max * 1e3:.3f} mm) over "
+                f"{self.workspace} configurations {where} (dropping the terms: "
+                f"{self.dropped_workspace_rms * 1e3:.3f} mm), {self.full_range_rms * 1e3:.3f} mm over the whole "
+                f"joint range (dropping: {self.dropped_full_range_rms * 1e3:.3f} mm); seed {self.seed}")
+
+
+def geometric_part(model: RobotModel) -> RobotModel:
+    """``model`` without its joint-side parameter blocks: every ``extras`` key whose removal shortens the
+    parameter vector (compliance today, any block added to the layout the same way tomorrow)."""
+    extras = dict(model.extras)
+    size = model.layout.size
+    for key in list(extras):
+        trial = replace(model, extras={k: v for k, v in extras.items() if k != key})
+        if trial.layout.size < size:
+            extras.pop(key)
+            size = trial.layout.size
+    return replace(model, extras=extras)
+
+
+def joint_side_terms(model: RobotModel) -> tuple[str, ...]:
+    """Names of the non-zero parameters of ``model`` that its :func:`geometric_part` has not (``c2``, ...)."""
+    kept = set(geometric_part(model).layout.names)
+    return tuple(name for name, value in zip(model.layout.names, model.params, strict=True)
+                 if name not in kept and value != 0.0)
+
+
+def _rms(a: np.ndarray, b: np.ndarray) -> float:
+    return float(np.sqrt(np.mean(np.sum((a - b) ** 2, axis=1))))
+
+
+def rigid_approximation(model: RobotModel, recorded: np.ndarray | None = None,
+                        workspace: int = WORKSPACE_SAMPLES, seed: int = 0) -> RigidFit:
+    """The geometric model whose tool points best match ``model``'s (see the module docstring).
+
+    Args:
+        model: the full (calibrated) model.
+        recorded: (K, n) recorded joint angles [rad] to include in the fit (the calibration's samples), or None.
+        workspace: configurations drawn for the fit (around ``recorded``, else uniform in the limits), and as
+            many again for the loss.
+        seed: seed of the workspace samples.
+
+    Returns:
+        :class:`RigidFit`; for a model without joint-side terms, the model itself and zero loss.
+    """
+    dropped, terms = geometric_part(model), joint_side_terms(model)
+    if not terms:
+        return RigidFit(model, model, ())
+    rng = np.random.default_rng(seed)
+    count = 0 if recorded is None else len(recorded)
+    if count:
+        recorded = np.asarray(recorded, dtype=float).reshape(-1, model.n_joints)
+
+        def draw() -> np.ndarray:
+            around = recorded[rng.integers(0, count, workspace)] + rng.normal(0.0, SPREAD, (workspace, model.n_joints))
+            return np.clip(around, model.lower, model.upper)
+
+        fit_q = np.vstack([recorded, draw()])
+        check_q = draw()
+    else:
+        fit_q = model.random_configurations(workspace, rng)
+        check_q = model.random_configurations(workspace, rng)
+    full_q = model.random_configurations(workspace, rng)
+    target = tool_point(model, fit_q)
+    scale = dropped.layout.spread()
+    scale = np.where(scale > 0, scale, 1.0)
+    rigid, cost = dropped, float(np.sum((tool_point(dropped, fit_q) - target) ** 2))
+    start = cost
+    for _ in range(ITERATIONS):
+        jac, point = param_jacobian(rigid, fit_q, return_point=True)
+        residual = (target - point).reshape(-1)
+        step = np.linalg.lstsq(jac.reshape(-1, rigid.n_params) * scale, residual, rcond=1e-9)[0] * scale
+        for _halving in range(8):
+            trial = rigid.with_params(rigid.params + step)
+            trial_cost = float(np.sum((tool_point(trial, fit_q) - target) ** 2))
+            if trial_cost < cost:
+                break
+            step = step / 2
+        else:
+            break
+        improvement = cost - trial_cost
+        rigid, cost = trial, trial_cost
+        if improvement <= RELATIVE_TOL * start:
+            break
+    check = tool_point(model, check_q)
+    distance = np.linalg.norm(tool_point(rigid, check_q) - check, axis=1)
+    return RigidFit(
+        model=rigid, dropped=dropped, terms=terms,
+        fit_rms=float(np.sqrt(cost / len(fit_q))), dropped_fit_rms=float(np.sqrt(start / len(fit_q))),
+        workspace_rms=float(np.sqrt(np.mean(distance**2))), workspace_max=float(distance.max()),
+        dropped_workspace_rms=_rms(tool_point(dropped, check_q), check),
+        recorded=count, workspace=workspace, seed=seed,
+        full_range_rms=_rms(tool_point(rigid, full_q), tool_point(model, full_q)),
+        dropped_full_range_rms=_rms(tool_point(dropped, full_q), tool_point(model, full_q)),
+    )

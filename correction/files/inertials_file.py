@@ -1,0 +1,56 @@
+"""The inertials file (``--inertials FILE``): link masses and centres of mass of an arm, for gravity torques.
+
+Format (YAML, SI units)::
+
+    # one entry per joint i, base to flange: the link that joint i moves, with everything rigidly on it
+    inertials:
+      - {mass: 4.970684, com: [0.003875, 0.002081, -0.04762]}   # [kg], [m] in DH frame i
+      - ...
+    payload: {mass: 0.76, com: [0.0, 0.0, 0.14]}                # optional: what the flange carries,
+                                                                # [kg], [m] in the last DH frame
+
+DH frame ``i`` is the frame :func:`correction.link_frames` gives for link ``i`` of the robot it is used with
+(for a URDF, the frames ``spherecal`` derives from it: check them with ``link_frames``, or take the masses
+from the URDF's own ``<inertial>`` elements, which are converted for you). No other key is allowed.
+"""
+
+from __future__ import annotations
+
+import os
+from dataclasses import replace
+
+from ..gravity import InertialsError, inertials_of
+from ..model import RobotModel
+from .text_input import read_text
+from .yaml_safe import load_yaml
+
+KEYS = ("inertials", "payload")
+
+
+def read_inertials(path: str | os.PathLike) -> dict:
+    """The ``inertials`` (and ``payload``) blocks of an inertials file, unchecked against any robot.
+
+    Raises:
+        InertialsError: unreadable file, invalid YAML, a missing ``inertials`` list or an unknown key.
+    """
+    data, _ = load_yaml(read_text(path, InertialsError), str(path), InertialsError)
+    if not isinstance(data, dict) or "inertials" not in data:
+        raise InertialsError(f"{path}: expected a mapping with an 'inertials' list (see correction.files."
+                             f"inertials_file)")
+    unknown = [key for key in data if key not in KEYS]
+    if unknown:
+        raise InertialsError(f"{path}: unknown key {unknown[0]!r} (expected {', '.join(KEYS)})")
+    return {key: data[key] for key in KEYS if key in data}
+
+
+def with_inertials_file(model: RobotModel, path: str | os.PathLike) -> RobotModel:
+    """``model`` with the masses of an inertials file (replacing any it had), checked against its joints.
+
+    Raises:
+        InertialsError: one line naming the file and the field (``inertials[2].com``, wrong count, ...).
+    """
+    blocks = read_inertials(path)
+    extras = {k: v for k, v in model.extras.items() if k not in KEYS}
+    out = replace(model, extras={**extras, **blocks, "inertials_source": str(path)})
+    inertials_of(out, source=str(path))  # every entry valid, one per joint
+    return out

@@ -1,0 +1,49 @@
+"""Another tool on a calibrated arm, from an offset or from the user's URDF (:mod:`correction.tool`)."""
+
+from __future__ import annotations
+
+import os
+
+import numpy as np
+
+from ..gravity import has_inertials
+from ..model import RobotModel
+from ..tool import ToolError, ToolSwap, tool_in_frame, with_tool
+from .urdf_to_dh import load_urdf
+
+
+def put_tool(model: RobotModel, offset: np.ndarray | None = None, urdf: str | os.PathLike | None = None,
+             tip_link: str | None = None, base_link: str | None = None) -> tuple[ToolSwap, str]:
+    """``model`` with the tool at ``offset`` (in the last DH frame [m]) or at ``tip_link`` of ``urdf``.
+
+    Args:
+        model: the calibrated model.
+        offset: (3,) the new tool point in the last DH frame [m]; or
+        urdf, tip_link, base_link: a URDF of the same arm with the new tool, its link at the tool point (the
+            chain's last frame must be the model's: :func:`correction.tool.tool_in_frame`). When the URDF has
+            masses, what its last link carries (gripper, fingers) becomes the payload.
+
+    Returns:
+        ``(swap, one line on the payload)``.
+
+    Raises:
+        ToolError: neither or both of ``offset`` and ``urdf``, or a URDF of another arm.
+        RobotFileError: an unreadable URDF or an unknown link (one line).
+    """
+    if (offset is None) == (urdf is None):
+        raise ToolError("the new tool: give either an offset [m] in the last frame or a URDF with its tip link")
+    payload = None
+    if urdf is not None:
+        description = load_urdf(urdf, tip_link=tip_link, base_link=base_link)
+        offset = tool_in_frame(description, model)
+        if has_inertials(description):
+            payload = description.extras["payload"]
+    swap = with_tool(model, offset, payload)
+    if payload is not None:
+        line = f"payload from {urdf}: {payload['mass']:.3f} kg (what its last link carries)"
+    elif "payload" in model.extras:
+        line = (f"payload kept: {model.extras['payload'].get('mass', 0.0):.3f} kg from the calibrated file (edit "
+                f"'payload' if the new tool weighs differently: the gravity sag of an elastic model depends on it)")
+    else:
+        line = "no payload in the calibrated file"
+    return swap, line

@@ -1,0 +1,113 @@
+"""Tool swap: calibrate with the ball, work with the gripper.
+
+The tool point of a :class:`RobotModel` is a point fixed in the last DH frame ``n``; a calibration identifies
+it together with the chain. Putting another tool on the calibrated arm replaces that point and keeps every
+identified term of the chain (DH, Hayati, base, compliance, ...)::
+
+    swap = with_tool(calibrated, [0.0, 0.0, 0.2104])      # the new tool point in frame n [m]
+    swap.model                                             # the calibrated arm with the new tool
+    swap.note                                              # what the calibration cannot vouch for
+
+What a single-point tool cannot identify: the ball tells the calibration where its centre is for every
+configuration, not how the last link is turned about that centre. A rotation of frame ``n`` about the ball
+centre moves no recorded point (the last joint's motion shows only the direction of its own axis, and only
+when the ball is off that axis), so it is held by the prior (the nominal description, spread
+:data:`correction.layout.ANGLE` 0.2 deg per angle), and, for the Panda's on-axis ball, the last joint's own
+``theta`` offset is not seen at all. At a new tool point a distance ``d`` from the ball centre such a rotation
+``delta`` moves the tool by ``delta * d``: 0.2 deg is 0.10 mm at d = 30 mm (the Franka Hand's TCP, 30 mm
+before MUKCa's ball), 0.7 mm at d = 200 mm. A new tool at the ball centre inherits the calibration's full
+accuracy; the farther it is, the more its accuracy rests on the nominal orientation of the last frame.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, replace
+
+import numpy as np
+
+from .chain import link_frames
+from .errors import SpherecalError
+from .layout import ANGLE
+from .model import RobotModel, matrix_rpy
+
+#: Largest distance [m] and angle [rad] between the last frame of the tool's description and the
+#: calibrated model's at zero angles: beyond a calibration's correction, the two name different frames.
+FRAME_DISTANCE_TOL = 0.03
+FRAME_ANGLE_TOL = np.deg2rad(5.0)
+
+
+class ToolError(SpherecalError):
+    """A tool that cannot be put on the model; the message names the field."""
+
+
+@dataclass(frozen=True)
+class ToolSwap:
+    """Outcome of :func:`with_tool`.
+
+    Attributes:
+        model: the calibrated model with the new tool point.
+        distance: |new tool - calibrated tool point| [m], in the last frame.
+        unidentified: tool displacement [m] of a rotation of the last frame about the old tool point by the
+            prior's angle spread (0.2 deg): what the calibration cannot vouch for at the new tool.
+        note: the above in one line, in mm.
+    """
+
+    model: RobotModel
+    distance: float
+    unidentified: float
+    note: str
+
+
+def with_tool(model: RobotModel, tool: np.ndarray, payload: dict | None = None,
+              angle: float = ANGLE.prior_std) -> ToolSwap:
+    """Put another tool point on a (calibrated) model.
+
+    Args:
+        model: the calibrated model (its tool point is the one it was calibrated with, e.g. the ball).
+        tool: (3,) the new tool point in the last DH frame [m].
+        payload: the new ``payload`` block (``{mass: kg, com: [x, y, z] m}`` in the last frame) for gravity
+            torques, or None to keep the model's (say so to the user: an elastic model's sag depends on it).
+        angle: unidentified rotation of the last frame to translate into millimetres [rad].
+
+    Raises:
+        ToolError: a tool that is not 3 finite numbers.
+    """
+    tool = np.asarray(tool, dtype=float)
+    if tool.shape != (3,) or not np.all(np.isfinite(tool)):
+        raise ToolError(f"tool: expected 3 finite coordinates [m] in the last frame, got {np.ravel(tool).tolist()!r}")
+    distance = float(np.linalg.norm(tool - model.tool))
+    extras = dict(model.extras)
+    if payload is not None:
+        extras["payload"] = payload
+    extras["tool_swap"] = {"calibrated_tool": [float(v) for v in model.tool], "tool": [float(v) for v in tool]}
+    unidentified = float(np.sin(angle) * distance)
+    note = (f"new tool {distance * 1e3:.1f} mm from the calibrated tool point: a single-point tool does not "
+            f"(fully) identify the rotation of the last frame about that point, so at the new tool each "
+            f"{np.rad2deg(angle):.1f} deg of it (the prior's spread) is {unidentified * 1e3:.2f} mm the calibration "
+            f"cannot vouch for")
+    return ToolSwap(replace(model, tool=tool, extras=extras), distance, unidentified, note)
+
+
+def tool_in_frame(description: RobotModel, model: RobotModel) -> np.ndarray:
+    """The tool point of ``description`` (another description of the same arm, e.g. its URDF up to the
+    gripper's TCP) in ``model``'s last DH frame [m].
+
+    The point is taken in ``description``'s own last frame: that frame must be ``model``'s (the same DH
+    construction, as when both come from the same URDF or robot file), checked at zero angles within
+    :data:`FRAME_DISTANCE_TOL` and :data:`FRAME_ANGLE_TOL`.
+
+    Raises:
+        ToolError: other joint count or convention, or last frames that are not the same frame.
+    """
+    mismatch = model.mismatch(description)
+    if mismatch is not None and mismatch[0] != "beta":
+        raise ToolError(f"tool description: {mismatch[0]}: {mismatch[1]}")
+    zero = np.zeros(model.n_joints)
+    mine, theirs = link_frames(model, zero)[-1], link_frames(description, zero)[-1]
+    gap = float(np.linalg.norm(mine[:3, 3] - theirs[:3, 3]))
+    turn = float(np.linalg.norm(matrix_rpy(mine[:3, :3].T @ theirs[:3, :3])))
+    if gap > FRAME_DISTANCE_TOL or turn > FRAME_ANGLE_TOL:
+        raise ToolError(f"tool description: its last frame is {gap * 1e3:.0f} mm and {np.rad2deg(turn):.1f} deg from "
+                        f"the model's at zero angles (at most {FRAME_DISTANCE_TOL * 1e3:.0f} mm, "
+                        f"{np.rad2deg(FRAME_ANGLE_TOL):.0f} deg): not the same arm, or another DH construction")
+    return np.array(description.tool, dtype=float)

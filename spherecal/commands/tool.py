@@ -1,0 +1,44 @@
+"""`spherecal tool`: Put another tool on a calibrated arm (calibrate with the ball, work with the gripper)."""
+
+from __future__ import annotations
+
+import argparse
+
+from spherecal.options import finite
+
+HELP = "Put another tool on a calibrated arm: a new robot file with the tool point replaced."
+
+
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    """Register the options of `spherecal tool`."""
+    parser.add_argument("robot", metavar="CAL.yaml", help="calibrated robot file")
+    tool = parser.add_mutually_exclusive_group(required=True)
+    tool.add_argument("--offset", nargs=3, type=finite, metavar=("X", "Y", "Z"),
+                      help="the new tool point in the last DH frame [m]")
+    tool.add_argument("--urdf", default=None, metavar="TOOL.urdf",
+                      help="a URDF of the same arm with the new tool (its last DH frame must be the calibrated "
+                      "file's); --tip-link names the tool link")
+    parser.add_argument("--tip-link", default=None, metavar="NAME", help="with --urdf: the link at the new tool point")
+    parser.add_argument("--base-link", default=None, metavar="NAME", help="with --urdf: the arm's base link")
+    parser.add_argument("--out", required=True, metavar="FILE", help="the new robot file (written atomically)")
+
+
+def run(args: argparse.Namespace) -> int:
+    """Load, put the tool on, write; nothing is written on an error."""
+    from spherecal.correction import dump_robot, load_robot
+    from spherecal.correction.files.tools import put_tool
+    from spherecal.options import fail, planned_outputs
+
+    if args.urdf is None and (args.tip_link or args.base_link):
+        raise fail("--tip-link and --base-link: only with --urdf")
+    outputs = planned_outputs(args, {"--out": args.out})
+    model = load_robot(args.robot)
+    swap, payload = put_tool(model, args.offset, args.urdf, args.tip_link, args.base_link)
+    header = f"spherecal tool: {args.robot} with the tool at {[round(v, 6) for v in swap.model.tool]} m (frame n)"
+    with outputs:
+        path = outputs.write_text(args.out, dump_robot(swap.model, header=header))
+    print(f"spherecal tool: wrote {path}: tool point {swap.model.tool.round(6).tolist()} m in the last frame "
+          f"(was {model.tool.round(6).tolist()})")
+    print(f"spherecal tool: {swap.note}")
+    print(f"spherecal tool: {payload}")
+    return 0

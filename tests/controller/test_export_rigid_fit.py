@@ -1,0 +1,127 @@
+"""`export --format urdf` of a model with joint compliance: the best rigid fit to the full model, read back by
+MuJoCo's URDF compiler, is never farther from the full model than the URDF of the geometric part alone."""
+
+from __future__ import annotations
+
+import os
+from dataclasses import replace
+
+import mujoco
+import numpy as np
+import pytest
+
+from spherecal.cli import main
+from spherecal.controller.export import export_model, recorded_configurations
+from spherecal.controller.rigid_fit import geometric_part, rigid_approximation
+from spherecal.correction import Dataset, load_robot, perturb, save_robot, tool_point, write_samples
+from spherecal.correction.elastic import with_compliance
+from spherecal.correction.files.provenance import input_record
+from spherecal.correction.files.urdf_write import robot_to_urdf
+from tests.correction.urdf_helpers import mujoco_ready
+
+COMPLIANCE = np.array([0.0, 1 / 2e4, 1 / 3e4, 1 / 3e4, 1 / 1e4, 1 / 1e4, 0.0])
+
+
+def _urdf_tool(text: str, q: np.ndarray) -> np.ndarray:
+    """(N, 3) flange (panda_link8) positions of a URDF compiled by MuJoCo [m]."""
+    mj = mujoco.MjModel.from_xml_string(mujoco_ready(text))
+    data = mujoco.MjData(mj)
+    body = mujoco.mj_name2id(mj, mujoco.mjtObj.mjOBJ_BODY, "panda_link8")
+    out = np.empty((len(q), 3))
+    for k, qk in enumerate(q):
+        data.qpos[:] = qk
+        mujoco.mj_kinematics(mj, data)
+        out[k] = data.xpos[body]
+    return out
+
+
+def _rms(a: np.ndarray, b: np.ndarray) -> float:
+    return float(np.sqrt(np.mean(np.sum((a - b) ** 2, axis=1))))
+
+
+@pytest.mark.parametrize("seed", [1, 2, 3])
+def test_rigid_fit_urdf_is_never_worse_than_the_plain_dh_urdf(tmp_path, capsys, seed) -> None:
+    rng = np.random.default_rng(seed)
+    model = with_compliance(perturb(load_robot("panda"), rng), COMPLIANCE * rng.uniform(0.5, 1.5, 7))
+    # the recording: three sockets' worth of configurations, in a corner of the workspace
+    centre = rng.uniform(model.lower + 0.5, model.upper - 0.5)
+    recorded = np.clip(centre + rng.normal(0.0, 0.3, (300, 7)), model.lower, model.upper)
+    samples = write_samples(tmp_path / "samples.csv", Dataset(np.repeat(["a", "b", "c"], 100), recorded))
+    made = {"provenance": {"inputs": {"samples": input_record(samples)}}}
+    model = replace(model, extras={**model.extras, "calibration": made})
+    cal = save_robot(model, tmp_path / "cal.yaml")
+    out = tmp_path / "cal.urdf"
+    assert main(["export", str(cal), "--format", "urdf", "--out", str(out)]) == 0
+    printed = capsys.readouterr().out
+    assert "a URDF cannot carry c2, c3, c4, c5, c6:" in printed and "300 recorded configurations from" in printed
+    plain = robot_to_urdf(geometric_part(model))  # the URDF export wrote before: the terms dropped
+    nearby = np.clip(recorded[:200] + rng.normal(0.0, 0.2, (200, 7)), model.lower, model.upper)  # not fitted
+    for q in (recorded, nearby):
+        full = tool_point(model, q)
+        fitted, dropped = _rms(_urdf_tool(out.read_text(), q), full), _rms(_urdf_tool(plain, q), full)
+        assert dropped > 2e-4  # the compliance matters
+        assert fitted <= 0.8 * dropped, (fitted, dropped)  # never worse, and here clearly better
+    assert f"by {rigid_approximation(model, recorded).workspace_rms * 1e3:.3f} mm rms" in printed
+    # exported from another folder: the samples file is found beside the calibrated file by its digest
+    here = os.getcwd()
+    try:
+        os.chdir(tmp_path.parent)
+        record = {"path": "samples.csv", "sha256": input_record(samples)["sha256"]}
+        moved = replace(model, extras={**model.extras, "calibration": {"provenance": {"inputs": {"samples": record}}}})
+        assert recorded_configurations(moved, folder=tmp_path)[0] is not None
+        assert recorded_configurations(moved)[0] is None
+    finally:
+        os.chdir(here)
+
+
+def test_rigid_model_is_exported_unchanged_and_other_formats_keep_every_term(panda, rng) -> None:
+    model = perturb(panda, rng)
+    exported = export_model(model, "urdf")
+    assert exported.text == robot_to_urdf(model) and exported.notes == () and exported.fit.terms == ()
+    elastic = with_compliance(model, COMPLIANCE)
+    assert "compliance" in export_model(elastic, "yaml").text
+    assert "flex2" in export_model(elastic, "mjcf").text  # the plant's flexible hinge behind the motor
+    with pytest.raises(Exception, match="--samples: only the urdf format"):
+        export_model(elastic, "yaml", samples="x.csv")
+
+
+def test_real_panda_held_out_sockets_through_the_exported_urdf(tmp_path, capsys) -> None:
+    """MUKCa's panda_2_clean (tests/data subset): elastic model trained on front_center, held-out sockets of the
+    other placements read through each URDF by correction.load_urdf: the rigid fit keeps most of the full model's
+    test MAE, the plain URDF loses it."""
+    from pathlib import Path
+
+    from spherecal.correction import load_urdf
+    from spherecal.identification.ingest.importers import read_mukca
+
+    data = Path(__file__).resolve().parents[1] / "data" / "mukca"
+    robot = str(data / "panda_ball.yaml")
+    train = tmp_path / "train"
+    assert main(["import", str(data / "panda_2_clean" / "front_center"), "--format", "mukca", "--robot", robot,
+                 "--out", str(train)]) == 0
+    cal, out = tmp_path / "cal.yaml", tmp_path / "cal.urdf"
+    assert main(["calibrate", "--robot", robot, "--samples", str(train / "samples.csv"), "--fixtures",
+                 str(train / "fixtures.yaml"), "--model", "elastic", "--out", str(cal)]) == 0
+    assert main(["export", str(cal), "--format", "urdf", "--out", str(out)]) == 0
+    model = load_robot(cal)
+    recording, _ = read_mukca(data / "panda_2_clean", model)
+    held = ~np.char.startswith(recording.labels.astype(str), "front_center")
+
+    def test_mae(m) -> float:
+        points, labels = tool_point(m, recording.q[held]), recording.labels[held]
+        return float(np.mean([np.linalg.norm(points[labels == s] - points[labels == s].mean(axis=0), axis=1).mean()
+                              for s in np.unique(labels)]))
+
+    full, fitted = test_mae(model), test_mae(load_urdf(out))
+    plain = test_mae(geometric_part(model))
+    assert fitted <= plain and fitted < full + 0.3 * (plain - full), (full, fitted, plain)
+    # --into MUKCa's own panda.urdf: the same rigid fit, read by MuJoCo at the ball
+    from tests.correction.urdf_helpers import DATA, MujocoUrdf
+
+    into = tmp_path / "into.urdf"
+    assert main(["export", str(cal), "--format", "urdf", "--into", str(DATA / "panda.urdf"), "--out", str(into)]) == 0
+    recorded = read_mukca(data / "panda_2_clean" / "front_center", model)[0].q
+    rigid = rigid_approximation(model, recorded).model
+    q = recording.q[held][:50]
+    ball, _ = MujocoUrdf(into.read_text()).body_pose("ball_link", model.extras["joint_names"], q)
+    np.testing.assert_allclose(ball, tool_point(rigid, q), atol=1e-9)

@@ -1,0 +1,106 @@
+"""Tool swap: the calibrated chain with another tool point, against a hand-written chain and MuJoCo's URDF
+compiler; the README's controller example on a real (MUKCa) calibration; the `tool` command."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from spherecal.cli import main
+from spherecal.controller.compensation import ModelMismatchError, compensate, corrected_ik
+from spherecal.correction import load_robot, load_urdf, perturb, tool_point
+from spherecal.correction.elastic import link_angles, with_compliance
+from spherecal.correction.files.tools import put_tool
+from spherecal.correction.tool import ToolError, with_tool
+from tests.correction.urdf_helpers import DATA, MujocoUrdf
+
+MUKCA = Path(__file__).resolve().parents[1] / "data" / "mukca"
+
+
+def _hand_chain(model, q: np.ndarray, tool: np.ndarray) -> np.ndarray:
+    """(3,) tool point of a modified-DH chain, written out with 4x4 matrices (no spherecal kinematics)."""
+    def rx(a):
+        c, s = np.cos(a), np.sin(a)
+        return np.array([[1, 0, 0, 0], [0, c, -s, 0], [0, s, c, 0], [0, 0, 0, 1.0]])
+
+    def rz(a):
+        c, s = np.cos(a), np.sin(a)
+        return np.array([[c, -s, 0, 0], [s, c, 0, 0], [0, 0, 1, 0], [0, 0, 0, 1.0]])
+
+    def move(x, y, z):
+        m = np.eye(4)
+        m[:3, 3] = x, y, z
+        return m
+
+    r, p, y = model.base_rpy
+    ry = np.array([[np.cos(p), 0, np.sin(p), 0], [0, 1, 0, 0], [-np.sin(p), 0, np.cos(p), 0], [0, 0, 0, 1.0]])
+    pose = move(*model.base_xyz) @ rz(y) @ ry @ rx(r)
+    for i in range(model.n_joints):
+        pose = pose @ rx(model.alpha[i]) @ move(model.a[i], 0, 0) @ rz(model.theta[i] + q[i]) @ move(0, 0, model.d[i])
+    return (pose @ np.append(tool, 1.0))[:3]
+
+
+def test_swapped_tool_point_is_the_hand_written_chains(panda, rng) -> None:
+    calibrated = with_compliance(perturb(panda, rng), [0.0, 5e-5, 3e-5, 3e-5, 1e-4, 0.0, 0.0])
+    new = np.array([0.01, -0.02, 0.21])
+    swap = with_tool(calibrated, new)
+    assert swap.model.extras["compliance"] == calibrated.extras["compliance"]  # every identified term kept
+    q = calibrated.random_configurations(20, rng)
+    q_link = link_angles(calibrated, q)  # the sag: the same arm and payload, so the same link angles
+    expected = np.array([_hand_chain(calibrated, qk, new) for qk in q_link])
+    np.testing.assert_allclose(tool_point(swap.model, q), expected, atol=1e-12)
+    assert np.linalg.norm(tool_point(swap.model, q) - tool_point(calibrated, q), axis=1).min() > 0.05
+    assert swap.distance == pytest.approx(np.linalg.norm(new - calibrated.tool))
+    assert swap.unidentified == pytest.approx(np.sin(np.deg2rad(0.2)) * swap.distance)
+    with pytest.raises(ToolError, match="3 finite"):
+        with_tool(calibrated, [0.0, np.nan, 0.1])
+
+
+def test_urdf_tool_lands_where_mujoco_puts_the_tcp(rng) -> None:
+    ball = load_urdf(DATA / "panda.urdf", tip_link="ball_link")  # calibrated with the ball ...
+    swap, _ = put_tool(ball, urdf=DATA / "panda.urdf", tip_link="panda_hand_tcp")  # ... working with the TCP
+    assert swap.distance == pytest.approx(0.0301, abs=1e-3)
+    q = ball.random_configurations(50, rng)
+    points, _ = MujocoUrdf((DATA / "panda.urdf").read_text()).body_pose("panda_hand_tcp",
+                                                                        ball.extras["joint_names"], q)
+    np.testing.assert_allclose(tool_point(swap.model, q), points, atol=1e-12)
+    with pytest.raises(ToolError, match="last frame"):
+        put_tool(ball, urdf=DATA / "iiwa14.urdf", tip_link="ball_link")
+
+
+def test_readme_controller_example_on_a_real_calibration(tmp_path) -> None:
+    robot = str(MUKCA / "panda_ball.yaml")  # MUKCa's ball on the embedded Panda
+    train = tmp_path / "train"
+    assert main(["import", str(MUKCA / "panda_2_clean" / "front_center"), "--format", "mukca", "--robot", robot,
+                 "--out", str(train)]) == 0
+    cal = tmp_path / "cal.yaml"
+    assert main(["calibrate", "--robot", robot, "--samples", str(train / "samples.csv"), "--fixtures",
+                 str(train / "fixtures.yaml"), "--model", "dh", "--out", str(cal)]) == 0
+    nominal, calibrated = load_robot("panda"), load_robot(cal)  # the README's two lines
+    q_now = np.array([0.0, -0.3, 0.0, -2.2, 0.0, 2.0, 0.8])
+    target = tool_point(nominal, q_now) + [0.03, 0.02, -0.02]
+    with pytest.raises(ModelMismatchError, match="mm at the seed .*put the controller's tool on it"):  # the ball
+        compensate(target, nominal, calibrated, q_now)
+    out = tmp_path / "cal_flange.yaml"
+    assert main(["tool", str(cal), "--offset", *map(str, nominal.tool), "--out", str(out)]) == 0
+    flange = load_robot(out)  # the same calibrated arm, its tool at the nominal model's (the flange)
+    result = compensate(target, nominal, flange, q_now)
+    assert np.linalg.norm(tool_point(flange, result.q) - target) < 1e-9 and result.gain > 1e-4
+    q = corrected_ik(flange, target, q_now, nominal=nominal)
+    assert np.linalg.norm(tool_point(flange, q) - target) < 1e-9
+
+
+def test_tool_command_errors_are_one_line_and_write_nothing(tmp_path, capsys) -> None:
+    out = tmp_path / "new.yaml"
+    assert main(["tool", "panda", "--offset", "0", "0", "0.2", "--urdf", str(DATA / "panda.urdf"),
+                 "--out", str(out)]) == 1
+    assert main(["tool", "panda", "--urdf", str(DATA / "panda.urdf"), "--tip-link", "nope", "--out", str(out)]) == 1
+    assert main(["tool", "panda", "--offset", "0", "0", "0.2", "--tip-link", "x", "--out", str(out)]) == 1
+    err = capsys.readouterr().err
+    assert err.count("\n") == 3 and "nope" in err and not out.exists()
+    assert main(["tool", "panda", "--offset", "0", "0", "0.2", "--out", str(out)]) == 0
+    printed = capsys.readouterr().out
+    assert "93.0 mm from the calibrated tool point" in printed and "0.32 mm" in printed
+    assert load_robot(out).tool.tolist() == [0.0, 0.0, 0.2]
