@@ -14,7 +14,7 @@ import time
 import warnings
 from pathlib import Path
 
-import bench_common  # noqa: F401  (first: import path, BLAS threads)
+import bench_common  # first: import path, BLAS threads
 import numpy as np  # noqa: E402
 import qpsolvers  # noqa: E402
 

@@ -12,7 +12,7 @@ import sys
 import time
 from pathlib import Path
 
-import bench_common  # noqa: F401  (first: import path, BLAS threads)
+import bench_common  # first: import path, BLAS threads
 import numpy as np  # noqa: E402
 
 from spherecal.controller.self_motion import (  # noqa: E402

@@ -14,7 +14,7 @@ import sys
 import time
 from pathlib import Path
 
-import bench_common  # noqa: F401  (first: import path, BLAS threads)
+import bench_common  # first: import path, BLAS threads
 import numpy as np  # noqa: E402
 
 from spherecal.correction import load_robot, perturb, registered_errors, tool_point  # noqa: E402

@@ -29,7 +29,7 @@ import tempfile
 import time
 from pathlib import Path
 
-import bench_common  # noqa: F401  (one BLAS thread)
+import bench_common  # one BLAS thread
 import numpy as np
 
 HERE = Path(__file__).resolve().parent

@@ -77,3 +77,16 @@ def test_readme_steps_run_in_the_venv_and_write_only_ignored_files() -> None:
     for path in written:
         check = subprocess.run(["git", "check-ignore", "-q", path], cwd=ROOT)
         assert check.returncode == 0, f"{path} is not ignored by git"
+
+
+def test_readme_is_short_and_its_docs_links_resolve() -> None:
+    """The README stays a front page (at most 200 lines); everything else is in docs/, and every
+    page it links exists and is in the site's table of contents."""
+    readme = (ROOT / "README.md").read_text()
+    assert len(readme.splitlines()) <= 200
+    links = re.findall(r"\]\((docs/[^)#]+)", readme)
+    assert {"docs/guide.md", "docs/real_robot.md", "docs/formats.md", "docs/method.md", "docs/figures.md"} <= set(links)
+    index = (ROOT / "docs" / "index.md").read_text()
+    for link in links:
+        assert (ROOT / link).is_file(), link
+        assert f"\n{Path(link).stem}\n" in index, f"{link} is not in docs/index.md's toctree"

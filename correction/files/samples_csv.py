@@ -182,11 +182,17 @@ class _Reader:
         )
 
 
-def format_samples(dataset: Dataset) -> str:
-    """CSV text of a dataset (floats written with every digit, so they round-trip exactly)."""
+def format_samples(dataset: Dataset, comment: str = "") -> str:
+    """CSV text of a dataset (floats written with every digit, so they round-trip exactly).
+
+    Args:
+        dataset: the samples.
+        comment: text written first as ``#`` lines (the provenance block's
+            :func:`~spherecal.correction.files.provenance.comment_block`), skipped by the reader.
+    """
     n = dataset.n_joints
     header = ["fixture"] + (["t"] if dataset.t is not None else []) + [f"q{i + 1}" for i in range(n)]
-    out = [",".join(header)]
+    out = [f"# {line}".rstrip() for line in comment.splitlines()] + [",".join(header)]
     for k in range(dataset.n_samples):
         row = [str(dataset.labels[k])]
         if dataset.t is not None:
@@ -196,11 +202,11 @@ def format_samples(dataset: Dataset) -> str:
     return "\n".join(out) + "\n"
 
 
-def write_samples(path: str | os.PathLike, dataset: Dataset) -> Path:
-    """Write ``samples.csv`` atomically (temporary file, rename)."""
+def write_samples(path: str | os.PathLike, dataset: Dataset, comment: str = "") -> Path:
+    """Write ``samples.csv`` atomically (temporary file, rename), ``comment`` first as ``#`` lines."""
     for name in dataset.fixture_names:
         if not name or "," in name or '"' in name or "\n" in name or name != name.strip():
             raise DatasetError(f"{path}: field 'fixture': fixture name {name!r} cannot be written to CSV")
-    return atomic_write_text(path, format_samples(dataset))
+    return atomic_write_text(path, format_samples(dataset, comment))
 
 

@@ -15,6 +15,7 @@ import numpy as np
 
 from spherecal.correction.files.fixtures import FixtureSpec, write_fixtures
 from spherecal.correction.files.outputs import OutputSet
+from spherecal.correction.files.provenance import comment_block
 from spherecal.correction.files.samples import Dataset, DatasetError
 from spherecal.correction.files.samples_csv import write_samples
 from spherecal.correction.model import RobotModel
@@ -180,5 +181,6 @@ def _write_together(outputs: OutputSet, dataset: Dataset, spec: FixtureSpec) -> 
     """Write both files together (staged beside their destination, then renamed)."""
     samples, fixtures = outputs.planned
     with outputs:
-        write_samples(outputs.stage(samples), dataset)
+        made = spec.extras.get("import", {}).get("provenance")
+        write_samples(outputs.stage(samples), dataset, comment_block(made) if made else "")
         write_fixtures(outputs.stage(fixtures), spec)

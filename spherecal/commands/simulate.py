@@ -87,6 +87,7 @@ def run(args: argparse.Namespace) -> int:
     from spherecal.controller.self_motion import SelfMotionSettings, collect_self_motion
     from spherecal.correction import dump_robot, load_robot, perturb
     from spherecal.correction.files.fixtures import FixtureSpec, format_fixtures
+    from spherecal.correction.files.provenance import comment_block
     from spherecal.correction.files.samples_csv import format_samples
 
     outputs = _check_args(args)
@@ -119,9 +120,10 @@ def run(args: argparse.Namespace) -> int:
         distances = [(names[i], names[j], float(np.linalg.norm(centres[i] - centres[j])))
                      for i in range(len(names)) for j in range(i + 1, len(names))]
     provenance = _provenance(args, settings, result)
-    samples_text = format_samples(result.dataset())
+    made = provenance["provenance"]
+    samples_text = format_samples(result.dataset(), comment_block(made))
     fixtures_text = format_fixtures(FixtureSpec(names=names, distances=distances,
-                                                extras={"simulation": {"seed": args.seed, "truth": "truth.yaml"}}))
+                                                extras={"simulation": {"truth": "truth.yaml", "provenance": made}}))
     truth = _with_simulation(true, provenance)
     truth_text = dump_robot(truth, header=f"true robot of `spherecal simulate --seed {args.seed}`")
 

@@ -6,6 +6,7 @@ a calibration on one placement must predict the held-out placements' sockets bet
 
 from __future__ import annotations
 
+import hashlib
 import json
 import shutil
 from pathlib import Path
@@ -121,6 +122,10 @@ def test_import_writes_every_row_with_its_fixture_and_the_socket_distance(import
             raw = np.loadtxt(DATA / "panda_2_clean" / p / f"hole_{k}.csv", delimiter=",")
             np.testing.assert_array_equal(dataset.for_fixture(f"{p}_h{k}"), raw)
     assert spec.extras["import"]["format"] == "mukca"
+    made = spec.extras["import"]["provenance"]  # the one provenance block, in both files
+    assert made["inputs"]["robot"]["sha256"] == hashlib.sha256(Path(PANDA).read_bytes()).hexdigest()
+    head = (imported / "all/samples.csv").read_text().splitlines()[:5]
+    assert head[0] == f"# command: {made['command']}" and f"# seed: {made['seed']}" in head
 
 
 def test_calibration_on_one_placement_holds_on_the_others(imported, capsys) -> None:

@@ -213,7 +213,7 @@ def test_cli_refuses_with_one_line_and_force_writes_the_failures(arm, noisy, tmp
     assert not (tmp_path / "cal.yaml").exists()
     assert main([*args, "--force"]) == 0
     block = yaml.safe_load((tmp_path / "cal.yaml").read_text())["calibration"]
-    assert block["options"]["force"] is True
+    assert block["provenance"]["inputs"]["force"] is True
     assert block["self_check"]["verdict"] == "inconsistent"
     assert any("distance P1-P2" in line for line in block["self_check"]["failed"])
     assert "FAILED: " in capsys.readouterr().out
