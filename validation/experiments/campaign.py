@@ -23,6 +23,7 @@ from __future__ import annotations
 
 import csv
 import io
+import itertools
 import os
 import time
 from collections.abc import Callable
@@ -39,6 +40,7 @@ from spherecal.identification.calibrate import calibrate
 from spherecal.identification.selection import elastic_start, rigid, select_model
 
 from ..pipeline import RANDOM_SET, validate_models
+from ..threads import capped
 from .experiment import calibrate_from, default_fixtures, motion_set, nominal_robot, true_robot
 
 #: The paper's simulated Table 2 (mm): row -> (mean of average error, mean of maximal error).
@@ -207,7 +209,7 @@ def run_campaign(
                 bar.update()
         else:
             with ProcessPoolExecutor(max_workers=workers) as pool:
-                for result in pool.map(runner, todo):
+                for result in pool.map(capped, itertools.repeat(runner), todo):  # one BLAS thread each
                     results.append(result)
                     bar.update()
     finally:
