@@ -33,7 +33,7 @@ from typing import Any
 from spherecal.correction.errors import SpherecalError
 from spherecal.correction.files.provenance import versions
 
-from .threads import thread_cap
+from .threads import cap_process, thread_cap
 
 #: Seconds to wait for a running scheduler to answer.
 CONNECT_TIMEOUT = 10
@@ -71,17 +71,27 @@ class Outcome:
     workers: dict[str, dict[str, str]] = field(default_factory=dict)
 
 
-@functools.lru_cache(maxsize=1)
-def _worker() -> tuple[str, dict[str, str]]:
-    """This process's name and package versions (once per process)."""
-    return f"{socket.gethostname()} pid {os.getpid()}", versions()
+@functools.lru_cache(maxsize=4)
+def _worker(pid: int) -> tuple[str, dict[str, str]]:
+    """This process's name and package versions, once per process (by pid: a forked child has its own)."""
+    return f"{socket.gethostname()} pid {pid}", versions()
+
+
+@functools.lru_cache(maxsize=4)
+def _capped_process(pid: int) -> None:
+    """Cap this worker process's thread pools for good, once (a scan of the loaded libraries takes
+    milliseconds); libraries loading later read the environment it sets."""
+    cap_process()
 
 
 def in_worker(function: Callable[[Any], Any], item: Any) -> tuple[Any, str, dict[str, str]]:
-    """``function(item)`` under the thread cap, with the name and versions of the process running it."""
-    with thread_cap():
-        result = function(item)
-    return (result, *_worker())
+    """``function(item)`` in a worker process, capped, with the name and versions of that process."""
+    _capped_process(os.getpid())
+    return (function(item), *_worker(os.getpid()))
+
+
+def _here(function: Callable[[Any], Any], item: Any) -> tuple[Any, str, dict[str, str]]:
+    return (function(item), *_worker(os.getpid()))
 
 
 def run_tasks(
@@ -120,8 +130,9 @@ def run_tasks(
             on_done()
 
     if executor is None:
-        for index, item in enumerate(items):
-            finish(index, functools.partial(in_worker, function, item))
+        with thread_cap():  # in this process: capped while the tasks run, restored after
+            for index, item in enumerate(items):
+                finish(index, functools.partial(_here, function, item))
     else:
         futures = {executor.submit(in_worker, function, item): index for index, item in enumerate(items)}
         try:

@@ -56,12 +56,22 @@ def thread_cap() -> Iterator[None]:
     """Within: every loaded BLAS/OpenMP pool at its :func:`limits`; libraries loading later read
     the variables :func:`cap_environment` set. The previous limits come back on exit."""
     cap_environment()
-    wanted = limits()
-    controller = ThreadpoolController()  # the libraries loaded now, each by its file
-    by_file = {lib.filepath: wanted[lib.internal_api] for lib in controller.lib_controllers
-               if lib.internal_api in wanted}
-    with controller.limit(limits=by_file):
+    controller = ThreadpoolController()  # the libraries loaded now
+    with controller.limit(limits=_by_file(controller)):
         yield
+
+
+def cap_process() -> None:
+    """Cap this process's pools for good, as :func:`thread_cap` does (a worker process's: nothing to restore)."""
+    cap_environment()
+    controller = ThreadpoolController()
+    controller.limit(limits=_by_file(controller))  # left in force
+
+
+def _by_file(controller: ThreadpoolController) -> dict[str, int]:
+    """Each loaded library (its file) -> the limit of its kind."""
+    wanted = limits()
+    return {lib.filepath: wanted[lib.internal_api] for lib in controller.lib_controllers if lib.internal_api in wanted}
 
 
 def capped(function: Callable[..., T], *args: Any) -> T:
