@@ -106,7 +106,8 @@ def run_tasks(
     Args:
         function: a module-level (picklable) function of one item.
         items: the tasks (picklable), each carrying its own seed.
-        executor: any concurrent.futures.Executor (see :func:`executor`).
+        executor: any process-based concurrent.futures.Executor (see :func:`executor`): each worker
+            process is capped to one BLAS thread for good (a thread pool would cap this process).
         names: a name per task for the failure report (default: its index).
         on_done: called once per finished task (failed ones too), as they finish.
 
