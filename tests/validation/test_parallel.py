@@ -138,3 +138,25 @@ def test_campaign_command_without_dask_says_so_in_one_line_and_writes_nothing(tm
     assert err[-1] == ("spherecal campaign: error: --scheduler local: dask.distributed is not installed "
                        "(pip install 'spherecal[dask]')")
     assert not out.exists()
+
+
+def test_the_provenance_records_the_workers_grouped_by_versions() -> None:
+    from spherecal.validation.provenance import comment_block, provenance
+
+    own = versions()
+    old = {**own, "numpy": "1.0.0"}
+    info = provenance(0, {}, ["x"], workers={"b pid 2": own, "a pid 1": own, "c pid 3": old})
+    line = comment_block(info).splitlines()[-1]
+    assert line.startswith("workers: a pid 1, b pid 2: the versions above; c pid 3: ")
+    assert "numpy 1.0.0" in line and "workers:" not in comment_block(provenance(0, {}, ["x"]))
+
+
+def test_campaign_command_records_its_pool_workers(tmp_path, capsys) -> None:
+    from spherecal.cli import main
+
+    out = tmp_path / "campaign"
+    args = ["campaign", "--sets", "2", "--rows", "P1", "--noise", "0", "--per-fixture", "30", "--configurations", "50"]
+    assert main([*args, "--out", str(out)]) == 0
+    header = [line for line in (out / "table2.csv").read_text().splitlines() if line.startswith("# workers: ")]
+    assert len(header) == 1 and header[0].endswith(": the versions above") and " pid " in header[0]
+    assert "worker processes, process pool" in capsys.readouterr().out
