@@ -239,10 +239,11 @@ def add_seconds(parser: argparse.ArgumentParser, default: float, what: str) -> N
     parser.add_argument("--seconds", type=duration, default=default, help=f"{what} [s] (default {default:g})")
 
 
-def add_workers(parser: argparse.ArgumentParser, what: str = "tasks") -> None:
-    """``--workers N`` (the built-in process pool, default 2) and ``--scheduler ADDRESS`` (a Dask cluster)."""
+def add_workers(parser: argparse.ArgumentParser, what: str = "tasks", also: str = "") -> None:
+    """``--workers N`` (the built-in process pool, default 2; ``also``: what else uses it) and
+    ``--scheduler ADDRESS`` (a Dask cluster instead, for the ``what``)."""
     parser.add_argument("--workers", type=count(1, 64), default=2,
-                        help=f"worker processes for the {what} (default 2; 1: in this process)")
+                        help=f"worker processes for the {what}{also} (default 2; 1: in this process)")
     parser.add_argument(
         "--scheduler", default=None, metavar="ADDRESS",
         help=f"run the {what} on a dask.distributed cluster: 'local' starts one of --workers processes on "

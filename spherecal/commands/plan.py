@@ -36,7 +36,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     add_seconds(parser, 3.0, "controller self-motion per candidate")
     add_seed(parser)
     parser.add_argument("--rrd", default=None, help="write a Rerun recording of the candidates coloured by score")
-    add_workers(parser, "candidates' surveys (and --analysis)")
+    add_workers(parser, "candidates' surveys", also=" and for --analysis")
 
 
 class _FixturesOption(argparse.Action):
@@ -65,6 +65,8 @@ def run(args: argparse.Namespace) -> int:
 
     outputs = planned_outputs(args, {"--rrd": args.rrd, "--analysis": args.analysis})
     if args.analysis is not None:
+        if args.scheduler is not None:
+            raise fail("--scheduler: the --analysis runs on the built-in process pool (--workers) only")
         from spherecal.validation.planning.analysis import AnalysisConfig, write_analysis
 
         with outputs:

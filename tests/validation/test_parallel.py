@@ -160,3 +160,11 @@ def test_campaign_command_records_its_pool_workers(tmp_path, capsys) -> None:
     header = [line for line in (out / "table2.csv").read_text().splitlines() if line.startswith("# workers: ")]
     assert len(header) == 1 and header[0].endswith(": the versions above") and " pid " in header[0]
     assert "worker processes, process pool" in capsys.readouterr().out
+
+
+def test_plan_analysis_on_a_scheduler_is_refused_before_anything_runs(tmp_path, capsys) -> None:
+    from spherecal.cli import main
+
+    out = tmp_path / "analysis.md"
+    assert main(["plan", "--analysis", str(out), "--scheduler", "local"]) == 1
+    assert capsys.readouterr().err.count("\n") == 1 and not out.exists()
