@@ -4,4 +4,5 @@ import sys
 
 from spherecal.cli import main
 
-sys.exit(main())
+if __name__ == "__main__":  # not when a spawned worker (a Dask cluster's) imports the main module
+    sys.exit(main())

@@ -65,6 +65,11 @@ def main(argv: list[str] | None = None) -> int:
         args = build_parser().parse_args(argv)  # --help and bad options end here, before numpy loads
     except SystemExit as done:
         return done.code if isinstance(done.code, int) else 1
+    # threadpoolctl: not at --help (start-up). The caps go into the environment before numpy (or
+    # scipy, each with its own BLAS) loads, and thread_cap limits what a caller had loaded already.
+    from spherecal.validation.threads import cap_environment, thread_cap
+
+    cap_environment()
     from spherecal.correction.errors import SpherecalError  # numpy: not at --help (start-up)
     from spherecal.options import OptionError
 
@@ -72,7 +77,7 @@ def main(argv: list[str] | None = None) -> int:
         print(f"spherecal {args.command}: warning: {_one_line(str(message))}", file=sys.stderr)
 
     try:
-        with warnings.catch_warnings():
+        with warnings.catch_warnings(), thread_cap():
             warnings.showwarning = one_line_warning  # a warning for the user, not a source location
             return int(args._run(args) or 0)
     except (SpherecalError, OptionError) as error:

@@ -258,6 +258,19 @@ def add_seconds(parser: argparse.ArgumentParser, default: float, what: str) -> N
     parser.add_argument("--seconds", type=duration, default=default, help=f"{what} [s] (default {default:g})")
 
 
+def add_workers(parser: argparse.ArgumentParser, what: str = "tasks", also: str = "") -> None:
+    """``--workers N`` (the built-in process pool, default 2; ``also``: what else uses it) and
+    ``--scheduler ADDRESS`` (a Dask cluster instead, for the ``what``)."""
+    parser.add_argument("--workers", type=count(1, 64), default=2,
+                        help=f"worker processes for the {what}{also} (default 2; 1: in this process)")
+    parser.add_argument(
+        "--scheduler", default=None, metavar="ADDRESS",
+        help=f"run the {what} on a dask.distributed cluster: 'local' starts one of --workers processes on "
+        "127.0.0.1 for this run, else a running scheduler's address (tcp://host:8786) whose workers have "
+        "spherecal installed; needs dask.distributed, spherecal's 'dask' extra (default: the built-in process pool)",
+    )
+
+
 # ------------------------------------------------------------------------------------ outputs
 #: Options (argparse destinations) that name files a command reads: no output may be one of them.
 INPUT_OPTIONS: tuple[str, ...] = (

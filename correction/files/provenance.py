@@ -56,7 +56,8 @@ def input_record(path: str | os.PathLike) -> dict[str, str]:
     return {"path": str(path), "sha256": file_digest(path) if Path(path).is_file() else kind}
 
 
-def provenance(seed: int | None, inputs: dict[str, Any], command: list[str] | None = None) -> dict[str, Any]:
+def provenance(seed: int | None, inputs: dict[str, Any], command: list[str] | None = None,
+               workers: dict[str, dict[str, str]] | None = None) -> dict[str, Any]:
     """The provenance block of an output: command line, time, versions, seed and inputs.
 
     Args:
@@ -65,22 +66,28 @@ def provenance(seed: int | None, inputs: dict[str, Any], command: list[str] | No
             (path and SHA-256); pass file names as :class:`~pathlib.Path`. Anything else (options,
             numbers, strings) is recorded as given.
         command: the command line (``sys.argv``, its program path shortened to its name, when None).
+        workers: worker -> its package versions, when other processes did the work (a pool, a Dask
+            cluster: ``validation.parallel``); recorded under ``"workers"``.
 
     Returns:
-        ``{"command", "created", "versions", "seed", "inputs"}`` (YAML- and JSON-ready).
+        ``{"command", "created", "versions", "seed", "inputs"}`` and ``"workers"`` when given (YAML- and
+        JSON-ready).
     """
     if command is None:
         command = [Path(sys.argv[0]).name, *sys.argv[1:]] if sys.argv and sys.argv[0] else []
     recorded = {
         key: input_record(value) if isinstance(value, os.PathLike) else value for key, value in inputs.items()
     }
-    return {
+    info = {
         "command": " ".join(str(word) for word in command),
         "created": datetime.now(timezone.utc).isoformat(timespec="seconds"),
         "versions": versions(),
         "seed": seed,
         "inputs": recorded,
     }
+    if workers:
+        info["workers"] = {name: dict(packages) for name, packages in sorted(workers.items())}
+    return info
 
 
 def comment_block(info: dict[str, Any]) -> str:
@@ -93,7 +100,21 @@ def comment_block(info: dict[str, Any]) -> str:
             value = f"{value['path']} (sha256 {value['sha256']})"
         inputs.append(f"{key}={value}")
     lines.append("inputs: " + ", ".join(inputs))
+    if info.get("workers"):
+        lines.append("workers: " + _workers(info["workers"], info["versions"]))
     return "\n".join(lines)
+
+
+def _workers(workers: dict[str, dict[str, str]], own: dict[str, str]) -> str:
+    """``host pid 1, host pid 2: the versions above; other pid 3: numpy 2.0.0, ...`` (grouped by versions)."""
+    groups: dict[tuple, list[str]] = {}
+    for name, packages in workers.items():
+        groups.setdefault(tuple(sorted(packages.items())), []).append(name)
+    parts = []
+    for packages, names in groups.items():
+        listed = "the versions above" if dict(packages) == own else ", ".join(f"{k} {v}" for k, v in packages)
+        parts.append(f"{', '.join(names)}: {listed}")
+    return "; ".join(parts)
 
 
 def matches_record(path: str | os.PathLike, record: dict[str, Any]) -> bool:

@@ -64,13 +64,6 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 def run(args: argparse.Namespace) -> int:
     """Read, check, calibrate, then write ``--out`` atomically and print the summary."""
-    import os
-
-    # The problem is small (a few thousand rows, ~35 columns): threaded BLAS only adds start-up
-    # and, on a busy machine, stalls (a 4500 x 34 SVD: 3 ms on one thread, 50-700 ms on two
-    # contended ones). Set before numpy is first imported; a user's own setting wins.
-    for variable in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
-        os.environ.setdefault(variable, "1")
     import time
 
     from spherecal.correction.files.samples import DEDUP_TOL

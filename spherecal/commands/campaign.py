@@ -11,7 +11,15 @@ HELP = "Run the paper's simulated protocol (fixture sets x noise levels) and pri
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     """Register the options of `spherecal campaign`."""
-    from spherecal.options import add_per_fixture, add_seconds, add_seed, configurations, count, noise_mm
+    from spherecal.options import (
+        add_per_fixture,
+        add_seconds,
+        add_seed,
+        add_workers,
+        configurations,
+        count,
+        noise_mm,
+    )
 
     parser.add_argument("--sets", type=count(1, 1000), default=10, help="motion sets per row (default 10)")
     add_per_fixture(parser, 500, "samples per fixture in each set")
@@ -40,12 +48,13 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                              "(e.g. 0,3e4,3e4,3e4,0,0,0); rows get an E")
     parser.add_argument("--model", choices=("dh", "elastic", "auto"), default="dh",
                         help="model calibrated (dh: default, the paper's; elastic; auto: cross-validated choice)")
-    parser.add_argument("--workers", type=count(1, 64), default=2, help="worker processes (default 2)")
+    add_workers(parser, "motion sets")
     parser.add_argument("--out", default="spherecal-campaign", help="folder for table2.csv and table2.md")
 
 
 def run(args: argparse.Namespace) -> int:
     """Run the campaign, print Table 2, write it as CSV and Markdown."""
+    import sys
     import time
 
     from spherecal.validation.experiments.campaign import (
@@ -88,8 +97,9 @@ def run(args: argparse.Namespace) -> int:
         noise_levels=(0.0, args.noise * 1e-3) if args.noise > 0 else (0.0,),
     )
     start = time.perf_counter()
-    results = run_campaign(config, workers=args.workers)
+    run = run_campaign(config, workers=args.workers, scheduler=args.scheduler)
     wall = time.perf_counter() - start
+    results = run.results
     rows_out = table(results)
     print(
         f"Table 2 ({args.protocol} protocol, {args.source} motion): calibrated tool-point error against the exact "
@@ -100,8 +110,13 @@ def run(args: argparse.Namespace) -> int:
         if result.refused:
             print(f"refused: {result.row} set {result.index}: {result.refused}")
     inputs = {k: v for k, v in vars(args).items() if not k.startswith("_") and k != "command"}
-    info = provenance(args.seed, {**inputs, "wall_time_s": round(wall, 1)})
+    info = provenance(args.seed, {**inputs, "wall_time_s": round(wall, 1)}, workers=run.workers)
     csv_path, md_path = write_tables(rows_out, args.out, comment_block(info), outputs)
     print(f"written: {csv_path}, {md_path}")
-    print(f"wall time {wall:.1f} s ({len(results)} sets, {args.workers} workers)")
+    where = f"Dask scheduler {args.scheduler}" if args.scheduler else "process pool"
+    print(f"wall time {wall:.1f} s ({len(results)} sets, {len(run.workers)} worker processes, {where})")
+    if run.failures:  # each also reported as it happened (TaskFailedWarning); the table holds the others
+        print(f"failed: {len(run.failures)} sets ({', '.join(f.name for f in run.failures)}), not in the table",
+              file=sys.stderr)
+        return 1
     return 0

@@ -11,7 +11,7 @@ HELP = "Rank candidate fixture positions by the calibration accuracy they predic
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     """Register the options of `spherecal plan`."""
-    from spherecal.options import add_per_fixture, add_robot, add_seconds, add_seed, count, noise_mm
+    from spherecal.options import add_per_fixture, add_robot, add_seconds, add_seed, add_workers, count, noise_mm
 
     add_robot(parser)
     where = parser.add_mutually_exclusive_group()
@@ -36,7 +36,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     add_seconds(parser, 3.0, "controller self-motion per candidate")
     add_seed(parser)
     parser.add_argument("--rrd", default=None, help="write a Rerun recording of the candidates coloured by score")
-    parser.add_argument("--workers", type=count(1, 64), default=2, help="worker processes of --analysis (default 2)")
+    add_workers(parser, "candidates' surveys", also=" and for --analysis")
 
 
 class _FixturesOption(argparse.Action):
@@ -57,8 +57,6 @@ def run(args: argparse.Namespace) -> int:
     """Plan (or predict, or regenerate the analysis) and print the result."""
     import time
 
-    import numpy as np
-
     from spherecal.correction import load_robot
 
     if args.per_fixture < 10:
@@ -67,6 +65,8 @@ def run(args: argparse.Namespace) -> int:
 
     outputs = planned_outputs(args, {"--rrd": args.rrd, "--analysis": args.analysis})
     if args.analysis is not None:
+        if args.scheduler is not None:
+            raise fail("--scheduler: the --analysis runs on the built-in process pool (--workers) only")
         from spherecal.validation.planning.analysis import AnalysisConfig, write_analysis
 
         with outputs:
@@ -74,9 +74,9 @@ def run(args: argparse.Namespace) -> int:
         print(f"written: {args.analysis}")
         return 0
     model = load_robot(args.robot, **urdf_links(args))
-    rng = np.random.default_rng(args.seed)
     if args.predict is not None:
         return _predict(args, model)
+    from spherecal.validation.parallel import executor
     from spherecal.validation.planning.candidates import grid_candidates, read_candidates
     from spherecal.validation.planning.plan import plan
 
@@ -86,9 +86,9 @@ def run(args: argparse.Namespace) -> int:
     if not 1 <= args.fixture_count <= 4:
         raise fail(f"--fixture-count must be in 1..4, got {args.fixture_count}")
     start = time.perf_counter()
-    result = plan(
-        model, candidates, args.fixture_count, rng, args.noise * 1e-3, args.per_fixture, args.motion, args.seconds
-    )
+    with executor(args.workers, args.scheduler) as pool:  # each candidate's survey a task, seeded by its name
+        result = plan(model, candidates, args.fixture_count, args.seed, args.noise * 1e-3, args.per_fixture,
+                      args.motion, args.seconds, executor=pool)
     from spherecal.validation.planning.plan_report import format_plan, write_recording
 
     print(format_plan(result))
@@ -97,7 +97,8 @@ def run(args: argparse.Namespace) -> int:
 
         inputs = {k: v for k, v in vars(args).items() if not k.startswith("_") and k != "command"}
         with outputs:  # staged, renamed into place once Rerun has written it all
-            write_recording(outputs.stage(args.rrd), result, comment_block(provenance(args.seed, inputs)))
+            info = provenance(args.seed, inputs, workers=result.workers)
+            write_recording(outputs.stage(args.rrd), result, comment_block(info))
         print(f"written: {args.rrd}")
     print(f"wall time {time.perf_counter() - start:.1f} s (survey {result.seconds['survey']:.1f} s, "
           f"scoring {result.seconds['score']:.1f} s, motion: {result.motion})")

@@ -65,9 +65,9 @@ def test_campaign_is_the_same_on_one_or_two_workers(tmp_path) -> None:
     config = CampaignConfig(sets=3, fixture_sets=("P1", "Pall"))
     one = run_campaign(config, workers=1, progress=False, runner=fake_runner)
     two = run_campaign(config, workers=2, progress=False, runner=fake_runner)
-    assert one == two
-    csv_path, md_path = write_tables(table(two), tmp_path / "out", comment="test")
-    assert csv_path.read_text() == table_csv(table(one), comment="test")
+    assert one.results == two.results and not one.failures and 1 <= len(two.workers) <= 2
+    csv_path, md_path = write_tables(table(two.results), tmp_path / "out", comment="test")
+    assert csv_path.read_text() == table_csv(table(one.results), comment="test")
     assert md_path.read_text().count("\n| P") == 4
     assert sorted(p.name for p in (tmp_path / "out").iterdir()) == ["table2.csv", "table2.md"]
 
@@ -77,7 +77,7 @@ def test_small_real_campaign_is_reproducible(tmp_path) -> None:
     from spherecal.validation.experiments.campaign import run_task
 
     config = CampaignConfig(sets=2, samples=150, configurations=500, fixture_sets=("P1", "Pall"))
-    first = run_campaign(config, workers=2, progress=False)
+    first = run_campaign(config, workers=2, progress=False).results
     again = [run_task(t) for t in tasks(config)[:2]]
     assert [r.mean for r in first[:2]] == [r.mean for r in again]
     rows = {r.name: r for r in table(first)}

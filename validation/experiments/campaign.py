@@ -16,7 +16,8 @@ Two protocols:
   true) forward kinematics, so its scale is exact.
 
 Every task is seeded from ``(seed, row, set)`` alone, so the table does not depend on the number of
-workers or on the order the tasks finish in.
+workers, on where they run (this process, the process pool, a Dask cluster: :mod:`validation.parallel`)
+or on the order the tasks finish in.
 """
 
 from __future__ import annotations
@@ -26,7 +27,7 @@ import io
 import os
 import time
 from collections.abc import Callable
-from concurrent.futures import ProcessPoolExecutor
+from concurrent.futures import Executor
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -37,6 +38,8 @@ from spherecal.correction.elastic import with_compliance
 from spherecal.correction.files.outputs import OutputSet
 from spherecal.identification.workflow import WorkflowOptions, run_workflow
 
+from .. import parallel
+from ..parallel import Failure, run_tasks
 from ..pipeline import RANDOM_SET, validate_models
 from .experiment import default_fixtures, motion_set, nominal_robot, true_robot
 
@@ -182,32 +185,52 @@ def _calibrate(model: str, nominal, start, data):
     return run_workflow(nominal, data.dataset, data.spec, options, start=start).model
 
 
-def run_campaign(
-    config: CampaignConfig, workers: int = 2, progress: bool = True, runner: Callable[[Task], TaskResult] = run_task
-) -> list[TaskResult]:
-    """Run every task, over ``workers`` processes (1: in this process), with a tqdm progress bar.
+@dataclass(frozen=True)
+class CampaignRun:
+    """The outcome of :func:`run_campaign`.
 
-    Returns:
-        The results sorted by (row order, set index): independent of scheduling.
+    Attributes:
+        results: the finished tasks' results, in (row order, set index): independent of scheduling.
+        failures: the tasks that raised (each also reported by a TaskFailedWarning), not in ``results``.
+        workers: worker -> its package versions (for the provenance of the files written).
+    """
+
+    results: list[TaskResult]
+    failures: list[Failure]
+    workers: dict[str, dict[str, str]]
+
+
+def run_campaign(
+    config: CampaignConfig,
+    workers: int = 2,
+    progress: bool = True,
+    runner: Callable[[Task], TaskResult] = run_task,
+    executor: Executor | None = None,
+    scheduler: str | None = None,
+) -> CampaignRun:
+    """Run every task with a tqdm progress bar that follows finished tasks.
+
+    Args:
+        config: the protocol.
+        workers: processes of the built-in pool (1: in this process), or of ``scheduler="local"``.
+        progress: show the progress bar.
+        runner: the task function (module-level: it is sent to the workers).
+        executor: run on this executor instead (any concurrent.futures.Executor, e.g. a Dask
+            client's ``get_executor()``); ``workers`` and ``scheduler`` are then unused.
+        scheduler: a dask.distributed scheduler's address, or ``"local"`` (see :func:`validation.parallel.executor`).
     """
     from tqdm import tqdm  # tqdm: only when a progress bar is shown
 
     todo = tasks(config)
-    bar = tqdm(total=len(todo), desc="campaign", unit="set", disable=not progress)
-    results = []
-    try:
-        if workers <= 1:
-            for task in todo:
-                results.append(runner(task))
-                bar.update()
+    names = [f"{task.row} set {task.index}" for task in todo]
+    with tqdm(total=len(todo), desc="campaign", unit="set", disable=not progress) as bar:
+        if executor is not None:
+            outcome = run_tasks(runner, todo, executor, names, bar.update)
         else:
-            with ProcessPoolExecutor(max_workers=workers) as pool:
-                for result in pool.map(runner, todo):
-                    results.append(result)
-                    bar.update()
-    finally:
-        bar.close()
-    return results
+            with parallel.executor(workers, scheduler) as own:
+                outcome = run_tasks(runner, todo, own, names, bar.update)
+    results = [result for result in outcome.results if result is not None]
+    return CampaignRun(results, outcome.failures, outcome.workers)
 
 
 @dataclass(frozen=True)

@@ -24,6 +24,7 @@ from __future__ import annotations
 
 import argparse
 import functools
+import itertools
 import time
 from concurrent.futures import ProcessPoolExecutor
 from dataclasses import dataclass, field, replace
@@ -40,6 +41,7 @@ from spherecal.validation.planning.candidates import Candidate, grid_candidates
 from spherecal.validation.planning.plan import motion_samples, plan
 from spherecal.validation.planning.plan_report import format_plan
 from spherecal.validation.provenance import comment_block, provenance
+from spherecal.validation.threads import capped
 
 #: The fourth fixture of the 1-4 fixture rows (low, left of the defaults) [m].
 P4 = (0.35, -0.1, 0.2)
@@ -182,7 +184,7 @@ def run_cells(todo: list[Cell], config: AnalysisConfig, offset: int = 0) -> list
     ]
     if config.workers > 1:
         with ProcessPoolExecutor(max_workers=config.workers) as pool:
-            outcomes = list(pool.map(_task, jobs, chunksize=1))
+            outcomes = list(pool.map(capped, itertools.repeat(_task), jobs, chunksize=1))  # one BLAS thread each
     else:
         outcomes = [_task(job) for job in jobs]
     results = []

@@ -20,9 +20,12 @@ window of that width around a well-centred reach configuration.
 
 from __future__ import annotations
 
+import functools
+import hashlib
 import itertools
 import math
 import time
+from concurrent.futures import Executor
 from dataclasses import dataclass, field, replace
 
 import numpy as np
@@ -35,6 +38,7 @@ from spherecal.correction.files.samples import Dataset
 from spherecal.identification.prediction import Prediction, Workspace, predict_accuracy
 from spherecal.identification.synthetic import fixture_samples, project_to_point
 
+from ..parallel import Outcome, run_tasks
 from .candidates import Candidate, CandidateError
 
 MOTIONS: tuple[str, ...] = ("kinematic", "controller")
@@ -94,6 +98,7 @@ class Plan:
         search: ``"exhaustive"`` or ``"greedy"``.
         motion, noise, samples: the settings planned for.
         seconds: wall time per stage [s].
+        workers: worker -> its package versions (the survey's tasks; for the provenance).
     """
 
     surveys: list[Survey]
@@ -103,6 +108,7 @@ class Plan:
     noise: float
     samples: int
     seconds: dict[str, float] = field(default_factory=dict)
+    workers: dict[str, dict[str, str]] = field(default_factory=dict)
 
     def ranked(self) -> list[Survey]:
         """Reachable candidates by predicted error alone (best first), then the unreachable ones."""
@@ -192,25 +198,53 @@ def motion_samples(
         ) from None
 
 
+def plan_seed(seed: int | np.random.Generator) -> int:
+    """The plan's integer seed: ``seed`` itself, or one integer drawn from a generator."""
+    return int(seed.integers(2**63)) if isinstance(seed, np.random.Generator) else int(seed)
+
+
+def candidate_rng(seed: int, candidate: Candidate) -> np.random.Generator:
+    """The candidate's own generator, from the plan's seed and the candidate's name (not its place in
+    the list): candidates are surveyed apart, in any order, on any worker, with the same samples."""
+    key = int.from_bytes(hashlib.sha256(candidate.name.encode()).digest()[:8], "little")
+    return np.random.default_rng([seed, 1, key])
+
+
+def survey_candidate(
+    model: RobotModel, candidate: Candidate, seed: int, motion: str = "kinematic", seconds: float = 3.0,
+    count: int = PLAN_SAMPLES,
+) -> Survey:
+    """Reach and self-motion coverage at one candidate, drawn from :func:`candidate_rng` (a task)."""
+    try:
+        q = motion_samples(model, candidate, count, candidate_rng(seed, candidate), motion, seconds)
+    except SpherecalError as error:
+        return Survey(candidate, False, str(error), np.zeros((0, model.n_joints)), np.zeros(model.n_joints))
+    return Survey(candidate, True, "", q, joint_coverage(q, model.lower, model.upper))
+
+
 def survey(
     model: RobotModel,
     candidates: list[Candidate],
-    rng: np.random.Generator,
+    seed: int | np.random.Generator,
     motion: str = "kinematic",
     seconds: float = 3.0,
     count: int = PLAN_SAMPLES,
+    executor: Executor | None = None,
 ) -> list[Survey]:
-    """Reach and self-motion coverage at every candidate (unreachable ones kept, with the reason)."""
+    """Reach and self-motion coverage at every candidate (unreachable ones kept, with the reason), each
+    candidate a task on ``executor`` (None: in this process) seeded by :func:`candidate_rng`; a task
+    that crashed is reported (TaskFailedWarning) and kept as unreachable, its ``reason`` naming the error."""
+    return _surveyed(model, candidates, plan_seed(seed), motion, seconds, count, executor)[0]
 
-    out = []
-    for candidate in candidates:
-        try:
-            q = motion_samples(model, candidate, count, rng, motion, seconds)
-        except SpherecalError as error:
-            out.append(Survey(candidate, False, str(error), np.zeros((0, model.n_joints)), np.zeros(model.n_joints)))
-            continue
-        out.append(Survey(candidate, True, "", q, joint_coverage(q, model.lower, model.upper)))
-    return out
+
+def _surveyed(model, candidates, seed, motion, seconds, count, executor) -> tuple[list[Survey], Outcome]:
+    task = functools.partial(survey_candidate, model, seed=seed, motion=motion, seconds=seconds, count=count)
+    outcome = run_tasks(task, candidates, executor, [c.name for c in candidates])
+    failed = {f.name: f.error for f in outcome.failures}
+    empty = np.zeros((0, model.n_joints)), np.zeros(model.n_joints)
+    surveys = [s if s is not None else Survey(c, False, f"failed: {failed[c.name]}", *empty)
+               for c, s in zip(candidates, outcome.results, strict=True)]
+    return surveys, outcome
 
 
 # -------------------------------------------------------------------------------------- scoring
@@ -270,14 +304,20 @@ def plan(
     model: RobotModel,
     candidates: list[Candidate],
     fixtures: int,
-    rng: np.random.Generator,
+    seed: int | np.random.Generator,
     noise: float = 3e-4,
     samples: int = 500,
     motion: str = "kinematic",
     seconds: float = 3.0,
     configurations: int = 1000,
+    executor: Executor | None = None,
 ) -> Plan:
     """Survey the candidates, then choose ``fixtures`` of them (and the distances to measure).
+
+    ``seed`` (or one integer drawn from a generator) seeds each candidate's survey by its name
+    (:func:`candidate_rng`) and the workspace by ``(seed, 0)``: the plan is the same whether the
+    candidates are surveyed in this process or as tasks on ``executor`` (a process pool, a Dask
+    client's executor; :mod:`validation.parallel`). Scoring runs here.
 
     Subsets are scored with every distance among them known (the best case), exhaustively when
     there are at most :data:`EXHAUSTIVE_LIMIT` of them, else greedily (add the candidate that lowers
@@ -292,10 +332,11 @@ def plan(
     if not 1 <= fixtures <= 4:
         raise CandidateError(f"--fixtures must be in 1..4, got {fixtures}")
     clock = time.perf_counter()
-    surveys = survey(model, candidates, rng, motion, seconds)
+    seed = plan_seed(seed)
+    surveys, outcome = _surveyed(model, candidates, seed, motion, seconds, PLAN_SAMPLES, executor)
     seconds_taken = {"survey": time.perf_counter() - clock}
     clock = time.perf_counter()
-    workspace = Workspace.of(model, configurations, rng)
+    workspace = Workspace.of(model, configurations, np.random.default_rng([seed, 0]))
     scored = []
     for s in surveys:
         if s.reachable:
@@ -309,7 +350,7 @@ def plan(
     if len(usable) >= fixtures:
         best, search = _search(model, usable, fixtures, noise, samples, workspace)
     seconds_taken["score"] = time.perf_counter() - clock
-    return Plan(scored, best, search, motion, noise, samples, seconds_taken)
+    return Plan(scored, best, search, motion, noise, samples, seconds_taken, outcome.workers)
 
 
 def _search(model, usable, fixtures, noise, samples, workspace) -> tuple[FixtureSet, str]:
