@@ -32,6 +32,9 @@ from .levenberg import levenberg_marquardt
 from .problem import CalibrationProblem, prior_std
 
 LOSSES: tuple[str, ...] = ("linear", "soft_l1", "huber")
+#: Jacobian evaluations of ours before scipy's MINPACK continues from where it is (a well-posed
+#: calibration needs 4-6; a flat valley, e.g. Hayati betas beside non-parallel axes, can take ~100).
+MAX_OURS = 20
 
 
 @dataclass(frozen=True)
@@ -71,7 +74,7 @@ def solve_lm(
         loss: ``linear``, ``soft_l1`` or ``huber``.
         f_scale: residual scale of the robust loss [m] (default ``problem.noise``).
         tol: ``ftol``, ``xtol`` and ``gtol``.
-        max_nfev: Jacobian evaluation budget of ours, residual budget of scipy's (default 100 /
+        max_nfev: Jacobian evaluation budget of ours, residual budget of scipy's (default :data:`MAX_OURS` /
             scipy's default).
     """
     if loss not in LOSSES:
@@ -80,7 +83,7 @@ def solve_lm(
     start = time.perf_counter()
     if loss != "linear" or _free_compliance(problem):
         return _solve_scipy(problem, x0, loss, f_scale, tol, max_nfev, start)
-    ours = levenberg_marquardt(problem.residuals, problem.jacobian, x0, tol, tol, tol, max_nfev or 100)
+    ours = levenberg_marquardt(problem.residuals, problem.jacobian, x0, tol, tol, tol, max_nfev or MAX_OURS)
     if ours.converged:
         return Solution(ours.x, ours.evaluations, time.perf_counter() - start, ours.message, ours.jacobians)
     rescue = _solve_scipy(problem, ours.x, loss, f_scale, tol, max_nfev, start)
