@@ -22,10 +22,11 @@ Stops (converged) when
   converge linearly at a rate that leaves at most ``ftol`` of the cost to gain;
 * an accepted step is at most ``xtol`` relative to the scaled unknowns (``|D h| <= xtol (|D x| + xtol)``);
 * the cosine between the residual and every scaled Jacobian column is at most ``gtol``;
-* the residual is zero, or no step lowers a cost already below :data:`ROUNDING` times the start's.
+* the residual is zero, or no step lowers the cost and the trust radius has shrunk below ``xtol``
+  (MINPACK's ``xtol`` test: the message gives the gain the linear model still predicts; large
+  against the cost means the Jacobian is approximate there).
 
-Stops unconverged, and says so, when ``max_jacobians`` is used up or no step lowers the cost
-although the linear model predicts a gain.
+Stops unconverged, and says so, when ``max_jacobians`` is used up.
 """
 
 from __future__ import annotations
@@ -44,8 +45,6 @@ INITIAL_RADIUS = 100.0
 MAX_CHORDS = 3
 #: Rejected steps in a row (on one Jacobian) before giving up.
 MAX_REJECTIONS = 60
-#: A cost below this fraction of the start's is at the rounding floor when no step lowers it.
-ROUNDING = 1e-16
 
 
 @dataclass(frozen=True)
@@ -146,7 +145,7 @@ def levenberg_marquardt(
     """
     x = np.array(x0, dtype=float)
     r = np.asarray(residuals(x), float)
-    cost = start_cost = 0.5 * float(r @ r)
+    cost = 0.5 * float(r @ r)
     evaluations, jacobians = 1, 0
     scale: np.ndarray | None = None
     radius = np.inf
@@ -189,11 +188,16 @@ def levenberg_marquardt(
                 x_new, r_new, cost_new, h = _chord(model, mu, trial, x_new, r_new, cost_new, h, ftol)
             if cost_new < cost:
                 break
-            if final or small(h):
-                if cost <= ROUNDING * start_cost or final:
-                    return result(True, "no step lowers the cost further: at the minimum to rounding")
-                return result(False, f"no step lowers the cost, although the linear model predicts {predicted:.3g}")
-            radius = 0.25 * float(np.linalg.norm(h))
+            if final:
+                return result(True, f"at the minimum: Gauss-Newton decrement {decrement:.3g} <= ftol x cost")
+            if small(h):
+                # MINPACK's xtol test: the trust radius is below xtol (the Jacobian and the residuals
+                # disagree at this scale, e.g. an approximate Jacobian): stop, saying how much they disagree
+                return result(True, f"no step above xtol lowers the cost (the linear model predicts {predicted:.3g})")
+            # shrink to the minimum of the parabola through the cost, its slope (-2 x the predicted gain
+            # of a Gauss-Newton step) and the trial's cost: by 10x after a wild step, 2x after a near miss
+            shrink = predicted / max(cost_new - cost + 2.0 * predicted, 1e-300)
+            radius = float(np.clip(shrink, 0.1, 0.5)) * min(radius, float(np.linalg.norm(h)))
         else:
             return result(False, f"{MAX_REJECTIONS} steps in a row raised the cost")
         change = cost - cost_new

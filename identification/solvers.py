@@ -1,13 +1,11 @@
 """Solvers of a :class:`CalibrationProblem`: least squares (``lm``) and particle swarm (``pso``).
 
 ``lm`` is our own column-scaled trust-region Levenberg-Marquardt (:mod:`.levenberg`) on the
-analytic Jacobian: it reaches :func:`scipy.optimize.least_squares`' minimum (cost to 1e-12
-relative) in 4-5 Jacobian evaluations where scipy's MINPACK takes 6-9, without importing
-scipy.optimize. scipy's ``least_squares`` (imported only then) still solves the robust losses
-``soft_l1`` / ``huber`` (trust-region reflective, scale: the expected noise), problems with free
-joint compliances (the elastic model's analytic Jacobian is first order in the deflection, about
-0.3 % off at a typical compliance, which our stopping rules, built for an exact Jacobian, do not
-tolerate), and continues from where ours ends when ours does not converge.
+analytic Jacobian: it reaches :func:`scipy.optimize.least_squares`' minimum (cost to 1e-9
+relative, unknowns within std / 100) in 4-5 Jacobian evaluations where scipy's MINPACK takes 6-9,
+without importing scipy.optimize. scipy's ``least_squares`` (imported only then) still solves the
+robust losses ``soft_l1`` / ``huber`` (trust-region reflective, scale: the expected noise) and
+continues from where ours stops when ours used up its budget (:data:`MAX_OURS`).
 
 ``pso`` is the paper's method: pyswarms' ``GlobalBestPSO`` over bounded deviations of the
 identified parameters from the start, minimising eq. 5, the mean distance between each sample's
@@ -81,12 +79,12 @@ def solve_lm(
         raise ValueError(f"unknown loss {loss!r}, expected one of {LOSSES}")
     x0 = problem.x0 if x0 is None else np.asarray(x0, float)
     start = time.perf_counter()
-    if loss != "linear" or _free_compliance(problem):
-        return _solve_scipy(problem, x0, loss, f_scale, tol, max_nfev, start)
+    if loss != "linear":
+        return solve_scipy(problem, x0, loss, f_scale, tol, max_nfev, start)
     ours = levenberg_marquardt(problem.residuals, problem.jacobian, x0, tol, tol, tol, max_nfev or MAX_OURS)
     if ours.converged:
         return Solution(ours.x, ours.evaluations, time.perf_counter() - start, ours.message, ours.jacobians)
-    rescue = _solve_scipy(problem, ours.x, loss, f_scale, tol, max_nfev, start)
+    rescue = solve_scipy(problem, ours.x, loss, f_scale, tol, max_nfev, start)
     return replace(
         rescue,
         evaluations=rescue.evaluations + ours.evaluations,
@@ -95,15 +93,24 @@ def solve_lm(
     )
 
 
-def _free_compliance(problem: CalibrationProblem) -> bool:
-    """True when a joint compliance is among the unknowns."""
-    compliance = problem.model.layout.compliance
-    return bool(np.any((problem.free >= compliance.start) & (problem.free < compliance.stop)))
+def solve_scipy(
+    problem: CalibrationProblem,
+    x0: np.ndarray,
+    loss: str = "linear",
+    f_scale: float | None = None,
+    tol: float = 1e-12,
+    max_nfev: int | None = None,
+    start: float | None = None,
+) -> Solution:
+    """:func:`scipy.optimize.least_squares` from ``x0`` (MINPACK's LM for the plain loss, else TRF, both
+    with ``x_scale='jac'``): robust losses, the rescue of ours, and the reference ours is measured against.
 
-
-def _solve_scipy(problem, x0, loss, f_scale, tol, max_nfev, start) -> Solution:
-    """:func:`scipy.optimize.least_squares` from ``x0`` (MINPACK's LM for the plain loss, else TRF)."""
-    from scipy.optimize import least_squares  # scipy.optimize: heavy, only for robust losses and compliances
+    Args:
+        problem, x0, loss, f_scale, tol, max_nfev: as :func:`solve_lm` (``max_nfev``: residual budget).
+        start: ``time.perf_counter()`` the wall time counts from (default: now).
+    """
+    start = time.perf_counter() if start is None else start
+    from scipy.optimize import least_squares  # scipy.optimize: heavy, only for robust losses and the rescue
 
     result = least_squares(
         problem.residuals,

@@ -134,3 +134,22 @@ def test_solve_lm_uses_ours_without_scipy_for_the_plain_loss(truth) -> None:
     assert np.all(np.abs(solution.x - ref.x) <= std / 100)
     robust = solve_lm(problem, loss="soft_l1")  # scipy's TRF: a different loss, a different minimum
     assert robust.jacobians > 0 and "ftol" in robust.message or "gtol" in robust.message or "xtol" in robust.message
+
+
+def test_elastic_calibration_same_as_with_scipy(truth, monkeypatch) -> None:
+    """The whole lm pipeline on the elastic model (joint compliances free; their analytic Jacobian is
+    first order, so the first, unpruned solve wanders): ours ends where scipy's MINPACK ends."""
+    from spherecal.identification import calibrate as pipeline
+    from spherecal.identification.selection import elastic_start
+    from spherecal.identification.solvers import solve_scipy
+
+    panda, true = truth
+    dataset, spec = _data(true, 3e-4, 3, per_fixture=200)
+    ours = pipeline.calibrate(elastic_start(panda), dataset, spec, check=False)
+    monkeypatch.setattr(pipeline, "solve_lm", lambda problem, x0, loss: solve_scipy(problem, x0, loss))
+    ref = pipeline.calibrate(elastic_start(panda), dataset, spec, check=False)
+    assert ours.identified == ref.identified and any(n.startswith("c") for n in ours.identified)
+    cost = [float(r @ r) for r in (res.problem.residuals(res.x) for res in (ours, ref))]
+    assert abs(cost[0] / cost[1] - 1) <= 1e-9
+    std = np.array([ref.std[name] for name in ref.problem.unknown_names])
+    assert np.all(np.abs(ours.x - ref.x) <= std / 100)
