@@ -112,14 +112,16 @@ def test_lm_path_imports_no_simulator_viewer_or_swarm(inputs, tmp_path) -> None:
     assert not (tmp_path / "report.log").exists()
 
 
-def test_dh_calibrate_imports_no_scipy_optimize(inputs, tmp_path) -> None:
-    """`calibrate --model dh` (lm, plain loss) runs our own solver: scipy.optimize is never imported
-    (it cost ~0.3 s of start-up), nor MuJoCo, Rerun or pyswarms."""
+@pytest.mark.parametrize("model", ["dh", "auto"])
+def test_calibrate_imports_no_scipy(inputs, tmp_path, model) -> None:
+    """`calibrate` (lm, plain loss; dh, or auto with its elastic folds) runs our own solver and chi-square
+    tail: scipy (0.3 s of start-up for scipy.optimize, as much for scipy.special) is never imported, nor
+    MuJoCo, Rerun or pyswarms."""
     code = (
         "import sys; from spherecal.cli import main;"
-        f"main(['calibrate','--robot','panda','--model','dh','--samples',{str(inputs / 'samples.csv')!r},"
+        f"main(['calibrate','--robot','panda','--model',{model!r},'--samples',{str(inputs / 'samples.csv')!r},"
         f"'--fixtures',{str(inputs / 'fixtures.yaml')!r},'--out',{str(tmp_path / 'c.yaml')!r}]);"
-        "heavy = ('scipy.optimize', 'mujoco', 'rerun', 'pyswarms', 'dask');"
+        "heavy = ('scipy', 'mujoco', 'rerun', 'pyswarms', 'dask');"
         "print(sorted(m for m in heavy if m in sys.modules), file=sys.stderr)"
     )
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, cwd=tmp_path)
