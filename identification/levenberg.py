@@ -18,8 +18,8 @@ Stops (converged) when
 
 * the Gauss-Newton decrement at the current point, ``0.5 g^T G^-1 g`` (the most the linear model
   could still gain), is at most ``ftol`` times the cost (after one last step along it);
-* an accepted Gauss-Newton step changed the cost by at most ``ftol`` relative, or two in a row
-  converge linearly at a rate that leaves at most ``ftol`` of the cost to gain;
+* an accepted Gauss-Newton step changed the cost by at most ``ftol`` relative, or by at most
+  ``sqrt(ftol)`` after one before it at a linear rate that leaves at most ``ftol`` of the cost to gain;
 * an accepted step is at most ``xtol`` relative to the scaled unknowns (``|D h| <= xtol (|D x| + xtol)``);
 * the cosine between the residual and every scaled Jacobian column is at most ``gtol``;
 * the residual is zero, or no step lowers the cost and the trust radius has shrunk below ``xtol``
@@ -82,8 +82,8 @@ class _Linearisation:
             singular, self.vectors = np.linalg.svd(np.linalg.qr(scaled, mode="r"))[1:]
             self.vectors = self.vectors.T
             self.values = singular**2
-        # directions the Jacobian does not see at all (rounding level) take no step
-        self.blind = self.values <= max(top, 1e-300) * np.finfo(float).eps ** 2
+        # directions the Jacobian does not see (singular value at rounding level, lstsq's rcond) take no step
+        self.blind = self.values <= max(top, 1e-300) * (np.finfo(float).eps * max(scaled.shape)) ** 2
         self.b = self.project(r)
 
     def project(self, r: np.ndarray) -> np.ndarray:
@@ -213,7 +213,8 @@ def levenberg_marquardt(
         if undamped and change <= ftol * (cost + change):
             return result(True, f"relative cost change {change / (cost + change):.3g} <= ftol")
         rate = change / previous if undamped and np.isfinite(previous) else np.inf
-        if rate < 0.5 and change * rate / (1.0 - rate) <= ftol * cost:
+        # extrapolated only once the change itself is small (sqrt(ftol)): the rate of two early steps misleads
+        if rate < 0.5 and change <= np.sqrt(ftol) * cost and change * rate / (1.0 - rate) <= ftol * cost:
             return result(True, f"Gauss-Newton steps converge linearly (rate {rate:.2g}): what is left <= ftol x cost")
         previous = change if undamped else np.inf
         if small(h):

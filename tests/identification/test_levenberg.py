@@ -153,3 +153,17 @@ def test_elastic_calibration_same_as_with_scipy(truth, monkeypatch) -> None:
     assert abs(cost[0] / cost[1] - 1) <= 1e-9
     std = np.array([ref.std[name] for name in ref.problem.unknown_names])
     assert np.all(np.abs(ours.x - ref.x) <= std / 100)
+
+
+def test_gauss_newton_step_is_lstsq_on_a_rank_deficient_jacobian() -> None:
+    """At the nominal design a calibration Jacobian can be exactly rank deficient (a singular value at
+    rounding level): the step is lstsq's minimum-norm solution, not a huge step along the blind direction."""
+    from spherecal.identification.levenberg import _Linearisation
+
+    rng = np.random.default_rng(3)
+    jac = rng.normal(size=(300, 6))
+    jac = np.column_stack([jac, jac[:, 2] - 0.5 * jac[:, 4] + 1e-15 * rng.normal(size=300)])  # rank 6 of 7
+    scaled = jac / np.linalg.norm(jac, axis=0)
+    r = rng.normal(size=300)
+    expected = np.linalg.lstsq(scaled, -r, rcond=None)[0]
+    assert np.allclose(_Linearisation(scaled, r).step(0.0), expected, atol=1e-9)
