@@ -8,7 +8,8 @@ Data: 3 x 500 samples on a perturbed Panda (seed S), 0.3 mm fixture noise, known
    scipy's MINPACK (``least_squares(method='lm', x_scale='jac')``, tolerances 1e-12) and a plain
    column-scaled Gauss-Newton (the floor: full steps, no safeguard). Jacobian and residual
    evaluations, wall time, cost ratio and largest parameter difference in std against scipy's.
-2. ``spherecal calibrate --model dh`` and ``spherecal calibrate`` (default ``auto``) on the same
+2. ``spherecal calibrate --model dh`` and ``spherecal calibrate`` (default ``auto``), each also as it
+   was before (``*_before``: scipy's LM and scipy.special's chi-square tail patched back in), on the same
    samples as whole processes (start-up, reading, model selection, self-check, writing included),
    interleaved with two in-process references on the same data, both with scipy's LM as the solver:
    ``reference_lm_solve``, one ``least_squares(method='lm')`` on the already built problem, and
@@ -48,6 +49,20 @@ from spherecal.identification.solvers import solve_scipy  # noqa: E402
 from spherecal.identification.synthetic import make_dataset  # noqa: E402
 
 NOISE = 3e-4
+#: The command as it was before issue 23's solver work, in the same tree: scipy's MINPACK LM as the
+#: solver and scipy.special's chi-square tail in the self-check (both imported at start-up as before).
+BEFORE = """
+import sys
+import numpy as np
+from scipy.special import gammaincc
+from spherecal.cli import main
+from spherecal.identification import calibrate as pipeline, consistency, selfcheck
+from spherecal.identification.solvers import solve_scipy
+pipeline.solve_lm = lambda problem, x0, loss: solve_scipy(problem, x0, loss)
+chi2 = lambda s, dof: float(np.log10(max(gammaincc(dof / 2, max(s, 0.0) / 2), 1e-300)))
+consistency.log10_chi2_sf = selfcheck.log10_chi2_sf = chi2
+sys.exit(main(sys.argv[1:]))
+"""
 
 
 def uptime() -> str:
@@ -137,9 +152,16 @@ def one_solve(problem, repeats: int) -> dict:
 
 
 def whole_process(folder: Path, problem_builder, calibration_with_scipy, repeats: int) -> dict:
-    command = [sys.executable, "-m", "spherecal", "calibrate", "--robot", "panda", "--samples",
-               str(folder / "samples.csv"), "--fixtures", str(folder / "fixtures.yaml")]
-    variants = {"calibrate_dh": ["--model", "dh"], "calibrate_default": []}
+    arguments = ["calibrate", "--robot", "panda", "--samples", str(folder / "samples.csv"), "--fixtures",
+                 str(folder / "fixtures.yaml")]
+    after = [sys.executable, "-m", "spherecal", *arguments]
+    before = [sys.executable, "-c", BEFORE, *arguments]
+    variants = {
+        "calibrate_dh": [*after, "--model", "dh"],
+        "calibrate_default": after,
+        "calibrate_dh_before": [*before, "--model", "dh"],
+        "calibrate_default_before": before,
+    }
     walls: dict[str, list[float]] = {
         "reference_lm_solve": [], "reference_build": [], "reference_lm_calibration": [], **{k: [] for k in variants}
     }
@@ -156,7 +178,7 @@ def whole_process(folder: Path, problem_builder, calibration_with_scipy, repeats
         for name, extra in variants.items():
             out = folder / f"{name}.yaml"
             clock = time.perf_counter()
-            done = subprocess.run([*command, *extra, "--out", str(out)], capture_output=True, text=True)
+            done = subprocess.run([*extra, "--out", str(out)], capture_output=True, text=True)
             walls[name].append(time.perf_counter() - clock)
             if done.returncode != 0:
                 raise SystemExit(f"{name} failed: {done.stderr.strip()}")
@@ -168,7 +190,8 @@ def whole_process(folder: Path, problem_builder, calibration_with_scipy, repeats
         print(f"  {name:<26} {median:8.3f} {median / solve:8.2f} {median / calibration:16.2f}")
     for name in ("calibrate_default", "calibrate_dh"):
         goal = medians[name] / calibration
-        print(f"  {name} / reference lm calibration: {goal:.2f} x (goal for default <= 0.3 x)")
+        print(f"  {name} / reference lm calibration: {goal:.2f} x (goal for default <= 0.3 x); "
+              f"after / before: {medians[name] / medians[name + '_before']:.2f}")
     return {
         "medians_s": medians,
         "runs_s": walls,
