@@ -6,7 +6,9 @@ Jacobian that costs several residual evaluations): every Jacobian is used as far
 Each iteration scales the Jacobian's columns (``D = max(D, |J_i|)``, MINPACK's rule, so the
 unknowns' units do not matter) and diagonalises the scaled normal matrix ``G = Js^T Js = V L V^T``
 (an F x F ``eigh``; from the SVD of the R of a thin QR of ``Js`` instead when ``G`` is too
-ill-conditioned for normal equations, condition above :data:`NORMAL_LIMIT`). The step is the
+ill-conditioned for normal equations, condition above :data:`NORMAL_LIMIT`); a direction whose
+singular value is at rounding level (lstsq's ``rcond``: ``eps max(M, F)`` of the largest) takes no
+step, so a start on an exactly degenerate design gets lstsq's minimum-norm step. The step is the
 Gauss-Newton step ``-G^-1 g`` when it fits the trust region ``|h| <= radius`` (scaled), else the
 damped step ``-(G + mu I)^-1 g`` of length ``radius`` (``mu`` from the eigenvalues, no further
 factorisation). From the trial point, chord steps (the same damped system, the trial point's
