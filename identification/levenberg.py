@@ -20,7 +20,8 @@ Stops (converged) when
 
 * the Gauss-Newton decrement at the current point, ``0.5 g^T G^-1 g`` (the most the linear model
   could still gain), is at most ``ftol`` times the cost (after one last step along it);
-* an accepted Gauss-Newton step changed the cost by at most ``ftol`` relative, or by at most
+* an accepted step changed the cost by at most ``ftol`` relative (a damped one only where the
+  Gauss-Newton decrement was at most ``sqrt(ftol)`` of the cost), or a Gauss-Newton step by at most
   ``sqrt(ftol)`` after one before it at a linear rate that leaves at most ``ftol`` of the cost to gain;
 * an accepted step is at most ``xtol`` relative to the scaled unknowns (``|D h| <= xtol (|D x| + xtol)``);
 * the cosine between the residual and every scaled Jacobian column is at most ``gtol``;
@@ -214,7 +215,9 @@ def levenberg_marquardt(
         if final:
             return result(True, f"Gauss-Newton decrement {decrement:.3g} <= ftol x cost")
         undamped = mu == 0.0
-        if undamped and change <= ftol * (cost + change):
+        # a damped step counts when even the undamped one could not have gained sqrt(ftol) (MINPACK
+        # stops on any step's change; an approximate Jacobian keeps damping near the minimum)
+        if change <= ftol * (cost + change) and (undamped or decrement <= np.sqrt(ftol) * (cost + change)):
             return result(True, f"relative cost change {change / (cost + change):.3g} <= ftol")
         rate = change / previous if undamped and np.isfinite(previous) else np.inf
         # extrapolated only once the change itself is small (sqrt(ftol)): the rate of two early steps misleads
