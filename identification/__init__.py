@@ -20,6 +20,7 @@ _EXPORTS: dict[str, str] = {
     "CalibrationResult": "calibrate",
     "solve_lm": "solvers",
     "solve_pso": "solvers",
+    "solve_scipy": "solvers",
     "Identifiability": "identifiability",
     "make_dataset": "synthetic",
 }

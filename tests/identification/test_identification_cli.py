@@ -116,3 +116,21 @@ def test_lm_path_imports_no_simulator_viewer_or_swarm(inputs, tmp_path) -> None:
     assert out.stderr.strip().splitlines()[-1] == "[]"
     assert yaml.safe_load((tmp_path / "c.yaml").read_text())["calibration"]["method"] == "lm"
     assert not (tmp_path / "report.log").exists()
+
+
+@pytest.mark.parametrize("model", ["dh", "auto"])
+def test_calibrate_imports_no_scipy(inputs, tmp_path, model) -> None:
+    """`calibrate` (lm, plain loss; dh, or auto with its elastic folds) runs our own solver and chi-square
+    tail: scipy (0.3 s of start-up for scipy.optimize, as much for scipy.special) is never imported, nor
+    MuJoCo, Rerun or pyswarms."""
+    code = (
+        "import sys; from spherecal.cli import main;"
+        f"main(['calibrate','--robot','panda','--model',{model!r},'--samples',{str(inputs / 'samples.csv')!r},"
+        f"'--fixtures',{str(inputs / 'fixtures.yaml')!r},'--out',{str(tmp_path / 'c.yaml')!r}]);"
+        "heavy = ('scipy', 'mujoco', 'rerun', 'pyswarms', 'dask');"
+        "print(sorted(m for m in heavy if m in sys.modules), file=sys.stderr)"
+    )
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, cwd=tmp_path)
+    assert out.returncode == 0, out.stderr
+    assert out.stderr.strip().splitlines()[-1] == "[]"
+    assert (tmp_path / "c.yaml").exists()
