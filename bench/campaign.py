@@ -17,7 +17,6 @@ from __future__ import annotations
 
 import argparse
 import dataclasses
-import json
 import os
 import statistics
 import subprocess
@@ -26,7 +25,6 @@ from pathlib import Path
 
 import bench_common  # noqa: F401  first: BLAS threads, no Rerun analytics
 
-from spherecal.correction.files.provenance import versions  # noqa: E402
 from spherecal.validation.experiments.campaign import CampaignConfig, run_campaign, tasks  # noqa: E402
 from spherecal.validation.parallel import executor, run_tasks  # noqa: E402
 
@@ -143,14 +141,13 @@ def main() -> None:
           f"({speedup['pool 2']:.2f}x); Dask overhead <= 5 %: "
           f"{'met' if max(dask_extra, noop['dask 2']) <= 0.05 * task else 'MISSED'}")
     print(f"load after: {after}")
-    out = Path(__file__).with_suffix(".json")
-    out.write_text(json.dumps({
-        "inputs": {**vars(args), "tasks": n_tasks}, "versions": versions(), "load_before": before,
+    out = bench_common.write_json(Path(__file__).with_suffix(".json"), {
+        "load_before": before,
         "load_after": after, "wall_s": runs, "median_wall_s": median, "speedup_vs_one_process": speedup,
         "median_task_s": task, "cpu_s": cpu, "cpu_ratio_one_over_pool": cpu_ratio, "schedule_bound": schedule,
         "dask_start_s": dask_start, "dask_extra_per_task_s": dask_extra,
         "noop_overhead_per_task_s": noop, "identical": identical,
-    }, indent=2))
+    }, inputs={**vars(args), "tasks": n_tasks})
     print(f"wrote {out}")
 
 

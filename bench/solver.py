@@ -25,7 +25,6 @@ unset) and read the load printed beside them.
 from __future__ import annotations
 
 import argparse
-import json
 import os
 import subprocess
 import sys
@@ -39,7 +38,6 @@ from scipy.optimize import least_squares  # noqa: E402  (the reference)
 
 from spherecal.correction import load_robot, perturb  # noqa: E402
 from spherecal.correction.files.fixtures import write_fixtures  # noqa: E402
-from spherecal.correction.files.provenance import versions  # noqa: E402
 from spherecal.correction.files.samples_csv import write_samples  # noqa: E402
 from spherecal.identification import calibrate as pipeline  # noqa: E402
 from spherecal.identification.build import build_problem  # noqa: E402
@@ -211,11 +209,9 @@ def main() -> None:
     true = perturb(panda, np.random.default_rng(args.seed))
     dataset, spec = make_dataset(true, rng=np.random.default_rng(args.seed + 1), noise=NOISE)
     problem = build_problem(panda, dataset, spec)
+    inputs = {"robot": "panda (embedded)", "samples_per_fixture": 500, "fixtures": list(dataset.fixture_names),
+              "noise_m": NOISE, "known_distances": True}
     results: dict = {
-        "versions": versions(("spherecal", "numpy", "scipy")),
-        "seed": args.seed,
-        "inputs": {"robot": "panda (embedded)", "samples_per_fixture": 500, "fixtures": list(dataset.fixture_names),
-                   "noise_m": NOISE, "known_distances": True},
         "openblas_num_threads": os.environ.get("OPENBLAS_NUM_THREADS"),
         "uptime_before": load_before,
     }
@@ -231,7 +227,7 @@ def main() -> None:
         )
     results["uptime_after"] = uptime()
     print(results["uptime_after"])
-    Path(__file__).with_suffix(".json").write_text(json.dumps(results, indent=2))
+    bench_common.write_json(Path(__file__).with_suffix(".json"), results, seed=args.seed, inputs=inputs)
 
 
 if __name__ == "__main__":

@@ -22,7 +22,6 @@ from __future__ import annotations
 import functools
 import logging
 import os
-import socket
 import warnings
 from collections.abc import Callable, Iterator, Sequence
 from concurrent.futures import Executor, ProcessPoolExecutor, as_completed
@@ -31,7 +30,7 @@ from dataclasses import dataclass, field
 from typing import Any
 
 from spherecal.correction.errors import SpherecalError
-from spherecal.correction.files.provenance import versions
+from spherecal.correction.files.provenance import this_process
 
 from .threads import cap_process, thread_cap
 
@@ -62,8 +61,8 @@ class Outcome:
     Attributes:
         results: one per task, in task order; ``None`` where the task failed.
         failures: the tasks that raised, in task order.
-        workers: worker (``"host pid N"``) -> its package versions (:func:`versions`), every worker that
-            finished a task.
+        workers: worker (``"host pid N"``) -> its package versions
+            (``correction.files.provenance.this_process``), every worker that finished a task.
     """
 
     results: list[Any]
@@ -74,7 +73,7 @@ class Outcome:
 @functools.lru_cache(maxsize=4)
 def _worker(pid: int) -> tuple[str, dict[str, str]]:
     """This process's name and package versions, once per process (by pid: a forked child has its own)."""
-    return f"{socket.gethostname()} pid {pid}", versions()
+    return this_process()
 
 
 @functools.lru_cache(maxsize=4)

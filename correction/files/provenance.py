@@ -21,6 +21,7 @@ from __future__ import annotations
 import hashlib
 import os
 import platform
+import socket
 import sys
 from datetime import datetime, timezone
 from importlib.metadata import PackageNotFoundError, version
@@ -115,6 +116,11 @@ def _workers(workers: dict[str, dict[str, str]], own: dict[str, str]) -> str:
         listed = "the versions above" if dict(packages) == own else ", ".join(f"{k} {v}" for k, v in packages)
         parts.append(f"{', '.join(names)}: {listed}")
     return "; ".join(parts)
+
+
+def this_process() -> tuple[str, dict[str, str]]:
+    """This process's name (``"host pid N"``) and package versions: one entry of a block's ``workers``."""
+    return f"{socket.gethostname()} pid {os.getpid()}", versions()
 
 
 def matches_record(path: str | os.PathLike, record: dict[str, Any]) -> bool:
