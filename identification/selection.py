@@ -7,19 +7,20 @@ Candidates (each also usable alone with ``--model``):
 * ``scale``: plus a per-joint angle scale (``s1..sn``, :mod:`correction.scale`);
 * ``elastic+scale``: both (needs inertials).
 
-``auto`` (the default) fits every candidate the robot file allows once on all samples, then judges them
+``auto`` (the default) judges every candidate the robot file allows
 
 * by **cross-validation** when the fixtures form at least 3 groups. Folds leave one *placement* out:
   fixtures named ``<placement>_h<k>`` (several sockets of one plate, as MUKCa records them) form one
-  group; otherwise every fixture is its own group. Each fold's fit starts from the candidate's full fit
-  (warm start) and is judged on the held-out group, whose centre is unknown to it::
+  group; otherwise every fixture is its own group. Each fold's fit (on :data:`CV_SAMPLES` samples per
+  fixture) is judged on the held-out group, whose centre is unknown to it::
 
       error(fold) = mean over its fixtures of  mean_k |p_k - mean(p)|     (the predicted points' spread)
                     and over known distances within the fold of  | |mean_a - mean_b| - D_ab |
 
   The candidate with the lowest mean error is kept only when its mean improvement over ``dh`` exceeds
   its standard error (the fold-to-fold spread of the differences): a richer model must earn its place.
-* by **BIC** otherwise (one placement: two sockets), from each candidate's one full fit::
+* by **BIC** otherwise (one placement: two sockets), from each candidate's one fit on all samples (the
+  chosen one's is the start of the final, self-checked solve)::
 
       BIC = M ln(RSS / M) + ln(M) k_eff   M data rows, RSS their residual sum of squares [m^2],
                                            k_eff the effective number of unknowns of the regularised fit
@@ -200,15 +201,14 @@ def _sub_spec(spec: FixtureSpec | None, names: tuple[str, ...]) -> FixtureSpec:
     )
 
 
-def cross_validate(fit, names: tuple[str, ...], fits: dict, nominal: RobotModel, dataset: Dataset,
+def cross_validate(fit, names: tuple[str, ...], nominal: RobotModel, dataset: Dataset,
                    spec: FixtureSpec | None, samples: int = CV_SAMPLES, seed: int = 0
                    ) -> tuple[tuple[str, ...], dict[str, np.ndarray], int]:
     """Held-out errors of the candidates ``names``, one fold per group.
 
     Args:
         fit: ``fit(start_model, dataset, spec, warm) -> CalibrationResult`` (the calibration as the caller runs
-            it; ``warm``: the model to start the optimisation from).
-        fits: candidate -> its full fit (each fold starts from it).
+            it; ``warm``: the model to start the optimisation from, None here: a fold starts from nominal).
         samples: samples per fixture of the fold fits (drawn once, seeded); the held-out group is judged on
             all of its samples.
 
@@ -225,7 +225,7 @@ def cross_validate(fit, names: tuple[str, ...], fits: dict, nominal: RobotModel,
         test = dataset.select(np.array([groups[label] == fold for label in dataset.labels]))
         train_spec = _sub_spec(spec, train.fixture_names)
         for name in names:
-            model = fit(start_for(name, nominal), train, train_spec, fits[name].model).model
+            model = fit(start_for(name, nominal), train, train_spec, None).model
             errors[name].append(held_out_error(model, test, spec))
     used = min(samples, min(dataset.counts().values()))
     return folds, {k: np.array(v) for k, v in errors.items()}, used
@@ -240,8 +240,8 @@ def select_model(requested: str, fit, nominal: RobotModel, dataset: Dataset, spe
             None, or the model to start the optimisation from).
 
     Returns:
-        The :class:`ModelSelection`; its ``fits`` hold every candidate's full fit (the chosen one's is the
-        caller's warm start).
+        The :class:`ModelSelection`; with BIC its ``fits`` hold every candidate's fit on all samples (the
+        chosen one's is the caller's warm start).
 
     Raises:
         SpherecalError: an elastic model requested for a robot without ``inertials``.
@@ -256,6 +256,27 @@ def select_model(requested: str, fit, nominal: RobotModel, dataset: Dataset, spe
         return ModelSelection(requested, requested, "requested")
     clock = time.perf_counter()
     names = candidates_for(nominal)
+    groups = set(groups_of(dataset.fixture_names).values())
+    if len(groups) >= 3:  # the folds judge; no full fit needed beyond the chosen one (the caller's)
+        try:
+            folds, errors, used = cross_validate(fit, names, nominal, dataset, spec, samples, seed)
+        except SpherecalError as error:  # a fold the data cannot calibrate: no evidence for a richer model
+            return ModelSelection("auto", "dh", f"a cross-validation fold could not be calibrated ({error})",
+                                  "cross-validation", seconds=time.perf_counter() - clock)
+        scores = {k: float(e.mean()) for k, e in errors.items()}
+        best = min(names, key=lambda k: (scores[k], names.index(k)))
+        selection = ModelSelection("auto", "dh", "", "cross-validation", scores, folds, errors, used,
+                                   time.perf_counter() - clock)
+        if best == "dh":
+            return replace(selection, reason="no richer model predicts held-out fixtures better than dh")
+        _, _, gain, se = selection.stats(best)
+        if gain > se:
+            reason = (f"{best} predicts held-out fixtures {gain * 1e3:.3g} mm better than dh, more than the fold "
+                      f"spread {se * 1e3:.2g} mm")
+            return replace(selection, chosen=best, reason=reason)
+        reason = (f"{best}'s held-out gain {gain * 1e3:.3g} mm does not exceed the fold spread {se * 1e3:.2g} mm; "
+                  f"the simpler model is kept")
+        return replace(selection, reason=reason)
     fits = {}
     for name in names:
         try:
@@ -271,27 +292,6 @@ def select_model(requested: str, fit, nominal: RobotModel, dataset: Dataset, spe
     if len(names) == 1:
         return ModelSelection("auto", "dh", "the only candidate" + note, "none", fits=fits,
                               seconds=time.perf_counter() - clock)
-    groups = set(groups_of(dataset.fixture_names).values())
-    if len(groups) >= 3:
-        try:
-            folds, errors, used = cross_validate(fit, names, fits, nominal, dataset, spec, samples, seed)
-        except SpherecalError as error:  # a fold the data cannot calibrate: no evidence for a richer model
-            return ModelSelection("auto", "dh", f"a cross-validation fold could not be calibrated ({error})" + note,
-                                  "cross-validation", fits=fits, seconds=time.perf_counter() - clock)
-        scores = {k: float(e.mean()) for k, e in errors.items()}
-        best = min(names, key=lambda k: (scores[k], names.index(k)))
-        selection = ModelSelection("auto", "dh", "", "cross-validation", scores, folds, errors, used,
-                                   time.perf_counter() - clock, fits)
-        if best == "dh":
-            return replace(selection, reason="no richer model predicts held-out fixtures better than dh" + note)
-        _, _, gain, se = selection.stats(best)
-        if gain > se:
-            reason = (f"{best} predicts held-out fixtures {gain * 1e3:.3g} mm better than dh, more than the fold "
-                      f"spread {se * 1e3:.2g} mm")
-            return replace(selection, chosen=best, reason=reason + note)
-        reason = (f"{best}'s held-out gain {gain * 1e3:.3g} mm does not exceed the fold spread {se * 1e3:.2g} mm; "
-                  f"the simpler model is kept")
-        return replace(selection, reason=reason + note)
     scores = {k: information_criterion(f) for k, f in fits.items()}
     best = min(names, key=lambda k: (scores[k], names.index(k)))
     reason = (f"{len(groups)} fixture group(s), too few to cross-validate (need 3): lowest BIC "
