@@ -33,11 +33,12 @@ import numpy as np
 from spherecal.correction import Dataset, FixtureSpec, tool_point
 from spherecal.identification.calibrate import calibrate
 from spherecal.identification.ingest.importers import MUKCA_DISTANCE
+from spherecal.identification.problem import PRIOR
 from spherecal.identification.selection import elastic_start, rigid, select_model
 
 
-def _fit(start, data, spec):
-    return calibrate(start, data, spec).model
+def _fit(start, data, spec, warm=None):  # as identification.workflow fits candidates and folds
+    return calibrate(start, data, spec, start=warm, check=False, prior=PRIOR)
 
 
 def _placement(name: str) -> str:
@@ -64,10 +65,10 @@ def evaluate(robot: str, dataset: Dataset, spec: FixtureSpec, nominal) -> dict:
         train_spec = FixtureSpec(names=train.fixture_names,
                                  distances=[d for d in spec.distances if _placement(d[0]) != held])
         clock = time.perf_counter()
-        models = {"dh": _fit(rigid(nominal), train, train_spec),
-                  "elastic": _fit(elastic_start(nominal), train, train_spec)}
+        models = {"dh": _fit(rigid(nominal), train, train_spec).model,
+                  "elastic": _fit(elastic_start(nominal), train, train_spec).model}
         choice = select_model("auto", _fit, nominal, train, train_spec, samples=10**6)
-        models["auto"] = models[choice.chosen]
+        models["auto"] = models.get(choice.chosen) or choice.fits[choice.chosen].model
         row = {"placement": held, "auto_chose": choice.chosen, "seconds": time.perf_counter() - clock}
         for key, model in models.items():
             mae, dist = held_out(model, test)

@@ -29,7 +29,7 @@ def scale_of(model: RobotModel) -> np.ndarray:
     """(n,) joint angle scales ``s`` (dimensionless) from ``model.extras["scale"]``; zeros when absent.
 
     Raises:
-        ScaleError: not ``n`` finite numbers, or a scale at or below -1 (a reversed or frozen joint).
+        ScaleError: not ``n`` finite numbers.
     """
     block = model.extras.get("scale")
     if block is None:
@@ -38,10 +38,9 @@ def scale_of(model: RobotModel) -> np.ndarray:
         s = np.asarray(block, dtype=float)
     except (TypeError, ValueError):
         s = np.empty(0)
-    if s.shape != (model.n_joints,) or not np.all(np.isfinite(s)) or np.any(s <= -1.0):
+    if s.shape != (model.n_joints,) or not np.all(np.isfinite(s)):
         raise ScaleError(
-            f"{model.name}: field 'scale': expected {model.n_joints} finite numbers above -1 (dimensionless), "
-            f"got {block!r}"
+            f"{model.name}: field 'scale': expected {model.n_joints} finite numbers (dimensionless), got {block!r}"
         )
     return s
 

@@ -220,13 +220,13 @@ def build_problem(
     jac = problem.generic_jacobian()
     fp = candidates.size
     # preference: centres, tool point, then joints from the last to the first, then (an elastic model) the
-    # compliances from the most loaded joint (the first) on: geometry keeps what both could explain
+    # compliances from the most loaded joint (the first) on, then the scales: geometry keeps what both could explain
     n = model.n_joints
     rank_of = {name: k for k, name in enumerate(("tool_x", "tool_y", "tool_z"))}
     for i in range(n, 0, -1):
         for f in ("a", "alpha", "beta", "d", "theta"):
             rank_of[f"{f}{i}"] = len(rank_of)
-    for name in model.layout.names[model.layout.compliance]:
+    for name in model.layout.names[model.layout.compliance] + model.layout.names[model.layout.scale]:
         rank_of[name] = len(rank_of)
     order = np.concatenate([np.arange(fp, jac.shape[1]), np.argsort([rank_of[names[i]] for i in candidates])])
     accepted, rejected = greedy_rank(jac, order, rank_tol)

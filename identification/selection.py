@@ -1,15 +1,35 @@
-"""Model selection by cross-validation: rigid DH (``dh``) or DH plus joint compliance (``elastic``).
+"""Model selection: which terms beside the geometry (``dh``) the data supports.
 
-Folds leave one *placement* out: fixtures named ``<placement>_h<k>`` (several sockets of one plate, as
-MUKCa records them) form one group; otherwise every fixture is its own group (leave-one-fixture-out).
-For each fold both models are fitted on the other groups and judged on the held-out one, whose centre
-is unknown to them::
+Candidates (each also usable alone with ``--model``):
 
-    error(fold) = mean over its fixtures of  mean_k |p_k - mean(p)|     (the predicted points' spread)
-                  and over known distances within the fold of  | |mean_a - mean_b| - D_ab |
+* ``dh``: geometry only (DH, tool point);
+* ``elastic``: plus joint compliance under gravity (``c1..cn``, needs the robot file's inertials);
+* ``scale``: plus a per-joint angle scale (``s1..sn``, :mod:`correction.scale`);
+* ``elastic+scale``: both (needs inertials).
 
-``auto`` keeps ``elastic`` only when the mean per-fold improvement over ``dh`` exceeds its standard
-error (the fold-to-fold spread of the differences): a richer model must earn its place.
+``auto`` (the default) judges every candidate the robot file allows
+
+* by **cross-validation** when the fixtures form at least 3 groups. Folds leave one *placement* out:
+  fixtures named ``<placement>_h<k>`` (several sockets of one plate, as MUKCa records them) form one
+  group; otherwise every fixture is its own group. Each fold's fit (on :data:`CV_SAMPLES` samples per
+  fixture) is judged on the held-out group, whose centre is unknown to it::
+
+      error(fold) = mean over its fixtures of  mean_k |p_k - mean(p)|     (the predicted points' spread)
+                    and over known distances within the fold of  | |mean_a - mean_b| - D_ab |
+
+  The candidate with the lowest mean error is kept only when its mean improvement over ``dh`` exceeds
+  its standard error (the fold-to-fold spread of the differences): a richer model must earn its place.
+* by **BIC** otherwise (one placement: two sockets), from each candidate's one fit on all samples (the
+  chosen one's is the start of the final, self-checked solve)::
+
+      BIC = M ln(RSS / M) + ln(M) k_eff   M data rows, RSS their residual sum of squares [m^2],
+                                           k_eff the effective number of unknowns of the regularised fit
+
+  (the trace of the data rows' hat matrix: with the prior toward nominal a weakly seen parameter counts
+  less than one). The lowest BIC wins. BIC rather than AIC (``2 k_eff``): on simulated single placements
+  (kinematic, 2 sockets 50 mm apart, 2 x 250 samples, 0.1 mm noise) AIC took a richer model on 2 of 10
+  rigid arms (seeds 7, 9: elastic by 3.3, scale by 0.9), BIC keeps dh on all while an elastic arm's gain
+  (about 560) dwarfs either penalty.
 """
 
 from __future__ import annotations
@@ -23,8 +43,13 @@ from spherecal.correction import Dataset, FixtureSpec, RobotModel, tool_point
 from spherecal.correction.elastic import with_compliance
 from spherecal.correction.errors import SpherecalError
 from spherecal.correction.gravity import has_inertials
+from spherecal.correction.scale import with_scale
 
-MODELS: tuple[str, ...] = ("dh", "elastic", "auto")
+#: The candidates, simplest first (ties go to the earlier one).
+CANDIDATES: tuple[str, ...] = ("dh", "scale", "elastic", "elastic+scale")
+MODELS: tuple[str, ...] = (*CANDIDATES, "auto")
+#: Candidates that need the robot file's inertials (gravity torques).
+NEEDS_INERTIALS: tuple[str, ...] = ("elastic", "elastic+scale")
 #: Samples per fixture of every fold's fits (the final fit uses all): keeps `calibrate` interactive.
 CV_SAMPLES = 150
 
@@ -55,72 +80,113 @@ def held_out_error(model: RobotModel, dataset: Dataset, spec: FixtureSpec | None
 
 
 def elastic_start(nominal: RobotModel) -> RobotModel:
-    """``nominal`` with every compliance free to be identified (start: rigid, or its own compliance)."""
+    """``nominal`` with every compliance free to be identified (start: rigid, or its own compliance), no scale."""
     c = nominal.extras.get("compliance")
-    return with_compliance(nominal, np.zeros(nominal.n_joints) if c is None else c)
+    return with_scale(with_compliance(nominal, np.zeros(nominal.n_joints) if c is None else c), None)
 
 
 def rigid(nominal: RobotModel) -> RobotModel:
-    """``nominal`` without compliance (the geometric model)."""
-    return with_compliance(nominal, None)
+    """``nominal`` without compliance or scale (the geometric model)."""
+    return with_scale(with_compliance(nominal, None), None)
+
+
+def start_for(name: str, nominal: RobotModel) -> RobotModel:
+    """The start model of candidate ``name``: ``nominal`` with exactly that candidate's terms free
+    (compliances and scales start at the nominal file's values, else zero)."""
+    if name not in CANDIDATES:
+        raise ValueError(f"unknown model {name!r}, expected one of {CANDIDATES}")
+    model = elastic_start(nominal) if "elastic" in name else rigid(nominal)
+    if "scale" in name:
+        s = nominal.extras.get("scale")
+        model = with_scale(model, np.zeros(nominal.n_joints) if s is None else s)
+    return model
+
+
+def candidates_for(nominal: RobotModel) -> tuple[str, ...]:
+    """The candidates the robot file allows (the elastic ones need inertials)."""
+    return tuple(c for c in CANDIDATES if c not in NEEDS_INERTIALS or has_inertials(nominal))
+
+
+def information_criterion(result) -> float:
+    """BIC of a fitted :class:`.calibrate.CalibrationResult` with its effective unknowns (module docstring)."""
+    problem, x = result.problem, result.x
+    r = problem.residuals(x)[~problem.prior_rows()]
+    m = r.size
+    unknowns = result.effective_unknowns if result.effective_unknowns is not None else problem.n_unknowns
+    return float(m * np.log(max(float(r @ r), 1e-300) / m) + np.log(m) * unknowns)
 
 
 @dataclass(frozen=True)
 class ModelSelection:
-    """What cross-validation found.
+    """What model selection found.
 
     Attributes:
-        requested: ``dh``, ``elastic`` or ``auto``.
-        chosen: the model calibrated: ``dh`` or ``elastic``.
+        requested: a candidate name or ``auto``.
+        chosen: the model calibrated.
         reason: one sentence.
-        folds: held-out group names, in order.
-        errors: model -> (folds,) held-out error [m] (empty when no cross-validation ran).
+        criterion: ``requested``, ``cross-validation`` or ``BIC`` (or ``none`` when only one candidate).
+        scores: candidate -> its score: mean held-out error [m] (cross-validation) or BIC (lower is better).
+        folds: held-out group names, in order (cross-validation).
+        errors: candidate -> (folds,) held-out error [m] (cross-validation).
         samples_per_fixture: samples per fixture of the fold fits.
-        seconds: wall time of the cross-validation [s].
+        seconds: wall time of the selection beyond the chosen model's fit [s].
+        fits: candidate -> its full fit (:class:`.calibrate.CalibrationResult`; not written to files).
     """
 
     requested: str
     chosen: str
     reason: str
+    criterion: str = "requested"
+    scores: dict[str, float] | None = None
     folds: tuple[str, ...] = ()
     errors: dict[str, np.ndarray] | None = None
     samples_per_fixture: int = 0
     seconds: float = 0.0
+    fits: dict | None = None
 
-    def stats(self) -> tuple[float, float, float, float] | None:
-        """(mean dh, mean elastic, mean improvement, its standard error) [m], or None without folds."""
+    def stats(self, name: str | None = None) -> tuple[float, float, float, float] | None:
+        """(mean dh, mean ``name``, mean improvement over dh, its standard error) [m] of the folds
+        (``name``: the chosen model, or the best richer one), or None without folds."""
         if not self.errors:
             return None
-        dh, el = self.errors["dh"], self.errors["elastic"]
-        diff = dh - el
+        if name is None:
+            richer = [k for k in self.errors if k != "dh"]
+            name = self.chosen if self.chosen != "dh" else min(richer, key=lambda k: self.errors[k].mean())
+        dh, other = self.errors["dh"], self.errors[name]
+        diff = dh - other
         se = float(np.std(diff, ddof=1) / np.sqrt(diff.size)) if diff.size > 1 else float("inf")
-        return float(dh.mean()), float(el.mean()), float(diff.mean()), se
+        return float(dh.mean()), float(other.mean()), float(diff.mean()), se
 
     def summary(self) -> str:
         lines = [f"model: {self.chosen} ({self.reason})"]
+        if self.scores:
+            unit = " [mm]" if self.criterion == "cross-validation" else ""
+            factor = 1e3 if self.criterion == "cross-validation" else 1.0
+            scores = ", ".join(f"{k} {v * factor:.4f}" if unit else f"{k} {v:.1f}" for k, v in self.scores.items())
+            lines.append(f"{self.criterion} score{unit} (lower is better): {scores}")
         if self.errors:
-            dh, el, gain, se = self.stats()
-            lines.append(
-                f"cross-validation, leave one of {len(self.folds)} groups out ({self.samples_per_fixture} samples per "
-                f"fixture per fit, {self.seconds:.2f} s): held-out error [mm] dh {dh * 1e3:.4f}, "
-                f"elastic {el * 1e3:.4f}, gain {gain * 1e3:.3g} +- {se * 1e3:.2g}"
-            )
+            lines.append(f"cross-validation, leave one of {len(self.folds)} groups out ({self.samples_per_fixture} "
+                         f"samples per fixture per fit, {self.seconds:.2f} s): held-out error [mm]")
             for k, name in enumerate(self.folds):
-                dh_k, el_k = self.errors["dh"][k] * 1e3, self.errors["elastic"][k] * 1e3
-                lines.append(f"  {name:<16} dh {dh_k:.4f}  elastic {el_k:.4f}")
+                row = "  ".join(f"{m} {e[k] * 1e3:.4f}" for m, e in self.errors.items())
+                lines.append(f"  {name:<16} {row}")
         return "\n".join(lines)
 
     def block(self) -> dict:
         """The ``model_selection`` entry of the result file (metres)."""
-        out = {"requested": self.requested, "chosen": self.chosen, "reason": self.reason}
+        out = {"requested": self.requested, "chosen": self.chosen, "reason": self.reason, "criterion": self.criterion}
+        if self.scores:
+            out["scores"] = {k: float(v) for k, v in self.scores.items()}
+        if self.fits:
+            out["effective_unknowns"] = {k: float(f.effective_unknowns) for k, f in self.fits.items()}
         if self.errors:
-            dh, el, gain, se = self.stats()
             out.update({
                 "folds": list(self.folds),
                 "held_out_error_m": {k: [float(v) for v in e] for k, e in self.errors.items()},
-                "mean_m": {"dh": dh, "elastic": el}, "gain_m": gain, "gain_standard_error_m": se,
-                "samples_per_fixture": self.samples_per_fixture, "seconds": self.seconds,
+                "samples_per_fixture": self.samples_per_fixture,
             })
+        if self.seconds:
+            out["seconds"] = self.seconds
         return out
 
 
@@ -135,29 +201,31 @@ def _sub_spec(spec: FixtureSpec | None, names: tuple[str, ...]) -> FixtureSpec:
     )
 
 
-def cross_validate(fit, nominal: RobotModel, dataset: Dataset, spec: FixtureSpec | None,
-                   samples: int = CV_SAMPLES, seed: int = 0) -> tuple[tuple[str, ...], dict[str, np.ndarray], int]:
-    """Held-out errors of both models, one fold per group.
+def cross_validate(fit, names: tuple[str, ...], nominal: RobotModel, dataset: Dataset,
+                   spec: FixtureSpec | None, samples: int = CV_SAMPLES, seed: int = 0
+                   ) -> tuple[tuple[str, ...], dict[str, np.ndarray], int]:
+    """Held-out errors of the candidates ``names``, one fold per group.
 
     Args:
-        fit: ``fit(start_model, dataset, spec) -> RobotModel`` (the calibration, as the caller runs it).
+        fit: ``fit(start_model, dataset, spec, warm) -> CalibrationResult`` (the calibration as the caller runs
+            it; ``warm``: the model to start the optimisation from, None here: a fold starts from nominal).
         samples: samples per fixture of the fold fits (drawn once, seeded); the held-out group is judged on
             all of its samples.
 
     Returns:
-        folds, model -> (folds,) errors [m], samples per fixture used.
+        folds, candidate -> (folds,) errors [m], samples per fixture used.
     """
     groups = groups_of(dataset.fixture_names)
     folds = tuple(dict.fromkeys(groups.values()))
     small = dataset.subsampled(samples, np.random.default_rng(seed))
-    errors = {"dh": [], "elastic": []}
+    errors: dict[str, list[float]] = {name: [] for name in names}
     for fold in folds:
         held = np.array([groups[label] == fold for label in small.labels])
         train = small.select(~held)
         test = dataset.select(np.array([groups[label] == fold for label in dataset.labels]))
         train_spec = _sub_spec(spec, train.fixture_names)
-        for name, start in (("dh", rigid(nominal)), ("elastic", elastic_start(nominal))):
-            model = fit(start, train, train_spec)
+        for name in names:
+            model = fit(start_for(name, nominal), train, train_spec, None).model
             errors[name].append(held_out_error(model, test, spec))
     used = min(samples, min(dataset.counts().values()))
     return folds, {k: np.array(v) for k, v in errors.items()}, used
@@ -165,38 +233,67 @@ def cross_validate(fit, nominal: RobotModel, dataset: Dataset, spec: FixtureSpec
 
 def select_model(requested: str, fit, nominal: RobotModel, dataset: Dataset, spec: FixtureSpec | None,
                  samples: int = CV_SAMPLES, seed: int = 0) -> ModelSelection:
-    """Decide between ``dh`` and ``elastic`` (see the module docstring).
+    """Choose the model (see the module docstring).
+
+    Args:
+        fit: ``fit(start_model, dataset, spec, warm) -> CalibrationResult`` without the self-check (``warm``:
+            None, or the model to start the optimisation from).
+
+    Returns:
+        The :class:`ModelSelection`; with BIC its ``fits`` hold every candidate's fit on all samples (the
+        chosen one's is the caller's warm start).
 
     Raises:
-        SpherecalError: ``elastic`` requested for a robot without ``inertials``.
+        SpherecalError: an elastic model requested for a robot without ``inertials``.
         ValueError: unknown ``requested``.
     """
     if requested not in MODELS:
         raise ValueError(f"unknown model {requested!r}, expected one of {MODELS}")
-    if requested == "dh":
-        return ModelSelection("dh", "dh", "requested")
-    if not has_inertials(nominal):
-        if requested == "elastic":
-            raise SpherecalError(f"{nominal.name}: field 'inertials': --model elastic needs the link masses "
+    if requested != "auto":
+        if requested in NEEDS_INERTIALS and not has_inertials(nominal):
+            raise SpherecalError(f"{nominal.name}: field 'inertials': --model {requested} needs the link masses "
                                  f"(an inertials block in the robot file)")
-        return ModelSelection("auto", "dh", "the robot file has no inertials: no gravity torques, no elastic model")
-    if requested == "elastic":
-        return ModelSelection("elastic", "elastic", "requested")
-    groups = set(groups_of(dataset.fixture_names).values())
-    if len(groups) < 3:
-        return ModelSelection("auto", "dh", f"{len(groups)} fixture group(s): too few to cross-validate (need 3)")
+        return ModelSelection(requested, requested, "requested")
     clock = time.perf_counter()
-    try:
-        folds, errors, used = cross_validate(fit, nominal, dataset, spec, samples, seed)
-    except SpherecalError as error:  # a fold the data cannot calibrate: no evidence for the richer model
-        return ModelSelection("auto", "dh", f"a cross-validation fold could not be calibrated ({error})")
-    seconds = time.perf_counter() - clock
-    selection = ModelSelection("auto", "dh", "", folds, errors, used, seconds)
-    _, _, gain, se = selection.stats()
-    if gain > se:
-        reason = (f"elastic predicts held-out fixtures {gain * 1e3:.3g} mm better, more than the fold spread "
-                  f"{se * 1e3:.2g} mm")
-        return replace(selection, chosen="elastic", reason=reason)
-    reason = (f"elastic's held-out gain {gain * 1e3:.3g} mm does not exceed the fold spread {se * 1e3:.2g} mm; "
-              f"the simpler model is kept")
-    return replace(selection, reason=reason)
+    names = candidates_for(nominal)
+    groups = set(groups_of(dataset.fixture_names).values())
+    if len(groups) >= 3:  # the folds judge; no full fit needed beyond the chosen one (the caller's)
+        try:
+            folds, errors, used = cross_validate(fit, names, nominal, dataset, spec, samples, seed)
+        except SpherecalError as error:  # a fold the data cannot calibrate: no evidence for a richer model
+            return ModelSelection("auto", "dh", f"a cross-validation fold could not be calibrated ({error})",
+                                  "cross-validation", seconds=time.perf_counter() - clock)
+        scores = {k: float(e.mean()) for k, e in errors.items()}
+        best = min(names, key=lambda k: (scores[k], names.index(k)))
+        selection = ModelSelection("auto", "dh", "", "cross-validation", scores, folds, errors, used,
+                                   time.perf_counter() - clock)
+        if best == "dh":
+            return replace(selection, reason="no richer model predicts held-out fixtures better than dh")
+        _, _, gain, se = selection.stats(best)
+        if gain > se:
+            reason = (f"{best} predicts held-out fixtures {gain * 1e3:.3g} mm better than dh, more than the fold "
+                      f"spread {se * 1e3:.2g} mm")
+            return replace(selection, chosen=best, reason=reason)
+        reason = (f"{best}'s held-out gain {gain * 1e3:.3g} mm does not exceed the fold spread {se * 1e3:.2g} mm; "
+                  f"the simpler model is kept")
+        return replace(selection, reason=reason)
+    fits = {}
+    for name in names:
+        try:
+            fits[name] = fit(start_for(name, nominal), dataset, spec, None)
+        except SpherecalError as error:  # a candidate the data cannot calibrate is no candidate
+            if name == "dh":
+                raise
+            fits[name] = error
+    failed = {k: str(v) for k, v in fits.items() if isinstance(v, SpherecalError)}
+    fits = {k: v for k, v in fits.items() if k not in failed}
+    names = tuple(fits)
+    note = "" if not failed else f"; not fitted: {', '.join(failed)}"
+    if len(names) == 1:
+        return ModelSelection("auto", "dh", "the only candidate" + note, "none", fits=fits,
+                              seconds=time.perf_counter() - clock)
+    scores = {k: information_criterion(f) for k, f in fits.items()}
+    best = min(names, key=lambda k: (scores[k], names.index(k)))
+    reason = (f"{len(groups)} fixture group(s), too few to cross-validate (need 3): lowest BIC "
+              f"(effective unknowns of the regularised fit), {scores['dh'] - scores[best]:.1f} below dh")
+    return ModelSelection("auto", best, reason + note, "BIC", scores, fits=fits, seconds=time.perf_counter() - clock)

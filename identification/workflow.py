@@ -31,7 +31,7 @@ from spherecal.correction.files.samples_csv import read_samples
 
 from .calibrate import MAX_CHANGE, CalibrationResult, calibrate
 from .problem import NOISE, PRIOR
-from .selection import ModelSelection, elastic_start, rigid, select_model
+from .selection import ModelSelection, select_model, start_for
 
 
 @dataclass(frozen=True)
@@ -40,7 +40,7 @@ class WorkflowOptions:
 
     Attributes:
         method: ``lm``, ``pso`` or ``pso+lm``.
-        model: ``dh``, ``elastic`` or ``auto`` (:mod:`.selection`).
+        model: ``dh``, ``elastic``, ``scale``, ``elastic+scale`` or ``auto`` (:mod:`.selection`).
         loss: ``linear``, ``soft_l1`` or ``huber``.
         noise: expected fixture noise std per axis [m].
         max_per_fixture: keep at most this many samples per fixture (random, seeded), None for all.
@@ -133,25 +133,30 @@ def run_workflow(nominal: RobotModel, dataset: Dataset, spec: FixtureSpec | None
     dropped = read - dataset.n_samples
     dataset = dataset.subsampled(options.max_per_fixture, np.random.default_rng(options.seed))
 
-    def fit(begin, data, fixtures):  # a cross-validation fold: lm, the user's loss and noise, no self-check
-        return calibrate(begin, data, fixtures, loss=options.loss, noise=options.noise,
-                         max_change=options.max_change, check=False, prior=options.prior).model
+    def fit(begin, data, fixtures, warm=None):  # a candidate's or a fold's fit: lm, no self-check
+        return calibrate(begin, data, fixtures, start=warm, loss=options.loss, noise=options.noise,
+                         max_change=options.max_change, check=False, prior=options.prior)
 
     selection = select_model(options.model, fit, nominal, dataset, spec, seed=options.seed)
-    make = elastic_start if selection.chosen == "elastic" else rigid
+    begin = start_for(selection.chosen, nominal)
+    if start is not None:
+        warm = start_for(selection.chosen, start)
+    elif selection.fits and selection.chosen in selection.fits and options.method == "lm":
+        warm = selection.fits[selection.chosen].model  # its full fit: the final solve starts at the answer
+    else:
+        warm = None
     result = calibrate(
-        make(nominal), dataset, spec, method=options.method, start=None if start is None else make(start),
-        seed=options.seed, loss=options.loss, noise=options.noise, max_change=options.max_change,
-        force=options.force, prior=options.prior,
+        begin, dataset, spec, method=options.method, start=warm, seed=options.seed, loss=options.loss,
+        noise=options.noise, max_change=options.max_change, force=options.force, prior=options.prior,
     )
     block = result.block()
     block["model_selection"] = selection.block()
     if selection.seconds:
-        block["timings_s"]["cross_validation"] = selection.seconds
+        block["timings_s"]["model_selection"] = selection.seconds
     block["duplicates_dropped"] = dropped
     block["options"] = options.record()
     block["provenance"] = provenance(options.seed, {**(inputs or {}), **options.record()})
-    extras = {k: v for k, v in result.model.extras.items() if k != "calibration"}  # compliance when elastic
+    extras = {k: v for k, v in result.model.extras.items() if k != "calibration"}  # compliance, scale
     extras["calibration"] = block
     return WorkflowResult(replace(result.model, extras=extras), result, selection, dropped, options.dedup_tol,
                           block)

@@ -47,11 +47,12 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     )
     parser.add_argument(
         "--model",
-        choices=("dh", "elastic", "auto"),
+        choices=("dh", "elastic", "scale", "elastic+scale", "auto"),
         default="auto",
-        help="dh: geometry only; elastic: geometry plus joint compliance under gravity (rad/Nm; needs the robot "
-        "file's inertials); auto (default): elastic only when it predicts held-out fixtures (or placements "
-        "<placement>_h<k>) better than dh by more than the fold-to-fold spread",
+        help="dh: geometry only; elastic: plus joint compliance under gravity (rad/Nm; needs the robot file's "
+        "inertials); scale: plus a per-joint angle scale (q -> (1 + s) q); elastic+scale: both; auto (default): "
+        "the candidate that predicts held-out fixture groups best by cross-validation (>= 3 groups: placements "
+        "<placement>_h<k> or fixtures), else the lowest BIC with the fit's effective number of unknowns",
     )
     parser.add_argument(
         "--prior", type=at_most(1e6, "(a weight)", allow_zero=True), default=0.5,  # identification.problem.PRIOR

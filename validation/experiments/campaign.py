@@ -179,9 +179,11 @@ def run_task(task: Task) -> TaskResult:
 
 
 def _calibrate(model: str, nominal, start, data):
-    """The calibrated robot of ``dh``, ``elastic`` or ``auto``: the library's one workflow
-    (identification.workflow), every sample kept, its cross-validation folds not self-checked."""
-    options = WorkflowOptions(model=model, dedup_tol=None)
+    """The calibrated robot of ``model`` (a candidate of identification.selection or ``auto``): the library's one
+    workflow (identification.workflow), every sample kept, its cross-validation folds not self-checked, and no
+    prior toward the nominal model (plain least squares, as the paper: in the ``paper`` protocol the nominal
+    model IS the true robot, a prior toward it would flatter the calibration)."""
+    options = WorkflowOptions(model=model, dedup_tol=None, prior=0.0)
     return run_workflow(nominal, data.dataset, data.spec, options, start=start).model
 
 
