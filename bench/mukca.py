@@ -163,7 +163,8 @@ def summary(results: dict) -> list[str]:
 
 def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--data", default=None, help="MUKCa root (data/, urdf/); default: shared/data/mukca beside the checkout")
+    parser.add_argument("--data", default=None,
+                        help="MUKCa root (data/, urdf/); default: shared/data/mukca beside the checkout")
     parser.add_argument("--robots", nargs="+", default=list(ROBOTS))
     parser.add_argument("--no-urdf", action="store_true", help="skip the exported-URDF column")
     args = parser.parse_args()
