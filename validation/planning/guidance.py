@@ -11,11 +11,13 @@ plate: where the arm is used), registered by a best rigid fit as the validation 
 
 * the parameters' error (:func:`identification.prediction.predict_accuracy` at ``sigma``, the same
   Monte Carlo draws for every candidate so that their differences are not draw noise);
-* what the model does not explain: the residual of a real calibration is mostly a smooth error of
+* what the model does not explain: the residual of a real calibration is partly a smooth error of
   the joint configuration, not white noise. It is modelled as a Gaussian process over joint space
-  (per axis: prior variance ``sigma^2``, squared-exponential kernel of length :data:`LENGTH` [rad],
-  observation variance ``sigma^2``); its posterior variance at the workspace given the recorded
-  and candidate configurations is what recording there leaves unknown.
+  (squared-exponential kernel of length :data:`LENGTH` [rad]) plus white noise; how the measured
+  ``sigma^2`` splits between the two is read from the recording's own residuals (their variogram
+  within each socket, :func:`noise_split`: residuals of nearby configurations agree when the
+  error is smooth). The process's posterior variance at the workspace given the recorded and
+  candidate configurations is what recording there leaves unknown (zero for white residuals).
 
 ``error = sqrt(rms_parameters^2 + 3 mean posterior variance)`` [m]; the gain of a candidate is the
 recording's error minus its own. Checked on real recordings (bench/plan_real.py): without the
@@ -35,7 +37,7 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
-from spherecal.correction import RobotModel, param_jacobian
+from spherecal.correction import RobotModel, param_jacobian, tool_point
 from spherecal.correction.errors import SpherecalError
 from spherecal.correction.files.fixtures import FixtureSpec
 from spherecal.correction.files.samples import Dataset
@@ -71,6 +73,8 @@ class Recorded:
         per_socket: median samples per recorded socket.
         centres: fixture name -> (3,) calibrated centre [m].
         model_choice: ``dh`` or ``elastic`` and why.
+        smooth: the part of ``noise`` that is a smooth error of the configuration, std per axis [m]
+            (:func:`noise_split`); the rest is white.
     """
 
     model: RobotModel
@@ -80,6 +84,7 @@ class Recorded:
     per_socket: int
     centres: dict[str, np.ndarray]
     model_choice: str
+    smooth: float = 0.0
 
 
 @dataclass(frozen=True, eq=False)
@@ -188,15 +193,48 @@ def calibrate_recording(
     selection = select_model(model, fit, nominal, dataset, spec, seed=seed)
     start = elastic_start(nominal) if selection.chosen == "elastic" else rigid(nominal)
     result = calibrate(start, dataset, spec, noise=noise, check=False)
+    sigma = measured_noise(result)
+    residuals = tool_point(result.model, dataset.q) - np.array([result.centres[n] for n in dataset.labels])
     return Recorded(
         model=result.model,
         dataset=dataset,
         spec=spec,
-        noise=measured_noise(result),
+        noise=sigma,
         per_socket=int(np.median(list(dataset.counts().values()))),
         centres=result.centres,
         model_choice=f"{selection.chosen} ({selection.reason})",
+        smooth=sigma * math.sqrt(noise_split(residuals, dataset.q, dataset.labels)),
     )
+
+
+def noise_split(residuals: np.ndarray, q: np.ndarray, labels: np.ndarray, length: float = LENGTH) -> float:
+    """Share of the residual variance that is a smooth error of the configuration (0: white, 1: all smooth).
+
+    Within each socket, every pair's semivariance per axis ``|r_i - r_j|^2 / 6`` is fitted by
+    ``white + smooth (1 - exp(-|q_i - q_j|^2 / (2 length^2)))`` (least squares, both >= 0).
+
+    Args:
+        residuals: (K, 3) tool point minus its socket's centre [m].
+        q: (K, n) configurations [rad].
+        labels: (K,) socket of each sample.
+        length: correlation length [rad].
+    """
+    g, f = [], []
+    for name in np.unique(labels):
+        mine = labels == name
+        r, c = residuals[mine], q[mine]
+        i, j = np.triu_indices(len(r), 1)
+        g.append(((r[i] - r[j]) ** 2).sum(axis=1) / 6.0)
+        f.append(1.0 - np.exp(-((c[i] - c[j]) ** 2).sum(axis=1) / (2.0 * length**2)))
+    g, f = np.concatenate(g), np.concatenate(f)
+    if g.size < 3 or np.ptp(f) == 0:
+        return 0.0
+    (white, smooth), *_ = np.linalg.lstsq(np.stack([np.ones_like(f), f], axis=1), g, rcond=None)
+    if smooth <= 0:
+        return 0.0
+    if white <= 0:
+        return 1.0
+    return float(smooth / (smooth + white))
 
 
 def pinned_down(before: Prediction, after: Prediction, share: float = PIN_SHARE) -> tuple[tuple[str, float], ...]:
@@ -218,19 +256,23 @@ def workspace_of(model: RobotModel, q: np.ndarray) -> Workspace:
     return Workspace(q=q, sensitivity=remove_rigid_motion(jac.reshape(3 * len(q), -1), points))
 
 
-def unexplained_variance(observed: np.ndarray, at: np.ndarray, sigma: float, length: float = LENGTH) -> float:
+def unexplained_variance(
+    observed: np.ndarray, at: np.ndarray, smooth: float, white: float, length: float = LENGTH
+) -> float:
     """Mean posterior variance per axis [m^2] at configurations ``at`` (M, n) of the unexplained error, a
-    Gaussian process over joint space (prior variance and observation variance ``sigma^2``, squared-exponential
-    kernel of ``length`` [rad]) observed at ``observed`` (K, n) [rad]."""
+    Gaussian process over joint space (prior std ``smooth`` [m], squared-exponential kernel of ``length`` [rad])
+    observed at ``observed`` (K, n) [rad] through white noise of std ``white`` [m]."""
+    if smooth <= 0:
+        return 0.0
 
     def kernel(a, b):
         d2 = np.einsum("ij,ij->i", a, a)[:, None] + np.einsum("ij,ij->i", b, b)[None, :] - 2.0 * a @ b.T
         return np.exp(-np.clip(d2, 0.0, None) / (2.0 * length**2))
 
     cross = kernel(at, observed)
-    gram = kernel(observed, observed) + np.eye(len(observed))
+    gram = kernel(observed, observed) + max((white / smooth) ** 2, 1e-6) * np.eye(len(observed))
     explained = np.einsum("ij,ji->i", cross, np.linalg.solve(gram, cross.T))
-    return float(sigma**2 * np.mean(1.0 - explained))
+    return float(smooth**2 * np.mean(1.0 - explained))
 
 
 def judge(
@@ -250,7 +292,8 @@ def judge(
         prediction = predict_accuracy(recorded.model, dataset, both, noise=recorded.noise, workspace=workspace)
     except SpherecalError as error:
         return Judged(placement, f"candidate {placement.name}: {str(error).splitlines()[0]}", q)
-    variance = unexplained_variance(np.concatenate([observed, *added]), workspace.q, recorded.noise)
+    white = math.sqrt(max(recorded.noise**2 - recorded.smooth**2, 0.0))
+    variance = unexplained_variance(np.concatenate([observed, *added]), workspace.q, recorded.smooth, white)
     error = math.sqrt(prediction.rms**2 + 3.0 * variance)
     return Judged(placement, "", q, error, prediction, math.sqrt(3.0 * variance))
 

@@ -35,6 +35,7 @@ def hand_guided(
     walkers: int = WALKERS,
     step: float = STEP,
     seeds: int = SEEDS,
+    noise: float = 0.0,
 ) -> tuple[np.ndarray, np.ndarray]:
     """Hand-guided self-motion samples at each socket (see the module docstring).
 
@@ -46,6 +47,8 @@ def hand_guided(
         walkers: walks per socket.
         step: random joint step [rad].
         seeds: random start configurations per socket.
+        noise: fixture noise [m]: each recorded sample's tool point is off the socket by a Gaussian of this
+            std per axis (a simulated recording; 0 for planning).
 
     Returns:
         (S, count, n) configurations [rad] inside the joint limits, and (S,) bool: the socket is
@@ -69,7 +72,7 @@ def hand_guided(
         jac = joint_jacobian(model, current)
         null = identity - np.linalg.pinv(jac) @ jac
         move = np.einsum("wij,wj->wi", null, rng.normal(0.0, step, current.shape))
-        trial, done = project_to_point(model, current + move, goal)
+        trial, done = project_to_point(model, current + move, goal + rng.normal(0.0, noise, goal.shape))
         current = np.where(done[:, None], trial, current)
         out[k] = current
     samples = out.reshape(steps, s, walkers, n).transpose(1, 0, 2, 3).reshape(s, steps * walkers, n)[:, :count]
