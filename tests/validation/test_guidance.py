@@ -24,6 +24,7 @@ from spherecal.validation.planning.placements import (
     plate_placements,
     read_placements,
 )
+from spherecal.validation.viewer.recording import read_entity_rows
 
 NOISE = 2e-4
 #: The recording so far: one placement of a two-socket plate (50 mm), in front of the Panda.
@@ -190,10 +191,13 @@ def test_plan_command_ranks_refuses_out_of_reach_and_writes_json(tmp_path, panda
         "  far:\n    sockets: {far_h0: [1.6, 0.0, 0.2], far_h1: [1.65, 0.0, 0.2]}\n"
         "    distances: [[far_h0, far_h1, 0.05]]\n"
     )
-    out = tmp_path / "plan.json"
+    out, rrd = tmp_path / "plan.json", tmp_path / "plan.rrd"
     argv = ["plan", "--samples", str(tmp_path / "samples.csv"), "--fixtures", str(tmp_path / "fixtures.yaml"),
             "--candidates", str(tmp_path / "c.yaml"), "--noise", "0.2", "--out", str(out)]
-    assert main(argv) == 0
+    assert main([*argv, "--rrd", str(rrd)]) == 0
+    rows = read_entity_rows(rrd)
+    assert {"world/candidates", "world/fixtures", "world/samples", "tables/plan"} <= set(rows)
+    assert rows["world/robot/arm"] > dataset.n_samples  # the arm through every recorded configuration
     text = capsys.readouterr().out
     refused = [line for line in text.splitlines() if line.startswith("refused:")]
     assert refused == ["refused: candidate far: socket far_h0 at [1.6, 0.0, 0.2] m is out of reach inside the "

@@ -13,11 +13,13 @@ plate: where the arm is used), registered by a best rigid fit as the validation 
   Monte Carlo draws for every candidate so that their differences are not draw noise);
 * what the model does not explain: the residual of a real calibration is partly a smooth error of
   the joint configuration, not white noise. It is modelled as a Gaussian process over joint space
-  (squared-exponential kernel of length :data:`LENGTH` [rad]) plus white noise; how the measured
-  ``sigma^2`` splits between the two is read from the recording's own residuals (their variogram
-  within each socket, :func:`noise_split`: residuals of nearby configurations agree when the
-  error is smooth). The process's posterior variance at the workspace given the recorded and
-  candidate configurations is what recording there leaves unknown (zero for white residuals).
+  (squared-exponential kernel of length :data:`LENGTH` [rad]) seen through white noise; its
+  posterior variance at the workspace given the recorded and candidate configurations is what
+  recording there leaves unknown. Their scales (:data:`SMOOTH`): ``"variogram"`` splits the measured
+  ``sigma^2`` by the recording's own residuals (their variogram within each socket,
+  :func:`noise_split`: residuals of nearby configurations agree when the error is smooth; zero for
+  white residuals); ``"residual"`` takes ``sigma`` for both (one placement cannot show how much of
+  the error varies between placements, which a within-socket variogram does not see).
 
 ``error = sqrt(rms_parameters^2 + 3 mean posterior variance)`` [m]; the gain of a candidate is the
 recording's error minus its own. Checked on real recordings (bench/plan_real.py): without the
@@ -60,6 +62,8 @@ PIN_SHARE = 0.7
 CONFIGURATIONS = 500
 #: Correlation length of the unexplained error over joint space [rad] (1 and 2 rank alike on real data).
 LENGTH = 1.0
+#: Scales of the unexplained error: ``"variogram"`` or ``"residual"`` (see the module docstring).
+SMOOTH = "variogram"
 
 
 @dataclass(frozen=True, eq=False)
@@ -73,8 +77,7 @@ class Recorded:
         per_socket: median samples per recorded socket.
         centres: fixture name -> (3,) calibrated centre [m].
         model_choice: ``dh`` or ``elastic`` and why.
-        smooth: the part of ``noise`` that is a smooth error of the configuration, std per axis [m]
-            (:func:`noise_split`); the rest is white.
+        smooth, white: the unexplained error's smooth part and its white noise, std per axis [m] (:data:`SMOOTH`).
     """
 
     model: RobotModel
@@ -85,6 +88,7 @@ class Recorded:
     centres: dict[str, np.ndarray]
     model_choice: str
     smooth: float = 0.0
+    white: float = 0.0
 
 
 @dataclass(frozen=True, eq=False)
@@ -203,8 +207,15 @@ def calibrate_recording(
         per_socket=int(np.median(list(dataset.counts().values()))),
         centres=result.centres,
         model_choice=f"{selection.chosen} ({selection.reason})",
-        smooth=sigma * math.sqrt(noise_split(residuals, dataset.q, dataset.labels)),
+        **_scales(sigma, residuals, dataset),
     )
+
+
+def _scales(sigma: float, residuals: np.ndarray, dataset: Dataset) -> dict[str, float]:
+    if SMOOTH == "residual":
+        return {"smooth": sigma, "white": sigma}
+    share = noise_split(residuals, dataset.q, dataset.labels)
+    return {"smooth": sigma * math.sqrt(share), "white": sigma * math.sqrt(1.0 - share)}
 
 
 def noise_split(residuals: np.ndarray, q: np.ndarray, labels: np.ndarray, length: float = LENGTH) -> float:
@@ -292,8 +303,7 @@ def judge(
         prediction = predict_accuracy(recorded.model, dataset, both, noise=recorded.noise, workspace=workspace)
     except SpherecalError as error:
         return Judged(placement, f"candidate {placement.name}: {str(error).splitlines()[0]}", q)
-    white = math.sqrt(max(recorded.noise**2 - recorded.smooth**2, 0.0))
-    variance = unexplained_variance(np.concatenate([observed, *added]), workspace.q, recorded.smooth, white)
+    variance = unexplained_variance(np.concatenate([observed, *added]), workspace.q, recorded.smooth, recorded.white)
     error = math.sqrt(prediction.rms**2 + 3.0 * variance)
     return Judged(placement, "", q, error, prediction, math.sqrt(3.0 * variance))
 

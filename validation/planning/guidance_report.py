@@ -99,7 +99,8 @@ def write_guidance_recording(path: str, guidance, provenance: str = "") -> str:
                   for j in judged for _ in j.placement.sockets]
         recording.stream.log("world/candidates", recording.rr.Points3D(
             points, colors=np.repeat(np.array(colours), each, axis=0), labels=labels, radii=0.012), static=True)
-        recording.extend_bounds("world", points)
+        if guidance.ranking:  # the camera frames what can be recorded, not a refused far-away candidate
+            recording.extend_bounds("world", points[: sum(each[: len(guidance.ranking)])])
         text = format_guidance(guidance)
         recording.text("plan", f"{provenance}\n\n{text}" if provenance else text,
                        "What to record next: candidates by predicted gain (mm)")

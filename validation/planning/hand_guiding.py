@@ -72,7 +72,8 @@ def hand_guided(
         jac = joint_jacobian(model, current)
         null = identity - np.linalg.pinv(jac) @ jac
         move = np.einsum("wij,wj->wi", null, rng.normal(0.0, step, current.shape))
-        trial, done = project_to_point(model, current + move, goal + rng.normal(0.0, noise, goal.shape))
+        target = goal + rng.normal(0.0, noise, goal.shape) if noise > 0 else goal
+        trial, done = project_to_point(model, current + move, target)
         current = np.where(done[:, None], trial, current)
         out[k] = current
     samples = out.reshape(steps, s, walkers, n).transpose(1, 0, 2, 3).reshape(s, steps * walkers, n)[:, :count]
