@@ -22,9 +22,8 @@ from pathlib import Path
 import numpy as np
 
 from spherecal.correction.files.fixtures import FixtureSpec
-from spherecal.correction.files.yaml_safe import load_yaml
 
-from .candidates import Candidate, CandidateError, grid_candidates
+from .candidates import Candidate, CandidateError, candidate_entries, grid_candidates
 
 
 @dataclass(frozen=True)
@@ -61,15 +60,7 @@ def read_placements(path: str | Path) -> list[Placement]:
             the file and the field).
     """
     path = Path(path)
-    try:
-        text = path.read_text(encoding="utf-8")
-    except (OSError, UnicodeDecodeError) as error:
-        raise CandidateError(f"{path}: cannot read candidates: {str(error).splitlines()[0]}") from None
-    data, _ = load_yaml(text, str(path), CandidateError)  # bounded: size, depth, aliases; no duplicate keys
-    entries = data.get("candidates") if isinstance(data, dict) else None
-    if not isinstance(entries, dict) or not entries:
-        raise CandidateError(f"{path}: field 'candidates': expected a non-empty mapping name -> "
-                             "{sockets: {name: [x, y, z]}, distances: [[a, b, metres]]}")
+    entries = candidate_entries(path, "{sockets: {name: [x, y, z]}, distances: [[a, b, metres]]}")
     out, seen = [], set()
     for name, entry in entries.items():
         where = f"{path}: field 'candidates.{name}"
