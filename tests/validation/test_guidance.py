@@ -213,3 +213,23 @@ def test_plan_command_ranks_refuses_out_of_reach_and_writes_json(tmp_path, panda
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and "candidate far: socket far at [1.6, 0.0, 0.2] m is out of reach" in err[0], err
     assert not out.exists()
+
+
+def test_a_plate_inside_the_base_column_is_refused_naming_it(simulated):
+    _, _, _, recorded, candidates = simulated
+    guidance = rank_placements(recorded, [_plate("inside", [0.0, 0.02, 0.1]), candidates[0]],
+                               np.random.default_rng(0))
+    assert [j.placement.name for j in guidance.ranking] == [candidates[0].name]
+    (refused,) = guidance.refused
+    assert refused.reason.startswith("candidate inside: fixture inside_h0 at [-0.025, 0.02, 0.1] m is inside the robot")
+
+
+def test_the_automatic_plate_grid_lies_where_the_arm_reaches(panda):
+    from spherecal.validation.planning.placements import reachable_grid
+
+    text = reachable_grid(panda, 0.1, np.random.default_rng(0))
+    placements = plate_placements({"h0": np.zeros(3)}, text, 1)
+    centres = np.array([p.centre for p in placements])
+    assert len(placements) == 25 and np.allclose(centres[:, 2], 0.1)
+    q, ok = hand_guided(panda, centres, 4, np.random.default_rng(1))
+    assert ok.mean() > 0.8  # the box spans the reach at that height; its corners may fall outside

@@ -53,7 +53,7 @@ from spherecal.identification.selection import elastic_start, rigid, select_mode
 
 from .candidates import CandidateError
 from .hand_guiding import hand_guided
-from .placements import Placement, plate_layout, plate_placements
+from .placements import Placement, plate_layout, plate_placements, reachable_grid
 
 #: Default smallest gain worth another placement [m].
 MIN_GAIN = 1e-5
@@ -333,18 +333,33 @@ def rank_placements(
     """
     if not placements:
         raise CandidateError("no candidate placements given")
+    given = list(placements)
     taken = set(recorded.dataset.fixture_names)
     for p in placements:
         clash = taken & set(p.sockets)
         if clash:
             raise CandidateError(f"candidate {p.name}: socket {sorted(clash)[0]!r} is a recorded fixture's name")
+    # MuJoCo: controller.self_motion imports it at its top (start-up); its base-column check is the one we use
+    from spherecal.controller.self_motion import check_fixture
+
     per_socket = recorded.per_socket if per_socket is None else per_socket
     clock = time.perf_counter()
+    inside, kept = [], []
+    for p in placements:
+        try:
+            for socket, centre in p.sockets.items():
+                check_fixture(recorded.model, socket, centre)
+            kept.append(p)
+        except SpherecalError as error:
+            inside.append(Judged(p, f"candidate {p.name}: {error}"))
+    placements = kept
+    if not placements:
+        raise CandidateError(f"no candidate can be recorded: {inside[0].reason}")
     centres = np.array([c for p in placements for c in p.sockets.values()])
     q, reachable = hand_guided(recorded.model, centres, per_socket, rng)
     seconds = {"configurations": time.perf_counter() - clock}
     clock = time.perf_counter()
-    configurations, refused, k = {}, [], 0
+    configurations, refused, k = {}, inside, 0
     for p in placements:
         names = list(p.sockets)
         ok = reachable[k : k + len(names)]
@@ -374,7 +389,7 @@ def rank_placements(
             (judged if not j.reason else refused).append(j)
     seconds["prediction"] = time.perf_counter() - clock
     ranking = sorted(judged, key=lambda j: j.error)
-    order = {p.name: i for i, p in enumerate(placements)}
+    order = {p.name: i for i, p in enumerate(given)}
     refused.sort(key=lambda j: order[j.placement.name])
     return Guidance(recorded, baseline, ranking, refused, min_gain, per_socket, seconds)
 
@@ -405,7 +420,8 @@ def recording_guidance(
         dataset, spec: the recording so far and its fixtures.
         rng: seeds everything random (model selection folds, hand-guided configurations, workspace subset).
         candidates: candidate placements.
-        plate_grid: ``"xmin,xmax,nx;ymin,ymax,ny;zmin,zmax,nz"`` [m] of plate centres, or None.
+        plate_grid: ``"xmin,xmax,nx;ymin,ymax,ny;zmin,zmax,nz"`` [m] of plate centres, ``"auto"`` (5 x 5 over
+            the reach at the recorded plate's height, :func:`.placements.reachable_grid`), or None.
         orientations: turns of the plate per grid point.
         per_socket: configurations per candidate socket (default: as recorded).
         min_gain: smallest gain worth another placement [m].
@@ -421,6 +437,10 @@ def recording_guidance(
     calibrated = time.perf_counter() - clock
     placements = list(candidates or [])
     if plate_grid is not None:
-        placements += plate_placements(plate_layout(recorded.spec, recorded.centres), plate_grid, orientations)
+        layout = plate_layout(recorded.spec, recorded.centres)
+        if plate_grid == "auto":
+            height = float(np.mean([recorded.centres[n] for n in recorded.dataset.fixture_names], axis=0)[2])
+            plate_grid = reachable_grid(recorded.model, height, rng)
+        placements += plate_placements(layout, plate_grid, orientations)
     guidance = rank_placements(recorded, placements, rng, per_socket, min_gain)
     return replace(guidance, seconds={"calibration": calibrated, **guidance.seconds})

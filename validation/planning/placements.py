@@ -21,6 +21,7 @@ from pathlib import Path
 
 import numpy as np
 
+from spherecal.correction import RobotModel, tool_point
 from spherecal.correction.files.fixtures import FixtureSpec
 
 from .candidates import Candidate, CandidateError, candidate_entries, grid_candidates
@@ -128,6 +129,23 @@ def plate_layout(spec: FixtureSpec, centres: dict[str, np.ndarray]) -> dict[str,
                 group.append(y)
     points = np.array([centres[name] for name in group])
     return {f"h{k}": p - points.mean(axis=0) for k, p in enumerate(points)}
+
+
+def reachable_grid(model: RobotModel, height: float, rng: np.random.Generator, count: int = 5) -> str:
+    """A ``count`` x ``count`` box grid at ``height`` [m] over where the tool point reaches at that height
+    (the 10th to 90th percentile of x and y of random configurations' tool points within 3 cm of it), as
+    the text :func:`plate_placements` takes. No collision check: points inside the robot's own column
+    are refused later only if out of reach.
+
+    Raises:
+        CandidateError: the tool point rarely reaches that height.
+    """
+    points = tool_point(model, model.random_configurations(20_000, rng))
+    near = points[np.abs(points[:, 2] - height) < 0.03]
+    if len(near) < 50:
+        raise CandidateError(f"--plate-grid auto: the tool point rarely reaches the plate's height {height:.3f} m")
+    (x0, y0), (x1, y1) = np.percentile(near[:, :2], [10, 90], axis=0)
+    return f"{x0:.4f},{x1:.4f},{count};{y0:.4f},{y1:.4f},{count};{height:.4f},{height:.4f},1"
 
 
 def plate_placements(layout: dict[str, np.ndarray], grid: str, orientations: int = 2) -> list[Placement]:
