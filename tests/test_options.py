@@ -28,13 +28,15 @@ UNITS = {
     "--min-duration": "s",
     "--rate": "Hz",
     "--stiffness": "Nm/rad",
+    "--min-gain": "mm",
+    "--plate-grid": "m",
 }
 #: options that are counts, names, files or factors (no physical unit).
 UNITLESS = {"--seed", "--per-fixture", "--max-per-fixture", "--configurations", "--sets", "--workers",
             "--fixture-count", "--max-change", "--method", "--loss", "--mode", "--solver", "--source",
             "--protocol", "--rows", "--motion", "--format", "--prefix", "--effort", "--velocity", "--topic",
             "--tip-link", "--base-link", "--convention", "--model", "--max-per-segment", "--min-configurations",
-            "--prior"}
+            "--prior", "--plate-orientations", "--per-socket"}
 
 
 def _options() -> list[tuple[str, argparse.Action]]:

@@ -6,17 +6,20 @@ import argparse
 
 from spherecal.options import fail, urdf_links
 
-HELP = "Rank candidate fixture positions by the calibration accuracy they predict."
+HELP = ("Rank candidate fixture positions by the calibration accuracy they predict; with --samples, what to record "
+        "next on a real arm")
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     """Register the options of `spherecal plan`."""
-    from spherecal.options import add_per_fixture, add_robot, add_seconds, add_seed, add_workers, count, noise_mm
+    from spherecal.options import MAX_PER_FIXTURE, add_robot, add_seconds, add_seed, add_workers, count, noise_mm
 
     add_robot(parser)
     where = parser.add_mutually_exclusive_group()
     where.add_argument("--candidates", default=None,
-                       help="YAML: candidates: {C1: {position: [x, y, z], joint_range: [share per joint]}} [m]")
+                       help="YAML: candidates: {C1: {position: [x, y, z], joint_range: [share per joint]}} [m]; "
+                            "with --samples also plate placements {left: {sockets: {a: [x, y, z], b: [x, y, z]}, "
+                            "distances: [[a, b, metres]]}}")
     where.add_argument("--grid", default=None, help="box grid 'xmin,xmax,nx;ymin,ymax,ny;zmin,zmax,nz' [m]")
     where.add_argument("--predict", default=None, metavar="SAMPLES_CSV",
                        help="instead of planning: predicted accuracy of this recorded or simulated data set")
@@ -24,12 +27,14 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                        help="instead of planning: regenerate the experiment-design analysis into this file "
                             "(docs/experiment_design.md)")
     parser.add_argument("--fixtures", default=None, action=_FixturesOption, metavar="FIXTURES_YAML",
-                        help="fixtures.yaml of --predict: known positions [m] and distances [m]")
+                        help="fixtures.yaml of --predict or --samples: known positions [m] and distances [m]")
+    _add_guidance(parser)
     parser.add_argument("--spec", dest="fixtures", default=None, help=argparse.SUPPRESS)  # the old name
     parser.add_argument("--fixture-count", type=count(1), default=3, metavar="N",
                         help="number of fixtures wanted, 1..4 (default 3)")
     parser.add_argument("--noise", type=noise_mm, default=0.3, help="fixture noise std per axis [mm] (default 0.3)")
-    add_per_fixture(parser, 500, "samples to be recorded per fixture")
+    parser.add_argument("--per-fixture", type=count(1, MAX_PER_FIXTURE), default=500, metavar="N",
+                        help="samples to be recorded per fixture (default 500)")
     parser.add_argument("--motion", choices=("kinematic", "controller"), default="kinematic",
                         help="self-motion at a candidate: kinematic projection (default, the whole manifold) or "
                              "the null-space controller on the MuJoCo plant for --seconds")
@@ -37,6 +42,45 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     add_seed(parser)
     parser.add_argument("--rrd", default=None, help="write a Rerun recording of the candidates coloured by score")
     add_workers(parser, "candidates' surveys", also=" and for --analysis")
+
+
+def _add_guidance(parser: argparse.ArgumentParser) -> None:
+    """The options of recording guidance (``--samples``: what has been recorded on the real arm)."""
+    from spherecal.options import count, non_negative
+
+    parser.add_argument("--samples", default=None, action=_SamplesOption, metavar="SAMPLES_CSV",
+                        help="samples.csv recorded so far: rank --candidates and --plate-grid placements by the "
+                             "accuracy the calibration would reach with each recorded as well")
+    parser.add_argument("--plate-grid", default=None, metavar="GRID",
+                        help="with --samples: the recorded plate (its sockets' layout) centred at the points of the "
+                             "box grid 'xmin,xmax,nx;ymin,ymax,ny;zmin,zmax,nz' [m], or 'auto' (5 x 5 over the reach "
+                             "at the recorded plate's height)")
+    parser.add_argument("--plate-orientations", type=count(1, 12), default=2, metavar="N",
+                        help="with --plate-grid: turns of the plate about the vertical per grid point (default 2)")
+    parser.add_argument("--per-socket", type=count(1, 5000), default=None, metavar="N",
+                        help="with --samples: configurations recorded per candidate socket (default: as many as "
+                             "the recording has per socket)")
+    parser.add_argument("--min-gain", type=non_negative, default=0.01,
+                        help="with --samples: smallest gain worth another placement [mm] (default 0.01)")
+    parser.add_argument("--out", default=None, metavar="PLAN_JSON",
+                        help="with --samples: write the ranking (best first, predicted error [m]) as JSON")
+
+
+class _SamplesOption(argparse.Action):
+    """``--samples``: the recording so far (a samples.csv). Its old meaning here, a count (``--samples 500``),
+    still works with a deprecation warning (now ``--per-fixture``)."""
+
+    def __call__(self, parser, namespace, values, option_string=None):
+        if values.strip().isdigit():
+            from spherecal.options import MAX_PER_FIXTURE, count, warn
+
+            warn("--samples is deprecated, use --per-fixture for a count (--samples names a samples.csv)")
+            try:
+                namespace.per_fixture = count(1, MAX_PER_FIXTURE)(values)
+            except argparse.ArgumentTypeError as error:
+                parser.error(f"argument --samples: {error}")
+        else:
+            namespace.samples = values
 
 
 class _FixturesOption(argparse.Action):
@@ -57,13 +101,15 @@ def run(args: argparse.Namespace) -> int:
     """Plan (or predict, or regenerate the analysis) and print the result."""
     import time
 
+    import numpy as np
+
     from spherecal.correction import load_robot
 
     if args.per_fixture < 10:
         raise fail(f"--per-fixture must be >= 10, got {args.per_fixture}")
     from spherecal.options import planned_outputs
 
-    outputs = planned_outputs(args, {"--rrd": args.rrd, "--analysis": args.analysis})
+    outputs = planned_outputs(args, {"--rrd": args.rrd, "--analysis": args.analysis, "--out": args.out})
     if args.analysis is not None:
         if args.scheduler is not None:
             raise fail("--scheduler: the --analysis runs on the built-in process pool (--workers) only")
@@ -76,6 +122,8 @@ def run(args: argparse.Namespace) -> int:
     model = load_robot(args.robot, **urdf_links(args))
     if args.predict is not None:
         return _predict(args, model)
+    if args.samples is not None:
+        return _guide(args, model, np.random.default_rng(args.seed), outputs)
     from spherecal.validation.parallel import executor
     from spherecal.validation.planning.candidates import grid_candidates, read_candidates
     from spherecal.validation.planning.plan import plan
@@ -113,4 +161,42 @@ def _predict(args: argparse.Namespace, model) -> int:
     dataset = read_samples(args.predict, model)
     spec = read_fixtures(args.fixtures) if args.fixtures else None
     print(predict_accuracy(model, dataset, spec, noise=args.noise * 1e-3).summary())
+    return 0
+
+
+def _guide(args: argparse.Namespace, model, rng, outputs) -> int:
+    """Recording guidance: rank the candidates given what has been recorded (``--samples``)."""
+    import json
+
+    from spherecal.correction.files.fixtures import read_fixtures
+    from spherecal.correction.files.samples_csv import read_samples
+    from spherecal.validation.planning.guidance import recording_guidance
+    from spherecal.validation.planning.guidance_report import (
+        format_guidance,
+        guidance_json,
+        write_guidance_recording,
+    )
+    from spherecal.validation.planning.placements import read_placements
+    from spherecal.validation.provenance import comment_block, provenance
+
+    if args.grid is not None:
+        raise fail("--grid places single fixtures for a plan from scratch; with --samples give --plate-grid")
+    if args.candidates is None and args.plate_grid is None:
+        raise fail("with --samples give --candidates C.yaml or --plate-grid 'xmin,xmax,nx;ymin,ymax,ny;zmin,zmax,nz'")
+    dataset = read_samples(args.samples, model)
+    spec = read_fixtures(args.fixtures) if args.fixtures else None
+    candidates = read_placements(args.candidates) if args.candidates else []
+    guidance = recording_guidance(model, dataset, spec, rng, candidates, args.plate_grid, args.plate_orientations,
+                                  args.per_socket, args.min_gain * 1e-3, args.noise * 1e-3)
+    print(format_guidance(guidance))
+    inputs = {k: v for k, v in vars(args).items() if not k.startswith("_") and k != "command"}
+    info = provenance(args.seed, inputs)
+    with outputs:  # staged: every output appears, or none
+        if args.out:
+            outputs.stage(args.out).write_text(json.dumps(guidance_json(guidance, info), indent=2) + "\n")
+        if args.rrd:
+            write_guidance_recording(outputs.stage(args.rrd), guidance, comment_block(info))
+    for name in (args.out, args.rrd):
+        if name:
+            print(f"written: {name}")
     return 0

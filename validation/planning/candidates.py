@@ -71,16 +71,7 @@ def read_candidates(path: str | Path, n_joints: int) -> list[Candidate]:
     """
 
     path = Path(path)
-    try:
-        text = path.read_text(encoding="utf-8")
-    except (OSError, UnicodeDecodeError) as error:
-        raise CandidateError(f"{path}: cannot read candidates: {str(error).splitlines()[0]}") from None
-    data, _ = load_yaml(text, str(path), CandidateError)  # bounded: size, depth, aliases; no duplicate keys
-    entries = data.get("candidates") if isinstance(data, dict) else None
-    if not isinstance(entries, dict) or not entries:
-        raise CandidateError(
-            f"{path}: field 'candidates': expected a non-empty mapping name -> {{position: [x, y, z]}}"
-        )
+    entries = candidate_entries(path, "{position: [x, y, z]}")
     out = []
     for name, entry in entries.items():
         where = f"{path}: field 'candidates.{name}"
@@ -99,6 +90,23 @@ def read_candidates(path: str | Path, n_joints: int) -> list[Candidate]:
             raise CandidateError(f"{where}.{sorted(unknown)[0]}': unknown field")
         out.append(Candidate(str(name), position, joint_range))
     return out
+
+
+def candidate_entries(path: Path, expected: str) -> dict:
+    """The ``candidates:`` mapping of a YAML file (bounded reader: size, depth, aliases, no duplicate keys).
+
+    Raises:
+        CandidateError: unreadable file, or no non-empty mapping (``expected`` names an entry's form).
+    """
+    try:
+        text = path.read_text(encoding="utf-8")
+    except (OSError, UnicodeDecodeError) as error:
+        raise CandidateError(f"{path}: cannot read candidates: {str(error).splitlines()[0]}") from None
+    data, _ = load_yaml(text, str(path), CandidateError)
+    entries = data.get("candidates") if isinstance(data, dict) else None
+    if not isinstance(entries, dict) or not entries:
+        raise CandidateError(f"{path}: field 'candidates': expected a non-empty mapping name -> {expected}")
+    return entries
 
 
 def _vector(value, size: int, where: str) -> np.ndarray:

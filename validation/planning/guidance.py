@@ -1,0 +1,443 @@
+"""Recording guidance: which plate placement to record next on a real arm, and when to stop.
+
+Start from what has been recorded: calibrate it (:func:`calibrate_recording`: the model choice of
+:func:`identification.selection.select_model`, the fit of :func:`identification.calibrate.calibrate`)
+and measure its noise ``sigma``, the residual per axis. Every candidate placement is judged at that
+calibration, not at the nominal arm: the configurations a person would record there are walked
+kinematically on the calibrated model (:func:`.hand_guiding.hand_guided`) and added to the recorded
+ones with the placement's known distances. The predicted error has two parts, evaluated over the
+*workspace*, the configurations of every reachable candidate (where the user considers putting the
+plate: where the arm is used), registered by a best rigid fit as the validation does:
+
+* the parameters' error (:func:`identification.prediction.predict_accuracy` at ``sigma``, the same
+  Monte Carlo draws for every candidate so that their differences are not draw noise);
+* what the model does not explain: the residual of a real calibration is partly a smooth error of
+  the joint configuration, not white noise. It is modelled as a Gaussian process over joint space
+  (squared-exponential kernel of length :data:`LENGTH` [rad]) seen through white noise; its
+  posterior variance at the workspace given the recorded and candidate configurations is what
+  recording there leaves unknown. Their scales (:data:`SMOOTH`): ``"variogram"`` splits the measured
+  ``sigma^2`` by the recording's own residuals (their variogram within each socket,
+  :func:`noise_split`: residuals of nearby configurations agree when the error is smooth; zero for
+  white residuals); ``"residual"`` takes ``sigma`` for both (one placement cannot show how much of
+  the error varies between placements, which a within-socket variogram does not see).
+
+``error = sqrt(rms_parameters^2 + 3 mean posterior variance)`` [m]; the gain of a candidate is the
+recording's error minus its own. On MUKCa's real placements (bench/plan_real.py, first placement
+recorded, the others as candidates, 5 plan seeds) the pick landed in the better half of the others by
+measured held-out error in 20/40 cases on panda_2_clean (chance), 13/15 on panda_4_clean and 11/20 on
+dinova_1 (``"residual"``: 22/40, 12/15, 13/20), and beat a random pick on average on each arm. The
+parameter part alone ranked panda_2_clean's placements no better (Spearman 0.1 against the change).
+
+More recording is not worth it when the best gain is below the larger of ``min_gain`` and the
+*noise floor* ``sigma / sqrt(N)`` (the standard error per axis of one socket's mean point at the
+measured noise and ``N`` samples per socket): a smaller gain could not be seen by validating on a
+new socket.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import dataclass, field, replace
+
+import numpy as np
+
+from spherecal.correction import RobotModel, param_jacobian, tool_point
+from spherecal.correction.errors import SpherecalError
+from spherecal.correction.files.fixtures import FixtureSpec
+from spherecal.correction.files.samples import Dataset
+from spherecal.identification.prediction import Prediction, Workspace, predict_accuracy, remove_rigid_motion
+from spherecal.identification.problem import NOISE, SIGMA_FLOOR
+from spherecal.identification.workflow import WorkflowOptions, run_workflow
+
+from .candidates import CandidateError
+from .hand_guiding import hand_guided
+from .placements import Placement, plate_layout, plate_placements, reachable_grid
+
+#: Default smallest gain worth another placement [m].
+MIN_GAIN = 1e-5
+#: A parameter is "pinned down" by a candidate when its predicted std falls below this share of
+#: the recording's (or it becomes identified at all).
+PIN_SHARE = 0.7
+#: Most workspace configurations the predictions are evaluated on, and most recorded configurations
+#: the unexplained-error part conditions on (a random subset, seeded).
+CONFIGURATIONS = 500
+#: Correlation length of the unexplained error over joint space [rad] (1 and 2 rank alike on real data).
+LENGTH = 1.0
+#: Scales of the unexplained error: ``"variogram"`` or ``"residual"`` (see the module docstring).
+SMOOTH = "variogram"
+
+
+@dataclass(frozen=True, eq=False)
+class Recorded:
+    """The calibration of what has been recorded: where every prediction starts.
+
+    Attributes:
+        model: the calibrated robot.
+        dataset, spec: the recording and its fixtures.
+        noise: measured noise, the residual std per axis [m].
+        per_socket: median samples per recorded socket.
+        centres: fixture name -> (3,) calibrated centre [m].
+        model_choice: ``dh`` or ``elastic`` and why.
+        smooth, white: the unexplained error's smooth part and its white noise, std per axis [m] (:data:`SMOOTH`).
+    """
+
+    model: RobotModel
+    dataset: Dataset
+    spec: FixtureSpec
+    noise: float
+    per_socket: int
+    centres: dict[str, np.ndarray]
+    model_choice: str
+    smooth: float = 0.0
+    white: float = 0.0
+
+
+@dataclass(frozen=True, eq=False)
+class Judged:
+    """One candidate placement, judged.
+
+    Attributes:
+        placement: the candidate.
+        reason: why it cannot be recorded (one line), or ``""``.
+        q: socket name -> (K, n) configurations a person would record there [rad].
+        error: predicted rms tool-point error over the workspace with it recorded as well [m] (see the module).
+        prediction: the parameter part (None when refused).
+        unexplained: the unexplained part, rms over the workspace [m].
+        gain: the recording's predicted error minus this one [m].
+        pinned: (parameter, std ratio) it pins down, strongest first (ratio 0: newly identified).
+    """
+
+    placement: Placement
+    reason: str = ""
+    q: dict[str, np.ndarray] = field(default_factory=dict)
+    error: float = math.inf
+    prediction: Prediction | None = None
+    unexplained: float = 0.0
+    gain: float = 0.0
+    pinned: tuple[tuple[str, float], ...] = ()
+
+
+@dataclass(frozen=True, eq=False)
+class Guidance:
+    """The outcome of :func:`rank_placements`.
+
+    Attributes:
+        recorded: the calibration of the recording so far.
+        baseline: the recording so far, judged like a candidate (its predicted error, no candidate added).
+        ranking: the candidates that can be recorded, best (lowest predicted error) first.
+        refused: the candidates that cannot, in input order, each with its reason.
+        min_gain: the stated threshold [m].
+        per_socket: configurations per candidate socket.
+        seconds: stage -> wall time [s].
+    """
+
+    recorded: Recorded
+    baseline: Judged
+    ranking: list[Judged]
+    refused: list[Judged]
+    min_gain: float
+    per_socket: int
+    seconds: dict[str, float] = field(default_factory=dict)
+
+    @property
+    def floor(self) -> float:
+        """Noise floor of a gain [m]: the standard error per axis of a socket's mean point."""
+        return self.recorded.noise / math.sqrt(self.recorded.per_socket)
+
+    @property
+    def worth_it(self) -> bool:
+        """Whether the best candidate gains more than the threshold and the noise floor."""
+        return bool(self.ranking) and self.ranking[0].gain > max(self.min_gain, self.floor)
+
+    def stop_line(self) -> str:
+        """One line: record the best candidate next, or stop (and why)."""
+        limit = f"the noise floor {self.floor * 1e3:.3g} mm and the threshold {self.min_gain * 1e3:.3g} mm"
+        if not self.ranking:
+            return "no candidate can be recorded: nothing to add"
+        best = self.ranking[0]
+        if self.worth_it:
+            return f"record {best.placement.name} next: it gains {best.gain * 1e3:.3g} mm, more than {limit}"
+        return (f"more recording is not worth it: the best candidate {best.placement.name} gains "
+                f"{best.gain * 1e3:.3g} mm, not more than {limit}")
+
+
+def measured_noise(result) -> float:
+    """Residual std per axis [m] of a :class:`CalibrationResult` (``sqrt(|r|^2 / (M - F))``), floored
+    at the solver's :data:`SIGMA_FLOOR`."""
+    r = result.problem.residuals(result.x)
+    dof = max(result.problem.n_residuals - result.problem.n_unknowns, 1)
+    return max(float(np.sqrt(r @ r / dof)), SIGMA_FLOOR)
+
+
+def calibrate_recording(
+    nominal: RobotModel,
+    dataset: Dataset,
+    spec: FixtureSpec | None,
+    noise: float = NOISE,
+    model: str = "auto",
+    seed: int = 0,
+) -> Recorded:
+    """Calibrate the recording so far (model choice as `calibrate`, no self-check) and measure its noise.
+
+    Args:
+        nominal: the robot.
+        dataset: (K, n) recorded joint angles [rad] with fixture labels.
+        spec: its known distances and positions (None: nothing known).
+        noise: expected fixture noise [m] (the fit's robust scale and distance weight).
+        model: ``dh``, ``elastic`` or ``auto``.
+        seed: seeds the model selection.
+
+    Raises:
+        DatasetError, UnidentifiableError, ImplausibleCalibrationError: the recording cannot be calibrated.
+    """
+    spec = FixtureSpec.unknown(dataset.fixture_names) if spec is None else spec
+    # The one calibration workflow, as `calibrate` runs it (prior, model choice); force: the plan judges
+    # the recording by its measured noise, it does not refuse it.
+    done = run_workflow(nominal, dataset, spec, WorkflowOptions(model=model, noise=noise, seed=seed, dedup_tol=None,
+                                                                 force=True))
+    result, selection = done.result, done.selection
+    sigma = measured_noise(result)
+    residuals = tool_point(result.model, dataset.q) - np.array([result.centres[n] for n in dataset.labels])
+    return Recorded(
+        model=result.model,
+        dataset=dataset,
+        spec=spec,
+        noise=sigma,
+        per_socket=int(np.median(list(dataset.counts().values()))),
+        centres=result.centres,
+        model_choice=f"{selection.chosen} ({selection.reason})",
+        **_scales(sigma, residuals, dataset),
+    )
+
+
+def _scales(sigma: float, residuals: np.ndarray, dataset: Dataset) -> dict[str, float]:
+    if SMOOTH == "residual":
+        return {"smooth": sigma, "white": sigma}
+    share = noise_split(residuals, dataset.q, dataset.labels)
+    return {"smooth": sigma * math.sqrt(share), "white": sigma * math.sqrt(1.0 - share)}
+
+
+def noise_split(residuals: np.ndarray, q: np.ndarray, labels: np.ndarray, length: float = LENGTH) -> float:
+    """Share of the residual variance that is a smooth error of the configuration (0: white, 1: all smooth).
+
+    Within each socket, every pair's semivariance per axis ``|r_i - r_j|^2 / 6`` is fitted by
+    ``white + smooth (1 - exp(-|q_i - q_j|^2 / (2 length^2)))`` (least squares, both >= 0).
+
+    Args:
+        residuals: (K, 3) tool point minus its socket's centre [m].
+        q: (K, n) configurations [rad].
+        labels: (K,) socket of each sample.
+        length: correlation length [rad].
+    """
+    g, f = [], []
+    for name in np.unique(labels):
+        mine = labels == name
+        r, c = residuals[mine], q[mine]
+        i, j = np.triu_indices(len(r), 1)
+        g.append(((r[i] - r[j]) ** 2).sum(axis=1) / 6.0)
+        f.append(1.0 - np.exp(-((c[i] - c[j]) ** 2).sum(axis=1) / (2.0 * length**2)))
+    g, f = np.concatenate(g), np.concatenate(f)
+    if g.size < 3 or np.ptp(f) == 0:
+        return 0.0
+    (white, smooth), *_ = np.linalg.lstsq(np.stack([np.ones_like(f), f], axis=1), g, rcond=None)
+    if smooth <= 0:
+        return 0.0
+    if white <= 0:
+        return 1.0
+    return float(smooth / (smooth + white))
+
+
+def pinned_down(before: Prediction, after: Prediction, share: float = PIN_SHARE) -> tuple[tuple[str, float], ...]:
+    """(parameter, std after / std before) of the parameters ``after`` determines much better, strongest first;
+    a parameter ``before`` did not identify has ratio 0."""
+    out = []
+    for name, std in after.std.items():
+        old = before.std.get(name)
+        if old is None:
+            out.append((name, 0.0))
+        elif old > 0 and std < share * old:
+            out.append((name, std / old))
+    return tuple(sorted(out, key=lambda item: item[1]))
+
+
+def workspace_of(model: RobotModel, q: np.ndarray) -> Workspace:
+    """The workspace at configurations ``q`` (N, n) [rad], rigid motions of their tool points removed."""
+    jac, points = param_jacobian(model, q, return_point=True)
+    return Workspace(q=q, sensitivity=remove_rigid_motion(jac.reshape(3 * len(q), -1), points))
+
+
+def unexplained_variance(
+    observed: np.ndarray, at: np.ndarray, smooth: float, white: float, length: float = LENGTH
+) -> float:
+    """Mean posterior variance per axis [m^2] at configurations ``at`` (M, n) of the unexplained error, a
+    Gaussian process over joint space (prior std ``smooth`` [m], squared-exponential kernel of ``length`` [rad])
+    observed at ``observed`` (K, n) [rad] through white noise of std ``white`` [m]."""
+    if smooth <= 0:
+        return 0.0
+
+    def kernel(a, b):
+        d2 = np.einsum("ij,ij->i", a, a)[:, None] + np.einsum("ij,ij->i", b, b)[None, :] - 2.0 * a @ b.T
+        return np.exp(-np.clip(d2, 0.0, None) / (2.0 * length**2))
+
+    cross = kernel(at, observed)
+    gram = kernel(observed, observed) + max((white / smooth) ** 2, 1e-6) * np.eye(len(observed))
+    explained = np.einsum("ij,ji->i", cross, np.linalg.solve(gram, cross.T))
+    return float(smooth**2 * np.mean(1.0 - explained))
+
+
+def judge(
+    recorded: Recorded, placement: Placement, q: dict[str, np.ndarray], workspace: Workspace, observed: np.ndarray
+) -> Judged:
+    """Predicted error of the recording plus ``placement``'s configurations ``q`` (socket -> (K, n) [rad]) over
+    ``workspace``; ``observed`` (K, n): the recorded configurations the unexplained part conditions on."""
+    data, spec = recorded.dataset, recorded.spec
+    sockets = tuple(placement.sockets)
+    added = [q[s] for s in sockets]
+    labels = np.concatenate([data.labels.astype(str), np.repeat(np.array(sockets, dtype=str), [len(a) for a in added])])
+    dataset = Dataset(labels=labels, q=np.concatenate([data.q, *added]), fixture_names=data.fixture_names + sockets,
+                      source=data.source)
+    both = FixtureSpec(names=spec.names + sockets, positions=spec.positions,
+                       distances=list(spec.distances) + list(placement.distances), source=spec.source)
+    try:
+        prediction = predict_accuracy(recorded.model, dataset, both, noise=recorded.noise, workspace=workspace)
+    except SpherecalError as error:
+        return Judged(placement, f"candidate {placement.name}: {str(error).splitlines()[0]}", q)
+    variance = unexplained_variance(np.concatenate([observed, *added]), workspace.q, recorded.smooth, recorded.white)
+    error = math.sqrt(prediction.rms**2 + 3.0 * variance)
+    return Judged(placement, "", q, error, prediction, math.sqrt(3.0 * variance))
+
+
+def rank_placements(
+    recorded: Recorded,
+    placements: list[Placement],
+    rng: np.random.Generator,
+    per_socket: int | None = None,
+    min_gain: float = MIN_GAIN,
+) -> Guidance:
+    """Rank candidate placements by the error the calibration would reach with each recorded as well.
+
+    Args:
+        recorded: the calibration of the recording so far (:func:`calibrate_recording`).
+        placements: the candidates.
+        rng: seeds the hand-guided configurations and the workspace subset.
+        per_socket: configurations per candidate socket (default: as many as recorded per socket).
+        min_gain: smallest gain worth another placement [m].
+
+    Raises:
+        CandidateError: no candidates, none reachable, or a candidate socket named like a recorded fixture.
+        UnidentifiableError: the recording so far cannot be predicted.
+    """
+    if not placements:
+        raise CandidateError("no candidate placements given")
+    given = list(placements)
+    taken = set(recorded.dataset.fixture_names)
+    for p in placements:
+        clash = taken & set(p.sockets)
+        if clash:
+            raise CandidateError(f"candidate {p.name}: socket {sorted(clash)[0]!r} is a recorded fixture's name")
+    # MuJoCo: controller.self_motion imports it at its top (start-up); its base-column check is the one we use
+    from spherecal.controller.self_motion import check_fixture
+
+    per_socket = recorded.per_socket if per_socket is None else per_socket
+    clock = time.perf_counter()
+    inside, kept = [], []
+    for p in placements:
+        try:
+            for socket, centre in p.sockets.items():
+                check_fixture(recorded.model, socket, centre)
+            kept.append(p)
+        except SpherecalError as error:
+            inside.append(Judged(p, f"candidate {p.name}: {error}"))
+    placements = kept
+    if not placements:
+        raise CandidateError(f"no candidate can be recorded: {inside[0].reason}")
+    centres = np.array([c for p in placements for c in p.sockets.values()])
+    q, reachable = hand_guided(recorded.model, centres, per_socket, rng)
+    seconds = {"configurations": time.perf_counter() - clock}
+    clock = time.perf_counter()
+    configurations, refused, k = {}, inside, 0
+    for p in placements:
+        names = list(p.sockets)
+        ok = reachable[k : k + len(names)]
+        if ok.all():
+            configurations[p.name] = {name: q[k + i] for i, name in enumerate(names)}
+        else:
+            socket = names[int(np.argmin(ok))]
+            where = np.round(p.sockets[socket], 4).tolist()
+            refused.append(Judged(p, f"candidate {p.name}: socket {socket} at {where} m is out of reach inside the "
+                                     "joint limits"))
+        k += len(names)
+    if not configurations:
+        raise CandidateError(f"no candidate can be recorded: {refused[0].reason}")
+    workspace = workspace_of(recorded.model, _subset(np.concatenate(
+        [a for c in configurations.values() for a in c.values()]), rng))
+    observed = _subset(recorded.dataset.q, rng)
+    none = Placement("recorded so far", {})
+    baseline = judge(recorded, none, {}, workspace, observed)
+    if baseline.reason:
+        raise CandidateError(f"the recording so far cannot be predicted: {baseline.reason}")
+    judged = []
+    for p in placements:
+        if p.name in configurations:
+            j = judge(recorded, p, configurations[p.name], workspace, observed)
+            if j.prediction is not None:
+                j = replace(j, gain=baseline.error - j.error, pinned=pinned_down(baseline.prediction, j.prediction))
+            (judged if not j.reason else refused).append(j)
+    seconds["prediction"] = time.perf_counter() - clock
+    ranking = sorted(judged, key=lambda j: j.error)
+    order = {p.name: i for i, p in enumerate(given)}
+    refused.sort(key=lambda j: order[j.placement.name])
+    return Guidance(recorded, baseline, ranking, refused, min_gain, per_socket, seconds)
+
+
+def _subset(q: np.ndarray, rng: np.random.Generator, most: int = CONFIGURATIONS) -> np.ndarray:
+    """At most ``most`` rows of ``q``, a random subset (seeded)."""
+    return q if len(q) <= most else q[np.sort(rng.choice(len(q), most, replace=False))]
+
+
+def recording_guidance(
+    nominal: RobotModel,
+    dataset: Dataset,
+    spec: FixtureSpec | None,
+    rng: np.random.Generator,
+    candidates: list[Placement] | None = None,
+    plate_grid: str | None = None,
+    orientations: int = 2,
+    per_socket: int | None = None,
+    min_gain: float = MIN_GAIN,
+    noise: float = NOISE,
+    model: str = "auto",
+) -> Guidance:
+    """What to record next: calibrate the recording so far, then rank the candidates (given ones, and the
+    recorded plate placed over ``plate_grid`` in ``orientations`` turns, see :func:`.placements.plate_placements`).
+
+    Args:
+        nominal: the robot.
+        dataset, spec: the recording so far and its fixtures.
+        rng: seeds everything random (model selection folds, hand-guided configurations, workspace subset).
+        candidates: candidate placements.
+        plate_grid: ``"xmin,xmax,nx;ymin,ymax,ny;zmin,zmax,nz"`` [m] of plate centres, ``"auto"`` (5 x 5 over
+            the reach at the recorded plate's height, :func:`.placements.reachable_grid`), or None.
+        orientations: turns of the plate per grid point.
+        per_socket: configurations per candidate socket (default: as recorded).
+        min_gain: smallest gain worth another placement [m].
+        noise: expected fixture noise of the fit [m].
+        model: ``dh``, ``elastic`` or ``auto`` (as `calibrate`).
+
+    Raises:
+        CandidateError: no candidates, or none that can be recorded; SpherecalError: the recording cannot be
+            calibrated.
+    """
+    clock = time.perf_counter()
+    recorded = calibrate_recording(nominal, dataset, spec, noise, model, seed=int(rng.integers(2**31)))
+    calibrated = time.perf_counter() - clock
+    placements = list(candidates or [])
+    if plate_grid is not None:
+        layout = plate_layout(recorded.spec, recorded.centres)
+        if plate_grid == "auto":
+            height = float(np.mean([recorded.centres[n] for n in recorded.dataset.fixture_names], axis=0)[2])
+            plate_grid = reachable_grid(recorded.model, height, rng)
+        placements += plate_placements(layout, plate_grid, orientations)
+    guidance = rank_placements(recorded, placements, rng, per_socket, min_gain)
+    return replace(guidance, seconds={"calibration": calibrated, **guidance.seconds})

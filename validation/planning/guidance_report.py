@@ -1,0 +1,110 @@
+"""Recording guidance for humans and files: the ranked table, ``plan.json`` and a Rerun recording."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from spherecal.correction import tool_point
+
+#: Parameters named per candidate in the table.
+PINNED_SHOWN = 3
+
+
+def _pinned(judged) -> str:
+    items = [f"{n} (new)" if r == 0 else f"{n} x{r:.2f}" for n, r in judged.pinned[:PINNED_SHOWN]]
+    more = len(judged.pinned) - PINNED_SHOWN
+    return ", ".join(items) + (f" +{more}" if more > 0 else "") if items else "-"
+
+
+def format_guidance(guidance) -> str:
+    """The ranked table (mm), the refused candidates (one line each) and the stop line."""
+    r, now = guidance.recorded, guidance.baseline
+    counts = sum(r.dataset.counts().values())
+    lines = [
+        f"recording so far: {len(r.dataset.fixture_names)} sockets, {counts} samples; calibration model "
+        f"{r.model_choice}; measured noise {r.noise * 1e3:.3g} mm per axis",
+        f"candidates: {len(guidance.ranking) + len(guidance.refused)}, {len(guidance.ranking)} recordable, "
+        f"{guidance.per_socket} hand-guided configurations per socket",
+        f"predicted rms tool-point error over the candidates' workspace [mm] now: {now.error * 1e3:.4f} "
+        f"(parameters {now.prediction.rms * 1e3:.4f}, unexplained {now.unexplained * 1e3:.4f})",
+        f"{'rank':>4} {'candidate':<16} {'x':>7} {'y':>7} {'z':>7} | {'error':>7} {'gain':>7} | pins down "
+        "(std ratio to now)",
+    ]
+    for k, j in enumerate(guidance.ranking):
+        x, y, z = j.placement.centre
+        lines.append(f"{k + 1:>4} {j.placement.name:<16} {x:7.3f} {y:7.3f} {z:7.3f} | {j.error * 1e3:7.4f} "
+                     f"{j.gain * 1e3:7.4f} | {_pinned(j)}")
+    lines.extend(f"refused: {j.reason}" for j in guidance.refused)
+    lines.append(guidance.stop_line())
+    return "\n".join(lines)
+
+
+def guidance_json(guidance, provenance: dict | None = None) -> dict:
+    """``plan.json``: ``ranking`` best first (``name``, ``predicted_error_m``, ``gain_m``, sockets [m],
+    distances [m], pinned parameters), ``refused``, the recording's figures and the stop decision."""
+    r = guidance.recorded
+
+    def entry(j) -> dict:
+        return {
+            "name": j.placement.name,
+            "predicted_error_m": j.error,
+            "gain_m": j.gain,
+            "parameters_rms_m": j.prediction.rms,
+            "unexplained_rms_m": j.unexplained,
+            "sockets": {k: [float(v) for v in p] for k, p in j.placement.sockets.items()},
+            "distances": [[a, b, d] for a, b, d in j.placement.distances],
+            "pinned": [{"parameter": n, "std_ratio": ratio} for n, ratio in j.pinned],
+        }
+
+    return {
+        "ranking": [entry(j) for j in guidance.ranking],
+        "refused": [{"name": j.placement.name, "reason": j.reason} for j in guidance.refused],
+        "recorded": {
+            "predicted_error_m": guidance.baseline.error,
+            "noise_m": r.noise,
+            "per_socket": r.per_socket,
+            "model": r.model_choice,
+            "samples_per_fixture": {k: int(v) for k, v in r.dataset.counts().items()},
+        },
+        "stop": {"worth_it": guidance.worth_it, "line": guidance.stop_line(), "noise_floor_m": guidance.floor,
+                 "min_gain_m": guidance.min_gain},
+        "configurations_per_socket": guidance.per_socket,
+        "timings_s": dict(guidance.seconds),
+        **({"provenance": provenance} if provenance else {}),
+    }
+
+
+def write_guidance_recording(path: str, guidance, provenance: str = "") -> str:
+    """The calibrated arm through the recorded configurations, the recorded sockets, and every candidate's
+    sockets coloured by gain (:func:`validation.viewer.recording_shapes.colour_ramp`, 0 = the best gain;
+    grey: refused), with the table as a text panel."""
+    from spherecal.validation.viewer.recording import Recording  # Rerun: only for --rrd
+    from spherecal.validation.viewer.recording_shapes import colour_ramp
+
+    recording = Recording(path, application_id="spherecal_plan", title="Recorded sockets and candidates by gain")
+    try:
+        r = guidance.recorded
+        names = list(r.centres)
+        recording.fixtures(names, np.array([r.centres[n] for n in names]))
+        recording.samples(tool_point(r.model, r.dataset.q), r.dataset.labels)
+        recording.self_motion(r.model, np.arange(r.dataset.n_samples, dtype=float), r.dataset.q)
+        judged = guidance.ranking + guidance.refused
+        points = np.array([p for j in judged for p in j.placement.sockets.values()])
+        gains = np.array([j.gain for j in guidance.ranking])
+        top = gains.max() if gains.size and gains.max() > 0 else 1.0
+        colours = [colour_ramp(np.array([1.0 - max(j.gain, 0.0) / top]))[0] for j in guidance.ranking]
+        colours += [np.array([150, 150, 150], np.uint8)] * len(guidance.refused)
+        each = [len(j.placement.sockets) for j in judged]
+        labels = [f"{j.placement.name} {j.gain * 1e3:+.3f} mm" if not j.reason else f"{j.placement.name} refused"
+                  for j in judged for _ in j.placement.sockets]
+        recording.stream.log("world/candidates", recording.rr.Points3D(
+            points, colors=np.repeat(np.array(colours), each, axis=0), labels=labels, radii=0.012), static=True)
+        if guidance.ranking:  # the camera frames what can be recorded, not a refused far-away candidate
+            recording.extend_bounds("world", points[: sum(each[: len(guidance.ranking)])])
+        text = format_guidance(guidance)
+        recording.text("plan", f"{provenance}\n\n{text}" if provenance else text,
+                       "What to record next: candidates by predicted gain (mm)")
+    except BaseException:
+        recording.abort()
+        raise
+    return str(recording.close())

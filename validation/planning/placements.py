@@ -1,0 +1,182 @@
+"""Candidate plate placements of recording guidance: groups of sockets with known distances.
+
+A placement is where the user would put the plate next: its sockets' centres in the robot's base
+frame [m] and the centre-to-centre distances known from the plate's drawing. From YAML::
+
+    candidates:
+      left:
+        sockets: {left_h0: [0.42, 0.21, 0.02], left_h1: [0.42, 0.26, 0.02]}
+        distances: [[left_h0, left_h1, 0.050]]
+      C7: {position: [0.5, 0.0, 0.1]}        # a single socket (the older candidate form)
+
+or generated: the user's plate (its socket layout, :func:`plate_layout`) placed at the points of a
+box grid in several orientations about the vertical axis (:func:`plate_placements`).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from spherecal.correction import RobotModel, tool_point
+from spherecal.correction.files.fixtures import FixtureSpec
+
+from .candidates import Candidate, CandidateError, candidate_entries, grid_candidates
+
+
+@dataclass(frozen=True)
+class Placement:
+    """One placement of a plate: a group of sockets.
+
+    Attributes:
+        name: candidate name.
+        sockets: socket name -> (3,) centre in the base frame [m].
+        distances: known centre-to-centre distances ``(socket_a, socket_b, metres)``.
+    """
+
+    name: str
+    sockets: dict[str, np.ndarray]
+    distances: tuple[tuple[str, str, float], ...] = ()
+
+    @property
+    def centre(self) -> np.ndarray:
+        """(3,) mean of the socket centres [m]."""
+        return np.mean(list(self.sockets.values()), axis=0)
+
+    @staticmethod
+    def single(candidate: Candidate) -> Placement:
+        """A one-socket placement from a :class:`Candidate` (its name is the socket's name)."""
+        return Placement(candidate.name, {candidate.name: np.asarray(candidate.position, float)})
+
+
+def read_placements(path: str | Path) -> list[Placement]:
+    """Placements from YAML (see the module docstring).
+
+    Raises:
+        CandidateError: unreadable file, no candidates, a bad socket position, a distance naming a
+            socket not in its placement or not positive, a socket name used twice (message names
+            the file and the field).
+    """
+    path = Path(path)
+    entries = candidate_entries(path, "{sockets: {name: [x, y, z]}, distances: [[a, b, metres]]}")
+    out, seen = [], set()
+    for name, entry in entries.items():
+        where = f"{path}: field 'candidates.{name}"
+        if not isinstance(entry, dict) or not ({"sockets", "position"} & set(entry)):
+            raise CandidateError(f"{where}': expected 'sockets: {{name: [x, y, z]}}' or 'position: [x, y, z]'")
+        unknown = set(entry) - {"sockets", "distances", "position"}
+        if unknown:
+            raise CandidateError(f"{where}.{sorted(unknown)[0]}': unknown field")
+        if "position" in entry:
+            sockets = {str(name): _point(entry["position"], f"{where}.position'")}
+        elif not isinstance(entry["sockets"], dict) or not entry["sockets"]:
+            raise CandidateError(f"{where}.sockets': expected a non-empty mapping name -> [x, y, z] [m]")
+        else:
+            sockets = {str(k): _point(v, f"{where}.sockets.{k}'") for k, v in entry["sockets"].items()}
+        for socket in sockets:
+            if socket in seen:
+                raise CandidateError(f"{where}.sockets.{socket}': socket name used by another candidate")
+            seen.add(socket)
+        distances = []
+        raw = entry.get("distances") or []
+        if not isinstance(raw, list):
+            raise CandidateError(f"{where}.distances': expected a list of [socket_a, socket_b, metres]")
+        for k, item in enumerate(raw):
+            at = f"{where}.distances[{k}]'"
+            if not isinstance(item, list) or len(item) != 3:
+                raise CandidateError(f"{at}: expected [socket_a, socket_b, metres], got {item!r}")
+            a, b, value = str(item[0]), str(item[1]), item[2]
+            if a not in sockets or b not in sockets or a == b:
+                raise CandidateError(f"{at}: {a!r} and {b!r} must be two sockets of this candidate")
+            if not isinstance(value, (int, float)) or not 0.0 < float(value) <= 10.0:
+                raise CandidateError(f"{at}: the distance must be in (0, 10] m, got {value!r}")
+            distances.append((a, b, float(value)))
+        out.append(Placement(str(name), sockets, tuple(distances)))
+    return out
+
+
+def _point(value, where: str) -> np.ndarray:
+    try:
+        point = np.asarray(value, dtype=float)
+    except (TypeError, ValueError):
+        raise CandidateError(f"{where}: expected [x, y, z] [m], got {value!r}") from None
+    if point.shape != (3,) or not np.all(np.isfinite(point)) or np.abs(point).max() > 10.0:
+        raise CandidateError(f"{where}: expected 3 finite numbers within 10 m [m], got {value!r}")
+    return point
+
+
+def plate_layout(spec: FixtureSpec, centres: dict[str, np.ndarray]) -> dict[str, np.ndarray]:
+    """The user's plate: socket suffix -> (3,) offset from the plate's centre [m], from the first
+    recorded group of sockets joined by known distances (their calibrated centres).
+
+    Args:
+        spec: the recording's fixtures (its known distances define the groups).
+        centres: fixture name -> (3,) calibrated centre [m].
+
+    Raises:
+        CandidateError: the recording has no known distance (no plate to copy).
+    """
+    if not spec.distances:
+        raise CandidateError(f"{spec.source or 'fixtures'}: field 'distances': no known distance in the recording, "
+                             "so no plate layout to place (give --candidates)")
+    group = [spec.distances[0][0], spec.distances[0][1]]
+    for a, b, _ in spec.distances[1:]:  # every socket joined to the first pair
+        for x, y in ((a, b), (b, a)):
+            if x in group and y not in group:
+                group.append(y)
+    points = np.array([centres[name] for name in group])
+    return {f"h{k}": p - points.mean(axis=0) for k, p in enumerate(points)}
+
+
+def reachable_grid(model: RobotModel, height: float, rng: np.random.Generator, count: int = 5) -> str:
+    """A ``count`` x ``count`` box grid at ``height`` [m] over where the tool point reaches at that height
+    (the 10th to 90th percentile of x and y of random configurations' tool points within 3 cm of it), as
+    the text :func:`plate_placements` takes. No collision check: points inside the robot's own column
+    are refused later only if out of reach.
+
+    Raises:
+        CandidateError: the tool point rarely reaches that height.
+    """
+    points = tool_point(model, model.random_configurations(20_000, rng))
+    near = points[np.abs(points[:, 2] - height) < 0.03]
+    if len(near) < 50:
+        raise CandidateError(f"--plate-grid auto: the tool point rarely reaches the plate's height {height:.3f} m")
+    (x0, y0), (x1, y1) = np.percentile(near[:, :2], [10, 90], axis=0)
+    return f"{x0:.4f},{x1:.4f},{count};{y0:.4f},{y1:.4f},{count};{height:.4f},{height:.4f},1"
+
+
+def plate_placements(layout: dict[str, np.ndarray], grid: str, orientations: int = 2) -> list[Placement]:
+    """The plate at every point of a box grid, turned about the vertical (z) axis.
+
+    Args:
+        layout: socket suffix -> (3,) offset from the plate's centre [m] (:func:`plate_layout`).
+        grid: ``"xmin,xmax,nx;ymin,ymax,ny;zmin,zmax,nz"`` [m], the plate centres.
+        orientations: turns per point, evenly over half a turn (a plate's socket pattern is usually
+            symmetric under a half turn), >= 1.
+
+    Returns:
+        Placements ``G<k>_<deg>`` with sockets ``G<k>_<deg>_<suffix>`` and every distance among them known.
+
+    Raises:
+        CandidateError: a bad grid or ``orientations`` < 1.
+    """
+    if orientations < 1:
+        raise CandidateError(f"--plate-orientations must be >= 1, got {orientations}")
+    suffixes = list(layout)
+    offsets = np.array([layout[s] for s in suffixes])
+    distances = [(i, j, float(np.linalg.norm(offsets[i] - offsets[j])))
+                 for i in range(len(suffixes)) for j in range(i + 1, len(suffixes))]
+    out = []
+    for point in grid_candidates(grid):
+        for k in range(orientations):
+            angle = math.pi * k / orientations
+            c, s = math.cos(angle), math.sin(angle)
+            turned = offsets @ np.array([[c, s, 0.0], [-s, c, 0.0], [0.0, 0.0, 1.0]])
+            name = f"G{point.name[1:]}_{round(math.degrees(angle))}"
+            sockets = {f"{name}_{suffix}": point.position + turned[i] for i, suffix in enumerate(suffixes)}
+            keys = list(sockets)
+            out.append(Placement(name, sockets, tuple((keys[i], keys[j], d) for i, j, d in distances)))
+    return out
