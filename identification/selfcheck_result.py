@@ -40,11 +40,15 @@ class SelfCheck:
         findings: all checks, in the order they ran.
         noise: declared noise per coordinate [m].
         sigma: residual std per coordinate of the fit [m].
+        prediction: the parameters' predicted error covariance at the noise judged with
+            (``noise_m``, ``parameters``, ``covariance`` [m, rad squared]): what ``validate`` predicts
+            held-out sockets' spreads with (:func:`.prediction.socket_spreads`).
     """
 
     findings: tuple[Finding, ...]
     noise: float
     sigma: float
+    prediction: dict = field(default_factory=dict)
 
     @property
     def failed(self) -> tuple[Finding, ...]:
@@ -88,6 +92,7 @@ class SelfCheck:
             "residual_std_mm": self.sigma * 1e3,
             "failed": [f.message for f in self.failed],
             "checks": {f.check: {"passed": f.passed, **f.figures} for f in self.findings},
+            **({"prediction": self.prediction} if self.prediction else {}),
         }
 
     def lines(self) -> list[str]:

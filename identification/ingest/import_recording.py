@@ -59,10 +59,11 @@ class ImportResult:
     segments: list[Segment]
     dropped_motion: int
     dropped_duplicates: int
+    notes: tuple[str, ...] = ()
 
     def format(self) -> str:
         """The printed report."""
-        lines = [f"read {self.read} samples"]
+        lines = [f"read {self.read} samples"] + list(self.notes)
         if self.segments:
             lines.append(
                 f"segmented into {len(self.segments)} fixtures ({self.dropped_motion} samples in motion dropped):"
@@ -167,7 +168,8 @@ def import_recording(
     spec = FixtureSpec(spec.names, spec.positions, spec.distances, {"import": block} if block else {})
     _write_together(_outputs(Path(out), source, inputs), kept, spec)
     return ImportResult(
-        kept, spec, read, segments, read - dataset.n_samples, dataset.n_samples - deduplicated.n_samples
+        kept, spec, read, segments, read - dataset.n_samples, dataset.n_samples - deduplicated.n_samples,
+        recording.notes,
     )
 
 

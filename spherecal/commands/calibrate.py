@@ -53,6 +53,11 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         "file's inertials); auto (default): elastic only when it predicts held-out fixtures (or placements "
         "<placement>_h<k>) better than dh by more than the fold-to-fold spread",
     )
+    parser.add_argument(
+        "--exclude-fixture", action="append", default=[], metavar="NAME",
+        help="leave the fixture NAME out (its samples and every known distance naming it); repeatable "
+        "(a socket the self-check finds drifting, a fixture that moved)",
+    )
     parser.add_argument("--out", required=True, help="calibrated robot file to write (YAML)")
 
 
@@ -78,6 +83,7 @@ def run(args: argparse.Namespace) -> int:
     from spherecal.correction.files.samples_csv import read_samples
     from spherecal.identification.calibrate import calibrate
     from spherecal.identification.selection import elastic_start, rigid, select_model
+    from spherecal.identification.training import exclude_fixtures, training_record
     from spherecal.options import planned_outputs
 
     outputs = planned_outputs(args, {"--out": args.out})  # before any work: never over an input
@@ -87,6 +93,8 @@ def run(args: argparse.Namespace) -> int:
     nominal = load_robot(args.robot, **urdf_links(args))
     dataset = read_samples(args.samples, nominal)
     spec = read_fixtures(args.fixtures) if args.fixtures else None
+    dataset, spec = exclude_fixtures(dataset, spec, args.exclude_fixture)
+    as_read = dataset
     read = len(dataset.labels)
     dataset = dataset.deduplicated(dedup_tol)
     dropped = read - dataset.n_samples
@@ -116,6 +124,7 @@ def run(args: argparse.Namespace) -> int:
     if selection.seconds:
         block["timings_s"]["cross_validation"] = selection.seconds
     block["duplicates_dropped"] = dropped
+    block["trained_on"] = training_record(as_read, dataset)  # validate recognises these samples by content
     block["inputs"] = {
         "robot": input_record(args.robot),
         "samples": input_record(args.samples),
@@ -130,6 +139,7 @@ def run(args: argparse.Namespace) -> int:
         "max_change": args.max_change,
         "model": args.model,
         "force": args.force,
+        "exclude_fixture": list(args.exclude_fixture),
     }
     block["seed"] = args.seed
     block["versions"] = versions(PACKAGES[:4] + (("pyswarms",) if "pso" in args.method else ()))
