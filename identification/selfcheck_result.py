@@ -77,12 +77,24 @@ class SelfCheck:
             return figures[0].message
         worst = max(failed, key=lambda f: f.figures.get("statistic", 0.0) - f.figures.get("dof", 0))
         others = len(failed) - 1
-        return f"{worst.message}; {others} other check(s) failed too and no single one explains the data"
+        trend = next((f for f in self.findings if f.figures.get("trend") and worst.check.endswith(
+            " " + f.check.removeprefix("trend "))), None)
+        text = worst.message + (f"; {trend.message.split(': ', 1)[-1]}" if trend is not None else "")
+        if not others:
+            return text
+        return f"{text}; {others} other check(s) failed too and no single one explains the data"
 
     def raise_if_inconsistent(self) -> None:
         """Raises :class:`InconsistentDataError` with :attr:`refusal` unless consistent."""
         if not self.consistent:
             raise InconsistentDataError(self.refusal)
+
+    @property
+    def warnings(self) -> tuple[str, ...]:
+        """Passed checks the user must still know of: a fixture whose residual trends with recording
+        order, residuals above the declared noise judged at the noise they show."""
+        return tuple(f.message for f in self.findings
+                     if f.figures.get("trend") or f.figures.get("honest_noise_warning"))
 
     def block(self) -> dict:
         """Plain data for the ``calibration:`` block of the written file."""
@@ -91,6 +103,7 @@ class SelfCheck:
             "noise_declared_mm": self.noise * 1e3,
             "residual_std_mm": self.sigma * 1e3,
             "failed": [f.message for f in self.failed],
+            "warnings": list(self.warnings),
             "checks": {f.check: {"passed": f.passed, **f.figures} for f in self.findings},
             **({"prediction": self.prediction} if self.prediction else {}),
         }
@@ -100,6 +113,7 @@ class SelfCheck:
         head = "consistent" if self.consistent else f"INCONSISTENT ({len(self.failed)} failed)"
         lines = [f"self-check: {head}"]
         lines += [f"  {f.message}" for f in self.findings if f.check in ("residual level", "prediction") and f.passed]
+        lines += [f"  {f.message}" for f in self.findings if f.figures.get("trend")]
         worst = _worst_group(self.findings)
         if worst is not None:
             figures = worst.figures

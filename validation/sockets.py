@@ -23,6 +23,7 @@ import numpy as np
 
 from spherecal.correction import RobotModel, tool_point
 from spherecal.correction.files.fixtures import FixtureSpec
+from spherecal.correction.files.robot_file import forced_calibration
 from spherecal.correction.files.samples import Dataset, configurations_digest
 from spherecal.identification.prediction import socket_spreads
 from spherecal.identification.training import trained_digests
@@ -205,14 +206,15 @@ def fitted_fixtures(model: RobotModel, dataset: Dataset | None = None) -> set[st
 
 def recorded_prediction(model: RobotModel) -> tuple[np.ndarray, float] | None:
     """``(R, noise)`` of the calibrated file's recorded parameter covariance (``R R^T``, over every
-    parameter of ``model``) and the noise it was judged at [m]; None when it records none."""
+    parameter of ``model``; at the larger of the declared and the residuals' noise) and the socket noise
+    the training residuals show [m] (std per axis); None when it records none."""
     block = model.extras.get("calibration")
     check = block.get("self_check") if isinstance(block, dict) else None
     record = check.get("prediction") if isinstance(check, dict) else None
     try:
         names = list(record["parameters"])
         covariance = np.asarray(record["covariance"], dtype=float).reshape(len(names), len(names))
-        noise = float(record["noise_m"])
+        noise = float(record.get("socket_noise_m", record["noise_m"]))
         index = [model.param_names.index(n) for n in names]
     except (TypeError, KeyError, ValueError):
         return None
@@ -271,12 +273,8 @@ def socket_validation(
 def remarks(report: SocketReport, calibrated: RobotModel) -> list[str]:
     """What a user must not miss, one line each: a calibration written with ``--force`` although its
     self-check found the data inconsistent, and a calibrated model worse than nominal on these samples."""
-    out = []
-    block = calibrated.extras.get("calibration")
-    check = block.get("self_check") if isinstance(block, dict) else None
-    if isinstance(check, dict) and check.get("verdict") == "inconsistent":
-        failed = check.get("failed") or ["(no reason recorded)"]
-        out.append(f"the calibration was forced (--force): its self-check found the data INCONSISTENT: {failed[0]}")
+    forced = forced_calibration(calibrated)
+    out = [forced] if forced else []
     held = any(f.held_out and f.measurable for f in report.fixtures)
     chosen = [f for f in report.fixtures if f.measurable and (f.held_out or not held)]
     if chosen:

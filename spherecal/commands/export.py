@@ -136,6 +136,12 @@ def run(args: argparse.Namespace) -> int:
 
     outputs = planned_outputs(args, {"--out": args.out})  # never over CAL.yaml or --into
     model = load_robot(args.robot, **urdf_links(args))
+    from spherecal.correction.files.robot_file import forced_calibration
+
+    if forced_calibration(model):
+        import warnings
+
+        warnings.warn(forced_calibration(model), stacklevel=1)
     effort, velocity = _limits(args.effort, "--effort"), _limits(args.velocity, "--velocity")
     header = provenance_header(args.robot, args.format)
     if args.into is not None:
