@@ -174,32 +174,39 @@ def _geometry(problem: CalibrationProblem, x: np.ndarray) -> list[Finding]:
 
 # ------------------------------------------------------------------------------------- trends
 def _trends(problem: CalibrationProblem, x: np.ndarray) -> list[Finding]:
-    """Per fixture, does the residual distance trend with recording order (file order)? A socket or
-    ball that moved while it was recorded (MUKCa's Gen3 lite ``front_h0``: 7.4 mm falling to 2.8 mm)."""
+    """Per fixture, does the residual trend with recording order (file order, or time when recorded)? A
+    socket or ball that moved while it was recorded (MUKCa's Gen3 lite ``front_h0``).
+
+    The residual vectors (K, 3) are fitted by a line in the sample number; the trend is its change from
+    the first sample to the last, significant when an axis's slope has ``|t| >`` :data:`TREND_T` and the
+    change exceeds :data:`TREND_CHANGE` x the declared noise.
+    """
     dataset = problem.dataset
-    distance = np.linalg.norm(problem.sample_errors(x), axis=1)
+    errors = problem.sample_errors(x)
     out = []
     for j, name in enumerate(dataset.fixture_names):
         rows = np.flatnonzero(dataset.fixture_index == j)
         if len(rows) < TREND_SAMPLES:
             continue
         order = rows if dataset.t is None else rows[np.argsort(dataset.t[rows], kind="stable")]
-        d = distance[order]
-        k = np.arange(len(d), dtype=float)
-        ranks = np.argsort(np.argsort(d)).astype(float)
-        rho = float(np.corrcoef(k, ranks)[0, 1]) if np.ptp(d) > 0 else 0.0
-        t = rho * np.sqrt((len(d) - 2) / max(1.0 - rho**2, 1e-12))
-        slope, intercept = np.polyfit(k, d, 1)
-        first, last = float(intercept), float(intercept + slope * k[-1])
-        trends = abs(t) > TREND_T and abs(last - first) > TREND_CHANGE * problem.noise
-        figures = {"rank_correlation": rho, "t": float(t), "first_mm": first * 1e3, "last_mm": last * 1e3,
-                   "samples": int(len(d)), "trend": bool(trends)}
-        where = samples_location(dataset.select(order))
+        e = errors[order]
+        k = np.arange(len(e), dtype=float)
+        k -= k.mean()
+        slope = (k @ (e - e.mean(axis=0))) / (k @ k)  # (3,) [m per sample]
+        rest = e - e.mean(axis=0) - np.outer(k, slope)
+        std = np.sqrt((rest**2).sum(axis=0) / max(len(e) - 2, 1)) / np.sqrt(k @ k)
+        t = float(np.max(np.abs(slope) / np.maximum(std, 1e-15)))
+        change = float(np.linalg.norm(slope) * (len(e) - 1))
+        distance = np.linalg.norm(e, axis=1)
+        first, last = np.polyval(np.polyfit(k, distance, 1), [k[0], k[-1]])
+        trends = t > TREND_T and change > TREND_CHANGE * problem.noise
+        figures = {"t": t, "change_mm": change * 1e3, "first_mm": float(first) * 1e3, "last_mm": float(last) * 1e3,
+                   "samples": int(len(e)), "trend": bool(trends)}
         text = (
-            f"{where}, field 'fixture': the residual at fixture {name} {'falls' if last < first else 'grows'} with "
-            f"recording order from {first * 1e3:.3g} to {last * 1e3:.3g} mm over its {len(d)} samples (rank "
-            f"correlation {rho:.2f}): the socket or the ball moved while it was recorded; leave it out "
-            f"(calibrate --exclude-fixture {name}) or record it again"
+            f"{samples_location(dataset.select(order))}, field 'fixture': the residual at fixture {name} moves "
+            f"{change * 1e3:.3g} mm with recording order over its {len(e)} samples (its distance from the centre "
+            f"goes from {first * 1e3:.3g} to {last * 1e3:.3g} mm): the socket or the ball moved while it was "
+            f"recorded; leave it out (calibrate --exclude-fixture {name}) or record it again"
         )
         # a trend is named, not refused: the level and leave-one-out checks judge what it does to the fit
         out.append(Finding(f"trend {name}", True, text if trends else f"no trend at {name}", figures))
