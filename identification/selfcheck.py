@@ -57,6 +57,10 @@ OUTLIER = 4.0
 #: fitted line changes by more than :data:`TREND_CHANGE` x the declared noise from its first to its last sample.
 TREND_T = 4.0
 TREND_CHANGE = 3.0
+#: Residuals above the declared noise are judged at the noise they show only when they look like noise: their
+#: robust std (1.4826 x the median absolute deviation) at least this share of their std. A few slipped samples
+#: or a fit that did not converge inflate the std far beyond the robust one (a refusal, as before).
+NOISE_LIKE = 0.6
 #: Fewest samples of a fixture whose trend is judged.
 TREND_SAMPLES = 8
 #: The predicted mean error must be below this share of the nominal model's expected error: a 2x margin,
@@ -108,9 +112,9 @@ def self_check(
     groups = [group_finding(problem, name, kinds[name], group, checkable) for name, group in left.items()]
     findings += name_culprit(groups, problem.noise, LEVEL_FACTOR)
     findings += _trends(problem, x)
-    prediction, record = _prediction(nominal, built or problem, max(noise, sigma))
+    prediction, record = _prediction(nominal, built or problem, max(noise, sigma), sigma)
     record["socket_noise_m"] = sigma  # where a ball sits in a socket, as the residuals show it
-    findings = _honest_noise(findings, prediction)
+    findings, prediction = _honest_noise(findings, prediction)
     findings.append(prediction)
     return SelfCheck(findings=tuple(findings), noise=noise, sigma=sigma, prediction=record)
 
@@ -213,25 +217,30 @@ def _trends(problem: CalibrationProblem, x: np.ndarray) -> list[Finding]:
     return out
 
 
-def _honest_noise(findings: list[Finding], prediction: Finding) -> list[Finding]:
-    """Residuals above the declared noise and no culprit: the calibration is judged at the noise they show.
-    Expected to beat nominal there: written, the level failure becomes a warning. Otherwise the refusal
-    says the noise they show and what the calibration would reach at it."""
+def _honest_noise(findings: list[Finding], prediction: Finding) -> tuple[list[Finding], Finding]:
+    """Residuals above the declared noise that look like noise (:data:`NOISE_LIKE`), and no culprit: the
+    calibration is judged at the noise they show. Expected to beat nominal there (the predicted mean error
+    below the nominal's expected error; the 2x margin :data:`BEAT` is for data at its declared noise): written,
+    the level failure a warning. Otherwise the refusal says the noise they show and what it would reach."""
     if any(f.culprit and not f.passed for f in findings):
-        return findings
-    out = []
-    for f in findings:
-        if f.check == "residual level" and not f.passed:
-            if prediction.passed:
-                text = (
-                    f"warning: {f.message.split(': ', 1)[-1].split(' and no single')[0]}; judged at that noise, "
-                    "the calibration is still expected to beat nominal (the prediction below): written"
-                )
-                f = replace(f, passed=True, message=text, figures={**f.figures, "honest_noise_warning": True})
-            else:
-                f = replace(f, message=f"{f.message}; at the noise the residuals show, {prediction.message}")
-        out.append(f)
-    return out
+        return findings, prediction
+    level = next((f for f in findings if f.check == "residual level" and not f.passed), None)
+    if level is None or level.figures.get("robust_ratio", 0.0) < NOISE_LIKE:
+        return findings, prediction
+    figures = prediction.figures
+    beats = figures["predicted_mean_mm"] < figures["nominal_expected_mean_mm"]
+    if beats:
+        shown = level.message.split(": ", 1)[-1].split(" and no single")[0]
+        level = replace(level, passed=True, figures={**level.figures, "honest_noise_warning": True}, message=(
+            f"warning: {shown}; judged at that noise, the calibration is still expected to beat nominal "
+            f"({figures['predicted_mean_mm']:.3g} mm against {figures['nominal_expected_mean_mm']:.3g} mm, the "
+            f"prediction below): written"))
+        if not prediction.passed:
+            prediction = replace(prediction, passed=True, message=prediction.message.split(
+                "cannot be expected to beat the nominal model: ", 1)[-1].split(f" (at most {BEAT:g}x needed)")[0])
+    else:
+        level = replace(level, message=f"{level.message}; at the noise the residuals show, {prediction.message}")
+    return [level if f.check == "residual level" else f for f in findings], prediction
 
 
 # ------------------------------------------------------------------------------- residual level
@@ -245,7 +254,11 @@ def _level(problem: CalibrationProblem, r: np.ndarray, sigma: float, dof: int, e
         for j, (name, c) in enumerate(dataset.counts().items())
     }
     statistic = float(r @ r) / noise**2
+    centred = per_axis - np.median(per_axis, axis=0)
+    robust = float(1.4826 * np.median(np.abs(centred)))
     figures = {
+        "robust_std_mm": robust * 1e3,
+        "robust_ratio": robust / max(sigma, 1e-15),
         "residual_std_mm": sigma * 1e3,
         "ratio": sigma / noise,
         "chi2": statistic,
@@ -285,15 +298,18 @@ def nominal_expected(model: RobotModel, sensitivity: np.ndarray, draws: int = 20
     return float(np.linalg.norm(field_.reshape(-1, 3, draws), axis=1).mean())
 
 
-def _prediction(nominal: RobotModel, built: CalibrationProblem, noise: float) -> tuple[Finding, dict]:
-    """Will the calibration beat nominal? Judged two ways, either suffices:
+def _prediction(nominal: RobotModel, built: CalibrationProblem, noise: float, shown: float) -> tuple[Finding, dict]:
+    """Will the calibration beat nominal? Over the workspace (``count`` random configurations within the
+    joint limits, after registration): the predicted mean error against the error the nominal model is
+    expected to have there, taken from the data where it can be:
 
-    * on the data given (preferred: a figure the user can check with ``validate``): the predicted
-      spread per training socket of the calibrated model's own error (no noise), against the nominal
-      model's measured spread there (its residual before calibration) less the noise floor
-      (the spread the noise alone gives, in quadrature);
-    * over the workspace (``count`` random configurations within the joint limits, after registration):
-      the predicted mean error against a nominal model off by the prior spread (1 mm, 0.2 deg).
+    * the prior spread (1 mm, 0.2 deg) gives the nominal's expected error over the workspace, and its
+      expected spread on the training sockets' configurations;
+    * the nominal's MEASURED spread there (its residual before calibration, less the noise floor in
+      quadrature) against that expected spread scales the workspace figure down (never up): an arm whose
+      nominal model is already good (an iiwa at 0.8 mm) is judged against its own error, not the generic 5 mm.
+
+    Beside it, for a user to check with ``validate``: the predicted spread per training socket.
     """
     count = 500
     workspace = Workspace.of(nominal, count=count)
@@ -301,33 +317,51 @@ def _prediction(nominal: RobotModel, built: CalibrationProblem, noise: float) ->
     rng = np.random.default_rng(0)
     field_ = workspace.sensitivity @ root @ rng.standard_normal((root.shape[1], 100))
     predicted_mean = float(np.linalg.norm(field_.reshape(-1, 3, 100), axis=1).mean())
-    reference = nominal_expected(nominal, workspace.sensitivity)
+    prior_reference = nominal_expected(nominal, workspace.sensitivity)
     dataset = built.dataset
     sockets = [dataset.for_fixture(name) for name in dataset.fixture_names]
     measured = [float(np.linalg.norm(p - p.mean(axis=0), axis=1).mean()) for p in
                 (tool_point(nominal, q) for q in sockets if len(q) > 1)]
     nominal_spread = float(np.mean(measured)) if measured else float("nan")
-    model_part = float(np.nanmean(socket_spreads(nominal, root, sockets, 0.0, 50)))
-    floor = float(np.nanmean(socket_spreads(nominal, np.zeros((nominal.n_params, 1)), sockets, noise, 50)))
     with_noise = float(np.nanmean(socket_spreads(nominal, root, sockets, noise, 50)))
+    model_part = float(np.nanmean(socket_spreads(nominal, root, sockets, 0.0, 50)))
+    # the noise in the nominal's measured spread is the sockets' real noise, as the residuals show it
+    floor = float(np.nanmean(socket_spreads(nominal, np.zeros((nominal.n_params, 1)), sockets, shown, 50)))
+    spread = nominal.layout.spread().copy()
+    spread[nominal.layout.base] = 0.0
+    prior_spread = float(np.nanmean(socket_spreads(nominal, np.diag(spread), sockets, 0.0, 50)))
     excess = float(np.sqrt(max(nominal_spread**2 - floor**2, 0.0))) if measured else float("nan")
+    from_data = bool(measured) and prior_spread > 0.0
+    # only ever stricter: a few sockets measure the nominal's own error loosely (an arm drawn from the prior
+    # itself, 1 s of self-motion at three sockets, measured 2.4x the prior's figure), and a looser bar would let
+    # through calibrations that extrapolate poorly; a nominal model better than the generic prior is judged
+    # against its own, smaller error
+    scale = min(excess / prior_spread, 1.0) if from_data else 1.0
+    reference = scale * prior_reference
     figures = {
         "predicted_mean_mm": predicted_mean * 1e3,
         "noise_used_mm": noise * 1e3,
         "nominal_expected_mean_mm": reference * 1e3,
+        "nominal_expected_prior_mm": prior_reference * 1e3,
+        "nominal_scale_from_data": scale,
         "workspace": f"{count} random configurations within the joint limits, after registration",
         "predicted_spread_mm": with_noise * 1e3,
         "predicted_spread_model_mm": model_part * 1e3,
         "noise_floor_spread_mm": floor * 1e3,
         "nominal_spread_measured_mm": nominal_spread * 1e3,
+        "nominal_spread_prior_mm": prior_spread * 1e3,
     }
+    basis = (
+        f"its measured residual on these samples, {nominal_spread * 1e3:.3g} mm spread per socket "
+        f"({excess * 1e3:.3g} mm beyond the noise), {excess / prior_spread:.2g}x what the prior spread (1 mm, 0.2 deg) "
+        "gives there; the bar is never raised above the prior's figure"
+        if from_data else "from the prior spread (1 mm, 0.2 deg)"
+    )
     text = (
-        f"on the training sockets: predicted spread {with_noise * 1e3:.3g} mm per socket at {noise * 1e3:.3g} mm "
-        f"noise (the model's part {model_part * 1e3:.3g} mm, the noise alone {floor * 1e3:.3g} mm), against "
-        f"{nominal_spread * 1e3:.3g} mm measured of the nominal model there (its residual before calibration); "
-        f"over {count} random configurations within the joint limits: predicted mean error "
-        f"{predicted_mean * 1e3:.3g} mm after registration, against {reference * 1e3:.3g} mm expected of a nominal "
-        f"model off by the prior spread (1 mm, 0.2 deg)"
+        f"predicted mean error {predicted_mean * 1e3:.3g} mm at {noise * 1e3:.3g} mm noise over {count} random "
+        f"configurations within the joint limits (after registration), against {reference * 1e3:.3g} mm expected of "
+        f"the nominal model there ({basis}); on the training sockets: predicted spread {with_noise * 1e3:.3g} mm per "
+        f"socket (the model's part {model_part * 1e3:.3g} mm)"
     )
     covariance = root @ root.T
     kept = np.flatnonzero(np.diag(covariance) > 0.0)
@@ -336,8 +370,7 @@ def _prediction(nominal: RobotModel, built: CalibrationProblem, noise: float) ->
         "parameters": [nominal.param_names[i] for i in kept],
         "covariance": [[float(f"{v:.6g}") for v in row] for row in covariance[np.ix_(kept, kept)]],
     }
-    on_data = measured and model_part < BEAT * excess
-    if on_data or predicted_mean < BEAT * reference:
+    if predicted_mean < BEAT * reference:
         return Finding("prediction", True, text, figures), record
     return Finding(
         "prediction",

@@ -74,7 +74,8 @@ class SelfCheck:
             return self.culprit.message
         figures = [f for f in failed if f.check in ("residual level", "prediction")]
         if figures:
-            return figures[0].message
+            trends = [f.message.split(": ", 1)[-1] for f in self.findings if f.figures.get("trend")]
+            return "; ".join([figures[0].message, *trends])
         worst = max(failed, key=lambda f: f.figures.get("statistic", 0.0) - f.figures.get("dof", 0))
         others = len(failed) - 1
         trend = next((f for f in self.findings if f.figures.get("trend") and worst.check.endswith(
