@@ -229,7 +229,7 @@ def error_field(
 
 def socket_spreads(
     model: RobotModel, root: np.ndarray, sockets: list[np.ndarray], noise: float, draws: int = DRAWS,
-    rng: np.random.Generator | None = None,
+    rng: np.random.Generator | None = None, gains: list[np.ndarray] | None = None,
 ) -> np.ndarray:
     """Predicted spread of each socket: the mean distance of a calibrated model's tool points from their
     mean (MUKCa's MAE, :mod:`spherecal.validation.sockets`), for the configurations recorded there.
@@ -244,6 +244,7 @@ def socket_spreads(
         noise: std per axis of where the ball sits in its socket [m] (0: the model's part alone).
         draws: Monte Carlo draws.
         rng: seeds the draws (default seed 0).
+        gains: per socket, (K, 3, P) ``param_jacobian(model, q)`` if already computed.
 
     Returns:
         (S,) predicted mean spread of each socket [m] (NaN for a socket with fewer than 2 samples).
@@ -253,8 +254,8 @@ def socket_spreads(
     for s, q in enumerate(sockets):
         if len(q) < 2:
             continue
-        gains = param_jacobian(model, q)  # (K, 3, P)
-        error = np.einsum("kip,pd->kid", gains, root @ rng.standard_normal((root.shape[1], draws)))
+        jac = param_jacobian(model, q) if gains is None else gains[s]  # (K, 3, P)
+        error = np.einsum("kip,pd->kid", jac, root @ rng.standard_normal((root.shape[1], draws)))
         error += noise * rng.standard_normal(error.shape)
         error -= error.mean(axis=0)
         out[s] = float(np.linalg.norm(error, axis=1).mean())

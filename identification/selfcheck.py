@@ -34,7 +34,7 @@ from dataclasses import replace
 
 import numpy as np
 
-from spherecal.correction import RobotModel, tool_point
+from spherecal.correction import RobotModel, param_jacobian, tool_point
 
 from .consistency import augmented, group_finding, log10_chi2_sf, name_culprit
 from .leave_out import leave_out
@@ -323,13 +323,17 @@ def _prediction(nominal: RobotModel, built: CalibrationProblem, noise: float, sh
     measured = [float(np.linalg.norm(p - p.mean(axis=0), axis=1).mean()) for p in
                 (tool_point(nominal, q) for q in sockets if len(q) > 1)]
     nominal_spread = float(np.mean(measured)) if measured else float("nan")
-    with_noise = float(np.nanmean(socket_spreads(nominal, root, sockets, noise, 50)))
-    model_part = float(np.nanmean(socket_spreads(nominal, root, sockets, 0.0, 50)))
+    gains = [param_jacobian(nominal, q) for q in sockets]
+
+    def spreads(deviation: np.ndarray, socket_noise: float) -> float:
+        return float(np.nanmean(socket_spreads(nominal, deviation, sockets, socket_noise, 50, gains=gains)))
+
+    with_noise, model_part = spreads(root, noise), spreads(root, 0.0)
     # the noise in the nominal's measured spread is the sockets' real noise, as the residuals show it
-    floor = float(np.nanmean(socket_spreads(nominal, np.zeros((nominal.n_params, 1)), sockets, shown, 50)))
+    floor = spreads(np.zeros((nominal.n_params, 1)), shown)
     spread = nominal.layout.spread().copy()
     spread[nominal.layout.base] = 0.0
-    prior_spread = float(np.nanmean(socket_spreads(nominal, np.diag(spread), sockets, 0.0, 50)))
+    prior_spread = spreads(np.diag(spread), 0.0)
     excess = float(np.sqrt(max(nominal_spread**2 - floor**2, 0.0))) if measured else float("nan")
     from_data = bool(measured) and prior_spread > 0.0
     # only ever stricter: a few sockets measure the nominal's own error loosely (an arm drawn from the prior
