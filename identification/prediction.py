@@ -152,6 +152,118 @@ def _anchor_spread(problem: CalibrationProblem) -> float:
     return anchor_spread(problem.model, problem.dataset.for_fixture(name), point)
 
 
+def deviation_root(
+    model: RobotModel, problem: CalibrationProblem, noise: float, sample_weight: float = 1.0
+) -> tuple[np.ndarray, CalibrationProblem, np.ndarray, np.ndarray]:
+    """The calibrated parameters' error ``dp = R z``, ``z ~ N(0, I)`` (see the module docstring).
+
+    Args:
+        model: the nominal robot (prior spreads of the parameters left at nominal).
+        problem: ``build_problem(model, dataset, spec)``.
+        noise: fixture noise std per coordinate [m].
+        sample_weight: each sample stands for this many recorded ones.
+
+    Returns:
+        ``(R, pruned, x, std)``: (P, k) root of the error covariance of every parameter of ``model``
+        (zero rows for the gauge), the pruned problem and its linearisation point, (F,) predicted std
+        of its identified parameters.
+    """
+    dataset = problem.dataset
+    sigma = max(noise, SIGMA_FLOOR)
+    lin, x_lin = problem.generic_point()
+    pruned, x = prune(lin, x_lin, sigma / np.sqrt(sample_weight))
+    rows = np.ones((pruned.n_residuals, 1))
+    rows[: 3 * dataset.n_samples] = np.sqrt(sample_weight)
+    jac = pruned.jacobian(x) * rows
+    fp = pruned.n_free_params
+    inverse = normal_inverse(jac)
+    cov = noise**2 * inverse[:fp, :fp]
+    free = pruned.free
+    std = np.sqrt(np.diag(cov))
+    values, vectors = np.linalg.eigh(cov)
+    columns = [np.zeros((model.n_params, fp))]
+    columns[0][free] = vectors * np.sqrt(np.clip(values, 0.0, None))
+    # biases, one column per standard-normal source
+    dropped = np.setdiff1d(lin.free, free)
+    if dropped.size:  # barely excited parameters left at nominal: the fit absorbs what it can
+        cols = [int(np.flatnonzero(lin.free == i)[0]) for i in dropped]
+        spread = prior_std(model)[dropped]
+        bias = np.zeros((model.n_params, dropped.size))
+        moved = np.zeros((pruned.n_residuals, len(cols)))  # their data columns in the pruned problem's rows
+        moved[~pruned.prior_rows()] = lin.jacobian(x_lin)[~lin.prior_rows()][:, cols]
+        bias[free] = (-inverse @ (jac.T @ (moved * rows * spread)))[:fp]
+        bias[dropped, np.arange(dropped.size)] = spread
+        columns.append(bias)
+    if pruned.anchor is not None:  # the scale anchor's radius is the nominal model's, not measured
+        kick = np.zeros((pruned.n_residuals, 1))
+        kick[-1] = pruned.distance_weight * _anchor_spread(pruned)
+        bias = np.zeros((model.n_params, 1))
+        bias[free] = (inverse @ (jac.T @ kick))[:fp]
+        columns.append(bias)
+    return np.hstack(columns), pruned, x, std
+
+
+def error_field(
+    model: RobotModel,
+    problem: CalibrationProblem,
+    noise: float,
+    gains: np.ndarray,
+    sample_weight: float = 1.0,
+    draws: int = DRAWS,
+    rng: np.random.Generator | None = None,
+) -> tuple[np.ndarray, CalibrationProblem, np.ndarray, np.ndarray]:
+    """Sampled tool-point errors of the calibration of ``problem``'s data: ``gains @ R @ z``.
+
+    Args:
+        model, problem, noise, sample_weight: see :func:`deviation_root`.
+        gains: (3 N, P) ``d p / d params`` at the configurations where the error is wanted, with what
+            the comparison removes projected out (rigid motions for :class:`Workspace`).
+        draws: Monte Carlo draws.
+        rng: seeds the draws (default seed 0).
+
+    Returns:
+        ``(field, pruned, x, std)``: (3 N, draws) error vectors [m], then as :func:`deviation_root`.
+    """
+    rng = np.random.default_rng(0) if rng is None else rng
+    root, pruned, x, std = deviation_root(model, problem, noise, sample_weight)
+    return gains @ root @ rng.standard_normal((root.shape[1], draws)), pruned, x, std
+
+
+def socket_spreads(
+    model: RobotModel, root: np.ndarray, sockets: list[np.ndarray], noise: float, draws: int = DRAWS,
+    rng: np.random.Generator | None = None, gains: list[np.ndarray] | None = None,
+) -> np.ndarray:
+    """Predicted spread of each socket: the mean distance of a calibrated model's tool points from their
+    mean (MUKCa's MAE, :mod:`spherecal.validation.sockets`), for the configurations recorded there.
+
+    The calibrated model's error ``G(q) R z`` (``R`` from :func:`deviation_root`) plus the socket's noise
+    ``n ~ N(0, noise^2)`` per axis and sample, less their mean over the socket; averaged over draws.
+
+    Args:
+        model: the model whose parameter Jacobian is used (nominal or calibrated: the same to first order).
+        root: (P, k) from :func:`deviation_root` (or as recorded in a calibrated file).
+        sockets: per socket, (K, n) joint angles [rad].
+        noise: std per axis of where the ball sits in its socket [m] (0: the model's part alone).
+        draws: Monte Carlo draws.
+        rng: seeds the draws (default seed 0).
+        gains: per socket, (K, 3, P) ``param_jacobian(model, q)`` if already computed.
+
+    Returns:
+        (S,) predicted mean spread of each socket [m] (NaN for a socket with fewer than 2 samples).
+    """
+    rng = np.random.default_rng(0) if rng is None else rng
+    out = np.full(len(sockets), np.nan)
+    for s, q in enumerate(sockets):
+        if len(q) < 2:
+            continue
+        jac = param_jacobian(model, q) if gains is None else gains[s]  # (K, 3, P)
+        error = np.einsum("kip,pd->kid", jac, root @ rng.standard_normal((root.shape[1], draws)))
+        error += noise * rng.standard_normal(error.shape)
+        error -= error.mean(axis=0)
+        out[s] = float(np.linalg.norm(error, axis=1).mean())
+    return out
+
+
 def predict_accuracy(
     model: RobotModel,
     dataset: Dataset,
@@ -185,40 +297,8 @@ def predict_accuracy(
     rng = np.random.default_rng(0) if rng is None else rng
     workspace = Workspace.of(model) if workspace is None else workspace
     problem = build_problem(model, dataset, spec, noise=max(noise, SIGMA_FLOOR)) if problem is None else problem
-    sigma = max(noise, SIGMA_FLOOR)
-    lin, x_lin = problem.generic_point()
-    pruned, x = prune(lin, x_lin, sigma / np.sqrt(sample_weight))
-    rows = np.ones((pruned.n_residuals, 1))
-    rows[: 3 * dataset.n_samples] = np.sqrt(sample_weight)
-    jac = pruned.jacobian(x) * rows
-    fp = pruned.n_free_params
-    inverse = normal_inverse(jac)
-    cov = noise**2 * inverse[:fp, :fp]
+    field, pruned, x, std = error_field(model, problem, noise, workspace.sensitivity, sample_weight, draws, rng)
     free = pruned.free
-    std = np.sqrt(np.diag(cov))
-    gains = workspace.sensitivity
-    values, vectors = np.linalg.eigh(cov)
-    root = vectors * np.sqrt(np.clip(values, 0.0, None))
-    field = gains[:, free] @ root @ rng.standard_normal((fp, draws))
-    # biases, one column per standard-normal source: (shift of the unknowns, direct tool-point effect)
-    shifts, direct = [], []
-    dropped = np.setdiff1d(lin.free, free)
-    if dropped.size:  # barely excited parameters left at nominal: the fit absorbs what it can
-        cols = [int(np.flatnonzero(lin.free == i)[0]) for i in dropped]
-        spread = prior_std(model)[dropped]
-        moved = np.zeros((pruned.n_residuals, len(cols)))  # their data columns in the pruned problem's rows
-        moved[~pruned.prior_rows()] = lin.jacobian(x_lin)[~lin.prior_rows()][:, cols]
-        shifts.append(-inverse @ (jac.T @ (moved * rows * spread)))
-        direct.append(gains[:, dropped] * spread)
-    if pruned.anchor is not None:  # the scale anchor's radius is the nominal model's, not measured
-        kick = np.zeros((pruned.n_residuals, 1))
-        kick[-1] = pruned.distance_weight * _anchor_spread(pruned)
-        shifts.append(inverse @ (jac.T @ kick))
-        direct.append(np.zeros((gains.shape[0], 1)))
-    if shifts:
-        shift, effect = np.hstack(shifts), np.hstack(direct)
-        bias = gains[:, free] @ shift[:fp] + effect
-        field += bias @ rng.standard_normal((bias.shape[1], draws))
     errors = np.linalg.norm(field.reshape(-1, 3, draws), axis=1)
     prior = prior_std(model)[free]
     names = pruned.identified

@@ -40,11 +40,15 @@ class SelfCheck:
         findings: all checks, in the order they ran.
         noise: declared noise per coordinate [m].
         sigma: residual std per coordinate of the fit [m].
+        prediction: the parameters' predicted error covariance at the noise judged with
+            (``noise_m``, ``parameters``, ``covariance`` [m, rad squared]): what ``validate`` predicts
+            held-out sockets' spreads with (:func:`.prediction.socket_spreads`).
     """
 
     findings: tuple[Finding, ...]
     noise: float
     sigma: float
+    prediction: dict = field(default_factory=dict)
 
     @property
     def failed(self) -> tuple[Finding, ...]:
@@ -70,15 +74,28 @@ class SelfCheck:
             return self.culprit.message
         figures = [f for f in failed if f.check in ("residual level", "prediction")]
         if figures:
-            return figures[0].message
+            trends = [f.message.split(": ", 1)[-1] for f in self.findings if f.figures.get("trend")]
+            return "; ".join([figures[0].message, *trends])
         worst = max(failed, key=lambda f: f.figures.get("statistic", 0.0) - f.figures.get("dof", 0))
         others = len(failed) - 1
-        return f"{worst.message}; {others} other check(s) failed too and no single one explains the data"
+        trend = next((f for f in self.findings if f.figures.get("trend") and worst.check.endswith(
+            " " + f.check.removeprefix("trend "))), None)
+        text = worst.message + (f"; {trend.message.split(': ', 1)[-1]}" if trend is not None else "")
+        if not others:
+            return text
+        return f"{text}; {others} other check(s) failed too and no single one explains the data"
 
     def raise_if_inconsistent(self) -> None:
         """Raises :class:`InconsistentDataError` with :attr:`refusal` unless consistent."""
         if not self.consistent:
             raise InconsistentDataError(self.refusal)
+
+    @property
+    def warnings(self) -> tuple[str, ...]:
+        """Passed checks the user must still know of: a fixture whose residual trends with recording
+        order, residuals above the declared noise judged at the noise they show."""
+        return tuple(f.message for f in self.findings
+                     if f.figures.get("trend") or f.figures.get("honest_noise_warning"))
 
     def block(self) -> dict:
         """Plain data for the ``calibration:`` block of the written file."""
@@ -87,7 +104,9 @@ class SelfCheck:
             "noise_declared_mm": self.noise * 1e3,
             "residual_std_mm": self.sigma * 1e3,
             "failed": [f.message for f in self.failed],
+            "warnings": list(self.warnings),
             "checks": {f.check: {"passed": f.passed, **f.figures} for f in self.findings},
+            **({"prediction": self.prediction} if self.prediction else {}),
         }
 
     def lines(self) -> list[str]:
@@ -95,6 +114,7 @@ class SelfCheck:
         head = "consistent" if self.consistent else f"INCONSISTENT ({len(self.failed)} failed)"
         lines = [f"self-check: {head}"]
         lines += [f"  {f.message}" for f in self.findings if f.check in ("residual level", "prediction") and f.passed]
+        lines += [f"  {f.message}" for f in self.findings if f.figures.get("trend")]
         worst = _worst_group(self.findings)
         if worst is not None:
             figures = worst.figures

@@ -32,6 +32,7 @@ from spherecal.correction.files.samples_csv import read_samples
 from .calibrate import MAX_CHANGE, CalibrationResult, calibrate
 from .problem import NOISE, PRIOR
 from .selection import ModelSelection, select_model, start_for
+from .training import exclude_fixtures, training_record
 
 
 @dataclass(frozen=True)
@@ -50,6 +51,7 @@ class WorkflowOptions:
         force: write even when the self-check finds the data inconsistent.
         seed: seeds subsampling, cross-validation and PSO.
         prior: weight ``W`` of the prior toward the nominal model (:mod:`.problem`), 0 = plain least squares.
+        exclude_fixtures: fixtures left out (their samples and every known distance naming them).
     """
 
     method: str = "lm"
@@ -62,6 +64,7 @@ class WorkflowOptions:
     force: bool = False
     seed: int = 0
     prior: float = PRIOR
+    exclude_fixtures: tuple[str, ...] = ()
 
     def record(self) -> dict:
         """The ``options`` entry of the result file (metres, radians; the seed is recorded beside it)."""
@@ -75,6 +78,7 @@ class WorkflowOptions:
             "model": self.model,
             "force": self.force,
             "prior": self.prior,
+            "exclude_fixture": list(self.exclude_fixtures),
         }
 
 
@@ -127,6 +131,8 @@ def run_workflow(nominal: RobotModel, dataset: Dataset, spec: FixtureSpec | None
     Raises:
         SpherecalError: the data cannot support the calibration (see :func:`.calibrate.calibrate`).
     """
+    dataset, spec = exclude_fixtures(dataset, spec, options.exclude_fixtures)
+    as_read = dataset
     read = dataset.n_samples
     if options.dedup_tol is not None:
         dataset = dataset.deduplicated(options.dedup_tol)
@@ -154,6 +160,7 @@ def run_workflow(nominal: RobotModel, dataset: Dataset, spec: FixtureSpec | None
     if selection.seconds:
         block["timings_s"]["model_selection"] = selection.seconds
     block["duplicates_dropped"] = dropped
+    block["trained_on"] = training_record(as_read, dataset)  # validate recognises these samples by content
     block["options"] = options.record()
     block["provenance"] = provenance(options.seed, {**(inputs or {}), **options.record()})
     extras = {k: v for k, v in result.model.extras.items() if k != "calibration"}  # compliance, scale

@@ -73,15 +73,25 @@ def main(argv: list[str] | None = None) -> int:
     from spherecal.correction.errors import SpherecalError  # numpy: not at --help (start-up)
     from spherecal.options import OptionError
 
+    held: list[str] = []  # warnings wait for the outcome: a refusal stays ONE line (it mentions them)
+
     def one_line_warning(message, category, filename, lineno, file=None, line=None) -> None:
-        print(f"spherecal {args.command}: warning: {_one_line(str(message))}", file=sys.stderr)
+        held.append(_one_line(str(message)))
+
+    def flush() -> None:
+        for text in held:
+            print(f"spherecal {args.command}: warning: {text}", file=sys.stderr)
 
     try:
         with warnings.catch_warnings(), thread_cap():
             warnings.showwarning = one_line_warning  # a warning for the user, not a source location
-            return int(args._run(args) or 0)
+            status = int(args._run(args) or 0)
+        flush()
+        return status
     except (SpherecalError, OptionError) as error:
-        print(f"spherecal {args.command}: error: {_one_line(str(error))}", file=sys.stderr)
+        also = f" (after {len(held)} warning{'s' * (len(held) > 1)}: {held[0]}{'; ...' if len(held) > 1 else ''})" \
+            if held else ""
+        print(f"spherecal {args.command}: error: {_one_line(str(error))}{also}", file=sys.stderr)
         return 1
     except OSError as error:  # a file that cannot be read or written: one line, not a traceback
         where = f"{error.filename}: " if error.filename else ""

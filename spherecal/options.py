@@ -121,6 +121,10 @@ def at_most(limit: float, unit: str, allow_zero: bool = False):
         value = non_negative(text) if allow_zero else positive(text)
         if value > limit:
             raise argparse.ArgumentTypeError(f"expected at most {limit:g} {unit}, got {text!r}")
+        if 0 < value < limit * 1e-12:  # subnormal-sized: converting it (deg to rad, 1/x) over- or underflows
+            raise argparse.ArgumentTypeError(
+                f"expected 0{' or' if allow_zero else ' <'} at least {limit * 1e-12:g} {unit}, got {text!r}"
+            )
         return value
 
     return parse

@@ -290,11 +290,15 @@ def check_mocap(measurement: MocapMeasurement, model: RobotModel, limit_tol: flo
         raise MocapError(f"{source}: {row(k)}: field q{i + 1}: {m.q[k, i]:.6g} rad outside the joint limits "
                          f"[{model.lower[i]:.6g}, {model.upper[i]:.6g}] of {model.name}")
     reach = float(np.sum(np.hypot(model.a, model.d)) + np.linalg.norm(model.tool))
-    offset = np.linalg.norm(m.tool - m.tool.mean(axis=0), axis=1)
+    # the largest coordinate difference from the median point: no sum or square, so a 1e308 value cannot
+    # overflow to "inf m"
+    difference = np.abs(m.tool - np.median(m.tool, axis=0))
+    offset = difference.max(axis=1)
     if offset.max() > 2 * reach:  # every tool point lies within `reach` of the base: any two within 2 reach
         k = int(np.argmax(offset))
+        axis = "xyz"[int(np.argmax(difference[k]))]
         raise MocapError(
-            f"{source}: {row(k)}: field x: tool point {offset[k]:.4g} m from the recording's centre, but "
+            f"{source}: {row(k)}: field {axis}: tool point {offset[k]:.4g} m from the recording's centre, but "
             f"{model.name} reaches at most {reach:.3g} m (the file is in metres: millimetres?)"
         )
     distinct = np.unique(m.q, axis=0).shape[0]

@@ -6,8 +6,13 @@ points from their mean (MUKCa's "MAE"; their "test MAE" on placements not used f
 known distance, the *distance error* is the distance between the two fixtures' mean points minus the
 known one. Both are computed for every model (nominal, calibrated) on the same samples.
 
-Fixtures named in the calibrated file's ``calibration.samples_per_fixture`` were used in the fit: they
-are marked, and the held-out summary leaves them out.
+A fixture whose samples the calibrated file says it was trained on (``calibration.trained_on``: digests
+of the joint angles, :mod:`spherecal.identification.training`) was used in the fit, whatever it is
+called: it is marked, and the held-out summary leaves it out. A spread from fewer than
+:data:`MIN_DISTINCT` distinct configurations is not measurable (None, printed as such), not zero.
+Beside each held-out socket's measured spread, the spread the calibration predicts there
+(:func:`spherecal.identification.prediction.socket_spreads`, from the parameter covariance the file
+records, at the noise its self-check judged with).
 """
 
 from __future__ import annotations
@@ -18,7 +23,14 @@ import numpy as np
 
 from spherecal.correction import RobotModel, tool_point
 from spherecal.correction.files.fixtures import FixtureSpec
-from spherecal.correction.files.samples import Dataset
+from spherecal.correction.files.robot_file import forced_calibration
+from spherecal.correction.files.samples import Dataset, configurations_digest
+from spherecal.identification.prediction import socket_spreads
+from spherecal.identification.training import trained_digests
+
+#: Fewest distinct configurations (1e-9 rad apart) a spread is measured from: with one the spread is 0
+#: whatever the model, with two it is half their distance.
+MIN_DISTINCT = 3
 
 
 @dataclass(frozen=True)
@@ -29,16 +41,25 @@ class FixtureSpread:
         name: fixture.
         count: samples.
         held_out: False when the fixture was used to calibrate.
-        mean, max: model -> mean and largest distance from the mean point [m].
+        mean, max: model -> mean and largest distance from the mean point [m] (None: not measurable).
         centre: model -> (3,) mean predicted tool point [m].
+        distinct: distinct configurations among the samples.
+        predicted: the calibrated model's predicted mean spread [m] (None: the file records no prediction).
     """
 
     name: str
     count: int
     held_out: bool
-    mean: dict[str, float]
-    max: dict[str, float]
+    mean: dict[str, float | None]
+    max: dict[str, float | None]
     centre: dict[str, np.ndarray]
+    distinct: int = 0
+    predicted: float | None = None
+
+    @property
+    def measurable(self) -> bool:
+        """At least :data:`MIN_DISTINCT` distinct configurations."""
+        return self.distinct >= MIN_DISTINCT
 
 
 @dataclass(frozen=True)
@@ -77,20 +98,32 @@ class SocketReport:
 
         None, not NaN: the report is JSON, and NaN is not JSON (``null`` is).
         """
-        spread = [f.mean[model] for f in self.fixtures if f.held_out]
+        spread = [f.mean[model] for f in self.fixtures if f.held_out and f.measurable]
         errors = [abs(d.error(model)) for d in self.distances if d.held_out]
         return (float(np.mean(spread)) if spread else None, float(np.mean(errors)) if errors else None)
+
+    def predicted_summary(self) -> float | None:
+        """Mean predicted spread of the measurable held-out sockets [m] (None without predictions)."""
+        values = [f.predicted for f in self.fixtures if f.held_out and f.measurable and f.predicted is not None]
+        return float(np.mean(values)) if values else None
 
     def format(self) -> str:
         """The printed tables (mm)."""
         head = " ".join(f"{m + ' mean':>16} {m + ' max':>15}" for m in self.models)
+        predicted = any(f.predicted is not None for f in self.fixtures)
         lines = [
             f"tool-point spread per socket [mm] (no mocap: distance of each predicted point from the fixture's mean), "
             f"{self.source}",
-            f"{'fixture':<22} {'samples':>7} {head}",
+            f"{'fixture':<22} {'samples':>7} {head}" + (f" {'predicted mean':>15}" if predicted else ""),
         ]
         for f in self.fixtures:
-            cells = " ".join(f"{f.mean[m] * 1e3:16.3f} {f.max[m] * 1e3:15.3f}" for m in self.models)
+            if f.measurable:
+                cells = " ".join(f"{f.mean[m] * 1e3:16.3f} {f.max[m] * 1e3:15.3f}" for m in self.models)
+            else:
+                cells = f"not measurable: {f.distinct} distinct configuration{'s' * (f.distinct != 1)} " \
+                        f"(at least {MIN_DISTINCT} needed)"
+            if predicted and f.measurable:
+                cells += f" {f.predicted * 1e3:15.3f}" if f.held_out and f.predicted is not None else f" {'-':>15}"
             lines.append(f"{f.name + ('' if f.held_out else ' (fit)'):<22} {f.count:>7} {cells}")
         if self.distances:
             head = " ".join(f"{m + ' error':>16}" for m in self.models)
@@ -103,15 +136,20 @@ class SocketReport:
                 cells = " ".join(f"{d.error(m) * 1e3:16.3f}" for m in self.models)
                 name = f"{d.a} - {d.b}" + ("" if d.held_out else " (fit)")
                 lines.append(f"{name:<40} {d.known * 1e3:8.3f} {cells}")
-        held = sum(f.held_out for f in self.fixtures)
+        held = sum(f.held_out and f.measurable for f in self.fixtures)
         lines.append("")
         if held == 0:
-            lines.append("every fixture was used in the fit: this is no held-out check")
+            lines.append("no measurable held-out fixture (every fixture used in the fit, or too few distinct "
+                         "configurations): this is no held-out check")
         for m in self.models:
             spread, error = self.summary(m)
             text = "-" if error is None else f"{error * 1e3:.3f}"
             mae = f"{'-':>8}" if spread is None else f"{spread * 1e3:8.3f}"
             lines.append(f"held-out ({held} fixtures) {m:<11} test MAE {mae} mm   mean |distance error| {text} mm")
+        forecast = self.predicted_summary()
+        if forecast is not None:
+            lines.append(f"held-out ({held} fixtures) predicted   test MAE {forecast * 1e3:8.3f} mm (the calibration's "
+                         "own prediction for these configurations; measured within 0.5x-2x of it is as expected)")
         return "\n".join(lines)
 
     def to_dict(self) -> dict:
@@ -125,6 +163,8 @@ class SocketReport:
                     "held_out": f.held_out,
                     "spread_mean": f.mean,
                     "spread_max": f.max,
+                    "distinct_configurations": f.distinct,
+                    "spread_predicted": f.predicted,
                     "centre": {m: [float(v) for v in c] for m, c in f.centre.items()},
                 }
                 for f in self.fixtures
@@ -141,20 +181,56 @@ class SocketReport:
                 for d in self.distances
             ],
             "held_out": {
-                m: {"test_mae": self.summary(m)[0], "distance_error_mean_abs": self.summary(m)[1]} for m in self.models
+                **{m: {"test_mae": self.summary(m)[0], "distance_error_mean_abs": self.summary(m)[1]}
+                   for m in self.models},
+                "predicted_test_mae": self.predicted_summary(),
             },
         }
 
 
-def fitted_fixtures(model: RobotModel) -> set[str]:
-    """Fixtures a calibrated robot file says it was fitted on (empty if it does not say)."""
+def fitted_fixtures(model: RobotModel, dataset: Dataset | None = None) -> set[str]:
+    """Fixtures of ``dataset`` the calibrated file was trained on, recognised by content.
+
+    A fixture counts as trained on when the digest of its joint angles
+    (:func:`~spherecal.correction.files.samples.configurations_digest`) is one the file's
+    ``calibration.trained_on`` records, whatever the fixture is called. A file that records no digests
+    (written before them) falls back to the names of ``calibration.samples_per_fixture``.
+    """
     block = model.extras.get("calibration")
+    digests = trained_digests(block)
+    if digests is not None and dataset is not None:
+        return {name for name in dataset.fixture_names if configurations_digest(dataset.for_fixture(name)) in digests}
     used = block.get("samples_per_fixture") if isinstance(block, dict) else None
     return set(used) if isinstance(used, dict) else set()
 
 
+def recorded_prediction(model: RobotModel) -> tuple[np.ndarray, float] | None:
+    """``(R, noise)`` of the calibrated file's recorded parameter covariance (``R R^T``, over every
+    parameter of ``model``; at the larger of the declared and the residuals' noise) and the socket noise
+    the training residuals show [m] (std per axis); None when it records none."""
+    block = model.extras.get("calibration")
+    check = block.get("self_check") if isinstance(block, dict) else None
+    record = check.get("prediction") if isinstance(check, dict) else None
+    try:
+        names = list(record["parameters"])
+        covariance = np.asarray(record["covariance"], dtype=float).reshape(len(names), len(names))
+        noise = float(record.get("socket_noise_m", record["noise_m"]))
+        index = [model.param_names.index(n) for n in names]
+    except (TypeError, KeyError, ValueError):
+        return None
+    values, vectors = np.linalg.eigh((covariance + covariance.T) / 2)
+    root = np.zeros((model.n_params, len(names)))
+    root[index] = vectors * np.sqrt(np.clip(values, 0.0, None))
+    return root, noise
+
+
+def _distinct(q: np.ndarray) -> int:
+    return int(np.unique(np.round(q / 1e-9), axis=0).shape[0]) if len(q) else 0
+
+
 def socket_validation(
-    models: dict[str, RobotModel], dataset: Dataset, spec: FixtureSpec | None = None, fitted: set[str] = frozenset()
+    models: dict[str, RobotModel], dataset: Dataset, spec: FixtureSpec | None = None, fitted: set[str] = frozenset(),
+    prediction: tuple[np.ndarray, float] | None = None,
 ) -> SocketReport:
     """Spread per fixture and known-distance errors of each model on recorded socket samples.
 
@@ -163,26 +239,54 @@ def socket_validation(
         dataset: the samples (joint angles per fixture).
         spec: the fixtures' known distances, or None.
         fitted: fixtures used to calibrate (marked; left out of the held-out summary).
+        prediction: ``(R, noise)`` of :func:`recorded_prediction`: predicted spreads of held-out fixtures.
 
     Returns:
-        The report; fixtures with fewer than 2 samples have zero spread.
+        The report; fixtures with fewer than :data:`MIN_DISTINCT` distinct configurations have no spread.
     """
     fixtures = []
     for name in dataset.fixture_names:
         q = dataset.for_fixture(name)
+        distinct = _distinct(q)
         mean, largest, centre = {}, {}, {}
         for key, model in models.items():
             points = tool_point(model, q)
             centre[key] = points.mean(axis=0)
             distance = np.linalg.norm(points - centre[key], axis=1)
-            mean[key], largest[key] = float(distance.mean()), float(distance.max())
-        fixtures.append(FixtureSpread(name, int(q.shape[0]), name not in fitted, mean, largest, centre))
+            measurable = distinct >= MIN_DISTINCT
+            mean[key] = float(distance.mean()) if measurable else None
+            largest[key] = float(distance.max()) if measurable else None
+        predicted = None
+        if prediction is not None and name not in fitted and distinct >= MIN_DISTINCT:
+            root, noise = prediction
+            predicted = float(socket_spreads(models["calibrated"], root, [q], noise)[0])
+        fixtures.append(FixtureSpread(name, int(q.shape[0]), name not in fitted, mean, largest, centre, distinct,
+                                      predicted))
     by_name = {f.name: f for f in fixtures}
     distances = []
     for a, b, known in spec.distances if spec is not None else []:
         measured = {key: float(np.linalg.norm(by_name[a].centre[key] - by_name[b].centre[key])) for key in models}
         distances.append(DistanceCheck(a, b, known, a not in fitted and b not in fitted, measured))
     return SocketReport(tuple(models), fixtures, distances, dataset.source)
+
+
+def remarks(report: SocketReport, calibrated: RobotModel) -> list[str]:
+    """What a user must not miss, one line each: a calibration written with ``--force`` although its
+    self-check found the data inconsistent, and a calibrated model worse than nominal on these samples."""
+    forced = forced_calibration(calibrated)
+    out = [forced] if forced else []
+    held = any(f.held_out and f.measurable for f in report.fixtures)
+    chosen = [f for f in report.fixtures if f.measurable and (f.held_out or not held)]
+    if chosen:
+        nominal = float(np.mean([f.mean["nominal"] for f in chosen]))
+        calibrated_ = float(np.mean([f.mean["calibrated"] for f in chosen]))
+        if calibrated_ > nominal:
+            which = "held-out" if held else "(training)"
+            out.append(
+                f"the calibrated model is WORSE than nominal on these samples: {which} mean spread "
+                f"{calibrated_ * 1e3:.3f} mm against {nominal * 1e3:.3f} mm nominal ({len(chosen)} sockets)"
+            )
+    return out
 
 
 def record_sockets(recording, report: SocketReport, models: dict[str, RobotModel], dataset: Dataset) -> None:

@@ -199,3 +199,14 @@ def dump_robot(model: RobotModel, header: str = "") -> str:
 def save_robot(model: RobotModel, path: str | os.PathLike, header: str = "") -> Path:
     """Write a robot file atomically (temporary file, rename); floats round-trip exactly."""
     return atomic_write_text(path, dump_robot(model, header))
+
+
+def forced_calibration(model) -> str | None:
+    """One line when ``model`` is a calibration written with ``--force`` although its self-check found the
+    data inconsistent (``calibration.self_check.verdict: inconsistent``), naming the first failed check."""
+    block = model.extras.get("calibration")
+    check = block.get("self_check") if isinstance(block, dict) else None
+    if not isinstance(check, dict) or check.get("verdict") != "inconsistent":
+        return None
+    failed = check.get("failed") or ["(no reason recorded)"]
+    return f"the calibration was forced (--force): its self-check found the data INCONSISTENT: {failed[0]}"

@@ -7,7 +7,8 @@ naming the file, the row (1-based line number) and the field.
 
 from __future__ import annotations
 
-from dataclasses import dataclass, replace
+import warnings
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
@@ -20,8 +21,102 @@ DEDUP_TOL = 1e-4
 LIMIT_TOL = 1e-6
 
 
+#: An angle further than this beyond a joint limit [rad] (a quarter turn) cannot be an angle of that joint
+#: as the robot file describes it (another arm's file, degrees in a radians file, a wrapped encoder):
+#: refused. Closer, it is the arm's own range exceeding its file's, as real arms do (MUKCa's Gen3 lite
+#: recordings pass ``gen3lite.urdf``'s q6 limit of 2.09 rad by 0.65 rad): used, with one warning.
+HARD_MARGIN = float(np.pi / 2)
+
+
 class DatasetError(SpherecalError):
     """A samples or fixtures file that cannot be used; one line naming file, row and field."""
+
+
+def configurations_digest(q: np.ndarray) -> str:
+    """SHA-256 (hex) of a set of configurations: (K, n) joint angles [rad] as little-endian float64,
+    rows sorted (the file order and the fixture's name do not matter; every bit of every angle does).
+
+    A calibrated file records it per fixture trained on (``calibration.trained_on``), so that
+    ``validate`` recognises training samples by their content, whatever they are called.
+    """
+    import hashlib  # standard library; only digests need it
+
+    rows = np.ascontiguousarray(np.asarray(q, dtype="<f8"))
+    if rows.ndim != 2:
+        raise ValueError("q must be (K, n)")
+    order = np.lexsort(rows.T[::-1]) if len(rows) else np.arange(0)
+    return hashlib.sha256(rows[order].tobytes()).hexdigest()
+
+
+class JointLimitWarning(UserWarning):
+    """Recorded angles beyond the robot file's joint limits (within :data:`HARD_MARGIN`): used as recorded."""
+
+
+@dataclass
+class LimitExcess:
+    """How far recorded angles pass the joint limits, gathered over a file read in blocks.
+
+    Attributes:
+        model_name: the robot (for messages).
+        lower, upper: (n,) joint limits [rad].
+        names: (n,) joint names for messages (``q1..qn``).
+        tol: accepted without a word [rad].
+        worst: joint index -> (excess [rad], the angle [rad], where it was found).
+    """
+
+    model_name: str
+    lower: np.ndarray
+    upper: np.ndarray
+    names: list[str]
+    tol: float = 1e-6
+    worst: dict[int, tuple[float, float, str]] = field(default_factory=dict)
+
+    @staticmethod
+    def of(model, names: list[str] | None = None, tol: float = 1e-6) -> LimitExcess:
+        """For a :class:`~spherecal.correction.model.RobotModel` ``model``."""
+        names = list(names) if names else [f"q{i + 1}" for i in range(model.n_joints)]
+        return LimitExcess(model.name, np.asarray(model.lower), np.asarray(model.upper), names, tol)
+
+    def add(self, q: np.ndarray, where, error: type[Exception]) -> None:
+        """Check (K, n) angles; ``where(k)`` names row ``k`` ("file: row N").
+
+        Raises:
+            error: an angle more than :data:`HARD_MARGIN` beyond a limit of a joint whose range is less
+                than a turn (one line: row, field, angle, limits).
+        """
+        below, above = self.lower - q, q - self.upper
+        excess = np.maximum(below, above)
+        if not np.any(excess > self.tol):
+            return
+        bounded = (self.upper - self.lower) < 2 * np.pi - 1e-9
+        hard = (excess > HARD_MARGIN) & bounded
+        if hard.any():
+            k, i = np.argwhere(hard)[0]
+            raise error(
+                f"{where(k)}, field {self.names[i]!r}: {q[k, i]:.6g} rad is {excess[k, i]:.3g} rad outside the joint "
+                f"limits [{self.lower[i]:.6g}, {self.upper[i]:.6g}] of {self.model_name}, more than a quarter turn "
+                f"({HARD_MARGIN:.3g} rad): not an angle of this joint (another arm's file, or degrees?)"
+            )
+        for i in np.flatnonzero((excess > self.tol).any(axis=0)):
+            k = int(np.argmax(excess[:, i]))
+            if excess[k, i] > self.worst.get(int(i), (0.0,))[0]:
+                self.worst[int(i)] = (float(excess[k, i]), float(q[k, i]), where(k))
+
+    def warn(self, source: str) -> str | None:
+        """Issue ONE :class:`JointLimitWarning` naming every joint past its limits (None, nothing to say)."""
+        if not self.worst:
+            return None
+        parts = []
+        for i, (excess, angle, where) in sorted(self.worst.items()):
+            side = f"above {self.upper[i]:.4g}" if angle > self.upper[i] else f"below {self.lower[i]:.4g}"
+            place = where[len(source):].lstrip("/\\: ") if where.startswith(source) else where
+            parts.append(f"{self.names[i]} by up to {excess:.3g} rad ({np.rad2deg(excess):.3g} deg) {side} ({place})")
+        text = (
+            f"{source}: recorded angles beyond the joint limits of {self.model_name}, used as recorded: "
+            f"{'; '.join(parts)} (the arm's range is wider than its robot file says)"
+        )
+        warnings.warn(text, JointLimitWarning, stacklevel=3)
+        return text
 
 
 # --------------------------------------------------------------------------------------- dataset

@@ -20,7 +20,7 @@ import numpy as np
 
 from spherecal.correction.files.atomic import atomic_write_text
 from spherecal.correction.files.csv_rows import is_skipped, iter_lines, parse_line, plain_values
-from spherecal.correction.files.samples import LIMIT_TOL, Dataset, DatasetError
+from spherecal.correction.files.samples import LIMIT_TOL, Dataset, DatasetError, LimitExcess
 from spherecal.correction.files.text_input import finite_number
 from spherecal.correction.model import RobotModel
 
@@ -66,14 +66,16 @@ def read_samples(path: str | os.PathLike, model: RobotModel, limit_tol: float = 
     Args:
         path: the CSV file.
         model: the robot (number of joints, joint limits).
-        limit_tol: angles up to this far outside a joint limit are accepted [rad].
+        limit_tol: angles up to this far outside a joint limit are accepted without a word [rad]; further,
+            up to :data:`~spherecal.correction.files.samples.HARD_MARGIN`, with one
+            :class:`~spherecal.correction.files.samples.JointLimitWarning` listing every joint.
 
     Returns:
         The samples, in file order (no duplicates dropped: see :meth:`Dataset.deduplicated`).
 
     Raises:
         DatasetError: unreadable or empty file, bad header, wrong number of fields, a value that
-            is not a finite number, an empty fixture name, an angle outside its joint limits, an
+            is not a finite number, an empty fixture name, an angle that cannot be of its joint, an
             unterminated quote or an over-long field.
     """
     path = Path(path)
@@ -99,6 +101,7 @@ class _Reader:
 
     def __init__(self, path: Path, model: RobotModel, limit_tol: float):
         self.path, self.model, self.limit_tol = path, model, limit_tol
+        self.excess = LimitExcess.of(model, tol=limit_tol)
         self.columns: list[str] | None = None
         self.has_t = False
         self.labels: list[np.ndarray] = []
@@ -160,19 +163,13 @@ class _Reader:
         return labels, np.array(values, dtype=float).reshape(len(rows), len(columns) - 1), np.array(rows)
 
     def _check_limits(self, data: np.ndarray, rows: np.ndarray) -> None:
-        model, tol = self.model, self.limit_tol
         q = data[:, 1:] if self.has_t else data
-        inside = (q >= model.lower - tol) & (q <= model.upper + tol)
-        if not inside.all():
-            k, i = np.argwhere(~inside)[0]
-            raise DatasetError(
-                f"{self.path}: row {rows[k]}, field 'q{i + 1}': {q[k, i]:.6g} rad outside the joint limits "
-                f"[{model.lower[i]:.6g}, {model.upper[i]:.6g}]"
-            )
+        self.excess.add(q, lambda k: f"{self.path}: row {rows[k]}", DatasetError)
 
     def dataset(self) -> Dataset:
         if not self.values:
             raise DatasetError(f"{self.path}: row 2, field 'fixture': no samples after the header")
+        self.excess.warn(str(self.path))  # one warning for the whole file, every joint past its limits
         data = np.concatenate(self.values) if len(self.values) > 1 else self.values[0]
         self.values.clear()  # the chunks are not kept beside the whole (peak memory)
         q = np.ascontiguousarray(data[:, 1:]) if self.has_t else data

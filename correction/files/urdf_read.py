@@ -20,6 +20,12 @@ from .text_input import read_text
 
 MOVABLE = ("revolute", "continuous")
 KNOWN_TYPES = ("revolute", "continuous", "prismatic", "fixed", "floating", "planar")
+#: Most ``<link>`` (and so ``<joint>``) elements read: a robot arm has tens (a humanoid with hands about
+#: 100); counted before any traversal, so that a huge or generated file is refused at once.
+MAX_LINKS = 2000
+#: Most movable joints on the calibrated chain (a serial arm has 6-7; a 64-joint chain is no arm, and its
+#: calibration problem would be thousands of columns wide).
+MAX_CHAIN_JOINTS = 64
 
 
 @dataclass(frozen=True)
@@ -34,6 +40,7 @@ class UrdfJoint:
     axis: np.ndarray
     lower: float | None = None
     upper: float | None = None
+    mimic: str | None = None
 
 
 @dataclass(frozen=True)
@@ -65,7 +72,7 @@ class UrdfTree:
         link = tip
         while link != base:
             joint = self.joints.get(link)
-            if joint is None:
+            if joint is None or len(joints) > len(self.joints):  # bounded: a loop never ends at the base
                 return None
             joints.append(joint)
             link = joint.parent
@@ -152,8 +159,12 @@ def _joint(element: ET.Element, source: str) -> UrdfJoint:
         lower, upper = (_floats(limit.get(k, "0"), 1, [0.0], f"{where} <limit {k}>")[0] for k in ("lower", "upper"))
         if lower > upper:
             raise RobotFileError(f"{where}: <limit> lower ({lower}) > upper ({upper})")
+    mimic = element.find("mimic")
+    if mimic is not None and not mimic.get("joint"):
+        raise RobotFileError(f"{where}: <mimic> without a joint=...")
     return UrdfJoint(name, kind, _link_ref(element, "parent", where), _link_ref(element, "child", where),
-                     _origin(element.find("origin"), where), axis, lower, upper)
+                     _origin(element.find("origin"), where), axis, lower, upper,
+                     None if mimic is None else mimic.get("joint"))
 
 
 def _inertial(link: ET.Element, name: str, source: str) -> Inertial | None:
@@ -182,6 +193,10 @@ def parse_urdf(text: str, source: str = "<urdf>") -> UrdfTree:
         raise RobotFileError(f"{source}: invalid XML: {error}") from None
     if root.tag != "robot":
         raise RobotFileError(f"{source}: expected a <robot> root element, got <{root.tag}>")
+    for tag in ("link", "joint"):  # bounded work: counted before anything is built or walked
+        count = sum(1 for _ in root.iterfind(tag))
+        if count > MAX_LINKS:
+            raise RobotFileError(f"{source}: {count} <{tag}> elements, at most {MAX_LINKS} are read (not a robot arm)")
     links: list[str] = []
     inertials: dict[str, Inertial] = {}
     for element in root.findall("link"):
@@ -216,8 +231,17 @@ def parse_urdf(text: str, source: str = "<urdf>") -> UrdfTree:
             raise RobotFileError(f"{source}: every link has a parent: the joints form a loop")
         raise RobotFileError(f"{source}: several root links ({', '.join(map(repr, roots))}): not one tree")
     tree = UrdfTree(source, root.get("name", ""), tuple(links), joints, roots[0], inertials)
+    children: dict[str, list[str]] = {}
+    for joint in joints.values():
+        children.setdefault(joint.parent, []).append(joint.child)
+    reached, stack = {roots[0]}, [roots[0]]
+    while stack:  # one visit per link: linear, whatever the shape
+        for child in children.get(stack.pop(), []):
+            if child not in reached:
+                reached.add(child)
+                stack.append(child)
     for link in links:  # a cycle detached from the root
-        if tree.path(roots[0], link) is None:
+        if link not in reached:
             raise RobotFileError(f"{source}: link {link!r} is not connected to the root {roots[0]!r}: a loop")
     return tree
 
@@ -255,6 +279,19 @@ def chain(
                 f"{source}: joint {joint.name!r}: a {joint.type} joint between {base!r} and {tip!r} "
                 "(only revolute, continuous and fixed joints can be calibrated)"
             )
-    if not any(j.type in MOVABLE for j in joints):
+    movable = sum(j.type in MOVABLE for j in joints)
+    if not movable:
         raise RobotFileError(f"{source}: no revolute joint between {base!r} and {tip!r}")
+    if movable > MAX_CHAIN_JOINTS:
+        raise RobotFileError(
+            f"{source}: {movable} revolute joints between {base!r} and {tip!r}, at most {MAX_CHAIN_JOINTS} "
+            "(not a serial arm: choose --base-link and --tip-link)"
+        )
+    for joint in joints:
+        if joint.mimic is not None and joint.type in MOVABLE:
+            raise RobotFileError(
+                f"{source}: joint {joint.name!r}, field 'mimic': it follows joint {joint.mimic!r} between {base!r} "
+                f"and {tip!r}; a coupled joint cannot be calibrated as an independent one (choose --tip-link "
+                "before it, or describe the chain without the coupling)"
+            )
     return base, tip, joints

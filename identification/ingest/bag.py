@@ -1,7 +1,9 @@
 """ROS bags in: ``sensor_msgs/JointState`` messages of a ROS 2 (sqlite3, MCAP) or ROS 1 bag, no ROS install.
 
 Read with the pure-Python ``rosbags`` library; joints are matched by name to the robot's
-(:func:`.importers.match_joints`), extra joints (a gripper's fingers) are ignored.
+(:func:`.importers.match_joints`), extra joints (a gripper's fingers) are ignored. A message naming none
+of the arm's joints (a gripper driver publishing its fingers alone on the same topic, interleaved with
+the arm's messages) is skipped and counted: the import report says how many and what they named.
 """
 
 from __future__ import annotations
@@ -13,7 +15,7 @@ import numpy as np
 
 from spherecal.correction.model import RobotModel
 
-from .importers import Recording, RecordingError, match_joints
+from .importers import Recording, RecordingError, arm_joint_names, joint_name_candidates, match_joints
 
 #: Default topic.
 TOPIC = "/joint_states"
@@ -66,6 +68,8 @@ def read_bag(path: str | os.PathLike, model: RobotModel, topic: str = TOPIC) -> 
                         "expected sensor_msgs/JointState"
                     )
             cache: dict[tuple[str, ...], np.ndarray] = {}
+            arm = arm_joint_names(model)
+            skipped: dict[tuple[str, ...], int] = {}  # names of messages without any arm joint -> count
             for k, (connection, timestamp, raw) in enumerate(reader.messages(connections=connections)):
                 message = reader.deserialize(raw, connection.msgtype)
                 where = f"{path}: {topic} message {k + 1}"
@@ -73,6 +77,9 @@ def read_bag(path: str | os.PathLike, model: RobotModel, topic: str = TOPIC) -> 
                 position = np.asarray(message.position, dtype=float)
                 if position.shape != (len(names),):
                     raise RecordingError(f"{where}, field 'position': {position.size} positions for {len(names)} names")
+                if names not in cache and arm.isdisjoint(names):  # another device's joints (a gripper)
+                    skipped[names] = skipped.get(names, 0) + 1
+                    continue
                 if names not in cache:
                     cache[names] = match_joints(list(names), model, where)[0]
                 q = position[cache[names]]
@@ -91,10 +98,23 @@ def read_bag(path: str | os.PathLike, model: RobotModel, topic: str = TOPIC) -> 
         if not type(error).__module__.startswith("rosbags"):
             raise
         raise RecordingError(f"{path}: cannot read the bag: {error}") from None
+    others = "; ".join(f"{count} naming {', '.join(names[:4]) or 'no joint'}{', ...' if len(names) > 4 else ''}"
+                       for names, count in skipped.items())
     if not values:
+        if skipped:
+            expected = " or ".join(dict.fromkeys(names[0] for names in joint_name_candidates(model)))
+            raise RecordingError(
+                f"{path}: {topic} message 1, field 'name': no message names the arm's first joint ({expected}); "
+                f"the topic carries {others}"
+            )
         raise RecordingError(f"{path}: field '--topic': no messages on {topic!r}")
+    notes = (
+        (f"skipped {sum(skipped.values())} messages on {topic} without any of the arm's joints ({others}): "
+         "another device (a gripper) publishing on the same topic",) if skipped else ()
+    )
     t = np.array(stamps)
     order = np.argsort(t, kind="stable")
-    recording = Recording(np.array(values)[order], t[order], None, str(path), tuple(rows[i] for i in order))
+    recording = Recording(np.array(values)[order], t[order], None, str(path), tuple(rows[i] for i in order), notes)
     recording.check_limits(model)
     return recording
+

@@ -60,10 +60,11 @@ class ImportResult:
     segments: list[Segment]
     dropped_motion: int
     dropped_duplicates: int
+    notes: tuple[str, ...] = ()
 
     def format(self) -> str:
         """The printed report."""
-        lines = [f"read {self.read} samples"]
+        lines = [f"read {self.read} samples"] + list(self.notes)
         if self.segments:
             lines.append(
                 f"segmented into {len(self.segments)} fixtures ({self.dropped_motion} samples in motion dropped):"
@@ -81,9 +82,16 @@ def check_out_dir(out: str | os.PathLike, inputs: list[str | os.PathLike]) -> No
     """Refuse an output folder that exists and is not empty, is a file, or holds (or is) an input."""
     out = Path(out).absolute()
     for item in inputs:
-        item = Path(item).resolve()  # links resolved: compare files, not strings
+        try:
+            item = Path(item).resolve()  # links resolved: compare files, not strings
+        except (RuntimeError, OSError):  # a symlink loop (RuntimeError before Python 3.13)
+            raise RecordingError(f"{item}: field 'SOURCE': cannot read: a symbolic link loop") from None
         if item == out.resolve() or out.resolve() in item.parents:
             raise RecordingError(f"{out}: field '--out': holds the input {item}; choose a new folder")
+    try:
+        out.resolve()
+    except (RuntimeError, OSError):
+        raise RecordingError(f"{out}: field '--out': a symbolic link loop; choose a new folder") from None
     if out.exists() and (not out.is_dir() or any(out.iterdir())):
         raise RecordingError(f"{out}: field '--out': exists and is not an empty folder; choose a new folder")
     for parent in out.parents:
@@ -168,7 +176,8 @@ def import_recording(
     spec = FixtureSpec(spec.names, spec.positions, spec.distances, {"import": block} if block else {})
     _write_together(_outputs(Path(out), source, inputs), kept, spec)
     return ImportResult(
-        kept, spec, read, segments, read - dataset.n_samples, dataset.n_samples - deduplicated.n_samples
+        kept, spec, read, segments, read - dataset.n_samples, dataset.n_samples - deduplicated.n_samples,
+        recording.notes,
     )
 
 

@@ -26,7 +26,7 @@ from spherecal.correction.files.csv_rows import (
     read_rows,
 )
 from spherecal.correction.files.fixtures import FixtureSpec
-from spherecal.correction.files.samples import LIMIT_TOL, Dataset, DatasetError
+from spherecal.correction.files.samples import LIMIT_TOL, Dataset, DatasetError, LimitExcess
 from spherecal.correction.files.text_input import finite_number
 from spherecal.correction.model import RobotModel
 
@@ -52,6 +52,7 @@ class Recording:
         labels: (T,) fixture label of every sample, or None (to be segmented).
         source: the file or folder read.
         rows: (T,) where each sample came from, for messages (``"file: row N"``).
+        notes: what the reader skipped and why (printed by the import report).
     """
 
     q: np.ndarray
@@ -59,17 +60,14 @@ class Recording:
     labels: np.ndarray | None
     source: str
     rows: tuple[str, ...]
+    notes: tuple[str, ...] = ()
 
     def check_limits(self, model: RobotModel, names: list[str] | None = None, tol: float = LIMIT_TOL) -> None:
-        """Raise :class:`RecordingError` on the first angle outside the robot's joint limits."""
-        inside = (self.q >= model.lower - tol) & (self.q <= model.upper + tol)
-        if not inside.all():
-            k, i = np.argwhere(~inside)[0]
-            field = names[i] if names else f"q{i + 1}"
-            raise RecordingError(
-                f"{self.rows[k]}, field {field!r}: {self.q[k, i]:.6g} rad outside the joint limits "
-                f"[{model.lower[i]:.6g}, {model.upper[i]:.6g}] of {model.name}"
-            )
+        """Refuse an angle that cannot be of its joint; warn ONCE, naming every joint, of angles past the
+        limits within :data:`~spherecal.correction.files.samples.HARD_MARGIN` (used as recorded)."""
+        excess = LimitExcess.of(model, names, tol)
+        excess.add(self.q, lambda k: self.rows[k], RecordingError)
+        excess.warn(self.source)
 
     def dataset(self) -> Dataset:
         """The labelled samples (labels must be set)."""
@@ -98,6 +96,11 @@ def joint_name_candidates(model: RobotModel) -> list[list[str]]:
     return out
 
 
+def arm_joint_names(model: RobotModel) -> set[str]:
+    """Every name any convention of :func:`joint_name_candidates` gives the robot's joints."""
+    return {name for names in joint_name_candidates(model) for name in names}
+
+
 def match_joints(available: list[str], model: RobotModel, where: str) -> tuple[np.ndarray, list[str]]:
     """Positions of the robot's joints in ``available`` (extra names, e.g. fingers, are ignored).
 
@@ -110,14 +113,21 @@ def match_joints(available: list[str], model: RobotModel, where: str) -> tuple[n
         ``(index, names)``: (n,) int positions in ``available`` and the matched names.
 
     Raises:
-        RecordingError: no convention matches every joint; names the first joint missing under the
-            convention that matches most.
+        RecordingError: no convention matches every joint (names the first joint missing under the
+            convention that matches most), or one of the matched joints is named twice.
     """
     lookup = {name: k for k, name in enumerate(available)}
     best: tuple[int, list[str]] | None = None
     for names in joint_name_candidates(model):
         found = [name in lookup for name in names]
         if all(found):
+            for name in names:  # a joint named twice: which column is the arm's cannot be told
+                if available.count(name) > 1:
+                    first, second = [k + 1 for k, other in enumerate(available) if other == name][:2]
+                    raise RecordingError(
+                        f"{where}, field {name!r}: joint {name!r} is named twice (entries {first} and {second}); "
+                        "which one is the arm's cannot be told"
+                    )
             return np.array([lookup[name] for name in names], dtype=int), names
         if best is None or sum(found) > best[0]:
             best = (sum(found), names)
@@ -134,7 +144,25 @@ _HOLE = re.compile(r"hole_(\d+)\.csv$")
 
 
 def _hole_files(folder: Path) -> list[tuple[int, Path]]:
-    found = [(int(m.group(1)), p) for p in folder.iterdir() if p.is_file() and (m := _HOLE.match(p.name))]
+    """``(k, path)`` of every ``hole_<k>.csv`` in ``folder``, by ``k``.
+
+    Raises:
+        RecordingError: a ``hole_<k>.csv`` that is not a readable file (a folder, a dangling link, a link
+            loop): the placement would silently lose a socket and its known distance.
+    """
+    found = []
+    for p in folder.iterdir():
+        m = _HOLE.match(p.name)
+        if not m:
+            continue
+        try:
+            regular = p.is_file()
+        except OSError as error:  # a symlink loop (ELOOP) on some Python versions
+            raise RecordingError(f"{p}: row 1, field 'q1': cannot read: {error.strerror or error}") from None
+        if not regular:
+            what = "a folder" if p.is_dir() else "a link that leads to no file (dangling or a loop)"
+            raise RecordingError(f"{p}: row 1, field 'q1': cannot read: {what}, not a file of configurations")
+        found.append((int(m.group(1)), p))
     return sorted(found)
 
 

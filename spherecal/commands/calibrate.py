@@ -60,6 +60,11 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         "(1 mm, 0.2 deg, 3e-5 rad/Nm, 1e-3 scale) at the declared --noise "
         "(a weight; default 0.5, measured on real arms; 0: plain least squares)",
     )
+    parser.add_argument(
+        "--exclude-fixture", action="append", default=[], metavar="NAME",
+        help="leave the fixture NAME out (its samples and every known distance naming it); repeatable "
+        "(a socket the self-check finds drifting, a fixture that moved)",
+    )
     parser.add_argument("--out", required=True, help="calibrated robot file to write (YAML)")
 
 
@@ -84,6 +89,7 @@ def run(args: argparse.Namespace) -> int:
         force=args.force,
         seed=args.seed,
         prior=args.prior,
+        exclude_fixtures=tuple(args.exclude_fixture),
     )
     done = calibrate_files(args.robot, args.samples, args.fixtures, args.out, options, outputs, **urdf_links(args))
     print(done.summary())

@@ -80,6 +80,13 @@ def run(args: argparse.Namespace) -> int:
 
     outputs = planned_outputs(args, {"--out": args.out})  # never over CAL.yaml, --into or --samples
     model = load_robot(args.robot, **urdf_links(args))
+    from spherecal.correction.files.robot_file import forced_calibration
+
+    forced = forced_calibration(model)
+    if forced:
+        import warnings
+
+        warnings.warn(forced, stacklevel=1)
     into = None if args.into is None else _into(args.into, args.out)
     exported = export_model(model, args.format, provenance_header(args.robot, args.format), args.prefix,
                             _limits(args.effort, "--effort"), _limits(args.velocity, "--velocity"), into,

@@ -140,6 +140,10 @@ def run(args: argparse.Namespace) -> int:
     from spherecal.validation.planning.plan_report import format_plan, write_recording
 
     print(format_plan(result))
+    if result.best is None:  # the table above says which candidates failed; the refusal is one line on stderr
+        reachable = sum(s.reachable for s in result.surveys)
+        raise fail(f"no plan: {reachable} of {len(result.surveys)} candidates reachable, fewer than the "
+                   f"{args.fixture_count} fixtures wanted (--fixture-count)")
     if args.rrd:
         from spherecal.validation.provenance import comment_block, provenance
 

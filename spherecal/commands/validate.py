@@ -66,6 +66,12 @@ def run(args: argparse.Namespace) -> int:
     urdf = [role for role, path in files.items() if str(path).lower().endswith(".urdf")] or ["nominal"]
     models = {role: load_robot(path, **(urdf_links(args) if role in urdf else {})) for role, path in files.items()}
     check_models(models, files)
+    from spherecal.correction.files.robot_file import forced_calibration
+
+    if forced_calibration(models["calibrated"]) and (args.truth is not None or args.mocap is not None):
+        import warnings  # the socket-only branch says it among its remarks
+
+        warnings.warn(forced_calibration(models["calibrated"]), stacklevel=1)
     if args.truth is None and args.mocap is None:
         from spherecal.commands.validate_sockets import run_sockets
 

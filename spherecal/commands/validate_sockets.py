@@ -39,12 +39,19 @@ def write_validation(args: argparse.Namespace, outputs, result: dict, record, ti
 
 def run_sockets(args: argparse.Namespace, models: dict[str, RobotModel], outputs) -> int:
     """Validate ``models`` on ``--samples`` (and ``--fixtures``): print the tables, write ``--out``, ``--rrd``."""
+    import warnings
     from pathlib import Path
 
     from spherecal.correction.files.fixtures import read_fixtures
     from spherecal.correction.files.samples_csv import read_samples
     from spherecal.validation.provenance import provenance
-    from spherecal.validation.sockets import fitted_fixtures, record_sockets, socket_validation
+    from spherecal.validation.sockets import (
+        fitted_fixtures,
+        record_sockets,
+        recorded_prediction,
+        remarks,
+        socket_validation,
+    )
 
     models = {"nominal": models["nominal"], "calibrated": models["calibrated"]}
     dataset = read_samples(args.samples, models["nominal"])
@@ -52,8 +59,12 @@ def run_sockets(args: argparse.Namespace, models: dict[str, RobotModel], outputs
     if args.fixtures is not None:
         spec = read_fixtures(args.fixtures)
         spec.check_against(dataset)
-    report = socket_validation(models, dataset, spec, fitted_fixtures(models["calibrated"]))
+    calibrated = models["calibrated"]
+    report = socket_validation(models, dataset, spec, fitted_fixtures(calibrated, dataset),
+                               recorded_prediction(calibrated))
     print(report.format())
+    for remark in remarks(report, calibrated):
+        warnings.warn(remark, stacklevel=1)
     inputs = {k: Path(v) if isinstance(v, str) and Path(v).is_file() else v for k, v in vars(args).items()}
     inputs = {k: v for k, v in inputs.items() if not k.startswith("_") and k != "command"}
     result = {"provenance": provenance(args.seed, inputs), "sockets": report.to_dict()}

@@ -80,7 +80,7 @@ def test_subsample_is_seeded_and_per_fixture(panda, rng) -> None:
         ("fixture,q1,q2,q3,q4,q5,q6\nP1,0,0,0,-1,0,1\n", 1, "q*"),
         (HEADER + "P1,0,0,0,-1,0,1\n", 2, "q7"),
         (HEADER + "P1,0,0,0,-1,0,1,0,0\n", 2, "column 9"),
-        (HEADER + GOOD + GOOD + "P1,0,0,0,0.5,0,1,0\n", 4, "q4"),
+        (HEADER + GOOD + GOOD + "P1,0,0,0,2.5,0,1,0\n", 4, "q4"),  # past a quarter turn (less: used, warned)
         ("", 1, "fixture"),
         (HEADER, 2, "fixture"),
         ("fixture,q1,q2,q3,q4,q5,q6,q7,q7\n", 1, "q7"),

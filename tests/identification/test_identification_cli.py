@@ -78,7 +78,7 @@ GOOD = "P1,0,0,0,-1,0,1,0\nP1,0.1,0,0,-1,0,1,0\n"
         (HEADER + GOOD + "P1,0,0,nan,-1,0,1,0\n", None, ("s.csv", "row 4", "field 'q3'")),
         (HEADER + GOOD + "P1,0,0,x,-1,0,1,0\n", None, ("s.csv", "row 4", "field 'q3'")),
         ("fixture,q1,q2,q3,q4,q5,q6\nP1,0,0,0,-1,0,1\n", None, ("s.csv", "row 1", "field 'q*'")),
-        (HEADER + GOOD + "P1,0,0,0,0.2,0,1,0\n", None, ("s.csv", "row 4", "field 'q4'")),
+        (HEADER + GOOD + "P1,0,0,0,2.2,0,1,0\n", None, ("s.csv", "row 4", "field 'q4'")),  # > a quarter turn past
         ("", None, ("s.csv", "row 1", "field 'fixture'")),
         (HEADER + GOOD, None, ("s.csv", "rows 2-3", "field 'fixture'")),  # fewer samples than unknowns
         (

@@ -276,7 +276,9 @@ def test_bad_input_is_one_line_and_writes_nothing(tmp_path, capsys) -> None:
     assert "hole_1.csv: row 5, field 'q2'" in _refused(argv, tmp_path, capsys)
     (source / "hole_1.csv").write_text("\n".join(lines[:2] + [lines[2].rsplit(",", 1)[0]]) + "\n")
     assert "hole_1.csv: row 3, field 'q*': 6 joint angles" in _refused(argv, tmp_path, capsys)
-    (source / "hole_1.csv").write_text("0,0,0,0,0,0,0\n")  # joint 4 of a Panda is never at 0
+    # degrees in a radians file: -90 cannot be an angle of joint 4 (a little past its limit would be used, with
+    # a warning: tests/identification/test_arms_not_panda.py)
+    (source / "hole_1.csv").write_text("0,0,0,-90,0,0,1\n")
     assert "hole_1.csv: row 1, field 'q4'" in _refused(argv, tmp_path, capsys)
     assert not out.exists() and [p.name for p in tmp_path.iterdir()] == ["front"]  # no staging folder left
     (source / "hole_1.csv").write_text("\n".join(lines) + "\n")

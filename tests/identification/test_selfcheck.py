@@ -142,13 +142,15 @@ def test_two_fixtures_declared_1mm_apart_are_refused(arm, noisy) -> None:
         calibrate(panda, dataset, FixtureSpec(spec.names, distances=[(a, b, 0.001), *rest]))
 
 
-def test_noise_declared_far_too_small_is_refused_with_the_figure(arm, noisy) -> None:
+def test_noise_declared_far_too_small_is_judged_at_the_noise_the_residuals_show(arm, noisy) -> None:
+    # issue 20 item 7: refused before; residuals that look like noise and a calibration that still beats
+    # nominal at that noise are written, with the figure as a warning
     panda, _ = arm
     dataset, spec = noisy
-    with pytest.raises(
-        InconsistentDataError, match=r"residual noise 0\.\d+ mm per axis is \d\.\d+x the declared 0\.05 mm"
-    ):
-        calibrate(panda, dataset, spec, noise=5e-5)
+    level = next(f for f in calibrate(panda, dataset, spec, noise=5e-5).selfcheck.findings
+                 if f.check == "residual level")
+    assert level.passed and level.figures["honest_noise_warning"]
+    assert re.search(r"residual noise 0\.\d+ mm per axis is \d\.\d+x the declared 0\.05 mm", level.message)
 
 
 def test_an_honest_large_noise_is_judged_at_the_declared_noise(arm, noisy) -> None:
@@ -169,7 +171,8 @@ def test_data_that_cannot_beat_nominal_is_refused(arm) -> None:
     dataset, _ = make_dataset(true, {"P1": PANDA_FIXTURES["P1"]}, 20, np.random.default_rng(3), noise=1e-2)
     forced = calibrate(panda, dataset, noise=1e-2, force=True)
     assert _error(forced.model, true) > _error(panda, true)
-    with pytest.raises(InconsistentDataError, match=r"cannot be expected to beat the nominal model: predicted mean"):
+    refusal = r"cannot be expected to beat the nominal model: .*predicted mean error"
+    with pytest.raises(InconsistentDataError, match=refusal):
         calibrate(panda, dataset, noise=1e-2)
 
 

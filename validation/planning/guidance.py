@@ -1,7 +1,7 @@
 """Recording guidance: which plate placement to record next on a real arm, and when to stop.
 
 Start from what has been recorded: calibrate it (:func:`calibrate_recording`: the model choice of
-:func:`identification.selection.select_model`, the fit of :func:`identification.calibrate.calibrate`)
+the one calibration workflow, :func:`identification.workflow.run_workflow`, as `calibrate` runs it)
 and measure its noise ``sigma``, the residual per axis. Every candidate placement is judged at that
 calibration, not at the nominal arm: the configurations a person would record there are walked
 kinematically on the calibrated model (:func:`.hand_guiding.hand_guided`) and added to the recorded

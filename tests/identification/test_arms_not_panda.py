@@ -1,0 +1,159 @@
+"""Issue 20 item 7: arms that are not Pandas. Recordings past a URDF's joint limits are used with one warning;
+a socket that drifts while recorded is named with its trend; a fixture can be left out; residuals above the
+declared noise are judged at the noise they show (written with a warning when the calibration still helps)."""
+
+from __future__ import annotations
+
+import json
+import warnings
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from spherecal.cli import main
+from spherecal.correction import load_robot, perturb
+from spherecal.correction.files.samples import Dataset, DatasetError, JointLimitWarning
+from spherecal.correction.files.samples_csv import read_samples, write_samples
+from spherecal.identification.calibrate import calibrate
+from spherecal.identification.synthetic import PANDA_FIXTURES, fixture_samples, make_dataset
+from spherecal.identification.training import exclude_fixtures
+from tests.refusal import refused
+
+ROOT = Path(__file__).resolve().parents[1] / "data"
+GEN3LITE = ROOT / "urdf" / "gen3lite.urdf"  # MUKCa's: joint_6 limited to +-2.09 rad
+MUKCA = ROOT / "mukca"
+
+
+def test_angles_past_the_limits_warn_once_naming_every_joint_and_are_used(tmp_path, panda) -> None:
+    dataset, _ = make_dataset(panda, per_fixture=10, rng=np.random.default_rng(0))
+    q = dataset.q.copy()
+    q[2, 5] = panda.upper[5] + 0.3
+    q[7, 5] = panda.upper[5] + 0.4
+    q[4, 0] = panda.lower[0] - 0.1
+    write_samples(tmp_path / "samples.csv", Dataset(labels=dataset.labels, q=q))
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        read = read_samples(tmp_path / "samples.csv", panda)
+    limits = [w for w in caught if issubclass(w.category, JointLimitWarning)]
+    assert len(limits) == 1  # one per run, every joint in it
+    text = str(limits[0].message)
+    assert "q1 by up to 0.1 rad (5.73 deg) below -2.897 (row 6)" in text
+    assert "q6 by up to 0.4 rad (22.9 deg) above 3.752 (row 9)" in text
+    np.testing.assert_array_equal(read.q, q)  # used as recorded
+    q[7, 5] = panda.upper[5] + 2.0  # beyond a quarter turn: not an angle of that joint
+    write_samples(tmp_path / "samples.csv", Dataset(labels=dataset.labels, q=q))
+    with pytest.raises(DatasetError, match=r"samples.csv: row 9, field 'q6': .* more than a quarter turn"):
+        read_samples(tmp_path / "samples.csv", panda)
+
+
+def test_the_gen3_lite_recordings_past_its_urdf_limits_import_with_one_warning(tmp_path, capsys) -> None:
+    # MUKCa's Gen3 lite passes gen3lite.urdf's joint_6 limit of 2.09 rad by up to 0.65 rad: refused before
+    argv = ["import", str(MUKCA / "dinova_1/left"), "--format", "mukca", "--robot", str(GEN3LITE), "--tip-link",
+            "ball_link", "--out", str(tmp_path / "out")]
+    assert main(argv) == 0
+    err = capsys.readouterr().err
+    limit_lines = [line for line in err.splitlines() if "beyond the joint limits" in line]
+    assert len(limit_lines) == 1 and "q6 by up to 0.652 rad (37.4 deg) below -2.09 (hole_1.csv: row 12)" in err
+
+
+def _drifting(panda, true, drift: float, seed: int = 3) -> tuple[Dataset, object]:
+    """Four Panda fixtures, 40 samples each; fixture P2's socket moves by ``drift`` [m] along x while recorded."""
+    rng = np.random.default_rng(seed)
+    dataset, spec = make_dataset(true, per_fixture=40, rng=rng, noise=2e-4)
+    if drift:
+        parts = [fixture_samples(true, PANDA_FIXTURES["P2"] + np.array([drift * k / 3, 0, 0]), 10, rng, 2e-4)
+                 for k in range(4)]
+        q = dataset.q.copy()
+        q[dataset.labels == "P2"] = np.concatenate(parts)
+        dataset = Dataset(labels=dataset.labels, q=q, fixture_names=dataset.fixture_names)
+    return dataset, spec
+
+
+def test_a_socket_that_moves_while_recorded_is_named_with_its_trend(panda) -> None:
+    true = perturb(panda, np.random.default_rng(1))
+    dataset, spec = _drifting(panda, true, 0.004)
+    result = calibrate(panda, dataset, spec, force=True)
+    trends = {f.check: f for f in result.selfcheck.findings if f.check.startswith("trend")}
+    assert [name for name, f in trends.items() if f.figures["trend"]] == ["trend P2"]
+    figures = trends["trend P2"].figures
+    assert "the residual at fixture P2 moves" in trends["trend P2"].message
+    assert 3.0 < figures["change_mm"] < 5.0  # the socket moved 4 mm
+    assert any("trend" in w or "recording order" in w for w in result.selfcheck.block()["warnings"])
+    steady, spec = _drifting(panda, true, 0.0)
+    checked = calibrate(panda, steady, spec).selfcheck
+    assert not any(f.figures.get("trend") for f in checked.findings)
+
+
+def test_exclude_fixture_leaves_it_and_its_distances_out(tmp_path, capsys, panda) -> None:
+    true = perturb(panda, np.random.default_rng(1))
+    dataset, spec = _drifting(panda, true, 0.004)
+    kept, kept_spec = exclude_fixtures(dataset, spec, ["P2"])
+    assert "P2" not in kept.fixture_names and all("P2" not in (a, b) for a, b, _ in kept_spec.distances)
+    assert len(kept_spec.distances) == 1
+    from spherecal.correction.files.fixtures import write_fixtures
+
+    write_samples(tmp_path / "samples.csv", dataset)
+    write_fixtures(tmp_path / "fixtures.yaml", spec)
+    argv = ["calibrate", "--robot", "panda", "--samples", str(tmp_path / "samples.csv"), "--fixtures",
+            str(tmp_path / "fixtures.yaml"), "--out", str(tmp_path / "cal.yaml"), "--model", "dh"]
+    assert main([*argv, "--exclude-fixture", "P2"]) == 0
+    block = load_robot(tmp_path / "cal.yaml").extras["calibration"]
+    assert set(block["samples_per_fixture"]) == {"P1", "P3"} and block["options"]["exclude_fixture"] == ["P2"]
+    assert set(block["trained_on"]["fixtures"]) == {"P1", "P3"}
+    (tmp_path / "cal.yaml").unlink()
+    refused([*argv, "--exclude-fixture", "P9"], tmp_path, capsys,
+            "field 'fixture': --exclude-fixture 'P9' is not a fixture of the samples (they have P1, P2, P3)")
+
+
+def test_more_noise_than_declared_is_judged_at_the_noise_the_residuals_show(panda) -> None:
+    # 1 mm noise declared as 0.3 mm: residuals 3x the declared noise. Refused before; now written with a
+    # warning, because at 1 mm the calibration is still expected to beat nominal (and does)
+    true = perturb(panda, np.random.default_rng(1))
+    dataset, spec = make_dataset(true, per_fixture=60, rng=np.random.default_rng(2), noise=1e-3)
+    result = calibrate(panda, dataset, spec, noise=3e-4)
+    level = next(f for f in result.selfcheck.findings if f.check == "residual level")
+    assert level.passed and level.figures["honest_noise_warning"] and level.figures["ratio"] > 2.0
+    assert "judged at that noise, the calibration is still expected to beat nominal" in level.message
+    q = panda.random_configurations(500, np.random.default_rng(4))
+    from spherecal.correction import registered_errors, tool_point
+
+    def error(model):
+        return float(registered_errors(tool_point(model, q), tool_point(true, q)).mean())
+
+    assert error(result.model) < 0.5 * error(panda)
+    # 5 mm noise declared as 0.3 mm, few samples at one fixture: it cannot help, and the refusal says what
+    # noise the residuals show and what the calibration would reach at it
+    few, _ = make_dataset(true, {"P1": PANDA_FIXTURES["P1"]}, 20, np.random.default_rng(3), noise=5e-3)
+    from spherecal.identification.selfcheck import InconsistentDataError
+
+    with pytest.raises(InconsistentDataError, match=r"residual noise \d\.\d+ mm per axis is .*at the noise the "
+                                                    r"residuals show, .*predicted spread \d"):
+        calibrate(panda, few, noise=3e-4)
+
+
+def test_gen3_lite_trained_on_each_real_placement_is_written_or_refused_with_its_reason(tmp_path, capsys) -> None:
+    """The real case (tests/data has front and left): front's socket front_h0 drifts and is refused, named with
+    its trend; left is written with a warning and beats the nominal on front_h1 (held out)."""
+    for placement in ("front", "left"):
+        assert main(["import", str(MUKCA / "dinova_1" / placement), "--format", "mukca", "--robot", str(GEN3LITE),
+                     "--tip-link", "ball_link", "--out", str(tmp_path / placement)]) == 0
+    capsys.readouterr()
+
+    def calibrate_on(placement: str, *extra: str) -> int:
+        return main(["calibrate", "--robot", str(GEN3LITE), "--tip-link", "ball_link", "--samples",
+                     str(tmp_path / placement / "samples.csv"), "--fixtures",
+                     str(tmp_path / placement / "fixtures.yaml"), "--out", str(tmp_path / f"cal_{placement}.yaml"),
+                     *extra])
+
+    assert calibrate_on("front") == 1
+    err = capsys.readouterr().err
+    assert "fixture front_h0" in err and "the residual at fixture front_h0 moves" in err
+    assert calibrate_on("left") == 0
+    assert "judged at that noise, the calibration is still expected to beat nominal" in capsys.readouterr().out
+    assert main(["validate", "--nominal", str(GEN3LITE), "--tip-link", "ball_link", "--calibrated",
+                 str(tmp_path / "cal_left.yaml"), "--samples", str(tmp_path / "front" / "samples.csv"), "--out",
+                 str(tmp_path / "v.json")]) == 0
+    fixtures = json.loads((tmp_path / "v.json").read_text())["sockets"]["fixtures"]
+    spread = fixtures["front_h1"]["spread_mean"]
+    assert spread["calibrated"] < 0.7 * spread["nominal"]
