@@ -40,7 +40,7 @@ from pathlib import Path
 import bench_common  # first: one BLAS thread, no Rerun analytics
 import numpy as np
 
-from spherecal.correction import SpherecalError, load_robot, save_robot, tool_point
+from spherecal.correction import SpherecalError, load_robot, save_robot, tool_point, write_samples
 from spherecal.identification.selection import candidates_for
 from spherecal.identification.workflow import WorkflowOptions, run_workflow
 
@@ -77,14 +77,16 @@ def held_out(model, data) -> tuple[float, float]:
     return float(np.mean(maes)), float(np.mean(dist)) if dist else float("nan")
 
 
-def _urdf_model(cal: Path, urdf: Path, work: Path):
-    """The calibrated file exported into MUKCa's URDF, read back (tip: the ball)."""
+def _urdf_model(cal: Path, urdf: Path, work: Path, samples: Path):
+    """The calibrated file exported into MUKCa's URDF (the rigid fit around the training ``samples``, as
+    `export` finds them beside a file `calibrate` wrote), read back (tip: the ball)."""
     from spherecal.cli import main
 
     out = work / (cal.stem + ".urdf")
     text = io.StringIO()
     with contextlib.redirect_stdout(text), contextlib.redirect_stderr(text):
-        code = main(["export", str(cal), "--format", "urdf", "--into", str(urdf), "--out", str(out)])
+        code = main(["export", str(cal), "--format", "urdf", "--into", str(urdf), "--out", str(out),
+                     "--samples", str(samples)])
     if code != 0:
         raise SpherecalError(f"export failed: {text.getvalue().strip().splitlines()[-1]}")
     return load_robot(out, tip_link="ball_link")
@@ -107,13 +109,14 @@ def experiment(nominal, train, train_spec, test, model: str, work: Path, urdf: P
             refused = str(error)
     cal = work / f"cal_{abs(hash((model, tuple(train.fixture_names))))}.yaml"
     save_robot(done.model, cal)
+    samples = write_samples(cal.with_suffix(".csv"), train)
     row.update(chosen=done.selection.chosen, criterion=done.selection.criterion, refused=refused,
                written=not refused, seconds=time.perf_counter() - clock)
     row["test_mae_mm"], row["distance_error_mm"] = (v * 1e3 for v in held_out(load_robot(cal), test))
     if urdf is not None:
         try:
             row["urdf_test_mae_mm"], row["urdf_distance_error_mm"] = (
-                v * 1e3 for v in held_out(_urdf_model(cal, urdf, work), test))
+                v * 1e3 for v in held_out(_urdf_model(cal, urdf, work, samples), test))
         except (SpherecalError, OSError, ValueError) as error:
             row["urdf_error"] = str(error)
     return row

@@ -23,8 +23,6 @@ from pathlib import Path
 
 import bench_common  # first: one BLAS thread, no Rerun analytics
 
-from spherecal.correction.files.provenance import versions
-
 HERE = Path(__file__).resolve().parent
 ROBOT = HERE.parent / "tests/data/mukca/panda_ball.yaml"
 GRID = "0.3,0.6,5;-0.4,0.4,5;0.05,0.05,1"
@@ -51,8 +49,6 @@ def main() -> None:
     parser.add_argument("--repeats", type=int, default=3)
     args = parser.parse_args()
     root = Path(args.data) if args.data else bench_common.find_mukca()
-    if not (root / "data").is_dir() and Path("/work/shared/data/mukca/data").is_dir():
-        root = Path("/work/shared/data/mukca")
     spherecal = str(Path(sys.executable).with_name("spherecal"))
     before = _uptime()
     print(before)
@@ -83,12 +79,10 @@ def main() -> None:
     print(f"best: {result['ranking'][0]['name']} {result['ranking'][0]['predicted_error_m'] * 1e3:.4f} mm; "
           f"{result['stop']['line']}")
     print(after)
-    out = HERE / "plan_guidance.json"
-    out.write_text(json.dumps({
+    out = bench_common.write_json(HERE / "plan_guidance.json", {
         "plan_seconds": plans, "calibrate_seconds": calibrations, "median_s": median, "baseline_median_s": baseline,
-        "placements": placements, "grid": GRID, "orientations": ORIENTATIONS, "seed": SEED,
-        "uptime_before": before, "uptime_after": after, "versions": versions(), "data": str(root),
-    }, indent=2) + "\n")
+        "uptime_before": before, "uptime_after": after,
+    }, seed=SEED, inputs={"data": root, "placements": placements, "grid": GRID, "orientations": ORIENTATIONS})
     print(f"wrote {out}")
 
 

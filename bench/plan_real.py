@@ -23,7 +23,6 @@ random pick (the candidates' mean) and the best pick. Writes ``bench/plan_real_<
 from __future__ import annotations
 
 import argparse
-import json
 import os
 import subprocess
 import time
@@ -33,7 +32,6 @@ import bench_common  # first: one BLAS thread, no Rerun analytics
 import numpy as np
 
 from spherecal.correction import load_robot, tool_point
-from spherecal.correction.files.provenance import versions
 from spherecal.identification.calibrate import calibrate
 from spherecal.validation.planning import guidance as guidance_module
 from spherecal.validation.planning.guidance import calibrate_recording, rank_placements
@@ -123,8 +121,6 @@ def main() -> None:
     args = parser.parse_args()
     guidance_module.SMOOTH = args.smooth
     root = Path(args.data) if args.data else bench_common.find_mukca()
-    if not (root / "data").is_dir() and Path("/work/shared/data/mukca/data").is_dir():
-        root = Path("/work/shared/data/mukca")
     print(subprocess.run(["uptime"], capture_output=True, text=True).stdout.strip())
     results = {}
     print(f"{'robot':<14} {'first, seed':<21} {'pick':<14} {'rank':>4} {'better':>6} {'rho MAE':>7} {'rho chg':>7} "
@@ -152,9 +148,8 @@ def main() -> None:
               f"best {summary['mean_best_change_mm']:.3f}")
         results[robot] = {"rows": rows, "summary": summary}
     out = HERE / f"plan_real_{args.smooth}.json"
-    out.write_text(json.dumps({"plan_real": results, "seeds": args.seeds, "smooth": args.smooth, "data": str(root),
-                               "versions": versions(),
-                               "blas_threads": os.environ.get("OPENBLAS_NUM_THREADS")}, indent=2) + "\n")
+    bench_common.write_json(out, {"plan_real": results, "blas_threads": os.environ.get("OPENBLAS_NUM_THREADS")},
+                            inputs={"seeds": args.seeds, "smooth": args.smooth, "data": root})
     print(f"wrote {out}")
 
 

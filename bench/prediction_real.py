@@ -114,10 +114,7 @@ def main_bench() -> None:
         inside = sum(0.5 <= x <= 2.0 for x in ratios)
         print(f"{robot}: ratio {min(ratios):.2f} .. {max(ratios):.2f}, {inside} of {len(ratios)} within 0.5x-2x")
     print(f"{time.perf_counter() - clock:.0f} s")
-    from spherecal.correction.files.provenance import PACKAGES, versions
-
-    args.out.write_text(json.dumps({"data": str(args.data), "rows": rows, "versions": versions(PACKAGES[:4])},
-                                   indent=2) + "\n")
+    bench_common.write_json(args.out, {"rows": rows}, inputs={"data": Path(args.data)})
     print(f"wrote {args.out}")
 
 
