@@ -7,7 +7,8 @@ positive model angle). Modified DH frames are then placed on those lines (Craig)
 * frame ``k`` has ``z_k`` along joint ``k``'s axis and its origin on that axis;
 * if axes ``k`` and ``k+1`` are not parallel, ``x_k`` lies on their common normal and the
   origin at its foot (classical DH; ``beta_{k+1} = 0``);
-* if they are parallel or nearly parallel (angle below :data:`PARALLEL_TOL`), the common
+* if they are parallel or nearly parallel (angle below :data:`PARALLEL_TOL`, or a common normal
+  more than :data:`FAR_NORMAL` away along the axis), the common
   normal is undefined or kilometres away: the origin stays where the previous link put it
   (``d_k = 0``), ``x_k`` points to where axis ``k+1`` crosses the plane normal to ``z_k``, and
   the misalignment is ``alpha_{k+1}`` (about ``x``) plus Hayati's ``beta_{k+1}`` (about ``y``):
@@ -41,6 +42,11 @@ from .urdf_read import MOVABLE, UrdfTree, chain, read_urdf
 #: calibration and beyond 1e-12 m exactness in double precision; designed-in angles between
 #: consecutive axes are degrees, and rounded URDF angles (1.5708 for pi/2) differ by ~1e-5.
 PARALLEL_TOL = 1e-3
+#: Distance [m] along an axis beyond which the common normal with the next axis counts as "at
+#: infinity": the axes are nearly parallel for DH's purposes (a calibrated arm whose axes were
+#: parallel and now differ by a few mrad, 0.1 m apart: d = 0.1 / 0.003 = 33 m) and get a Hayati
+#: ``beta`` as well. No arm's joints are 2 m apart.
+FAR_NORMAL = 2.0
 
 
 class NearlyParallelAxesWarning(UserWarning):
@@ -109,11 +115,12 @@ def dh_from_lines(points: np.ndarray, axes: np.ndarray, hints: np.ndarray, tip: 
         if k + 1 < n:
             z_next, p_next = axes[k + 1], points[k + 1]
             cross = np.cross(z, z_next)
-            if np.linalg.norm(cross) >= np.sin(parallel_tol):
-                # Common normal: feet on both lines.
+            s = np.inf
+            if np.linalg.norm(cross) >= np.sin(parallel_tol):  # common normal: its foot on axis k
                 w = pre_o - p_next
                 b, dz, dn = z @ z_next, z @ w, z_next @ w
                 s = (b * dn - dz) / (1.0 - b * b)
+            if abs(s) <= FAR_NORMAL:
                 o = pre_o + s * z
                 x = _unit(cross)
                 if x @ hint_x < 0:

@@ -20,13 +20,16 @@ ROBOTS = {  # file or inline text, tip link
     "gen3lite": ("gen3lite.urdf", "ball_link"),
     "ur5e": (None, None),
     "ur5e_skewed": (None, None),
+    # 3 mrad: beyond PARALLEL_TOL, but the common normal is ~100 m away (a calibrated arm exported to URDF)
+    "ur5e_skewed_3mrad": (None, None),
 }
+SKEW = {"ur5e_skewed": 2e-5, "ur5e_skewed_3mrad": 3e-3}
 
 
 def _text(robot: str) -> str:
     file, _ = ROBOTS[robot]
     if file is None:
-        return ur5e_urdf(skew=2e-5 if robot == "ur5e_skewed" else 0.0)
+        return ur5e_urdf(skew=SKEW.get(robot, 0.0))
     return (DATA / file).read_text()
 
 
@@ -83,6 +86,16 @@ def test_parallel_axes_get_beta_only_when_skewed():
     gen3 = _model("gen3lite", "modified")
     assert gen3.extras["urdf"]["parallel_joints"] == ["joint_3"]
     assert 1e-6 < abs(gen3.beta[2]) < 1e-4 and np.abs(gen3.d).max() < 0.3  # 1.5708 and 3.1416 in the file
+
+
+def test_axes_whose_common_normal_is_far_get_beta():
+    """3 mrad between axes 0.4 m apart: plain DH would put wrist 1's common normal ~130 m away (a d no
+    robot file accepts); the far normal counts as parallel, so the joint gets a Hayati beta and stays short
+    (the elbow's tilt about the offset's own direction leaves its normal at the foot: plain DH, exact)."""
+    model = _model("ur5e_skewed_3mrad", "modified")
+    assert model.extras["urdf"]["parallel_joints"] == [NAMES[3]]
+    assert abs(model.beta[3]) == pytest.approx(3e-3, rel=1e-6)
+    assert np.abs(model.d).max() < 0.2 and np.abs(model.a).max() < 0.5
 
 
 def test_inertials_lumped_per_joint_match_mujoco_centre_of_mass(rng):
