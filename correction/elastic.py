@@ -14,12 +14,10 @@ number per joint [rad/Nm], zero for a rigid joint); the masses in ``inertials`` 
 
 from __future__ import annotations
 
-from dataclasses import replace
-
 import numpy as np
 
 from .gravity import InertialsError, gravity_torques, inertials_of
-from .model import RobotModel
+from .model import RobotModel, joint_vector, with_joint_vector
 
 #: Fixed-point iterations of :func:`motor_angles` (each gains a factor ``c |dtau/dq|`` ~ 1e-3).
 MOTOR_ITERATIONS = 6
@@ -31,17 +29,7 @@ def compliance_of(model: RobotModel) -> np.ndarray:
     Raises:
         InertialsError: a malformed list, or compliances without an ``inertials`` block.
     """
-    block = model.extras.get("compliance")
-    if block is None:
-        return np.zeros(model.n_joints)
-    try:
-        c = np.asarray(block, dtype=float)
-    except (TypeError, ValueError):
-        c = np.empty(0)
-    if c.shape != (model.n_joints,) or not np.all(np.isfinite(c)):
-        raise InertialsError(
-            f"{model.name}: field 'compliance': expected {model.n_joints} finite numbers [rad/Nm], got {block!r}"
-        )
+    c = joint_vector(model, "compliance", "[rad/Nm]", InertialsError)
     if np.any(c != 0):
         inertials_of(model)  # a compliance without masses has no effect: refuse it loudly
     return c
@@ -49,10 +37,7 @@ def compliance_of(model: RobotModel) -> np.ndarray:
 
 def with_compliance(model: RobotModel, compliance: np.ndarray | None) -> RobotModel:
     """A copy of ``model`` with ``extras["compliance"]`` set to (n,) [rad/Nm] (removed when None)."""
-    extras = {k: v for k, v in model.extras.items() if k != "compliance"}
-    if compliance is not None:
-        extras["compliance"] = [float(v) for v in np.asarray(compliance, dtype=float).reshape(model.n_joints)]
-    return replace(model, extras=extras)
+    return with_joint_vector(model, "compliance", compliance)
 
 
 def link_angles(model: RobotModel, q: np.ndarray, compliance: np.ndarray | None = None) -> np.ndarray:

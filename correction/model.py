@@ -251,3 +251,31 @@ def pose_matrix(xyz: np.ndarray, rpy: np.ndarray) -> np.ndarray:
     pose[:3, :3] = rpy_matrix(rpy)
     pose[:3, 3] = xyz
     return pose
+
+
+def joint_vector(model: RobotModel, key: str, unit: str, error: type[Exception]) -> np.ndarray:
+    """(n,) per-joint numbers of ``model.extras[key]`` (``compliance``, ``scale``); zeros when absent.
+
+    Args:
+        key: the extras key (a robot file's top-level list).
+        unit: the unit named in the error (``[rad/Nm]``, ``(dimensionless)``).
+        error: the exception raised for a malformed list (one line naming the field).
+    """
+    block = model.extras.get(key)
+    if block is None:
+        return np.zeros(model.n_joints)
+    try:
+        values = np.asarray(block, dtype=float)
+    except (TypeError, ValueError):
+        values = np.empty(0)
+    if values.shape != (model.n_joints,) or not np.all(np.isfinite(values)):
+        raise error(f"{model.name}: field '{key}': expected {model.n_joints} finite numbers {unit}, got {block!r}")
+    return values
+
+
+def with_joint_vector(model: RobotModel, key: str, values: np.ndarray | None) -> RobotModel:
+    """A copy of ``model`` with ``extras[key]`` set to (n,) plain floats (removed when None)."""
+    extras = {k: v for k, v in model.extras.items() if k != key}
+    if values is not None:
+        extras[key] = [float(v) for v in np.asarray(values, dtype=float).reshape(model.n_joints)]
+    return replace(model, extras=extras)

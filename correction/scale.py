@@ -13,12 +13,10 @@ zero for an exact joint); the layout carries them as ``s1 .. sn`` (:data:`.layou
 
 from __future__ import annotations
 
-from dataclasses import replace
-
 import numpy as np
 
 from .errors import SpherecalError
-from .model import RobotModel
+from .model import RobotModel, joint_vector, with_joint_vector
 
 
 class ScaleError(SpherecalError):
@@ -31,26 +29,12 @@ def scale_of(model: RobotModel) -> np.ndarray:
     Raises:
         ScaleError: not ``n`` finite numbers.
     """
-    block = model.extras.get("scale")
-    if block is None:
-        return np.zeros(model.n_joints)
-    try:
-        s = np.asarray(block, dtype=float)
-    except (TypeError, ValueError):
-        s = np.empty(0)
-    if s.shape != (model.n_joints,) or not np.all(np.isfinite(s)):
-        raise ScaleError(
-            f"{model.name}: field 'scale': expected {model.n_joints} finite numbers (dimensionless), got {block!r}"
-        )
-    return s
+    return joint_vector(model, "scale", "(dimensionless)", ScaleError)
 
 
 def with_scale(model: RobotModel, scale: np.ndarray | None) -> RobotModel:
     """A copy of ``model`` with ``extras["scale"]`` set to (n,) dimensionless numbers (removed when None)."""
-    extras = {k: v for k, v in model.extras.items() if k != "scale"}
-    if scale is not None:
-        extras["scale"] = [float(v) for v in np.asarray(scale, dtype=float).reshape(model.n_joints)]
-    return replace(model, extras=extras)
+    return with_joint_vector(model, "scale", scale)
 
 
 def joint_angles(model: RobotModel, q: np.ndarray) -> np.ndarray:

@@ -85,7 +85,7 @@ def _rot(axis: str, angle: float) -> np.ndarray:
 
 
 def dh_from_lines(points: np.ndarray, axes: np.ndarray, hints: np.ndarray, tip: np.ndarray,
-                  parallel_tol: float = PARALLEL_TOL) -> dict:
+                  parallel_tol: float = PARALLEL_TOL, far_normal: float = FAR_NORMAL) -> dict:
     """Modified DH (with Hayati ``beta``) of joint axes given as lines at q = 0.
 
     Args:
@@ -94,6 +94,7 @@ def dh_from_lines(points: np.ndarray, axes: np.ndarray, hints: np.ndarray, tip: 
         hints: (n, 4, 4) the child link pose of each joint at q = 0 (picks free signs).
         tip: (4, 4) pose of the tip link at q = 0.
         parallel_tol: see :data:`PARALLEL_TOL`.
+        far_normal: see :data:`FAR_NORMAL` [m] (``inf`` and ``parallel_tol = 0``: classical DH everywhere).
 
     Returns:
         A mapping with ``a, alpha, beta, d, theta`` (n,), ``tool`` (3,), ``base`` (4, 4) and
@@ -120,7 +121,7 @@ def dh_from_lines(points: np.ndarray, axes: np.ndarray, hints: np.ndarray, tip: 
                 w = pre_o - p_next
                 b, dz, dn = z @ z_next, z @ w, z_next @ w
                 s = (b * dn - dz) / (1.0 - b * b)
-            if abs(s) <= FAR_NORMAL:
+            if abs(s) <= far_normal:
                 o = pre_o + s * z
                 x = _unit(cross)
                 if x @ hint_x < 0:
@@ -190,11 +191,14 @@ def _inertials(tree: UrdfTree, base: str, joints: list, frames: list[np.ndarray]
 
 
 def urdf_model(tree: UrdfTree, tip_link: str | None = None, base_link: str | None = None,
-               convention: str = "modified", parallel_tol: float = PARALLEL_TOL) -> RobotModel:
+               convention: str = "modified", parallel_tol: float = PARALLEL_TOL,
+               far_normal: float = FAR_NORMAL) -> RobotModel:
     """The revolute chain of a parsed URDF as a :class:`RobotModel` (see the module docstring).
 
     ``extras`` carries ``urdf`` (base and tip link, joint and child link names, the axes
     found parallel), ``joint_names`` and, when the URDF has masses, ``inertials`` and ``payload``.
+    ``parallel_tol`` [rad] and ``far_normal`` [m] decide which joints get a Hayati ``beta``
+    (:data:`PARALLEL_TOL`, :data:`FAR_NORMAL`).
     """
     base, tip, joints = chain(tree, base_link, tip_link)
     poses = tree.world_poses(base)
@@ -205,7 +209,7 @@ def urdf_model(tree: UrdfTree, tip_link: str | None = None, base_link: str | Non
         points.append(pose[:3, 3])
         axes.append(_unit(pose[:3, :3] @ joint.axis))
         hints.append(pose)
-    dh = dh_from_lines(np.array(points), np.array(axes), np.array(hints), poses[tip], parallel_tol)
+    dh = dh_from_lines(np.array(points), np.array(axes), np.array(hints), poses[tip], parallel_tol, far_normal)
     lower = [j.lower if j.type == "revolute" else -np.pi for j in movable]
     upper = [j.upper if j.type == "revolute" else np.pi for j in movable]
     names = [j.name for j in movable]
