@@ -6,6 +6,7 @@ not the nominal one, which joint angles put the real tool point on the target.
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
@@ -75,11 +76,24 @@ def _error_and_jacobian(model: RobotModel, q: np.ndarray, target: np.ndarray, or
     return np.concatenate([target - pose[:3, 3], err_o]), np.vstack([jac_p, axes.T])
 
 
+#: The tool point (3,) [m] and its Jacobian (3, n) [m/rad] at joint angles (n,) [rad].
+Kinematics = Callable[[np.ndarray], tuple[np.ndarray, np.ndarray]]
+
+
 def _solve_from(model: RobotModel, q: np.ndarray, target: np.ndarray, orientation: np.ndarray | None,
-                max_iter: int) -> tuple[np.ndarray, np.ndarray, int]:
-    """Damped Gauss-Newton with clamping to the limits (joints pinned at a limit are frozen)."""
+                max_iter: int, kinematics: Kinematics | None = None) -> tuple[np.ndarray, np.ndarray, int]:
+    """Damped Gauss-Newton with clamping to the limits (joints pinned at a limit are frozen).
+
+    ``kinematics`` (position only) replaces :mod:`correction`'s kinematics of ``model``; its
+    arrays may be buffers overwritten by the next call (they are copied)."""
     lower, upper = model.lower, model.upper
-    err, jac = _error_and_jacobian(model, q, target, orientation)
+    if kinematics is None:
+        error_and_jacobian = lambda q: _error_and_jacobian(model, q, target, orientation)  # noqa: E731
+    else:
+        def error_and_jacobian(q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+            point, jac = kinematics(q)
+            return target - point, jac.copy()
+    err, jac = error_and_jacobian(q)
     cost = err @ err
     lam2 = 1e-6
     it = 0
@@ -97,7 +111,7 @@ def _solve_from(model: RobotModel, q: np.ndarray, target: np.ndarray, orientatio
                 break
             free &= ~pinned
         trial = np.clip(q + dq, lower, upper)
-        trial_err, trial_jac = _error_and_jacobian(model, trial, target, orientation)
+        trial_err, trial_jac = error_and_jacobian(trial)
         trial_cost = trial_err @ trial_err
         if trial_cost < cost:
             q, err, jac, cost = trial, trial_err, trial_jac, trial_cost
@@ -117,6 +131,7 @@ def ik(
     max_iter: int = 200,
     restarts: int = 0,
     rng: np.random.Generator | None = None,
+    kinematics: Kinematics | None = None,
 ) -> IKResult:
     """Joint angles that put the tool point of ``model`` on ``target``.
 
@@ -132,6 +147,10 @@ def ik(
         max_iter: iterations per start.
         restarts: extra random starts when a start fails.
         rng: seeded generator for the restarts (required when ``restarts > 0``).
+        kinematics: ``q (n,) -> (tool point (3,) [m], Jacobian (3, n) [m/rad])`` of ``model``
+            computed elsewhere (e.g. :meth:`NullSpaceController.kinematics`, MuJoCo, ~100x
+            faster than numpy on one configuration); position only. ``model`` still gives the
+            limits.
 
     Returns:
         :class:`IKResult` (check ``converged``; the best attempt is returned either way).
@@ -140,11 +159,13 @@ def ik(
     orientation = None if orientation is None else np.asarray(orientation, dtype=float).reshape(3, 3)
     if restarts and rng is None:
         raise ValueError("ik: restarts need a seeded rng")
+    if kinematics is not None and orientation is not None:
+        raise ValueError("ik: a kinematics callable gives the position only, not an orientation")
     starts = [np.clip(np.asarray(q0, dtype=float), model.lower, model.upper)]
     best, total = None, 0
     for k in range(restarts + 1):
         start = starts[0] if k == 0 else model.random_configurations(1, rng)[0]
-        q, err, it = _solve_from(model, start, target, orientation, max_iter)
+        q, err, it = _solve_from(model, start, target, orientation, max_iter, kinematics)
         total += it
         pos, ang = float(np.linalg.norm(err[:3])), float(np.linalg.norm(err[3:])) if orientation is not None else 0.0
         result = IKResult(q, pos, ang, total, pos < POSITION_TOL and ang < ORIENTATION_TOL)
