@@ -135,7 +135,8 @@ class CoverageExploration:
         start = q.copy()
         start[j] = value
         result = ik(replace(self.model, lower=lower, upper=upper), self.target, start, max_iter=50,
-                    restarts=GOAL_RESTARTS, rng=self.rng, kinematics=self.kinematics)
+                    restarts=GOAL_RESTARTS, rng=self.rng, kinematics=self.kinematics,
+                    lockstep=self.kinematics is not None)
         return result.q if result.converged else None
 
     def decide(self, t: float, q_history: np.ndarray, jac: np.ndarray) -> None:
