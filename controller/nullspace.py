@@ -76,6 +76,7 @@ class NullSpaceController:
         self.dt = dt
         self.closed_form = closed_form
         self.report = StepReport()
+        self.last_bounds: tuple[np.ndarray, np.ndarray] | None = None  # (lb, ub) of the last step [rad/s]
         self._kin = build_plant(model)
         self._jac = np.zeros((3, self._kin.mj_model.nv))
         self._n = model.n_joints
@@ -122,7 +123,7 @@ class NullSpaceController:
         """(n,) joint velocity command [rad/s] for one control period (arguments as :meth:`build`)."""
         point, jac = self.kinematics(q)
         v = self._zero3 if target is None else damped_task_velocity(jac, gain * (np.asarray(target) - point))
-        lb, ub = self.bounds(q)
+        lb, ub = self.last_bounds = self.bounds(q)
         if self.closed_form:
             qdot = equality_solution(jac, v, q_r)
             if qdot is not None and np.all(qdot >= lb) and np.all(qdot <= ub):

@@ -280,7 +280,7 @@ class Plant:
         command = d.ctrl[:n]  # views into MuJoCo's buffers: written before and read after each step
         tool = d.site_xpos[self.tool_site]
         site = None if anchor is None else m.site_pos[self.fixture_sites[fixture]]
-        rigid = not self.elastic and np.array_equal(self.motor_qpos, np.arange(n))
+        rigid = not self.elastic  # its qpos is the n motor angles, in order
         qpos = d.qpos[:n]
         for s, u in enumerate(ctrl, start):
             command[:] = u

@@ -330,7 +330,7 @@ def collect_self_motion(
                 ramp.retarget(t)
                 next_decision = s + period
             command = controller.step(q, ramp(t, exploration.command(q)))
-            block = command_block(command, previous, *controller.bounds(q), every_control)
+            block = command_block(command, previous, *controller.last_bounds, every_control)
             previous = command
             plant.advance(s, q_log, tool_log, block[: stop - s], anchor, fixture=k)
             if progress is not None and stop - reported >= report_every:
