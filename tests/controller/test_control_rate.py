@@ -37,7 +37,7 @@ def test_the_ball_stays_in_the_socket_at_the_lower_control_rate(runs):
     assert CONTROL_RATE < 1000.0
     # today's tolerance (a QP every 1 ms step), and no worse than the 1 kHz controller on the same robot
     assert slow.max_violation[0] < 5e-5
-    assert slow.max_violation[0] < 1.25 * fast.max_violation[0]
+    assert slow.max_violation[0] < 1.1 * fast.max_violation[0]  # 1.01x; a plain hold at 100 Hz: 1.16x
     assert slow.limit_excess[0] == 0.0 and slow.fallbacks == 0
     # the readings are the true robot's: its tool point is the recorded one, on the fixture
     assert np.abs(slow.tool - tool_point(slow.true_model, slow.q)).max() < 1e-9
