@@ -47,7 +47,7 @@ class NullSpaceController:
         limit_gain: [1/s], see :func:`velocity_bounds`.
         dt: control period [s] (kept for users that integrate the command).
         closed_form: when no bound is active, return the QP's solution in closed form
-            (:func:`controller.qp_ik.equality_solution`, exact, ~10x faster than OSQP) and call the
+            (:func:`controller.qp_ik.equality_solution`, exact; a whole step 24.7 us against 28.6 us) and call the
             QP solver only when a bound is active or near a singularity; False: always the solver.
     """
 
