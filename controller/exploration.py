@@ -12,7 +12,7 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
-from .ik import ik
+from .ik import Kinematics, ik
 
 MODES: tuple[str, ...] = ("coverage", "random")
 #: Defaults: exploration speed [rad/s], decision periods [s], ramp duration [s], histogram bins.
@@ -112,11 +112,14 @@ class CoverageExploration:
         speed: ``|q_r|`` far from the goal [rad/s].
         period: longest time spent on one goal [s].
         step: how far past the visited range a goal is set [rad].
+        kinematics: the model's tool point and Jacobian computed elsewhere (see :func:`controller.ik.ik`;
+            the controller's MuJoCo kinematics: a few microseconds per configuration), or None.
     """
 
     def __init__(self, model, target: np.ndarray, rng: np.random.Generator, speed: float = SPEED,
-                 period: float = COVERAGE_PERIOD, step: float = GOAL_STEP):
+                 period: float = COVERAGE_PERIOD, step: float = GOAL_STEP, kinematics: Kinematics | None = None):
         self.model, self.target, self.rng = model, np.asarray(target, float), rng
+        self.kinematics = kinematics
         margin = np.minimum(GOAL_MARGIN, 0.5 * (model.upper - model.lower))  # a locked joint: its value
         self.lower, self.upper = model.lower + margin, model.upper - margin
         self.n = self.lower.size
@@ -126,14 +129,14 @@ class CoverageExploration:
         self._joint = -1
 
     def _find_goal(self, q: np.ndarray, j: int, value: float) -> np.ndarray | None:
-
-
+        """(n,) a configuration on the self-motion manifold with ``q_j = value``, near ``q``, or None."""
         lower, upper = self.lower.copy(), self.upper.copy()
         lower[j] = upper[j] = value
         start = q.copy()
         start[j] = value
         result = ik(replace(self.model, lower=lower, upper=upper), self.target, start, max_iter=50,
-                    restarts=GOAL_RESTARTS, rng=self.rng)
+                    restarts=GOAL_RESTARTS, rng=self.rng, kinematics=self.kinematics,
+                    lockstep=self.kinematics is not None)
         return result.q if result.converged else None
 
     def decide(self, t: float, q_history: np.ndarray, jac: np.ndarray) -> None:
@@ -182,10 +185,13 @@ class CoverageExploration:
         return delta * (self.speed / max(float(np.linalg.norm(delta)), 0.3))
 
 
-def make_exploration(mode: str, model, target: np.ndarray, rng: np.random.Generator, speed: float | None = None):
-    """The exploration of ``mode`` (``"coverage"`` or ``"random"``) for ``model`` at ``target`` (3,) [m]."""
+def make_exploration(mode: str, model, target: np.ndarray, rng: np.random.Generator, speed: float | None = None,
+                     kinematics: Kinematics | None = None):
+    """The exploration of ``mode`` (``"coverage"`` or ``"random"``) for ``model`` at ``target`` (3,) [m]
+    (``kinematics``: see :class:`CoverageExploration`)."""
     if mode == "coverage":
-        return CoverageExploration(model, target, rng, COVERAGE_SPEED if speed is None else speed)
+        return CoverageExploration(model, target, rng, COVERAGE_SPEED if speed is None else speed,
+                                   kinematics=kinematics)
     if mode == "random":
         return RandomExploration(model.n_joints, rng, RANDOM_SPEED if speed is None else speed)
     raise ValueError(f"unknown exploration mode {mode!r}, expected one of {MODES}")

@@ -6,6 +6,7 @@ not the nominal one, which joint angles put the real tool point on the target.
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
@@ -72,38 +73,103 @@ def _error_and_jacobian(model: RobotModel, q: np.ndarray, target: np.ndarray, or
     return np.concatenate([target - pose[:3, 3], err_o]), pose_jacobian(model, q)
 
 
-def _solve_from(model: RobotModel, q: np.ndarray, target: np.ndarray, orientation: np.ndarray | None,
-                max_iter: int) -> tuple[np.ndarray, np.ndarray, int]:
-    """Damped Gauss-Newton with clamping to the limits (joints pinned at a limit are frozen)."""
-    lower, upper = model.lower, model.upper
-    err, jac = _error_and_jacobian(model, q, target, orientation)
-    cost = err @ err
-    lam2 = 1e-6
-    it = 0
-    for it in range(1, max_iter + 1):  # noqa: B007
-        if np.linalg.norm(err[:3]) < POSITION_TOL * 0.1 and (orientation is None or
-                                                             np.linalg.norm(err[3:]) < ORIENTATION_TOL * 0.1):
+#: The tool point (3,) [m] and its Jacobian (3, n) [m/rad] at joint angles (n,) [rad].
+Kinematics = Callable[[np.ndarray], tuple[np.ndarray, np.ndarray]]
+
+
+#: Evaluates a batch of configurations (k, n) [rad]: task errors (k, m) and their Jacobians (k, m, n).
+Evaluate = Callable[[np.ndarray], tuple[np.ndarray, np.ndarray]]
+
+
+def _evaluator(model: RobotModel, target: np.ndarray, orientation: np.ndarray | None,
+               kinematics: Kinematics | None) -> Evaluate:
+    """The task error and Jacobian of a batch, row by row, from ``kinematics`` (its buffers are
+    copied) or from :mod:`correction`'s kinematics of ``model``."""
+    m, n = 3 if orientation is None else 6, model.n_joints
+
+    def evaluate(q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        err, jac = np.empty((q.shape[0], m)), np.empty((q.shape[0], m, n))
+        for k, qk in enumerate(q):
+            if kinematics is None:
+                err[k], jac[k] = _error_and_jacobian(model, qk, target, orientation)
+            else:
+                point, jac[k] = kinematics(qk)
+                err[k] = target - point
+        return err, jac
+
+    return evaluate
+
+
+def _reached(err: np.ndarray, scale: float = 1.0) -> np.ndarray:
+    """(k,) rows of ``err`` (k, 3 or 6) within ``scale`` x the tolerances."""
+    ok = np.linalg.norm(err[:, :3], axis=1) < POSITION_TOL * scale
+    if err.shape[1] > 3:
+        ok &= np.linalg.norm(err[:, 3:], axis=1) < ORIENTATION_TOL * scale
+    return ok
+
+
+def _answer(running: np.ndarray, ok: np.ndarray) -> int | None:
+    """Index of the first start that converged with every earlier one finished without converging
+    (what trying the starts one after another returns), -1 when all failed, None while undecided."""
+    for k, (busy, good) in enumerate(zip(running, ok, strict=True)):
+        if busy:
+            return None
+        if good:
+            return k
+    return -1
+
+
+def _solve_batch(lower: np.ndarray, upper: np.ndarray, starts: np.ndarray, evaluate: Evaluate,
+                 max_iter: int) -> tuple[np.ndarray, np.ndarray, np.ndarray, int]:
+    """Damped Gauss-Newton with clamping to the limits (joints pinned at a limit are frozen), run
+    from every start in lockstep (one numpy call per iteration for the whole batch).
+
+    Each start goes on until it converges (errors below a tenth of the tolerances), its damping
+    exceeds 1e3 or ``max_iter``; the batch stops as soon as the answer is known (:func:`_answer`).
+
+    Args:
+        lower, upper: (n,) limits [rad].
+        starts: (S, n) starts [rad].
+        evaluate: task errors and Jacobians of a batch.
+        max_iter: iterations per start.
+
+    Returns:
+        ``(q (S, n), err (S, m), iterations (S,), answer)`` with ``answer`` from :func:`_answer`.
+    """
+    q = np.array(starts, dtype=float)
+    err, jac = evaluate(q)
+    cost = np.einsum("sm,sm->s", err, err)
+    lam2 = np.full(q.shape[0], 1e-6)
+    iterations = np.zeros(q.shape[0], dtype=int)
+    running = np.ones(q.shape[0], dtype=bool)
+    eye = np.eye(err.shape[1])
+    for _ in range(max_iter):
+        running &= ~_reached(err, 0.1)
+        if not running[0] and _answer(running, _reached(err)) is not None:
             break
-        free = np.ones(q.size, dtype=bool)
+        idx = np.flatnonzero(running)
+        iterations[idx] += 1
+        qi, ei, ji = q[idx], err[idx], jac[idx]
+        free = np.ones(qi.shape, dtype=bool)
         for _ in range(2):
-            jf = jac[:, free]
-            dq = np.zeros(q.size)
-            dq[free] = jf.T @ np.linalg.solve(jf @ jf.T + lam2 * np.eye(err.size), err)
-            pinned = ((q <= lower) & (dq < 0)) | ((q >= upper) & (dq > 0))
+            jf = ji * free[:, None, :]
+            jft = jf.transpose(0, 2, 1)
+            dq = (jft @ np.linalg.solve(jf @ jft + lam2[idx, None, None] * eye, ei[..., None]))[..., 0]
+            pinned = ((qi <= lower) & (dq < 0)) | ((qi >= upper) & (dq > 0))
             if not np.any(pinned & free):
                 break
             free &= ~pinned
-        trial = np.clip(q + dq, lower, upper)
-        trial_err, trial_jac = _error_and_jacobian(model, trial, target, orientation)
-        trial_cost = trial_err @ trial_err
-        if trial_cost < cost:
-            q, err, jac, cost = trial, trial_err, trial_jac, trial_cost
-            lam2 = max(lam2 * 0.1, 1e-12)
-        else:
-            lam2 *= 10.0
-            if lam2 > 1e3:
-                break
-    return q, err, it
+        trial = np.clip(qi + dq, lower, upper)
+        trial_err, trial_jac = evaluate(trial)
+        trial_cost = np.einsum("sm,sm->s", trial_err, trial_err)
+        better = trial_cost < cost[idx]
+        won, lost = idx[better], idx[~better]
+        q[won], err[won], jac[won], cost[won] = trial[better], trial_err[better], trial_jac[better], trial_cost[better]
+        lam2[won] = np.maximum(lam2[won] * 0.1, 1e-12)
+        lam2[lost] *= 10.0
+        running[lost[lam2[lost] > 1e3]] = False
+    running[:] = False
+    return q, err, iterations, _answer(running, _reached(err))
 
 
 def ik(
@@ -114,12 +180,16 @@ def ik(
     max_iter: int = 200,
     restarts: int = 0,
     rng: np.random.Generator | None = None,
+    kinematics: Kinematics | None = None,
+    lockstep: bool = False,
 ) -> IKResult:
     """Joint angles that put the tool point of ``model`` on ``target``.
 
     Damped Gauss-Newton on :mod:`correction`'s kinematics, started from ``q0`` (the minimum-norm
     step keeps the answer near it), clamped to the joint limits; if it does not converge, up to
-    ``restarts`` more starts drawn uniformly inside the limits with ``rng``.
+    ``restarts`` more starts drawn uniformly inside the limits with ``rng`` (drawn together and
+    run in lockstep; the first of them, in order, that converges is the answer, as if they had
+    been tried one after another).
 
     Args:
         model: the kinematics to invert (nominal, true or calibrated).
@@ -129,6 +199,13 @@ def ik(
         max_iter: iterations per start.
         restarts: extra random starts when a start fails.
         rng: seeded generator for the restarts (required when ``restarts > 0``).
+        kinematics: ``q (n,) -> (tool point (3,) [m], Jacobian (3, n) [m/rad])`` of ``model``
+            computed elsewhere (e.g. :meth:`NullSpaceController.kinematics`, MuJoCo, ~100x
+            faster than numpy on one configuration); position only. ``model`` still gives the
+            limits.
+        lockstep: draw the restarts at once and run them with ``q0`` from the first iteration
+            (same answer; worth it when a start often fails and evaluations are cheap, as in the
+            coverage goal search; the restarts are drawn even when ``q0`` converges).
 
     Returns:
         :class:`IKResult` (check ``converged``; the best attempt is returned either way).
@@ -137,17 +214,20 @@ def ik(
     orientation = None if orientation is None else np.asarray(orientation, dtype=float).reshape(3, 3)
     if restarts and rng is None:
         raise ValueError("ik: restarts need a seeded rng")
-    starts = [np.clip(np.asarray(q0, dtype=float), model.lower, model.upper)]
-    best, total = None, 0
-    for k in range(restarts + 1):
-        start = starts[0] if k == 0 else model.random_configurations(1, rng)[0]
-        q, err, it = _solve_from(model, start, target, orientation, max_iter)
-        total += it
-        pos, ang = float(np.linalg.norm(err[:3])), float(np.linalg.norm(err[3:])) if orientation is not None else 0.0
-        result = IKResult(q, pos, ang, total, pos < POSITION_TOL and ang < ORIENTATION_TOL)
-        if best is None or (result.position_error + result.orientation_error
-                            < best.position_error + best.orientation_error):
-            best = result
-        if result.converged:
-            return IKResult(q, pos, ang, total, True)
-    return IKResult(best.q, best.position_error, best.orientation_error, total, False)
+    if kinematics is not None and orientation is not None:
+        raise ValueError("ik: a kinematics callable gives the position only, not an orientation")
+    evaluate = _evaluator(model, target, orientation, kinematics)
+    first = np.clip(np.asarray(q0, dtype=float), model.lower, model.upper)[None]
+    if lockstep and restarts:
+        starts = np.vstack([first, model.random_configurations(restarts, rng)])
+        q, err, iterations, answer = _solve_batch(model.lower, model.upper, starts, evaluate, max_iter)
+    else:
+        q, err, iterations, answer = _solve_batch(model.lower, model.upper, first, evaluate, max_iter)
+    if answer < 0 and restarts and not lockstep:  # the restarts run together, the first that converges wins
+        more = _solve_batch(model.lower, model.upper, model.random_configurations(restarts, rng), evaluate, max_iter)
+        q, err, iterations = (np.concatenate([a, b]) for a, b in zip((q, err, iterations), more[:3], strict=True))
+        answer = -1 if more[3] < 0 else 1 + more[3]
+    pos = np.linalg.norm(err[:, :3], axis=1)
+    ang = np.linalg.norm(err[:, 3:], axis=1) if orientation is not None else np.zeros(pos.size)
+    pick = answer if answer >= 0 else int(np.argmin(pos + ang))
+    return IKResult(q[pick], float(pos[pick]), float(ang[pick]), int(iterations.sum()), answer >= 0)

@@ -257,6 +257,45 @@ class Plant:
         if self.elastic:
             self.mj_data.qfrc_applied[self.flex_dofs] = -self.mj_data.qfrc_gravcomp[self.flex_dofs]
 
+    def advance(self, start: int, q_log: np.ndarray, tool_log: np.ndarray, ctrl: np.ndarray,
+                anchor: np.ndarray | None = None, fixture: int = 0) -> None:
+        """Physics steps ``start .. start + len(ctrl) - 1``, one actuator command each, logged at every step.
+
+        ``q_log[s]`` gets the joint readings at the start of step ``s`` and ``tool_log[s]`` the tool
+        site at the same state (MuJoCo computes positions before integrating). A rigid plant runs
+        ``mj_step`` with no numpy between steps but the copies; an elastic one splits it to apply
+        joint gravity (:meth:`apply_joint_gravity`).
+
+        Args:
+            start: index of the first step (into the logs).
+            q_log: (S, n) joint readings [rad], written in place.
+            tool_log: (S, 3) tool site in the world [m], written in place.
+            ctrl: (P, n) actuator commands of the P steps (joint velocities [rad/s]).
+            anchor: (S, 3) world position of fixture site ``fixture`` at each step [m] (a moving
+                fixture, e.g. compliance), or None to leave it where it is.
+            fixture: index of the fixture site that ``anchor`` moves.
+        """
+        m, d = self.mj_model, self.mj_data
+        n = self.n_joints
+        command = d.ctrl[:n]  # views into MuJoCo's buffers: written before and read after each step
+        tool = d.site_xpos[self.tool_site]
+        site = None if anchor is None else m.site_pos[self.fixture_sites[fixture]]
+        rigid = not self.elastic  # its qpos is the n motor angles, in order
+        qpos = d.qpos[:n]
+        for s, u in enumerate(ctrl, start):
+            command[:] = u
+            if site is not None:
+                site[:] = anchor[s]
+            if rigid:
+                q_log[s] = qpos
+                mujoco.mj_step(m, d)
+            else:
+                mujoco.mj_step1(m, d)
+                self.apply_joint_gravity()
+                q_log[s] = d.qpos[self.motor_qpos]
+                mujoco.mj_step2(m, d)
+            tool_log[s] = tool
+
     # -------------------------------------------------------------------- fixtures
     def fixture_index(self, name: str) -> int:
         try:

@@ -7,10 +7,12 @@ Decision variable: the joint velocity ``qdot`` (n,) [rad/s]. Problem (one contro
                 lb <= qdot <= ub                 (velocity and position limits over a step)
 
 With no bound active the solution is ``J^+ v + (I - J^+ J) q_r``: the secondary velocity
-``q_r`` projected into the null space of the tool-point task. ``v = Kp (p_B - p)`` when a
-target is given and ``0`` during self-motion (the closed chain, not the nominal model, keeps
-the tool on the fixture). Near singularities ``v`` is replaced by its damped least-squares
-image ``J J^T (J J^T + lambda^2 I)^-1 v``, which stays in the range of ``J``.
+``q_r`` projected into the null space of the tool-point task. :func:`equality_solution` gives it
+in closed form; when it lies inside the bounds it *is* the QP's solution (the KKT conditions hold
+with zero bound multipliers), so a controller needs the QP solver only when a bound is active.
+``v = Kp (p_B - p)`` when a target is given and ``0`` during self-motion (the closed chain, not
+the nominal model, keeps the tool on the fixture). Near singularities ``v`` is replaced by its
+damped least-squares image ``J J^T (J J^T + lambda^2 I)^-1 v``, which stays in the range of ``J``.
 
 :func:`build_problem` returns a :class:`qpsolvers.Problem` to inspect or solve with any
 qpsolvers solver; :class:`PersistentOSQP` keeps one ``osqp.OSQP`` set up and only updates
@@ -97,6 +99,26 @@ def damped_task_velocity(jac: np.ndarray, v: np.ndarray, damping: float = DAMPIN
         return v
     lam2 = damping**2 * (1.0 - (w / MANIPULABILITY_THRESHOLD) ** 2)
     return jjt @ np.linalg.solve(jjt + lam2 * np.eye(jjt.shape[0]), v)
+
+
+def equality_solution(jac: np.ndarray, v: np.ndarray, q_r: np.ndarray) -> np.ndarray | None:
+    """The QP's solution with the bounds left out: ``q_r + J^T (J J^T)^-1 (v - J q_r)`` (n,) [rad/s].
+
+    It is the QP's solution whenever it lies inside ``[lb, ub]``.
+
+    Args:
+        jac: (3, n) tool-point Jacobian [m/rad].
+        v: (3,) primary task velocity [m/s].
+        q_r: (n,) desired secondary joint velocity [rad/s].
+
+    Returns:
+        (n,) joint velocity, or None near a singularity (manipulability ``sqrt(det(J J^T))`` below
+        :data:`MANIPULABILITY_THRESHOLD`), where the QP solver and the damped task decide.
+    """
+    jjt = jac @ jac.T
+    if np.linalg.det(jjt) < MANIPULABILITY_THRESHOLD**2:
+        return None
+    return q_r + jac.T @ np.linalg.solve(jjt, v - jac @ q_r)
 
 
 def build_problem(
@@ -189,11 +211,13 @@ class PersistentOSQP:
 
 @dataclass
 class StepReport:
-    """What the last control step did: ``status`` is ``"qp"`` or ``"fallback: <reason>"``."""
+    """What the last control step did: ``status`` is ``"qp"`` or ``"fallback: <reason>"``;
+    ``closed_form`` counts the steps solved by :func:`equality_solution` (no bound active)."""
 
     status: str = "qp"
     fallbacks: int = 0
     steps: int = 0
+    closed_form: int = 0
 
 
 def solve_step(

@@ -25,11 +25,12 @@ def test_controller_jacobian_matches_correction(panda, rng):
         assert np.abs(jac - joint_jacobian(panda, q)).max() < 1e-12
 
 
+@pytest.mark.parametrize("closed_form", [False, True])
 @pytest.mark.parametrize("solver,persistent", [("osqp", True), ("osqp", False), ("daqp", False)])
-def test_null_space_motion_is_strict_and_a_projection(panda, rng, solver, persistent):
+def test_null_space_motion_is_strict_and_a_projection(panda, rng, solver, persistent, closed_form):
     if solver not in qpsolvers.available_solvers:
         pytest.skip(f"{solver} not installed")
-    controller = NullSpaceController(panda, solver=solver, persistent=persistent)
+    controller = NullSpaceController(panda, solver=solver, persistent=persistent, closed_form=closed_form)
     for _ in range(50):
         q = Q0 + rng.normal(0.0, 0.1, 7)
         q_r = rng.normal(0.0, 0.3, 7)
@@ -41,6 +42,28 @@ def test_null_space_motion_is_strict_and_a_projection(panda, rng, solver, persis
         assert np.all(projected > lb + 1e-3) and np.all(projected < ub - 1e-3)  # no bound active
         assert np.abs(qdot - projected).max() < 1e-8
     assert controller.report.fallbacks == 0
+    assert controller.report.closed_form == (50 if closed_form else 0)  # the solver ran when asked to
+
+
+def test_closed_form_is_used_only_with_no_bound_active(panda, rng):
+    # near a limit the projection crosses a bound: the QP solver decides, and its answer differs
+    fast, solver = NullSpaceController(panda), NullSpaceController(panda, closed_form=False)
+    q = Q0.copy()
+    q[3] = panda.upper[3] - 0.012  # 2 mm inside the margin: ub of joint 4 is 0.04 rad/s
+    q_r = np.zeros(7)
+    q_r[3] = 1.0
+    jac = joint_jacobian(panda, q)
+    assert _projection(jac, q_r)[3] > controller_ub(solver, q)[3]  # the unconstrained answer would cross it
+    qdot, reference = fast.step(q, q_r), solver.step(q, q_r)
+    assert fast.report.closed_form == 0 and np.abs(qdot - reference).max() < 1e-8
+    assert qdot[3] <= controller_ub(solver, q)[3] + 1e-9 and np.linalg.norm(jac @ qdot) < 1e-9
+    for q in panda.random_configurations(20, rng) * 0.3 + Q0 * 0.7:  # well inside: the same numbers
+        q_r = rng.normal(0.0, 0.3, 7)
+        assert np.abs(fast.step(q, q_r) - solver.step(q, q_r)).max() < 1e-9
+
+
+def controller_ub(controller, q):
+    return controller.bounds(q)[1]
 
 
 def test_position_task_reaches_target(panda):

@@ -42,6 +42,7 @@ def test_short_demo_writes_everything_and_its_recording_holds_the_documented_ent
     assert names == expected
     report = json.loads((out / "demo.json").read_text())
     assert report["provenance"]["seed"] == 3 and report["provenance"]["inputs"]["samples_per_fixture"] == SAMPLES
+    assert report["provenance"]["inputs"]["control_rate_hz"] == 250.0  # the controller's rate over 1 kHz physics
     for name in ("samples.csv", "fixtures.yaml", "truth.yaml", "calibrated.yaml", "mocap.csv"):
         assert "mujoco 4" in (out / name).read_text(), name  # versions recorded in every result file
 

@@ -162,8 +162,8 @@ def deviation_summary(report: ValidationReport) -> str:
     )
 
 
-def _inputs(config: DemoConfig) -> dict:
-    return {
+def _inputs(config: DemoConfig, data=None) -> dict:
+    inputs = {
         "seed": config.seed,
         "samples_per_fixture": config.samples,
         "fixture_noise_m": config.noise,
@@ -172,6 +172,10 @@ def _inputs(config: DemoConfig) -> dict:
         "configurations": config.configurations,
         "motion_source": config.source,
     }
+    run = None if data is None else data.trajectory
+    if run is not None:  # MuJoCo: the controller's rate over the 1 kHz physics shapes the samples
+        inputs["control_rate_hz"] = run.settings.control_rate
+    return inputs
 
 
 #: The files of a demo in its folder (``recording`` only with ``rrd``).
@@ -200,7 +204,7 @@ def write_results(config: DemoConfig, result: DemoResult, data, fixtures: dict[s
 
     out = Path(config.out)
     outputs = demo_outputs(config) if outputs is None else outputs
-    info = provenance(config.seed, _inputs(config))
+    info = provenance(config.seed, _inputs(config, data))
     header = "spherecal demo\n" + comment_block(info)
     comment = "".join(f"# {line}\n" for line in header.splitlines())
     first = result.report.sets[0]
