@@ -95,7 +95,7 @@ class CompensationResult:
 
     @property
     def uncompensated_error(self) -> float:
-        """|target - landing| [m] had the target itself been sent (the first controller evaluation)."""
+        """``|target - landing|`` [m] had the target itself been sent (the first controller evaluation)."""
         return float(self.history[0])
 
     @property

@@ -46,7 +46,7 @@ class ToolSwap:
 
     Attributes:
         model: the calibrated model with the new tool point.
-        distance: |new tool - calibrated tool point| [m], in the last frame.
+        distance: ``|new tool - calibrated tool point|`` [m], in the last frame.
         unidentified: tool displacement [m] of a rotation of the last frame about the old tool point by the
             prior's angle spread (0.2 deg): what the calibration cannot vouch for at the new tool.
         note: the above in one line, in mm.
