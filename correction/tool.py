@@ -59,15 +59,25 @@ class ToolSwap:
 
 
 def with_tool(model: RobotModel, tool: np.ndarray, payload: dict | None = None,
-              angle: float = ANGLE.prior_std) -> ToolSwap:
+              angle: float = ANGLE.prior_std, nominal_tool: np.ndarray | None = None) -> ToolSwap:
     """Put another tool point on a (calibrated) model.
+
+    The calibrated tool point carries more than the ball's mounting: the last joint's ``d`` and ``theta``
+    are redundant with it and held at nominal, so the flange's own error along and about the last axis is
+    in the tool point too (MUKCa's Panda: ``tool_z`` moves 1.6 mm). With ``nominal_tool`` (the old tool's
+    nominal position, which the calibration started from) that correction is carried over:
+    ``new = model.tool + (tool - nominal_tool)``, ``tool`` being the new tool's nominal position, as a
+    description gives it (right when both tools hang from the same flange, e.g. a ball held by the gripper).
 
     Args:
         model: the calibrated model (its tool point is the one it was calibrated with, e.g. the ball).
-        tool: (3,) the new tool point in the last DH frame [m].
+        tool: (3,) the new tool point in the last DH frame [m] (its nominal position when ``nominal_tool``
+            is given, else the point itself).
         payload: the new ``payload`` block (``{mass: kg, com: [x, y, z] m}`` in the last frame) for gravity
             torques, or None to keep the model's (say so to the user: an elastic model's sag depends on it).
         angle: unidentified rotation of the last frame to translate into millimetres [rad].
+        nominal_tool: (3,) the calibrated tool's nominal position in the last frame [m]
+            (``calibration.nominal_tool`` of a calibrated file), or None to put ``tool`` as given.
 
     Raises:
         ToolError: a tool that is not 3 finite numbers.
@@ -75,16 +85,28 @@ def with_tool(model: RobotModel, tool: np.ndarray, payload: dict | None = None,
     tool = np.asarray(tool, dtype=float)
     if tool.shape != (3,) or not np.all(np.isfinite(tool)):
         raise ToolError(f"tool: expected 3 finite coordinates [m] in the last frame, got {np.ravel(tool).tolist()!r}")
+    carried = np.zeros(3)
+    if nominal_tool is not None:
+        nominal_tool = np.asarray(nominal_tool, dtype=float)
+        if nominal_tool.shape != (3,) or not np.all(np.isfinite(nominal_tool)):
+            raise ToolError(f"nominal_tool: expected 3 finite coordinates [m], got {np.ravel(nominal_tool).tolist()!r}")
+        carried = model.tool - nominal_tool
+        tool = tool + carried
     distance = float(np.linalg.norm(tool - model.tool))
     extras = dict(model.extras)
     if payload is not None:
         extras["payload"] = payload
-    extras["tool_swap"] = {"calibrated_tool": [float(v) for v in model.tool], "tool": [float(v) for v in tool]}
+    extras["tool_swap"] = {"calibrated_tool": [float(v) for v in model.tool], "tool": [float(v) for v in tool],
+                           "carried_correction": [float(v) for v in carried]}
     unidentified = float(np.sin(angle) * distance)
     note = (f"new tool {distance * 1e3:.1f} mm from the calibrated tool point: a single-point tool does not "
             f"(fully) identify the rotation of the last frame about that point, so at the new tool each "
             f"{np.rad2deg(angle):.1f} deg of it (the prior's spread) is {unidentified * 1e3:.2f} mm the calibration "
             f"cannot vouch for")
+    if nominal_tool is not None:
+        shift = ", ".join(f"{v * 1e3:+.3f}" for v in carried)
+        note += (f"; the calibration's correction of the old tool point, ({shift}) mm in the last frame (the "
+                 f"flange's own error is in it), is carried to the new tool")
     return ToolSwap(replace(model, tool=tool, extras=extras), distance, unidentified, note)
 
 

@@ -160,6 +160,7 @@ def run_workflow(nominal: RobotModel, dataset: Dataset, spec: FixtureSpec | None
     if selection.seconds:
         block["timings_s"]["model_selection"] = selection.seconds
     block["duplicates_dropped"] = dropped
+    block["nominal_tool"] = [float(v) for v in nominal.tool]  # a tool swap carries the tool's correction over
     block["trained_on"] = training_record(as_read, dataset)  # validate recognises these samples by content
     block["options"] = options.record()
     block["provenance"] = provenance(options.seed, {**(inputs or {}), **options.record()})

@@ -18,7 +18,9 @@ def put_tool(model: RobotModel, offset: np.ndarray | None = None, urdf: str | os
 
     Args:
         model: the calibrated model.
-        offset: (3,) the new tool point in the last DH frame [m]; or
+        offset: (3,) the new tool's nominal point in the last DH frame [m] (a calibrated file records its
+            old tool's nominal point, ``calibration.nominal_tool``: the calibration's correction of it is
+            carried to the new tool, see :func:`correction.tool.with_tool`); or
         urdf, tip_link, base_link: a URDF of the same arm with the new tool, its link at the tool point (the
             chain's last frame must be the model's: :func:`correction.tool.tool_in_frame`). When the URDF has
             masses, what its last link carries (gripper, fingers) becomes the payload.
@@ -38,7 +40,9 @@ def put_tool(model: RobotModel, offset: np.ndarray | None = None, urdf: str | os
         offset = tool_in_frame(description, model)
         if has_inertials(description):
             payload = description.extras["payload"]
-    swap = with_tool(model, offset, payload)
+    block = model.extras.get("calibration")
+    nominal = block.get("nominal_tool") if isinstance(block, dict) else None
+    swap = with_tool(model, offset, payload, nominal_tool=nominal)
     if payload is not None:
         line = f"payload from {urdf}: {payload['mass']:.3f} kg (what its last link carries)"
     elif "payload" in model.extras:
