@@ -57,6 +57,7 @@ def run(args: argparse.Namespace) -> int:
     import sys
     import time
 
+    from spherecal.correction.files.provenance import comment_block, provenance
     from spherecal.validation.experiments.campaign import (
         FIXTURE_SETS,
         TABLE_FILES,
@@ -66,7 +67,6 @@ def run(args: argparse.Namespace) -> int:
         table,
         write_tables,
     )
-    from spherecal.validation.provenance import comment_block, provenance
 
     rows = tuple(r.strip() for r in args.rows.split(",") if r.strip())
     unknown = [r for r in rows if r not in FIXTURE_SETS]

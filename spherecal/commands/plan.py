@@ -145,7 +145,7 @@ def run(args: argparse.Namespace) -> int:
         raise fail(f"no plan: {reachable} of {len(result.surveys)} candidates reachable, fewer than the "
                    f"{args.fixture_count} fixtures wanted (--fixture-count)")
     if args.rrd:
-        from spherecal.validation.provenance import comment_block, provenance
+        from spherecal.correction.files.provenance import comment_block, provenance
 
         inputs = {k: v for k, v in vars(args).items() if not k.startswith("_") and k != "command"}
         with outputs:  # staged, renamed into place once Rerun has written it all
@@ -173,6 +173,7 @@ def _guide(args: argparse.Namespace, model, rng, outputs) -> int:
     import json
 
     from spherecal.correction.files.fixtures import read_fixtures
+    from spherecal.correction.files.provenance import comment_block, provenance
     from spherecal.correction.files.samples_csv import read_samples
     from spherecal.validation.planning.guidance import recording_guidance
     from spherecal.validation.planning.guidance_report import (
@@ -181,7 +182,6 @@ def _guide(args: argparse.Namespace, model, rng, outputs) -> int:
         write_guidance_recording,
     )
     from spherecal.validation.planning.placements import read_placements
-    from spherecal.validation.provenance import comment_block, provenance
 
     if args.grid is not None:
         raise fail("--grid places single fixtures for a plan from scratch; with --samples give --plate-grid")

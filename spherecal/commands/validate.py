@@ -46,11 +46,11 @@ def run(args: argparse.Namespace) -> int:
     import numpy as np
 
     from spherecal.correction import load_robot
+    from spherecal.correction.files.provenance import provenance
     from spherecal.validation.inputs import check_models
     from spherecal.validation.mocap import check_mocap, read_mocap_csv
     from spherecal.validation.pipeline import record_validate_run, validate_models
     from spherecal.validation.progress import progress_bar
-    from spherecal.validation.provenance import provenance
 
     if args.truth is None and args.mocap is None and args.samples is None:
         raise fail("give --truth (simulation), --mocap (recorded data) or --samples (socket-only)")

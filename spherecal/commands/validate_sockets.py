@@ -43,8 +43,8 @@ def run_sockets(args: argparse.Namespace, models: dict[str, RobotModel], outputs
     from pathlib import Path
 
     from spherecal.correction.files.fixtures import read_fixtures
+    from spherecal.correction.files.provenance import provenance
     from spherecal.correction.files.samples_csv import read_samples
-    from spherecal.validation.provenance import provenance
     from spherecal.validation.sockets import (
         fitted_fixtures,
         record_sockets,

@@ -141,7 +141,7 @@ def test_campaign_command_without_dask_says_so_in_one_line_and_writes_nothing(tm
 
 
 def test_the_provenance_records_the_workers_grouped_by_versions() -> None:
-    from spherecal.validation.provenance import comment_block, provenance
+    from spherecal.correction.files.provenance import comment_block, provenance
 
     own = versions()
     old = {**own, "numpy": "1.0.0"}

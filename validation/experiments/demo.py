@@ -13,12 +13,12 @@ import numpy as np
 from spherecal.correction import RobotModel, save_robot, tool_point
 from spherecal.correction.files.fixtures import format_fixtures
 from spherecal.correction.files.outputs import OutputSet, check_folder
+from spherecal.correction.files.provenance import comment_block, provenance
 from spherecal.correction.files.samples_csv import format_samples
 
 from ..mocap import MARKER_NOISE, MocapMeasurement, write_mocap_csv
 from ..pipeline import RANDOM_SET, ValidationReport, record_parameters, record_validation, validate_models
 from ..progress import progress_bar
-from ..provenance import comment_block, provenance
 from ..viewer.recording import Recording
 from .experiment import calibrate_from, default_fixtures, motion_set, nominal_robot, true_robot
 

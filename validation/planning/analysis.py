@@ -33,6 +33,7 @@ from pathlib import Path
 import numpy as np
 
 from spherecal.correction import atomic_write_text, registered_errors, tool_point
+from spherecal.correction.files.provenance import comment_block, provenance
 from spherecal.correction.files.samples import Dataset
 from spherecal.identification.calibrate import calibrate
 from spherecal.identification.prediction import Workspace, predict_accuracy
@@ -40,7 +41,6 @@ from spherecal.validation.experiments.experiment import default_fixtures, fixtur
 from spherecal.validation.planning.candidates import Candidate, grid_candidates
 from spherecal.validation.planning.plan import motion_samples, plan
 from spherecal.validation.planning.plan_report import format_plan
-from spherecal.validation.provenance import comment_block, provenance
 from spherecal.validation.threads import capped
 
 #: The fourth fixture of the 1-4 fixture rows (low, left of the defaults) [m].
