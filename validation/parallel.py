@@ -173,8 +173,17 @@ def _dask(scheduler: str, workers: int) -> Iterator[Executor]:
         ) from None
     cluster = None
     if scheduler == "local":  # processes (one thread each), on this machine only, no dashboard
-        cluster = LocalCluster(n_workers=workers, threads_per_worker=1, processes=True, host="127.0.0.1",
-                               dashboard_address=None, silence_logs=logging.ERROR)
+        import dask  # installed with distributed
+
+        # Dask's nanny gives its workers MALLOC_TRIM_THRESHOLD_=65536, which turns off glibc's dynamic mmap
+        # threshold: every numpy temporary above 128 KiB is then mmap'ed and unmapped again, and a campaign task
+        # spent two thirds of its time in the kernel (2-3x slower than in the process pool). Our workers keep
+        # glibc's default; the BLAS caps it sets stay.
+        environ = dict(dask.config.get("distributed.nanny.pre-spawn-environ", default={}))
+        environ.pop("MALLOC_TRIM_THRESHOLD_", None)
+        with dask.config.set({"distributed.nanny.pre-spawn-environ": environ}):
+            cluster = LocalCluster(n_workers=workers, threads_per_worker=1, processes=True, host="127.0.0.1",
+                                   dashboard_address=None, silence_logs=logging.ERROR)
     try:
         try:
             client = Client(cluster if cluster is not None else scheduler, timeout=CONNECT_TIMEOUT)
