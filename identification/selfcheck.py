@@ -7,8 +7,12 @@ Run on every calibration (:func:`self_check`), its findings travel with the resu
   (largest joint range below :data:`MIN_MOTION`);
 * **residual level**: the residual std per coordinate against the declared ``noise``, overall (a
   chi-square with the fit's degrees of freedom ``3 K + distances - unknowns``) and per fixture;
-  refused above :data:`LEVEL_FACTOR` x ``noise`` (a factor, not the chi-square's tail: real
-  recordings are not Gaussian, see below);
+  above :data:`LEVEL_FACTOR` x ``noise`` (a factor, not the chi-square's tail: real recordings are not
+  Gaussian, see below) refused, unless the residuals look like noise and nothing else is blamed: then the
+  calibration is judged at the noise they show (written with a warning when still expected to beat
+  nominal, refused naming that noise otherwise);
+* **trend**: a fixture whose residual moves with recording order (a socket or ball that moved while it
+  was recorded) is named with the trend;
 * **leave one out** (:mod:`.consistency`, :mod:`.leave_out`, linearised): every known distance, every known position
   (freed: three unknowns with a prior of its stated accuracy) and every fixture's samples, refitted
   without them; the disagreement in mm and ``dSSR / sigma^2 ~ chi2(dof)`` with ``sigma`` the larger
