@@ -1,8 +1,8 @@
 """Wall time of ``spherecal demo`` and its self-motion's simulated-to-wall ratio, against a baseline checkout.
 
 Runs the whole command (a new process each time, as a user would) from this checkout and from a
-baseline checkout with its own venv (``--base``, e.g. the commit before issue 23 at
-``/tmp/work/base-demo``), interleaved ``--repeats`` times, with ``OPENBLAS_NUM_THREADS=1``. For each
+baseline checkout with its own venv (``--base``, e.g. ``git worktree add ../base-demo d7b2fe6`` and a
+``.venv`` there: the commit before issue 23), interleaved ``--repeats`` times, with ``OPENBLAS_NUM_THREADS=1``. For each
 run: the whole-process wall time, the child's CPU time (user + sys: on one core of a quiet machine
 the wall time; less sensitive to a busy machine), the demo's motion-stage time from its
 ``demo.json``; then the demo's self-motion alone (same seed, robot, fixtures, settings) in a
@@ -13,7 +13,7 @@ and after; writes ``bench/demo.json``.
 Targets (issue 23): self-motion >= 20x real time on one core; the demo <= 15 s on a quiet
 2-core machine.
 
-    .venv/bin/python bench/demo.py --base /tmp/work/base-demo --repeats 3
+    .venv/bin/python bench/demo.py --base ../base-demo --repeats 3
 """
 
 from __future__ import annotations
@@ -98,8 +98,8 @@ def median(values: list[float]) -> float:
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--base", type=Path, default=Path("/tmp/work/base-demo"),
-                        help="baseline checkout with its own .venv (default /tmp/work/base-demo)")
+    parser.add_argument("--base", type=Path, required=True,
+                        help="baseline checkout with its own .venv (e.g. ../base-demo)")
     parser.add_argument("--repeats", type=int, default=3, help="runs of each, interleaved (default 3)")
     parser.add_argument("--seconds", type=float, default=60.0,
                         help="simulated self-motion per fixture [s] (default 60)")

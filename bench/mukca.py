@@ -21,7 +21,7 @@ Models: the Pandas use the embedded Panda (with its inertials) with the tool poi
 (``bench_common.mukca_panda``); the Gen3 lite uses ``tests/data/mukca/gen3lite_ball.yaml`` (no inertials: no
 elastic models, ``auto`` chooses between dh and scale).
 
-    .venv/bin/python bench/mukca.py [--data /work/shared/data/mukca] [--robots panda_2_clean ...] [--no-urdf]
+    .venv/bin/python bench/mukca.py [--data ../shared/data/mukca] [--robots panda_2_clean ...] [--no-urdf]
 
 Prints a table and writes ``bench/mukca.json`` (versions, seed, command, every figure).
 """
