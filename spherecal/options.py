@@ -283,6 +283,16 @@ INPUT_OPTIONS: tuple[str, ...] = (
 )
 
 
+def recorded_options(args: argparse.Namespace) -> dict:
+    """The options of a run as its provenance block records them (``correction.files.provenance``): every
+    option as given, argparse's internals left out, and each that names an existing file as a
+    :class:`~pathlib.Path`, so that the block records its SHA-256."""
+    from pathlib import Path
+
+    return {k: Path(v) if isinstance(v, str) and Path(v).is_file() else v
+            for k, v in vars(args).items() if not k.startswith("_") and k != "command"}
+
+
 def planned_outputs(args: argparse.Namespace, outputs: dict):
     """The :class:`spherecal.correction.files.outputs.OutputSet` of a command, checked before any work.
 

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import argparse
 
-from spherecal.options import fail
+from spherecal.options import fail, recorded_options
 
 HELP = "Run the paper's simulated protocol (fixture sets x noise levels) and print its error table."
 
@@ -109,7 +109,7 @@ def run(args: argparse.Namespace) -> int:
     for result in results:
         if result.refused:
             print(f"refused: {result.row} set {result.index}: {result.refused}")
-    inputs = {k: v for k, v in vars(args).items() if not k.startswith("_") and k != "command"}
+    inputs = recorded_options(args)
     info = provenance(args.seed, {**inputs, "wall_time_s": round(wall, 1)}, workers=run.workers)
     csv_path, md_path = write_tables(rows_out, args.out, comment_block(info), outputs)
     print(f"written: {csv_path}, {md_path}")

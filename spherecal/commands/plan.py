@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import argparse
 
-from spherecal.options import fail, urdf_links
+from spherecal.options import fail, recorded_options, urdf_links
 
 HELP = ("Rank candidate fixture positions by the calibration accuracy they predict; with --samples, what to record "
         "next on a real arm")
@@ -147,7 +147,7 @@ def run(args: argparse.Namespace) -> int:
     if args.rrd:
         from spherecal.correction.files.provenance import comment_block, provenance
 
-        inputs = {k: v for k, v in vars(args).items() if not k.startswith("_") and k != "command"}
+        inputs = recorded_options(args)
         with outputs:  # staged, renamed into place once Rerun has written it all
             info = provenance(args.seed, inputs, workers=result.workers)
             write_recording(outputs.stage(args.rrd), result, comment_block(info))
@@ -193,7 +193,7 @@ def _guide(args: argparse.Namespace, model, rng, outputs) -> int:
     guidance = recording_guidance(model, dataset, spec, rng, candidates, args.plate_grid, args.plate_orientations,
                                   args.per_socket, args.min_gain * 1e-3, args.noise * 1e-3)
     print(format_guidance(guidance))
-    inputs = {k: v for k, v in vars(args).items() if not k.startswith("_") and k != "command"}
+    inputs = recorded_options(args)
     info = provenance(args.seed, inputs)
     with outputs:  # staged: every output appears, or none
         if args.out:

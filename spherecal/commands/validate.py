@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import argparse
 
-from spherecal.options import fail, urdf_links
+from spherecal.options import fail, recorded_options, urdf_links
 
 HELP = "Compare nominal and calibrated models against the truth, motion-capture data or socket samples alone."
 
@@ -41,7 +41,6 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 def run(args: argparse.Namespace) -> int:
     """Load and check every input, validate, print the table, then write the outputs."""
-    from pathlib import Path
 
     import numpy as np
 
@@ -104,8 +103,7 @@ def run(args: argparse.Namespace) -> int:
     print(report.format())
     if report.deviations is not None:
         print("\nparameter deviations from the truth:\n" + report.deviations.format())
-    inputs = {k: Path(v) if isinstance(v, str) and Path(v).is_file() else v for k, v in vars(args).items()}
-    inputs = {k: v for k, v in inputs.items() if not k.startswith("_") and k != "command"}
+    inputs = recorded_options(args)
     result = {"provenance": provenance(args.seed, inputs), "validation": report.to_dict()}
 
     drawn = "truth" if "truth" in models else "calibrated"

@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 
 from spherecal.correction import RobotModel
+from spherecal.options import recorded_options
 
 
 def write_validation(args: argparse.Namespace, outputs, result: dict, record, title: str) -> None:
@@ -40,7 +41,6 @@ def write_validation(args: argparse.Namespace, outputs, result: dict, record, ti
 def run_sockets(args: argparse.Namespace, models: dict[str, RobotModel], outputs) -> int:
     """Validate ``models`` on ``--samples`` (and ``--fixtures``): print the tables, write ``--out``, ``--rrd``."""
     import warnings
-    from pathlib import Path
 
     from spherecal.correction.files.fixtures import read_fixtures
     from spherecal.correction.files.provenance import provenance
@@ -65,8 +65,7 @@ def run_sockets(args: argparse.Namespace, models: dict[str, RobotModel], outputs
     print(report.format())
     for remark in remarks(report, calibrated):
         warnings.warn(remark, stacklevel=1)
-    inputs = {k: Path(v) if isinstance(v, str) and Path(v).is_file() else v for k, v in vars(args).items()}
-    inputs = {k: v for k, v in inputs.items() if not k.startswith("_") and k != "command"}
+    inputs = recorded_options(args)
     result = {"provenance": provenance(args.seed, inputs), "sockets": report.to_dict()}
 
     def record(recording) -> None:
