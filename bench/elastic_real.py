@@ -30,11 +30,11 @@ from pathlib import Path
 import bench_common  # first: one BLAS thread, before numpy loads
 import numpy as np
 
-from spherecal.correction import Dataset, FixtureSpec, tool_point
+from spherecal.correction import Dataset, FixtureSpec, geometric_part, tool_point
 from spherecal.identification.calibrate import calibrate
 from spherecal.identification.ingest.importers import MUKCA_DISTANCE
 from spherecal.identification.problem import PRIOR
-from spherecal.identification.selection import elastic_start, rigid, select_model
+from spherecal.identification.selection import elastic_start, select_model
 
 
 def _fit(start, data, spec, warm=None):  # as identification.workflow fits candidates and folds
@@ -65,7 +65,7 @@ def evaluate(robot: str, dataset: Dataset, spec: FixtureSpec, nominal) -> dict:
         train_spec = FixtureSpec(names=train.fixture_names,
                                  distances=[d for d in spec.distances if _placement(d[0]) != held])
         clock = time.perf_counter()
-        models = {"dh": _fit(rigid(nominal), train, train_spec).model,
+        models = {"dh": _fit(geometric_part(nominal), train, train_spec).model,
                   "elastic": _fit(elastic_start(nominal), train, train_spec).model}
         choice = select_model("auto", _fit, nominal, train, train_spec, samples=10**6)
         models["auto"] = models.get(choice.chosen) or choice.fits[choice.chosen].model

@@ -22,8 +22,7 @@ from pathlib import Path
 import bench_common  # first: one BLAS thread, no Rerun analytics
 import numpy as np
 
-from spherecal.controller.rigid_fit import geometric_part
-from spherecal.correction import load_robot, load_urdf, tool_point
+from spherecal.correction import geometric_part, load_robot, load_urdf, tool_point
 from spherecal.correction.files.urdf_write import robot_to_urdf
 
 #: robot folder -> (training placement, MUKCa's published test MAE [mm] for it, or None)

@@ -24,11 +24,11 @@ the whole joint range 0.499 / 0.521 (worse than dropping), refitted around the r
 
 from __future__ import annotations
 
-from dataclasses import dataclass, replace
+from dataclasses import dataclass
 
 import numpy as np
 
-from spherecal.correction import RobotModel, param_jacobian, tool_point
+from spherecal.correction import RobotModel, geometric_part, param_jacobian, tool_point
 
 #: Workspace configurations drawn for the fit, and as many again to measure the loss.
 WORKSPACE_SAMPLES = 2000
@@ -83,19 +83,6 @@ class RigidFit:
                 f"{self.workspace} configurations {where} (dropping the terms: "
                 f"{self.dropped_workspace_rms * 1e3:.3f} mm), {self.full_range_rms * 1e3:.3f} mm over the whole "
                 f"joint range (dropping: {self.dropped_full_range_rms * 1e3:.3f} mm); seed {self.seed}")
-
-
-def geometric_part(model: RobotModel) -> RobotModel:
-    """``model`` without its joint-side parameter blocks: every ``extras`` key whose removal shortens the
-    parameter vector (compliance today, any block added to the layout the same way tomorrow)."""
-    extras = dict(model.extras)
-    size = model.layout.size
-    for key in list(extras):
-        trial = replace(model, extras={k: v for k, v in extras.items() if k != key})
-        if trial.layout.size < size:
-            extras.pop(key)
-            size = trial.layout.size
-    return replace(model, extras=extras)
 
 
 def joint_side_terms(model: RobotModel) -> tuple[str, ...]:

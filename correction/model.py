@@ -279,3 +279,16 @@ def with_joint_vector(model: RobotModel, key: str, values: np.ndarray | None) ->
     if values is not None:
         extras[key] = [float(v) for v in np.asarray(values, dtype=float).reshape(model.n_joints)]
     return replace(model, extras=extras)
+
+
+def geometric_part(model: RobotModel) -> RobotModel:
+    """``model`` without its joint-side parameter blocks: every ``extras`` key whose removal shortens the
+    parameter vector (compliance and scale today, any block added to the layout the same way tomorrow)."""
+    extras = dict(model.extras)
+    size = model.layout.size
+    for key in list(extras):
+        trial = replace(model, extras={k: v for k, v in extras.items() if k != key})
+        if trial.layout.size < size:
+            extras.pop(key)
+            size = trial.layout.size
+    return replace(model, extras=extras)

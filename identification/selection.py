@@ -39,7 +39,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from spherecal.correction import Dataset, FixtureSpec, RobotModel, tool_point
+from spherecal.correction import Dataset, FixtureSpec, RobotModel, geometric_part, tool_point
 from spherecal.correction.elastic import with_compliance
 from spherecal.correction.errors import SpherecalError
 from spherecal.correction.gravity import has_inertials
@@ -85,17 +85,12 @@ def elastic_start(nominal: RobotModel) -> RobotModel:
     return with_scale(with_compliance(nominal, np.zeros(nominal.n_joints) if c is None else c), None)
 
 
-def rigid(nominal: RobotModel) -> RobotModel:
-    """``nominal`` without compliance or scale (the geometric model)."""
-    return with_scale(with_compliance(nominal, None), None)
-
-
 def start_for(name: str, nominal: RobotModel) -> RobotModel:
     """The start model of candidate ``name``: ``nominal`` with exactly that candidate's terms free
     (compliances and scales start at the nominal file's values, else zero)."""
     if name not in CANDIDATES:
         raise ValueError(f"unknown model {name!r}, expected one of {CANDIDATES}")
-    model = elastic_start(nominal) if "elastic" in name else rigid(nominal)
+    model = elastic_start(nominal) if "elastic" in name else geometric_part(nominal)
     if "scale" in name:
         s = nominal.extras.get("scale")
         model = with_scale(model, np.zeros(nominal.n_joints) if s is None else s)

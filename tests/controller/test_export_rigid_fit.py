@@ -12,8 +12,8 @@ import pytest
 
 from spherecal.cli import main
 from spherecal.controller.export import export_model, recorded_configurations
-from spherecal.controller.rigid_fit import geometric_part, rigid_approximation
-from spherecal.correction import Dataset, load_robot, perturb, save_robot, tool_point, write_samples
+from spherecal.controller.rigid_fit import rigid_approximation
+from spherecal.correction import Dataset, geometric_part, load_robot, perturb, save_robot, tool_point, write_samples
 from spherecal.correction.elastic import with_compliance
 from spherecal.correction.files.provenance import input_record
 from spherecal.correction.files.urdf_write import robot_to_urdf

@@ -42,13 +42,12 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
-from spherecal.correction import RobotModel, param_jacobian, tool_point
+from spherecal.correction import RobotModel, geometric_part, param_jacobian, tool_point
 from spherecal.correction.errors import SpherecalError
 from spherecal.correction.files.fixtures import FixtureSpec
 from spherecal.correction.files.samples import Dataset
 from spherecal.identification.prediction import Prediction, Workspace, predict_accuracy, remove_rigid_motion
 from spherecal.identification.problem import NOISE, SIGMA_FLOOR
-from spherecal.identification.selection import rigid
 from spherecal.identification.workflow import WorkflowOptions, run_workflow
 
 from .candidates import CandidateError
@@ -357,7 +356,7 @@ def rank_placements(
     # Walked on the calibration's geometric part: an elastic model's gravity torques (and their finite
     # differences in every joint Jacobian) made this stage 10-15x slower for a sub-millimetre shift of where
     # the walk lands, which the prediction (parameter Jacobians at these configurations) does not need.
-    q, reachable = hand_guided(rigid(recorded.model), centres, per_socket, rng)
+    q, reachable = hand_guided(geometric_part(recorded.model), centres, per_socket, rng)
     seconds = {"configurations": time.perf_counter() - clock}
     clock = time.perf_counter()
     configurations, refused, k = {}, inside, 0
