@@ -171,6 +171,7 @@ def calibrate(
     check: bool = True,
     force: bool = False,
     prior: float = 0.0,
+    noise_declared: bool = True,
 ) -> CalibrationResult:
     """Identify the parameters of ``nominal`` that put every sample's tool point on its fixture.
 
@@ -193,6 +194,8 @@ def calibrate(
         prior: weight ``W`` of the prior toward ``nominal`` (:mod:`.problem`): each identified parameter's
             deviation over its prior spread, at the declared ``noise``; 0 (default) is plain least squares
             (the workflow and `calibrate` use :data:`.problem.PRIOR`).
+        noise_declared: ``noise`` is what the user states of this data (a floor of the self-check's accuracy
+            judgement); False: a default, and the accuracy is judged at the noise the residuals show.
 
     Returns:
         The :class:`CalibrationResult`.
@@ -239,7 +242,7 @@ def calibrate(
     params, centres = problem.unpack(x)
     timings["covariance"] = time.perf_counter() - clock
     clock = time.perf_counter()
-    checked = self_check(problem, x, nominal, built, loss=loss) if check else None
+    checked = self_check(problem, x, nominal, built, loss=loss, declared=noise_declared) if check else None
     timings["self_check"] = time.perf_counter() - clock
     if checked is not None and not force:
         checked.raise_if_inconsistent()

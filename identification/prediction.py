@@ -153,7 +153,8 @@ def _anchor_spread(problem: CalibrationProblem) -> float:
 
 
 def deviation_root(
-    model: RobotModel, problem: CalibrationProblem, noise: float, sample_weight: float = 1.0
+    model: RobotModel, problem: CalibrationProblem, noise: float, sample_weight: float = 1.0,
+    bias_scale: float = 1.0,
 ) -> tuple[np.ndarray, CalibrationProblem, np.ndarray, np.ndarray]:
     """The calibrated parameters' error ``dp = R z``, ``z ~ N(0, I)`` (see the module docstring).
 
@@ -162,6 +163,9 @@ def deviation_root(
         problem: ``build_problem(model, dataset, spec)``.
         noise: fixture noise std per coordinate [m].
         sample_weight: each sample stands for this many recorded ones.
+        bias_scale: the arm's parameter deviations as a share of the prior spread (1: the generic arm);
+            scales the biases of what the data cannot see (parameters left at nominal, the scale anchor),
+            which are the nominal model's own errors in those directions.
 
     Returns:
         ``(R, pruned, x, std)``: (P, k) root of the error covariance of every parameter of ``model``
@@ -177,7 +181,14 @@ def deviation_root(
     jac = pruned.jacobian(x) * rows
     fp = pruned.n_free_params
     inverse = normal_inverse(jac)
-    cov = noise**2 * inverse[:fp, :fp]
+    if bias_scale == 1.0 or not pruned.n_prior:
+        cov = noise**2 * inverse[:fp, :fp]
+    else:  # the prior rows regularise at the generic spread, the arm's deviations are bias_scale times it:
+        # cov = A^-1 (J_d^T J_d + s^2 J_p^T J_p) A^-1 sigma^2 (= sigma^2 A^-1 at s = 1)
+        prior = pruned.prior_rows()
+        middle = jac[~prior].T @ jac[~prior] + bias_scale**2 * (jac[prior].T @ jac[prior])
+        cov = noise**2 * (inverse @ middle @ inverse)[:fp, :fp]
+        cov = 0.5 * (cov + cov.T)
     free = pruned.free
     std = np.sqrt(np.diag(cov))
     values, vectors = np.linalg.eigh(cov)
@@ -187,7 +198,7 @@ def deviation_root(
     dropped = np.setdiff1d(lin.free, free)
     if dropped.size:  # barely excited parameters left at nominal: the fit absorbs what it can
         cols = [int(np.flatnonzero(lin.free == i)[0]) for i in dropped]
-        spread = prior_std(model)[dropped]
+        spread = bias_scale * prior_std(model)[dropped]
         bias = np.zeros((model.n_params, dropped.size))
         moved = np.zeros((pruned.n_residuals, len(cols)))  # their data columns in the pruned problem's rows
         moved[~pruned.prior_rows()] = lin.jacobian(x_lin)[~lin.prior_rows()][:, cols]
@@ -196,7 +207,7 @@ def deviation_root(
         columns.append(bias)
     if pruned.anchor is not None:  # the scale anchor's radius is the nominal model's, not measured
         kick = np.zeros((pruned.n_residuals, 1))
-        kick[-1] = pruned.distance_weight * _anchor_spread(pruned)
+        kick[-1] = bias_scale * pruned.distance_weight * _anchor_spread(pruned)
         bias = np.zeros((model.n_params, 1))
         bias[free] = (inverse @ (jac.T @ kick))[:fp]
         columns.append(bias)

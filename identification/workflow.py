@@ -43,7 +43,9 @@ class WorkflowOptions:
         method: ``lm``, ``pso`` or ``pso+lm``.
         model: ``dh``, ``elastic``, ``scale``, ``elastic+scale`` or ``auto`` (:mod:`.selection`).
         loss: ``linear``, ``soft_l1`` or ``huber``.
-        noise: expected fixture noise std per axis [m].
+        noise: declared fixture noise std per axis [m], or None (default): not declared, the fit weighs the
+            samples at :data:`.problem.NOISE` and the self-check judges the accuracy at the noise the residuals
+            show (a declared noise is a floor of that judgement: :func:`.selfcheck.self_check`).
         max_per_fixture: keep at most this many samples per fixture (random, seeded), None for all.
         dedup_tol: drop a sample within this of an earlier one of its fixture, every joint [rad];
             None keeps every sample.
@@ -57,7 +59,7 @@ class WorkflowOptions:
     method: str = "lm"
     model: str = "auto"
     loss: str = "linear"
-    noise: float = NOISE
+    noise: float | None = None
     max_per_fixture: int | None = None
     dedup_tol: float | None = DEDUP_TOL
     max_change: float = MAX_CHANGE
@@ -66,12 +68,18 @@ class WorkflowOptions:
     prior: float = PRIOR
     exclude_fixtures: tuple[str, ...] = ()
 
+    @property
+    def fit_noise(self) -> float:
+        """The noise the fit weighs the samples at [m]: the declared one, else :data:`.problem.NOISE`."""
+        return NOISE if self.noise is None else self.noise
+
     def record(self) -> dict:
         """The ``options`` entry of the result file (metres, radians; the seed is recorded beside it)."""
         return {
             "method": self.method,
             "loss": self.loss,
-            "noise_m": self.noise,
+            "noise_m": self.fit_noise,
+            "noise_declared": self.noise is not None,
             "max_per_fixture": self.max_per_fixture,
             "dedup_tol_rad": None if self.dedup_tol is None else float(self.dedup_tol),
             "max_change": self.max_change,
@@ -140,7 +148,7 @@ def run_workflow(nominal: RobotModel, dataset: Dataset, spec: FixtureSpec | None
     dataset = dataset.subsampled(options.max_per_fixture, np.random.default_rng(options.seed))
 
     def fit(begin, data, fixtures, warm=None):  # a candidate's or a fold's fit: lm, no self-check
-        return calibrate(begin, data, fixtures, start=warm, loss=options.loss, noise=options.noise,
+        return calibrate(begin, data, fixtures, start=warm, loss=options.loss, noise=options.fit_noise,
                          max_change=options.max_change, check=False, prior=options.prior)
 
     selection = select_model(options.model, fit, nominal, dataset, spec, seed=options.seed)
@@ -153,7 +161,8 @@ def run_workflow(nominal: RobotModel, dataset: Dataset, spec: FixtureSpec | None
         warm = None
     result = calibrate(
         begin, dataset, spec, method=options.method, start=warm, seed=options.seed, loss=options.loss,
-        noise=options.noise, max_change=options.max_change, force=options.force, prior=options.prior,
+        noise=options.fit_noise, max_change=options.max_change, force=options.force, prior=options.prior,
+        noise_declared=options.noise is not None,
     )
     block = result.block()
     block["model_selection"] = selection.block()

@@ -24,8 +24,10 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     add_seed(parser, "subsampling and PSO")
     parser.add_argument("--loss", choices=("linear", "soft_l1", "huber"), default="linear", help="lm loss")
     parser.add_argument(
-        "--noise", type=positive_noise_mm, default=0.3,
-        help="expected fixture noise std per axis [mm] (robust-loss scale, residual check; default 0.3)",
+        "--noise", type=positive_noise_mm, default=None,
+        help="fixture noise std per axis you know of this recording [mm] (robust-loss scale, residual check, "
+             "and a floor of the accuracy judgement); default: the fit weighs samples at 0.3 and the accuracy "
+             "is judged at the noise the residuals show",
     )
     parser.add_argument(
         "--dedup-deg", type=at_most(10.0, "deg", allow_zero=True), default=None,
@@ -82,7 +84,7 @@ def run(args: argparse.Namespace) -> int:
         method=args.method,
         model=args.model,
         loss=args.loss,
-        noise=args.noise * 1e-3,  # [m]
+        noise=None if args.noise is None else args.noise * 1e-3,  # [m]
         max_per_fixture=args.max_per_fixture,
         dedup_tol=DEDUP_TOL if args.dedup_deg is None else math.radians(args.dedup_deg),  # [rad]
         max_change=args.max_change,
