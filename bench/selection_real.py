@@ -1,0 +1,204 @@
+"""Model selection from one placement on real Pandas: which criterion picks the model that predicts other placements.
+
+For every placement of every robot (MUKCa recordings; panda_2_clean has 8, panda_4_clean 3), train on that
+placement alone (MUKCa's protocol: two sockets, 50 mm apart) and fit every candidate of
+``identification.selection`` as ``auto`` fits them (``select_model``'s one-placement path: the workflow's
+``lm`` fit, prior :data:`PRIOR`, after the workflow's deduplication); score each fit on the other placements
+(test MAE [mm], ``bench/mukca.py``'s metric) and by every criterion below; report what each criterion
+would have chosen, as mean ratios to dh and to the per-placement best model. Criteria (lower is better):
+
+* ``bic``: the library's (``selection.information_criterion``): ``M ln(RSS/M) + ln(M) k_eff``;
+* ``aic``: ``M ln(RSS/M) + 2 k_eff``;
+* ``evidence``: minus twice the Laplace log evidence of the MAP fit. The prior rows are read as a Gaussian
+  prior relative to the noise (std ``sigma s_i / (sqrt(W) noise)``, so the MAP is the fit's), centres flat,
+  and ``sigma`` profiled out::
+
+      (M - Fc) ln |R|^2 + ln det(J^T J) - 2 sum_i ln(sqrt(W) noise / s_i)
+
+  ``R`` every residual at the solution (data and prior rows), ``J`` their Jacobian, ``Fc`` the centre unknowns;
+* ``risk``: the posterior predictive error of the held-out metric: the fit's noise per axis
+  ``RSS / (M - k_eff)`` plus the posterior variance (covariance ``sigma^2 (J^T J)^-1``) of the tool points'
+  deviations from their mean, per axis, averaged over 8 virtual sockets at random reachable points of the
+  nominal model (30 configurations each, ``identification.synthetic.fixture_samples``, seed 0);
+* ``richest``: always elastic+scale.
+
+Then the mechanism of the scale term's failures: joint 4's offset ``theta4`` of the dh fit in prior spreads
+(0.2 deg), and, for elastic+scale against dh, how far ``theta4`` moved and how much ``s4 q4 + c4 tau4`` adds to
+joint 4's angle on the training samples (mean and spread over them, mdeg).
+
+    .venv/bin/python bench/selection_real.py --data ../shared/data/mukca [--robots panda_2_clean panda_4_clean]
+
+Prints a table and writes ``bench/selection_real.json`` (versions, seed, inputs, every figure).
+"""
+
+from __future__ import annotations
+
+import argparse
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import bench_common  # first: one BLAS thread, no Rerun analytics
+import numpy as np
+from mukca import _placement, held_out
+
+from spherecal.correction import param_jacobian, tool_point
+from spherecal.correction.files.samples import DEDUP_TOL
+from spherecal.correction.gravity import gravity_torques
+from spherecal.identification.calibrate import calibrate
+from spherecal.identification.identifiability import normal_inverse
+from spherecal.identification.problem import PRIOR, prior_std
+from spherecal.identification.selection import CANDIDATES, information_criterion, select_model
+from spherecal.identification.synthetic import fixture_samples
+
+HERE = Path(__file__).resolve().parent
+CRITERIA = ("bic", "aic", "evidence", "risk", "richest")
+#: Virtual sockets of the ``risk`` criterion and configurations per socket.
+SOCKETS, PER_SOCKET = 8, 30
+
+
+def _fit(start, data, spec, warm=None):  # as identification.workflow fits every candidate
+    return calibrate(start, data, spec, start=warm, check=False, prior=PRIOR)
+
+
+def _data_rows(result) -> tuple[np.ndarray, np.ndarray]:
+    """(data residuals, all residuals) [m] of a fit at its solution."""
+    r = result.problem.residuals(result.x)
+    return r[~result.problem.prior_rows()], r
+
+
+def aic(result) -> float:
+    data, _ = _data_rows(result)
+    return float(data.size * np.log(data @ data / data.size) + 2 * result.effective_unknowns)
+
+
+def evidence(result) -> float:
+    """Minus twice the Laplace log evidence, sigma profiled out (module docstring), up to a shared constant."""
+    problem = result.problem
+    data, every = _data_rows(result)
+    jac = problem.jacobian(result.x)
+    centres = 3 * len(problem.free_centres)
+    _, logdet = np.linalg.slogdet(jac.T @ jac)
+    return float((data.size - centres) * np.log(every @ every) + logdet - 2 * np.log(problem._prior_scale()).sum())
+
+
+def virtual_sockets(model) -> list[np.ndarray]:
+    """(SOCKETS,) arrays (PER_SOCKET, n) of configurations at random reachable points of ``model`` (seed 0)."""
+    rng = np.random.default_rng(0)
+    centres = tool_point(model, model.random_configurations(SOCKETS, rng))
+    return [fixture_samples(model, c, PER_SOCKET, rng) for c in centres]
+
+
+def risk(result, sockets: list[np.ndarray]) -> float:
+    """Posterior predictive squared error per axis [m^2] of the held-out metric (module docstring)."""
+    problem = result.problem
+    data, _ = _data_rows(result)
+    noise = float(data @ data) / (data.size - result.effective_unknowns)
+    fp = problem.n_free_params
+    cov = noise * normal_inverse(problem.jacobian(result.x))[:fp, :fp]
+    variance = []
+    for q in sockets:
+        jac = param_jacobian(result.model, q)[:, :, problem.free]
+        jac = jac - jac.mean(axis=0)
+        variance.append(np.einsum("nij,jk,nik->n", jac, cov, jac).mean() / 3)
+    return noise + float(np.mean(variance))
+
+
+def joint4(fits: dict) -> dict:
+    """The scale/compliance against offset trade at joint 4 (module docstring) [prior spreads, mdeg]."""
+    dh, rich = fits["dh"], fits.get("elastic+scale")
+    layout = dh.model.layout
+    theta = layout.field("theta")[3]
+    out = {"theta4_dh_prior_spreads": float((dh.model.params[theta] - dh.nominal.params[theta])
+                                            / prior_std(dh.model)[theta])}
+    if rich is not None:
+        lay, q = rich.model.layout, rich.problem.dataset.q
+        extra = rich.model.params[lay.scale][3] * q[:, 3]
+        extra = extra + rich.model.params[lay.compliance][3] * gravity_torques(rich.model, q)[:, 3]
+        out.update({
+            "s4_prior_spreads": float(rich.model.params[lay.scale][3] / prior_std(rich.model)[lay.scale][3]),
+            "q4_mean_rad": float(q[:, 3].mean()), "q4_std_rad": float(q[:, 3].std()),
+            "theta4_moved_mdeg": float(np.rad2deg(rich.model.params[lay.field("theta")[3]] - dh.model.params[theta]))
+            * 1e3,
+            "s4q4_c4tau4_mean_mdeg": float(np.rad2deg(extra.mean())) * 1e3,
+            "s4q4_c4tau4_std_mdeg": float(np.rad2deg(extra.std())) * 1e3,
+        })
+    return out
+
+
+def run_robot(root: Path, robot: str) -> dict:
+    nominal = bench_common.mukca_panda()
+    dataset, _ = bench_common.mukca_dataset(root, robot, nominal)
+    sockets = virtual_sockets(nominal)
+    out = {}
+    for place in dict.fromkeys(_placement(n) for n in dataset.fixture_names):
+        train, spec = bench_common.mukca_dataset(root, robot, nominal, [place])
+        train = train.deduplicated(DEDUP_TOL)
+        test = dataset.select(np.array([_placement(label) != place for label in dataset.labels]))
+        selection = select_model("auto", _fit, nominal, train, spec)
+        fits = selection.fits
+        mae = {k: held_out(f.model, test)[0] * 1e3 for k, f in fits.items()}
+        scores = {"bic": {k: information_criterion(f) for k, f in fits.items()},
+                  "aic": {k: aic(f) for k, f in fits.items()},
+                  "evidence": {k: evidence(f) for k, f in fits.items()},
+                  "risk": {k: risk(f, sockets) for k, f in fits.items()}}
+        names = tuple(fits)
+        chosen = {c: min(names, key=lambda k, s=s: (s[k], names.index(k))) for c, s in scores.items()}
+        chosen["richest"] = names[-1]
+        assert chosen["bic"] == selection.chosen
+        out[place] = {"test_mae_mm": mae, "scores": scores, "chosen": chosen, "joint4": joint4(fits)}
+        j4 = {k: 0.0 for k in ("s4_prior_spreads", "theta4_moved_mdeg", "s4q4_c4tau4_mean_mdeg",
+                               "s4q4_c4tau4_std_mdeg")} | out[place]["joint4"]
+        print(f"{robot:<14} {place:<13} " + "  ".join(f"{k} {v:.3f}" for k, v in mae.items())
+              + "  | " + " ".join(f"{c}:{chosen[c]}" for c in CRITERIA)
+              + f"  | theta4(dh) {j4['theta4_dh_prior_spreads']:+.1f} sd, e+s: s4 {j4['s4_prior_spreads']:+.1f} sd,"
+              f" theta4 {j4['theta4_moved_mdeg']:+.0f} mdeg, s4q4+c4tau4 {j4['s4q4_c4tau4_mean_mdeg']:+.0f}"
+              f" +- {j4['s4q4_c4tau4_std_mdeg']:.0f} mdeg", flush=True)
+    return out
+
+
+def summary(results: dict) -> tuple[list[str], dict]:
+    rows = [r for out in results.values() for r in out.values()]
+    dh = np.array([r["test_mae_mm"]["dh"] for r in rows])
+    best = np.array([min(r["test_mae_mm"].values()) for r in rows])
+    lines = ["", f"over {len(rows)} training placements: test MAE [mm] of the model each rule takes",
+             f"{'rule':<14} {'mean':>7} {'/dh':>7} {'/best':>7} {'worst/dh':>9}"]
+    figures = {}
+    for rule in (*CANDIDATES, *CRITERIA, "best"):
+        if rule in CANDIDATES:
+            mae = np.array([r["test_mae_mm"][rule] for r in rows])
+        elif rule == "best":
+            mae = best
+        else:
+            mae = np.array([r["test_mae_mm"][r["chosen"][rule]] for r in rows])
+        figures[rule] = {"mean_mm": float(mae.mean()), "ratio_dh": float(np.mean(mae / dh)),
+                         "ratio_best": float(np.mean(mae / best)), "worst_ratio_dh": float(np.max(mae / dh))}
+        f = figures[rule]
+        lines.append(f"{rule:<14} {f['mean_mm']:7.3f} {f['ratio_dh']:7.3f} {f['ratio_best']:7.3f} "
+                     f"{f['worst_ratio_dh']:9.3f}")
+    return lines, figures
+
+
+def main() -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--data", default=None,
+                        help="MUKCa root (data/, urdf/); default: shared/data/mukca beside the checkout")
+    parser.add_argument("--robots", nargs="+", default=["panda_2_clean", "panda_4_clean"])
+    args = parser.parse_args()
+    root = Path(args.data) if args.data else bench_common.find_mukca()
+    uptime = subprocess.run(["uptime"], capture_output=True, text=True).stdout.strip()
+    print(f"uptime: {uptime}")
+    clock = time.perf_counter()
+    results = {robot: run_robot(root, robot) for robot in args.robots}
+    lines, figures = summary(results)
+    print("\n".join(lines))
+    out = bench_common.write_json(HERE / "selection_real.json", {
+        "uptime": uptime, "seconds": time.perf_counter() - clock, "summary": figures, "results": results},
+        seed=0, inputs={"data": Path(root)}, indent=1)
+    print(f"wrote {out}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
