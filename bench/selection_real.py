@@ -22,11 +22,18 @@ would have chosen, as mean ratios to dh and to the per-placement best model. Cri
   nominal model (30 configurations each, ``identification.synthetic.fixture_samples``, seed 0);
 * ``richest``: always elastic+scale.
 
+With ``--simulated`` also the simulated arms of ``tests/identification/test_selection.py`` (one placement,
+10 rigid and 10 elastic seeds): how often each rule chooses right (dh, elastic).
+
 Then the mechanism of the scale term's failures: joint 4's offset ``theta4`` of the dh fit in prior spreads
 (0.2 deg), and, for elastic+scale against dh, how far ``theta4`` moved and how much ``s4 q4 + c4 tau4`` adds to
 joint 4's angle on the training samples (mean and spread over them, mdeg).
 
     .venv/bin/python bench/selection_real.py --data ../shared/data/mukca [--robots panda_2_clean panda_4_clean]
+        [--prior 0.5] [--out bench/selection_real.json]
+
+``--prior`` changes every fit's prior weight (the library's default :data:`PRIOR` otherwise): how robust
+each rule's choice is to it.
 
 Prints a table and writes ``bench/selection_real.json`` (versions, seed, inputs, every figure).
 """
@@ -58,8 +65,11 @@ CRITERIA = ("bic", "aic", "evidence", "risk", "richest")
 SOCKETS, PER_SOCKET = 8, 30
 
 
-def _fit(start, data, spec, warm=None):  # as identification.workflow fits every candidate
-    return calibrate(start, data, spec, start=warm, check=False, prior=PRIOR)
+def fitter(prior: float):
+    """The candidates' fit as ``identification.workflow`` runs it, at prior weight ``prior``."""
+    def fit(start, data, spec, warm=None):
+        return calibrate(start, data, spec, start=warm, check=False, prior=prior)
+    return fit
 
 
 def _data_rows(result) -> tuple[np.ndarray, np.ndarray]:
@@ -127,7 +137,7 @@ def joint4(fits: dict) -> dict:
     return out
 
 
-def run_robot(root: Path, robot: str) -> dict:
+def run_robot(root: Path, robot: str, prior: float) -> dict:
     nominal = bench_common.mukca_panda()
     dataset, _ = bench_common.mukca_dataset(root, robot, nominal)
     sockets = virtual_sockets(nominal)
@@ -136,7 +146,7 @@ def run_robot(root: Path, robot: str) -> dict:
         train, spec = bench_common.mukca_dataset(root, robot, nominal, [place])
         train = train.deduplicated(DEDUP_TOL)
         test = dataset.select(np.array([_placement(label) != place for label in dataset.labels]))
-        selection = select_model("auto", _fit, nominal, train, spec)
+        selection = select_model("auto", fitter(prior), nominal, train, spec)
         fits = selection.fits
         mae = {k: held_out(f.model, test)[0] * 1e3 for k, f in fits.items()}
         scores = {"bic": {k: information_criterion(f) for k, f in fits.items()},
@@ -155,6 +165,41 @@ def run_robot(root: Path, robot: str) -> dict:
               + f"  | theta4(dh) {j4['theta4_dh_prior_spreads']:+.1f} sd, e+s: s4 {j4['s4_prior_spreads']:+.1f} sd,"
               f" theta4 {j4['theta4_moved_mdeg']:+.0f} mdeg, s4q4+c4tau4 {j4['s4q4_c4tau4_mean_mdeg']:+.0f}"
               f" +- {j4['s4q4_c4tau4_std_mdeg']:.0f} mdeg", flush=True)
+    return out
+
+
+#: The simulated single placement of ``tests/identification/test_selection.py`` (two sockets 50 mm apart).
+PLATE = {"front_h0": (0.5, -0.025, 0.15), "front_h1": (0.5, 0.025, 0.15)}
+#: The elastic plant of that test [rad/Nm].
+C_TRUE = np.array([0.0, 1 / 3e4, 1 / 3e4, 1 / 3e4, 0.0, 0.0, 0.0])
+
+
+def simulated(prior: float, seeds: int = 10) -> dict:
+    """Each rule's choice on the test's simulated arms (kinematic, 2 x 250 samples, 0.1 mm noise): rigid
+    (seeds 0..) and elastic (seeds 100..), as ``test_bic_from_one_placement_keeps_dh_on_a_rigid_arm_...``."""
+    from spherecal.correction import load_robot, perturb
+    from spherecal.correction.elastic import with_compliance
+    from spherecal.identification.synthetic import make_dataset
+
+    panda = load_robot("panda")
+    sockets = virtual_sockets(panda)
+    out = {}
+    for plant, compliance, base in (("rigid", None, 0), ("elastic", C_TRUE, 100)):
+        choices = []
+        for seed in range(base, base + seeds):
+            rng = np.random.default_rng(seed)
+            truth = perturb(panda, rng)
+            truth = truth if compliance is None else with_compliance(truth, compliance)
+            dataset, spec = make_dataset(truth, PLATE, per_fixture=250, rng=rng, noise=1e-4)
+            fits = select_model("auto", fitter(prior), panda, dataset, spec).fits
+            names = tuple(fits)
+            scores = {"bic": information_criterion, "aic": aic, "evidence": evidence,
+                      "risk": lambda f: risk(f, sockets)}
+            choices.append({c: min(names, key=lambda k, s=s: (s(fits[k]), names.index(k))) for c, s in scores.items()})
+        out[plant] = choices
+        print(f"simulated {plant:<8} " + "  ".join(
+            f"{c}: {sum(ch[c] == ('dh' if compliance is None else 'elastic') for ch in choices)}/{seeds} right"
+            for c in choices[0]), flush=True)
     return out
 
 
@@ -185,16 +230,24 @@ def main() -> int:
     parser.add_argument("--data", default=None,
                         help="MUKCa root (data/, urdf/); default: shared/data/mukca beside the checkout")
     parser.add_argument("--robots", nargs="+", default=["panda_2_clean", "panda_4_clean"])
+    parser.add_argument("--prior", type=float, default=PRIOR,
+                        help=f"prior weight W of every fit [1] (default the library's {PRIOR})")
+    parser.add_argument("--simulated", action="store_true",
+                        help="also the test's simulated rigid and elastic arms, 10 seeds each (about a minute)")
+    parser.add_argument("--out", default=str(HERE / "selection_real.json"), help="result file (JSON)")
     args = parser.parse_args()
     root = Path(args.data) if args.data else bench_common.find_mukca()
     uptime = subprocess.run(["uptime"], capture_output=True, text=True).stdout.strip()
     print(f"uptime: {uptime}")
     clock = time.perf_counter()
-    results = {robot: run_robot(root, robot) for robot in args.robots}
+    results = {robot: run_robot(root, robot, args.prior) for robot in args.robots}
     lines, figures = summary(results)
     print("\n".join(lines))
-    out = bench_common.write_json(HERE / "selection_real.json", {
-        "uptime": uptime, "seconds": time.perf_counter() - clock, "summary": figures, "results": results},
+    if args.simulated:
+        figures["simulated"] = simulated(args.prior)
+    out = bench_common.write_json(args.out, {
+        "uptime": uptime, "prior": args.prior, "seconds": time.perf_counter() - clock, "summary": figures,
+        "results": results},
         seed=0, inputs={"data": Path(root)}, indent=1)
     print(f"wrote {out}")
     return 0
