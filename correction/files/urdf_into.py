@@ -110,7 +110,7 @@ def urdf_into(model: RobotModel, text: str, source: str = "<urdf>", header: str 
 
     Args:
         model: the calibrated robot; ``extras["urdf"]`` (from a URDF import) names the base and
-            tip links, otherwise the URDF's root and the end of its longest chain are used.
+            tip links, otherwise the URDF's root and the one end of its serial chain are used.
         text: the original URDF document.
         source: its file name, for error messages.
         header: comment lines (inputs, versions) for the provenance comment.
