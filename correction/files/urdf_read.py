@@ -93,30 +93,38 @@ class UrdfTree:
                 stack.append(joint.child)
         return poses
 
-    def default_tip(self, base: str) -> str:
-        """The tool link when none is named: the one end of the serial chain below ``base``.
+    def chain_ends(self, base: str) -> list[tuple[str, str]]:
+        """Where the serial chain below ``base`` can end: ``(leaf link, child link of the last revolute joint
+        above it)`` in file order, depth first.
 
         The chain goes down through revolute and continuous joints; its ends are the leaf links below the last
         of them reached through fixed joints only (below a prismatic finger or a coupled ``<mimic>`` joint is
         no end: a gripper's moving part; such a joint with revolute joints after it stays on the chain, for
-        :func:`chain` to refuse). With one end, or several at the same point (a flange and a ``tool0`` frame),
-        the first in file order; with ends at different points (a gripper's fingers beside a ball or a tool
-        frame) the choice is the user's.
-
-        Raises:
-            RobotFileError: ends at different points, each listed with its distance [mm] from the frame of
-                the last movable joint before it (one line).
+        :func:`chain` to refuse).
         """
-        ends: list[tuple[str, str]] = []  # (leaf link, the child link of the last movable joint above it)
+        ends: list[tuple[str, str]] = []
         # (link, child link of the last revolute joint above it, a moving tool joint since that one)
         stack: list[tuple[str, str | None, bool]] = [(base, None, False)]
-        while stack:  # depth first in file order; the tree is loop-free (checked by parse_urdf)
+        while stack:  # the tree is loop-free (checked by parse_urdf)
             link, flange, moving = stack.pop(0)
             below = self.children(link)
             if not below and flange is not None and not moving:
                 ends.append((link, flange))
             stack[:0] = [(j.child, j.child, False) if j.type in MOVABLE and j.mimic is None
                          else (j.child, flange, moving or j.type != "fixed") for j in below]
+        return ends
+
+    def default_tip(self, base: str) -> str:
+        """The tool link when none is named: the one end of the serial chain below ``base``
+        (:meth:`chain_ends`). With one end, or several at the same point (a flange and a ``tool0`` frame), the
+        first in file order; with ends at different points (a gripper's fingers beside a ball or a tool frame)
+        the choice is the user's.
+
+        Raises:
+            RobotFileError: ends at different points, each listed with its distance [mm] from the frame of
+                the last movable joint before it (one line).
+        """
+        ends = self.chain_ends(base)
         if not ends:
             return base  # no movable joint below: chain() names the problem
         poses = self.world_poses(base)
