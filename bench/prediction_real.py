@@ -35,7 +35,7 @@ import bench_common  # first: one BLAS thread, no Rerun analytics
 from spherecal.cli import main
 
 ROBOTS = {"panda_2_clean": "panda.urdf", "panda_4_clean": "panda.urdf", "dinova_1": "gen3lite.urdf"}
-TIP = "ball_link"  # MUKCa's URDFs end in their ball (the Gen3 lite's longest chain is a finger)
+TIP = "ball_link"  # MUKCa's ball (the Gen3 lite's chain also ends in fingers and a tool frame)
 
 
 def _run(argv: list[str]) -> tuple[int, str, str]:

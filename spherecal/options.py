@@ -219,7 +219,7 @@ def add_urdf_links(parser: argparse.ArgumentParser) -> None:
     """``--tip-link`` and ``--base-link``: which chain of a ``--robot`` URDF is the arm."""
     parser.add_argument("--tip-link", default=None, metavar="NAME",
                         help="URDF robot: the link whose origin is the tool point, the ball centre "
-                        "(default: the end of the longest chain)")
+                        "(default: the one end of the serial chain; refused when it ends in several)")
     parser.add_argument("--base-link", default=None, metavar="NAME",
                         help="URDF robot: the link whose frame is the world (default: the root link)")
     parser.add_argument("--inertials", default=None, metavar="FILE",

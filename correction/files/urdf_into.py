@@ -23,7 +23,8 @@ from ..conversion import to_modified
 from ..kinematics import tool_point
 from ..model import RobotModel, matrix_rpy
 from ..rigid import registered_errors
-from .urdf_read import MOVABLE, parse_urdf
+from .robot_file import RobotFileError
+from .urdf_read import MOVABLE, UrdfTree, parse_urdf
 from .urdf_to_dh import NearlyParallelAxesWarning, urdf_model
 from .urdf_write import ExportError, _triple, provenance_comment, xml_comment
 
@@ -95,13 +96,39 @@ def _check_same_arm(model: RobotModel, nominal: RobotModel, source: str) -> None
         raise ExportError(
             f"{source}: joint names {nominal.extras['joint_names']} differ from the calibrated model's {list(names)}"
         )
-    q = model.random_configurations(200, np.random.default_rng(0))
-    error = registered_errors(tool_point(model, q), tool_point(nominal, q)).max()
+    error = _tool_point_gap(model, nominal)
     if error > SAME_ROBOT_TOL:
         raise ExportError(
             f"{source}: not the calibrated robot: tool points {error * 1e3:.0f} mm apart "
             f"(more than {SAME_ROBOT_TOL * 1e3:.0f} mm after the best rigid fit)"
         )
+
+
+def _tool_point_gap(model: RobotModel, nominal: RobotModel) -> float:
+    """Largest tool-point distance [m] between two arms after the best rigid fit (200 seeded configurations)."""
+    q = model.random_configurations(200, np.random.default_rng(0))
+    return float(registered_errors(tool_point(model, q), tool_point(nominal, q)).max())
+
+
+def _matching_end(model: RobotModel, tree: UrdfTree, base_link: str | None) -> str | None:
+    """For a model that names no tip link: the one end of the URDF's chain whose tool point is the model's
+    (within :data:`SAME_ROBOT_TOL`; a gripper's fingers, a tool frame and a ball are ends far apart), or None
+    (one end, none matching, or several: the default tip and its refusal then apply)."""
+    base = tree.root if base_link is None else base_link
+    ends = [leaf for leaf, _ in tree.chain_ends(base)] if base in tree.links else []
+    if len(ends) < 2:
+        return None
+    matching = []
+    for leaf in ends:
+        try:
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore", NearlyParallelAxesWarning)
+                nominal = urdf_model(tree, leaf, base_link)
+        except RobotFileError:
+            continue
+        if nominal.n_joints == model.n_joints and _tool_point_gap(model, nominal) <= SAME_ROBOT_TOL:
+            matching.append(leaf)
+    return matching[0] if len(matching) == 1 else None
 
 
 def urdf_into(model: RobotModel, text: str, source: str = "<urdf>", header: str = "") -> str:
@@ -110,7 +137,8 @@ def urdf_into(model: RobotModel, text: str, source: str = "<urdf>", header: str 
 
     Args:
         model: the calibrated robot; ``extras["urdf"]`` (from a URDF import) names the base and
-            tip links, otherwise the URDF's root and the end of its longest chain are used.
+            tip links, otherwise the URDF's root and the one end of its serial chain are used (of a chain
+            that ends in several links, the one whose tool point is the model's).
         text: the original URDF document.
         source: its file name, for error messages.
         header: comment lines (inputs, versions) for the provenance comment.
@@ -123,7 +151,8 @@ def urdf_into(model: RobotModel, text: str, source: str = "<urdf>", header: str 
     tree = parse_urdf(text, source)
     with warnings.catch_warnings():  # the user was told about parallel axes when the model was imported
         warnings.simplefilter("ignore", NearlyParallelAxesWarning)
-        nominal = urdf_model(tree, links.get("tip_link"), links.get("base_link"))
+        tip_link = links.get("tip_link") or _matching_end(model, tree, links.get("base_link"))
+        nominal = urdf_model(tree, tip_link, links.get("base_link"))
     base, tip = nominal.extras["urdf"]["base_link"], nominal.extras["urdf"]["tip_link"]
     _check_same_arm(model, nominal, source)
     calibrated = to_modified(model)

@@ -26,6 +26,10 @@ MAX_LINKS = 2000
 #: Most movable joints on the calibrated chain (a serial arm has 6-7; a 64-joint chain is no arm, and its
 #: calibration problem would be thousands of columns wide).
 MAX_CHAIN_JOINTS = 64
+#: Chain ends closer than this [m] are one tool point (a flange and its ``tool0`` frame): no choice to make.
+SAME_POINT_TOL = 1e-6
+#: Most chain ends a refusal lists.
+MAX_LISTED = 8
 
 
 @dataclass(frozen=True)
@@ -89,16 +93,52 @@ class UrdfTree:
                 stack.append(joint.child)
         return poses
 
-    def depth_first_tip(self, base: str) -> str:
-        """The end of the longest chain (most joints) below ``base``; the first in file order on a tie."""
-        best, best_depth = base, 0
-        stack = [(base, 0)]
-        while stack:
-            link, depth = stack.pop(0)
-            if depth > best_depth:
-                best, best_depth = link, depth
-            stack[:0] = [(j.child, depth + 1) for j in self.children(link)]
-        return best
+    def chain_ends(self, base: str) -> list[tuple[str, str]]:
+        """Where the serial chain below ``base`` can end: ``(leaf link, child link of the last revolute joint
+        above it)`` in file order, depth first.
+
+        The chain goes down through revolute and continuous joints; its ends are the leaf links below the last
+        of them reached through fixed joints only (below a prismatic finger or a coupled ``<mimic>`` joint is
+        no end: a gripper's moving part; such a joint with revolute joints after it stays on the chain, for
+        :func:`chain` to refuse).
+        """
+        ends: list[tuple[str, str]] = []
+        # (link, child link of the last revolute joint above it, a moving tool joint since that one)
+        stack: list[tuple[str, str | None, bool]] = [(base, None, False)]
+        while stack:  # the tree is loop-free (checked by parse_urdf)
+            link, flange, moving = stack.pop(0)
+            below = self.children(link)
+            if not below and flange is not None and not moving:
+                ends.append((link, flange))
+            stack[:0] = [(j.child, j.child, False) if j.type in MOVABLE and j.mimic is None
+                         else (j.child, flange, moving or j.type != "fixed") for j in below]
+        return ends
+
+    def default_tip(self, base: str) -> str:
+        """The tool link when none is named: the one end of the serial chain below ``base``
+        (:meth:`chain_ends`). With one end, or several at the same point (a flange and a ``tool0`` frame), the
+        first in file order; with ends at different points (a gripper's fingers beside a ball or a tool frame)
+        the choice is the user's.
+
+        Raises:
+            RobotFileError: ends at different points, each listed with its distance [mm] from the frame of
+                the last movable joint before it (one line).
+        """
+        ends = self.chain_ends(base)
+        if not ends:
+            return base  # no movable joint below: chain() names the problem
+        poses = self.world_poses(base)
+        points = np.array([poses[leaf][:3, 3] for leaf, _ in ends])
+        if np.ptp(points, axis=0).max() <= SAME_POINT_TOL:
+            return ends[0][0]
+        listed = ", ".join(
+            f"{leaf} ({np.linalg.norm(poses[leaf][:3, 3] - poses[flange][:3, 3]) * 1e3:.0f} mm from {flange})"
+            for leaf, flange in ends[:MAX_LISTED])
+        more = f" and {len(ends) - MAX_LISTED} more" if len(ends) > MAX_LISTED else ""
+        raise RobotFileError(
+            f"{self.source}: the chain below {base!r} ends in {len(ends)} links at different points: "
+            f"{listed}{more}; name the one at the tool point (the ball's centre) with --tip-link"
+        )
 
 
 def _floats(text: str | None, count: int, default: list[float], where: str) -> list[float]:
@@ -254,22 +294,23 @@ def read_urdf(path: str | os.PathLike) -> UrdfTree:
 def chain(
     tree: UrdfTree, base_link: str | None = None, tip_link: str | None = None
 ) -> tuple[str, str, list[UrdfJoint]]:
-    """The joints from ``base_link`` (default: the root) to ``tip_link`` (default: the end of
-    the longest chain below the base).
+    """The joints from ``base_link`` (default: the root) to ``tip_link`` (default: the one end of
+    the serial chain below the base, :meth:`UrdfTree.default_tip`).
 
     Returns:
         ``(base, tip, joints)``: every joint on the path, fixed ones included.
 
     Raises:
         RobotFileError: an unknown link, a tip not below the base, a prismatic (or floating,
-            planar) joint on the path, or no revolute joint at all.
+            planar) joint on the path, no revolute joint at all, or no ``tip_link`` where the chain
+            ends in several links at different points.
     """
     source = tree.source
     base = tree.root if base_link is None else base_link
     for option, link in (("base link", base), ("tip link", tip_link)):
         if link is not None and link not in tree.links:
             raise RobotFileError(f"{source}: {option} {link!r} is not a link of robot {tree.name!r}")
-    tip = tree.depth_first_tip(base) if tip_link is None else tip_link
+    tip = tree.default_tip(base) if tip_link is None else tip_link
     joints = tree.path(base, tip)
     if joints is None:
         raise RobotFileError(f"{source}: tip link {tip!r} is not below base link {base!r}")

@@ -248,7 +248,7 @@ def load_urdf(path: str | os.PathLike, tip_link: str | None = None, base_link: s
 
     Args:
         path: the URDF file (meshes need not exist; visuals and collisions are ignored).
-        tip_link: the link whose origin is the tool point (default: end of the longest chain).
+        tip_link: the link whose origin is the tool point (default: the one end of the serial chain).
         base_link: the model's world frame (default: the root link).
         convention: ``"modified"`` (default) or ``"standard"``.
 

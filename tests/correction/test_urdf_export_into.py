@@ -135,3 +135,23 @@ def test_model_in_other_convention_of_same_arm(rng):
     q = calibrated.random_configurations(50, rng)
     points, _ = MujocoUrdf(written).body_pose("ball", calibrated.extras["joint_names"], q)
     assert np.abs(points - tool_point(calibrated, q)).max() < 1e-12
+
+
+def test_a_model_without_its_tip_link_goes_to_the_chain_end_at_its_tool_point(rng):
+    """A robot file (no URDF links recorded) into a URDF whose chain ends in fingers, a tool frame and the
+    ball: the end whose tool point is the model's is written (before: the longest chain, a finger, refused)."""
+    nominal, calibrated = _calibrated("gen3lite", "modified", rng)
+    bare = replace(calibrated, extras={"joint_names": calibrated.extras["joint_names"]})
+    original = _text("gen3lite")
+    written = urdf_into(bare, original, "gen3lite.urdf")
+    q = calibrated.random_configurations(250, rng)
+    points, _ = MujocoUrdf(written).body_pose("ball_link", calibrated.extras["joint_names"], q)
+    assert np.linalg.norm(points - tool_point(calibrated, q), axis=1).max() < 1e-12
+    assert "ball_joint" in _changed_joints(original, written)
+    # the tool point 120 mm past the ball matches no end within 50 mm: the refusal lists them
+    from spherecal.correction import RobotFileError
+
+    far = replace(bare, tool=bare.tool + np.array([0.0, 0.0, 0.12]))
+    with pytest.raises(RobotFileError, match="4 links at different points") as error:
+        urdf_into(far, original, "gen3lite.urdf")
+    assert "ball_link (180 mm from end_effector_link)" in str(error.value)

@@ -176,3 +176,46 @@ def test_base_link_and_default_tip(tmp_path):
     full, sub = load_urdf(path), load_urdf(path, base_link="upper_arm_link")
     assert full.extras["urdf"]["tip_link"] == "ball" and full.n_joints == 6
     assert sub.n_joints == 4 and sub.extras["joint_names"] == list(NAMES[2:])
+
+
+def _with_ends(text: str, *ends: tuple[str, str, str, str]) -> str:
+    """``text`` with more links: (name, parent, joint type, xyz) each, fixed or prismatic."""
+    extra = "".join(
+        f'  <link name="{name}"/>\n  <joint name="{name}_joint" type="{kind}"><parent link="{parent}"/>'
+        f'<child link="{name}"/><origin xyz="{xyz}" rpy="0 0 0"/><axis xyz="0 1 0"/>'
+        '<limit lower="0" upper="0.04" effort="20" velocity="0.2"/></joint>\n'
+        for name, parent, kind, xyz in ends)
+    return text.replace("</robot>", extra + "</robot>")
+
+
+def test_default_tip_is_the_one_end_of_the_chain_and_a_branching_tool_is_the_users_choice(tmp_path):
+    from spherecal.correction import RobotFileError
+
+    path = tmp_path / "arm.urdf"
+    # a prismatic finger cannot be on the chain, a frame at the ball's centre is the same tool point
+    path.write_text(_with_ends(ur5e_urdf(), ("finger", "tool0", "prismatic", "0 0.02 0.03"),
+                               ("ball_frame", "tool0", "fixed", "0.001 -0.002 0.05")))
+    assert load_urdf(path).extras["urdf"]["tip_link"] == "ball"
+    # fingers on fixed joints beside the ball, deeper than it (the longest chain was a finger, 65 mm off the ball)
+    path.write_text(_with_ends(ur5e_urdf(), ("finger_base", "tool0", "fixed", "0 0.03 0.02"),
+                               ("finger_tip", "finger_base", "fixed", "0 0 0.03")))
+    with pytest.raises(RobotFileError) as error:
+        load_urdf(path)
+    message = str(error.value)
+    assert "\n" not in message and str(path) in message and "--tip-link" in message
+    assert "ball (50 mm from wrist_3_link)" in message and "finger_tip (58 mm from wrist_3_link)" in message
+    assert load_urdf(path, tip_link="ball").extras["urdf"]["tip_link"] == "ball"
+
+
+def test_gen3lite_default_tip_lists_its_ball_fingers_and_tool_frame(tmp_path, capsys):
+    from spherecal.correction import RobotFileError
+    from tests.refusal import refused
+
+    with pytest.raises(RobotFileError, match=r"4 links at different points: tool_frame \(130 mm.*ball_link \(180 mm"):
+        load_urdf(DATA / "gen3lite.urdf")
+    source = tmp_path / "left"
+    source.mkdir()
+    (source / "hole_0.csv").write_text("0.1,0.2,0.3,0.4,0.5,0.6\n")
+    (source / "hole_1.csv").write_text("0.1,0.2,0.3,0.4,0.5,0.7\n")
+    refused(["import", source, "--format", "mukca", "--robot", DATA / "gen3lite.urdf", "--out", tmp_path / "out"],
+            tmp_path, capsys, "right_finger_dist_link (116 mm", "ball_link (180 mm", "--tip-link")
