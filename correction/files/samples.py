@@ -61,7 +61,7 @@ class LimitExcess:
         lower, upper: (n,) joint limits [rad].
         names: (n,) joint names for messages (``q1..qn``).
         tol: accepted without a word [rad].
-        worst: joint index -> (excess [rad], the angle [rad], where it was found).
+        worst: (joint index, 0 below / 1 above) -> (excess [rad], the angle [rad], where it was found).
     """
 
     model_name: str
@@ -69,7 +69,7 @@ class LimitExcess:
     upper: np.ndarray
     names: list[str]
     tol: float = 1e-6
-    worst: dict[int, tuple[float, float, str]] = field(default_factory=dict)
+    worst: dict[tuple[int, int], tuple[float, float, str]] = field(default_factory=dict)
 
     @staticmethod
     def of(model, names: list[str] | None = None, tol: float = 1e-6) -> LimitExcess:
@@ -97,18 +97,19 @@ class LimitExcess:
                 f"limits [{self.lower[i]:.6g}, {self.upper[i]:.6g}] of {self.model_name}, more than a quarter turn "
                 f"({HARD_MARGIN:.3g} rad): not an angle of this joint (another arm's file, or degrees?)"
             )
-        for i in np.flatnonzero((excess > self.tol).any(axis=0)):
-            k = int(np.argmax(excess[:, i]))
-            if excess[k, i] > self.worst.get(int(i), (0.0,))[0]:
-                self.worst[int(i)] = (float(excess[k, i]), float(q[k, i]), where(k))
+        for side, past in ((0, below), (1, above)):  # each side of a joint: an arm may pass both
+            for i in np.flatnonzero((past > self.tol).any(axis=0)):
+                k = int(np.argmax(past[:, i]))
+                if past[k, i] > self.worst.get((int(i), side), (0.0,))[0]:
+                    self.worst[(int(i), side)] = (float(past[k, i]), float(q[k, i]), where(k))
 
     def warn(self, source: str) -> str | None:
         """Issue ONE :class:`JointLimitWarning` naming every joint past its limits (None, nothing to say)."""
         if not self.worst:
             return None
         parts = []
-        for i, (excess, angle, where) in sorted(self.worst.items()):
-            side = f"above {self.upper[i]:.4g}" if angle > self.upper[i] else f"below {self.lower[i]:.4g}"
+        for (i, past), (excess, _, where) in sorted(self.worst.items()):
+            side = f"above {self.upper[i]:.4g}" if past else f"below {self.lower[i]:.4g}"
             place = where[len(source):].lstrip("/\\: ") if where.startswith(source) else where
             parts.append(f"{self.names[i]} by up to {excess:.3g} rad ({np.rad2deg(excess):.3g} deg) {side} ({place})")
         text = (

@@ -31,6 +31,7 @@ def test_angles_past_the_limits_warn_once_naming_every_joint_and_are_used(tmp_pa
     q[2, 5] = panda.upper[5] + 0.3
     q[7, 5] = panda.upper[5] + 0.4
     q[4, 0] = panda.lower[0] - 0.1
+    q[5, 5] = panda.lower[5] - 0.2  # the same joint past both of its limits: both named
     write_samples(tmp_path / "samples.csv", Dataset(labels=dataset.labels, q=q))
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
@@ -40,6 +41,7 @@ def test_angles_past_the_limits_warn_once_naming_every_joint_and_are_used(tmp_pa
     text = str(limits[0].message)
     assert "q1 by up to 0.1 rad (5.73 deg) below -2.897 (row 6)" in text
     assert "q6 by up to 0.4 rad (22.9 deg) above 3.752 (row 9)" in text
+    assert "q6 by up to 0.2 rad (11.5 deg) below -0.0175 (row 7)" in text
     np.testing.assert_array_equal(read.q, q)  # used as recorded
     q[7, 5] = panda.upper[5] + 2.0  # beyond a quarter turn: not an angle of that joint
     write_samples(tmp_path / "samples.csv", Dataset(labels=dataset.labels, q=q))
