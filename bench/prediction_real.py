@@ -13,7 +13,8 @@ error is Gaussian with the Gauss-Markov covariance of its own problem at the lar
 the noise its residuals show, plus the biases of what it cannot see (barely excited parameters left at nominal,
 drawn from their prior spread; the scale anchor); the calibrated file records that covariance. For a held-out
 socket, the parameter error is propagated to the recorded configurations through the parameter Jacobian, the
-socket's own noise (the training residual std per axis) is added, both less their mean over the socket, and
+socket's own noise (the training residual std per axis of the sample and distance rows, without the MAP prior's
+penalty, which is no noise) is added, both less their mean over the socket, and
 the mean distance averaged over 200 draws.
 
     .venv/bin/python bench/prediction_real.py [--data shared/data/mukca] [--out bench/prediction_real.json]

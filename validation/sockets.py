@@ -11,8 +11,10 @@ of the joint angles, :mod:`spherecal.identification.training`) was used in the f
 called: it is marked, and the held-out summary leaves it out. A spread from fewer than
 :data:`MIN_DISTINCT` distinct configurations is not measurable (None, printed as such), not zero.
 Beside each held-out socket's measured spread, the spread the calibration predicts there
-(:func:`spherecal.identification.prediction.socket_spreads`, from the parameter covariance the file
-records, at the noise its self-check judged with).
+(:func:`spherecal.identification.prediction.socket_spreads`): the parameter error from the covariance the
+file records (at the noise its self-check judged with, the larger of the declared and the measured) through
+the recorded configurations, plus the socket's own noise as the training residuals show it (data rows only,
+``socket_noise_m``), both less their mean over the socket.
 """
 
 from __future__ import annotations
@@ -207,7 +209,8 @@ def fitted_fixtures(model: RobotModel, dataset: Dataset | None = None) -> set[st
 def recorded_prediction(model: RobotModel) -> tuple[np.ndarray, float] | None:
     """``(R, noise)`` of the calibrated file's recorded parameter covariance (``R R^T``, over every
     parameter of ``model``; at the larger of the declared and the residuals' noise) and the socket noise
-    the training residuals show [m] (std per axis); None when it records none."""
+    the training residuals show [m] (std per axis of the sample and distance rows, without the prior's
+    penalty; ``noise_m`` in files written before it was recorded); None when it records none."""
     block = model.extras.get("calibration")
     check = block.get("self_check") if isinstance(block, dict) else None
     record = check.get("prediction") if isinstance(check, dict) else None
