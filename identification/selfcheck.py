@@ -27,9 +27,11 @@ Run on every calibration (:func:`self_check`), its findings travel with the resu
   be expected to beat nominal with a margin (:data:`BEAT`) is refused. The larger noise, because the residuals
   cannot refute a declared noise from below: play that the fit absorbs into the parameters, or a
   fixture that moved between recordings, leaves small residuals and a wrong model. Recorded with it, for
-  ``validate`` to predict a held-out socket's spread: that covariance and the socket's own noise, the data
-  rows' residual std (the ``sigma`` of the level check also holds the prior rows, whose penalty is no noise
-  and dominates it for a few dozen samples of a well-made arm: 0.18 mm against 0.10 mm on MUKCa's Pandas).
+  ``validate`` to predict a held-out socket's spread (:func:`_record_held_out`): that covariance, the socket's
+  own noise (the data rows' residual std, at most the declared noise; the ``sigma`` of the level check also
+  holds the prior rows, whose penalty is no noise and dominates it for a few dozen samples of a well-made arm:
+  0.18 mm against 0.10 mm on MUKCa's Pandas) and the arm's unmodelled joint-angle error that the residual
+  beyond the declared noise shows, with the bias it leaves in the parameters.
 
 The refusal is one line naming the culprit (file, row, field; the disagreement in mm and the stated
 accuracy) or, without one, the figure that failed.
@@ -44,8 +46,9 @@ import numpy as np
 from spherecal.correction import RobotModel, param_jacobian, tool_point
 
 from .consistency import augmented, group_finding, log10_chi2_sf, name_culprit
+from .joint_error import LENGTH
 from .leave_out import leave_out
-from .prediction import Workspace, deviation_root, socket_spreads
+from .prediction import Workspace, deviation_root, joint_error_root, socket_spreads
 from .problem import CalibrationProblem, samples_location
 from .selfcheck_result import Finding, InconsistentDataError, SelfCheck
 
@@ -121,9 +124,10 @@ def self_check(
     findings += _trends(problem, x)
     # where a ball sits in a socket, as the residuals show it: the data rows alone (``sigma`` above also holds the
     # prior rows, whose penalty is no noise and dominates it for a few dozen samples of a well-made arm)
-    socket = problem.data_sigma(x, problem.effective_unknowns(problem.jacobian(x)))
-    prediction, record = _prediction(nominal, built or problem, max(noise, sigma), sigma, socket)
-    record["socket_noise_m"] = socket
+    unknowns = problem.effective_unknowns(problem.jacobian(x))
+    shown = problem.data_sigma(x, unknowns)
+    prediction, record = _prediction(nominal, built or problem, max(noise, sigma), sigma, shown)
+    _record_held_out(record, nominal, built or problem, max(noise, sigma), noise, shown, problem.n_data - unknowns)
     findings, prediction = _honest_noise(findings, prediction)
     findings.append(prediction)
     return SelfCheck(findings=tuple(findings), noise=noise, sigma=sigma, prediction=record)
@@ -298,6 +302,29 @@ def _level(problem: CalibrationProblem, r: np.ndarray, sigma: float, dof: int, e
 
 
 # --------------------------------------------------------------------------------- prediction
+def _record_held_out(record: dict, nominal: RobotModel, built: CalibrationProblem, noise: float, declared: float,
+                     shown: float, dof: float) -> None:
+    """Add to the recorded prediction what ``validate`` needs at sockets the calibration did not see: the socket's
+    own noise and the arm's unmodelled joint-angle error (:mod:`.joint_error`).
+
+    The declared noise is where a ball sits in its socket; what the data rows' residual (``shown``, per axis)
+    shows beyond it is the arm's own error that no parameter describes: a joint-angle error whose std makes the
+    fit leave that excess energy (``(shown^2 - declared^2) x dof``) in its residuals
+    (:func:`.prediction.joint_error_root`). Its bias on the fitted parameters joins the recorded covariance;
+    the socket noise is then the declared one. Residuals below the declared noise: none, and the socket noise
+    is what they show. The beat-nominal judgement does not use it (the nominal model carries the same error).
+    """
+    record["socket_noise_m"] = float(min(shown, declared))
+    excess = float(np.sqrt(max(shown**2 - declared**2, 0.0) * max(dof, 0.0)))
+    std, bias = joint_error_root(nominal, built, noise, excess)
+    if std <= 0:
+        return
+    record.update(joint_error_rad=std, joint_error_length_rad=LENGTH)
+    index = [nominal.param_names.index(n) for n in record["parameters"]]
+    covariance = np.asarray(record["covariance"], dtype=float) + (bias @ bias.T)[np.ix_(index, index)]
+    record["covariance"] = [[float(f"{v:.6g}") for v in row] for row in covariance]
+
+
 def nominal_expected(model: RobotModel, sensitivity: np.ndarray, draws: int = 200) -> float:
     """Expected mean tool-point error [m] of a nominal model whose parameters are off by the prior
     spread (base excluded), after registration, over the workspace of ``sensitivity`` (3 N, P)."""

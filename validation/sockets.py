@@ -11,10 +11,11 @@ of the joint angles, :mod:`spherecal.identification.training`) was used in the f
 called: it is marked, and the held-out summary leaves it out. A spread from fewer than
 :data:`MIN_DISTINCT` distinct configurations is not measurable (None, printed as such), not zero.
 Beside each held-out socket's measured spread, the spread the calibration predicts there
-(:func:`spherecal.identification.prediction.socket_spreads`): the parameter error from the covariance the
-file records (at the noise its self-check judged with, the larger of the declared and the measured) through
-the recorded configurations, plus the socket's own noise as the training residuals show it (data rows only,
-``socket_noise_m``), both less their mean over the socket.
+(:class:`spherecal.identification.prediction.HeldOut`): the parameter error from the covariance the file
+records (at the noise its self-check judged with, the larger of the declared and the measured) through the
+recorded configurations, the socket's own noise (the training residual std of the data rows, at most the
+declared noise) and a fresh draw of the arm's unmodelled joint-angle error (what the residuals show beyond the
+declared noise, :mod:`spherecal.identification.joint_error`), less their mean over the socket.
 """
 
 from __future__ import annotations
@@ -27,7 +28,8 @@ from spherecal.correction import RobotModel, tool_point
 from spherecal.correction.files.fixtures import FixtureSpec
 from spherecal.correction.files.robot_file import forced_calibration
 from spherecal.correction.files.samples import Dataset, configurations_digest
-from spherecal.identification.prediction import socket_spreads
+from spherecal.identification.joint_error import LENGTH
+from spherecal.identification.prediction import HeldOut
 from spherecal.identification.training import trained_digests
 
 #: Fewest distinct configurations (1e-9 rad apart) a spread is measured from: with one the spread is 0
@@ -206,11 +208,12 @@ def fitted_fixtures(model: RobotModel, dataset: Dataset | None = None) -> set[st
     return set(used) if isinstance(used, dict) else set()
 
 
-def recorded_prediction(model: RobotModel) -> tuple[np.ndarray, float] | None:
-    """``(R, noise)`` of the calibrated file's recorded parameter covariance (``R R^T``, over every
-    parameter of ``model``; at the larger of the declared and the residuals' noise) and the socket noise
-    the training residuals show [m] (std per axis of the sample and distance rows, without the prior's
-    penalty; ``noise_m`` in files written before it was recorded); None when it records none."""
+def recorded_prediction(model: RobotModel) -> HeldOut | None:
+    """What the calibrated file predicts at sockets it did not see (its self-check's ``prediction`` record): the
+    parameter covariance (``R R^T`` over every parameter of ``model``, at the larger of the declared and the
+    residuals' noise, with the bias of the arm's unmodelled joint-angle error), the socket's own noise [m] (std
+    per axis; ``noise_m`` in files written before it was recorded) and that joint-angle error [rad]; None when it
+    records none."""
     block = model.extras.get("calibration")
     check = block.get("self_check") if isinstance(block, dict) else None
     record = check.get("prediction") if isinstance(check, dict) else None
@@ -218,13 +221,15 @@ def recorded_prediction(model: RobotModel) -> tuple[np.ndarray, float] | None:
         names = list(record["parameters"])
         covariance = np.asarray(record["covariance"], dtype=float).reshape(len(names), len(names))
         noise = float(record.get("socket_noise_m", record["noise_m"]))
+        joint_error = float(record.get("joint_error_rad", 0.0))
+        length = float(record.get("joint_error_length_rad", LENGTH))
         index = [model.param_names.index(n) for n in names]
     except (TypeError, KeyError, ValueError):
         return None
     values, vectors = np.linalg.eigh((covariance + covariance.T) / 2)
     root = np.zeros((model.n_params, len(names)))
     root[index] = vectors * np.sqrt(np.clip(values, 0.0, None))
-    return root, noise
+    return HeldOut(root, noise, joint_error, length)
 
 
 def _distinct(q: np.ndarray) -> int:
@@ -233,7 +238,7 @@ def _distinct(q: np.ndarray) -> int:
 
 def socket_validation(
     models: dict[str, RobotModel], dataset: Dataset, spec: FixtureSpec | None = None, fitted: set[str] = frozenset(),
-    prediction: tuple[np.ndarray, float] | None = None,
+    prediction: HeldOut | None = None,
 ) -> SocketReport:
     """Spread per fixture and known-distance errors of each model on recorded socket samples.
 
@@ -242,7 +247,7 @@ def socket_validation(
         dataset: the samples (joint angles per fixture).
         spec: the fixtures' known distances, or None.
         fitted: fixtures used to calibrate (marked; left out of the held-out summary).
-        prediction: ``(R, noise)`` of :func:`recorded_prediction`: predicted spreads of held-out fixtures.
+        prediction: :func:`recorded_prediction`: predicted spreads of held-out fixtures.
 
     Returns:
         The report; fixtures with fewer than :data:`MIN_DISTINCT` distinct configurations have no spread.
@@ -261,8 +266,7 @@ def socket_validation(
             largest[key] = float(distance.max()) if measurable else None
         predicted = None
         if prediction is not None and name not in fitted and distinct >= MIN_DISTINCT:
-            root, noise = prediction
-            predicted = float(socket_spreads(models["calibrated"], root, [q], noise)[0])
+            predicted = float(prediction.spreads(models["calibrated"], [q])[0])
         fixtures.append(FixtureSpread(name, int(q.shape[0]), name not in fitted, mean, largest, centre, distinct,
                                       predicted))
     by_name = {f.name: f for f in fixtures}
