@@ -90,12 +90,14 @@ class DistanceCheck:
 
 @dataclass(frozen=True)
 class SocketReport:
-    """Spread per fixture and distance errors, per model (metres)."""
+    """Spread per fixture and distance errors, per model (metres); ``joint_error``: the unmodelled joint-angle
+    error [rad] the prediction includes (0: none)."""
 
     models: tuple[str, ...]
     fixtures: list[FixtureSpread]
     distances: list[DistanceCheck]
     source: str
+    joint_error: float = 0.0
 
     def summary(self, model: str) -> tuple[float | None, float | None]:
         """Held-out mean spread [m] (mean over fixtures) and mean ``|distance error|`` [m] (each None if none).
@@ -154,6 +156,10 @@ class SocketReport:
         if forecast is not None:
             lines.append(f"held-out ({held} fixtures) predicted   test MAE {forecast * 1e3:8.3f} mm (the calibration's "
                          "own prediction for these configurations; measured within 0.5x-2x of it is as expected)")
+            if self.joint_error > 0:
+                lines.append(f"  the prediction includes the arm's unmodelled joint-angle error, "
+                             f"{self.joint_error * 1e3:.2g} mrad per joint, that its training residuals show beyond "
+                             "the declared noise")
         return "\n".join(lines)
 
     def to_dict(self) -> dict:
@@ -188,6 +194,7 @@ class SocketReport:
                 **{m: {"test_mae": self.summary(m)[0], "distance_error_mean_abs": self.summary(m)[1]}
                    for m in self.models},
                 "predicted_test_mae": self.predicted_summary(),
+                "predicted_joint_error_rad": self.joint_error,
             },
         }
 
@@ -274,7 +281,8 @@ def socket_validation(
     for a, b, known in spec.distances if spec is not None else []:
         measured = {key: float(np.linalg.norm(by_name[a].centre[key] - by_name[b].centre[key])) for key in models}
         distances.append(DistanceCheck(a, b, known, a not in fitted and b not in fitted, measured))
-    return SocketReport(tuple(models), fixtures, distances, dataset.source)
+    return SocketReport(tuple(models), fixtures, distances, dataset.source,
+                        prediction.joint_error if prediction is not None else 0.0)
 
 
 def remarks(report: SocketReport, calibrated: RobotModel) -> list[str]:

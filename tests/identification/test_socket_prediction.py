@@ -13,7 +13,7 @@ from spherecal.identification.prediction import socket_spreads
 from spherecal.identification.problem import NOISE
 from spherecal.identification.synthetic import make_dataset
 from spherecal.identification.workflow import WorkflowOptions, run_workflow
-from spherecal.validation.sockets import recorded_prediction
+from spherecal.validation.sockets import recorded_prediction, socket_validation
 
 
 def _spread(points: np.ndarray) -> float:
@@ -60,7 +60,7 @@ def test_an_unmodelled_joint_angle_error_is_measured_and_predicted_at_held_out_s
     prediction = recorded_prediction(calibrated)
     assert abs(prediction.joint_error / std - 1.0) < 0.2, prediction.joint_error  # was: none (0)
     assert prediction.noise == pytest.approx(NOISE)  # the rest of the residual is the arm's, not the socket's
-    sockets = [held.for_fixture(name) for name in held.fixture_names]
-    measured = np.mean([_spread(tool_point(calibrated, q)) for q in sockets])
-    predicted = np.mean(prediction.spreads(calibrated, sockets))
-    assert 0.5 < measured / predicted < 2.0, (measured, predicted)
+    report = socket_validation({"nominal": nominal, "calibrated": calibrated}, held, prediction=prediction)
+    measured, _ = report.summary("calibrated")
+    assert 0.5 < measured / report.predicted_summary() < 2.0, (measured, report.predicted_summary())
+    assert "the prediction includes the arm's unmodelled joint-angle error, " in report.format()
