@@ -331,8 +331,5 @@ def _noise_warning(problem: CalibrationProblem, x: np.ndarray, sigma: float, noi
 
 
 def _sigma(problem: CalibrationProblem, x: np.ndarray, unknowns: float | None = None) -> float:
-    """Residual standard deviation per coordinate [m] of the data rows: ``sqrt(|r|^2 / (M - F))``, with the
-    effective number of unknowns ``F`` of a regularised fit when given (else the count of unknowns)."""
-    r = problem.residuals(x)[~problem.prior_rows()]
-    dof = max(problem.n_data - (problem.n_unknowns if unknowns is None else unknowns), 1.0)
-    return float(np.sqrt(r @ r / dof))
+    """Residual standard deviation per coordinate [m] of the data rows (:meth:`CalibrationProblem.data_sigma`)."""
+    return problem.data_sigma(x, unknowns)

@@ -19,6 +19,12 @@ best rigid fit), then sampled::
     e = Proj G_F (L z + shift),     L L^T = cov,  z ~ N(0, I)
 
 Returns the expected mean and 95th percentile of ``|e|`` [m] and the identifiability summary.
+
+At sockets a calibration did not see (:class:`HeldOut`, recorded by the self-check, read by ``validate``), the
+spread of the recorded configurations (:func:`socket_spreads`): the parameter error above through the parameter
+Jacobian there, the socket's own noise, and the arm's unmodelled joint-angle error (:mod:`.joint_error`): the
+residual beyond the declared noise is that error's share the fit could not absorb (:func:`joint_error_root`
+gives its std and the bias it bends the parameters by), and each held-out socket gets a fresh draw of it.
 """
 
 from __future__ import annotations
@@ -35,6 +41,7 @@ from spherecal.correction.layout import ParameterLayout
 from .build import build_problem
 from .gauge import anchor_spread
 from .identifiability import Identifiability, normal_inverse
+from .joint_error import LENGTH, draw, tool_fields
 from .problem import NOISE, SIGMA_FLOOR, CalibrationProblem, prior_std
 from .pruning import prune
 
@@ -152,6 +159,17 @@ def _anchor_spread(problem: CalibrationProblem) -> float:
     return anchor_spread(problem.model, problem.dataset.for_fixture(name), point)
 
 
+def _linearised(problem: CalibrationProblem, noise: float, sample_weight: float = 1.0):
+    """The pruned problem at its generic point: ``(lin, x_lin, pruned, x, rows, jac, inverse)`` (``rows``: the
+    sample rows' weights, ``jac`` weighted by them, ``inverse`` of its normal matrix)."""
+    lin, x_lin = problem.generic_point()
+    pruned, x = prune(lin, x_lin, max(noise, SIGMA_FLOOR) / np.sqrt(sample_weight))
+    rows = np.ones((pruned.n_residuals, 1))
+    rows[: 3 * problem.dataset.n_samples] = np.sqrt(sample_weight)
+    jac = pruned.jacobian(x) * rows
+    return lin, x_lin, pruned, x, rows, jac, normal_inverse(jac)
+
+
 def deviation_root(
     model: RobotModel, problem: CalibrationProblem, noise: float, sample_weight: float = 1.0,
     bias_scale: float = 1.0,
@@ -172,15 +190,8 @@ def deviation_root(
         (zero rows for the gauge), the pruned problem and its linearisation point, (F,) predicted std
         of its identified parameters.
     """
-    dataset = problem.dataset
-    sigma = max(noise, SIGMA_FLOOR)
-    lin, x_lin = problem.generic_point()
-    pruned, x = prune(lin, x_lin, sigma / np.sqrt(sample_weight))
-    rows = np.ones((pruned.n_residuals, 1))
-    rows[: 3 * dataset.n_samples] = np.sqrt(sample_weight)
-    jac = pruned.jacobian(x) * rows
+    lin, x_lin, pruned, x, rows, jac, inverse = _linearised(problem, noise, sample_weight)
     fp = pruned.n_free_params
-    inverse = normal_inverse(jac)
     if bias_scale == 1.0 or not pruned.n_prior:
         cov = noise**2 * inverse[:fp, :fp]
     else:  # the prior rows regularise at the generic spread, the arm's deviations are bias_scale times it:
@@ -214,6 +225,47 @@ def deviation_root(
     return np.hstack(columns), pruned, x, std
 
 
+def joint_error_root(
+    model: RobotModel, problem: CalibrationProblem, noise: float, excess: float, length: float = LENGTH
+) -> tuple[float, np.ndarray]:
+    """The unmodelled joint-angle error (:mod:`.joint_error`) that leaves ``excess`` in the residuals, and the bias
+    it bends the fitted parameters by.
+
+    A unit-std error ``f`` at the training configurations moves the fit by ``dx = -(J^T J)^-1 J^T f`` and leaves
+    ``f + J dx`` in the residuals; its std ``s`` is the one whose expected left-over energy ``s^2 |f + J dx|^2``
+    (summed over the process's root columns) equals the residual energy beyond the declared noise,
+    ``excess^2 = (sigma_data^2 - noise_declared^2) x dof``.
+
+    Args:
+        model: the nominal robot.
+        problem: ``build_problem(model, dataset, spec)``.
+        noise: the noise of the linearisation (as :func:`deviation_root`) [m].
+        excess: sqrt of the residual energy beyond the declared noise [m] (0: none).
+        length: the process's correlation length [rad].
+
+    Returns:
+        ``(s, B)``: the std of each joint's angle error [rad] and (P, c) the root of the bias's covariance
+        over every parameter of ``model`` (already times ``s``; add its columns to :func:`deviation_root`'s).
+    """
+    if excess <= 0:
+        return 0.0, np.zeros((model.n_params, 0))
+    _, _, pruned, _, _, jac, inverse = _linearised(problem, noise)
+    count, fp = pruned.dataset.n_samples, pruned.n_free_params
+    data = jac[: 3 * count]
+    shifts, kept = [], 0.0
+    for field in tool_fields(model, pruned.dataset.q, length):
+        field = field.reshape(3 * count, -1)
+        shift = -inverse @ (data.T @ field)  # (U, r): every unknown
+        kept += float(((field + data @ shift) ** 2).sum())
+        shifts.append(shift[:fp])
+    if kept <= 0:
+        return 0.0, np.zeros((model.n_params, 0))
+    std = excess / np.sqrt(kept)
+    bias = np.zeros((model.n_params, sum(s.shape[1] for s in shifts)))
+    bias[pruned.free] = std * np.hstack(shifts)
+    return float(std), bias
+
+
 def error_field(
     model: RobotModel,
     problem: CalibrationProblem,
@@ -242,13 +294,16 @@ def error_field(
 
 def socket_spreads(
     model: RobotModel, root: np.ndarray, sockets: list[np.ndarray], noise: float, draws: int = DRAWS,
-    rng: np.random.Generator | None = None, gains: list[np.ndarray] | None = None,
+    rng: np.random.Generator | None = None, gains: list[np.ndarray] | None = None, joint_error: float = 0.0,
+    length: float = LENGTH,
 ) -> np.ndarray:
     """Predicted spread of each socket: the mean distance of a calibrated model's tool points from their
     mean (MUKCa's MAE, :mod:`spherecal.validation.sockets`), for the configurations recorded there.
 
     The calibrated model's error ``G(q) R z`` (``R`` from :func:`deviation_root`) plus the socket's noise
-    ``n ~ N(0, noise^2)`` per axis and sample, less their mean over the socket; averaged over draws.
+    ``n ~ N(0, noise^2)`` per axis and sample plus, for a socket the calibration did not see, a fresh draw of the
+    arm's unmodelled joint-angle error (:func:`.joint_error.draw`, std ``joint_error``), less their mean over the
+    socket; averaged over draws.
 
     Args:
         model: the model whose parameter Jacobian is used (nominal or calibrated: the same to first order).
@@ -258,6 +313,8 @@ def socket_spreads(
         draws: Monte Carlo draws.
         rng: seeds the draws (default seed 0).
         gains: per socket, (K, 3, P) ``param_jacobian(model, q)`` if already computed.
+        joint_error: std of each joint's unmodelled angle error [rad] (0: none).
+        length: its correlation length over joint space [rad].
 
     Returns:
         (S,) predicted mean spread of each socket [m] (NaN for a socket with fewer than 2 samples).
@@ -270,9 +327,34 @@ def socket_spreads(
         jac = param_jacobian(model, q) if gains is None else gains[s]  # (K, 3, P)
         error = np.einsum("kip,pd->kid", jac, root @ rng.standard_normal((root.shape[1], draws)))
         error += noise * rng.standard_normal(error.shape)
+        if joint_error > 0:
+            error += draw(model, q, joint_error, draws, rng, length)
         error -= error.mean(axis=0)
         out[s] = float(np.linalg.norm(error, axis=1).mean())
     return out
+
+
+@dataclass(frozen=True, eq=False)
+class HeldOut:
+    """What a calibration predicts at sockets it did not see (recorded in its file's self-check).
+
+    Attributes:
+        root: (P, k) root of the calibrated parameters' error covariance (:func:`deviation_root` plus
+            :func:`joint_error_root`'s bias), over every parameter of the model.
+        noise: the socket's own noise, std per axis [m].
+        joint_error: std of each joint's unmodelled angle error [rad] (0: none).
+        length: its correlation length over joint space [rad].
+    """
+
+    root: np.ndarray
+    noise: float
+    joint_error: float = 0.0
+    length: float = LENGTH
+
+    def spreads(self, model: RobotModel, sockets: list[np.ndarray]) -> np.ndarray:
+        """(S,) predicted mean spread [m] of each socket's configurations (K, n) [rad] (:func:`socket_spreads`)."""
+        return socket_spreads(model, self.root, sockets, self.noise, joint_error=self.joint_error,
+                              length=self.length)
 
 
 def predict_accuracy(

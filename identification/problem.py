@@ -153,6 +153,14 @@ class CalibrationProblem:
         rows[start : start + self.n_prior] = True
         return rows
 
+    def data_sigma(self, x: np.ndarray, unknowns: float | None = None) -> float:
+        """Residual standard deviation per coordinate [m] of the data rows at ``x``: ``sqrt(|r|^2 / (M - F))``
+        without the prior rows (their penalty is not noise), with the effective number of unknowns ``F`` of a
+        regularised fit when given (:meth:`effective_unknowns`), else the count of unknowns."""
+        r = self.residuals(x)[~self.prior_rows()]
+        dof = max(self.n_data - (self.n_unknowns if unknowns is None else unknowns), 1.0)
+        return float(np.sqrt(r @ r / dof))
+
     def effective_unknowns(self, jac: np.ndarray) -> float:
         """Effective number of unknowns of the regularised fit: ``trace`` of the hat matrix of the data rows,
         ``F - trace(J_p (J^T J)^-1 J_p^T)`` for the prior rows ``J_p`` of ``jac`` (M, F); ``F`` without a prior."""

@@ -11,8 +11,11 @@ of the joint angles, :mod:`spherecal.identification.training`) was used in the f
 called: it is marked, and the held-out summary leaves it out. A spread from fewer than
 :data:`MIN_DISTINCT` distinct configurations is not measurable (None, printed as such), not zero.
 Beside each held-out socket's measured spread, the spread the calibration predicts there
-(:func:`spherecal.identification.prediction.socket_spreads`, from the parameter covariance the file
-records, at the noise its self-check judged with).
+(:class:`spherecal.identification.prediction.HeldOut`): the parameter error from the covariance the file
+records (at the noise its self-check judged with, the larger of the declared and the measured) through the
+recorded configurations, the socket's own noise (the training residual std of the data rows, at most the
+declared noise) and a fresh draw of the arm's unmodelled joint-angle error (what the residuals show beyond the
+declared noise, :mod:`spherecal.identification.joint_error`), less their mean over the socket.
 """
 
 from __future__ import annotations
@@ -25,7 +28,8 @@ from spherecal.correction import RobotModel, tool_point
 from spherecal.correction.files.fixtures import FixtureSpec
 from spherecal.correction.files.robot_file import forced_calibration
 from spherecal.correction.files.samples import Dataset, configurations_digest
-from spherecal.identification.prediction import socket_spreads
+from spherecal.identification.joint_error import LENGTH
+from spherecal.identification.prediction import HeldOut
 from spherecal.identification.training import trained_digests
 
 #: Fewest distinct configurations (1e-9 rad apart) a spread is measured from: with one the spread is 0
@@ -86,12 +90,14 @@ class DistanceCheck:
 
 @dataclass(frozen=True)
 class SocketReport:
-    """Spread per fixture and distance errors, per model (metres)."""
+    """Spread per fixture and distance errors, per model (metres); ``joint_error``: the unmodelled joint-angle
+    error [rad] the prediction includes (0: none)."""
 
     models: tuple[str, ...]
     fixtures: list[FixtureSpread]
     distances: list[DistanceCheck]
     source: str
+    joint_error: float = 0.0
 
     def summary(self, model: str) -> tuple[float | None, float | None]:
         """Held-out mean spread [m] (mean over fixtures) and mean ``|distance error|`` [m] (each None if none).
@@ -150,6 +156,10 @@ class SocketReport:
         if forecast is not None:
             lines.append(f"held-out ({held} fixtures) predicted   test MAE {forecast * 1e3:8.3f} mm (the calibration's "
                          "own prediction for these configurations; measured within 0.5x-2x of it is as expected)")
+            if self.joint_error > 0:
+                lines.append(f"  the prediction includes the arm's unmodelled joint-angle error, "
+                             f"{self.joint_error * 1e3:.2g} mrad per joint, that its training residuals show beyond "
+                             "the declared noise")
         return "\n".join(lines)
 
     def to_dict(self) -> dict:
@@ -184,6 +194,7 @@ class SocketReport:
                 **{m: {"test_mae": self.summary(m)[0], "distance_error_mean_abs": self.summary(m)[1]}
                    for m in self.models},
                 "predicted_test_mae": self.predicted_summary(),
+                "predicted_joint_error_rad": self.joint_error,
             },
         }
 
@@ -204,10 +215,12 @@ def fitted_fixtures(model: RobotModel, dataset: Dataset | None = None) -> set[st
     return set(used) if isinstance(used, dict) else set()
 
 
-def recorded_prediction(model: RobotModel) -> tuple[np.ndarray, float] | None:
-    """``(R, noise)`` of the calibrated file's recorded parameter covariance (``R R^T``, over every
-    parameter of ``model``; at the larger of the declared and the residuals' noise) and the socket noise
-    the training residuals show [m] (std per axis); None when it records none."""
+def recorded_prediction(model: RobotModel) -> HeldOut | None:
+    """What the calibrated file predicts at sockets it did not see (its self-check's ``prediction`` record): the
+    parameter covariance (``R R^T`` over every parameter of ``model``, at the larger of the declared and the
+    residuals' noise, with the bias of the arm's unmodelled joint-angle error), the socket's own noise [m] (std
+    per axis; ``noise_m`` in files written before it was recorded) and that joint-angle error [rad]; None when it
+    records none."""
     block = model.extras.get("calibration")
     check = block.get("self_check") if isinstance(block, dict) else None
     record = check.get("prediction") if isinstance(check, dict) else None
@@ -215,13 +228,15 @@ def recorded_prediction(model: RobotModel) -> tuple[np.ndarray, float] | None:
         names = list(record["parameters"])
         covariance = np.asarray(record["covariance"], dtype=float).reshape(len(names), len(names))
         noise = float(record.get("socket_noise_m", record["noise_m"]))
+        joint_error = float(record.get("joint_error_rad", 0.0))
+        length = float(record.get("joint_error_length_rad", LENGTH))
         index = [model.param_names.index(n) for n in names]
     except (TypeError, KeyError, ValueError):
         return None
     values, vectors = np.linalg.eigh((covariance + covariance.T) / 2)
     root = np.zeros((model.n_params, len(names)))
     root[index] = vectors * np.sqrt(np.clip(values, 0.0, None))
-    return root, noise
+    return HeldOut(root, noise, joint_error, length)
 
 
 def _distinct(q: np.ndarray) -> int:
@@ -230,7 +245,7 @@ def _distinct(q: np.ndarray) -> int:
 
 def socket_validation(
     models: dict[str, RobotModel], dataset: Dataset, spec: FixtureSpec | None = None, fitted: set[str] = frozenset(),
-    prediction: tuple[np.ndarray, float] | None = None,
+    prediction: HeldOut | None = None,
 ) -> SocketReport:
     """Spread per fixture and known-distance errors of each model on recorded socket samples.
 
@@ -239,7 +254,7 @@ def socket_validation(
         dataset: the samples (joint angles per fixture).
         spec: the fixtures' known distances, or None.
         fitted: fixtures used to calibrate (marked; left out of the held-out summary).
-        prediction: ``(R, noise)`` of :func:`recorded_prediction`: predicted spreads of held-out fixtures.
+        prediction: :func:`recorded_prediction`: predicted spreads of held-out fixtures.
 
     Returns:
         The report; fixtures with fewer than :data:`MIN_DISTINCT` distinct configurations have no spread.
@@ -258,8 +273,7 @@ def socket_validation(
             largest[key] = float(distance.max()) if measurable else None
         predicted = None
         if prediction is not None and name not in fitted and distinct >= MIN_DISTINCT:
-            root, noise = prediction
-            predicted = float(socket_spreads(models["calibrated"], root, [q], noise)[0])
+            predicted = float(prediction.spreads(models["calibrated"], [q])[0])
         fixtures.append(FixtureSpread(name, int(q.shape[0]), name not in fitted, mean, largest, centre, distinct,
                                       predicted))
     by_name = {f.name: f for f in fixtures}
@@ -267,7 +281,8 @@ def socket_validation(
     for a, b, known in spec.distances if spec is not None else []:
         measured = {key: float(np.linalg.norm(by_name[a].centre[key] - by_name[b].centre[key])) for key in models}
         distances.append(DistanceCheck(a, b, known, a not in fitted and b not in fitted, measured))
-    return SocketReport(tuple(models), fixtures, distances, dataset.source)
+    return SocketReport(tuple(models), fixtures, distances, dataset.source,
+                        prediction.joint_error if prediction is not None else 0.0)
 
 
 def remarks(report: SocketReport, calibrated: RobotModel) -> list[str]:

@@ -46,6 +46,7 @@ from spherecal.correction import RobotModel, geometric_part, param_jacobian, too
 from spherecal.correction.errors import SpherecalError
 from spherecal.correction.files.fixtures import FixtureSpec
 from spherecal.correction.files.samples import Dataset
+from spherecal.identification.joint_error import kernel
 from spherecal.identification.prediction import Prediction, Workspace, predict_accuracy, remove_rigid_motion
 from spherecal.identification.problem import NOISE, SIGMA_FLOOR
 from spherecal.identification.workflow import WorkflowOptions, run_workflow
@@ -275,13 +276,8 @@ def unexplained_variance(
     observed at ``observed`` (K, n) [rad] through white noise of std ``white`` [m]."""
     if smooth <= 0:
         return 0.0
-
-    def kernel(a, b):
-        d2 = np.einsum("ij,ij->i", a, a)[:, None] + np.einsum("ij,ij->i", b, b)[None, :] - 2.0 * a @ b.T
-        return np.exp(-np.clip(d2, 0.0, None) / (2.0 * length**2))
-
-    cross = kernel(at, observed)
-    gram = kernel(observed, observed) + max((white / smooth) ** 2, 1e-6) * np.eye(len(observed))
+    cross = kernel(at, observed, length)
+    gram = kernel(observed, observed, length) + max((white / smooth) ** 2, 1e-6) * np.eye(len(observed))
     explained = np.einsum("ij,ji->i", cross, np.linalg.solve(gram, cross.T))
     return float(smooth**2 * np.mean(1.0 - explained))
 
