@@ -290,12 +290,8 @@ def check_plausible(problem: CalibrationProblem, params: np.ndarray, max_change:
             moved most (in prior spreads).
     """
     model = problem.model
-    q = model.random_configurations(PLAUSIBILITY_CONFIGURATIONS, np.random.default_rng(0))
-    change = float(registered_errors(tool_point(model.with_params(params), q), tool_point(model, q)).mean())
-    prior = prior_std(model)
-    prior[[model.param_index(name) for name in GAUGE[model.convention]]] = 0.0
-    prior[model.layout.base] = 0.0
-    typical = float(np.sqrt(((param_jacobian(model, q) * prior) ** 2).sum(axis=(1, 2))).mean())
+    q, start_points, typical = _plausibility_reference(model)
+    change = float(registered_errors(tool_point(model.with_params(params), q), start_points).mean())
     if change <= max_change * typical:
         return
     free = problem.free
@@ -310,6 +306,37 @@ def check_plausible(problem: CalibrationProblem, params: np.ndarray, max_change:
         f"{model.layout.format(name, params[free[worst]] - model.params[free[worst]])}: the samples do not determine "
         f"the parameters; record more self-motion (wider joint ranges, more fixtures or known distances)"
     )
+
+
+def _plausibility_reference(model: RobotModel) -> tuple[np.ndarray, np.ndarray, float]:
+    """What :func:`check_plausible` judges a fit starting from ``model`` against: the configurations
+    ((C, n) [rad], seeded), the start model's tool points there ((C, 3) [m]) and the tool-point change a real
+    arm's errors typically cause [m]. They depend on the start model alone, so they are computed once per
+    model content and reused (every fold of one model-selection candidate and the final fit start from the
+    same model: 13 fits, 4 distinct start models)."""
+    key = (
+        model.convention, model.hayati, model.params.tobytes(), model.lower.tobytes(), model.upper.tobytes(),
+        repr(model.extras),  # compliance, scale, inertials: what the tool point depends on beside the geometry
+    )
+    found = _REFERENCES.get(key)
+    if found is None:
+        q = model.random_configurations(PLAUSIBILITY_CONFIGURATIONS, np.random.default_rng(0))
+        prior = prior_std(model)
+        prior[[model.param_index(name) for name in GAUGE[model.convention]]] = 0.0
+        prior[model.layout.base] = 0.0
+        typical = float(np.sqrt(((param_jacobian(model, q) * prior) ** 2).sum(axis=(1, 2))).mean())
+        found = (q, tool_point(model, q), typical)
+        for array in found[:2]:
+            array.setflags(write=False)
+        if len(_REFERENCES) >= _MAX_REFERENCES:
+            _REFERENCES.pop(next(iter(_REFERENCES)))  # the oldest
+        _REFERENCES[key] = found
+    return found
+
+
+#: :func:`_plausibility_reference` by start model content (a few: the model-selection candidates).
+_REFERENCES: dict[tuple, tuple[np.ndarray, np.ndarray, float]] = {}
+_MAX_REFERENCES = 8
 
 
 def _noise_warning(problem: CalibrationProblem, x: np.ndarray, sigma: float, noise: float) -> str:

@@ -230,9 +230,15 @@ class CalibrationProblem:
         return moved, moved.pack(generic, self.centres)
 
     def generic_jacobian(self) -> np.ndarray:
-        """(M, F) Jacobian at :meth:`generic_point`."""
+        """(M, F) Jacobian at :meth:`generic_point`.
+
+        Its parameter part depends on the model and the samples alone (not on which parameters are free,
+        nor on the prior), so it is kept for every problem sharing this one's cache (:func:`build_problem`'s
+        rank test and :func:`prune` after the solve)."""
         moved, x = self.generic_point()
-        return moved.jacobian(x)
+        if "generic_param_jacobian" not in self._cache:
+            self._cache["generic_param_jacobian"] = param_jacobian(moved.model, self.dataset.q)
+        return moved.jacobian(x, self._cache["generic_param_jacobian"])
 
     # ------------------------------------------------------------------ residuals, Jacobian
     def sample_errors(self, x: np.ndarray) -> np.ndarray:
@@ -266,12 +272,14 @@ class CalibrationProblem:
             parts.append([self.distance_weight * gap])
         return np.concatenate(parts)
 
-    def jacobian(self, x: np.ndarray) -> np.ndarray:
-        """(M, F) analytic Jacobian of :meth:`residuals` (``correction.param_jacobian`` columns)."""
+    def jacobian(self, x: np.ndarray, pj: np.ndarray | None = None) -> np.ndarray:
+        """(M, F) analytic Jacobian of :meth:`residuals` (``correction.param_jacobian`` columns; ``pj``: that
+        (K, 3, P) Jacobian of every parameter at ``x`` when already known)."""
         params, centres = self.unpack(x)
         count, fp = self.dataset.n_samples, self.n_free_params
         jac = np.zeros((self.n_residuals, self.n_unknowns))
-        pj = param_jacobian(self.model.with_params(params), self.dataset.q)
+        if pj is None:
+            pj = param_jacobian(self.model.with_params(params), self.dataset.q)
         jac[: 3 * count, :fp] = pj[:, :, self.free].reshape(3 * count, fp)
         slot, fixture = self._layout()
         rows = np.flatnonzero(slot[fixture] >= 0)

@@ -1,0 +1,49 @@
+"""What a calibration computes once and reuses is what it would compute afresh."""
+
+from __future__ import annotations
+
+from dataclasses import replace
+
+import numpy as np
+import pytest
+
+from spherecal.correction import perturb, tool_point
+from spherecal.correction.elastic import with_compliance
+from spherecal.identification.build import build_problem
+from spherecal.identification.calibrate import _plausibility_reference
+from spherecal.identification.synthetic import make_dataset
+
+
+def test_the_plausibility_reference_follows_the_start_model_s_content(panda) -> None:
+    q, points, typical = _plausibility_reference(panda)
+    # the same content in another object (every fold of a candidate builds its own start model): reused
+    again = _plausibility_reference(with_compliance(panda, None))
+    assert again[1] is points
+    np.testing.assert_array_equal(points, tool_point(panda, q))
+    with pytest.raises(ValueError):
+        points[0, 0] = 0.0  # shared: read-only
+    # another content (an elastic start: its tool sags under gravity, its compliances add to the typical change)
+    elastic = with_compliance(panda, np.full(panda.n_joints, 3e-5))
+    q_e, points_e, typical_e = _plausibility_reference(elastic)
+    np.testing.assert_array_equal(q_e, q)  # the same seeded configurations
+    np.testing.assert_array_equal(points_e, tool_point(elastic, q))
+    assert np.abs(points_e - points).max() > 1e-5
+    assert typical_e > typical
+    # the same parameters with a heavier payload: the same parameter vector, another arm under gravity
+    heavier = replace(elastic, extras={**elastic.extras, "payload": {"mass": 3.0, "com": [0.0, 0.0, 0.1]}})
+    np.testing.assert_array_equal(heavier.params, elastic.params)
+    _, points_h, _ = _plausibility_reference(heavier)
+    np.testing.assert_array_equal(points_h, tool_point(heavier, q))
+    assert np.abs(points_h - points_e).max() > 1e-6
+
+
+def test_the_generic_jacobian_kept_for_pruning_is_the_fresh_one(panda) -> None:
+    true = perturb(panda, np.random.default_rng(1))
+    dataset, spec = make_dataset(true, per_fixture=40, rng=np.random.default_rng(2))
+    problem = build_problem(panda, dataset, spec, prior_weight=0.5)  # its rank test keeps the generic part
+    assert "generic_param_jacobian" in problem._cache
+    pruned = replace(problem, free=problem.free[:-3])  # as pruning does: fewer columns, the prior rows with them
+    moved, x = pruned.generic_point()  # a fresh cache: its Jacobian is computed anew
+    fresh = moved.jacobian(x)
+    assert fresh.shape == (pruned.n_residuals, pruned.n_unknowns)
+    np.testing.assert_array_equal(pruned.generic_jacobian(), fresh)
