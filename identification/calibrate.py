@@ -12,7 +12,7 @@ from spherecal.correction.files.fixtures import FixtureSpec
 from spherecal.correction.files.samples import Dataset
 
 from .build import build_problem
-from .identifiability import Identifiability, predicted_std
+from .identifiability import Identifiability, normal_inverse, predicted_std
 from .problem import (
     GAUGE,
     NOISE,
@@ -232,9 +232,10 @@ def calibrate(
             x, timings["lm"] = solution.x, timings["lm"] + solution.seconds
     clock = time.perf_counter()
     jac = problem.jacobian(x)
-    edf = problem.effective_unknowns(jac)
+    inverse = normal_inverse(jac)  # one SVD for both
+    edf = problem.effective_unknowns(jac, inverse)
     sigma = _sigma(problem, x, edf)
-    std_values = predicted_std(jac, sigma)
+    std_values = predicted_std(jac, sigma, inverse)
     ident = Identifiability.of(jac)
     params, centres = problem.unpack(x)
     timings["covariance"] = time.perf_counter() - clock

@@ -153,13 +153,15 @@ class CalibrationProblem:
         rows[start : start + self.n_prior] = True
         return rows
 
-    def effective_unknowns(self, jac: np.ndarray) -> float:
+    def effective_unknowns(self, jac: np.ndarray, inverse: np.ndarray | None = None) -> float:
         """Effective number of unknowns of the regularised fit: ``trace`` of the hat matrix of the data rows,
-        ``F - trace(J_p (J^T J)^-1 J_p^T)`` for the prior rows ``J_p`` of ``jac`` (M, F); ``F`` without a prior."""
+        ``F - trace(J_p (J^T J)^-1 J_p^T)`` for the prior rows ``J_p`` of ``jac`` (M, F); ``F`` without a prior
+        (``inverse``: ``(J^T J)^-1``, :func:`.identifiability.normal_inverse`, when already computed)."""
         if not self.n_prior:
             return float(self.n_unknowns)
         jp = jac[self.prior_rows()]
-        return float(self.n_unknowns - np.einsum("ij,jk,ik->", jp, normal_inverse(jac), jp))
+        inverse = normal_inverse(jac) if inverse is None else inverse
+        return float(self.n_unknowns - np.einsum("ij,jk,ik->", jp, inverse, jp))
 
     def _prior_scale(self) -> np.ndarray:
         """(Fp,) ``sqrt(W) noise / s_i`` of the identified parameters [m per unit of the parameter]."""
