@@ -99,7 +99,6 @@ class CalibrationProblem:
         distance_weight: weight ``w`` of the distance residuals.
         noise: expected fixture noise [m].
         warnings: what the user must know about this problem.
-        identifiability: singular values and condition number of the column-scaled Jacobian.
         anchor: ``(fixture, point, radius)``: the scale gauge ``|c_fixture - point| = radius`` [m]
             (one more residual, weighted like a distance), or None.
         prior_weight: ``W`` of the prior rows (0: none; see the module docstring).
@@ -117,7 +116,6 @@ class CalibrationProblem:
     distance_weight: float
     noise: float
     warnings: tuple[str, ...] = ()
-    identifiability: Identifiability | None = None
     anchor: tuple[str, np.ndarray, float] | None = None
     prior_weight: float = 0.0
     prior_centre: np.ndarray | None = None
@@ -167,6 +165,12 @@ class CalibrationProblem:
         """(Fp,) ``sqrt(W) noise / s_i`` of the identified parameters [m per unit of the parameter]."""
         spread = prior_std(self.model)[self.free]
         return np.sqrt(self.prior_weight) * max(self.noise, SIGMA_FLOOR) / spread
+
+    @property
+    def identifiability(self) -> Identifiability:
+        """Singular values and condition number of the column-scaled Jacobian at the start :attr:`x0`
+        (computed on each access: a calibration reports its own at the solution)."""
+        return Identifiability.of(self.jacobian(self.x0))
 
     @property
     def identified(self) -> tuple[str, ...]:

@@ -47,3 +47,14 @@ def test_the_generic_jacobian_kept_for_pruning_is_the_fresh_one(panda) -> None:
     fresh = moved.jacobian(x)
     assert fresh.shape == (pruned.n_residuals, pruned.n_unknowns)
     np.testing.assert_array_equal(pruned.generic_jacobian(), fresh)
+
+
+def test_a_problem_s_identifiability_is_computed_when_asked_at_its_start(panda) -> None:
+    true = perturb(panda, np.random.default_rng(1))
+    dataset, spec = make_dataset(true, per_fixture=40, rng=np.random.default_rng(2))
+    problem = build_problem(panda, dataset, spec)
+    jac = problem.jacobian(problem.x0)
+    scaled = jac / np.linalg.norm(jac, axis=0)
+    singular = np.linalg.svd(scaled, compute_uv=False)  # apart: the SVD, not the normal matrix's eigenvalues
+    np.testing.assert_allclose(problem.identifiability.singular_values, singular, rtol=1e-6)
+    assert problem.identifiability.condition_number == pytest.approx(singular[0] / singular[-1], rel=1e-6)
