@@ -16,6 +16,9 @@ Data: 3 x 500 samples on a perturbed Panda (seed S), 0.3 mm fixture noise, known
    ``reference_lm_calibration``, the library's lm calibration ``calibrate(panda, dataset, spec)`` as
    ``bench/identification.py`` times it (build, solve, prune, re-solve, covariance, self-check) with
    scipy's LM in place of ours. Ratios of medians; goal: default <= 0.3x the reference.
+3. The floor of any whole process, interleaved with the runs above: ``python -c pass`` (the interpreter),
+   ``python -c "import numpy"`` and ``python -c "import numpy, scipy.linalg"``, as ratios of the same
+   reference (what share of the goal start-up alone already takes).
 
 Prints a table and writes bench/solver.json (versions, seed, inputs, uptime before and after).
 Timings on a shared machine are noisy: run with OPENBLAS_NUM_THREADS=1 (bench_common sets it when
@@ -160,8 +163,14 @@ def whole_process(folder: Path, problem_builder, calibration_with_scipy, repeats
         "calibrate_dh_before": [*before, "--model", "dh"],
         "calibrate_default_before": before,
     }
+    floors = {  # no --out: start-up alone
+        "floor_python": [sys.executable, "-c", "pass"],
+        "floor_import_numpy": [sys.executable, "-c", "import numpy"],
+        "floor_import_numpy_scipy_linalg": [sys.executable, "-c", "import numpy, scipy.linalg"],
+    }
     walls: dict[str, list[float]] = {
-        "reference_lm_solve": [], "reference_build": [], "reference_lm_calibration": [], **{k: [] for k in variants}
+        "reference_lm_solve": [], "reference_build": [], "reference_lm_calibration": [], **{k: [] for k in variants},
+        **{k: [] for k in floors},
     }
     for _ in range(repeats):
         clock = time.perf_counter()
@@ -180,6 +189,10 @@ def whole_process(folder: Path, problem_builder, calibration_with_scipy, repeats
             walls[name].append(time.perf_counter() - clock)
             if done.returncode != 0:
                 raise SystemExit(f"{name} failed: {done.stderr.strip()}")
+        for name, command in floors.items():
+            clock = time.perf_counter()
+            subprocess.run(command, check=True)
+            walls[name].append(time.perf_counter() - clock)
     medians = {name: float(np.median(runs)) for name, runs in walls.items()}
     solve, calibration = medians["reference_lm_solve"], medians["reference_lm_calibration"]
     print(f"whole process, medians of {repeats} interleaved runs, against the in-process references (scipy's LM)")
@@ -190,6 +203,9 @@ def whole_process(folder: Path, problem_builder, calibration_with_scipy, repeats
         goal = medians[name] / calibration
         print(f"  {name} / reference lm calibration: {goal:.2f} x (goal for default <= 0.3 x); "
               f"after / before: {medians[name] / medians[name + '_before']:.2f}")
+    print(f"  floor: the interpreter alone {medians['floor_python'] / calibration:.2f} x, importing numpy "
+          f"{medians['floor_import_numpy'] / calibration:.2f} x, numpy and scipy.linalg "
+          f"{medians['floor_import_numpy_scipy_linalg'] / calibration:.2f} x the reference lm calibration")
     return {
         "medians_s": medians,
         "runs_s": walls,
