@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import threading
 import time
 from dataclasses import dataclass, field
 
@@ -319,7 +320,8 @@ def _plausibility_reference(model: RobotModel) -> tuple[np.ndarray, np.ndarray, 
         model.convention, model.hayati, model.params.tobytes(), model.lower.tobytes(), model.upper.tobytes(),
         repr(model.extras),  # compliance, scale, inertials: what the tool point depends on beside the geometry
     )
-    found = _REFERENCES.get(key)
+    with _REFERENCES_LOCK:  # a Dask worker may run calibrations in threads
+        found = _REFERENCES.get(key)
     if found is None:
         q = model.random_configurations(PLAUSIBILITY_CONFIGURATIONS, np.random.default_rng(0))
         prior = prior_std(model)
@@ -329,14 +331,16 @@ def _plausibility_reference(model: RobotModel) -> tuple[np.ndarray, np.ndarray, 
         found = (q, tool_point(model, q), typical)
         for array in found[:2]:
             array.setflags(write=False)
-        if len(_REFERENCES) >= _MAX_REFERENCES:
-            _REFERENCES.pop(next(iter(_REFERENCES)))  # the oldest
-        _REFERENCES[key] = found
+        with _REFERENCES_LOCK:
+            if len(_REFERENCES) >= _MAX_REFERENCES:
+                _REFERENCES.pop(next(iter(_REFERENCES)))  # the oldest
+            _REFERENCES[key] = found
     return found
 
 
 #: :func:`_plausibility_reference` by start model content (a few: the model-selection candidates).
 _REFERENCES: dict[tuple, tuple[np.ndarray, np.ndarray, float]] = {}
+_REFERENCES_LOCK = threading.Lock()
 _MAX_REFERENCES = 8
 
 

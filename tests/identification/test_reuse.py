@@ -58,3 +58,13 @@ def test_a_problem_s_identifiability_is_computed_when_asked_at_its_start(panda) 
     singular = np.linalg.svd(scaled, compute_uv=False)  # apart: the SVD, not the normal matrix's eigenvalues
     np.testing.assert_allclose(problem.identifiability.singular_values, singular, rtol=1e-6)
     assert problem.identifiability.condition_number == pytest.approx(singular[0] / singular[-1], rel=1e-6)
+
+
+def test_plausibility_references_of_many_models_from_threads_stay_their_own(panda) -> None:
+    from concurrent.futures import ThreadPoolExecutor
+
+    models = [perturb(panda, np.random.default_rng(seed)) for seed in range(12)]  # more than are kept
+    with ThreadPoolExecutor(4) as pool:
+        found = list(pool.map(_plausibility_reference, models * 2))
+    for model, (q, points, _) in zip(models * 2, found, strict=True):
+        np.testing.assert_array_equal(points, tool_point(model, q))
