@@ -233,18 +233,19 @@ class CalibrationProblem:
         generic = model.params + np.random.default_rng(0).normal(0.0, 0.1, model.n_params) * prior_std(model)
         centre = model.params if self.prior_centre is None else self.prior_centre
         moved = replace(self, model=model.with_params(generic), prior_centre=centre, _cache={})
-        return moved, moved.pack(generic, self.centres)
+        x = moved.pack(generic, self.centres)
+        # its parameter Jacobian depends on the model and the samples alone (not on which parameters are free,
+        # nor on the prior): computed once for every problem sharing this one's cache (build_problem's rank
+        # test, prune after the solve, the self-check's prediction), handed to the moved problem
+        if "generic_param_jacobian" not in self._cache:
+            self._cache["generic_param_jacobian"] = _read_only(param_jacobian(moved.model, self.dataset.q))
+        moved._cache["param_jacobian"] = (moved.unpack(x)[0].tobytes(), self._cache["generic_param_jacobian"])
+        return moved, x
 
     def generic_jacobian(self) -> np.ndarray:
-        """(M, F) Jacobian at :meth:`generic_point`.
-
-        Its parameter part depends on the model and the samples alone (not on which parameters are free,
-        nor on the prior), so it is kept for every problem sharing this one's cache (:func:`build_problem`'s
-        rank test and :func:`prune` after the solve)."""
+        """(M, F) Jacobian at :meth:`generic_point`."""
         moved, x = self.generic_point()
-        if "generic_param_jacobian" not in self._cache:
-            self._cache["generic_param_jacobian"] = param_jacobian(moved.model, self.dataset.q)
-        return moved.jacobian(x, self._cache["generic_param_jacobian"])
+        return moved.jacobian(x)
 
     # ------------------------------------------------------------------ residuals, Jacobian
     def sample_errors(self, x: np.ndarray) -> np.ndarray:
@@ -278,14 +279,22 @@ class CalibrationProblem:
             parts.append([self.distance_weight * gap])
         return np.concatenate(parts)
 
-    def jacobian(self, x: np.ndarray, pj: np.ndarray | None = None) -> np.ndarray:
-        """(M, F) analytic Jacobian of :meth:`residuals` (``correction.param_jacobian`` columns; ``pj``: that
-        (K, 3, P) Jacobian of every parameter at ``x`` when already known)."""
+    def jacobian(self, x: np.ndarray) -> np.ndarray:
+        """(M, F) analytic Jacobian of :meth:`residuals` (``correction.param_jacobian`` columns).
+
+        The last parameter Jacobian is kept with the parameters it was taken at, for every problem sharing
+        this one's cache: asked again at the same parameters (a fit's covariance, then its self-check) it is
+        not recomputed."""
         params, centres = self.unpack(x)
         count, fp = self.dataset.n_samples, self.n_free_params
         jac = np.zeros((self.n_residuals, self.n_unknowns))
-        if pj is None:
-            pj = param_jacobian(self.model.with_params(params), self.dataset.q)
+        key = params.tobytes()
+        known = self._cache.get("param_jacobian")
+        if known is not None and known[0] == key:
+            pj = known[1]
+        else:
+            pj = _read_only(param_jacobian(self.model.with_params(params), self.dataset.q))
+            self._cache["param_jacobian"] = (key, pj)
         jac[: 3 * count, :fp] = pj[:, :, self.free].reshape(3 * count, fp)
         slot, fixture = self._layout()
         rows = np.flatnonzero(slot[fixture] >= 0)
@@ -313,6 +322,12 @@ class CalibrationProblem:
     def centre_dict(self, centres: np.ndarray) -> dict[str, np.ndarray]:
         """Fixture name -> (3,) centre [m]."""
         return {name: centres[j] for j, name in enumerate(self.dataset.fixture_names)}
+
+
+def _read_only(array: np.ndarray) -> np.ndarray:
+    """``array``, no longer writable (it is shared through a problem's cache)."""
+    array.setflags(write=False)
+    return array
 
 
 def samples_location(dataset: Dataset) -> str:

@@ -43,10 +43,26 @@ def test_the_generic_jacobian_kept_for_pruning_is_the_fresh_one(panda) -> None:
     problem = build_problem(panda, dataset, spec, prior_weight=0.5)  # its rank test keeps the generic part
     assert "generic_param_jacobian" in problem._cache
     pruned = replace(problem, free=problem.free[:-3])  # as pruning does: fewer columns, the prior rows with them
-    moved, x = pruned.generic_point()  # a fresh cache: its Jacobian is computed anew
-    fresh = moved.jacobian(x)
+    moved, x = pruned.generic_point()
+    fresh = replace(moved, _cache={}).jacobian(x)  # nothing kept: computed anew
     assert fresh.shape == (pruned.n_residuals, pruned.n_unknowns)
     np.testing.assert_array_equal(pruned.generic_jacobian(), fresh)
+
+
+def test_a_kept_parameter_jacobian_serves_only_its_own_parameters(panda) -> None:
+    true = perturb(panda, np.random.default_rng(1))
+    dataset, spec = make_dataset(true, per_fixture=40, rng=np.random.default_rng(2))
+    problem = build_problem(panda, dataset, spec, prior_weight=0.5)
+    x = problem.x0 + 1e-4 * np.random.default_rng(3).normal(size=problem.n_unknowns)
+    problem.jacobian(x)  # kept, for every problem sharing the cache
+    params, centres = problem.unpack(x)
+    pruned = replace(problem, free=problem.free[2:])  # shares the cache, other unknowns
+    for trial in (pruned.pack(params, centres), pruned.pack(params, centres) + 1e-5):  # the same parameters, others
+        np.testing.assert_array_equal(pruned.jacobian(trial), replace(pruned, _cache={}).jacobian(trial))
+    eps = 1e-7  # and the kept one is the Jacobian of the residuals there
+    numeric = np.stack([(problem.residuals(x + eps * e) - problem.residuals(x - eps * e)) / (2 * eps)
+                        for e in np.eye(x.size)], axis=1)
+    assert np.abs(problem.jacobian(x) - numeric).max() < 1e-6 * problem.distance_weight
 
 
 def test_a_problem_s_identifiability_is_computed_when_asked_at_its_start(panda) -> None:
