@@ -1,6 +1,6 @@
 """The solver against its floor, and `calibrate` whole-process against an in-process reference LM.
 
-Usage: OPENBLAS_NUM_THREADS=1 python bench/solver.py [--repeats N] [--seed S]
+Usage: OPENBLAS_NUM_THREADS=1 python bench/solver.py [--repeats N] [--seed S] [--baseline-python PYTHON]
 
 Data: 3 x 500 samples on a perturbed Panda (seed S), 0.3 mm fixture noise, known distances.
 
@@ -16,6 +16,12 @@ Data: 3 x 500 samples on a perturbed Panda (seed S), 0.3 mm fixture noise, known
    ``reference_lm_calibration``, the library's lm calibration ``calibrate(panda, dataset, spec)`` as
    ``bench/identification.py`` times it (build, solve, prune, re-solve, covariance, self-check) with
    scipy's LM in place of ours. Ratios of medians; goal: default <= 0.3x the reference.
+   With ``--baseline-python`` (the interpreter of another checkout's environment, e.g. the tree before a
+   change), its ``spherecal calibrate`` runs too, interleaved (``*_baseline``): before / after on one load.
+   Beside the wall time, each process's CPU time (user + system): less sensitive to a busy machine.
+3. The floor of any whole process, interleaved with the runs above: ``python -c pass`` (the interpreter),
+   ``python -c "import numpy"`` and ``python -c "import numpy, scipy.linalg"``, as ratios of the same
+   reference (what share of the goal start-up alone already takes).
 
 Prints a table and writes bench/solver.json (versions, seed, inputs, uptime before and after).
 Timings on a shared machine are noisy: run with OPENBLAS_NUM_THREADS=1 (bench_common sets it when
@@ -26,6 +32,7 @@ from __future__ import annotations
 
 import argparse
 import os
+import resource
 import subprocess
 import sys
 import tempfile
@@ -61,6 +68,12 @@ chi2 = lambda s, dof: float(np.log10(max(gammaincc(dof / 2, max(s, 0.0) / 2), 1e
 consistency.log10_chi2_sf = selfcheck.log10_chi2_sf = chi2
 sys.exit(main(sys.argv[1:]))
 """
+
+
+def children_cpu() -> float:
+    """CPU time [s] (user + system) of every finished child process so far."""
+    used = resource.getrusage(resource.RUSAGE_CHILDREN)
+    return used.ru_utime + used.ru_stime
 
 
 def uptime() -> str:
@@ -149,7 +162,8 @@ def one_solve(problem, repeats: int) -> dict:
     return rows
 
 
-def whole_process(folder: Path, problem_builder, calibration_with_scipy, repeats: int) -> dict:
+def whole_process(folder: Path, problem_builder, calibration_with_scipy, repeats: int,
+                  baseline: str | None = None) -> dict:
     arguments = ["calibrate", "--robot", "panda", "--samples", str(folder / "samples.csv"), "--fixtures",
                  str(folder / "fixtures.yaml")]
     after = [sys.executable, "-m", "spherecal", *arguments]
@@ -160,9 +174,19 @@ def whole_process(folder: Path, problem_builder, calibration_with_scipy, repeats
         "calibrate_dh_before": [*before, "--model", "dh"],
         "calibrate_default_before": before,
     }
-    walls: dict[str, list[float]] = {
-        "reference_lm_solve": [], "reference_build": [], "reference_lm_calibration": [], **{k: [] for k in variants}
+    if baseline:
+        variants["calibrate_dh_baseline"] = [baseline, "-m", "spherecal", *arguments, "--model", "dh"]
+        variants["calibrate_default_baseline"] = [baseline, "-m", "spherecal", *arguments]
+    floors = {  # no --out: start-up alone
+        "floor_python": [sys.executable, "-c", "pass"],
+        "floor_import_numpy": [sys.executable, "-c", "import numpy"],
+        "floor_import_numpy_scipy_linalg": [sys.executable, "-c", "import numpy, scipy.linalg"],
     }
+    walls: dict[str, list[float]] = {
+        "reference_lm_solve": [], "reference_build": [], "reference_lm_calibration": [], **{k: [] for k in variants},
+        **{k: [] for k in floors},
+    }
+    cpus: dict[str, list[float]] = {k: [] for k in [*variants, *floors]}
     for _ in range(repeats):
         clock = time.perf_counter()
         problem = problem_builder()
@@ -175,24 +199,42 @@ def whole_process(folder: Path, problem_builder, calibration_with_scipy, repeats
         walls["reference_lm_calibration"].append(time.perf_counter() - clock)
         for name, extra in variants.items():
             out = folder / f"{name}.yaml"
-            clock = time.perf_counter()
+            clock, cpu = time.perf_counter(), children_cpu()
             done = subprocess.run([*extra, "--out", str(out)], capture_output=True, text=True)
             walls[name].append(time.perf_counter() - clock)
+            cpus[name].append(children_cpu() - cpu)
             if done.returncode != 0:
                 raise SystemExit(f"{name} failed: {done.stderr.strip()}")
+        for name, command in floors.items():
+            clock, cpu = time.perf_counter(), children_cpu()
+            subprocess.run(command, check=True)
+            walls[name].append(time.perf_counter() - clock)
+            cpus[name].append(children_cpu() - cpu)
     medians = {name: float(np.median(runs)) for name, runs in walls.items()}
     solve, calibration = medians["reference_lm_solve"], medians["reference_lm_calibration"]
     print(f"whole process, medians of {repeats} interleaved runs, against the in-process references (scipy's LM)")
-    print(f"  {'':<26} {'median s':>8} {'x solve':>8} {'x lm calibration':>16}")
+    cpu_medians = {name: float(np.median(runs)) for name, runs in cpus.items()}
+    print(f"  {'':<32} {'median s':>8} {'x solve':>8} {'x lm calibration':>16} {'CPU s':>6}")
     for name, median in medians.items():
-        print(f"  {name:<26} {median:8.3f} {median / solve:8.2f} {median / calibration:16.2f}")
+        cpu = f"{cpu_medians[name]:6.3f}" if name in cpu_medians else ""
+        print(f"  {name:<32} {median:8.3f} {median / solve:8.2f} {median / calibration:16.2f} {cpu}")
     for name in ("calibrate_default", "calibrate_dh"):
         goal = medians[name] / calibration
         print(f"  {name} / reference lm calibration: {goal:.2f} x (goal for default <= 0.3 x); "
               f"after / before: {medians[name] / medians[name + '_before']:.2f}")
+    print(f"  floor: the interpreter alone {medians['floor_python'] / calibration:.2f} x, importing numpy "
+          f"{medians['floor_import_numpy'] / calibration:.2f} x, numpy and scipy.linalg "
+          f"{medians['floor_import_numpy_scipy_linalg'] / calibration:.2f} x the reference lm calibration")
+    if baseline:
+        for name in ("calibrate_default", "calibrate_dh"):
+            print(f"  {name} / its baseline ({baseline}): wall {medians[name] / medians[name + '_baseline']:.2f}, "
+                  f"CPU {cpu_medians[name] / cpu_medians[name + '_baseline']:.2f}")
     return {
         "medians_s": medians,
         "runs_s": walls,
+        "cpu_medians_s": cpu_medians,
+        "cpu_runs_s": cpus,
+        "baseline_python": baseline,
         "ratio_to_reference_lm_solve": {k: v / solve for k, v in medians.items()},
         "ratio_to_reference_lm_calibration": {k: v / calibration for k, v in medians.items()},
     }
@@ -202,6 +244,8 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--repeats", type=int, default=5, help="interleaved runs per figure (>= 5)")
     parser.add_argument("--seed", type=int, default=1, help="seed of the true robot (the samples use seed + 1)")
+    parser.add_argument("--baseline-python", default=None,
+                        help="python of another checkout's environment: its calibrate runs interleaved")
     args = parser.parse_args()
     load_before = uptime()
     print(load_before, f"| OPENBLAS_NUM_THREADS={os.environ.get('OPENBLAS_NUM_THREADS')}")
@@ -210,7 +254,7 @@ def main() -> None:
     dataset, spec = make_dataset(true, rng=np.random.default_rng(args.seed + 1), noise=NOISE)
     problem = build_problem(panda, dataset, spec)
     inputs = {"robot": "panda (embedded)", "samples_per_fixture": 500, "fixtures": list(dataset.fixture_names),
-              "noise_m": NOISE, "known_distances": True}
+              "noise_m": NOISE, "known_distances": True, "baseline_python": args.baseline_python}
     results: dict = {
         "openblas_num_threads": os.environ.get("OPENBLAS_NUM_THREADS"),
         "uptime_before": load_before,
@@ -224,6 +268,7 @@ def main() -> None:
             lambda: build_problem(panda, dataset, spec),
             lambda: calibrate_with_scipy(panda, dataset, spec),
             max(args.repeats, 5),
+            args.baseline_python,
         )
     results["uptime_after"] = uptime()
     print(results["uptime_after"])

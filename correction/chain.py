@@ -152,9 +152,10 @@ def rigid_tool_point(model: RobotModel, q: np.ndarray) -> np.ndarray:
     return p[0] if single else p
 
 
-def _rigid_joint_jacobian(model: RobotModel, q: np.ndarray) -> np.ndarray:
-    """(N, 3, n) ``d p / d q`` of the geometric chain at link angles ``q`` (N, n) [m/rad]."""
-    f = frames(model, q)
+def _rigid_joint_jacobian(model: RobotModel, q: np.ndarray, f: Frames | None = None) -> np.ndarray:
+    """(N, 3, n) ``d p / d q`` of the geometric chain at link angles ``q`` (N, n) [m/rad] (``f``: their
+    :func:`frames` when already known)."""
+    f = frames(model, q) if f is None else f
     p = _tool_point(model, f)
     axes = slice(1, None) if model.convention == "modified" else slice(0, -1)
     z = np.moveaxis(f.z[axes], 1, 0)  # (3, n, N): joint i turns about z of this frame

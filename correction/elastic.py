@@ -40,17 +40,19 @@ def with_compliance(model: RobotModel, compliance: np.ndarray | None) -> RobotMo
     return with_joint_vector(model, "compliance", compliance)
 
 
-def link_angles(model: RobotModel, q: np.ndarray, compliance: np.ndarray | None = None) -> np.ndarray:
+def link_angles(model: RobotModel, q: np.ndarray, compliance: np.ndarray | None = None,
+                torques: np.ndarray | None = None) -> np.ndarray:
     """Link angles ``q - c tau(q)`` of measured angles ``q`` (N, n) or (n,) [rad].
 
     Args:
         compliance: (n,) [rad/Nm]; ``model``'s when None. All zero: ``q`` is returned unchanged.
+        torques: ``tau(q)`` (N, n) [Nm] when the caller has it already (:func:`gravity_torques`).
     """
     c = compliance_of(model) if compliance is None else np.asarray(compliance, dtype=float)
     q = np.asarray(q, dtype=float)
     if not np.any(c):
         return q
-    return q - c * gravity_torques(model, q)
+    return q - c * (gravity_torques(model, q) if torques is None else torques)
 
 
 def motor_angles(model: RobotModel, q_link: np.ndarray, compliance: np.ndarray | None = None) -> np.ndarray:

@@ -22,7 +22,7 @@ from typing import Any
 
 import numpy as np
 
-from .chain import link_frames
+from .chain import frames
 from .errors import SpherecalError
 from .model import RobotModel
 
@@ -106,9 +106,11 @@ def gravity_torques(
         masses, coms = inertials_of(model)
     q = np.asarray(q, dtype=float)
     single = q.ndim == 1
-    poses = link_frames(model, np.atleast_2d(q))  # (N, n+1, 4, 4)
+    f = frames(model, np.atleast_2d(q))  # axes and origins (n+1, 3, N): the rotations, not whole 4 x 4 poses
+    rotations = np.stack([f.x, f.y, f.z], axis=-1).transpose(2, 0, 1, 3)  # (N, n+1, 3, 3), columns x y z
+    origins = f.origin.transpose(2, 0, 1)  # (N, n+1, 3)
     n = model.n_joints
-    rot, origin = poses[:, 1:, :3, :3], poses[:, 1:, :3, 3]  # frames 1..n
+    rot, origin = rotations[:, 1:], origins[:, 1:]  # frames 1..n
     body_frame = np.minimum(np.arange(n + 1), n - 1)  # link i in frame i+1, the payload in frame n
     centres = np.einsum("nbij,bj->nbi", rot[:, body_frame], coms) + origin[:, body_frame]  # (N, n+1, 3)
     weighted = masses[None, :, None] * centres
@@ -117,7 +119,7 @@ def gravity_torques(
     if model.convention == "modified":  # joint i turns about z of frame i
         axis, point = rot[:, :, :, 2], origin
     else:  # about z of frame i-1
-        axis, point = poses[:, :-1, :3, 2], poses[:, :-1, :3, 3]
+        axis, point = rotations[:, :-1, :, 2], origins[:, :-1]
     lever = first_moment - carried[None, :, None] * point
     tau = -np.einsum("nij,j->ni", np.cross(axis, lever), np.asarray(g, dtype=float))
     return tau[0] if single else tau

@@ -33,13 +33,13 @@ from .model import RobotModel
 from .scale import joint_angles, scale_of
 
 
-def _link_angles(model: RobotModel, q: np.ndarray) -> np.ndarray:
+def _link_angles(model: RobotModel, q: np.ndarray, torques: np.ndarray | None = None) -> np.ndarray:
     """Link angles of measured angles ``q`` (N, n) [rad]: ``q_joint = (1 + s) q`` (scaled model, else ``q``),
-    then ``q_joint - c tau(q_joint)`` (elastic model, else ``q_joint``)."""
+    then ``q_joint - c tau(q_joint)`` (elastic model, else ``q_joint``; ``torques``: ``tau(q_joint)`` when known)."""
     q = joint_angles(model, q)
     if "compliance" not in model.extras:
         return q
-    return link_angles(model, q)
+    return link_angles(model, q, torques=torques)
 
 
 def _dlink_djoint(model: RobotModel, q_joint: np.ndarray, jac: np.ndarray) -> np.ndarray:
@@ -170,7 +170,10 @@ def param_jacobian(
         (N, 3, P) ``d p / d params`` [m/m and m/rad], and the tool point if asked.
     """
     q2, single = _as_batch(model, q)
-    q_link = _link_angles(model, q2)
+    lay = model.layout
+    q_joint = joint_angles(model, q2)
+    tau = gravity_torques(model, q_joint) if lay.elastic else None  # once: the link angles' and the c columns'
+    q_link = _link_angles(model, q2, tau)
     f = frames(model, q_link)
     n = model.n_joints
     p = _tool_point(model, f)
@@ -182,7 +185,6 @@ def param_jacobian(
     rot_z = _cross(np.moveaxis(f.z, 1, 0), np.moveaxis(lever, 1, 0))
     rot_x, rot_z = np.moveaxis(rot_x, 0, 1), np.moveaxis(rot_z, 0, 1)  # (n+1, 3, N)
     rot_y = np.moveaxis(_cross(np.moveaxis(f.y, 1, 0), np.moveaxis(lever, 1, 0)), 0, 1)
-    lay = model.layout
     joints = jac[lay.joints].reshape(n, len(lay.joint_fields), 3, count)
     a, alpha, d, theta = (lay.joint_fields.index(name) for name in ("a", "alpha", "d", "theta"))
     hayati = list(lay.hayati)
@@ -218,10 +220,8 @@ def param_jacobian(
     for k, row in enumerate(range(lay.base_rpy.start, lay.base_rpy.stop)):
         jac[row] = _cross(base_axes[k][:, None], base_lever)
     if lay.elastic or lay.scaled:
-        q_joint = joint_angles(model, q2)
-        rigid = _rigid_joint_jacobian(model, q_link)  # (N, 3, n)
+        rigid = _rigid_joint_jacobian(model, q_link, f)  # (N, 3, n)
     if lay.elastic:  # d p / d c_i = -J_q(q_link)[:, i] tau_i(q_joint); exact, q_joint does not depend on c
-        tau = gravity_torques(model, q_joint)  # (N, n)
         jac[lay.compliance] = -rigid.transpose(2, 1, 0) * tau.T[:, None]
     if lay.scaled:  # d p / d s_i = (d p / d q_link)[:, i] q_i, the torque's dependence on q neglected
         jac[lay.scale] = (rigid * q2[:, None, :]).transpose(2, 1, 0)

@@ -125,7 +125,7 @@ class ParameterLayout:
     @property
     def joint_fields(self) -> tuple[str, ...]:
         """Per-joint field names in vector order (``a, alpha, d, theta``)."""
-        return tuple(name for name, _ in JOINT_FIELDS)
+        return _JOINT_FIELD_NAMES
 
     @property
     def base(self) -> slice:
@@ -140,9 +140,8 @@ class ParameterLayout:
             raise KeyError(f"no parameter named {name!r} in a {self.n_joints}-joint model") from None
 
     def field(self, name: str) -> np.ndarray:
-        """(n,) indices of one per-joint field (``"a"``, ``"theta"``, ...) for joints 1..n."""
-        k = self.joint_fields.index(name)
-        return self.joints.start + k + len(JOINT_FIELDS) * np.arange(self.n_joints)
+        """(n,) indices of one per-joint field (``"a"``, ``"theta"``, ...) for joints 1..n (read-only)."""
+        return _field_index(self.joints.start, self.n_joints, name)
 
     def held(self, convention: str) -> tuple[str, ...]:
         """Names of the ``d`` held at zero beside each ``beta``: Hayati's rule that the joint whose
@@ -192,6 +191,17 @@ class ParameterLayout:
 
     def _lookup(self) -> dict[str, int]:
         return _name_index(self.names)
+
+
+_JOINT_FIELD_NAMES: tuple[str, ...] = tuple(name for name, _ in JOINT_FIELDS)
+
+
+@lru_cache(maxsize=256)
+def _field_index(start: int, n_joints: int, name: str) -> np.ndarray:
+    """:meth:`ParameterLayout.field`, computed once (every parameter vector a fit packs or unpacks reads it)."""
+    index = start + _JOINT_FIELD_NAMES.index(name) + len(JOINT_FIELDS) * np.arange(n_joints)
+    index.setflags(write=False)
+    return index
 
 
 @lru_cache(maxsize=64)

@@ -16,7 +16,7 @@ from spherecal.correction.files.fixtures import FixtureSpec
 from spherecal.correction.files.samples import Dataset, DatasetError
 
 from .gauge import anchor_spread, gauge_left, scale_centre
-from .identifiability import Identifiability, greedy_rank
+from .identifiability import greedy_rank
 from .problem import (
     CONSISTENCY_TOL,
     DISTANCE_STD,
@@ -251,8 +251,7 @@ def build_problem(
     ordered_fixed = {name: fixed[name] for name in names if name in fixed}
     if not np.isfinite(prior_weight) or prior_weight < 0:
         raise ValueError(f"prior_weight must be a finite number >= 0, got {prior_weight!r}")
-    problem = replace(problem, free=candidates[keep], fixed=ordered_fixed, prior_weight=float(prior_weight),
-                      prior_centre=model.params if prior_weight > 0 else None)
-    return replace(problem, identifiability=Identifiability.of(problem.jacobian(problem.x0)))
+    return replace(problem, free=candidates[keep], fixed=ordered_fixed, prior_weight=float(prior_weight),
+                   prior_centre=model.params if prior_weight > 0 else None)
 
 

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import threading
 import time
 from dataclasses import dataclass, field
 
@@ -12,7 +13,7 @@ from spherecal.correction.files.fixtures import FixtureSpec
 from spherecal.correction.files.samples import Dataset
 
 from .build import build_problem
-from .identifiability import Identifiability, predicted_std
+from .identifiability import Identifiability, normal_inverse, predicted_std
 from .problem import (
     GAUGE,
     NOISE,
@@ -235,9 +236,10 @@ def calibrate(
             x, timings["lm"] = solution.x, timings["lm"] + solution.seconds
     clock = time.perf_counter()
     jac = problem.jacobian(x)
-    edf = problem.effective_unknowns(jac)
+    inverse = normal_inverse(jac)  # one SVD for both
+    edf = problem.effective_unknowns(jac, inverse)
     sigma = _sigma(problem, x, edf)
-    std_values = predicted_std(jac, sigma)
+    std_values = predicted_std(jac, sigma, inverse)
     ident = Identifiability.of(jac)
     params, centres = problem.unpack(x)
     timings["covariance"] = time.perf_counter() - clock
@@ -293,12 +295,8 @@ def check_plausible(problem: CalibrationProblem, params: np.ndarray, max_change:
             moved most (in prior spreads).
     """
     model = problem.model
-    q = model.random_configurations(PLAUSIBILITY_CONFIGURATIONS, np.random.default_rng(0))
-    change = float(registered_errors(tool_point(model.with_params(params), q), tool_point(model, q)).mean())
-    prior = prior_std(model)
-    prior[[model.param_index(name) for name in GAUGE[model.convention]]] = 0.0
-    prior[model.layout.base] = 0.0
-    typical = float(np.sqrt(((param_jacobian(model, q) * prior) ** 2).sum(axis=(1, 2))).mean())
+    q, start_points, typical = _plausibility_reference(model)
+    change = float(registered_errors(tool_point(model.with_params(params), q), start_points).mean())
     if change <= max_change * typical:
         return
     free = problem.free
@@ -313,6 +311,40 @@ def check_plausible(problem: CalibrationProblem, params: np.ndarray, max_change:
         f"{model.layout.format(name, params[free[worst]] - model.params[free[worst]])}: the samples do not determine "
         f"the parameters; record more self-motion (wider joint ranges, more fixtures or known distances)"
     )
+
+
+def _plausibility_reference(model: RobotModel) -> tuple[np.ndarray, np.ndarray, float]:
+    """What :func:`check_plausible` judges a fit starting from ``model`` against: the configurations
+    ((C, n) [rad], seeded), the start model's tool points there ((C, 3) [m]) and the tool-point change a real
+    arm's errors typically cause [m]. They depend on the start model alone, so they are computed once per
+    model content and reused (every fold of one model-selection candidate and the final fit start from the
+    same model: 13 fits, 4 distinct start models)."""
+    key = (
+        model.convention, model.hayati, model.params.tobytes(), model.lower.tobytes(), model.upper.tobytes(),
+        repr(model.extras),  # compliance, scale, inertials: what the tool point depends on beside the geometry
+    )
+    with _REFERENCES_LOCK:  # a Dask worker may run calibrations in threads
+        found = _REFERENCES.get(key)
+    if found is None:
+        q = model.random_configurations(PLAUSIBILITY_CONFIGURATIONS, np.random.default_rng(0))
+        prior = prior_std(model)
+        prior[[model.param_index(name) for name in GAUGE[model.convention]]] = 0.0
+        prior[model.layout.base] = 0.0
+        typical = float(np.sqrt(((param_jacobian(model, q) * prior) ** 2).sum(axis=(1, 2))).mean())
+        found = (q, tool_point(model, q), typical)
+        for array in found[:2]:
+            array.setflags(write=False)
+        with _REFERENCES_LOCK:
+            if len(_REFERENCES) >= _MAX_REFERENCES:
+                _REFERENCES.pop(next(iter(_REFERENCES)))  # the oldest
+            _REFERENCES[key] = found
+    return found
+
+
+#: :func:`_plausibility_reference` by start model content (a few: the model-selection candidates).
+_REFERENCES: dict[tuple, tuple[np.ndarray, np.ndarray, float]] = {}
+_REFERENCES_LOCK = threading.Lock()
+_MAX_REFERENCES = 8
 
 
 def _noise_warning(problem: CalibrationProblem, x: np.ndarray, sigma: float, noise: float) -> str:

@@ -68,7 +68,7 @@ def greedy_rank(jac: np.ndarray, order: np.ndarray, rel_tol: float = 1e-7) -> tu
     """
     norms = np.linalg.norm(jac, axis=0)
     negligible = norms <= 1e-10 * (np.median(norms) if norms.size else 0.0)
-    basis: list[np.ndarray] = []
+    basis = np.empty((len(order), jac.shape[0]))  # rows 0..k-1: orthonormal basis of the accepted columns
     accepted: list[int] = []
     rejected: dict[int, np.ndarray] = {}
     for j in order:
@@ -77,12 +77,12 @@ def greedy_rank(jac: np.ndarray, order: np.ndarray, rel_tol: float = 1e-7) -> tu
             rejected[int(j)] = np.zeros(jac.shape[1])
             continue
         v = column / norms[j]
-        for _ in range(2):  # re-orthogonalise once for stability
-            for b in basis:
-                v = v - (b @ v) * b
+        done = basis[: len(accepted)]
+        for _ in range(2):  # classical Gram-Schmidt, re-orthogonalised once (as stable as modified, 2 products)
+            v = v - (done @ v) @ done
         length = np.linalg.norm(v)
         if length > rel_tol:
-            basis.append(v / length)
+            basis[len(accepted)] = v / length
             accepted.append(int(j))
         else:
             coef = np.zeros(jac.shape[1])
@@ -103,7 +103,8 @@ def normal_inverse(jac: np.ndarray) -> np.ndarray:
     return (vt.T * inv**2) @ vt / np.outer(norms, norms)
 
 
-def predicted_std(jac: np.ndarray, sigma: float) -> np.ndarray:
+def predicted_std(jac: np.ndarray, sigma: float, inverse: np.ndarray | None = None) -> np.ndarray:
     """(F,) standard deviation of every unknown for residual noise ``sigma`` [m] (Gauss-Markov):
-    the square root of the diagonal of ``cov = sigma^2 (J^T J)^-1``."""
-    return sigma * np.sqrt(np.diag(normal_inverse(jac)))
+    the square root of the diagonal of ``cov = sigma^2 (J^T J)^-1`` (``inverse``: :func:`normal_inverse` of
+    ``jac`` when already computed)."""
+    return sigma * np.sqrt(np.diag(normal_inverse(jac) if inverse is None else inverse))

@@ -99,7 +99,6 @@ class CalibrationProblem:
         distance_weight: weight ``w`` of the distance residuals.
         noise: expected fixture noise [m].
         warnings: what the user must know about this problem.
-        identifiability: singular values and condition number of the column-scaled Jacobian.
         anchor: ``(fixture, point, radius)``: the scale gauge ``|c_fixture - point| = radius`` [m]
             (one more residual, weighted like a distance), or None.
         prior_weight: ``W`` of the prior rows (0: none; see the module docstring).
@@ -117,7 +116,6 @@ class CalibrationProblem:
     distance_weight: float
     noise: float
     warnings: tuple[str, ...] = ()
-    identifiability: Identifiability | None = None
     anchor: tuple[str, np.ndarray, float] | None = None
     prior_weight: float = 0.0
     prior_centre: np.ndarray | None = None
@@ -161,18 +159,26 @@ class CalibrationProblem:
         dof = max(self.n_data - (self.n_unknowns if unknowns is None else unknowns), 1.0)
         return float(np.sqrt(r @ r / dof))
 
-    def effective_unknowns(self, jac: np.ndarray) -> float:
+    def effective_unknowns(self, jac: np.ndarray, inverse: np.ndarray | None = None) -> float:
         """Effective number of unknowns of the regularised fit: ``trace`` of the hat matrix of the data rows,
-        ``F - trace(J_p (J^T J)^-1 J_p^T)`` for the prior rows ``J_p`` of ``jac`` (M, F); ``F`` without a prior."""
+        ``F - trace(J_p (J^T J)^-1 J_p^T)`` for the prior rows ``J_p`` of ``jac`` (M, F); ``F`` without a prior
+        (``inverse``: ``(J^T J)^-1``, :func:`.identifiability.normal_inverse`, when already computed)."""
         if not self.n_prior:
             return float(self.n_unknowns)
         jp = jac[self.prior_rows()]
-        return float(self.n_unknowns - np.einsum("ij,jk,ik->", jp, normal_inverse(jac), jp))
+        inverse = normal_inverse(jac) if inverse is None else inverse
+        return float(self.n_unknowns - np.einsum("ij,jk,ik->", jp, inverse, jp))
 
     def _prior_scale(self) -> np.ndarray:
         """(Fp,) ``sqrt(W) noise / s_i`` of the identified parameters [m per unit of the parameter]."""
         spread = prior_std(self.model)[self.free]
         return np.sqrt(self.prior_weight) * max(self.noise, SIGMA_FLOOR) / spread
+
+    @property
+    def identifiability(self) -> Identifiability:
+        """Singular values and condition number of the column-scaled Jacobian at the start :attr:`x0`
+        (computed on each access: a calibration reports its own at the solution)."""
+        return Identifiability.of(self.jacobian(self.x0))
 
     @property
     def identified(self) -> tuple[str, ...]:
@@ -235,7 +241,14 @@ class CalibrationProblem:
         generic = model.params + np.random.default_rng(0).normal(0.0, 0.1, model.n_params) * prior_std(model)
         centre = model.params if self.prior_centre is None else self.prior_centre
         moved = replace(self, model=model.with_params(generic), prior_centre=centre, _cache={})
-        return moved, moved.pack(generic, self.centres)
+        x = moved.pack(generic, self.centres)
+        # its parameter Jacobian depends on the model and the samples alone (not on which parameters are free,
+        # nor on the prior): computed once for every problem sharing this one's cache (build_problem's rank
+        # test, prune after the solve, the self-check's prediction), handed to the moved problem
+        if "generic_param_jacobian" not in self._cache:
+            self._cache["generic_param_jacobian"] = _read_only(param_jacobian(moved.model, self.dataset.q))
+        moved._cache["param_jacobian"] = (moved.unpack(x)[0].tobytes(), self._cache["generic_param_jacobian"])
+        return moved, x
 
     def generic_jacobian(self) -> np.ndarray:
         """(M, F) Jacobian at :meth:`generic_point`."""
@@ -275,11 +288,21 @@ class CalibrationProblem:
         return np.concatenate(parts)
 
     def jacobian(self, x: np.ndarray) -> np.ndarray:
-        """(M, F) analytic Jacobian of :meth:`residuals` (``correction.param_jacobian`` columns)."""
+        """(M, F) analytic Jacobian of :meth:`residuals` (``correction.param_jacobian`` columns).
+
+        The last parameter Jacobian is kept with the parameters it was taken at, for every problem sharing
+        this one's cache: asked again at the same parameters (a fit's covariance, then its self-check) it is
+        not recomputed."""
         params, centres = self.unpack(x)
         count, fp = self.dataset.n_samples, self.n_free_params
         jac = np.zeros((self.n_residuals, self.n_unknowns))
-        pj = param_jacobian(self.model.with_params(params), self.dataset.q)
+        key = params.tobytes()
+        known = self._cache.get("param_jacobian")
+        if known is not None and known[0] == key:
+            pj = known[1]
+        else:
+            pj = _read_only(param_jacobian(self.model.with_params(params), self.dataset.q))
+            self._cache["param_jacobian"] = (key, pj)
         jac[: 3 * count, :fp] = pj[:, :, self.free].reshape(3 * count, fp)
         slot, fixture = self._layout()
         rows = np.flatnonzero(slot[fixture] >= 0)
@@ -307,6 +330,12 @@ class CalibrationProblem:
     def centre_dict(self, centres: np.ndarray) -> dict[str, np.ndarray]:
         """Fixture name -> (3,) centre [m]."""
         return {name: centres[j] for j, name in enumerate(self.dataset.fixture_names)}
+
+
+def _read_only(array: np.ndarray) -> np.ndarray:
+    """``array``, no longer writable (it is shared through a problem's cache)."""
+    array.setflags(write=False)
+    return array
 
 
 def samples_location(dataset: Dataset) -> str:

@@ -6,7 +6,7 @@ from dataclasses import replace
 
 import numpy as np
 
-from .identifiability import Identifiability, predicted_std
+from .identifiability import predicted_std
 from .problem import CalibrationProblem, prior_std
 
 
@@ -53,5 +53,4 @@ def prune(
     params[dropped] = problem.model.params[dropped]
     fixed = {name: fixed[name] for name in names if name in fixed}
     pruned = replace(problem, free=problem.free[keep], fixed=fixed)
-    x_new = pruned.pack(params, centres)
-    return replace(pruned, identifiability=Identifiability.of(pruned.jacobian(x_new))), x_new
+    return pruned, pruned.pack(params, centres)

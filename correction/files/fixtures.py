@@ -27,7 +27,7 @@ import yaml
 from spherecal.correction.files.atomic import atomic_write_text
 from spherecal.correction.files.robot_file import MAX_LENGTH
 from spherecal.correction.files.samples import Dataset, DatasetError
-from spherecal.correction.files.yaml_safe import load_yaml
+from spherecal.correction.files.yaml_safe import dump_yaml, load_yaml
 
 
 # ------------------------------------------------------------------------------ fixtures.yaml
@@ -193,7 +193,7 @@ def format_fixtures(spec: FixtureSpec) -> str:
     if spec.distances:
         data["distances"] = [[a, b, float(v)] for a, b, v in spec.distances]
     data.update(spec.extras)
-    body = yaml.safe_dump(data, sort_keys=False, default_flow_style=None, width=1000)
+    body = dump_yaml(data, sort_keys=False, default_flow_style=None, width=1000)
     return "# spherecal fixtures: centres in the base frame and distances, metres\n" + body
 
 

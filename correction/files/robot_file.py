@@ -18,11 +18,10 @@ import os
 from pathlib import Path
 from typing import Any
 
-import yaml
-
 from ..errors import SpherecalError
 from ..model import CONVENTIONS, JOINT_FIELDS, RobotModel
 from .atomic import atomic_write_text
+from .yaml_safe import dump_yaml
 
 JOINT_KEYS: tuple[str, ...] = JOINT_FIELDS + ("lower", "upper")
 #: Optional per-joint key: a joint with ``beta`` carries a Hayati angle (see RobotModel.hayati).
@@ -190,9 +189,7 @@ def robot_to_dict(model: RobotModel) -> dict:
 def dump_robot(model: RobotModel, header: str = "") -> str:
     """YAML text of a robot file; ``header`` lines are written as comments on top."""
     comments = "".join(f"# {line}\n" for line in header.splitlines())
-    body = yaml.safe_dump(
-        robot_to_dict(model), sort_keys=False, default_flow_style=None, width=1000
-    )
+    body = dump_yaml(robot_to_dict(model), sort_keys=False, default_flow_style=None, width=1000)
     return comments + "# spherecal robot file: metres and radians\n" + body
 
 

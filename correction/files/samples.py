@@ -175,8 +175,12 @@ class Dataset:
     @property
     def fixture_index(self) -> np.ndarray:
         """(K,) int: index of every sample's fixture in :attr:`fixture_names`."""
-        lookup = {name: i for i, name in enumerate(self.fixture_names)}
-        return np.array([lookup[label] for label in self.labels], dtype=int)
+        index = np.full(self.labels.shape, -1, dtype=int)
+        for i, name in enumerate(self.fixture_names):  # one comparison per fixture, not a Python loop per sample
+            index[self.labels == name] = i
+        if np.any(index < 0):
+            raise KeyError(str(self.labels[np.argmax(index < 0)]))
+        return index
 
     def counts(self) -> dict[str, int]:
         """Number of samples per fixture, in :attr:`fixture_names` order."""

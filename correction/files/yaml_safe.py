@@ -139,3 +139,9 @@ def load_yaml(text: str, source: str, error: type[SpherecalError] = YamlError) -
         raise error(f"{source}: {row}, field '': invalid YAML: {problem}") from None
     except RecursionError:  # a deep flow scalar the composer's guard did not see
         raise error(f"{source}: row ?, field '': nested too deeply") from None
+
+
+def dump_yaml(data: Any, **options: Any) -> str:
+    """``yaml.safe_dump(data, **options)`` through libyaml's emitter when PyYAML has it (``CSafeDumper``:
+    the same text, 3-4x faster on a calibrated robot file), else PyYAML's own."""
+    return yaml.dump(data, Dumper=getattr(yaml, "CSafeDumper", yaml.SafeDumper), **options)

@@ -39,6 +39,15 @@ def test_fixture_order_is_first_appearance(panda, rng) -> None:
     assert ds.for_fixture("B").shape == (2, 7)
 
 
+def test_fixture_index_names_each_sample_s_fixture(rng) -> None:
+    labels = np.array(["B", "A", "C", "B", "A", "A"] * 50)
+    given = Dataset(labels=labels, q=rng.normal(size=(labels.size, 7)), fixture_names=("C", "A", "B"))
+    np.testing.assert_array_equal(given.fixture_index, [("C", "A", "B").index(label) for label in labels])
+    unlisted = Dataset(labels=labels, q=given.q, fixture_names=("A", "B"))
+    with pytest.raises(KeyError, match="C"):
+        _ = unlisted.fixture_index
+
+
 def test_deduplicate_exact_and_near(panda, rng) -> None:
     q = panda.random_configurations(6, rng)
     extra = np.vstack([q[0], q[1] + 5e-5, q[2] + 5e-3])  # exact, near, distinct

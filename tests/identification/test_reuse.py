@@ -1,0 +1,86 @@
+"""What a calibration computes once and reuses is what it would compute afresh."""
+
+from __future__ import annotations
+
+from dataclasses import replace
+
+import numpy as np
+import pytest
+
+from spherecal.correction import perturb, tool_point
+from spherecal.correction.elastic import with_compliance
+from spherecal.identification.build import build_problem
+from spherecal.identification.calibrate import _plausibility_reference
+from spherecal.identification.synthetic import make_dataset
+
+
+def test_the_plausibility_reference_follows_the_start_model_s_content(panda) -> None:
+    q, points, typical = _plausibility_reference(panda)
+    # the same content in another object (every fold of a candidate builds its own start model): reused
+    again = _plausibility_reference(with_compliance(panda, None))
+    assert again[1] is points
+    np.testing.assert_array_equal(points, tool_point(panda, q))
+    with pytest.raises(ValueError):
+        points[0, 0] = 0.0  # shared: read-only
+    # another content (an elastic start: its tool sags under gravity, its compliances add to the typical change)
+    elastic = with_compliance(panda, np.full(panda.n_joints, 3e-5))
+    q_e, points_e, typical_e = _plausibility_reference(elastic)
+    np.testing.assert_array_equal(q_e, q)  # the same seeded configurations
+    np.testing.assert_array_equal(points_e, tool_point(elastic, q))
+    assert np.abs(points_e - points).max() > 1e-5
+    assert typical_e > typical
+    # the same parameters with a heavier payload: the same parameter vector, another arm under gravity
+    heavier = replace(elastic, extras={**elastic.extras, "payload": {"mass": 3.0, "com": [0.0, 0.0, 0.1]}})
+    np.testing.assert_array_equal(heavier.params, elastic.params)
+    _, points_h, _ = _plausibility_reference(heavier)
+    np.testing.assert_array_equal(points_h, tool_point(heavier, q))
+    assert np.abs(points_h - points_e).max() > 1e-6
+
+
+def test_the_generic_jacobian_kept_for_pruning_is_the_fresh_one(panda) -> None:
+    true = perturb(panda, np.random.default_rng(1))
+    dataset, spec = make_dataset(true, per_fixture=40, rng=np.random.default_rng(2))
+    problem = build_problem(panda, dataset, spec, prior_weight=0.5)  # its rank test keeps the generic part
+    assert "generic_param_jacobian" in problem._cache
+    pruned = replace(problem, free=problem.free[:-3])  # as pruning does: fewer columns, the prior rows with them
+    moved, x = pruned.generic_point()
+    fresh = replace(moved, _cache={}).jacobian(x)  # nothing kept: computed anew
+    assert fresh.shape == (pruned.n_residuals, pruned.n_unknowns)
+    np.testing.assert_array_equal(pruned.generic_jacobian(), fresh)
+
+
+def test_a_kept_parameter_jacobian_serves_only_its_own_parameters(panda) -> None:
+    true = perturb(panda, np.random.default_rng(1))
+    dataset, spec = make_dataset(true, per_fixture=40, rng=np.random.default_rng(2))
+    problem = build_problem(panda, dataset, spec, prior_weight=0.5)
+    x = problem.x0 + 1e-4 * np.random.default_rng(3).normal(size=problem.n_unknowns)
+    problem.jacobian(x)  # kept, for every problem sharing the cache
+    params, centres = problem.unpack(x)
+    pruned = replace(problem, free=problem.free[2:])  # shares the cache, other unknowns
+    for trial in (pruned.pack(params, centres), pruned.pack(params, centres) + 1e-5):  # the same parameters, others
+        np.testing.assert_array_equal(pruned.jacobian(trial), replace(pruned, _cache={}).jacobian(trial))
+    eps = 1e-7  # and the kept one is the Jacobian of the residuals there
+    numeric = np.stack([(problem.residuals(x + eps * e) - problem.residuals(x - eps * e)) / (2 * eps)
+                        for e in np.eye(x.size)], axis=1)
+    assert np.abs(problem.jacobian(x) - numeric).max() < 1e-6 * problem.distance_weight
+
+
+def test_a_problem_s_identifiability_is_computed_when_asked_at_its_start(panda) -> None:
+    true = perturb(panda, np.random.default_rng(1))
+    dataset, spec = make_dataset(true, per_fixture=40, rng=np.random.default_rng(2))
+    problem, _ = build_problem(panda, dataset, spec).generic_point()  # the nominal design itself is degenerate
+    jac = problem.jacobian(problem.x0)
+    scaled = jac / np.linalg.norm(jac, axis=0)
+    singular = np.linalg.svd(scaled, compute_uv=False)  # apart: the SVD, not the normal matrix's eigenvalues
+    np.testing.assert_allclose(problem.identifiability.singular_values, singular, rtol=1e-6)
+    assert problem.identifiability.condition_number == pytest.approx(singular[0] / singular[-1], rel=1e-6)
+
+
+def test_plausibility_references_of_many_models_from_threads_stay_their_own(panda) -> None:
+    from concurrent.futures import ThreadPoolExecutor
+
+    models = [perturb(panda, np.random.default_rng(seed)) for seed in range(12)]  # more than are kept
+    with ThreadPoolExecutor(4) as pool:
+        found = list(pool.map(_plausibility_reference, models * 2))
+    for model, (q, points, _) in zip(models * 2, found, strict=True):
+        np.testing.assert_array_equal(points, tool_point(model, q))
