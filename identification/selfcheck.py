@@ -50,7 +50,7 @@ import numpy as np
 
 from spherecal.correction import RobotModel, param_jacobian, tool_point
 
-from .consistency import augmented, group_finding, log10_chi2_sf, name_culprit
+from .consistency import augmented, group_finding, log10_chi2_sf, name_culprit, sets_scale_alone
 from .joint_error import LENGTH
 from .leave_out import leave_out
 from .prediction import Workspace, deviation_root, joint_error_root, socket_spreads
@@ -127,7 +127,7 @@ def self_check(
     findings.append(_level(problem, r, sigma, dof, excluded, declared))
     jac, res, groups, kinds, spread = augmented(problem, x, r)
     _, _, left = leave_out(jac, res, groups, spread=spread)
-    checkable = sum(1 for g in left.values() if g.dof > 0)
+    checkable = sum(1 for k, g in left.items() if g.dof > 0 and not sets_scale_alone(problem, kinds[k]))
     groups = [group_finding(problem, name, kinds[name], group, checkable) for name, group in left.items()]
     findings += name_culprit(groups, problem.noise, LEVEL_FACTOR)
     findings += _trends(problem, x)

@@ -16,6 +16,7 @@ from spherecal.correction.files.fixtures import FixtureSpec
 from spherecal.correction.files.samples import Dataset
 from spherecal.identification.calibrate import calibrate
 from spherecal.identification.leave_out import leave_out
+from spherecal.identification.problem import PRIOR
 from spherecal.identification.selfcheck import InconsistentDataError
 from spherecal.identification.synthetic import PANDA_FIXTURES, make_dataset
 
@@ -87,6 +88,19 @@ def test_a_single_distance_is_reported_unchecked(arm, noisy) -> None:
     finding = next(f for f in result.selfcheck.findings if f.check == "distance P1-P2")
     assert finding.passed and finding.figures == {"unchecked": True}
     assert any(line.startswith("  unchecked: distance P1-P2") for line in result.selfcheck.lines())
+
+
+def test_a_single_long_distance_with_the_prior_is_unchecked_not_refused(arm, noisy) -> None:
+    # two fixtures 0.82 m apart, their exact distance, 0.3 mm noise, the MAP prior of the workflow: the prior
+    # alone would put the distance 17 mm short (noise pulls a fit toward a smaller arm), which refused good data
+    panda, true = arm
+    dataset, spec = noisy
+    subset = dataset.select(np.flatnonzero(np.isin(dataset.labels, ["P1", "P2"])))
+    subset = Dataset(subset.labels, subset.q, fixture_names=("P1", "P2"))
+    result = calibrate(panda, subset, FixtureSpec(("P1", "P2"), distances=spec.distances[:1]), prior=PRIOR)
+    finding = next(f for f in result.selfcheck.findings if f.check == "distance P1-P2")
+    assert finding.passed and finding.figures == {"unchecked": True}
+    assert _error(result.model, true) < 0.5 * _error(panda, true)
 
 
 # ------------------------------------------------------------------------------ the slips
