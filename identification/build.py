@@ -58,7 +58,7 @@ def _check_reach(model: RobotModel, spec: FixtureSpec) -> None:
     for k, (a, b, value) in enumerate(spec.distances):
         if value > 2 * reach:
             raise DatasetError(
-                f"{where}: {spec._row(f'distances[{k}]')}field 'distances[{k}]': {a}-{b} {value:.6g} m is more "
+                f"{where}: {spec.distance_field(k)}: {a}-{b} {value:.6g} m is more "
                 f"than the arm can span ({2 * reach:.3g} m); distances are in metres"
             )
 
@@ -72,15 +72,18 @@ def _drop_known_distances(spec: FixtureSpec, known: dict[str, np.ndarray]) -> Fi
     keep = []
     for k, (a, b, value) in enumerate(spec.distances):
         if a not in known or b not in known:
-            keep.append((a, b, value))
+            keep.append(k)
             continue
         apart = float(np.linalg.norm(known[a] - known[b]))
         if abs(apart - value) > CONSISTENCY_TOL:
             raise DatasetError(
-                f"{spec.source or 'fixtures'}: {spec._row(f'distances[{k}]')}field 'distances[{k}]': "
+                f"{spec.source or 'fixtures'}: {spec.distance_field(k)}: "
                 f"distance {a}-{b} is {value:.6g} m but their known positions are {apart:.6g} m apart"
             )
-    return spec if len(keep) == len(spec.distances) else replace(spec, distances=keep)
+    if len(keep) == len(spec.distances):
+        return spec
+    index = tuple(spec.distance_index[k] if spec.distance_index else k for k in keep)  # the file's numbering
+    return replace(spec, distances=[spec.distances[k] for k in keep], distance_index=index)
 
 
 def build_problem(

@@ -189,7 +189,7 @@ def group_finding(problem: CalibrationProblem, name: str, kind: tuple, group: Le
         if what == "distance":
             a, b, declared = spec.distances[key]
             text = (
-                f"{where}: {spec._row(f'distances[{key}]')}field 'distances[{key}]': distance {a}-{b} "
+                f"{where}: {spec.distance_field(key)}: distance {a}-{b} "
                 f"({declared:.6g} m) disagrees with the samples by {size * 1e3:.3f} mm (its stated accuracy "
                 f"{stated * 1e3:.3g} mm, socket play {SOCKET_STD * 1e3:.2g} mm, the fit's {fit_std * 1e3:.2g} mm)"
             )

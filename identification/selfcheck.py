@@ -159,7 +159,7 @@ def _geometry(problem: CalibrationProblem, x: np.ndarray) -> list[Finding]:
                 Finding(
                     f"separation {a}-{b}",
                     False,
-                    f"{where}: {spec._row(f'distances[{k}]')}field 'distances[{k}]': distance {a}-{b} is "
+                    f"{where}: {spec.distance_field(k)}: distance {a}-{b} is "
                     f"{value * 1e3:.3g} mm: fixtures closer than {MIN_SEPARATION * 1e3:.0f} mm check nothing "
                     f"(the same socket under two names, or a typo)",
                     {"declared_mm": value * 1e3},

@@ -69,10 +69,12 @@ def exclude_fixtures(
     dataset = dataset.select(np.flatnonzero(keep))
     if spec is not None:
         left = set(dataset.fixture_names)
+        kept = [k for k, d in enumerate(spec.distances) if d[0] in left and d[1] in left]
         spec = FixtureSpec(
             names=tuple(n for n in spec.names if n in left),
             positions={k: v for k, v in spec.positions.items() if k in left},
-            distances=[d for d in spec.distances if d[0] in left and d[1] in left],
+            distances=[spec.distances[k] for k in kept],
             extras=spec.extras, source=spec.source, rows=spec.rows,
+            distance_index=tuple(spec.distance_index[k] if spec.distance_index else k for k in kept),
         )
     return dataset, spec

@@ -42,6 +42,8 @@ class FixtureSpec:
         extras: other top-level keys of the file, written back unchanged.
         source: file the spec came from (for messages), or "".
         rows: file line of ``"fixtures.P1"`` and ``"distances[k]"`` entries (for messages).
+        distance_index: the file's index of each of ``distances`` when some were left out (for messages;
+            empty: the same order).
     """
 
     names: tuple[str, ...] = ()
@@ -50,9 +52,15 @@ class FixtureSpec:
     extras: dict = field(default_factory=dict)
     source: str = ""
     rows: dict[str, int] = field(default_factory=dict)
+    distance_index: tuple[int, ...] = ()
 
     def _row(self, key: str) -> str:
         return f"row {self.rows[key]}, " if key in self.rows else ""
+
+    def distance_field(self, k: int) -> str:
+        """``"row N, field 'distances[j]'"`` of distance ``k`` as the file numbers it (for messages)."""
+        j = self.distance_index[k] if self.distance_index else k
+        return f"{self._row(f'distances[{j}]')}field 'distances[{j}]'"
 
     @staticmethod
     def unknown(names: tuple[str, ...] | list[str]) -> FixtureSpec:
@@ -74,7 +82,7 @@ class FixtureSpec:
             for name in (a, b):
                 if name not in have:
                     raise DatasetError(
-                        f"{where}: {self._row(f'distances[{k}]')}field 'distances[{k}]': "
+                        f"{where}: {self.distance_field(k)}: "
                         f"fixture {name!r} has no samples"
                         f"{' in ' + dataset.source if dataset.source else ''}"
                     )

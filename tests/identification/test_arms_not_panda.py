@@ -13,6 +13,7 @@ import pytest
 
 from spherecal.cli import main
 from spherecal.correction import load_robot, perturb
+from spherecal.correction.files.fixtures import FixtureSpec
 from spherecal.correction.files.samples import Dataset, DatasetError, JointLimitWarning
 from spherecal.correction.files.samples_csv import read_samples, write_samples
 from spherecal.identification.calibrate import calibrate
@@ -106,6 +107,27 @@ def test_exclude_fixture_leaves_it_and_its_distances_out(tmp_path, capsys, panda
     (tmp_path / "cal.yaml").unlink()
     refused([*argv, "--exclude-fixture", "P9"], tmp_path, capsys,
             "field 'fixture': --exclude-fixture 'P9' is not a fixture of the samples (they have P1, P2, P3)")
+
+
+def test_a_refusal_after_exclude_fixture_names_the_distance_as_the_file_numbers_it(tmp_path, capsys, panda) -> None:
+    # four fixtures, six distances; P1 left out drops the first three: a 10 mm typo in the file's last one
+    # must be named as row and field of the file (it was 'distances[2]' of the shortened list, the wrong row)
+    from spherecal.correction.files.fixtures import write_fixtures
+
+    true = perturb(panda, np.random.default_rng(2))
+    centres = {**PANDA_FIXTURES, "P4": np.array([0.45, -0.35, 0.25])}
+    dataset, spec = make_dataset(true, centres, 150, np.random.default_rng(3), noise=1e-4)
+    a, b, value = spec.distances[-1]
+    assert (a, b) == ("P3", "P4") and len(spec.distances) == 6
+    typo = FixtureSpec(spec.names, distances=[*spec.distances[:-1], (a, b, value + 0.01)])
+    write_samples(tmp_path / "samples.csv", dataset)
+    write_fixtures(tmp_path / "fixtures.yaml", typo)
+    line = next(i for i, text in enumerate((tmp_path / "fixtures.yaml").read_text().splitlines(), 1)
+                if text.startswith("- [P3, P4"))
+    argv = ["calibrate", "--robot", "panda", "--samples", str(tmp_path / "samples.csv"), "--fixtures",
+            str(tmp_path / "fixtures.yaml"), "--out", str(tmp_path / "cal.yaml"), "--model", "dh",
+            "--exclude-fixture", "P1"]
+    refused(argv, tmp_path, capsys, f"fixtures.yaml: row {line}, field 'distances[5]': distance P3-P4")
 
 
 def test_more_noise_than_declared_is_judged_at_the_noise_the_residuals_show(panda) -> None:
