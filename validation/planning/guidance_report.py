@@ -26,7 +26,8 @@ def format_guidance(guidance) -> str:
         f"candidates: {len(guidance.ranking) + len(guidance.refused)}, {len(guidance.ranking)} recordable, "
         f"{guidance.per_socket} hand-guided configurations per socket",
         f"predicted rms tool-point error over the candidates' workspace [mm] now: {now.error * 1e3:.4f} "
-        f"(parameters {now.prediction.rms * 1e3:.4f}, unexplained {now.unexplained * 1e3:.4f})",
+        f"(parameters {now.parameters * 1e3:.4f}, unexplained {now.unexplained * 1e3:.4f}); each candidate's error "
+        "and gain are over the other candidates' workspace (held out, as a validation on new placements sees it)",
         f"{'rank':>4} {'candidate':<16} {'x':>7} {'y':>7} {'z':>7} | {'error':>7} {'gain':>7} | pins down "
         "(std ratio to now)",
     ]
@@ -49,7 +50,7 @@ def guidance_json(guidance, provenance: dict | None = None) -> dict:
             "name": j.placement.name,
             "predicted_error_m": j.error,
             "gain_m": j.gain,
-            "parameters_rms_m": j.prediction.rms,
+            "parameters_rms_m": j.parameters,
             "unexplained_rms_m": j.unexplained,
             "sockets": {k: [float(v) for v in p] for k, p in j.placement.sockets.items()},
             "distances": [[a, b, d] for a, b, d in j.placement.distances],
