@@ -16,6 +16,7 @@ from spherecal.correction.perturb import perturb
 from spherecal.identification.calibrate import calibrate
 from spherecal.identification.prediction import predict_accuracy
 from spherecal.identification.synthetic import fixture_samples
+from spherecal.validation.planning import guidance as guidance_module
 from spherecal.validation.planning.candidates import CandidateError
 from spherecal.validation.planning.guidance import (
     calibrate_recording,
@@ -128,13 +129,15 @@ def simulated(panda):
     return truth, dataset, spec, recorded, candidates
 
 
-def test_the_predicted_gains_are_real_on_a_simulated_arm(panda, simulated):
+@pytest.mark.parametrize("judged_on", ["whole", "held-out"])
+def test_the_predicted_gains_are_real_on_a_simulated_arm(panda, simulated, judged_on, monkeypatch):
     """Every candidate is predicted to help after one placement, and on average they really do: each recorded
     on the true robot (2 noisy recordings), calibrated with the first placement, the true error where the user
-    considers working and has not recorded (every other candidate's self-motion) falls below the first
+    considers working (every candidate's self-motion; held out: every other candidate's) falls below the first
     calibration's there, by about the predicted share. (One recording of one candidate may still come out
-    worse: single realisations scatter by tens of percent.)"""
+    worse: single realisations scatter by tens of percent.) Both rules of where a candidate is judged."""
     truth, dataset, spec, recorded, candidates = simulated
+    monkeypatch.setattr(guidance_module, "JUDGED_ON", judged_on)
     guidance = rank_placements(recorded, candidates, np.random.default_rng(0))
     assert not guidance.refused and len(guidance.ranking) == len(candidates)
     assert all(j.gain > 0 for j in guidance.ranking) and guidance.worth_it
@@ -142,7 +145,7 @@ def test_the_predicted_gains_are_real_on_a_simulated_arm(panda, simulated):
     q = {c.name: np.concatenate([fixture_samples(truth, p, 100, rng) for p in c.sockets.values()]) for c in candidates}
     shares, predicted = [], []
     for j in guidance.ranking:
-        others = np.concatenate([v for k, v in q.items() if k != j.placement.name])
+        others = np.concatenate([v for k, v in q.items() if k != j.placement.name or judged_on == "whole"])
         first = float(registered_errors(tool_point(recorded.model, others), tool_point(truth, others)).mean())
         errors = []
         for _ in range(2):
@@ -158,12 +161,14 @@ def test_the_predicted_gains_are_real_on_a_simulated_arm(panda, simulated):
     assert np.mean(shares) < 1.0 and 1 / 3 < np.mean(shares) / np.mean(predicted) < 3, (shares, predicted)
 
 
-def test_each_candidate_is_judged_where_it_was_not_recorded(simulated):
-    """A candidate's error and gain are over the other candidates' configurations only (held out, as a
-    validation on placements not used for fitting measures them), recomputed here independently: the
-    prediction and the unexplained part evaluated at those configurations alone; a lone candidate is judged on
-    its own."""
+@pytest.mark.parametrize("judged_on", ["whole", "held-out"])
+def test_each_candidate_is_judged_where_the_rule_says(simulated, judged_on, monkeypatch):
+    """A candidate's error and gain are over the whole workspace, or held out over the other candidates'
+    configurations only (as a validation on placements not used for fitting measures them), recomputed here
+    independently: the prediction and the unexplained part evaluated at those configurations alone; a lone
+    candidate is judged on its own."""
     _, _, _, recorded, candidates = simulated
+    monkeypatch.setattr(guidance_module, "JUDGED_ON", judged_on)
     guidance = rank_placements(recorded, candidates[:3], np.random.default_rng(0))
     assert [j.gain for j in guidance.ranking] == sorted((j.gain for j in guidance.ranking), reverse=True)
     everything = np.concatenate([a for j in guidance.ranking for a in j.q.values()])
@@ -185,7 +190,7 @@ def test_each_candidate_is_judged_where_it_was_not_recorded(simulated):
         return math.sqrt(np.mean(part**2) + 3.0 * np.mean(gp))
 
     for j in guidance.ranking:
-        others = owner != j.placement.name
+        others = (owner != j.placement.name) | (judged_on == "whole")
         assert j.error == pytest.approx(rms(j.q, others), rel=1e-6)
         assert j.gain == pytest.approx(rms({}, others) - j.error, rel=1e-6)
     lone = rank_placements(recorded, candidates[:1], np.random.default_rng(0)).ranking[0]

@@ -21,30 +21,29 @@ plate: where the arm is used), registered by a best rigid fit as the validation 
   white residuals); ``"residual"`` takes ``sigma`` for both (one placement cannot show how much of
   the error varies between placements, which a within-socket variogram does not see).
 
-``error = sqrt(mean of (parameter error^2 + 3 posterior variance))`` [m] over the *held-out* workspace
-(:data:`JUDGED_ON`): a candidate is judged on the configurations of the *other* candidates (all of them when it
-is the only one), and its gain is the recording's predicted error over those same configurations minus its
-own. Where a candidate is recorded, the calibration's error is its fit residual, not a prediction; what a
-calibration is worth is what it predicts where it was not fitted (MUKCa's test MAE on placements not used
-for fitting, the self-check's leave-one-out). Judged over the whole workspace (``"whole"``, before), a
-candidate gained most by covering its own region, i.e. by lying far from what is recorded; on MUKCa's real
-placements the measured change of adding a candidate does not follow that distance (Spearman -0.09 on
-panda_2_clean, -0.38 on dinova_1) but the candidate's proximity to the *other* placements (its mean distance
-to them: 0.50 and 0.75). Candidates are ranked by the gain, not by the held-out error (each one's held-out set
-differs; ranked by that error the picks were worst-first, 3/24 on panda_2_clean). No constant was fitted:
-:data:`LENGTH` and :data:`SMOOTH` are unchanged.
+``error = sqrt(mean of (parameter error^2 + 3 posterior variance))`` [m] over the configurations a candidate is
+judged on (:data:`JUDGED_ON`), and its gain is the recording's predicted error over the same configurations minus
+its own; candidates are ranked by the gain. ``"whole"`` (default): the whole workspace, the candidate's own
+configurations included (where the arm is used, recorded or not). ``"held-out"``: the *other* candidates'
+configurations only (all of them for a lone candidate): where a candidate is recorded the calibration's error
+is its fit residual, and MUKCa's test MAE measures the placements not used for fitting. (Ranked by the held-out
+*error* instead of the gain, the picks were worst-first, 3/24 on panda_2_clean: each one's set differs.)
 
-Measured on MUKCa's real placements (bench/plan_real.py: first placement recorded, the other recorded
-placements as candidates, 5 plan seeds; actual = calibrate on first + candidate, test MAE on the rest, change
-against the first's calibration on the same sockets), the plan's pick in the better half of the candidates,
-whole -> held out: panda_2_clean 21/40 -> 27/40 (mean Spearman of the plan's order against the change 0.08 ->
-0.15; mean change of the picks -0.095 -> -0.102 mm, random -0.087), panda_4_clean 7/15 -> 5/15 (two candidates
-whose measured changes, +-0.02 mm, are below the noise floor of 0.03 mm: nothing to rank), dinova_1 8/20 ->
-6/20 (picks -0.840 -> -0.370 mm, random -0.458): 36/75 -> 38/75. On dinova_1 the parameter part (white noise at
-the Gen3 lite's 0.7-2.5 mm residual) decides the ranking and its held-out gain does not follow the measured
-one; the unexplained part alone picks well on both arms (seeds 0-2: panda_2_clean 17/24, dinova_1 9/12) but is
-zero for a white residual, where the parameter part is the whole truth (the simulated arm), so it cannot rank
-alone.
+On MUKCa's real placements (bench/plan_real.py: first placement recorded, the other recorded placements as
+candidates, 5 plan seeds; actual = `spherecal calibrate`'s workflow on first + candidate, test MAE on the rest,
+change against the first's calibration on the same sockets), the pick in the better half of the candidates,
+whole / held-out: panda_2_clean 23/40 / 26/40 (mean change of the picks -0.107 / -0.111 mm, random -0.097;
+Spearman of the plan's order against the change 0.04 / 0.14), panda_4_clean 8/15 / 6/15 (-0.045 / -0.040,
+random -0.043: two candidates whose changes differ by less than the noise floor), dinova_1 8/20 / 6/20
+(-0.896 / -0.383, random -0.489): 39/75 / 38/75. Held-out ranks panda_2_clean's seven candidates better but
+picks worse than random on dinova_1, where the parameter part (white noise at the Gen3 lite's 0.7-2.5 mm
+residual) decides the ranking and its held-out gain does not follow the measured one; the whole rule is the
+only one that beats a random pick on every arm, hence the default. The measured changes follow a candidate's
+proximity to the *other* placements (Spearman of its mean distance to them against the change 0.50 on
+panda_2_clean, 0.75 on dinova_1) and not its distance from the recording (-0.09, -0.38); the unexplained part
+alone, held out, picks well on both arms (seeds 0-2: panda_2_clean 17/24, dinova_1 9/12) but is zero for a
+white residual, where the parameter part is the whole truth (the simulated arm), so it cannot rank alone. No
+constant was fitted to these data: :data:`LENGTH` and :data:`SMOOTH` are unchanged.
 
 More recording is not worth it when the best gain is below the larger of ``min_gain`` and the
 *noise floor* ``sigma / sqrt(N)`` (the standard error per axis of one socket's mean point at the
@@ -84,9 +83,9 @@ CONFIGURATIONS = 500
 LENGTH = 1.0
 #: Scales of the unexplained error: ``"variogram"`` or ``"residual"`` (see the module docstring).
 SMOOTH = "variogram"
-#: Where a candidate is judged: ``"held-out"`` (the other candidates' configurations) or ``"whole"`` (the whole
-#: workspace, its own configurations included); see the module docstring.
-JUDGED_ON = "held-out"
+#: Where a candidate is judged: ``"whole"`` (the whole workspace, its own configurations included) or
+#: ``"held-out"`` (the other candidates' configurations); see the module docstring.
+JUDGED_ON = "whole"
 
 
 @dataclass(frozen=True, eq=False)
@@ -122,13 +121,13 @@ class Judged:
         placement: the candidate.
         reason: why it cannot be recorded (one line), or ``""``.
         q: socket name -> (K, n) configurations a person would record there [rad].
-        error: predicted rms tool-point error over the held-out workspace with it recorded as well [m] (see the
-            module; the recording so far: over the whole workspace).
+        error: predicted rms tool-point error with it recorded as well [m], over the configurations it is judged on
+            (:data:`JUDGED_ON`; the recording so far: over the whole workspace).
         prediction: the parameter part (None when refused).
-        unexplained: the unexplained part, rms over the held-out workspace [m].
-        gain: the recording's predicted error over the same held-out workspace minus this one [m].
+        unexplained: the unexplained part, rms over the same configurations [m].
+        gain: the recording's predicted error over the same configurations minus this one [m].
         pinned: (parameter, std ratio) it pins down, strongest first (ratio 0: newly identified).
-        parameters: the parameter part, rms over the held-out workspace [m].
+        parameters: the parameter part, rms over the same configurations [m].
         squared: (N,) predicted mean squared error at each workspace configuration [m^2] (parameters and
             unexplained part; empty when refused).
     """
@@ -316,7 +315,7 @@ def judge(
     recorded: Recorded, placement: Placement, q: dict[str, np.ndarray], workspace: Workspace, observed: np.ndarray
 ) -> Judged:
     """Predicted error of the recording plus ``placement``'s configurations ``q`` (socket -> (K, n) [rad]) over
-    the whole ``workspace`` (:func:`held_out` restricts it); ``observed`` (K, n): the recorded configurations
+    the whole ``workspace`` (:func:`judged_over` restricts it); ``observed`` (K, n): the recorded configurations
     the unexplained part conditions on."""
     data, spec = recorded.dataset, recorded.spec
     sockets = tuple(placement.sockets)
@@ -337,7 +336,7 @@ def judge(
                   math.sqrt(np.mean(variance)), parameters=prediction.rms, squared=parameters + variance)
 
 
-def held_out(judged: Judged, before: Judged, mask: np.ndarray) -> Judged:
+def judged_over(judged: Judged, before: Judged, mask: np.ndarray) -> Judged:
     """``judged`` over the workspace configurations ``mask`` (N,) bool only, its gain against ``before``
     (the recording so far) over the same configurations."""
     error = math.sqrt(np.mean(judged.squared[mask]))
@@ -429,7 +428,7 @@ def rank_placements(
                 # held out: the workspace without the candidate's own configurations (all of it for a lone candidate)
                 mine = owners == list(configurations).index(p.name)
                 keep = ~mine if JUDGED_ON == "held-out" and not mine.all() else np.ones_like(mine)
-                j = replace(held_out(j, baseline, keep),
+                j = replace(judged_over(j, baseline, keep),
                             pinned=pinned_down(baseline.prediction, j.prediction))
             (judged if not j.reason else refused).append(j)
     seconds["prediction"] = time.perf_counter() - clock

@@ -6,6 +6,8 @@ import numpy as np
 
 from spherecal.correction import tool_point
 
+from . import guidance as guidance_module
+
 #: Parameters named per candidate in the table.
 PINNED_SHOWN = 3
 
@@ -19,6 +21,7 @@ def _pinned(judged) -> str:
 def format_guidance(guidance) -> str:
     """The ranked table (mm), the refused candidates (one line each) and the stop line."""
     r, now = guidance.recorded, guidance.baseline
+    where = "the other candidates' workspace (held out)" if guidance_module.JUDGED_ON == "held-out" else "the same"
     counts = sum(r.dataset.counts().values())
     lines = [
         f"recording so far: {len(r.dataset.fixture_names)} sockets, {counts} samples; calibration model "
@@ -27,7 +30,7 @@ def format_guidance(guidance) -> str:
         f"{guidance.per_socket} hand-guided configurations per socket",
         f"predicted rms tool-point error over the candidates' workspace [mm] now: {now.error * 1e3:.4f} "
         f"(parameters {now.parameters * 1e3:.4f}, unexplained {now.unexplained * 1e3:.4f}); each candidate's error "
-        "and gain are over the other candidates' workspace (held out, as a validation on new placements sees it)",
+        f"and gain over {where}",
         f"{'rank':>4} {'candidate':<16} {'x':>7} {'y':>7} {'z':>7} | {'error':>7} {'gain':>7} | pins down "
         "(std ratio to now)",
     ]
