@@ -6,16 +6,18 @@ placements as candidates, knowing only what a user knows: the recording of the f
 each candidate's sockets are (the first calibration's tool point at the mean of the configurations recorded
 there: where the user would put the plate). Its configurations are walked kinematically; the recorded
 configurations of the candidates are never used by the prediction. Then what adding each candidate
-actually does: calibrate on first + candidate (`calibrate`'s default model and noise, no self-check), test
+actually does: calibrate on first + candidate (``--actual workflow``, default: as `spherecal calibrate` does it,
+the one workflow's model choice and prior, forced, as the plan calibrates the first placement; ``plain``: the
+library's :func:`calibrate` defaults, plain least squares on the nominal layout, as before), test
 MAE (MUKCa's metric: mean distance of the predicted ball centres from their mean, per socket) on the
 remaining placements, and its change against the first placement's calibration on the same sockets.
 
 The plan's configurations are random walks, so its pick depends on the seed: the whole is repeated for
 ``--seeds`` seeds (the actual outcomes do not depend on it) and the summary is over every (seed, first) pair.
-Printed per robot: Spearman rank correlation of the plan's predicted error against the actual test MAE and
+Printed per robot: Spearman rank correlation of the plan's order (best first) against the actual test MAE and
 against the actual change, how often the plan's pick is in the better half of the candidates (its change
 below the median; with 2 or 3 candidates: the best one), and the mean change of the plan's picks against a
-random pick (the candidates' mean) and the best pick. Writes ``bench/plan_real_<smooth>.json``.
+random pick (the candidates' mean) and the best pick. Writes ``bench/plan_real_<smooth>_<judged on>_<actual>.json``.
 
     .venv/bin/python bench/plan_real.py [--data ../shared/data/mukca]
 """
@@ -55,7 +57,7 @@ def spearman(a: list[float], b: list[float]) -> float:
     return float(np.corrcoef(ra, rb)[0, 1])
 
 
-def robot_rows(root: Path, robot: str, robot_file: Path, seeds: int) -> dict:
+def robot_rows(root: Path, robot: str, robot_file: Path, seeds: int, how: str = "workflow") -> dict:
     model = load_robot(robot_file)
     everything, _ = bench_common.mukca_dataset(root, robot, model)
     placements = sorted({n.rpartition("_h")[0] for n in everything.fixture_names})
@@ -81,11 +83,13 @@ def robot_rows(root: Path, robot: str, robot_file: Path, seeds: int) -> dict:
         guidance = rank_placements(recorded, candidates, np.random.default_rng(seed))
         planned = time.perf_counter() - clock
         predicted = {j.placement.name: j.error for j in guidance.ranking}
+        position = {j.placement.name: k for k, j in enumerate(guidance.ranking)}  # the plan's order, best first
         mae, change = {}, {}
         for p in others:
             if (first, p) not in actual:  # no seed in it: once per pair
                 dataset, spec = bench_common.mukca_dataset(root, robot, model, [first, p])
-                fitted = calibrate(model, dataset, spec, check=False).model
+                fitted = (calibrate_recording(model, dataset, spec).model if how == "workflow"
+                          else calibrate(model, dataset, spec, check=False).model)
                 after = test_mae(fitted, [first, p])
                 actual[first, p] = (after, after - test_mae(recorded.model, [first, p]))
             mae[p], change[p] = actual[first, p]
@@ -97,8 +101,9 @@ def robot_rows(root: Path, robot: str, robot_file: Path, seeds: int) -> dict:
             "pick": pick,
             "pick_rank_by_change": sorted(change, key=change.get).index(pick) + 1,
             "better_half": bool(better),
-            "spearman_test_mae": spearman([predicted[p] for p in ranked], [mae[p] for p in ranked]),
-            "spearman_change": spearman([predicted[p] for p in ranked], [change[p] for p in ranked]),
+            "spearman_test_mae": spearman([position[p] for p in ranked], [mae[p] for p in ranked]),
+            "spearman_change": spearman([position[p] for p in ranked], [change[p] for p in ranked]),
+            "predicted_gain_mm": {j.placement.name: j.gain * 1e3 for j in guidance.ranking},
             "pick_change_mm": change[pick] * 1e3,
             "random_change_mm": float(np.mean(values)) * 1e3,
             "best_change_mm": values[0] * 1e3,
@@ -117,9 +122,14 @@ def main() -> None:
     parser.add_argument("--data", default=None, help="MUKCa data folder (default: shared/data/mukca found upward)")
     parser.add_argument("--smooth", choices=("variogram", "residual"), default=guidance_module.SMOOTH,
                         help="scales of the unexplained error (validation.planning.guidance.SMOOTH)")
+    parser.add_argument("--judged-on", choices=("held-out", "whole"), default=guidance_module.JUDGED_ON,
+                        help="where a candidate is judged (validation.planning.guidance.JUDGED_ON)")
+    parser.add_argument("--actual", choices=("workflow", "plain"), default="workflow",
+                        help="how first + candidate is calibrated for the actual outcome (see the module docstring)")
     parser.add_argument("--seeds", type=int, default=SEEDS, help=f"plan seeds 0..N-1 (default {SEEDS})")
     args = parser.parse_args()
     guidance_module.SMOOTH = args.smooth
+    guidance_module.JUDGED_ON = args.judged_on
     root = Path(args.data) if args.data else bench_common.find_mukca()
     print(subprocess.run(["uptime"], capture_output=True, text=True).stdout.strip())
     results = {}
@@ -129,7 +139,7 @@ def main() -> None:
         if not (root / "data" / robot).is_dir():
             print(f"{robot}: not found under {root}, skipped")
             continue
-        rows = robot_rows(root, robot, robot_file, args.seeds)
+        rows = robot_rows(root, robot, robot_file, args.seeds, args.actual)
         for first, r in rows.items():
             print(f"{robot:<14} {first:<21} {r['pick']:<14} {r['pick_rank_by_change']:>4} {str(r['better_half']):>6} "
                   f"{r['spearman_test_mae']:7.2f} {r['spearman_change']:7.2f} {r['pick_change_mm']:8.3f} "
@@ -147,9 +157,10 @@ def main() -> None:
               f"[mm] pick {summary['mean_pick_change_mm']:.3f}, random {summary['mean_random_change_mm']:.3f}, "
               f"best {summary['mean_best_change_mm']:.3f}")
         results[robot] = {"rows": rows, "summary": summary}
-    out = HERE / f"plan_real_{args.smooth}.json"
+    out = HERE / f"plan_real_{args.smooth}_{args.judged_on}_{args.actual}.json"
     bench_common.write_json(out, {"plan_real": results, "blas_threads": os.environ.get("OPENBLAS_NUM_THREADS")},
-                            inputs={"seeds": args.seeds, "smooth": args.smooth, "data": root})
+                            inputs={"seeds": args.seeds, "smooth": args.smooth, "judged_on": args.judged_on,
+                                    "actual": args.actual, "data": root})
     print(f"wrote {out}")
 
 

@@ -6,6 +6,8 @@ import numpy as np
 
 from spherecal.correction import tool_point
 
+from . import guidance as guidance_module
+
 #: Parameters named per candidate in the table.
 PINNED_SHOWN = 3
 
@@ -19,6 +21,7 @@ def _pinned(judged) -> str:
 def format_guidance(guidance) -> str:
     """The ranked table (mm), the refused candidates (one line each) and the stop line."""
     r, now = guidance.recorded, guidance.baseline
+    where = "the other candidates' workspace (held out)" if guidance_module.JUDGED_ON == "held-out" else "the same"
     counts = sum(r.dataset.counts().values())
     lines = [
         f"recording so far: {len(r.dataset.fixture_names)} sockets, {counts} samples; calibration model "
@@ -26,7 +29,8 @@ def format_guidance(guidance) -> str:
         f"candidates: {len(guidance.ranking) + len(guidance.refused)}, {len(guidance.ranking)} recordable, "
         f"{guidance.per_socket} hand-guided configurations per socket",
         f"predicted rms tool-point error over the candidates' workspace [mm] now: {now.error * 1e3:.4f} "
-        f"(parameters {now.prediction.rms * 1e3:.4f}, unexplained {now.unexplained * 1e3:.4f})",
+        f"(parameters {now.parameters * 1e3:.4f}, unexplained {now.unexplained * 1e3:.4f}); each candidate's error "
+        f"and gain over {where}",
         f"{'rank':>4} {'candidate':<16} {'x':>7} {'y':>7} {'z':>7} | {'error':>7} {'gain':>7} | pins down "
         "(std ratio to now)",
     ]
@@ -49,7 +53,7 @@ def guidance_json(guidance, provenance: dict | None = None) -> dict:
             "name": j.placement.name,
             "predicted_error_m": j.error,
             "gain_m": j.gain,
-            "parameters_rms_m": j.prediction.rms,
+            "parameters_rms_m": j.parameters,
             "unexplained_rms_m": j.unexplained,
             "sockets": {k: [float(v) for v in p] for k, p in j.placement.sockets.items()},
             "distances": [[a, b, d] for a, b, d in j.placement.distances],
