@@ -33,7 +33,8 @@ joint 4's angle on the training samples (mean and spread over them, mdeg).
         [--prior 0.5] [--out bench/selection_real.json]
 
 ``--prior`` changes every fit's prior weight (the library's default :data:`PRIOR` otherwise): how robust
-each rule's choice is to it.
+each rule's choice is to it. ``--tail K`` gives the prior a heavy tail beyond ``K`` prior spreads
+(``identification.problem``; the library's default is the Gaussian prior).
 
 Prints a table and writes ``bench/selection_real.json`` (versions, seed, inputs, every figure).
 """
@@ -65,10 +66,11 @@ CRITERIA = ("bic", "aic", "evidence", "risk", "richest")
 SOCKETS, PER_SOCKET = 8, 30
 
 
-def fitter(prior: float):
-    """The candidates' fit as ``identification.workflow`` runs it, at prior weight ``prior``."""
+def fitter(prior: float, tail: float | None = None):
+    """The candidates' fit as ``identification.workflow`` runs it, at prior weight ``prior`` (and the prior's
+    heavy tail at ``tail`` spreads; None: the library's default)."""
     def fit(start, data, spec, warm=None):
-        return calibrate(start, data, spec, start=warm, check=False, prior=prior)
+        return calibrate(start, data, spec, start=warm, check=False, prior=prior, prior_tail=tail)
     return fit
 
 
@@ -137,7 +139,7 @@ def joint4(fits: dict) -> dict:
     return out
 
 
-def run_robot(root: Path, robot: str, prior: float) -> dict:
+def run_robot(root: Path, robot: str, prior: float, tail: float | None = None) -> dict:
     nominal = bench_common.mukca_panda()
     dataset, _ = bench_common.mukca_dataset(root, robot, nominal)
     sockets = virtual_sockets(nominal)
@@ -146,7 +148,7 @@ def run_robot(root: Path, robot: str, prior: float) -> dict:
         train, spec = bench_common.mukca_dataset(root, robot, nominal, [place])
         train = train.deduplicated(DEDUP_TOL)
         test = dataset.select(np.array([_placement(label) != place for label in dataset.labels]))
-        selection = select_model("auto", fitter(prior), nominal, train, spec)
+        selection = select_model("auto", fitter(prior, tail), nominal, train, spec)
         fits = selection.fits
         mae = {k: held_out(f.model, test)[0] * 1e3 for k, f in fits.items()}
         scores = {"bic": {k: information_criterion(f) for k, f in fits.items()},
@@ -174,7 +176,7 @@ PLATE = {"front_h0": (0.5, -0.025, 0.15), "front_h1": (0.5, 0.025, 0.15)}
 C_TRUE = np.array([0.0, 1 / 3e4, 1 / 3e4, 1 / 3e4, 0.0, 0.0, 0.0])
 
 
-def simulated(prior: float, seeds: int = 10) -> dict:
+def simulated(prior: float, seeds: int = 10, tail: float | None = None) -> dict:
     """Each rule's choice on the test's simulated arms (kinematic, 2 x 250 samples, 0.1 mm noise): rigid
     (seeds 0..) and elastic (seeds 100..), as ``test_bic_from_one_placement_keeps_dh_on_a_rigid_arm_...``."""
     from spherecal.correction import load_robot, perturb
@@ -191,7 +193,7 @@ def simulated(prior: float, seeds: int = 10) -> dict:
             truth = perturb(panda, rng)
             truth = truth if compliance is None else with_compliance(truth, compliance)
             dataset, spec = make_dataset(truth, PLATE, per_fixture=250, rng=rng, noise=1e-4)
-            fits = select_model("auto", fitter(prior), panda, dataset, spec).fits
+            fits = select_model("auto", fitter(prior, tail), panda, dataset, spec).fits
             names = tuple(fits)
             scores = {"bic": information_criterion, "aic": aic, "evidence": evidence,
                       "risk": lambda f: risk(f, sockets)}
@@ -232,6 +234,8 @@ def main() -> int:
     parser.add_argument("--robots", nargs="+", default=["panda_2_clean", "panda_4_clean"])
     parser.add_argument("--prior", type=float, default=PRIOR,
                         help=f"prior weight W of every fit [1] (default the library's {PRIOR})")
+    parser.add_argument("--tail", type=float, default=None,
+                        help="where the prior's heavy tail starts [prior spreads] (default: the library's)")
     parser.add_argument("--simulated", action="store_true",
                         help="also the test's simulated rigid and elastic arms, 10 seeds each (about a minute)")
     parser.add_argument("--out", default=str(HERE / "selection_real.json"), help="result file (JSON)")
@@ -240,14 +244,14 @@ def main() -> int:
     uptime = subprocess.run(["uptime"], capture_output=True, text=True).stdout.strip()
     print(f"uptime: {uptime}")
     clock = time.perf_counter()
-    results = {robot: run_robot(root, robot, args.prior) for robot in args.robots}
+    results = {robot: run_robot(root, robot, args.prior, args.tail) for robot in args.robots}
     lines, figures = summary(results)
     print("\n".join(lines))
     if args.simulated:
-        figures["simulated"] = simulated(args.prior)
+        figures["simulated"] = simulated(args.prior, tail=args.tail)
     out = bench_common.write_json(args.out, {
-        "uptime": uptime, "prior": args.prior, "seconds": time.perf_counter() - clock, "summary": figures,
-        "results": results},
+        "uptime": uptime, "prior": args.prior, "tail": args.tail, "seconds": time.perf_counter() - clock,
+        "summary": figures, "results": results},
         seed=0, inputs={"data": Path(root)}, indent=1)
     print(f"wrote {out}")
     return 0

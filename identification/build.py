@@ -22,6 +22,7 @@ from .problem import (
     DISTANCE_STD,
     GAUGE,
     NOISE,
+    PRIOR_TAIL,
     CalibrationProblem,
     UnidentifiableError,
     mean_points,
@@ -96,6 +97,7 @@ def build_problem(
     rank_tol: float = 1e-7,
     pin: str = "radius",
     prior_weight: float = 0.0,
+    prior_tail: float | None = None,
 ) -> CalibrationProblem:
     """Set up the calibration: choose the unknowns, fix the gauge, test identifiability.
 
@@ -114,6 +116,8 @@ def build_problem(
         prior_weight: ``W`` of the prior rows toward ``model`` (:mod:`.problem`; 0: plain least squares).
             The rank test judges the data alone: a parameter the samples cannot see is fixed, not left to
             the prior.
+        prior_tail: where the prior's heavy tail starts [prior spreads] (default :data:`.problem.PRIOR_TAIL`;
+            inf: a Gaussian prior).
 
     Raises:
         DatasetError: a fixture used but not listed, a distance or position naming a fixture
@@ -254,7 +258,10 @@ def build_problem(
     ordered_fixed = {name: fixed[name] for name in names if name in fixed}
     if not np.isfinite(prior_weight) or prior_weight < 0:
         raise ValueError(f"prior_weight must be a finite number >= 0, got {prior_weight!r}")
+    tail = PRIOR_TAIL if prior_tail is None else float(prior_tail)
+    if not tail > 0:
+        raise ValueError(f"prior_tail must be > 0 (inf: Gaussian), got {prior_tail!r}")
     return replace(problem, free=candidates[keep], fixed=ordered_fixed, prior_weight=float(prior_weight),
-                   prior_centre=model.params if prior_weight > 0 else None)
+                   prior_centre=model.params if prior_weight > 0 else None, prior_tail=tail)
 
 

@@ -120,10 +120,25 @@ class CalibrationResult:
             "std": {k: float(v) for k, v in self.std.items()},
             "warnings": list(self.warnings),
             "prior_weight": float(self.problem.prior_weight) if self.problem else 0.0,
+            "prior_tail_spreads": (float(self.problem.prior_tail)
+                                   if self.problem and np.isfinite(self.problem.prior_tail) else None),
             "effective_unknowns": self.effective_unknowns,
             **({"self_check": self.selfcheck.block()} if self.selfcheck is not None else {}),
             "timings_s": {k: float(v) for k, v in self.timings.items()},
         }
+
+    def _tail_line(self) -> list[str]:
+        """The parameters in the prior's heavy tail (a large error of this arm: a joint zero, a tool mount), if any."""
+        problem = self.problem
+        if problem is None or problem.prior_curvature is None or problem.prior_centre is None:
+            return []
+        z = (self.model.params - problem.prior_centre) / prior_std(self.model)
+        tail = [i for i in problem.free if abs(z[i]) > problem.prior_tail]
+        if not tail:
+            return []
+        names = self.model.param_names
+        return [f"beyond the prior's {problem.prior_tail:g}-spread core (large errors of this arm): "
+                + ", ".join(f"{names[i]} {z[i]:+.1f} spreads" for i in tail)]
 
     def summary(self) -> str:
         """One screen: residuals before/after, parameter changes with std, fixed parameters, warnings."""
@@ -144,6 +159,7 @@ class CalibrationResult:
             kind = layout.kinds[layout.index(name)]
             scale, unit = kind.display_scale, kind.display_unit
             lines.append(f"  {name:<9} {unit:<7} {(end - start) * scale:10.5f} {std * scale:10.5f}")
+        lines.extend(self._tail_line())
         groups: dict[str, list[str]] = {}
         for name, reason in self.fixed.items():
             groups.setdefault(reason, []).append(name)
@@ -173,6 +189,7 @@ def calibrate(
     force: bool = False,
     prior: float = 0.0,
     noise_declared: bool = True,
+    prior_tail: float | None = None,
 ) -> CalibrationResult:
     """Identify the parameters of ``nominal`` that put every sample's tool point on its fixture.
 
@@ -195,6 +212,8 @@ def calibrate(
         prior: weight ``W`` of the prior toward ``nominal`` (:mod:`.problem`): each identified parameter's
             deviation over its prior spread, at the declared ``noise``; 0 (default) is plain least squares
             (the workflow and `calibrate` use :data:`.problem.PRIOR`).
+        prior_tail: where the prior's heavy tail starts [prior spreads] (default :data:`.problem.PRIOR_TAIL`;
+            inf: a Gaussian prior).
         noise_declared: ``noise`` is what the user states of this data (a floor of the self-check's accuracy
             judgement); False: a default, and the accuracy is judged at the noise the residuals show.
 
@@ -212,7 +231,7 @@ def calibrate(
         raise ValueError(f"unknown method {method!r}, expected one of {METHODS}")
     timings: dict[str, float] = {}
     clock = time.perf_counter()
-    problem = build_problem(nominal, dataset, spec, noise=noise, prior_weight=prior)
+    problem = build_problem(nominal, dataset, spec, noise=noise, prior_weight=prior, prior_tail=prior_tail)
     built = problem
     before = np.linalg.norm(problem.sample_errors(problem.x0), axis=1)
     timings["build"] = time.perf_counter() - clock
@@ -235,6 +254,7 @@ def calibrate(
             solution = solve_lm(problem, x_restart, loss=loss)
             x, timings["lm"] = solution.x, timings["lm"] + solution.seconds
     clock = time.perf_counter()
+    problem = problem.reweighted(x)  # a heavy-tailed prior's rows at their curvature here (stds, self-check)
     jac = problem.jacobian(x)
     inverse = normal_inverse(jac)  # one SVD for both
     edf = problem.effective_unknowns(jac, inverse)

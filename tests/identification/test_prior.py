@@ -1,12 +1,14 @@
-"""The prior toward the nominal model (MAP): rows, Jacobian, effective unknowns, and its pull."""
+"""The prior toward the nominal model (MAP): rows, Jacobian, effective unknowns, its pull, and its heavy tail."""
 
 import numpy as np
 
-from spherecal.correction import load_robot, perturb
+from spherecal.correction import load_robot, perturb, tool_point
 from spherecal.identification.build import build_problem
 from spherecal.identification.calibrate import calibrate
 from spherecal.identification.identifiability import normal_inverse
-from spherecal.identification.synthetic import make_dataset
+from spherecal.identification.problem import PRIOR
+from spherecal.identification.selection import start_for
+from spherecal.identification.synthetic import fixture_samples, make_dataset
 
 
 def _data(seed=21, per_fixture=60):
@@ -50,3 +52,72 @@ def test_weight_zero_is_least_squares_and_a_heavy_prior_holds_nominal():
     for name in light.identified:  # the posterior is narrower than the likelihood alone
         assert light.std[name] <= plain.std.get(name, np.inf) * (1 + 1e-9)
     assert light.block()["prior_weight"] == 0.5 and plain.block()["prior_weight"] == 0.0
+
+
+#: The tail measured in bench/prior_tail.py [prior spreads] (the library's default is the Gaussian prior).
+TAIL = 3.0
+
+
+def test_tail_rows_match_finite_differences_and_reweighting_keeps_the_solution():
+    panda, dataset, spec = _data()
+    problem = build_problem(panda, dataset, spec, prior_weight=0.5, prior_tail=TAIL)
+    gauss = build_problem(panda, dataset, spec, prior_weight=0.5)
+    assert problem.prior_tail == TAIL and gauss.prior_tail == np.inf
+    spread = panda.layout.spread()[problem.free]
+    z = np.linspace(-8.0, 8.0, problem.n_free_params) + 0.1  # deviations inside and far beyond the core [spreads]
+    x = problem.pack(panda.params, problem.centres)
+    x[: problem.n_free_params] += z * spread
+    rows = problem.prior_rows()
+    jac, h = problem.jacobian(x), 1e-9
+    for k in range(problem.n_free_params):
+        e = np.zeros_like(x)
+        e[k] = h
+        fd = (problem.residuals(x + e) - problem.residuals(x - e)) / (2 * h)
+        np.testing.assert_allclose(jac[rows, k], fd[rows], rtol=1e-5, atol=1e-9)
+    inside = np.abs(z) <= TAIL  # the core is the Gaussian prior, the tail costs less
+    r, rg = problem.residuals(x)[rows], gauss.residuals(x)[rows]
+    np.testing.assert_allclose(r[inside], rg[inside], rtol=1e-12)
+    assert np.all(np.abs(r[~inside]) < np.abs(rg[~inside]))
+    frozen = problem.reweighted(x)  # IRLS rows: the same gradient, the tail's curvature
+    np.testing.assert_allclose(frozen.jacobian(x).T @ frozen.residuals(x), jac.T @ problem.residuals(x),
+                               rtol=1e-10, atol=1e-18)
+    weights = frozen.prior_curvature[problem.free]
+    np.testing.assert_allclose(weights, np.minimum(1.0, TAIL**2 / z**2))
+    assert gauss.reweighted(x) is gauss
+
+
+def test_an_arm_within_the_core_sees_the_gaussian_prior():
+    panda, dataset, spec = _data()
+    tail = calibrate(panda, dataset, spec, check=False, prior=0.5, prior_tail=TAIL)
+    gauss = calibrate(panda, dataset, spec, check=False, prior=0.5)
+    z = (tail.model.params - panda.params) / panda.layout.spread()
+    assert np.abs(z).max() <= TAIL
+    np.testing.assert_allclose(tail.model.params, gauss.model.params, atol=1e-12)
+    assert tail.block()["prior_tail_spreads"] == TAIL and gauss.block()["prior_tail_spreads"] is None
+
+
+def test_a_joint_zero_far_off_is_found_as_an_offset_not_a_scale():
+    # one placement (two sockets 50 mm apart, q4 within +-0.3 rad): under a Gaussian prior a joint-4 zero 6 spreads
+    # off is partly explained by the joint-4 scale s4 q4 (cheaper than the offset), which is wrong at other q4
+    panda = load_robot("panda")
+    plate = {"front_h0": (0.5, -0.025, 0.15), "front_h1": (0.5, 0.025, 0.15)}
+    i4 = panda.param_index("theta4")
+    rng = np.random.default_rng(3)
+    truth = perturb(panda, rng)
+    params = truth.params.copy()
+    params[i4] = panda.params[i4] - 6 * panda.layout.spread()[i4]
+    truth = truth.with_params(params)
+    dataset, spec = make_dataset(truth, plate, per_fixture=100, rng=rng, noise=1e-4)
+    sockets = [fixture_samples(truth, c, 30, rng) for c in tool_point(truth, truth.random_configurations(6, rng))]
+
+    def held_out(model):  # mean spread of the predicted points at sockets the fit never saw [m]
+        return np.mean([np.linalg.norm(p - p.mean(axis=0), axis=1).mean() for p in
+                        (tool_point(model, q) for q in sockets)])
+
+    fits = {tail: calibrate(start_for("scale", panda), dataset, spec, check=False, prior=PRIOR, prior_tail=tail)
+            for tail in (TAIL, np.inf)}
+    s4 = {t: abs(f.model.params[f.model.layout.scale][3]) for t, f in fits.items()}
+    off = {t: abs(f.model.params[i4] - truth.params[i4]) for t, f in fits.items()}
+    assert held_out(fits[TAIL].model) < 0.8 * held_out(fits[np.inf].model)
+    assert s4[TAIL] < 0.6 * s4[np.inf] and off[TAIL] < 0.6 * off[np.inf]
+    assert "theta4" in fits[TAIL].summary().split("beyond the prior's 3-spread core")[1].splitlines()[0]
