@@ -104,6 +104,11 @@ def test_tool_command_errors_are_one_line_and_write_nothing(tmp_path, capsys) ->
     printed = capsys.readouterr().out
     assert "93.0 mm from the calibrated tool point" in printed and "0.32 mm" in printed
     assert load_robot(out).tool.tolist() == [0.0, 0.0, 0.2]
+    out.unlink()
+    # 100 typed in millimetres for metres: a tool point 100 m off the flange is refused, nothing written
+    assert main(["tool", "panda", "--offset", "0", "0", "100", "--out", str(out)]) == 1
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "100 m from the last frame, more than the arm itself" in err and not out.exists()
 
 
 def test_tool_swap_carries_the_flange_error_the_tool_point_absorbed(panda, rng) -> None:
