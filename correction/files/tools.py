@@ -30,7 +30,7 @@ def put_tool(model: RobotModel, offset: np.ndarray | None = None, urdf: str | os
 
     Raises:
         ToolError: neither or both of ``offset`` and ``urdf``, a URDF of another arm, or a tool point farther
-            from the last frame than the arm is long (sum of |a| and |d|: millimetres typed for metres).
+            from the last frame than the arm is long (the sum of ``|a|`` and ``|d|``: millimetres typed for metres).
         RobotFileError: an unreadable URDF or an unknown link (one line).
     """
     if (offset is None) == (urdf is None):
