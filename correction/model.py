@@ -100,6 +100,12 @@ class RobotModel:
         return int(self.a.size)
 
     @property
+    def chain_length(self) -> float:
+        """Sum of ``|a|`` and ``|d|`` [m]: no point of the chain is farther than this from the base frame's
+        origin along the links (a bound on reach, tool excluded)."""
+        return float(np.abs(self.a).sum() + np.abs(self.d).sum())
+
+    @property
     def n_params(self) -> int:
         """Length ``P`` of the flat parameter vector (see :attr:`layout`)."""
         return self.layout.size

@@ -80,11 +80,17 @@ def with_tool(model: RobotModel, tool: np.ndarray, payload: dict | None = None,
             (``calibration.nominal_tool`` of a calibrated file), or None to put ``tool`` as given.
 
     Raises:
-        ToolError: a tool that is not 3 finite numbers.
+        ToolError: a tool that is not 3 finite numbers, or farther from the last frame than the arm is long
+            (:attr:`RobotModel.chain_length`: millimetres typed for metres).
     """
     tool = np.asarray(tool, dtype=float)
     if tool.shape != (3,) or not np.all(np.isfinite(tool)):
         raise ToolError(f"tool: expected 3 finite coordinates [m] in the last frame, got {np.ravel(tool).tolist()!r}")
+    if np.linalg.norm(tool) > model.chain_length:
+        raise ToolError(
+            f"the new tool point {np.array2string(tool, precision=4)} m is {np.linalg.norm(tool):.4g} m from the "
+            f"last frame, more than the arm itself ({model.chain_length:.3g} m, sum of |a| and |d|): the offset is in "
+            "metres")
     carried = np.zeros(3)
     if nominal_tool is not None:
         nominal_tool = np.asarray(nominal_tool, dtype=float)

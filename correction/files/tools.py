@@ -29,8 +29,8 @@ def put_tool(model: RobotModel, offset: np.ndarray | None = None, urdf: str | os
         ``(swap, one line on the payload)``.
 
     Raises:
-        ToolError: neither or both of ``offset`` and ``urdf``, a URDF of another arm, or a tool point farther
-            from the last frame than the arm is long (the sum of ``|a|`` and ``|d|``: millimetres typed for metres).
+        ToolError: neither or both of ``offset`` and ``urdf``, a URDF of another arm, or a tool point
+            :func:`.tool.with_tool` refuses.
         RobotFileError: an unreadable URDF or an unknown link (one line).
     """
     if (offset is None) == (urdf is None):
@@ -41,14 +41,6 @@ def put_tool(model: RobotModel, offset: np.ndarray | None = None, urdf: str | os
         offset = tool_in_frame(description, model)
         if has_inertials(description):
             payload = description.extras["payload"]
-    offset = np.asarray(offset, dtype=float)
-    reach = float(np.abs(model.a).sum() + np.abs(model.d).sum())
-    if offset.shape != (3,) or not np.all(np.isfinite(offset)) or np.linalg.norm(offset) > reach:
-        raise ToolError(
-            f"the new tool point {np.array2string(offset, precision=4)} m is {np.linalg.norm(offset):.4g} m from the "
-            f"last frame, more than the arm itself ({reach:.3g} m, sum of |a| and |d|): the offset is in metres"
-            if offset.shape == (3,) and np.all(np.isfinite(offset)) else
-            f"the new tool point: expected 3 finite numbers [m], got {offset.tolist()}")
     block = model.extras.get("calibration")
     nominal = block.get("nominal_tool") if isinstance(block, dict) else None
     swap = with_tool(model, offset, payload, nominal_tool=nominal)
