@@ -264,7 +264,8 @@ def calibrate(
     params, centres = problem.unpack(x)
     timings["covariance"] = time.perf_counter() - clock
     clock = time.perf_counter()
-    checked = self_check(problem, x, nominal, built, loss=loss, declared=noise_declared) if check else None
+    checked = (self_check(problem, x, nominal, built, loss=loss, declared=noise_declared, unknowns=edf)
+               if check else None)
     timings["self_check"] = time.perf_counter() - clock
     if checked is not None and not force:
         checked.raise_if_inconsistent()

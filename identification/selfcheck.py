@@ -92,6 +92,7 @@ def self_check(
     built: CalibrationProblem | None = None,
     loss: str = "linear",
     declared: bool = True,
+    unknowns: float | None = None,
 ) -> SelfCheck:
     """Check a solved calibration against its own data, its stated accuracies and the nominal model.
 
@@ -106,6 +107,8 @@ def self_check(
         declared: the problem's noise is what the user states of this data: the accuracy is judged at the
             larger of it and the noise the residuals show. False (a default noise, not a statement about
             this data): judged at the noise the residuals show; the residual-level check still uses it.
+        unknowns: the fit's effective unknowns at ``x`` if already computed
+            (:meth:`CalibrationProblem.effective_unknowns`; recomputed when None or when outliers are left out).
 
     Returns:
         The :class:`SelfCheck` (call :meth:`SelfCheck.raise_if_inconsistent` to refuse).
@@ -120,6 +123,7 @@ def self_check(
             np.any(inliers[problem.dataset.fixture_index == j]) for j in range(len(problem.dataset.fixture_names))
         ):
             problem = replace(problem, dataset=problem.dataset.select(inliers), _cache={})
+            unknowns = None
     r = problem.residuals(x)
     dof = max(problem.n_residuals - problem.n_unknowns, 1)
     sigma = float(np.sqrt(r @ r / dof))
@@ -133,7 +137,8 @@ def self_check(
     findings += _trends(problem, x)
     # where a ball sits in a socket, as the residuals show it: the data rows alone (``sigma`` above also holds the
     # prior rows, whose penalty is no noise and dominates it for a few dozen samples of a well-made arm)
-    unknowns = problem.effective_unknowns(problem.jacobian(x))
+    if unknowns is None:
+        unknowns = problem.effective_unknowns(problem.jacobian(x))
     shown = problem.data_sigma(x, unknowns)
     judged = max(noise, sigma) if declared else max(sigma, SIGMA_FLOOR)
     prediction, record = _prediction(nominal, built or problem, judged, sigma, shown)
