@@ -81,10 +81,7 @@ def _drop_known_distances(spec: FixtureSpec, known: dict[str, np.ndarray]) -> Fi
                 f"{spec.source or 'fixtures'}: {spec.distance_field(k)}: "
                 f"distance {a}-{b} is {value:.6g} m but their known positions are {apart:.6g} m apart"
             )
-    if len(keep) == len(spec.distances):
-        return spec
-    index = tuple(spec.distance_index[k] if spec.distance_index else k for k in keep)  # the file's numbering
-    return replace(spec, distances=[spec.distances[k] for k in keep], distance_index=index)
+    return spec if len(keep) == len(spec.distances) else spec.keep_distances(keep)
 
 
 def build_problem(

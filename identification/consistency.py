@@ -80,6 +80,11 @@ def log10_chi2_sf(statistic: float, dof: int) -> float:
 
 
 # ------------------------------------------------------------------------------- leave one out
+def known_positions(problem: CalibrationProblem) -> list[str]:
+    """The fixtures whose centre is a known position (neither an unknown nor pinned by the scale anchor)."""
+    return [n for n in problem.dataset.fixture_names if n not in problem.free_centres and n not in problem.pinned]
+
+
 def augmented(problem: CalibrationProblem, x: np.ndarray, r: np.ndarray):
     """Jacobian and residuals with every known position freed (3 unknowns, a prior row each), and the groups.
 
@@ -89,7 +94,7 @@ def augmented(problem: CalibrationProblem, x: np.ndarray, r: np.ndarray):
     """
     dataset, spec = problem.dataset, problem.spec
     names = dataset.fixture_names
-    known = [n for n in names if n not in problem.free_centres and n not in problem.pinned]
+    known = known_positions(problem)
     jac = problem.jacobian(x)
     m, f = jac.shape
     count = dataset.n_samples
@@ -136,8 +141,7 @@ def sets_scale_alone(problem: CalibrationProblem, kind: tuple) -> bool:
     what = kind[0]
     if what not in ("distance", "position"):
         return False
-    names = problem.dataset.fixture_names
-    positions = sum(1 for n in names if n not in problem.free_centres and n not in problem.pinned)
+    positions = len(known_positions(problem))
     distances = len(problem.spec.distances) - (what == "distance")
     positions -= what == "position"
     return distances < 1 and positions < 2

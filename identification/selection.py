@@ -209,11 +209,9 @@ def _sub_spec(spec: FixtureSpec | None, names: tuple[str, ...]) -> FixtureSpec:
     if spec is None:
         return FixtureSpec.unknown(names)
     keep = set(names)
-    return replace(
-        spec, names=tuple(n for n in spec.names if n in keep),
-        positions={k: v for k, v in spec.positions.items() if k in keep},
-        distances=[d for d in spec.distances if d[0] in keep and d[1] in keep],
-    )
+    kept = [k for k, (a, b, _) in enumerate(spec.distances) if a in keep and b in keep]
+    return replace(spec.keep_distances(kept), names=tuple(n for n in spec.names if n in keep),
+                   positions={k: v for k, v in spec.positions.items() if k in keep})
 
 
 def cross_validate(fit, names: tuple[str, ...], nominal: RobotModel, dataset: Dataset,

@@ -14,6 +14,8 @@ any trained fixture, whatever either is named (MUKCa calls the placements of eve
 
 from __future__ import annotations
 
+from dataclasses import replace
+
 import numpy as np
 
 from spherecal.correction.files.fixtures import FixtureSpec
@@ -70,11 +72,6 @@ def exclude_fixtures(
     if spec is not None:
         left = set(dataset.fixture_names)
         kept = [k for k, d in enumerate(spec.distances) if d[0] in left and d[1] in left]
-        spec = FixtureSpec(
-            names=tuple(n for n in spec.names if n in left),
-            positions={k: v for k, v in spec.positions.items() if k in left},
-            distances=[spec.distances[k] for k in kept],
-            extras=spec.extras, source=spec.source, rows=spec.rows,
-            distance_index=tuple(spec.distance_index[k] if spec.distance_index else k for k in kept),
-        )
+        spec = replace(spec.keep_distances(kept), names=tuple(n for n in spec.names if n in left),
+                       positions={k: v for k, v in spec.positions.items() if k in left})
     return dataset, spec

@@ -17,7 +17,7 @@ from __future__ import annotations
 
 import math
 import os
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any
 
@@ -56,6 +56,11 @@ class FixtureSpec:
 
     def _row(self, key: str) -> str:
         return f"row {self.rows[key]}, " if key in self.rows else ""
+
+    def keep_distances(self, keep: list[int]) -> FixtureSpec:
+        """This spec with only the distances at indices ``keep``, each still named as the file numbers it."""
+        index = tuple(self.distance_index[k] if self.distance_index else k for k in keep)
+        return replace(self, distances=[self.distances[k] for k in keep], distance_index=index)
 
     def distance_field(self, k: int) -> str:
         """``"row N, field 'distances[j]'"`` of distance ``k`` as the file numbers it (for messages)."""
