@@ -33,11 +33,6 @@ from spherecal.identification.workflow import WorkflowOptions, run_workflow  # n
 PLACEMENTS = {"a": [0.55, 0.0, 0.10], "b": [0.42, 0.35, 0.05], "c": [0.45, -0.33, 0.30]}
 
 
-def spread(model, q) -> float:
-    p = tool_point(model, q)
-    return float(np.linalg.norm(p - p.mean(axis=0), axis=1).mean())
-
-
 def one(nominal, seed: int, share: float, noise: float) -> dict:
     rng = np.random.default_rng(seed)
     true = perturb(nominal, rng, share * 1e-3, np.deg2rad(share * 0.2), share * 1e-3)
@@ -47,9 +42,10 @@ def one(nominal, seed: int, share: float, noise: float) -> dict:
     train = Dataset(train.labels, train.q, fixture_names=("a0", "a1"))
     spec = FixtureSpec(("a0", "a1"), distances=(("a0", "a1", 0.05),))
     held = [n for n in data.fixture_names if not n.startswith("a")]
+    sockets = [data.for_fixture(n) for n in held]
     q = nominal.random_configurations(500, np.random.default_rng(1))
     truth = tool_point(true, q)
-    row = {"seed": seed, "nominal_heldout_mm": 1e3 * np.mean([spread(nominal, data.for_fixture(n)) for n in held]),
+    row = {"seed": seed, "nominal_heldout_mm": 1e3 * bench_common.socket_mae(nominal, sockets),
            "nominal_workspace_mm": 1e3 * registered_errors(tool_point(nominal, q), truth).mean()}
     for key, declared in (("default", None), ("declared_0.3", 3e-4)):
         out = run_workflow(nominal, train, spec, WorkflowOptions(noise=declared, force=True))
@@ -61,7 +57,7 @@ def one(nominal, seed: int, share: float, noise: float) -> dict:
             decision = "refused"
         row[key] = {
             "decision": decision, "model": out.selection.chosen,
-            "heldout_mm": 1e3 * np.mean([spread(out.model, data.for_fixture(n)) for n in held]),
+            "heldout_mm": 1e3 * bench_common.socket_mae(out.model, sockets),
             "workspace_mm": 1e3 * registered_errors(tool_point(out.model, q), truth).mean(),
             "predicted_mm": finding.figures["predicted_mean_mm"],
             "nominal_expected_mm": finding.figures["nominal_expected_mean_mm"],

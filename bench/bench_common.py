@@ -54,6 +54,17 @@ def run_cli(argv: list[str]) -> str:
 
 
 # ----------------------------------------------------------------------------- MUKCa real data
+def socket_mae(model, sockets) -> float:
+    """MUKCa's test MAE [m]: the mean over ``sockets`` ((K, n) joint angles each) of the mean distance of
+    ``model``'s tool points from their mean."""
+    import numpy as np
+
+    from spherecal.correction import tool_point
+
+    return float(np.mean([np.linalg.norm(p - p.mean(axis=0), axis=1).mean()
+                          for p in (tool_point(model, q) for q in sockets)]))
+
+
 def find_mukca() -> Path:
     """``shared/data/mukca`` beside this checkout or one of its parents (the full recordings)."""
     for base in Path(__file__).resolve().parents:

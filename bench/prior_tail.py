@@ -69,8 +69,7 @@ def arm(panda, seed: int, elastic: bool, large: bool):
 
 def held_out(model, sockets) -> float:
     """Mean spread [mm] of ``model``'s tool points around their mean at each socket."""
-    return float(np.mean([np.linalg.norm(p - p.mean(axis=0), axis=1).mean()
-                          for p in (tool_point(model, q) for q in sockets)])) * 1e3
+    return bench_common.socket_mae(model, sockets) * 1e3
 
 
 def main() -> int:
