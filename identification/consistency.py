@@ -147,7 +147,20 @@ def sets_scale_alone(problem: CalibrationProblem, kind: tuple) -> bool:
     return distances < 1 and positions < 2
 
 
-def group_finding(problem: CalibrationProblem, name: str, kind: tuple, group: LeftOut, checkable: int) -> Finding:
+def group_finding(problem: CalibrationProblem, name: str, kind: tuple, group: LeftOut, checkable: int,
+                  unmodelled: float = 0.0) -> Finding:
+    """The leave-one-out finding of one group (see the module docstring).
+
+    Args:
+        problem, name, kind, group: the solved problem, the group's name and kind (:func:`augmented`) and its
+            :class:`.leave_out.LeftOut`.
+        checkable: how many groups are tested (the Bonferroni count).
+        unmodelled: a fixture's expected variance per axis [m^2] of what the rest's fit cannot carry to its
+            configurations: the arm's unmodelled error that the rest's residual shows beyond the declared noise,
+            drawn fresh there (``selfcheck``; 0 for an arm within its noise). Added to the noise a fixture's
+            samples are judged at: an arm whose model holds to a millimetre does not transfer to a fresh part
+            of its workspace at a tenth of one, and that is not a fixture that moved.
+    """
     what, key, weight, stated = kind
     spec, dataset = problem.spec, problem.dataset
     where = spec.source or "fixtures"
@@ -156,7 +169,7 @@ def group_finding(problem: CalibrationProblem, name: str, kind: tuple, group: Le
         return Finding(name, True, text, {"unchecked": True})
     scale = max(problem.noise, group.sigma_rest)
     if what == "fixture":
-        statistic = max(group.delta_ssr, 0.0) / scale**2
+        statistic = max(group.delta_ssr, 0.0) / (scale**2 + unmodelled)
     else:  # the constraint's value as the rest predicts it, against its stated accuracy, socket play and the fit
         play = SOCKET_STD**2 * (2.0 if what == "distance" else 1.0)
         variance = stated**2 + play + group.fit_var * (scale / weight) ** 2
@@ -170,8 +183,10 @@ def group_finding(problem: CalibrationProblem, name: str, kind: tuple, group: Le
         "log10_p": log10_p,
         "excess": excess,
         "sigma_rest_mm": group.sigma_rest * 1e3,
-        "explained": max(group.delta_ssr, 0.0) / scale**2 - group.dof,  # residual removed beyond noise
+        "explained": statistic - group.dof if what == "fixture" else max(group.delta_ssr, 0.0) / scale**2 - group.dof,
     }
+    if unmodelled > 0:
+        figures["unmodelled_mm"] = float(np.sqrt(unmodelled)) * 1e3
     significant = log10_p < np.log10(ALPHA / max(checkable, 1)) and excess > GROUP_FACTOR
     if what == "fixture":
         predicted = group.predicted.reshape(-1, 3)
@@ -183,7 +198,7 @@ def group_finding(problem: CalibrationProblem, name: str, kind: tuple, group: Le
         text = (
             f"{samples_location(rows)}, field 'fixture': the samples at fixture {key} disagree with the other "
             f"fixtures by {size * 1e3:.3g} mm rms (the others alone: residual {group.sigma_rest * 1e3:.3g} mm per "
-            f"axis): samples of another arm, a fixture that moved, or a wrong label"
+            f"axis{_unmodelled_clause(unmodelled)}): samples of another arm, a fixture that moved, or a wrong label"
         )
     else:
         value = group.predicted / weight
@@ -204,6 +219,13 @@ def group_finding(problem: CalibrationProblem, name: str, kind: tuple, group: Le
                 f"play {SOCKET_STD * 1e3:.2g} mm, the fit's {fit_std * 1e3:.2g} mm)"
             )
     return Finding(name, not significant, text, figures)
+
+
+def _unmodelled_clause(unmodelled: float) -> str:
+    """``", and the arm's unmodelled error expected there X mm"`` (per axis) when there is some."""
+    if unmodelled <= 0:
+        return ""
+    return f", and the arm's unmodelled error expected there {np.sqrt(unmodelled) * 1e3:.3g} mm"
 
 
 def name_culprit(groups: list[Finding], noise: float, level_factor: float) -> list[Finding]:

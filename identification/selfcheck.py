@@ -51,8 +51,8 @@ import numpy as np
 from spherecal.correction import RobotModel, param_jacobian, tool_point
 
 from .consistency import augmented, group_finding, log10_chi2_sf, name_culprit, sets_scale_alone
-from .joint_error import LENGTH
-from .leave_out import leave_out
+from .joint_error import LENGTH, tool_fields
+from .leave_out import LeftOut, leave_out
 from .prediction import Workspace, deviation_root, joint_error_root, socket_spreads
 from .problem import SIGMA_FLOOR, CalibrationProblem, samples_location
 from .selfcheck_result import Finding, InconsistentDataError, SelfCheck
@@ -132,7 +132,9 @@ def self_check(
     jac, res, groups, kinds, spread = augmented(problem, x, r)
     _, _, left = leave_out(jac, res, groups, spread=spread)
     checkable = sum(1 for k, g in left.items() if g.dof > 0 and not sets_scale_alone(problem, kinds[k]))
-    groups = [group_finding(problem, name, kinds[name], group, checkable) for name, group in left.items()]
+    unmodelled = _unmodelled(nominal, built or problem, problem, left, kinds)
+    groups = [group_finding(problem, name, kinds[name], group, checkable, unmodelled.get(name, 0.0))
+              for name, group in left.items()]
     findings += name_culprit(groups, problem.noise, LEVEL_FACTOR)
     findings += _trends(problem, x)
     # where a ball sits in a socket, as the residuals show it: the data rows alone (``sigma`` above also holds the
@@ -324,6 +326,35 @@ def _level(problem: CalibrationProblem, r: np.ndarray, sigma: float, dof: int, e
 
 
 # --------------------------------------------------------------------------------- prediction
+def _unmodelled(nominal: RobotModel, built: CalibrationProblem, problem: CalibrationProblem,
+                left: dict[str, LeftOut], kinds: dict[str, tuple]) -> dict[str, float]:
+    """Per fixture group, the variance per axis [m^2] of the arm's unmodelled error that a fit of the OTHER rows
+    leaves at its samples (:func:`.consistency.group_finding`'s ``unmodelled``).
+
+    The others' residual beyond the declared noise (``sigma_rest^2 - noise^2`` over their degrees of freedom) is
+    read as the arm's joint-angle error (:mod:`.joint_error`), as :func:`_record_held_out` reads the whole
+    residual: its std is the one the fit leaves that energy of (:func:`.prediction.joint_error_root`, linear in
+    it), and a fresh draw at the fixture's configurations, less its mean there (the centre is fitted), is what
+    the others' fit cannot carry to it. From the OTHER rows: a fixture that is itself wrong (another arm, a
+    wrong label) inflates only the others' figures, not its own. Nothing for an arm within its declared noise.
+    """
+    noise = problem.noise
+    rest = {name: g for name, g in left.items()
+            if kinds[name][0] == "fixture" and g.dof > 0 and g.sigma_rest > noise}
+    if not rest:
+        return {}
+    per_excess, _ = joint_error_root(nominal, built, noise, 1.0)  # the std per unit excess (std is linear in it)
+    out = {}
+    for name, group in rest.items():
+        std = per_excess * float(np.sqrt((group.sigma_rest**2 - noise**2) * group.dof_rest))
+        q = problem.dataset.for_fixture(kinds[name][1])
+        if std <= 0 or len(q) < 2:
+            continue
+        energy = sum(float(((f - f.mean(axis=0)) ** 2).sum()) for f in tool_fields(nominal, q))
+        out[name] = std**2 * energy / (3 * len(q))
+    return out
+
+
 def _record_held_out(record: dict, nominal: RobotModel, built: CalibrationProblem, noise: float, declared: float,
                      shown: float, dof: float) -> None:
     """Add to the recorded prediction what ``validate`` needs at sockets the calibration did not see: the socket's

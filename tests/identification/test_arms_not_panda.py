@@ -5,6 +5,7 @@ declared noise are judged at the noise they show (written with a warning when th
 from __future__ import annotations
 
 import json
+import shutil
 import warnings
 from pathlib import Path
 
@@ -17,6 +18,7 @@ from spherecal.correction.files.fixtures import FixtureSpec
 from spherecal.correction.files.samples import Dataset, DatasetError, JointLimitWarning
 from spherecal.correction.files.samples_csv import read_samples, write_samples
 from spherecal.identification.calibrate import calibrate
+from spherecal.identification.selfcheck import InconsistentDataError
 from spherecal.identification.synthetic import PANDA_FIXTURES, fixture_samples, make_dataset
 from spherecal.identification.training import exclude_fixtures
 from tests.refusal import refused
@@ -181,3 +183,46 @@ def test_gen3_lite_trained_on_each_real_placement_is_written_or_refused_with_its
     fixtures = json.loads((tmp_path / "v.json").read_text())["sockets"]["fixtures"]
     spread = fixtures["front_h1"]["spread_mean"]
     assert spread["calibrated"] < 0.7 * spread["nominal"]
+
+
+def test_gen3_lite_placements_that_a_rigid_model_cannot_join_within_a_millimetre_are_written(tmp_path, capsys) -> None:
+    """Two real Gen3 lite placements (front without its drifting front_h0, raised_back): no DH model fits both to
+    the residual each shows alone (1 mm), so each fixture, left out, disagrees with the other placement's fit by
+    ~5 mm. That is the arm's unmodelled error over its workspace, which the others' residual shows beyond the
+    declared noise, not a fixture that moved: refused before ("the samples at fixture raised_back_h0 disagree with
+    the other fixtures by 5.72 mm rms"); now written, and better than nominal on the held-out placement left."""
+    both = tmp_path / "recorded"
+    for placement in ("front", "raised_back"):
+        shutil.copytree(MUKCA / "dinova_1" / placement, both / placement)
+    assert main(["import", str(both), "--format", "mukca", "--robot", str(GEN3LITE), "--tip-link", "ball_link",
+                 "--out", str(tmp_path / "train")]) == 0
+    assert main(["import", str(MUKCA / "dinova_1" / "left"), "--format", "mukca", "--robot", str(GEN3LITE),
+                 "--tip-link", "ball_link", "--out", str(tmp_path / "test")]) == 0
+    capsys.readouterr()
+    assert main(["calibrate", "--robot", str(GEN3LITE), "--tip-link", "ball_link", "--samples",
+                 str(tmp_path / "train" / "samples.csv"), "--fixtures", str(tmp_path / "train" / "fixtures.yaml"),
+                 "--exclude-fixture", "front_h0", "--out", str(tmp_path / "cal.yaml")]) == 0, capsys.readouterr().err
+    assert main(["validate", "--nominal", str(GEN3LITE), "--tip-link", "ball_link", "--calibrated",
+                 str(tmp_path / "cal.yaml"), "--samples", str(tmp_path / "test" / "samples.csv"), "--out",
+                 str(tmp_path / "v.json")]) == 0
+    fixtures = json.loads((tmp_path / "v.json").read_text())["sockets"]["fixtures"]
+    for socket in ("left_h0", "left_h1"):
+        spread = fixtures[socket]["spread_mean"]
+        assert spread["calibrated"] < 0.8 * spread["nominal"], (socket, spread)
+
+
+def test_another_arms_fixture_is_still_named_on_an_arm_with_unmodelled_error(panda) -> None:
+    """The allowance for an arm's unmodelled error comes from the OTHER fixtures' residual: a fixture recorded on
+    another arm is still refused, named, when every sample carries 0.6 mm of noise against the declared 0.3 mm
+    (the wrong fixture inflates only the others' allowance, not its own)."""
+    true = perturb(panda, np.random.default_rng(1))
+    other = perturb(panda, np.random.default_rng(2))
+    rng = np.random.default_rng(5)
+    dataset, spec = make_dataset(true, per_fixture=40, rng=rng, noise=6e-4)
+    q = dataset.q.copy()
+    q[dataset.labels == "P3"] = fixture_samples(other, PANDA_FIXTURES["P3"], 40, rng, 6e-4)
+    wrong = Dataset(labels=dataset.labels, q=q, fixture_names=dataset.fixture_names)
+    with pytest.raises(InconsistentDataError, match=r"fixture P3 disagree with the other fixtures by [\d.]+ mm rms "
+                                                    r"\(the others alone: residual [\d.]+ mm per axis, and the arm's "
+                                                    r"unmodelled error expected there"):
+        calibrate(panda, wrong, spec, noise=3e-4)
