@@ -16,7 +16,10 @@ Run on every calibration (:func:`self_check`), its findings travel with the resu
 * **leave one out** (:mod:`.consistency`, :mod:`.leave_out`, linearised): every known distance, every known position
   (freed: three unknowns with a prior of its stated accuracy) and every fixture's samples, refitted
   without them; the disagreement in mm and ``dSSR / sigma^2 ~ chi2(dof)`` with ``sigma`` the larger
-  of the declared noise and the residual std of the rest. A group is inconsistent when that test's
+  of the declared noise and the residual std of the rest (for a fixture's samples, plus the arm's unmodelled
+  error that the rest's residual shows beyond the declared noise, drawn fresh at its configurations:
+  :func:`_unmodelled`; an arm whose model holds to a millimetre does not transfer to another part of its
+  workspace at a tenth of one, and that is no fixture that moved). A group is inconsistent when that test's
   p-value is below :data:`.consistency.ALPHA` over the number of groups (Bonferroni) and its disagreement exceeds
   :data:`.consistency.GROUP_FACTOR` x ``sigma`` per coordinate (so that a fixture recorded with a little more
   play than the others, which hundreds of samples make "significant", is not a culprit). A group with
