@@ -24,7 +24,7 @@ the chain end whose tool point is the file's).
 
     .venv/bin/python bench/mukca.py [--data ../shared/data/mukca] [--robots panda_2_clean ...] [--no-urdf]
 
-Prints a table and writes ``bench/mukca.json`` (versions, seed, command, every figure).
+Prints a table and writes ``bench/mukca.json`` (or ``--out``) (versions, seed, command, every figure).
 """
 
 from __future__ import annotations
@@ -175,6 +175,8 @@ def main() -> int:
                         help="MUKCa root (data/, urdf/); default: shared/data/mukca beside the checkout")
     parser.add_argument("--robots", nargs="+", default=list(ROBOTS))
     parser.add_argument("--no-urdf", action="store_true", help="skip the exported-URDF column")
+    parser.add_argument("--out", type=Path, default=HERE / "mukca.json",
+                        help="result file (default bench/mukca.json; a run of some robots only: give another)")
     args = parser.parse_args()
     root = Path(args.data) if args.data else bench_common.find_mukca()
     uptime = subprocess.run(["uptime"], capture_output=True, text=True).stdout.strip()
@@ -188,7 +190,7 @@ def main() -> int:
             results[robot] = run_robot(root, robot, ROBOTS[robot], work, not args.no_urdf)
     lines = summary(results)
     print("\n".join(lines))
-    out = bench_common.write_json(HERE / "mukca.json", {
+    out = bench_common.write_json(args.out, {
         "uptime": uptime, "mukca_figures_mm": {f"{r}/{p}": v for (r, p), v in MUKCA.items()},
         "seconds": time.perf_counter() - clock, "results": results}, seed=0, inputs={"data": Path(root)}, indent=1)
     print(f"wrote {out}")
