@@ -117,6 +117,8 @@ def split(
     # the space the fit leaves the residual (M's eigenvalues are 1 there, 0 along what it fits): without the directions
     # the fit half absorbs, where the prior's pull on an arm off nominal leaves a smooth residual that is no noise
     space = values > 0.5
+    if not space.any():  # the fit leaves its residual no room: nothing to split
+        return float(np.sqrt(np.mean(residual[rows] ** 2))), 0.0
     whiten = vectors[:, space] / np.sqrt(values[space])
     mu, turn = np.linalg.eigh(whiten.T @ smooth @ whiten)
     y2 = (turn.T @ (whiten.T @ residual[rows])) ** 2

@@ -33,7 +33,7 @@ def test_a_drawn_joint_angle_error_moves_the_tool_point_as_the_kinematics_do() -
     np.testing.assert_allclose(moved, tool_point(panda, q + eps) - tool_point(panda, q), rtol=1e-4, atol=1e-13)
 
 
-def _fit_residual(panda, std: float, noise: float, seed: int):
+def _fit_residual(panda, std: float, noise: float, seed: int, count: int = 40):
     """A MUKCa-like calibration problem's linear fit (prior rows included) of white noise plus a joint-angle error
     drawn from the process: ``(q, residual, data_jac, inverse)``."""
     from spherecal.correction.files.fixtures import FixtureSpec
@@ -41,7 +41,7 @@ def _fit_residual(panda, std: float, noise: float, seed: int):
     from spherecal.identification.identifiability import normal_inverse
     from spherecal.identification.synthetic import make_dataset
 
-    data, _ = make_dataset(panda, {"a": (0.5, 0.1, 0.3), "b": (0.5, 0.15, 0.3)}, 40, np.random.default_rng(seed))
+    data, _ = make_dataset(panda, {"a": (0.5, 0.1, 0.3), "b": (0.5, 0.15, 0.3)}, count, np.random.default_rng(seed))
     spec = FixtureSpec(names=("a", "b"), distances=[("a", "b", 0.05)])
     problem = build_problem(panda, data, spec, prior_weight=0.5)  # calibrate's default prior
     jac = problem.jacobian(problem.start_from(panda))
@@ -53,12 +53,13 @@ def _fit_residual(panda, std: float, noise: float, seed: int):
     return data.q, residual, jac[: 3 * count], inverse
 
 
-@pytest.mark.parametrize("std", [0.0, 3e-4, 3e-3])
-def test_the_residual_is_split_into_white_noise_and_the_joint_angle_error_that_made_it(panda, std) -> None:
+@pytest.mark.parametrize(("std", "count"), [(0.0, 40), (3e-4, 40), (3e-3, 40), (3e-4, 120)])
+def test_the_residual_is_split_into_white_noise_and_the_joint_angle_error_that_made_it(panda, std, count) -> None:
     # the truth known: 0.1 mm white noise plus a joint-angle error below (0.3 mrad: ~0.2 mm at the tool, MUKCa's
-    # Pandas) or far above it (3 mrad); the fit absorbs part of both. The mean of a few draws, each a fresh arm.
+    # Pandas) or far above it (3 mrad); the fit absorbs part of both. The mean of a few draws, each a fresh arm;
+    # 2 x 120 samples: a random subset of them (SPLIT_SAMPLES)
     noise = 1e-4
-    found = np.array([split(panda, *_fit_residual(panda, std, noise, seed)) for seed in range(4)])
+    found = np.array([split(panda, *_fit_residual(panda, std, noise, seed, count)) for seed in range(4)])
     if std < 1e-3:
         assert abs(found[:, 0].mean() / noise - 1.0) < 0.25, found
     else:  # 3 mrad moves the tool ~1.5 mm: the white 0.1 mm is lost under it, but not inflated by it
