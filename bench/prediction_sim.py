@@ -39,6 +39,7 @@ SETUPS = {
     "prior arm, 0.1 mm + 0.2 mrad": (1.0, 1e-4, 2e-4, 30),
     "3x arm, 0.1 mm + 0.3 mrad": (3.0, 1e-4, 3e-4, 30),
     "prior arm, 0.1 mm + 3 mrad": (1.0, 1e-4, 3e-3, 40),
+    "prior arm, 0.3 mm, 8 samples": (1.0, 3e-4, 0.0, 8),
     "3x arm, 0.3 mm, 8 samples": (3.0, 3e-4, 0.0, 8),
 }
 TRAIN = {"a": (0.5, 0.1, 0.3), "b": (0.5, 0.15, 0.3)}

@@ -31,7 +31,7 @@ held-out socket gets a fresh draw of it.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -161,11 +161,23 @@ def _anchor_spread(problem: CalibrationProblem) -> float:
     return anchor_spread(problem.model, problem.dataset.for_fixture(name), point)
 
 
-def _linearised(problem: CalibrationProblem, noise: float, sample_weight: float = 1.0):
+def _linearised(problem: CalibrationProblem, noise: float, sample_weight: float = 1.0,
+                free: np.ndarray | None = None):
     """The pruned problem at its generic point: ``(lin, x_lin, pruned, x, rows, jac, inverse)`` (``rows``: the
-    sample rows' weights, ``jac`` weighted by them, ``inverse`` of its normal matrix)."""
+    sample rows' weights, ``jac`` weighted by them, ``inverse`` of its normal matrix). ``free``: the parameters a
+    calibration identified (indices into the model's), the others left at nominal as it left them; default: pruned
+    at ``noise`` (:func:`.pruning.prune`)."""
     lin, x_lin = problem.generic_point()
-    pruned, x = prune(lin, x_lin, max(noise, SIGMA_FLOOR) / np.sqrt(sample_weight))
+    if free is None:
+        pruned, x = prune(lin, x_lin, max(noise, SIGMA_FLOOR) / np.sqrt(sample_weight))
+    else:
+        params, centres = lin.unpack(x_lin)
+        dropped = np.setdiff1d(lin.free, free)
+        params[dropped] = lin.model.params[dropped]
+        names = lin.model.param_names
+        left = {names[i]: "left at nominal by the calibration" for i in dropped}
+        pruned = replace(lin, free=np.intersect1d(lin.free, free), fixed={**lin.fixed, **left})
+        x = pruned.pack(params, centres)
     rows = np.ones((pruned.n_residuals, 1))
     rows[: 3 * problem.dataset.n_samples] = np.sqrt(sample_weight)
     jac = pruned.jacobian(x) * rows
@@ -174,7 +186,8 @@ def _linearised(problem: CalibrationProblem, noise: float, sample_weight: float 
 
 def deviation_root(
     model: RobotModel, problem: CalibrationProblem, noise: float, sample_weight: float = 1.0,
-    bias_scale: float = 1.0, data_noise: float | None = None,
+    bias_scale: float = 1.0, data_noise: float | None = None, free: np.ndarray | None = None,
+    unseen_scale: float | None = None,
 ) -> tuple[np.ndarray, CalibrationProblem, np.ndarray, np.ndarray]:
     """The calibrated parameters' error ``dp = R z``, ``z ~ N(0, I)`` (see the module docstring).
 
@@ -194,13 +207,19 @@ def deviation_root(
             distance rows ``J_r`` are at ``noise_p`` by their weight. None: every row at ``noise``,
             ``noise^2 A^-1 (J_d^T J_d + bias_scale^2 J_p^T J_p) A^-1`` (the beat-nominal judgement's, which counts the
             prior's penalty in the residual as noise, and is exact only when ``noise^2 = W noise_p^2``).
+        free: the parameters the calibration identified (indices into ``model``'s), when known: the others are
+            what it left at nominal (default: ``problem`` pruned at ``noise``, which may leave at nominal a
+            parameter the calibration, pruning at its own residual, identified).
+        unseen_scale: ``bias_scale`` of what the data cannot see at all (parameters left at nominal, the scale
+            anchor) where it differs (default ``bias_scale``): a forecast charges them at the arm's measured scale.
 
     Returns:
         ``(R, pruned, x, std)``: (P, k) root of the error covariance of every parameter of ``model``
         (zero rows for the gauge), the pruned problem and its linearisation point, (F,) predicted std
         of its identified parameters.
     """
-    lin, x_lin, pruned, x, rows, jac, inverse = _linearised(problem, noise, sample_weight)
+    lin, x_lin, pruned, x, rows, jac, inverse = _linearised(problem, noise, sample_weight, free)
+    unseen_scale = bias_scale if unseen_scale is None else unseen_scale
     fp = pruned.n_free_params
     if data_noise is not None:  # the samples at their noise; distances, anchor and prior rows at the problem's
         samples, prior = slice(0, 3 * pruned.dataset.n_samples), pruned.prior_rows()
@@ -228,7 +247,7 @@ def deviation_root(
     dropped = np.setdiff1d(lin.free, free)
     if dropped.size:  # barely excited parameters left at nominal: the fit absorbs what it can
         cols = [int(np.flatnonzero(lin.free == i)[0]) for i in dropped]
-        spread = bias_scale * prior_std(model)[dropped]
+        spread = unseen_scale * prior_std(model)[dropped]
         bias = np.zeros((model.n_params, dropped.size))
         moved = np.zeros((pruned.n_residuals, len(cols)))  # their data columns in the pruned problem's rows
         moved[~pruned.prior_rows()] = lin.jacobian(x_lin)[~lin.prior_rows()][:, cols]
@@ -237,7 +256,7 @@ def deviation_root(
         columns.append(bias)
     if pruned.anchor is not None:  # the scale anchor's radius is the nominal model's, not measured
         kick = np.zeros((pruned.n_residuals, 1))
-        kick[-1] = bias_scale * pruned.distance_weight * _anchor_spread(pruned)
+        kick[-1] = unseen_scale * pruned.distance_weight * _anchor_spread(pruned)
         bias = np.zeros((model.n_params, 1))
         bias[free] = (inverse @ (jac.T @ kick))[:fp]
         columns.append(bias)
@@ -246,7 +265,7 @@ def deviation_root(
 
 def joint_error_root(
     model: RobotModel, problem: CalibrationProblem, noise: float, excess: float, length: float = LENGTH,
-    std: float = 0.0,
+    std: float = 0.0, free: np.ndarray | None = None,
 ) -> tuple[float, np.ndarray]:
     """The unmodelled joint-angle error (:mod:`.joint_error`) that leaves ``excess`` in the residuals, and the bias
     it bends the fitted parameters by.
@@ -264,6 +283,7 @@ def joint_error_root(
         length: the process's correlation length [rad].
         std: the error's std [rad] as estimated otherwise (:func:`.joint_error.split`); the larger of it and the
             excess's is taken.
+        free: the parameters the calibration identified, as :func:`deviation_root`'s.
 
     Returns:
         ``(s, B)``: the std of each joint's angle error [rad] and (P, c) the root of the bias's covariance
@@ -271,7 +291,7 @@ def joint_error_root(
     """
     if excess <= 0 and std <= 0:
         return 0.0, np.zeros((model.n_params, 0))
-    _, _, pruned, _, _, jac, inverse = _linearised(problem, noise)
+    _, _, pruned, _, _, jac, inverse = _linearised(problem, noise, free=free)
     count, fp = pruned.dataset.n_samples, pruned.n_free_params
     data = jac[: 3 * count]
     shifts, kept = [], 0.0
