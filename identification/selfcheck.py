@@ -37,7 +37,8 @@ Run on every calibration (:func:`self_check`), its findings travel with the resu
   also holds the prior rows, whose penalty is no noise and dominates it for a few dozen samples of a well-made
   arm: 0.18 mm against 0.10 mm on MUKCa's Pandas) and the arm's unmodelled joint-angle error (with any residual
   beyond the declared noise), the covariance of the parameters' error at that socket noise, with the bias the
-  joint-angle error leaves in them.
+  joint-angle error leaves in them and what the calibration left at nominal charged at the nominal's measured
+  scale (above the prior's too: a forecast, not a bar).
 
 The refusal is one line naming the culprit (file, row, field; the disagreement in mm and the stated
 accuracy) or, without one, the figure that failed.
