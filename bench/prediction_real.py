@@ -8,17 +8,18 @@ sockets of the mean distance of the predicted ball centres from their mean) and 
 file predicts for those same held-out configurations (``validate``'s "predicted" line), and their ratio.
 A refused calibration is also forced (``--force``) to show what it would have measured; its row says so.
 
-How the prediction is made (identification/prediction.py, identification/joint_error.py, validation/sockets.py):
-the calibration's parameter error is Gaussian with the Gauss-Markov covariance of its own problem at the larger of
-the declared noise and the noise its residuals show, plus the biases of what it cannot see (barely excited
-parameters left at nominal, drawn from their prior spread; the scale anchor). What the data rows' residual (the MAP
-prior's penalty is no noise) shows beyond the declared noise is the arm's own unmodelled error, modelled as a
-joint-angle error per joint, a Gaussian process over joint space (length 1 rad) seen through the joint Jacobian:
-its std is the one whose part the fit cannot absorb matches that excess, and the bias its absorbed part leaves in
-the parameters joins the covariance the calibrated file records. For a held-out socket, the parameter error is
-propagated to the recorded configurations through the parameter Jacobian, the socket's own noise (the residual
-std, at most the declared noise) and a fresh draw of the joint-angle error are added, all less their mean over
-the socket, and the mean distance averaged over 200 draws.
+How the prediction is made (identification/prediction.py, identification/joint_error.py, identification/selfcheck.py,
+validation/sockets.py): the samples' residual is split by maximum likelihood over the space the fit leaves it into
+white noise (where the ball sits in its socket; at most the declared noise) and a joint-angle error per joint, a
+Gaussian process over joint space (length 1 rad) seen through the joint Jacobian, the arm's own error that no
+parameter describes (what lies beyond the declared noise counts as that error too). The calibration's parameter
+error is that of its MAP estimate: the samples' noise through the fit, the arm's deviations (at the scale the
+judgement uses) through the prior rows, the biases of what it cannot see (the parameters the calibration left at
+nominal, the scale anchor), drawn from the prior spread times the scale the nominal model's error on the training
+sockets measures (above 1 too), and the bias the joint-angle error's absorbed part leaves.
+For a held-out socket, the parameter error is propagated to the recorded configurations through the parameter
+Jacobian, the socket's own noise and a fresh draw of the joint-angle error are added, all less their mean over the
+socket, and the mean distance averaged over 200 draws.
 
     .venv/bin/python bench/prediction_real.py [--data shared/data/mukca] [--out bench/prediction_real.json]
 """

@@ -10,7 +10,8 @@ sees it through the joint Jacobian::
 
 A calibration absorbs part of it into its parameters at the training configurations (a bias that does not
 hold elsewhere) and leaves the rest in its residuals; at a socket it did not see, a fresh draw of it adds to
-the spread, amplified by the lever arms there (:mod:`.prediction`).
+the spread, amplified by the lever arms there (:mod:`.prediction`). How much of a fit's residual is this error and how
+much white noise, :func:`split` estimates by maximum likelihood.
 """
 
 from __future__ import annotations
@@ -69,3 +70,65 @@ def draw(model: RobotModel, q: np.ndarray, std: float, draws: int, rng: np.rando
     for field in tool_fields(model, q, length, rng):
         out += std * np.einsum("kir,rd->kid", field, rng.standard_normal((field.shape[2], draws)))
     return out
+
+
+#: At most this many samples enter :func:`split` (a seeded random subset above it: the likelihood is cubic in them).
+SPLIT_SAMPLES = 150
+
+
+def split(
+    model: RobotModel, q: np.ndarray, residual: np.ndarray, data_jac: np.ndarray, inverse: np.ndarray,
+    length: float = LENGTH, rng: np.random.Generator | None = None,
+) -> tuple[float, float]:
+    """Maximum-likelihood split of a fit's sample residuals into white noise and the joint-angle error.
+
+    The samples' errors ``e = n + sum_j dp/dq_j eps_j`` (white ``n``, std ``noise`` per coordinate; the process of
+    the module docstring, std ``std``) leave ``r = M e`` in the residuals, ``M = I - J_d (J^T J)^-1 J_d^T`` (what the
+    fit absorbs; ``J`` with every row of the problem, prior included). Both stds maximise the Gaussian likelihood
+    of ``r`` over the space the fit leaves it (restricted maximum likelihood; the eigenvectors of ``M M^T`` above
+    1/2): white noise spreads evenly over it,
+    the process's smooth error concentrates in few directions. Above :data:`SPLIT_SAMPLES` samples, a seeded
+    random subset of them (their residuals' covariance still through the whole fit).
+
+    Args:
+        model: the robot (the joint Jacobian of the process's tool-point field).
+        q: (K, n) the samples' joint angles [rad].
+        residual: (3 K,) their residuals at the solution [m], stacked ``x0 y0 z0 x1 ...``.
+        data_jac: (3 K, U) their rows of the fit's Jacobian [m per unknown].
+        inverse: (U, U) ``(J^T J)^-1`` of the fit's whole Jacobian.
+        length: the process's correlation length [rad].
+        rng: seeds the subset and the process's features (default seed 0).
+
+    Returns:
+        ``(noise, std)``: the white noise std per coordinate [m] and the joint-angle error's std [rad] (0: none).
+    """
+    rng = np.random.default_rng(0) if rng is None else rng
+    count = len(q)
+    keep = np.sort(rng.choice(count, SPLIT_SAMPLES, replace=False)) if count > SPLIT_SAMPLES else np.arange(count)
+    rows = (3 * keep[:, None] + np.arange(3)).ravel()
+    sub = data_jac[rows] @ inverse  # (3 S, U)
+    white = np.eye(len(rows)) - 2.0 * sub @ data_jac[rows].T + sub @ (data_jac.T @ data_jac) @ sub.T  # M_S M_S^T
+    smooth = np.zeros_like(white)
+    for field in tool_fields(model, q, length, rng):
+        field = field.reshape(3 * count, -1)
+        absorbed = field[rows] - sub @ (data_jac.T @ field)  # M_S F
+        smooth += absorbed @ absorbed.T
+    values, vectors = np.linalg.eigh(0.5 * (white + white.T))
+    # the space the fit leaves the residual (M's eigenvalues are 1 there, 0 along what it fits): without the directions
+    # the fit half absorbs, where the prior's pull on an arm off nominal leaves a smooth residual that is no noise
+    space = values > 0.5
+    if not space.any():  # the fit leaves its residual no room: nothing to split
+        return float(np.sqrt(np.mean(residual[rows] ** 2))), 0.0
+    whiten = vectors[:, space] / np.sqrt(values[space])
+    mu, turn = np.linalg.eigh(whiten.T @ smooth @ whiten)
+    y2 = (turn.T @ (whiten.T @ residual[rows])) ** 2
+    mu = np.clip(mu, 0.0, None)
+    if mu[-1] <= 0 or not y2.any():
+        return float(np.sqrt(y2.mean())), 0.0
+    # cov = a (I + t diag(mu)) in the whitened basis: for each t the likelihood's a is mean(y^2 / (1 + t mu))
+    ratios = np.concatenate([[0.0], np.geomspace(1e-4, 1e6, 241) / mu[-1]])
+    scaled = 1.0 + ratios[:, None] * mu[None, :]
+    a = (y2[None, :] / scaled).mean(axis=1)
+    loglik = -0.5 * (len(y2) * np.log(a) + np.log(scaled).sum(axis=1))
+    best = int(np.argmax(loglik))
+    return float(np.sqrt(a[best])), float(np.sqrt(ratios[best] * a[best]))

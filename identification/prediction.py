@@ -21,15 +21,17 @@ best rigid fit), then sampled::
 Returns the expected mean and 95th percentile of ``|e|`` [m] and the identifiability summary.
 
 At sockets a calibration did not see (:class:`HeldOut`, recorded by the self-check, read by ``validate``), the
-spread of the recorded configurations (:func:`socket_spreads`): the parameter error above through the parameter
-Jacobian there, the socket's own noise, and the arm's unmodelled joint-angle error (:mod:`.joint_error`): the
-residual beyond the declared noise is that error's share the fit could not absorb (:func:`joint_error_root`
-gives its std and the bias it bends the parameters by), and each held-out socket gets a fresh draw of it.
+spread of the recorded configurations (:func:`socket_spreads`): the parameter error above (its samples' part at the
+socket's own noise, ``deviation_root(data_noise=...)``) through the parameter Jacobian there, the socket's own noise,
+and the arm's unmodelled joint-angle error (:mod:`.joint_error`): the residual's smooth part over joint space
+(:func:`.joint_error.split`, maximum likelihood) and any beyond the declared noise are that error's share the fit
+could not absorb (:func:`joint_error_root` gives its std and the bias it bends the parameters by), and each
+held-out socket gets a fresh draw of it.
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -159,11 +161,23 @@ def _anchor_spread(problem: CalibrationProblem) -> float:
     return anchor_spread(problem.model, problem.dataset.for_fixture(name), point)
 
 
-def _linearised(problem: CalibrationProblem, noise: float, sample_weight: float = 1.0):
+def _linearised(problem: CalibrationProblem, noise: float, sample_weight: float = 1.0,
+                free: np.ndarray | None = None):
     """The pruned problem at its generic point: ``(lin, x_lin, pruned, x, rows, jac, inverse)`` (``rows``: the
-    sample rows' weights, ``jac`` weighted by them, ``inverse`` of its normal matrix)."""
+    sample rows' weights, ``jac`` weighted by them, ``inverse`` of its normal matrix). ``free``: the parameters a
+    calibration identified (indices into the model's), the others left at nominal as it left them; default: pruned
+    at ``noise`` (:func:`.pruning.prune`)."""
     lin, x_lin = problem.generic_point()
-    pruned, x = prune(lin, x_lin, max(noise, SIGMA_FLOOR) / np.sqrt(sample_weight))
+    if free is None:
+        pruned, x = prune(lin, x_lin, max(noise, SIGMA_FLOOR) / np.sqrt(sample_weight))
+    else:
+        params, centres = lin.unpack(x_lin)
+        dropped = np.setdiff1d(lin.free, free)
+        params[dropped] = lin.model.params[dropped]
+        names = lin.model.param_names
+        left = {names[i]: "left at nominal by the calibration" for i in dropped}
+        pruned = replace(lin, free=np.intersect1d(lin.free, free), fixed={**lin.fixed, **left})
+        x = pruned.pack(params, centres)
     rows = np.ones((pruned.n_residuals, 1))
     rows[: 3 * problem.dataset.n_samples] = np.sqrt(sample_weight)
     jac = pruned.jacobian(x) * rows
@@ -172,7 +186,8 @@ def _linearised(problem: CalibrationProblem, noise: float, sample_weight: float 
 
 def deviation_root(
     model: RobotModel, problem: CalibrationProblem, noise: float, sample_weight: float = 1.0,
-    bias_scale: float = 1.0,
+    bias_scale: float = 1.0, data_noise: float | None = None, free: np.ndarray | None = None,
+    unseen_scale: float | None = None,
 ) -> tuple[np.ndarray, CalibrationProblem, np.ndarray, np.ndarray]:
     """The calibrated parameters' error ``dp = R z``, ``z ~ N(0, I)`` (see the module docstring).
 
@@ -184,15 +199,38 @@ def deviation_root(
         bias_scale: the arm's parameter deviations as a share of the prior spread (1: the generic arm);
             scales the biases of what the data cannot see (parameters left at nominal, the scale anchor),
             which are the nominal model's own errors in those directions.
+        data_noise: the samples' own noise, std per coordinate [m], when known apart from ``noise`` (which then
+            only sets the pruning): the error of the MAP estimate ``x = A^-1 J_d^T y`` (``A = J_d^T J_d + J_p^T J_p``)
+            of an arm ``bias_scale`` prior spreads off is ``A^-1 J_d^T n - A^-1 J_p^T J_p dp``, whose covariance is
+            ``A^-1 (data_noise^2 J_s^T J_s + noise_p^2 J_r^T J_r + bias_scale^2 W noise_p^2 J_p^T J_p) A^-1``: the
+            prior rows weigh ``sqrt(W) noise_p / s`` (``W`` the prior weight, ``noise_p`` the problem's noise), the
+            distance rows ``J_r`` are at ``noise_p`` by their weight. None: every row at ``noise``,
+            ``noise^2 A^-1 (J_d^T J_d + bias_scale^2 J_p^T J_p) A^-1`` (the beat-nominal judgement's, which counts the
+            prior's penalty in the residual as noise, and is exact only when ``noise^2 = W noise_p^2``).
+        free: the parameters the calibration identified (indices into ``model``'s), when known: the others are
+            what it left at nominal (default: ``problem`` pruned at ``noise``, which may leave at nominal a
+            parameter the calibration, pruning at its own residual, identified).
+        unseen_scale: ``bias_scale`` of what the data cannot see at all (parameters left at nominal, the scale
+            anchor) where it differs (default ``bias_scale``): a forecast charges them at the arm's measured scale.
 
     Returns:
         ``(R, pruned, x, std)``: (P, k) root of the error covariance of every parameter of ``model``
         (zero rows for the gauge), the pruned problem and its linearisation point, (F,) predicted std
         of its identified parameters.
     """
-    lin, x_lin, pruned, x, rows, jac, inverse = _linearised(problem, noise, sample_weight)
+    lin, x_lin, pruned, x, rows, jac, inverse = _linearised(problem, noise, sample_weight, free)
+    unseen_scale = bias_scale if unseen_scale is None else unseen_scale
     fp = pruned.n_free_params
-    if bias_scale == 1.0 or not pruned.n_prior:
+    if data_noise is not None:  # the samples at their noise; distances, anchor and prior rows at the problem's
+        samples, prior = slice(0, 3 * pruned.dataset.n_samples), pruned.prior_rows()
+        rest = ~prior
+        rest[samples] = False
+        stated = max(pruned.noise, SIGMA_FLOOR) ** 2  # (w distance_std)^2, and (sqrt(W) noise_p / s)^2 s^2 over W
+        middle = (data_noise**2 * (jac[samples].T @ jac[samples]) + stated * (jac[rest].T @ jac[rest])
+                  + bias_scale**2 * pruned.prior_weight * stated * (jac[prior].T @ jac[prior]))
+        cov = (inverse @ middle @ inverse)[:fp, :fp]
+        cov = 0.5 * (cov + cov.T)
+    elif bias_scale == 1.0 or not pruned.n_prior:
         cov = noise**2 * inverse[:fp, :fp]
     else:  # the prior rows regularise at the generic spread, the arm's deviations are bias_scale times it:
         # cov = A^-1 (J_d^T J_d + s^2 J_p^T J_p) A^-1 sigma^2 (= sigma^2 A^-1 at s = 1)
@@ -209,7 +247,7 @@ def deviation_root(
     dropped = np.setdiff1d(lin.free, free)
     if dropped.size:  # barely excited parameters left at nominal: the fit absorbs what it can
         cols = [int(np.flatnonzero(lin.free == i)[0]) for i in dropped]
-        spread = bias_scale * prior_std(model)[dropped]
+        spread = unseen_scale * prior_std(model)[dropped]
         bias = np.zeros((model.n_params, dropped.size))
         moved = np.zeros((pruned.n_residuals, len(cols)))  # their data columns in the pruned problem's rows
         moved[~pruned.prior_rows()] = lin.jacobian(x_lin)[~lin.prior_rows()][:, cols]
@@ -218,7 +256,7 @@ def deviation_root(
         columns.append(bias)
     if pruned.anchor is not None:  # the scale anchor's radius is the nominal model's, not measured
         kick = np.zeros((pruned.n_residuals, 1))
-        kick[-1] = bias_scale * pruned.distance_weight * _anchor_spread(pruned)
+        kick[-1] = unseen_scale * pruned.distance_weight * _anchor_spread(pruned)
         bias = np.zeros((model.n_params, 1))
         bias[free] = (inverse @ (jac.T @ kick))[:fp]
         columns.append(bias)
@@ -226,7 +264,8 @@ def deviation_root(
 
 
 def joint_error_root(
-    model: RobotModel, problem: CalibrationProblem, noise: float, excess: float, length: float = LENGTH
+    model: RobotModel, problem: CalibrationProblem, noise: float, excess: float, length: float = LENGTH,
+    std: float = 0.0, free: np.ndarray | None = None,
 ) -> tuple[float, np.ndarray]:
     """The unmodelled joint-angle error (:mod:`.joint_error`) that leaves ``excess`` in the residuals, and the bias
     it bends the fitted parameters by.
@@ -242,14 +281,17 @@ def joint_error_root(
         noise: the noise of the linearisation (as :func:`deviation_root`) [m].
         excess: sqrt of the residual energy beyond the declared noise [m] (0: none).
         length: the process's correlation length [rad].
+        std: the error's std [rad] as estimated otherwise (:func:`.joint_error.split`); the larger of it and the
+            excess's is taken.
+        free: the parameters the calibration identified, as :func:`deviation_root`'s.
 
     Returns:
         ``(s, B)``: the std of each joint's angle error [rad] and (P, c) the root of the bias's covariance
         over every parameter of ``model`` (already times ``s``; add its columns to :func:`deviation_root`'s).
     """
-    if excess <= 0:
+    if excess <= 0 and std <= 0:
         return 0.0, np.zeros((model.n_params, 0))
-    _, _, pruned, _, _, jac, inverse = _linearised(problem, noise)
+    _, _, pruned, _, _, jac, inverse = _linearised(problem, noise, free=free)
     count, fp = pruned.dataset.n_samples, pruned.n_free_params
     data = jac[: 3 * count]
     shifts, kept = [], 0.0
@@ -260,7 +302,7 @@ def joint_error_root(
         shifts.append(shift[:fp])
     if kept <= 0:
         return 0.0, np.zeros((model.n_params, 0))
-    std = excess / np.sqrt(kept)
+    std = max(excess / np.sqrt(kept), std)
     bias = np.zeros((model.n_params, sum(s.shape[1] for s in shifts)))
     bias[pruned.free] = std * np.hstack(shifts)
     return float(std), bias

@@ -12,10 +12,11 @@ called: it is marked, and the held-out summary leaves it out. A spread from fewe
 :data:`MIN_DISTINCT` distinct configurations is not measurable (None, printed as such), not zero.
 Beside each held-out socket's measured spread, the spread the calibration predicts there
 (:class:`spherecal.identification.prediction.HeldOut`): the parameter error from the covariance the file
-records (at the noise its self-check judged with, the larger of the declared and the measured) through the
-recorded configurations, the socket's own noise (the training residual std of the data rows, at most the
-declared noise) and a fresh draw of the arm's unmodelled joint-angle error (what the residuals show beyond the
-declared noise, :mod:`spherecal.identification.joint_error`), less their mean over the socket.
+records (its samples' part at the socket's noise, the prior's at the arm's deviations) through the recorded
+configurations, the socket's own noise (the white part of the training residual by maximum likelihood, at most the
+declared noise) and a fresh draw of the arm's unmodelled joint-angle error (the residual's smooth part over joint
+space, and any beyond the declared noise, :mod:`spherecal.identification.joint_error`), less their mean over the
+socket.
 """
 
 from __future__ import annotations
@@ -158,8 +159,7 @@ class SocketReport:
                          "own prediction for these configurations; measured within 0.5x-2x of it is as expected)")
             if self.joint_error > 0:
                 lines.append(f"  the prediction includes the arm's unmodelled joint-angle error, "
-                             f"{self.joint_error * 1e3:.2g} mrad per joint, that its training residuals show beyond "
-                             "the declared noise")
+                             f"{self.joint_error * 1e3:.2g} mrad per joint, that its training residuals show")
         return "\n".join(lines)
 
     def to_dict(self) -> dict:
@@ -217,8 +217,8 @@ def fitted_fixtures(model: RobotModel, dataset: Dataset | None = None) -> set[st
 
 def recorded_prediction(model: RobotModel) -> HeldOut | None:
     """What the calibrated file predicts at sockets it did not see (its self-check's ``prediction`` record): the
-    parameter covariance (``R R^T`` over every parameter of ``model``, at the larger of the declared and the
-    residuals' noise, with the bias of the arm's unmodelled joint-angle error), the socket's own noise [m] (std
+    parameter covariance (``R R^T`` over every parameter of ``model``, its samples' part at the socket's noise, with
+    the bias of the arm's unmodelled joint-angle error), the socket's own noise [m] (std
     per axis; ``noise_m`` in files written before it was recorded) and that joint-angle error [rad]; None when it
     records none."""
     block = model.extras.get("calibration")

@@ -116,3 +116,36 @@ def test_predicted_mean_within_25_percent_of_a_10_set_campaign(panda):
             f"ratio {ratio:.2f}"
         )
         assert 0.75 < ratio < 1.25
+
+
+def test_the_error_covariance_at_the_samples_noise_is_the_map_estimates_over_refits(panda):
+    # explicit refits of the linearised MAP calibration (prior rows at the default weight and 0.3 mm) of an arm 3x the
+    # prior spread off nominal, sockets at 0.1 mm: the error x - dp of x = A^-1 J_d^T (J_d dp + n) against the
+    # covariance deviation_root records for validate. The judgement's form, every row at the noise, is not it here
+    # (the prior's part is exact only when noise^2 = W noise_p^2).
+    from spherecal.correction.files.fixtures import FixtureSpec
+    from spherecal.identification.build import build_problem
+    from spherecal.identification.prediction import _linearised, deviation_root
+    from spherecal.identification.problem import prior_std
+
+    data, _ = make_dataset(panda, {"a": (0.5, 0.1, 0.3), "b": (0.5, 0.15, 0.3)}, 40, np.random.default_rng(5))
+    problem = build_problem(panda, data, FixtureSpec(names=("a", "b"), distances=[("a", "b", 0.05)]), prior_weight=0.5)
+    noise, scale = 1e-4, 3.0
+    _, _, pruned, _, _, jac, inverse = _linearised(problem, noise)
+    root, _, _, _ = deviation_root(panda, problem, noise, bias_scale=scale, data_noise=noise)
+    assert root.shape[1] == pruned.n_free_params  # nothing left at nominal: the covariance alone
+    fp, rows = pruned.n_free_params, ~pruned.prior_rows()
+    stated = np.full(rows.sum(), pruned.noise)  # the distance's row at its stated accuracy, the samples' at theirs
+    stated[: 3 * data.n_samples] = noise
+    rng = np.random.default_rng(6)
+    draws = 4000
+    dp = np.zeros((jac.shape[1], draws))
+    dp[:fp] = scale * prior_std(panda)[pruned.free, None] * rng.standard_normal((fp, draws))
+    y = jac[rows] @ dp + stated[:, None] * rng.standard_normal((rows.sum(), draws))
+    error = (inverse @ (jac[rows].T @ y) - dp)[:fp]
+    gains = param_jacobian(panda, panda.random_configurations(50, np.random.default_rng(7))).reshape(-1, panda.n_params)
+    measured = np.sum((gains[:, pruned.free] @ error) ** 2) / draws
+    predicted = np.sum((gains @ root) ** 2)
+    assert abs(predicted / measured - 1.0) < 0.08, (predicted, measured)
+    judged, _, _, _ = deviation_root(panda, problem, noise, bias_scale=scale)
+    assert np.sum((gains @ judged) ** 2) / measured < 0.7  # the prior's part charged at the samples' noise

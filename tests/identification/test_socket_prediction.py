@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import numpy as np
-import pytest
 
 from spherecal.correction import load_robot, perturb, tool_point
 from spherecal.correction.files.fixtures import FixtureSpec
@@ -59,8 +58,67 @@ def test_an_unmodelled_joint_angle_error_is_measured_and_predicted_at_held_out_s
     calibrated = run_workflow(nominal, train, spec, WorkflowOptions(force=True)).model
     prediction = recorded_prediction(calibrated)
     assert abs(prediction.joint_error / std - 1.0) < 0.2, prediction.joint_error  # was: none (0)
-    assert prediction.noise == pytest.approx(NOISE)  # the rest of the residual is the arm's, not the socket's
+    # the rest of the residual is the arm's, not the socket's: at most the declared noise, and the white part
+    # (0.24 mm; the truth 0.1 mm) no longer the whole residual
+    assert noise < prediction.noise <= NOISE, prediction.noise
     report = socket_validation({"nominal": nominal, "calibrated": calibrated}, held, prediction=prediction)
     measured, _ = report.summary("calibrated")
     assert 0.5 < measured / report.predicted_summary() < 2.0, (measured, report.predicted_summary())
     assert "the prediction includes the arm's unmodelled joint-angle error, " in report.format()
+
+
+def test_a_joint_angle_error_under_the_declared_noise_is_measured_and_predicted_at_held_out_sockets() -> None:
+    # MUKCa's Pandas leave 0.08-0.2 mm residuals, under the declared 0.3 mm, yet part of them is the arm's smooth
+    # error (0.1-0.3 mrad by maximum likelihood). Simulated: an arm 3x the prior spread off nominal, sockets at 0.1 mm,
+    # a 0.3 mrad joint-angle error. Was: none recorded, the socket noise read 0.16-0.20 mm (the whole residual).
+    std, noise = 3e-4, 1e-4
+    nominal = load_robot("panda")
+    found, ratios = [], []
+    for seed in range(3):
+        true = perturb(nominal, np.random.default_rng(seed), 3e-3, np.deg2rad(0.6), 3e-3)
+        train, _ = make_dataset(true, {"a": (0.5, 0.1, 0.3), "b": (0.5, 0.15, 0.3)}, 30,
+                                np.random.default_rng(100 + seed), noise)
+        held, _ = make_dataset(true, {"c": (-0.1, 0.5, 0.4), "d": (0.35, -0.35, 0.75), "e": (0.3, 0.3, 0.3)}, 30,
+                               np.random.default_rng(200 + seed), noise)
+        q = np.concatenate([train.q, held.q])
+        root = field_root(q, LENGTH)
+        recorded = q - std * root @ np.random.default_rng(300 + seed).standard_normal((root.shape[1], q.shape[1]))
+        train = Dataset(labels=train.labels, q=recorded[: len(train.q)], fixture_names=train.fixture_names)
+        held = Dataset(labels=held.labels, q=recorded[len(train.q):], fixture_names=held.fixture_names)
+        spec = FixtureSpec(names=("a", "b"), distances=[("a", "b", 0.05)])
+        calibrated = run_workflow(nominal, train, spec, WorkflowOptions(force=True, model="dh")).model
+        prediction = recorded_prediction(calibrated)
+        found.append((prediction.noise, prediction.joint_error))
+        report = socket_validation({"nominal": nominal, "calibrated": calibrated}, held, prediction=prediction)
+        ratios.append(report.summary("calibrated")[0] / report.predicted_summary())
+    found = np.array(found)
+    assert abs(found[:, 1].mean() / std - 1.0) < 0.3, found
+    assert abs(found[:, 0].mean() / noise - 1.0) < 0.35, found
+    assert all(0.5 < r < 2.0 for r in ratios), ratios
+
+
+def test_what_a_calibration_leaves_at_nominal_is_predicted_at_the_arms_measured_scale() -> None:
+    # an arm 3x the prior spread off nominal, 8 samples per socket at 0.3 mm: a few parameters barely excited, left at
+    # nominal, so their error is the arm's own deviation there (known here). The recorded prediction charges them at
+    # the scale the nominal model measures on the training sockets (2.5-4.4x), not the prior's 1 mm / 0.2 deg (was:
+    # 1x, a third of the truth).
+    from spherecal.identification.problem import prior_std
+
+    nominal = load_robot("panda")
+    spread = prior_std(nominal)
+    recorded, true_error = [], []
+    for seed in range(4):
+        true = perturb(nominal, np.random.default_rng(seed), 3e-3, np.deg2rad(0.6), 3e-3)
+        train, _ = make_dataset(true, {"a": (0.5, 0.1, 0.3), "b": (0.5, 0.15, 0.3)}, 8,
+                                np.random.default_rng(100 + seed), 3e-4)
+        spec = FixtureSpec(names=("a", "b"), distances=[("a", "b", 0.05)])
+        calibrated = run_workflow(nominal, train, spec, WorkflowOptions(force=True, model="dh")).model
+        block = calibrated.extras["calibration"]
+        left = [nominal.param_names.index(n) for n, why in block["fixed"].items() if why.startswith("barely excited")]
+        root = recorded_prediction(calibrated).root
+        std = np.sqrt(np.einsum("pk,pk->p", root, root))
+        recorded += list(std[left] / spread[left])
+        true_error += list(np.abs(true.params - nominal.params)[left] / spread[left])
+    assert len(recorded) >= 6, recorded
+    ratio = np.sqrt(np.mean(np.square(true_error))) / np.sqrt(np.mean(np.square(recorded)))
+    assert 0.6 < ratio < 1.6, (ratio, recorded, true_error)
