@@ -122,14 +122,22 @@ def main() -> None:
     parser.add_argument("--data", default=None, help="MUKCa data folder (default: shared/data/mukca found upward)")
     parser.add_argument("--smooth", choices=("variogram", "residual"), default=guidance_module.SMOOTH,
                         help="scales of the unexplained error (validation.planning.guidance.SMOOTH)")
-    parser.add_argument("--judged-on", choices=("held-out", "whole"), default=guidance_module.JUDGED_ON,
+    parser.add_argument("--judged-on", choices=("sockets", "held-out", "whole"), default=guidance_module.JUDGED_ON,
                         help="where a candidate is judged (validation.planning.guidance.JUDGED_ON)")
+    parser.add_argument("--unmodelled", choices=("declared", "variogram"), default=guidance_module.UNMODELLED,
+                        help="how the recording's residual splits into socket noise and the arm's unmodelled error "
+                             "(validation.planning.guidance.UNMODELLED; judged on sockets only)")
+    parser.add_argument("--postures", choices=("recorded", "walk"), default=guidance_module.POSTURES,
+                        help="configurations at a candidate: the recorded postures carried over, or random walks "
+                             "(validation.planning.guidance.POSTURES)")
     parser.add_argument("--actual", choices=("workflow", "plain"), default="workflow",
                         help="how first + candidate is calibrated for the actual outcome (see the module docstring)")
     parser.add_argument("--seeds", type=int, default=SEEDS, help=f"plan seeds 0..N-1 (default {SEEDS})")
     args = parser.parse_args()
     guidance_module.SMOOTH = args.smooth
     guidance_module.JUDGED_ON = args.judged_on
+    guidance_module.UNMODELLED = args.unmodelled
+    guidance_module.POSTURES = args.postures
     root = Path(args.data) if args.data else bench_common.find_mukca()
     print(subprocess.run(["uptime"], capture_output=True, text=True).stdout.strip())
     results = {}
@@ -157,9 +165,10 @@ def main() -> None:
               f"[mm] pick {summary['mean_pick_change_mm']:.3f}, random {summary['mean_random_change_mm']:.3f}, "
               f"best {summary['mean_best_change_mm']:.3f}")
         results[robot] = {"rows": rows, "summary": summary}
-    out = HERE / f"plan_real_{args.smooth}_{args.judged_on}_{args.actual}.json"
+    out = HERE / f"plan_real_{args.judged_on}_{args.unmodelled}_{args.postures}_{args.smooth}_{args.actual}.json"
     bench_common.write_json(out, {"plan_real": results, "blas_threads": os.environ.get("OPENBLAS_NUM_THREADS")},
                             inputs={"seeds": args.seeds, "smooth": args.smooth, "judged_on": args.judged_on,
+                                    "unmodelled": args.unmodelled, "postures": args.postures,
                                     "actual": args.actual, "data": root})
     print(f"wrote {out}")
 

@@ -144,7 +144,8 @@ def test_the_predicted_gains_are_real_on_a_simulated_arm(panda, simulated, judge
     rng = np.random.default_rng(11)
     q = {c.name: np.concatenate([fixture_samples(truth, p, 100, rng) for p in c.sockets.values()]) for c in candidates}
     shares, predicted = [], []
-    for j in guidance.ranking:
+    judged = {j.placement.name: j for j in guidance.ranking}
+    for j in (judged[c.name] for c in candidates):  # the candidates' order: the draws do not follow the plan's
         others = np.concatenate([v for k, v in q.items() if k != j.placement.name or judged_on == "whole"])
         first = float(registered_errors(tool_point(recorded.model, others), tool_point(truth, others)).mean())
         errors = []

@@ -63,13 +63,21 @@ from spherecal.correction import RobotModel, geometric_part, param_jacobian, too
 from spherecal.correction.errors import SpherecalError
 from spherecal.correction.files.fixtures import FixtureSpec
 from spherecal.correction.files.samples import Dataset
+from spherecal.identification.build import build_problem
 from spherecal.identification.joint_error import kernel
-from spherecal.identification.prediction import Prediction, Workspace, predict_accuracy, remove_rigid_motion
+from spherecal.identification.prediction import (
+    Prediction,
+    Workspace,
+    held_out_joint_error,
+    joint_error_root,
+    predict_accuracy,
+    remove_rigid_motion,
+)
 from spherecal.identification.problem import NOISE, SIGMA_FLOOR
 from spherecal.identification.workflow import WorkflowOptions, run_workflow
 
 from .candidates import CandidateError
-from .hand_guiding import hand_guided
+from .hand_guiding import carried_over, hand_guided
 from .placements import Placement, plate_layout, plate_placements, reachable_grid
 
 #: Default smallest gain worth another placement [m].
@@ -84,9 +92,13 @@ CONFIGURATIONS = 500
 LENGTH = 1.0
 #: Scales of the unexplained error: ``"variogram"`` or ``"residual"`` (see the module docstring).
 SMOOTH = "variogram"
-#: Where a candidate is judged: ``"whole"`` (the whole workspace, its own configurations included) or
-#: ``"held-out"`` (the other candidates' configurations); see the module docstring.
-JUDGED_ON = "whole"
+#: Where and how a candidate is judged: ``"sockets"`` (the spread at the other candidates' sockets, MUKCa's test
+#: MAE, with the arm's unmodelled joint-angle error), ``"whole"`` (the registered error over the whole workspace,
+#: its own configurations included) or ``"held-out"`` (the same over the other candidates' configurations); see the
+#: module docstring.
+JUDGED_ON = "sockets"
+UNMODELLED = "declared"
+POSTURES = "recorded"
 
 
 @dataclass(frozen=True, eq=False)
@@ -101,6 +113,10 @@ class Recorded:
         centres: fixture name -> (3,) calibrated centre [m].
         model_choice: ``dh`` or ``elastic`` and why.
         smooth, white: the unexplained error's smooth part and its white noise, std per axis [m] (:data:`SMOOTH`).
+        socket_noise: where a ball sits in its socket, std per axis [m]: the smaller of the declared noise and the
+            data rows' residual (as the self-check records it).
+        joint_error: std of each joint's unmodelled angle error [rad] that leaves the residual beyond the declared
+            noise (:func:`identification.prediction.joint_error_root`, as the self-check; 0: none).
     """
 
     model: RobotModel
@@ -112,6 +128,8 @@ class Recorded:
     model_choice: str
     smooth: float = 0.0
     white: float = 0.0
+    socket_noise: float = 0.0
+    joint_error: float = 0.0
 
 
 @dataclass(frozen=True, eq=False)
@@ -131,6 +149,10 @@ class Judged:
         parameters: the parameter part, rms over the same configurations [m].
         squared: (N,) predicted mean squared error at each workspace configuration [m^2] (parameters and
             unexplained part; empty when refused).
+        noise: the sockets' own noise in ``error`` and ``gain``, rms over the axes [m] (judged on sockets: the spread
+            a validation there measures holds it; 0 otherwise).
+        own_gain: the gain of the calibration's own error, the sockets' noise left out [m] (what the stop line weighs;
+            ``gain`` when ``noise`` is 0).
     """
 
     placement: Placement
@@ -143,6 +165,8 @@ class Judged:
     pinned: tuple[tuple[str, float], ...] = ()
     parameters: float = 0.0
     squared: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    noise: float = 0.0
+    own_gain: float = 0.0
 
 
 @dataclass(frozen=True, eq=False)
@@ -174,8 +198,9 @@ class Guidance:
 
     @property
     def worth_it(self) -> bool:
-        """Whether the best candidate gains more than the threshold and the noise floor."""
-        return bool(self.ranking) and self.ranking[0].gain > max(self.min_gain, self.floor)
+        """Whether the best candidate gains more than the threshold and the noise floor (its calibration's own
+        error: the sockets' noise left out)."""
+        return bool(self.ranking) and self.ranking[0].own_gain > max(self.min_gain, self.floor)
 
     def stop_line(self) -> str:
         """One line: record the best candidate next, or stop (and why)."""
@@ -184,9 +209,9 @@ class Guidance:
             return "no candidate can be recorded: nothing to add"
         best = self.ranking[0]
         if self.worth_it:
-            return f"record {best.placement.name} next: it gains {best.gain * 1e3:.3g} mm, more than {limit}"
+            return f"record {best.placement.name} next: it gains {best.own_gain * 1e3:.3g} mm, more than {limit}"
         return (f"more recording is not worth it: the best candidate {best.placement.name} gains "
-                f"{best.gain * 1e3:.3g} mm, not more than {limit}")
+                f"{best.own_gain * 1e3:.3g} mm, not more than {limit}")
 
 
 def measured_noise(result) -> float:
@@ -226,6 +251,16 @@ def calibrate_recording(
     result, selection = done.result, done.selection
     sigma = measured_noise(result)
     residuals = tool_point(result.model, dataset.q) - np.array([result.centres[n] for n in dataset.labels])
+    # as the self-check: the data rows' residual beyond the declared noise is the arm's own unmodelled error
+    unknowns = result.problem.n_unknowns if result.effective_unknowns is None else result.effective_unknowns
+    shown = result.problem.data_sigma(result.x, unknowns)
+    dof = max(result.problem.n_data - unknowns, 0.0)
+    if UNMODELLED == "variogram":
+        share = noise_split(residuals, dataset.q, dataset.labels)
+        excess, socket = shown * math.sqrt(share * dof), shown * math.sqrt(1.0 - share)
+    else:
+        excess, socket = math.sqrt(max(shown**2 - noise**2, 0.0) * dof), min(shown, noise)
+    joint_error, _ = joint_error_root(result.problem.model, result.problem, noise, excess)
     return Recorded(
         model=result.model,
         dataset=dataset,
@@ -235,6 +270,8 @@ def calibrate_recording(
         centres=result.centres,
         model_choice=f"{selection.chosen} ({selection.reason})",
         **_scales(sigma, residuals, dataset),
+        socket_noise=max(socket, SIGMA_FLOOR),
+        joint_error=joint_error,
     )
 
 
@@ -294,6 +331,18 @@ def workspace_of(model: RobotModel, q: np.ndarray) -> Workspace:
     return Workspace(q=q, sensitivity=remove_rigid_motion(jac.reshape(3 * len(q), -1), points))
 
 
+def sockets_of(model: RobotModel, q: np.ndarray, labels: np.ndarray) -> Workspace:
+    """The sockets at configurations ``q`` (N, n) [rad] of sockets ``labels`` (N,): each socket's mean tool-point
+    shift removed (what its spread, MUKCa's MAE, does not see; a rigid motion of the whole shifts a socket's
+    points alike, so it goes too)."""
+    jac = param_jacobian(model, q)  # (N, 3, P)
+    names, index = np.unique(labels, return_inverse=True)
+    mean = np.zeros((len(names), *jac.shape[1:]))
+    np.add.at(mean, index, jac)
+    jac = jac - (mean / np.bincount(index, minlength=len(names))[:, None, None])[index]
+    return Workspace(q=q, sensitivity=jac.reshape(3 * len(q), -1))
+
+
 def unexplained_variance(
     observed: np.ndarray, at: np.ndarray, smooth: float, white: float, length: float = LENGTH
 ) -> np.ndarray:
@@ -308,38 +357,48 @@ def unexplained_variance(
 
 
 def judge(
-    recorded: Recorded, placement: Placement, q: dict[str, np.ndarray], workspace: Workspace, observed: np.ndarray
+    recorded: Recorded, placement: Placement, q: dict[str, np.ndarray], workspace: Workspace, observed: np.ndarray,
+    sockets: np.ndarray | None = None,
 ) -> Judged:
     """Predicted error of the recording plus ``placement``'s configurations ``q`` (socket -> (K, n) [rad]) over
     the whole ``workspace`` (:func:`judged_over` restricts it); ``observed`` (K, n): the recorded configurations
-    the unexplained part conditions on."""
+    the unexplained part conditions on. With ``sockets`` (N,), the socket of each workspace configuration
+    (:func:`sockets_of`): the spread there, at the socket noise, with the arm's unmodelled joint-angle error
+    (:func:`identification.prediction.held_out_joint_error`) instead of the Gaussian process over tool points."""
     data, spec = recorded.dataset, recorded.spec
-    sockets = tuple(placement.sockets)
-    added = [q[s] for s in sockets]
-    labels = np.concatenate([data.labels.astype(str), np.repeat(np.array(sockets, dtype=str), [len(a) for a in added])])
-    dataset = Dataset(labels=labels, q=np.concatenate([data.q, *added]), fixture_names=data.fixture_names + sockets,
+    names = tuple(placement.sockets)
+    added = [q[s] for s in names]
+    labels = np.concatenate([data.labels.astype(str), np.repeat(np.array(names, dtype=str), [len(a) for a in added])])
+    dataset = Dataset(labels=labels, q=np.concatenate([data.q, *added]), fixture_names=data.fixture_names + names,
                       source=data.source)
-    both = FixtureSpec(names=spec.names + sockets, positions=spec.positions,
+    both = FixtureSpec(names=spec.names + names, positions=spec.positions,
                        distances=list(spec.distances) + list(placement.distances), source=spec.source)
+    noise = recorded.noise if sockets is None else recorded.socket_noise
     try:
-        prediction = predict_accuracy(recorded.model, dataset, both, noise=recorded.noise, workspace=workspace)
+        problem = build_problem(recorded.model, dataset, both, noise=max(noise, SIGMA_FLOOR))
+        prediction = predict_accuracy(recorded.model, dataset, both, noise=noise, workspace=workspace, problem=problem)
     except SpherecalError as error:
         return Judged(placement, f"candidate {placement.name}: {str(error).splitlines()[0]}", q)
-    variance = 3.0 * unexplained_variance(np.concatenate([observed, *added]), workspace.q, recorded.smooth,
-                                          recorded.white)
+    if sockets is None:
+        variance = 3.0 * unexplained_variance(np.concatenate([observed, *added]), workspace.q, recorded.smooth,
+                                              recorded.white)
+    else:
+        variance = held_out_joint_error(recorded.model, problem, noise, recorded.joint_error, workspace.q, sockets)
     parameters = np.mean(prediction.errors**2, axis=1)
-    return Judged(placement, "", q, math.sqrt(np.mean(parameters + variance)), prediction,
-                  math.sqrt(np.mean(variance)), parameters=prediction.rms, squared=parameters + variance)
+    socket = 0.0 if sockets is None else math.sqrt(3.0) * noise
+    return Judged(placement, "", q, math.sqrt(np.mean(parameters + variance) + socket**2), prediction,
+                  math.sqrt(np.mean(variance)), parameters=prediction.rms, squared=parameters + variance, noise=socket)
 
 
 def judged_over(judged: Judged, before: Judged, mask: np.ndarray) -> Judged:
     """``judged`` over the workspace configurations ``mask`` (N,) bool only, its gain against ``before``
-    (the recording so far) over the same configurations."""
-    error = math.sqrt(np.mean(judged.squared[mask]))
+    (the recording so far) over the same configurations (with the sockets' noise, and without: ``own_gain``)."""
+    own, was = math.sqrt(np.mean(judged.squared[mask])), math.sqrt(np.mean(before.squared[mask]))
+    error = math.sqrt(own**2 + judged.noise**2)
     parameters = math.sqrt(np.mean(np.mean(judged.prediction.errors[mask] ** 2, axis=1)))
-    unexplained = math.sqrt(max(error**2 - parameters**2, 0.0))
+    unexplained = math.sqrt(max(own**2 - parameters**2, 0.0))
     return replace(judged, error=error, parameters=parameters, unexplained=unexplained,
-                   gain=math.sqrt(np.mean(before.squared[mask])) - error)
+                   gain=math.sqrt(was**2 + judged.noise**2) - error, own_gain=was - own)
 
 
 def rank_placements(
@@ -390,7 +449,10 @@ def rank_placements(
     # Walked on the calibration's geometric part: an elastic model's gravity torques (and their finite
     # differences in every joint Jacobian) made this stage 10-15x slower for a sub-millimetre shift of where
     # the walk lands, which the prediction (parameter Jacobians at these configurations) does not need.
-    q, reachable = hand_guided(geometric_part(recorded.model), centres, per_socket, rng)
+    if POSTURES == "recorded":
+        q, reachable = carried_over(geometric_part(recorded.model), centres, recorded.dataset.q, per_socket, rng)
+    else:
+        q, reachable = hand_guided(geometric_part(recorded.model), centres, per_socket, rng)
     seconds = {"configurations": time.perf_counter() - clock}
     clock = time.perf_counter()
     configurations, refused, k = {}, inside, 0
@@ -409,21 +471,27 @@ def rank_placements(
         raise CandidateError(f"no candidate can be recorded: {refused[0].reason}")
     everything = np.concatenate([a for c in configurations.values() for a in c.values()])
     owners = np.concatenate([np.full(sum(map(len, c.values())), i) for i, c in enumerate(configurations.values())])
+    labels = np.concatenate([np.repeat(np.array(list(c), dtype=str), [len(a) for a in c.values()])
+                             for c in configurations.values()])
     chosen = _subset_rows(len(everything), rng)
-    workspace, owners = workspace_of(recorded.model, everything[chosen]), owners[chosen]
+    owners, labels = owners[chosen], labels[chosen]
+    if JUDGED_ON == "sockets":
+        workspace = sockets_of(recorded.model, everything[chosen], labels)
+    else:
+        workspace, labels = workspace_of(recorded.model, everything[chosen]), None
     observed = _subset(recorded.dataset.q, rng)
     none = Placement("recorded so far", {})
-    baseline = judge(recorded, none, {}, workspace, observed)
+    baseline = judge(recorded, none, {}, workspace, observed, labels)
     if baseline.reason:
         raise CandidateError(f"the recording so far cannot be predicted: {baseline.reason}")
     judged = []
     for p in placements:
         if p.name in configurations:
-            j = judge(recorded, p, configurations[p.name], workspace, observed)
+            j = judge(recorded, p, configurations[p.name], workspace, observed, labels)
             if j.prediction is not None:
                 # held out: the workspace without the candidate's own configurations (all of it for a lone candidate)
                 mine = owners == list(configurations).index(p.name)
-                keep = ~mine if JUDGED_ON == "held-out" and not mine.all() else np.ones_like(mine)
+                keep = ~mine if JUDGED_ON != "whole" and not mine.all() else np.ones_like(mine)
                 j = replace(judged_over(j, baseline, keep),
                             pinned=pinned_down(baseline.prediction, j.prediction))
             (judged if not j.reason else refused).append(j)
