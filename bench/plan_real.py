@@ -4,22 +4,26 @@ For each robot of MUKCa's data (``panda_2_clean``: 8 placements, ``panda_4_clean
 each *first* placement: the plan (:func:`validation.planning.guidance.rank_placements`) ranks the other
 placements as candidates, knowing only what a user knows: the recording of the first placement, and where
 each candidate's sockets are (the first calibration's tool point at the mean of the configurations recorded
-there: where the user would put the plate). Its configurations are walked kinematically; the recorded
-configurations of the candidates are never used by the prediction. Then what adding each candidate
+there: where the user would put the plate). Its configurations at a candidate are made kinematically (the first
+placement's postures carried over, or random walks: ``--postures``); the recorded configurations of the candidates
+are never used by the prediction. Then what adding each candidate
 actually does: calibrate on first + candidate (``--actual workflow``, default: as `spherecal calibrate` does it,
 the one workflow's model choice and prior, forced, as the plan calibrates the first placement; ``plain``: the
 library's :func:`calibrate` defaults, plain least squares on the nominal layout, as before), test
 MAE (MUKCa's metric: mean distance of the predicted ball centres from their mean, per socket) on the
 remaining placements, and its change against the first placement's calibration on the same sockets.
 
-The plan's configurations are random walks, so its pick depends on the seed: the whole is repeated for
-``--seeds`` seeds (the actual outcomes do not depend on it) and the summary is over every (seed, first) pair.
+The plan's configurations are random (walks; the carried-over postures' order and any walk that fills them), so
+its pick may depend on the seed: the whole is repeated for ``--seeds`` seeds (the actual outcomes do not depend
+on it) and the summary is over every (seed, first) pair.
 Printed per robot: Spearman rank correlation of the plan's order (best first) against the actual test MAE and
 against the actual change, how often the plan's pick is in the better half of the candidates (its change
 below the median; with 2 or 3 candidates: the best one), and the mean change of the plan's picks against a
-random pick (the candidates' mean) and the best pick. Writes ``bench/plan_real_<smooth>_<judged on>_<actual>.json``.
+random pick (the candidates' mean) and the best pick. ``--judged-on``, ``--unmodelled``, ``--postures`` and
+``--smooth`` set the plan's rules (:mod:`validation.planning.guidance`). Writes
+``bench/plan_real_<judged on>_<unmodelled>_<postures>_<smooth>_<actual>.json``.
 
-    .venv/bin/python bench/plan_real.py [--data ../shared/data/mukca]
+    .venv/bin/python bench/plan_real.py [--data ../shared/data/mukca] [--judged-on whole --postures walk]
 """
 
 from __future__ import annotations

@@ -3,49 +3,52 @@
 Start from what has been recorded: calibrate it (:func:`calibrate_recording`: the model choice of
 the one calibration workflow, :func:`identification.workflow.run_workflow`, as `calibrate` runs it)
 and measure its noise ``sigma``, the residual per axis. Every candidate placement is judged at that
-calibration, not at the nominal arm: the configurations a person would record there are walked
-kinematically on the calibrated model (:func:`.hand_guiding.hand_guided`) and added to the recorded
-ones with the placement's known distances. The predicted error has two parts, evaluated over the
-*workspace*, the configurations of every reachable candidate (where the user considers putting the
-plate: where the arm is used), registered by a best rigid fit as the validation does:
+calibration, not at the nominal arm: the configurations a person would record there are added to the
+recorded ones with the placement's known distances. Those configurations (:data:`POSTURES`): ``"recorded"``
+(default), the postures the person has recorded so far carried over to the candidate's sockets
+(:func:`.hand_guiding.carried_over`: each recorded configuration moved onto the socket); ``"walk"``, random
+walks through the self-motion from the most comfortable postures (:func:`.hand_guiding.hand_guided`).
 
-* the parameters' error (:func:`identification.prediction.predict_accuracy` at ``sigma``, the same
-  Monte Carlo draws for every candidate so that their differences are not draw noise);
-* what the model does not explain: the residual of a real calibration is partly a smooth error of
-  the joint configuration, not white noise. It is modelled as a Gaussian process over joint space
-  (squared-exponential kernel of length :data:`LENGTH` [rad]) seen through white noise; its
-  posterior variance at the workspace given the recorded and candidate configurations is what
-  recording there leaves unknown. Their scales (:data:`SMOOTH`): ``"variogram"`` splits the measured
-  ``sigma^2`` by the recording's own residuals (their variogram within each socket,
-  :func:`noise_split`: residuals of nearby configurations agree when the error is smooth; zero for
-  white residuals); ``"residual"`` takes ``sigma`` for both (one placement cannot show how much of
-  the error varies between placements, which a within-socket variogram does not see).
+Where and how a candidate is judged (:data:`JUDGED_ON`):
 
-``error = sqrt(mean of (parameter error^2 + 3 posterior variance))`` [m] over the configurations a candidate is
-judged on (:data:`JUDGED_ON`), and its gain is the recording's predicted error over the same configurations minus
-its own; candidates are ranked by the gain. ``"whole"`` (default): the whole workspace, the candidate's own
-configurations included (where the arm is used, recorded or not). ``"held-out"``: the *other* candidates'
-configurations only (all of them for a lone candidate): where a candidate is recorded the calibration's error
-is its fit residual, and MUKCa's test MAE measures the placements not used for fitting. (Ranked by the held-out
-*error* instead of the gain, the picks were worst-first, 3/24 on panda_2_clean: each one's set differs.)
+* ``"sockets"`` (default): what MUKCa's test MAE and a socket-only `validate` measure, the spread of the
+  calibrated tool point at sockets not used for fitting, here the *other* candidates' sockets (the placements the
+  user considers: a sample of where the arm is used; all of them for a lone candidate). Per configuration, the
+  parameters' error less its mean over the socket (:func:`identification.prediction.predict_accuracy` on
+  :func:`sockets_of`, at the sockets' own noise), the arm's unmodelled joint-angle error as the fit leaves it there
+  (:func:`identification.prediction.held_out_joint_error`: one realisation over the training and held-out
+  configurations, so that what the fit absorbed where it was recorded cancels part of it nearby), and the sockets'
+  own noise. As the self-check does (:data:`UNMODELLED` ``"declared"``), the data rows' residual beyond the
+  declared noise is that joint-angle error and the socket noise is the smaller of the two; ``"variogram"`` splits
+  the residual by :func:`noise_split` instead.
+* ``"whole"``: the registered tool-point error over the whole workspace, the configurations of every candidate
+  (its own included), parameters as above at ``sigma`` plus an unexplained part, a Gaussian process over joint
+  space (squared-exponential kernel of length :data:`LENGTH` [rad]) whose scales :data:`SMOOTH` sets
+  (``"variogram"``: ``sigma^2`` split by :func:`noise_split`; ``"residual"``: ``sigma`` for both), its posterior
+  variance given the recorded and candidate configurations.
+* ``"held-out"``: as ``"whole"`` over the other candidates' configurations only.
+
+``error = sqrt(mean of (parameter error^2 + unexplained^2) + socket noise^2)`` [m] over the configurations a
+candidate is judged on (socket noise on sockets only), its gain the recording's error over the same configurations
+minus its own; candidates are ranked by the gain (the same set on both sides: choosing a candidate takes it out of
+the held-out set, and the recording's error differs between sets).
 
 On MUKCa's real placements (bench/plan_real.py: first placement recorded, the other recorded placements as
-candidates, 5 plan seeds; actual = `spherecal calibrate`'s workflow on first + candidate, test MAE on the rest,
-change against the first's calibration on the same sockets), the pick in the better half of the candidates,
-whole / held-out: panda_2_clean 23/40 / 26/40 (mean change of the picks -0.107 / -0.111 mm, random -0.097;
-Spearman of the plan's order against the change 0.04 / 0.14), panda_4_clean 8/15 / 6/15 (-0.045 / -0.040,
-random -0.043: two candidates whose changes differ by less than the noise floor), dinova_1 8/20 / 6/20
-(-0.896 / -0.383, random -0.489): 39/75 / 38/75. Held-out ranks panda_2_clean's seven candidates better but
-picks worse than random on dinova_1, where the parameter part (white noise at the Gen3 lite's 0.7-2.5 mm
-residual) decides the ranking and its held-out gain does not follow the measured one; the whole rule is the
-only one that beats a random pick on every arm, hence the default. The measured changes follow a candidate's
-proximity to the *other* placements (Spearman of its mean distance to them against the change 0.50 on
-panda_2_clean, 0.75 on dinova_1) and not its distance from the recording (-0.09, -0.38); the unexplained part
-alone, held out, picks well on both arms (seeds 0-2: panda_2_clean 17/24, dinova_1 9/12) but is zero for a
-white residual, where the parameter part is the whole truth (the simulated arm), so it cannot rank alone. No
-constant was fitted to these data: :data:`LENGTH` and :data:`SMOOTH` are unchanged.
+candidates at the first calibration's tool point, 5 plan seeds; actual = `spherecal calibrate`'s workflow on
+first + candidate, test MAE on the rest, change against the first's calibration on the same sockets), the pick in
+the better half of the candidates (with 2 or 3 candidates: the best one), the defaults against ``whole`` with
+walks (the defaults before): panda_2_clean 40/40 against 23/40 (mean change of the picks -0.126 mm against
+-0.107, random -0.097, best -0.128; Spearman of the plan's order against the change 0.35 against 0.04),
+panda_4_clean 5/15 against 8/15 (-0.033 against -0.045, random -0.043: one first's two candidates differ by
+0.001 mm, another's order follows which socket is left to test, whose own noise the plan cannot know), dinova_1
+15/20 against 8/20 (-1.279 against -0.896, random -0.489). One part at a time (better half, panda_2 / panda_4 /
+dinova_1): sockets with walks 22/7/6, held-out with the recorded postures 33/5/9, whole with them 19/10/0,
+sockets with the variogram split 35/5/12: the recorded postures and judging where the test measures decide it
+together; the Gen3 lite's 0.7-2.5 mm residual (0.3 mm declared) is mostly the joint-angle error (2-7 mrad), which
+ranks its candidates by how close they lie to the others in joint space. No constant was fitted to these data.
 
-More recording is not worth it when the best gain is below the larger of ``min_gain`` and the
+More recording is not worth it when the best candidate's gain of the calibration's own error (the sockets' noise
+left out, ``Judged.own_gain``) is below the larger of ``min_gain`` and the
 *noise floor* ``sigma / sqrt(N)`` (the standard error per axis of one socket's mean point at the
 measured noise and ``N`` samples per socket): a smaller gain could not be seen by validating on a
 new socket.
@@ -97,7 +100,10 @@ SMOOTH = "variogram"
 #: its own configurations included) or ``"held-out"`` (the same over the other candidates' configurations); see the
 #: module docstring.
 JUDGED_ON = "sockets"
+#: The arm's unmodelled joint-angle error (judged on sockets): ``"declared"`` (the data rows' residual beyond the
+#: declared noise, as the self-check) or ``"variogram"`` (the residual's smooth share, :func:`noise_split`).
 UNMODELLED = "declared"
+#: Configurations at a candidate: ``"recorded"`` (the recorded postures carried over) or ``"walk"`` (random walks).
 POSTURES = "recorded"
 
 
