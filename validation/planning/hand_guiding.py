@@ -88,9 +88,10 @@ def carried_over(
     count: int,
     rng: np.random.Generator,
 ) -> tuple[np.ndarray, np.ndarray]:
-    """The postures the person has recorded so far, carried over to each new socket: every recorded configuration
-    moved onto the socket by damped Newton steps (the nearest configuration there, inside the joint limits); a
-    socket where fewer than ``count`` of them converge is filled up from :func:`hand_guided`'s walk.
+    """The postures the person has recorded so far, carried over to each new socket: recorded configurations (a
+    random subset of at most ``2 count``: a long recording costs no more than twice the walk) moved onto the socket
+    by damped Newton steps (the nearest configuration there, inside the joint limits); a socket where fewer than
+    ``count`` of them converge is filled up from :func:`hand_guided`'s walk.
 
     Args:
         model: the robot (its current model).
@@ -104,10 +105,10 @@ def carried_over(
         (as :func:`hand_guided`; the rows of an unreachable socket are zeros).
     """
     centres = np.atleast_2d(np.asarray(centres, float))
-    s, k = centres.shape[0], len(recorded)
     walked, reachable = hand_guided(model, centres, count, rng)
-    order = rng.permutation(k)
-    q, ok = project_to_point(model, np.tile(recorded[order], (s, 1)), np.repeat(centres, k, axis=0))
+    chosen = recorded[rng.permutation(len(recorded))[: 2 * count]]
+    s, k = centres.shape[0], len(chosen)
+    q, ok = project_to_point(model, np.tile(chosen, (s, 1)), np.repeat(centres, k, axis=0))
     q, ok = q.reshape(s, k, -1), ok.reshape(s, k)
     out = walked.copy()
     for i in np.flatnonzero(reachable):
