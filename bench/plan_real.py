@@ -4,22 +4,26 @@ For each robot of MUKCa's data (``panda_2_clean``: 8 placements, ``panda_4_clean
 each *first* placement: the plan (:func:`validation.planning.guidance.rank_placements`) ranks the other
 placements as candidates, knowing only what a user knows: the recording of the first placement, and where
 each candidate's sockets are (the first calibration's tool point at the mean of the configurations recorded
-there: where the user would put the plate). Its configurations are walked kinematically; the recorded
-configurations of the candidates are never used by the prediction. Then what adding each candidate
+there: where the user would put the plate). Its configurations at a candidate are made kinematically (the first
+placement's postures carried over, or random walks: ``--postures``); the recorded configurations of the candidates
+are never used by the prediction. Then what adding each candidate
 actually does: calibrate on first + candidate (``--actual workflow``, default: as `spherecal calibrate` does it,
 the one workflow's model choice and prior, forced, as the plan calibrates the first placement; ``plain``: the
 library's :func:`calibrate` defaults, plain least squares on the nominal layout, as before), test
 MAE (MUKCa's metric: mean distance of the predicted ball centres from their mean, per socket) on the
 remaining placements, and its change against the first placement's calibration on the same sockets.
 
-The plan's configurations are random walks, so its pick depends on the seed: the whole is repeated for
-``--seeds`` seeds (the actual outcomes do not depend on it) and the summary is over every (seed, first) pair.
+The plan's configurations are random (walks; the carried-over postures' order and any walk that fills them), so
+its pick may depend on the seed: the whole is repeated for ``--seeds`` seeds (the actual outcomes do not depend
+on it) and the summary is over every (seed, first) pair.
 Printed per robot: Spearman rank correlation of the plan's order (best first) against the actual test MAE and
 against the actual change, how often the plan's pick is in the better half of the candidates (its change
 below the median; with 2 or 3 candidates: the best one), and the mean change of the plan's picks against a
-random pick (the candidates' mean) and the best pick. Writes ``bench/plan_real_<smooth>_<judged on>_<actual>.json``.
+random pick (the candidates' mean) and the best pick. ``--judged-on``, ``--unmodelled``, ``--postures`` and
+``--smooth`` set the plan's rules (:mod:`validation.planning.guidance`). Writes
+``bench/plan_real_<judged on>_<unmodelled>_<postures>_<smooth>_<actual>.json``.
 
-    .venv/bin/python bench/plan_real.py [--data ../shared/data/mukca]
+    .venv/bin/python bench/plan_real.py [--data ../shared/data/mukca] [--judged-on whole --postures walk]
 """
 
 from __future__ import annotations
@@ -122,14 +126,22 @@ def main() -> None:
     parser.add_argument("--data", default=None, help="MUKCa data folder (default: shared/data/mukca found upward)")
     parser.add_argument("--smooth", choices=("variogram", "residual"), default=guidance_module.SMOOTH,
                         help="scales of the unexplained error (validation.planning.guidance.SMOOTH)")
-    parser.add_argument("--judged-on", choices=("held-out", "whole"), default=guidance_module.JUDGED_ON,
+    parser.add_argument("--judged-on", choices=("sockets", "held-out", "whole"), default=guidance_module.JUDGED_ON,
                         help="where a candidate is judged (validation.planning.guidance.JUDGED_ON)")
+    parser.add_argument("--unmodelled", choices=("declared", "variogram"), default=guidance_module.UNMODELLED,
+                        help="how the recording's residual splits into socket noise and the arm's unmodelled error "
+                             "(validation.planning.guidance.UNMODELLED; judged on sockets only)")
+    parser.add_argument("--postures", choices=("recorded", "walk"), default=guidance_module.POSTURES,
+                        help="configurations at a candidate: the recorded postures carried over, or random walks "
+                             "(validation.planning.guidance.POSTURES)")
     parser.add_argument("--actual", choices=("workflow", "plain"), default="workflow",
                         help="how first + candidate is calibrated for the actual outcome (see the module docstring)")
     parser.add_argument("--seeds", type=int, default=SEEDS, help=f"plan seeds 0..N-1 (default {SEEDS})")
     args = parser.parse_args()
     guidance_module.SMOOTH = args.smooth
     guidance_module.JUDGED_ON = args.judged_on
+    guidance_module.UNMODELLED = args.unmodelled
+    guidance_module.POSTURES = args.postures
     root = Path(args.data) if args.data else bench_common.find_mukca()
     print(subprocess.run(["uptime"], capture_output=True, text=True).stdout.strip())
     results = {}
@@ -157,9 +169,10 @@ def main() -> None:
               f"[mm] pick {summary['mean_pick_change_mm']:.3f}, random {summary['mean_random_change_mm']:.3f}, "
               f"best {summary['mean_best_change_mm']:.3f}")
         results[robot] = {"rows": rows, "summary": summary}
-    out = HERE / f"plan_real_{args.smooth}_{args.judged_on}_{args.actual}.json"
+    out = HERE / f"plan_real_{args.judged_on}_{args.unmodelled}_{args.postures}_{args.smooth}_{args.actual}.json"
     bench_common.write_json(out, {"plan_real": results, "blas_threads": os.environ.get("OPENBLAS_NUM_THREADS")},
                             inputs={"seeds": args.seeds, "smooth": args.smooth, "judged_on": args.judged_on,
+                                    "unmodelled": args.unmodelled, "postures": args.postures,
                                     "actual": args.actual, "data": root})
     print(f"wrote {out}")
 

@@ -35,7 +35,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from spherecal.correction import RobotModel, param_jacobian
+from spherecal.correction import RobotModel, joint_jacobian, param_jacobian
 from spherecal.correction.files.fixtures import FixtureSpec
 from spherecal.correction.files.samples import Dataset
 from spherecal.correction.layout import ParameterLayout
@@ -43,7 +43,7 @@ from spherecal.correction.layout import ParameterLayout
 from .build import build_problem
 from .gauge import anchor_spread
 from .identifiability import Identifiability, normal_inverse
-from .joint_error import LENGTH, draw, tool_fields
+from .joint_error import LENGTH, draw, field_root, tool_fields
 from .problem import NOISE, SIGMA_FLOOR, CalibrationProblem, prior_std
 from .pruning import prune
 
@@ -306,6 +306,56 @@ def joint_error_root(
     bias = np.zeros((model.n_params, sum(s.shape[1] for s in shifts)))
     bias[pruned.free] = std * np.hstack(shifts)
     return float(std), bias
+
+
+def held_out_joint_error(
+    model: RobotModel, problem: CalibrationProblem, noise: float, std: float, q: np.ndarray, labels: np.ndarray,
+    length: float = LENGTH, rng: np.random.Generator | None = None,
+) -> np.ndarray:
+    """Expected squared spread [m^2] at sockets the calibration of ``problem`` did not see, of the arm's unmodelled
+    joint-angle error (:mod:`.joint_error`, std ``std`` [rad]): one realisation of it over the training and the
+    held-out configurations together.
+
+    The fit absorbs the error at its training configurations (``dx = -(J^T J)^-1 J^T f``, as
+    :func:`joint_error_root`); at a held-out configuration the calibrated model is off by ``f + G dx``, less its
+    mean over the socket (MUKCa's spread). Where the held-out configurations lie close to the training ones in
+    joint space the two errors are correlated and the absorbed bias cancels part of the held-out one; far away it
+    adds to a fresh draw (what :func:`socket_spreads` assumes for an unseen socket).
+
+    Args:
+        model: the robot (joint and parameter Jacobians).
+        problem: ``build_problem(model, dataset, spec)`` of the training data.
+        noise: the noise of the linearisation (as :func:`deviation_root`) [m].
+        std: std of each joint's angle error [rad] (0: zeros).
+        q: (M, n) held-out configurations [rad].
+        labels: (M,) socket of each (the spread is about each socket's mean).
+        length: correlation length over joint space [rad].
+        rng: seeds the random features of a large configuration set (:func:`.joint_error.field_root`).
+
+    Returns:
+        (M,) expected ``|e - mean over the socket|^2`` at each held-out configuration [m^2] (summed over the axes).
+    """
+    out = np.zeros(len(q))
+    if std <= 0 or not len(q):
+        return out
+    _, _, pruned, _, _, jac, inverse = _linearised(problem, noise)
+    count, fp = pruned.dataset.n_samples, pruned.n_free_params
+    absorb = -(inverse @ jac[: 3 * count].T)[:fp]  # (fp, 3K): training error -> identified parameters' shift
+    both = np.concatenate([pruned.dataset.q, q])
+    root = field_root(both, length, rng)
+    joints = joint_jacobian(model, both)  # (K + M, 3, n)
+    gains = param_jacobian(model, q)[:, :, pruned.free]  # (M, 3, fp)
+    names, index = np.unique(labels, return_inverse=True)
+    size = np.bincount(index, minlength=len(names))
+    for j in range(joints.shape[2]):
+        field = joints[:, :, j, None] * root[:, None, :]  # (K + M, 3, r)
+        shift = absorb @ field[:count].reshape(3 * count, -1)  # (fp, r)
+        error = field[count:] + np.einsum("mip,pr->mir", gains, shift)
+        mean = np.zeros((len(names), *error.shape[1:]))
+        np.add.at(mean, index, error)
+        error -= (mean / size[:, None, None])[index]
+        out += std**2 * np.einsum("mir,mir->m", error, error)
+    return out
 
 
 def error_field(

@@ -21,14 +21,18 @@ def _pinned(judged) -> str:
 def format_guidance(guidance) -> str:
     """The ranked table (mm), the refused candidates (one line each) and the stop line."""
     r, now = guidance.recorded, guidance.baseline
-    where = "the other candidates' workspace (held out)" if guidance_module.JUDGED_ON == "held-out" else "the same"
+    where = {"held-out": "the other candidates' workspace (held out)",
+             "sockets": "the other candidates' sockets (held out)"}.get(guidance_module.JUDGED_ON, "the same")
+    what = ("predicted rms spread at the candidates' sockets (MUKCa's test MAE, with the sockets' noise "
+            f"{now.noise * 1e3:.3g} mm)" if guidance_module.JUDGED_ON == "sockets"
+            else "predicted rms tool-point error over the candidates' workspace")
     counts = sum(r.dataset.counts().values())
     lines = [
         f"recording so far: {len(r.dataset.fixture_names)} sockets, {counts} samples; calibration model "
         f"{r.model_choice}; measured noise {r.noise * 1e3:.3g} mm per axis",
         f"candidates: {len(guidance.ranking) + len(guidance.refused)}, {len(guidance.ranking)} recordable, "
         f"{guidance.per_socket} hand-guided configurations per socket",
-        f"predicted rms tool-point error over the candidates' workspace [mm] now: {now.error * 1e3:.4f} "
+        f"{what} [mm] now: {now.error * 1e3:.4f} "
         f"(parameters {now.parameters * 1e3:.4f}, unexplained {now.unexplained * 1e3:.4f}); each candidate's error "
         f"and gain over {where}",
         f"{'rank':>4} {'candidate':<16} {'x':>7} {'y':>7} {'z':>7} | {'error':>7} {'gain':>7} | pins down "
@@ -53,6 +57,7 @@ def guidance_json(guidance, provenance: dict | None = None) -> dict:
             "name": j.placement.name,
             "predicted_error_m": j.error,
             "gain_m": j.gain,
+            "own_gain_m": j.own_gain,
             "parameters_rms_m": j.parameters,
             "unexplained_rms_m": j.unexplained,
             "sockets": {k: [float(v) for v in p] for k, p in j.placement.sockets.items()},
@@ -66,6 +71,10 @@ def guidance_json(guidance, provenance: dict | None = None) -> dict:
         "recorded": {
             "predicted_error_m": guidance.baseline.error,
             "noise_m": r.noise,
+            "socket_noise_m": r.socket_noise,
+            "joint_error_rad": r.joint_error,
+            "judged_on": guidance_module.JUDGED_ON,
+            "postures": guidance_module.POSTURES,
             "per_socket": r.per_socket,
             "model": r.model_choice,
             "samples_per_fixture": {k: int(v) for k, v in r.dataset.counts().items()},

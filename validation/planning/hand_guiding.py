@@ -79,3 +79,39 @@ def hand_guided(
     samples = out.reshape(steps, s, walkers, n).transpose(1, 0, 2, 3).reshape(s, steps * walkers, n)[:, :count]
     samples[~reachable] = 0.0
     return samples, reachable
+
+
+def carried_over(
+    model: RobotModel,
+    centres: np.ndarray,
+    recorded: np.ndarray,
+    count: int,
+    rng: np.random.Generator,
+) -> tuple[np.ndarray, np.ndarray]:
+    """The postures the person has recorded so far, carried over to each new socket: recorded configurations (a
+    random subset of at most ``2 count``: a long recording costs no more than twice the walk) moved onto the socket
+    by damped Newton steps (the nearest configuration there, inside the joint limits); a socket where fewer than
+    ``count`` of them converge is filled up from :func:`hand_guided`'s walk.
+
+    Args:
+        model: the robot (its current model).
+        centres: (S, 3) socket centres in the base frame [m].
+        recorded: (K, n) the recorded configurations [rad].
+        count: samples per socket.
+        rng: seeded generator (which recorded configurations, in which order; the walk).
+
+    Returns:
+        (S, count, n) configurations [rad] inside the joint limits, and (S,) bool: the socket is reachable
+        (as :func:`hand_guided`; the rows of an unreachable socket are zeros).
+    """
+    centres = np.atleast_2d(np.asarray(centres, float))
+    walked, reachable = hand_guided(model, centres, count, rng)
+    chosen = recorded[rng.permutation(len(recorded))[: 2 * count]]
+    s, k = centres.shape[0], len(chosen)
+    q, ok = project_to_point(model, np.tile(chosen, (s, 1)), np.repeat(centres, k, axis=0))
+    q, ok = q.reshape(s, k, -1), ok.reshape(s, k)
+    out = walked.copy()
+    for i in np.flatnonzero(reachable):
+        mine = q[i][ok[i]][:count]
+        out[i, : len(mine)] = mine
+    return out, reachable
