@@ -63,6 +63,38 @@ def tool_fields(model: RobotModel, q: np.ndarray, length: float = LENGTH, rng: n
         yield jac[:, :, j, None] * root[:, None, :]
 
 
+def seen_fields(model: RobotModel, q: np.ndarray, data_jac: np.ndarray, length: float = LENGTH,
+                rng: np.random.Generator | None = None):
+    """Per joint, what a fit sees of the unit joint-angle error process at its samples, without forming the field.
+
+    With ``F_j`` the (3 K, r) field of :func:`tool_fields` (same root, same ``rng`` draws) and ``J`` the samples'
+    rows of the fit's Jacobian: ``J^T F_j = (sum_i J_ki dp_i/dq_j) L`` and ``|F_j|^2 = sum_k |dp_k/dq_j|^2
+    |L_k|^2``, a (K, U) by (K, r) product instead of a (3 K, U) by (3 K, r) one on a (3 K, r) array.
+
+    Args:
+        model: the robot (the joint Jacobian).
+        q: (K, n) the samples' joint angles [rad].
+        data_jac: (3 K, U) the samples' rows of the fit's Jacobian, stacked ``x0 y0 z0 x1 ...``.
+        length, rng: as :func:`tool_fields`.
+
+    Yields:
+        ``(J^T F_j, |F_j|^2, F_j rows)``: (U, r), a float, and a function of (S,) sample indices giving their
+        (3 S, r) rows of ``F_j``, one joint at a time.
+    """
+    root = field_root(q, length, rng)
+    jac = joint_jacobian(model, q)  # (K, 3, n)
+    per_sample = data_jac.reshape(len(q), 3, -1)
+    weight = np.einsum("kr,kr->k", root, root)
+    for j in range(jac.shape[2]):
+        gain = jac[:, :, j]  # (K, 3)
+        seen = np.einsum("kiu,ki->ku", per_sample, gain).T @ root
+
+        def rows(keep: np.ndarray, gain: np.ndarray = gain) -> np.ndarray:
+            return (gain[keep, :, None] * root[keep, None, :]).reshape(3 * len(keep), -1)
+
+        yield seen, float(np.einsum("ki,ki,k->", gain, gain, weight)), rows
+
+
 def draw(model: RobotModel, q: np.ndarray, std: float, draws: int, rng: np.random.Generator,
          length: float = LENGTH) -> np.ndarray:
     """(K, 3, draws) tool-point errors [m] of fresh draws of the joint-angle error (std ``std`` [rad]) at ``q``."""
@@ -109,9 +141,8 @@ def split(
     sub = data_jac[rows] @ inverse  # (3 S, U)
     white = np.eye(len(rows)) - 2.0 * sub @ data_jac[rows].T + sub @ (data_jac.T @ data_jac) @ sub.T  # M_S M_S^T
     smooth = np.zeros_like(white)
-    for field in tool_fields(model, q, length, rng):
-        field = field.reshape(3 * count, -1)
-        absorbed = field[rows] - sub @ (data_jac.T @ field)  # M_S F
+    for seen, _, field_rows in seen_fields(model, q, data_jac, length, rng):
+        absorbed = field_rows(keep) - sub @ seen  # M_S F
         smooth += absorbed @ absorbed.T
     values, vectors = np.linalg.eigh(0.5 * (white + white.T))
     # the space the fit leaves the residual (M's eigenvalues are 1 there, 0 along what it fits): without the directions

@@ -43,7 +43,7 @@ from spherecal.correction.layout import ParameterLayout
 from .build import build_problem
 from .gauge import anchor_spread
 from .identifiability import Identifiability, normal_inverse
-from .joint_error import LENGTH, draw, field_root, tool_fields
+from .joint_error import LENGTH, draw, field_root, seen_fields
 from .problem import NOISE, SIGMA_FLOOR, CalibrationProblem, prior_std
 from .pruning import prune
 
@@ -294,11 +294,12 @@ def joint_error_root(
     _, _, pruned, _, _, jac, inverse = _linearised(problem, noise, free=free)
     count, fp = pruned.dataset.n_samples, pruned.n_free_params
     data = jac[: 3 * count]
+    normal = data.T @ data
     shifts, kept = [], 0.0
-    for field in tool_fields(model, pruned.dataset.q, length):
-        field = field.reshape(3 * count, -1)
-        shift = -inverse @ (data.T @ field)  # (U, r): every unknown
-        kept += float(((field + data @ shift) ** 2).sum())
+    for seen, energy, _ in seen_fields(model, pruned.dataset.q, data, length):
+        shift = -inverse @ seen  # (U, r): every unknown
+        # |F + J dx|^2 = |F|^2 + 2 <J^T F, dx> + <dx, J^T J dx>
+        kept += energy + 2.0 * float(np.sum(seen * shift)) + float(np.sum(shift * (normal @ shift)))
         shifts.append(shift[:fp])
     if kept <= 0:
         return 0.0, np.zeros((model.n_params, 0))
