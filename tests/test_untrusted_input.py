@@ -265,3 +265,30 @@ def test_joint_csv_fast_and_careful_readers_agree(tmp_path, panda) -> None:
     for name in ("q", "t", "labels"):
         np.testing.assert_array_equal(getattr(a, name), getattr(b, name))
     assert a.rows[12] == f"{plain}: row 14" and b.rows[12] == f"{careful}: row 15"
+
+
+# ------------------------------------------------------------------------------ endless inputs
+@pytest.mark.parametrize(("option", "device", "message"), [
+    ("--samples", "/dev/zero", "/dev/zero: row 1, field '': a line longer than"),
+    ("--fixtures", "/dev/zero", "/dev/zero: cannot read: larger than"),
+    ("--calibrated", "/dev/zero", "/dev/zero: cannot read: larger than"),
+    ("--nominal", "/dev/urandom", "/dev/urandom: cannot read: larger than"),
+    ("--mocap", "/dev/zero", "/dev/zero: row 1, field '': a line longer than"),
+])
+def test_an_endless_input_is_refused_not_read_forever(tmp_path, panda, option, device, message) -> None:
+    # `--fixtures /dev/zero` grew until the kernel killed the process (a minute, no message); `--samples
+    # /dev/zero` and a robot file from /dev/urandom hung: every reader read the whole input first
+    import subprocess
+    import sys
+
+    save_robot(panda, tmp_path / "robot.yaml")
+    path = write_samples(tmp_path / "samples.csv", Dataset(labels=np.array(["P1"] * 3),
+                                                           q=panda.random_configurations(3, np.random.default_rng(0))))
+    inputs = {"--nominal": tmp_path / "robot.yaml", "--calibrated": tmp_path / "robot.yaml", "--samples": path}
+    if option != "--mocap":
+        inputs[option] = device
+    argv = [a for pair in inputs.items() for a in pair] + (["--mocap", device] if option == "--mocap" else [])
+    run = subprocess.run([sys.executable, "-c", "import sys; from spherecal.cli import main; sys.exit(main())",
+                          "validate", *map(str, argv)], capture_output=True, text=True, timeout=60)
+    assert run.returncode == 1 and len(run.stderr.strip().splitlines()) == 1, run.stderr[-500:]
+    assert message in run.stderr, run.stderr

@@ -27,7 +27,8 @@ import yaml
 from spherecal.correction.files.atomic import atomic_write_text
 from spherecal.correction.files.robot_file import MAX_LENGTH
 from spherecal.correction.files.samples import Dataset, DatasetError
-from spherecal.correction.files.yaml_safe import dump_yaml, load_yaml
+from spherecal.correction.files.text_input import read_text
+from spherecal.correction.files.yaml_safe import MAX_FILE_BYTES, dump_yaml, load_yaml
 
 
 # ------------------------------------------------------------------------------ fixtures.yaml
@@ -124,10 +125,8 @@ def read_fixtures(path: str | os.PathLike) -> FixtureSpec:
     """
 
     path = Path(path)
-    try:
-        text = path.read_text(encoding="utf-8-sig")  # a spreadsheet's byte-order mark is not data
-    except (OSError, UnicodeDecodeError) as error:
-        raise DatasetError(f"{path}: cannot read: {getattr(error, 'strerror', None) or error}") from None
+    # a spreadsheet's byte-order mark is not data; bounded: /dev/zero is refused, not read forever
+    text = read_text(path, DatasetError, encoding="utf-8-sig", limit=MAX_FILE_BYTES)
     data, root = load_yaml(text, str(path), DatasetError)  # bounded: size, depth, aliases; no duplicate keys
     if data is None:
         raise DatasetError(f"{path}: row 1, field 'fixtures': empty file")
