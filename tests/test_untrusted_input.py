@@ -236,6 +236,21 @@ def test_fixtures_refuse_millimetres_in_a_metres_file(tmp_path, text, message) -
         read_fixtures(path)
 
 
+@pytest.mark.parametrize(("key", "message"), [
+    ("distancse", r"row 5, field 'distancse': unknown key 'distancse' \(did you mean 'distances'\?"),
+    ("Distances", r"row 5, field 'Distances': unknown key 'Distances' \(did you mean 'distances'\?"),
+    ("fixture", r"row 5, field 'fixture': unknown key 'fixture' \(did you mean 'fixtures'\?"),
+])
+def test_fixtures_refuse_a_misspelt_top_level_key(tmp_path, key, message) -> None:
+    # `distancse:` was kept as an unread extra: the known distance silently played no part in the calibration
+    path = tmp_path / "fixtures.yaml"
+    path.write_text(f"fixtures:\n  P1: {{}}\n  P2: {{}}\n{key}:\n  - [P1, P2, 0.05]\n")
+    with pytest.raises(DatasetError, match=message):
+        read_fixtures(path)
+    path.write_text("fixtures:\n  P1: {}\n  P2: {}\nnotes: plate screwed to the table\nimport: {format: csv}\n")
+    assert read_fixtures(path).extras == {"notes": "plate screwed to the table", "import": {"format": "csv"}}
+
+
 @pytest.mark.parametrize(("argv", "message"), [
     (["import", "x", "--format", "mukca", "--robot", "panda", "--out", "o", "--distance", "50"], "at most 10 m"),
     (["calibrate", "--robot", "panda", "--samples", "s.csv", "--out", "c.yaml", "--dedup-deg", "1e300"], "10 deg"),

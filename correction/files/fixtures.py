@@ -15,6 +15,7 @@ Errors are :class:`~spherecal.correction.files.samples.DatasetError`, one line n
 
 from __future__ import annotations
 
+import difflib
 import math
 import os
 from dataclasses import dataclass, field, replace
@@ -190,6 +191,10 @@ def read_fixtures(path: str | os.PathLike) -> FixtureSpec:
         seen_pairs.add(pair)
         distances.append((a, b, float(value)))
     extras = {k: v for k, v in data.items() if k not in ("fixtures", "distances")}
+    for key in extras:  # kept unread (provenance blocks, notes), unless it is a misspelt key we read
+        near = difflib.get_close_matches(str(key).lower(), ["fixtures", "distances"], n=1, cutoff=0.75)
+        if near:
+            raise fail(f"unknown key {key!r} (did you mean {near[0]!r}? as written, it would be ignored)", key)
     rows = {f"fixtures.{name}": _node_line(root, "fixtures", name) for name in names}
     rows.update({f"distances[{k}]": _node_line(root, "distances", k) for k in range(len(distances))})
     return FixtureSpec(tuple(names), positions, distances, extras, source=str(path), rows=rows)
