@@ -194,10 +194,15 @@ def read_mukca(
     root = Path(path)
     if not root.is_dir():
         raise RecordingError(f"{root}: field 'SOURCE': a MUKCa source is a folder (placement or folder of them)")
+    placements = sorted(p for p in root.iterdir() if p.is_dir() and _hole_files(p))
     if _hole_files(root):
+        if placements:  # which did the user mean? reading either alone silently drops the other
+            raise RecordingError(
+                f"{root}: field 'SOURCE': holds hole_<k>.csv files and placement folders ({placements[0].name}"
+                f"{', ...' if len(placements) > 1 else ''}) with their own; give one placement folder or a folder "
+                "of placements"
+            )
         placements = [root]
-    else:
-        placements = sorted(p for p in root.iterdir() if p.is_dir() and _hole_files(p))
     if not placements:
         raise RecordingError(f"{root}: field 'hole_0.csv': no hole_<k>.csv here or in its sub-folders")
     n = model.n_joints

@@ -291,6 +291,21 @@ def test_bad_input_is_one_line_and_writes_nothing(tmp_path, capsys) -> None:
     assert main(argv) == 0 and sorted(p.name for p in out.iterdir()) == ["fixtures.yaml", "samples.csv"]
 
 
+def test_hole_files_beside_placement_folders_are_refused(tmp_path, capsys) -> None:
+    # a robot folder holding one placement's hole files AND placement folders imported the hole files alone: the
+    # placements in the sub-folders were dropped without a word
+    source = tmp_path / "panda"
+    shutil.copytree(DATA / "panda_2_clean/front_center", source)
+    shutil.copytree(DATA / "panda_2_clean/front_center", source / "left")
+    argv = ["import", str(source), "--format", "mukca", "--robot", str(PANDA), "--out", str(tmp_path / "out")]
+    assert "panda: field 'SOURCE': holds hole_<k>.csv files and placement folders (left)" in _refused(
+        argv, tmp_path, capsys)
+    shutil.move(source / "hole_0.csv", tmp_path / "hole_0.csv")
+    shutil.move(source / "hole_1.csv", tmp_path / "hole_1.csv")
+    assert main(argv) == 0  # a folder of placements alone: every placement imported
+    assert read_fixtures(tmp_path / "out" / "fixtures.yaml").names == ("left_h0", "left_h1")
+
+
 def test_a_mukca_folder_read_as_a_bag_is_named_for_what_it_is(tmp_path, capsys) -> None:
     out = tmp_path / "out"
     argv = ["import", str(DATA / "panda_2_clean/front_center"), "--format", "bag", "--robot", str(PANDA)]
