@@ -85,6 +85,31 @@ def _edit_line(path, row: int, edit) -> None:
     path.write_text("".join(lines))
 
 
+def _cell(line: str, column: int, text: str) -> str:
+    fields = line.rstrip("\n").split(",")
+    fields[column] = text
+    return ",".join(fields) + "\n"
+
+
+@pytest.mark.parametrize("text", ["\u0661", "\uff11", "1_0", "0.\u0665"])
+def test_a_digit_of_another_script_or_an_underscore_is_not_a_number(tmp_path, panda, text) -> None:
+    # Python's float() reads '\u0661' (Arabic-Indic one) as 1.0, full-width '\uff11' as 1.0 and '1_0' as 10.0:
+    # a corrupted or foreign-locale cell was used as an angle (a refusal came, if at all, from the fit)
+    path = write_samples(tmp_path / "samples.csv", _samples(panda))
+    _edit_line(path, 5, lambda line: _cell(line, 4, text))  # fixture, t, q1, q2, q3
+    with pytest.raises(DatasetError, match=rf"row 5, field 'q3': expected a number, got '{text}'"):
+        read_samples(path, panda)
+    joint = tmp_path / "joint.csv"
+    joint.write_text("t,q1,q2,q3,q4,q5,q6,q7\n0," + ",".join(["0.1"] * 2 + [text] + ["-1", "0.1", "1", "0.1"]) + "\n")
+    with pytest.raises(RecordingError, match=rf"row 2, field 'q3': expected a number, got '{text}'"):
+        read_joint_csv(joint, panda)
+    mocap = write_mocap_csv(tmp_path / "mocap.csv", MocapMeasurement(q=_samples(panda).q[:5],
+                                                                     tool=np.zeros((5, 3))))
+    _edit_line(mocap, 3, lambda line: _cell(line, 2, text))
+    with pytest.raises(MocapError, match=rf"row 3: field q3: bad value '{text}'"):
+        read_mocap_csv(mocap, panda.n_joints)
+
+
 CSV_CASES = [
     (lambda line: line.replace(",", ',"', 1), 3, "unterminated quote"),
     (lambda line: line.replace(",", "," + "7" * 200_000, 1), 4, "a field longer than the CSV limit"),

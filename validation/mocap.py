@@ -28,6 +28,7 @@ from spherecal.correction import (
 )
 from spherecal.correction.files.csv_rows import read_rows
 from spherecal.correction.files.samples import LIMIT_TOL
+from spherecal.correction.files.text_input import plain_float
 
 #: The paper's motion-capture accuracy: 0.3 mm per marker (std).
 MARKER_NOISE = 0.3e-3
@@ -251,7 +252,7 @@ def read_mocap_csv(path: str | os.PathLike, n_joints: int, cluster: MarkerCluste
             raise MocapError(f"{path}: row {line}: {len(row)} columns, expected {len(header)} ({','.join(header)})")
         for j, cell in enumerate(row):
             try:
-                value = float(cell)
+                value = plain_float(cell)
             except ValueError:
                 value = math.nan
             if not math.isfinite(value):

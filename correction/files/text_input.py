@@ -37,6 +37,21 @@ def read_text(path: str | os.PathLike, error: type[Exception], encoding: str = "
         raise error(f"{path}: cannot read: not UTF-8 text (byte {why.start})") from None
 
 
+def plain_float(text: str) -> float:
+    """``float(text)`` for the numbers a file of ours holds: ASCII digits, sign, point, exponent, nan/inf.
+
+    Python's ``float`` also takes other scripts' digits (``'\u0661'``, Arabic-Indic one, is 1.0; full-width
+    ``'\uff15'`` is 5.0) and underscores (``'1_0'`` is 10.0): in a CSV cell these are a corrupted or
+    foreign-locale value, not a number.
+
+    Raises:
+        ValueError: not such a number.
+    """
+    if not text.isascii() or "_" in text:
+        raise ValueError(f"not a plain number: {text!r}")
+    return float(text)
+
+
 def finite_number(text: str, where: str, error: type[Exception]) -> float:
     """``text`` as a finite float.
 
@@ -44,7 +59,7 @@ def finite_number(text: str, where: str, error: type[Exception]) -> float:
         error: ``"<where>: expected a number, got '...'"`` or ``"<where>: must be finite, got 'nan'"``.
     """
     try:
-        value = float(text)
+        value = plain_float(text)
     except ValueError:
         raise error(f"{where}: expected a number, got {text.strip()!r}") from None
     if not math.isfinite(value):

@@ -27,7 +27,7 @@ from spherecal.correction.files.csv_rows import (
 )
 from spherecal.correction.files.fixtures import FixtureSpec
 from spherecal.correction.files.samples import LIMIT_TOL, Dataset, DatasetError, LimitExcess
-from spherecal.correction.files.text_input import finite_number
+from spherecal.correction.files.text_input import finite_number, plain_float
 from spherecal.correction.model import RobotModel
 
 #: Default MUKCa socket distance [m] (their printed plate: centres 50 mm apart).
@@ -305,7 +305,7 @@ def read_joint_csv(path: str | os.PathLike, model: RobotModel) -> Recording:
 
 def _is_number(text: str) -> bool:
     try:
-        float(text)
+        plain_float(text)
     except ValueError:
         return False
     return True
