@@ -291,6 +291,19 @@ def test_bad_input_is_one_line_and_writes_nothing(tmp_path, capsys) -> None:
     assert main(argv) == 0 and sorted(p.name for p in out.iterdir()) == ["fixtures.yaml", "samples.csv"]
 
 
+def test_a_robot_file_of_the_wrong_convention_is_refused_not_written(imported, tmp_path, capsys) -> None:
+    # MUKCa's real Panda with its robot file hand-labelled `convention: standard` (the numbers are modified DH):
+    # a residual of 369 mm per axis was "judged at that noise" and the file written with exit 0, the predicted
+    # 4.65 mm "beating" the nominal's 4.88 mm (both the prior's figures: the model describes no arm)
+    wrong = tmp_path / "standard.yaml"
+    wrong.write_text(PANDA.read_text().replace("convention: modified", "convention: standard"))
+    argv = ["calibrate", "--robot", wrong, "--samples", imported / "train/samples.csv", "--fixtures",
+            imported / "train/fixtures.yaml", "--out", tmp_path / "cal.yaml"]
+    error = _refused(argv, tmp_path, capsys)
+    assert "mm per axis is not a ball held in a socket (at most 10 mm): the nominal model does not describe this " \
+           "arm" in error
+
+
 def test_hole_files_beside_placement_folders_are_refused(tmp_path, capsys) -> None:
     # a robot folder holding one placement's hole files AND placement folders imported the hole files alone: the
     # placements in the sub-folders were dropped without a word
