@@ -221,3 +221,23 @@ def test_atomic_write_refuses_a_device_or_pipe(tmp_path) -> None:
     with pytest.raises(OutputError, match="is a device, pipe or socket"):
         atomic_write_text(tmp_path / "pipe", "x")
     assert (tmp_path / "pipe").is_fifo() and [p.name for p in tmp_path.iterdir()] == ["pipe"]
+
+
+@pytest.mark.parametrize(
+    "argv",
+    [
+        ["calibrate", "--robot", "robot.yaml", "--samples", "samples.csv", "--out", "loop.yaml"],
+        ["validate", "--nominal", "robot.yaml", "--calibrated", "calibrated.yaml", "--mocap", "mocap.csv",
+         "--rrd", "loop.yaml"],
+        ["export", "calibrated.yaml", "--format", "yaml", "--out", "loop.yaml"],
+        ["campaign", "--out", "loop.yaml"],
+        ["demo", "--out", "loop.yaml", "--source", "synthetic"],
+        ["simulate", "--out", "loop.yaml"],
+        ["import", "samples.csv", "--format", "csv", "--robot", "robot.yaml", "--out", "loop.yaml"],
+    ],
+)
+def test_an_output_in_a_symbolic_link_loop_is_one_line(files, capsys, monkeypatch, argv) -> None:
+    # Path.resolve raised "RuntimeError: Symlink loop" from the output checks: a 30-line traceback
+    monkeypatch.chdir(files)
+    (files / "loop.yaml").symlink_to(files / "loop.yaml")
+    refused(argv, files, capsys, "loop.yaml: field '--")

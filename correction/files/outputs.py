@@ -50,6 +50,20 @@ def same_file(a: Path, b: Path) -> bool:
     return a.resolve() == b.resolve()
 
 
+def _refuse_link_loop(path: Path, option: str) -> None:
+    """Refuse an output whose path runs into a symbolic link loop (``Path.resolve`` raises RuntimeError on
+    one in Python 3.11-3.12, OSError ELOOP later: a traceback before this check).
+
+    Raises:
+        OutputError: one line naming the option and the file.
+    """
+    try:
+        path.resolve()
+    except (RuntimeError, OSError):
+        raise OutputError(f"{path}: field '{option}': runs into a symbolic link loop (expected a file name to "
+                          "write)") from None
+
+
 def _inside(path: Path, folder: Path) -> bool:
     try:
         return folder.is_dir() and path.resolve().is_relative_to(folder.resolve())
@@ -76,6 +90,7 @@ def check_folder(path: PathLike, option: str) -> None:
         OutputError: one line naming the option and the folder.
     """
     path = Path(path)
+    _refuse_link_loop(path, option)
     if path.exists() and not path.is_dir():
         raise OutputError(f"{path}: field '{option}': exists and is not a folder")
     _check_parents(path / "_", option, shown=path)
@@ -119,6 +134,7 @@ class OutputSet:
                 path = Path(name)
                 if isinstance(name, str) and name.endswith(("/", os.sep)):  # Path() drops the slash
                     raise OutputError(f"{name}: field '{option}': ends with '/', a folder name (expected a file name)")
+                _refuse_link_loop(path, option)
                 for other, known in self.planned.items():
                     if same_file(path, other):
                         raise OutputError(f"{path}: field '{option}': is also the output of {known}; "
