@@ -304,6 +304,17 @@ def test_a_robot_file_of_the_wrong_convention_is_refused_not_written(imported, t
            "arm" in error
 
 
+def test_a_calibrated_file_given_as_nominal_is_named_in_the_refusal(imported, tmp_path, capsys) -> None:
+    # the calibration of these samples fed back as --robot: refused "cannot be expected to beat the nominal
+    # model", without saying that the "nominal" was itself a calibration
+    argv = ["calibrate", "--robot", imported / "cal.yaml", "--samples", imported / "train/samples.csv", "--fixtures",
+            imported / "train/fixtures.yaml", "--out", tmp_path / "again.yaml"]
+    error = _refused(argv, tmp_path, capsys)
+    assert "cannot be expected to beat the nominal model" in error
+    assert error.endswith("the --robot model is already a calibration (its file has a 'calibration' block): "
+                          "calibrate from the nominal robot file, or check this one on these samples with validate")
+
+
 def test_hole_files_beside_placement_folders_are_refused(tmp_path, capsys) -> None:
     # a robot folder holding one placement's hole files AND placement folders imported the hole files alone: the
     # placements in the sub-folders were dropped without a word
