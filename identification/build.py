@@ -86,8 +86,9 @@ def _drop_known_distances(spec: FixtureSpec, known: dict[str, np.ndarray]) -> Fi
 
 #: Largest dense Jacobian a calibration builds [bytes]: 3 rows per sample (and a prior row per parameter) by the
 #: parameters and 3 unknowns per fixture centre. 10 000 fixtures of 2 samples make 14 GB (the process was killed
-#: after a minute); MUKCa's 2 x 10^5-sample stress file 0.2 GB, a simulated campaign set under 0.01 GB.
-MAX_JACOBIAN_BYTES = 1_000_000_000
+#: after a minute); a 2 x 10^5-sample file of two sockets 0.23 GB (calibrated in 31 s at 1.1 GB resident: the fit
+#: holds about 5 such arrays), a simulated campaign set under 0.01 GB.
+MAX_JACOBIAN_BYTES = 500_000_000
 
 
 def _check_size(dataset: Dataset, n_params: int) -> None:
