@@ -221,6 +221,8 @@ def _mocap_case(tmp_path, panda, kind: str):
         q, tool = np.repeat(q[:1], 40, axis=0), np.repeat(tool[:1], 40, axis=0)
     elif kind == "outside limits":
         q[7, 3] = 1.0
+    elif kind == "on one line":
+        tool[:, :2] = tool[0, :2]  # x and y columns constant: only z varies
     write_mocap_csv(tmp_path / "mocap.csv", MocapMeasurement(q=q, tool=tool))
 
 
@@ -228,9 +230,11 @@ def _mocap_case(tmp_path, panda, kind: str):
     ("millimetres", "m from the recording's centre, but franka_panda reaches at most"),
     ("identical rows", "1 distinct configurations in 40 rows, need at least 10"),
     ("outside limits", "row 9: field q4: 1 rad outside the joint limits"),
+    ("on one line", "rows 2-41: field x: the tool points lie on one line (0.00 mm RMS off it, at least 1 mm needed)"),
 ])
 def test_validate_refuses_mocap_that_cannot_be_of_this_arm(tmp_path, panda, capsys, kind, message) -> None:
-    # millimetres in a metres file gave a 573 m "error", identical rows 0.000 mm for both models, exit 0
+    # millimetres in a metres file gave a 573 m "error", identical rows 0.000 mm for both models, exit 0; tool
+    # points on one line (x, y constant) registered about that line by noise alone: 470 mm "errors", exit 0
     _mocap_case(tmp_path, panda, kind)
     save_robot(panda, tmp_path / "cal.yaml")
     refused(["validate", "--nominal", "panda", "--calibrated", tmp_path / "cal.yaml", "--mocap",
