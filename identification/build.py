@@ -13,7 +13,7 @@ import numpy as np
 
 from spherecal.correction import RobotModel, tool_point
 from spherecal.correction.files.fixtures import FixtureSpec
-from spherecal.correction.files.samples import Dataset, DatasetError
+from spherecal.correction.files.samples import Dataset, DatasetError, configurations_digest
 
 from .gauge import anchor_spread, gauge_left, scale_centre
 from .identifiability import greedy_rank
@@ -109,6 +109,26 @@ def _check_size(dataset: Dataset, n_params: int) -> None:
         )
 
 
+def _check_copies(dataset: Dataset) -> None:
+    """Refuse two fixtures holding the same configurations: one recording copied for two sockets (their centres
+    coincide, and a known distance between them makes the fit's distance direction 0/0).
+
+    Raises:
+        DatasetError: one line naming the second fixture's rows and the first fixture.
+    """
+    index = dataset.fixture_index
+    seen: dict[str, str] = {}
+    for j, name in enumerate(dataset.fixture_names):
+        rows = np.flatnonzero(index == j)
+        digest = configurations_digest(dataset.q[rows])
+        if digest in seen:
+            raise DatasetError(
+                f"{samples_location(dataset.select(rows))}, field 'fixture': fixture {name} holds the same "
+                f"{len(rows)} configurations as fixture {seen[digest]} (one recording copied for two sockets?)"
+            )
+        seen[digest] = name
+
+
 def build_problem(
     model: RobotModel,
     dataset: Dataset,
@@ -159,6 +179,7 @@ def build_problem(
     names = model.param_names
     names_fixtures = dataset.fixture_names
     _check_size(dataset, len(names))
+    _check_copies(dataset)
     if all(np.ptp(dataset.for_fixture(name), axis=0).max() == 0 for name in names_fixtures):
         raise UnidentifiableError(
             f"{samples_location(dataset)}, field 'q*': at every fixture all samples are "

@@ -315,6 +315,22 @@ def test_a_calibrated_file_given_as_nominal_is_named_in_the_refusal(imported, tm
                           "calibrate from the nominal robot file, or check this one on these samples with validate")
 
 
+def test_one_recording_copied_for_both_sockets_is_named(tmp_path, capsys) -> None:
+    # hole_1.csv a copy of hole_0.csv: calibrate refused "the fixture centres are not determined by the samples
+    # (after 1 warning: invalid value encountered in divide)": a numpy warning and no word of the copy
+    source = tmp_path / "front"
+    source.mkdir()
+    shutil.copy(DATA / "panda_2_clean/front_center/hole_0.csv", source / "hole_0.csv")
+    shutil.copy(DATA / "panda_2_clean/front_center/hole_0.csv", source / "hole_1.csv")
+    out = tmp_path / "out"
+    assert main(["import", str(source), "--format", "mukca", "--robot", str(PANDA), "--out", str(out)]) == 0
+    argv = ["calibrate", "--robot", PANDA, "--samples", out / "samples.csv", "--fixtures", out / "fixtures.yaml",
+            "--out", tmp_path / "cal.yaml"]
+    error = _refused(argv, tmp_path, capsys)
+    assert error.endswith("field 'fixture': fixture front_h1 holds the same 30 configurations as fixture front_h0 "
+                          "(one recording copied for two sockets?)")
+
+
 def test_hole_files_beside_placement_folders_are_refused(tmp_path, capsys) -> None:
     # a robot folder holding one placement's hole files AND placement folders imported the hole files alone: the
     # placements in the sub-folders were dropped without a word
