@@ -110,6 +110,23 @@ def test_a_digit_of_another_script_or_an_underscore_is_not_a_number(tmp_path, pa
         read_mocap_csv(mocap, panda.n_joints)
 
 
+def test_two_files_concatenated_name_the_second_header(tmp_path, panda) -> None:
+    # `cat a.csv b.csv > all.csv`: the second header was "expected a number, got 'q1'" (samples) or
+    # "got 'panda_joint1'" (joint CSV), not what had happened
+    one = format_samples(_samples(panda))
+    path = tmp_path / "samples.csv"
+    path.write_text(one + one)
+    row = len(one.splitlines()) + 1  # the first line of the second copy
+    with pytest.raises(DatasetError, match=rf"samples.csv: row {row}, field 'fixture': the header again \(two files "
+                                           r"concatenated\?"):
+        read_samples(path, panda)
+    joint = tmp_path / "joint.csv"
+    text = "t,q1,q2,q3,q4,q5,q6,q7\n0," + ",".join(["0.1"] * 3 + ["-1", "0.1", "1", "0.1"]) + "\n"
+    joint.write_text(text + text)
+    with pytest.raises(RecordingError, match=r"joint.csv: row 3, field 't': the header again \(two files concatenated"):
+        read_joint_csv(joint, panda)
+
+
 CSV_CASES = [
     (lambda line: line.replace(",", ',"', 1), 3, "unterminated quote"),
     (lambda line: line.replace(",", "," + "7" * 200_000, 1), 4, "a field longer than the CSV limit"),

@@ -322,6 +322,9 @@ def _careful_block(block: list[str], start: int, path: Path, header: list[str], 
         if len(fields) < len(header):
             missing = header[len(fields)]
             raise RecordingError(f"{where}, field {missing!r}: {len(fields)} fields, the header has {len(header)}")
+        if [f.strip() for f in fields] == header:
+            raise RecordingError(f"{where}, field {header[columns[0]]!r}: the header again (two files concatenated? "
+                                 "a recording has one header; merge the rows without it)")
         values.append([_number(fields[i], f"{where}, field {header[i]!r}") for i in columns])
         if label_col is not None:
             label = fields[label_col].strip()
