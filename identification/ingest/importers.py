@@ -26,7 +26,7 @@ from spherecal.correction.files.csv_rows import (
     read_rows,
 )
 from spherecal.correction.files.fixtures import FixtureSpec
-from spherecal.correction.files.samples import LIMIT_TOL, Dataset, DatasetError, LimitExcess
+from spherecal.correction.files.samples import LIMIT_TOL, Dataset, DatasetError, LimitExcess, configurations_digest
 from spherecal.correction.files.text_input import finite_number, plain_float
 from spherecal.correction.model import RobotModel
 
@@ -232,6 +232,14 @@ def read_mukca(
             distances.append((f"{folder.name}_h{holes[0][0]}", f"{folder.name}_h{holes[1][0]}", float(distance)))
     recording = Recording(np.array(q, dtype=float), None, np.array(labels), str(root), tuple(rows))
     recording.check_limits(model)
+    seen: dict[str, str] = {}
+    for name in names:  # a hole file copied for another socket: the fit would find two sockets at one point
+        index = np.flatnonzero(recording.labels == name)
+        digest = configurations_digest(recording.q[index])
+        if digest in seen:
+            raise RecordingError(f"{rows[index[0]]}, field 'q*': the same {len(index)} configurations as fixture "
+                                 f"{seen[digest]} (one recording copied for two sockets?)")
+        seen[digest] = name
     return recording, FixtureSpec(names=tuple(names), distances=distances)
 
 

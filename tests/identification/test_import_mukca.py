@@ -316,16 +316,21 @@ def test_a_calibrated_file_given_as_nominal_is_named_in_the_refusal(imported, tm
 
 
 def test_one_recording_copied_for_both_sockets_is_named(tmp_path, capsys) -> None:
-    # hole_1.csv a copy of hole_0.csv: calibrate refused "the fixture centres are not determined by the samples
-    # (after 1 warning: invalid value encountered in divide)": a numpy warning and no word of the copy
+    # hole_1.csv a copy of hole_0.csv: import wrote both, and calibrate refused "the fixture centres are not
+    # determined by the samples (after 1 warning: invalid value encountered in divide)": no word of the copy
     source = tmp_path / "front"
     source.mkdir()
     shutil.copy(DATA / "panda_2_clean/front_center/hole_0.csv", source / "hole_0.csv")
     shutil.copy(DATA / "panda_2_clean/front_center/hole_0.csv", source / "hole_1.csv")
     out = tmp_path / "out"
-    assert main(["import", str(source), "--format", "mukca", "--robot", str(PANDA), "--out", str(out)]) == 0
-    argv = ["calibrate", "--robot", PANDA, "--samples", out / "samples.csv", "--fixtures", out / "fixtures.yaml",
-            "--out", tmp_path / "cal.yaml"]
+    error = _refused(["import", source, "--format", "mukca", "--robot", PANDA, "--out", out], tmp_path, capsys)
+    assert error.endswith("front/hole_1.csv: row 1, field 'q*': the same 30 configurations as fixture front_h0 "
+                          "(one recording copied for two sockets?)")
+    (tmp_path / "out").mkdir()  # the same samples written by hand: calibrate names the copy as well
+    (out / "samples.csv").write_text("fixture,q1,q2,q3,q4,q5,q6,q7\n" + "".join(
+        f"{name},{line}" for name in ("front_h0", "front_h1")
+        for line in (source / "hole_0.csv").read_text().splitlines(keepends=True)))
+    argv = ["calibrate", "--robot", PANDA, "--samples", out / "samples.csv", "--out", tmp_path / "cal.yaml"]
     error = _refused(argv, tmp_path, capsys)
     assert error.endswith("field 'fixture': fixture front_h1 holds the same 30 configurations as fixture front_h0 "
                           "(one recording copied for two sockets?)")
