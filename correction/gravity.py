@@ -30,6 +30,10 @@ from .model import RobotModel
 GRAVITY = (0.0, 0.0, -9.81)
 
 
+#: Farthest a centre of mass may lie from its frame [m]: farther is a file in millimetres, not an arm.
+MAX_COM_DISTANCE = 10.0
+
+
 class InertialsError(SpherecalError):
     """Missing or malformed ``inertials`` / ``payload`` data; the message names the field."""
 
@@ -47,6 +51,9 @@ def _entry(value: Any, where: str) -> tuple[float, np.ndarray]:
         com_array = np.empty(0)
     if com_array.shape != (3,) or not np.all(np.isfinite(com_array)):
         raise InertialsError(f"{where}.com: expected 3 finite numbers [m], got {com!r}")
+    if np.linalg.norm(com_array) > MAX_COM_DISTANCE:
+        raise InertialsError(f"{where}.com: {com!r} m is {np.linalg.norm(com_array):.4g} m from its frame, not "
+                             f"physical (at most {MAX_COM_DISTANCE:g} m; the file is in metres)")
     return float(mass), com_array
 
 

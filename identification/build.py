@@ -13,7 +13,7 @@ import numpy as np
 
 from spherecal.correction import RobotModel, tool_point
 from spherecal.correction.files.fixtures import FixtureSpec
-from spherecal.correction.files.samples import Dataset, DatasetError
+from spherecal.correction.files.samples import Dataset, DatasetError, configurations_digest
 
 from .gauge import anchor_spread, gauge_left, scale_centre
 from .identifiability import greedy_rank
@@ -84,6 +84,51 @@ def _drop_known_distances(spec: FixtureSpec, known: dict[str, np.ndarray]) -> Fi
     return spec if len(keep) == len(spec.distances) else spec.keep_distances(keep)
 
 
+#: Largest dense Jacobian a calibration builds [bytes]: 3 rows per sample (and a prior row per parameter) by the
+#: parameters and 3 unknowns per fixture centre. 10 000 fixtures of 2 samples make 14 GB (the process was killed
+#: after a minute); a 2 x 10^5-sample file of two sockets 0.23 GB (calibrated in 31 s at 1.1 GB resident: the fit
+#: holds about 5 such arrays), a simulated campaign set under 0.01 GB.
+MAX_JACOBIAN_BYTES = 500_000_000
+
+
+def _check_size(dataset: Dataset, n_params: int) -> None:
+    """Refuse a problem whose dense Jacobian exceeds :data:`MAX_JACOBIAN_BYTES` (before anything is built).
+
+    Raises:
+        DatasetError: one line naming the samples file, the fixture and sample counts and what to do.
+    """
+    fixtures = len(dataset.fixture_names)
+    rows, unknowns = 3 * dataset.n_samples + n_params, n_params + 3 * fixtures
+    size = 8.0 * rows * unknowns
+    if size > MAX_JACOBIAN_BYTES:
+        raise DatasetError(
+            f"{samples_location(dataset)}, field 'fixture': {fixtures} fixtures and {dataset.n_samples} samples make "
+            f"{unknowns} unknowns and {rows} equations, a {size / 1e9:.3g} GB Jacobian (at most "
+            f"{MAX_JACOBIAN_BYTES / 1e9:g} GB): does the fixture column name each sample? Else fewer samples "
+            "(--max-per-fixture) or fewer fixtures"
+        )
+
+
+def _check_copies(dataset: Dataset) -> None:
+    """Refuse two fixtures holding the same configurations: one recording copied for two sockets (their centres
+    coincide, and a known distance between them makes the fit's distance direction 0/0).
+
+    Raises:
+        DatasetError: one line naming the second fixture's rows and the first fixture.
+    """
+    index = dataset.fixture_index
+    seen: dict[str, str] = {}
+    for j, name in enumerate(dataset.fixture_names):
+        rows = np.flatnonzero(index == j)
+        digest = configurations_digest(dataset.q[rows])
+        if digest in seen:
+            raise DatasetError(
+                f"{samples_location(dataset.select(rows))}, field 'fixture': fixture {name} holds the same "
+                f"{len(rows)} configurations as fixture {seen[digest]} (one recording copied for two sockets?)"
+            )
+        seen[digest] = name
+
+
 def build_problem(
     model: RobotModel,
     dataset: Dataset,
@@ -133,6 +178,8 @@ def build_problem(
         )
     names = model.param_names
     names_fixtures = dataset.fixture_names
+    _check_size(dataset, len(names))
+    _check_copies(dataset)
     if all(np.ptp(dataset.for_fixture(name), axis=0).max() == 0 for name in names_fixtures):
         raise UnidentifiableError(
             f"{samples_location(dataset)}, field 'q*': at every fixture all samples are "

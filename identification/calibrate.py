@@ -24,7 +24,7 @@ from .problem import (
     samples_location,
 )
 from .pruning import prune
-from .selfcheck import SelfCheck, self_check
+from .selfcheck import InconsistentDataError, SelfCheck, self_check
 from .solvers import solve_lm, solve_pso
 
 METHODS: tuple[str, ...] = ("lm", "pso", "pso+lm")
@@ -174,6 +174,17 @@ class CalibrationResult:
         return "\n".join(lines)
 
 
+def _already_calibrated(nominal: RobotModel, checked: SelfCheck) -> str:
+    """The reason a refusal "cannot beat the nominal model" has when the nominal model is itself a calibration
+    (its robot file carries a ``calibration`` block): "" otherwise."""
+    if not isinstance(nominal.extras.get("calibration"), dict):
+        return ""
+    if not any(f.check == "prediction" for f in checked.failed):
+        return ""
+    return ("; the --robot model is already a calibration (its file has a 'calibration' block): calibrate from "
+            "the nominal robot file, or check this one on these samples with validate")
+
+
 def calibrate(
     nominal: RobotModel,
     dataset: Dataset,
@@ -268,7 +279,10 @@ def calibrate(
                if check else None)
     timings["self_check"] = time.perf_counter() - clock
     if checked is not None and not force:
-        checked.raise_if_inconsistent()
+        try:
+            checked.raise_if_inconsistent()
+        except InconsistentDataError as refused:
+            raise InconsistentDataError(f"{refused}{_already_calibrated(nominal, checked)}") from None
     clock = time.perf_counter()
     check_plausible(problem, params, max_change)
     model = problem.model.with_params(params)

@@ -82,6 +82,11 @@ TREND_CHANGE = 3.0
 #: robust std (1.4826 x the median absolute deviation) at least this share of their std. A few slipped samples
 #: or a fit that did not converge inflate the std far beyond the robust one (a refusal, as before).
 NOISE_LIKE = 0.6
+#: Largest residual std per coordinate judged as noise [m]: a ball held in a socket stays within its own size of
+#: the socket's centre (the real arms here: 0.16-0.18 mm on MUKCa's Pandas, 0.87 mm on its Kinova). Beyond it the
+#: nominal model does not describe the arm (a robot file of another convention or arm): both the prediction and
+#: the nominal's expected error are then the prior's, and "beats nominal" says nothing.
+MAX_SOCKET_NOISE = 0.010
 #: Fewest samples of a fixture whose trend is judged.
 TREND_SAMPLES = 8
 #: The predicted mean error must be below this share of the nominal model's expected error: a 2x margin,
@@ -279,6 +284,12 @@ def _honest_noise(findings: list[Finding], prediction: Finding) -> tuple[list[Fi
     level = next((f for f in findings if f.check == "residual level" and not f.passed), None)
     if level is None or level.figures.get("robust_ratio", 0.0) < NOISE_LIKE:
         return findings, prediction
+    if level.figures["residual_std_mm"] > MAX_SOCKET_NOISE * 1e3:
+        level = replace(level, message=(
+            f"{level.message}; {level.figures['residual_std_mm']:.3g} mm per axis is not a ball held in a socket (at "
+            f"most {MAX_SOCKET_NOISE * 1e3:g} mm): the nominal model does not describe this arm (another arm's file, "
+            "its DH convention, its units?)"))
+        return [level if f.check == "residual level" else f for f in findings], prediction
     figures = prediction.figures
     beats = figures["predicted_mean_mm"] < figures["nominal_expected_mean_mm"]
     if beats:

@@ -19,6 +19,9 @@ def snapshot(folder: Path) -> dict[str, tuple[bytes, int] | None]:
             if os.path.islink(path) and not os.path.exists(path):
                 found[path] = (b"<dangling>", 0)
                 continue
+            if not os.path.isfile(path):  # a pipe or device: reading it would block; its kind is what matters
+                found[path] = (b"<special>", os.stat(path).st_mode)
+                continue
             found[path] = (Path(path).read_bytes(), os.stat(path).st_mtime_ns)
     return found
 

@@ -187,3 +187,57 @@ def test_an_unwritable_recording_is_one_line_before_anything_is_written(files, c
     argv = ["validate", "--nominal", files / "robot.yaml", "--calibrated", files / "calibrated.yaml",
             "--mocap", files / "mocap.csv", "--out", files / "r.json", "--rrd", files / "samples.csv" / "r.rrd"]
     refused(argv, files, capsys, "r.rrd: field '--rrd':", "samples.csv is not a folder")
+
+
+@pytest.mark.parametrize(
+    "argv",
+    [
+        ["calibrate", "--robot", "robot.yaml", "--samples", "samples.csv", "--out", "special"],
+        ["validate", "--nominal", "robot.yaml", "--calibrated", "calibrated.yaml", "--mocap", "mocap.csv",
+         "--out", "special"],
+        ["export", "calibrated.yaml", "--format", "urdf", "--out", "special"],
+        ["tool", "calibrated.yaml", "--offset", "0", "0", "0.1", "--out", "special"],
+    ],
+)
+def test_an_output_that_is_a_device_or_pipe_is_refused_and_left_in_place(files, capsys, monkeypatch, argv) -> None:
+    # `--out /dev/full` (or /dev/null, a named pipe) was staged beside it and renamed over it: as root the device
+    # node itself became a regular file holding the result, and the command said "wrote /dev/full"
+    monkeypatch.chdir(files)
+    os.mkfifo(files / "special")  # a pipe stands for a device node: both are replaced the same way
+    refused(argv, files, capsys, "special: field '--out': is a device, pipe or socket, not a regular file")
+    assert not (files / "special").is_file() and (files / "special").is_fifo()
+
+
+def test_an_output_name_ending_in_a_slash_is_refused(files, capsys) -> None:
+    # `--out results/` wrote the calibrated robot file as a FILE named `results` (Path() drops the slash)
+    refused(["calibrate", "--robot", files / "robot.yaml", "--samples", files / "samples.csv",
+             "--out", f"{files / 'results'}/"], files, capsys, "results/: field '--out': ends with '/', a folder name")
+
+
+def test_atomic_write_refuses_a_device_or_pipe(tmp_path) -> None:
+    from spherecal.correction import atomic_write_text
+
+    os.mkfifo(tmp_path / "pipe")
+    with pytest.raises(OutputError, match="is a device, pipe or socket"):
+        atomic_write_text(tmp_path / "pipe", "x")
+    assert (tmp_path / "pipe").is_fifo() and [p.name for p in tmp_path.iterdir()] == ["pipe"]
+
+
+@pytest.mark.parametrize(
+    "argv",
+    [
+        ["calibrate", "--robot", "robot.yaml", "--samples", "samples.csv", "--out", "loop.yaml"],
+        ["validate", "--nominal", "robot.yaml", "--calibrated", "calibrated.yaml", "--mocap", "mocap.csv",
+         "--rrd", "loop.yaml"],
+        ["export", "calibrated.yaml", "--format", "yaml", "--out", "loop.yaml"],
+        ["campaign", "--out", "loop.yaml"],
+        ["demo", "--out", "loop.yaml", "--source", "synthetic"],
+        ["simulate", "--out", "loop.yaml"],
+        ["import", "samples.csv", "--format", "csv", "--robot", "robot.yaml", "--out", "loop.yaml"],
+    ],
+)
+def test_an_output_in_a_symbolic_link_loop_is_one_line(files, capsys, monkeypatch, argv) -> None:
+    # Path.resolve raised "RuntimeError: Symlink loop" from the output checks: a 30-line traceback
+    monkeypatch.chdir(files)
+    (files / "loop.yaml").symlink_to(files / "loop.yaml")
+    refused(argv, files, capsys, "loop.yaml: field '--")

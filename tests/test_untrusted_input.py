@@ -85,6 +85,48 @@ def _edit_line(path, row: int, edit) -> None:
     path.write_text("".join(lines))
 
 
+def _cell(line: str, column: int, text: str) -> str:
+    fields = line.rstrip("\n").split(",")
+    fields[column] = text
+    return ",".join(fields) + "\n"
+
+
+@pytest.mark.parametrize("text", ["\u0661", "\uff11", "1_0", "0.\u0665"])
+def test_a_digit_of_another_script_or_an_underscore_is_not_a_number(tmp_path, panda, text) -> None:
+    # Python's float() reads '\u0661' (Arabic-Indic one) as 1.0, full-width '\uff11' as 1.0 and '1_0' as 10.0:
+    # a corrupted or foreign-locale cell was used as an angle (a refusal came, if at all, from the fit)
+    path = write_samples(tmp_path / "samples.csv", _samples(panda))
+    _edit_line(path, 5, lambda line: _cell(line, 4, text))  # fixture, t, q1, q2, q3
+    with pytest.raises(DatasetError, match=rf"row 5, field 'q3': expected a number, got '{text}'"):
+        read_samples(path, panda)
+    joint = tmp_path / "joint.csv"
+    joint.write_text("t,q1,q2,q3,q4,q5,q6,q7\n0," + ",".join(["0.1"] * 2 + [text] + ["-1", "0.1", "1", "0.1"]) + "\n")
+    with pytest.raises(RecordingError, match=rf"row 2, field 'q3': expected a number, got '{text}'"):
+        read_joint_csv(joint, panda)
+    mocap = write_mocap_csv(tmp_path / "mocap.csv", MocapMeasurement(q=_samples(panda).q[:5],
+                                                                     tool=np.zeros((5, 3))))
+    _edit_line(mocap, 3, lambda line: _cell(line, 2, text))
+    with pytest.raises(MocapError, match=rf"row 3: field q3: bad value '{text}'"):
+        read_mocap_csv(mocap, panda.n_joints)
+
+
+def test_two_files_concatenated_name_the_second_header(tmp_path, panda) -> None:
+    # `cat a.csv b.csv > all.csv`: the second header was "expected a number, got 'q1'" (samples) or
+    # "got 'panda_joint1'" (joint CSV), not what had happened
+    one = format_samples(_samples(panda))
+    path = tmp_path / "samples.csv"
+    path.write_text(one + one)
+    row = len(one.splitlines()) + 1  # the first line of the second copy
+    with pytest.raises(DatasetError, match=rf"samples.csv: row {row}, field 'fixture': the header again \(two files "
+                                           r"concatenated\?"):
+        read_samples(path, panda)
+    joint = tmp_path / "joint.csv"
+    text = "t,q1,q2,q3,q4,q5,q6,q7\n0," + ",".join(["0.1"] * 3 + ["-1", "0.1", "1", "0.1"]) + "\n"
+    joint.write_text(text + text)
+    with pytest.raises(RecordingError, match=r"joint.csv: row 3, field 't': the header again \(two files concatenated"):
+        read_joint_csv(joint, panda)
+
+
 CSV_CASES = [
     (lambda line: line.replace(",", ',"', 1), 3, "unterminated quote"),
     (lambda line: line.replace(",", "," + "7" * 200_000, 1), 4, "a field longer than the CSV limit"),
@@ -196,6 +238,8 @@ def _mocap_case(tmp_path, panda, kind: str):
         q, tool = np.repeat(q[:1], 40, axis=0), np.repeat(tool[:1], 40, axis=0)
     elif kind == "outside limits":
         q[7, 3] = 1.0
+    elif kind == "on one line":
+        tool[:, :2] = tool[0, :2]  # x and y columns constant: only z varies
     write_mocap_csv(tmp_path / "mocap.csv", MocapMeasurement(q=q, tool=tool))
 
 
@@ -203,9 +247,11 @@ def _mocap_case(tmp_path, panda, kind: str):
     ("millimetres", "m from the recording's centre, but franka_panda reaches at most"),
     ("identical rows", "1 distinct configurations in 40 rows, need at least 10"),
     ("outside limits", "row 9: field q4: 1 rad outside the joint limits"),
+    ("on one line", "rows 2-41: field x: the tool points lie on one line (0.00 mm RMS off it, at least 1 mm needed)"),
 ])
 def test_validate_refuses_mocap_that_cannot_be_of_this_arm(tmp_path, panda, capsys, kind, message) -> None:
-    # millimetres in a metres file gave a 573 m "error", identical rows 0.000 mm for both models, exit 0
+    # millimetres in a metres file gave a 573 m "error", identical rows 0.000 mm for both models, exit 0; tool
+    # points on one line (x, y constant) registered about that line by noise alone: 470 mm "errors", exit 0
     _mocap_case(tmp_path, panda, kind)
     save_robot(panda, tmp_path / "cal.yaml")
     refused(["validate", "--nominal", "panda", "--calibrated", tmp_path / "cal.yaml", "--mocap",
@@ -234,6 +280,21 @@ def test_fixtures_refuse_millimetres_in_a_metres_file(tmp_path, text, message) -
     path.write_text(text)
     with pytest.raises(DatasetError, match=message):
         read_fixtures(path)
+
+
+@pytest.mark.parametrize(("key", "message"), [
+    ("distancse", r"row 5, field 'distancse': unknown key 'distancse' \(did you mean 'distances'\?"),
+    ("Distances", r"row 5, field 'Distances': unknown key 'Distances' \(did you mean 'distances'\?"),
+    ("fixture", r"row 5, field 'fixture': unknown key 'fixture' \(did you mean 'fixtures'\?"),
+])
+def test_fixtures_refuse_a_misspelt_top_level_key(tmp_path, key, message) -> None:
+    # `distancse:` was kept as an unread extra: the known distance silently played no part in the calibration
+    path = tmp_path / "fixtures.yaml"
+    path.write_text(f"fixtures:\n  P1: {{}}\n  P2: {{}}\n{key}:\n  - [P1, P2, 0.05]\n")
+    with pytest.raises(DatasetError, match=message):
+        read_fixtures(path)
+    path.write_text("fixtures:\n  P1: {}\n  P2: {}\nnotes: plate screwed to the table\nimport: {format: csv}\n")
+    assert read_fixtures(path).extras == {"notes": "plate screwed to the table", "import": {"format": "csv"}}
 
 
 @pytest.mark.parametrize(("argv", "message"), [
@@ -265,3 +326,30 @@ def test_joint_csv_fast_and_careful_readers_agree(tmp_path, panda) -> None:
     for name in ("q", "t", "labels"):
         np.testing.assert_array_equal(getattr(a, name), getattr(b, name))
     assert a.rows[12] == f"{plain}: row 14" and b.rows[12] == f"{careful}: row 15"
+
+
+# ------------------------------------------------------------------------------ endless inputs
+@pytest.mark.parametrize(("option", "device", "message"), [
+    ("--samples", "/dev/zero", "/dev/zero: row 1, field '': a line longer than"),
+    ("--fixtures", "/dev/zero", "/dev/zero: cannot read: larger than"),
+    ("--calibrated", "/dev/zero", "/dev/zero: cannot read: larger than"),
+    ("--nominal", "/dev/urandom", "/dev/urandom: cannot read: larger than"),
+    ("--mocap", "/dev/zero", "/dev/zero: row 1, field '': a line longer than"),
+])
+def test_an_endless_input_is_refused_not_read_forever(tmp_path, panda, option, device, message) -> None:
+    # `--fixtures /dev/zero` grew until the kernel killed the process (a minute, no message); `--samples
+    # /dev/zero` and a robot file from /dev/urandom hung: every reader read the whole input first
+    import subprocess
+    import sys
+
+    save_robot(panda, tmp_path / "robot.yaml")
+    path = write_samples(tmp_path / "samples.csv", Dataset(labels=np.array(["P1"] * 3),
+                                                           q=panda.random_configurations(3, np.random.default_rng(0))))
+    inputs = {"--nominal": tmp_path / "robot.yaml", "--calibrated": tmp_path / "robot.yaml", "--samples": path}
+    if option != "--mocap":
+        inputs[option] = device
+    argv = [a for pair in inputs.items() for a in pair] + (["--mocap", device] if option == "--mocap" else [])
+    run = subprocess.run([sys.executable, "-c", "import sys; from spherecal.cli import main; sys.exit(main())",
+                          "validate", *map(str, argv)], capture_output=True, text=True, timeout=60)
+    assert run.returncode == 1 and len(run.stderr.strip().splitlines()) == 1, run.stderr[-500:]
+    assert message in run.stderr, run.stderr

@@ -28,11 +28,15 @@ from spherecal.correction import (
 )
 from spherecal.correction.files.csv_rows import read_rows
 from spherecal.correction.files.samples import LIMIT_TOL
+from spherecal.correction.files.text_input import plain_float
 
 #: The paper's motion-capture accuracy: 0.3 mm per marker (std).
 MARKER_NOISE = 0.3e-3
 
 
+#: Smallest RMS distance of the recorded tool points from their best-fitting line [m]: below it the
+#: registration's rotation about that line is fixed by noise alone (a column held constant or repeated).
+MIN_SPREAD = 0.001
 #: Fewest distinct configurations of a mocap recording that can validate a model.
 MIN_CONFIGURATIONS = 10
 
@@ -251,7 +255,7 @@ def read_mocap_csv(path: str | os.PathLike, n_joints: int, cluster: MarkerCluste
             raise MocapError(f"{path}: row {line}: {len(row)} columns, expected {len(header)} ({','.join(header)})")
         for j, cell in enumerate(row):
             try:
-                value = float(cell)
+                value = plain_float(cell)
             except ValueError:
                 value = math.nan
             if not math.isfinite(value):
@@ -306,4 +310,13 @@ def check_mocap(measurement: MocapMeasurement, model: RobotModel, limit_tol: flo
         raise MocapError(
             f"{source}: row ?: field q1: {distinct} distinct configurations in {len(m.q)} rows, need at least "
             f"{MIN_CONFIGURATIONS} (a registration fits fewer exactly, and every model would look perfect)"
+        )
+    centred = m.tool - m.tool.mean(axis=0)
+    off_line = np.linalg.svd(centred, compute_uv=False)[1] / np.sqrt(len(m.tool))  # RMS off the best line [m]
+    if off_line < MIN_SPREAD:
+        lines = f"rows {m.lines[0]}-{m.lines[-1]}" if m.lines is not None else f"samples 1-{len(m.tool)}"
+        raise MocapError(
+            f"{source}: {lines}: field x: the tool points lie on one line ({off_line * 1e3:.2f} mm RMS off it, at "
+            f"least {MIN_SPREAD * 1e3:g} mm needed): the rotation about it, so the mocap frame, cannot be registered "
+            "(a constant or repeated column?)"
         )

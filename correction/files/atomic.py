@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import os
+import stat
 import tempfile
 from pathlib import Path
 
@@ -11,6 +12,23 @@ from ..errors import SpherecalError
 
 class OutputError(SpherecalError):
     """A result file that cannot be written (a directory in the way, no permission, disk full)."""
+
+
+def refuse_special_file(path: Path, option: str | None = None) -> None:
+    """Refuse an existing output that is not a regular file (``/dev/null``, ``/dev/full``, a pipe,
+    a socket): the rename that makes a write atomic would replace the device node itself.
+
+    Raises:
+        OutputError: one line naming ``path`` (and ``option`` when given).
+    """
+    try:
+        mode = os.stat(path).st_mode
+    except OSError:  # absent (or unreadable: the write reports it)
+        return
+    if not stat.S_ISREG(mode) and not stat.S_ISDIR(mode):
+        field = f" field '{option}':" if option else ""
+        raise OutputError(f"{path}:{field} is a device, pipe or socket, not a regular file (expected a file name to "
+                          "write)")
 
 
 def atomic_write_text(path: str | os.PathLike, text: str) -> Path:
@@ -29,6 +47,7 @@ def atomic_write_bytes(path: str | os.PathLike, data: bytes) -> Path:
         OutputError: the file cannot be written (one line naming ``path``); nothing is left behind.
     """
     path = Path(path)
+    refuse_special_file(path)
     try:
         path.parent.mkdir(parents=True, exist_ok=True)
         fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)

@@ -20,6 +20,10 @@ import numpy as np
 
 from ..errors import SpherecalError
 
+#: Longest physical line read [characters]: a row of joint angles is a few hundred; a file without line
+#: ends (``/dev/zero``, a binary file) is refused here instead of being read whole into one line.
+MAX_LINE = 1_000_000
+
 
 def field_limit() -> int:
     """The csv module's field-size limit [characters] (131072 unless changed)."""
@@ -71,9 +75,10 @@ def iter_lines(path: str | os.PathLike, error: type[SpherecalError], chunk: int 
     """
     path = Path(path)
     with open_text(path, error) as handle:
+        lines = _bounded_lines(handle, path, error)
         while True:
             try:
-                block = list(islice(handle, chunk))
+                block = list(islice(lines, chunk))
             except UnicodeDecodeError as problem:
                 raise error(f"{path}: cannot read: not UTF-8 text ({problem.reason})") from None
             except OSError as problem:
@@ -81,6 +86,20 @@ def iter_lines(path: str | os.PathLike, error: type[SpherecalError], chunk: int 
             if not block:
                 return
             yield block
+
+
+def _bounded_lines(handle, path: Path, error: type[SpherecalError]) -> Iterator[str]:
+    """The lines of ``handle``, each at most :data:`MAX_LINE` characters (else one line naming the row)."""
+    row = 0
+    while True:
+        line = handle.readline(MAX_LINE + 1)
+        if not line:
+            return
+        row += 1
+        if len(line) > MAX_LINE:
+            raise error(f"{path}: row {row}, field '': a line longer than {MAX_LINE} characters (not a text "
+                        "file of rows?)")
+        yield line
 
 
 def read_rows(path: str | os.PathLike, error: type[SpherecalError], comments: bool = True

@@ -15,6 +15,7 @@ Errors are :class:`~spherecal.correction.files.samples.DatasetError`, one line n
 
 from __future__ import annotations
 
+import difflib
 import math
 import os
 from dataclasses import dataclass, field, replace
@@ -27,7 +28,8 @@ import yaml
 from spherecal.correction.files.atomic import atomic_write_text
 from spherecal.correction.files.robot_file import MAX_LENGTH
 from spherecal.correction.files.samples import Dataset, DatasetError
-from spherecal.correction.files.yaml_safe import dump_yaml, load_yaml
+from spherecal.correction.files.text_input import read_text
+from spherecal.correction.files.yaml_safe import MAX_FILE_BYTES, dump_yaml, load_yaml
 
 
 # ------------------------------------------------------------------------------ fixtures.yaml
@@ -124,10 +126,8 @@ def read_fixtures(path: str | os.PathLike) -> FixtureSpec:
     """
 
     path = Path(path)
-    try:
-        text = path.read_text(encoding="utf-8-sig")  # a spreadsheet's byte-order mark is not data
-    except (OSError, UnicodeDecodeError) as error:
-        raise DatasetError(f"{path}: cannot read: {getattr(error, 'strerror', None) or error}") from None
+    # a spreadsheet's byte-order mark is not data; bounded: /dev/zero is refused, not read forever
+    text = read_text(path, DatasetError, encoding="utf-8-sig", limit=MAX_FILE_BYTES)
     data, root = load_yaml(text, str(path), DatasetError)  # bounded: size, depth, aliases; no duplicate keys
     if data is None:
         raise DatasetError(f"{path}: row 1, field 'fixtures': empty file")
@@ -191,6 +191,10 @@ def read_fixtures(path: str | os.PathLike) -> FixtureSpec:
         seen_pairs.add(pair)
         distances.append((a, b, float(value)))
     extras = {k: v for k, v in data.items() if k not in ("fixtures", "distances")}
+    for key in extras:  # kept unread (provenance blocks, notes), unless it is a misspelt key we read
+        near = difflib.get_close_matches(str(key).lower(), ["fixtures", "distances"], n=1, cutoff=0.75)
+        if near:
+            raise fail(f"unknown key {key!r} (did you mean {near[0]!r}? as written, it would be ignored)", key)
     rows = {f"fixtures.{name}": _node_line(root, "fixtures", name) for name in names}
     rows.update({f"distances[{k}]": _node_line(root, "distances", k) for k in range(len(distances))})
     return FixtureSpec(tuple(names), positions, distances, extras, source=str(path), rows=rows)

@@ -22,7 +22,7 @@ from dataclasses import replace
 from ..gravity import InertialsError, inertials_of
 from ..model import RobotModel
 from .text_input import read_text
-from .yaml_safe import load_yaml
+from .yaml_safe import MAX_FILE_BYTES, load_yaml
 
 KEYS = ("inertials", "payload")
 
@@ -33,7 +33,7 @@ def read_inertials(path: str | os.PathLike) -> dict:
     Raises:
         InertialsError: unreadable file, invalid YAML, a missing ``inertials`` list or an unknown key.
     """
-    data, _ = load_yaml(read_text(path, InertialsError), str(path), InertialsError)
+    data, _ = load_yaml(read_text(path, InertialsError, limit=MAX_FILE_BYTES), str(path), InertialsError)
     if not isinstance(data, dict) or "inertials" not in data:
         raise InertialsError(f"{path}: expected a mapping with an 'inertials' list (see correction.files."
                              f"inertials_file)")

@@ -23,17 +23,21 @@ import tempfile
 from collections.abc import Iterable, Mapping
 from pathlib import Path
 
-from .atomic import OutputError, _umask
+from .atomic import OutputError, _umask, refuse_special_file
 
 PathLike = str | os.PathLike
 
 
-def _paths(value: PathLike | Iterable[PathLike] | None) -> list[Path]:
+def _names(value: PathLike | Iterable[PathLike] | None) -> list[PathLike]:
     if value is None:
         return []
     if isinstance(value, (str, os.PathLike)):
-        return [Path(value)]
-    return [Path(v) for v in value if v is not None]
+        return [value]
+    return [v for v in value if v is not None]
+
+
+def _paths(value: PathLike | Iterable[PathLike] | None) -> list[Path]:
+    return [Path(v) for v in _names(value)]
 
 
 def same_file(a: Path, b: Path) -> bool:
@@ -44,6 +48,20 @@ def same_file(a: Path, b: Path) -> bool:
     except OSError:
         pass
     return a.resolve() == b.resolve()
+
+
+def _refuse_link_loop(path: Path, option: str) -> None:
+    """Refuse an output whose path runs into a symbolic link loop (``Path.resolve`` raises RuntimeError on
+    one in Python 3.11-3.12, OSError ELOOP later: a traceback before this check).
+
+    Raises:
+        OutputError: one line naming the option and the file.
+    """
+    try:
+        path.resolve()
+    except (RuntimeError, OSError):
+        raise OutputError(f"{path}: field '{option}': runs into a symbolic link loop (expected a file name to "
+                          "write)") from None
 
 
 def _inside(path: Path, folder: Path) -> bool:
@@ -61,6 +79,7 @@ def check_output(path: Path, option: str) -> None:
     """
     if path.is_dir():
         raise OutputError(f"{path}: field '{option}': is a folder, expected a file name")
+    refuse_special_file(path, option)
     _check_parents(path, option)
 
 
@@ -71,6 +90,7 @@ def check_folder(path: PathLike, option: str) -> None:
         OutputError: one line naming the option and the folder.
     """
     path = Path(path)
+    _refuse_link_loop(path, option)
     if path.exists() and not path.is_dir():
         raise OutputError(f"{path}: field '{option}': exists and is not a folder")
     _check_parents(path / "_", option, shown=path)
@@ -110,7 +130,11 @@ class OutputSet:
         self._created: list[Path] = []
         input_paths = [(option, p) for option, value in (inputs or {}).items() for p in _paths(value) if p.exists()]
         for option, value in outputs.items():
-            for path in _paths(value):
+            for name in _names(value):
+                path = Path(name)
+                if isinstance(name, str) and name.endswith(("/", os.sep)):  # Path() drops the slash
+                    raise OutputError(f"{name}: field '{option}': ends with '/', a folder name (expected a file name)")
+                _refuse_link_loop(path, option)
                 for other, known in self.planned.items():
                     if same_file(path, other):
                         raise OutputError(f"{path}: field '{option}': is also the output of {known}; "

@@ -47,7 +47,11 @@ def versions(packages: tuple[str, ...] = PACKAGES) -> dict[str, str]:
 
 def file_digest(path: str | os.PathLike) -> str:
     """SHA-256 of a file's bytes (hex)."""
-    return hashlib.sha256(Path(path).read_bytes()).hexdigest()
+    digest = hashlib.sha256()
+    with open(path, "rb") as handle:  # in blocks: a recording of gigabytes is not held in memory
+        for block in iter(lambda: handle.read(1 << 20), b""):
+            digest.update(block)
+    return digest.hexdigest()
 
 
 def input_record(path: str | os.PathLike) -> dict[str, str]:

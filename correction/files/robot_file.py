@@ -19,6 +19,7 @@ from pathlib import Path
 from typing import Any
 
 from ..errors import SpherecalError
+from ..gravity import InertialsError, inertials_of
 from ..model import CONVENTIONS, JOINT_FIELDS, RobotModel
 from .atomic import atomic_write_text
 from .yaml_safe import dump_yaml
@@ -127,6 +128,7 @@ def robot_from_dict(data: Any, source: str = "<robot>") -> RobotModel:
         base_xyz = _vector3(base.get("xyz", [0.0] * 3), f"{source}: base.xyz", _LENGTH)
         base_rpy = _vector3(base.get("rpy", [0.0] * 3), f"{source}: base.rpy", _ANGLE)
     extras = {k: v for k, v in data.items() if k not in _KNOWN_KEYS}
+    _check_extras(extras, len(joints), source)
     return RobotModel(
         name=name,
         convention=convention,
@@ -143,6 +145,44 @@ def robot_from_dict(data: Any, source: str = "<robot>") -> RobotModel:
         base_rpy=base_rpy,
         extras=extras,
     )
+
+
+#: Per-joint lists a robot file may carry beside the geometry: key -> unit named in the message.
+_JOINT_VECTORS = {"compliance": "[rad/Nm]", "scale": "(dimensionless)"}
+
+
+def _check_extras(extras: dict, n: int, source: str) -> None:
+    """The optional blocks the library reads (``compliance``, ``scale``, ``joint_names``, ``inertials``,
+    ``payload``) have one entry per joint and valid values; others are kept unread.
+
+    Raises:
+        RobotFileError: one line naming ``source`` and the field.
+    """
+    for key, unit in _JOINT_VECTORS.items():
+        if key not in extras:
+            continue
+        values = extras[key]
+        if (not isinstance(values, list) or len(values) != n
+                or not all(isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v)
+                           for v in values)):
+            raise RobotFileError(f"{source}: field '{key}': expected a list of {n} finite numbers {unit}, "
+                                 f"got {values!r}")
+    if "joint_names" in extras:
+        names = extras["joint_names"]
+        if (not isinstance(names, list) or len(names) != n
+                or not all(isinstance(v, str) and v for v in names)):
+            raise RobotFileError(f"{source}: field 'joint_names': expected a list of {n} joint names, got {names!r}")
+        twice = next((v for k, v in enumerate(names) if v in names[:k]), None)
+        if twice is not None:
+            raise RobotFileError(f"{source}: field 'joint_names': {twice!r} is named twice")
+    if "inertials" in extras:
+        probe = RobotModel(name=source, convention="modified", a=[0.0] * n, alpha=[0.0] * n, d=[0.0] * n,
+                           theta=[0.0] * n, lower=[-1.0] * n, upper=[1.0] * n, tool=[0.0] * 3,
+                           extras={k: extras[k] for k in ("inertials", "payload") if k in extras})
+        try:
+            inertials_of(probe, source)
+        except InertialsError as error:
+            raise RobotFileError(str(error)) from None
 
 
 def check_robot(model: RobotModel, source: str) -> None:

@@ -25,7 +25,7 @@ from .inertials_file import with_inertials_file
 from .robot_file import EMBEDDED_ROBOTS, RobotFileError, robot_from_dict
 from .text_input import read_text
 from .urdf_to_dh import NearlyParallelAxesWarning, load_urdf
-from .yaml_safe import load_yaml
+from .yaml_safe import MAX_FILE_BYTES, load_yaml
 
 #: Tool link of each embedded URDF (the flange; the Gen3 lite's gripper tool frame).
 URDF_TIPS: dict[str, str] = {"iiwa14.urdf": "iiwa_link_ee_kuka", "gen3lite.urdf": "tool_frame"}
@@ -96,7 +96,7 @@ def _load(path_or_name: str | os.PathLike, tip_link: str | None, base_link: str 
     if key in EMBEDDED_ROBOTS and not Path(key).exists():
         return _embedded(EMBEDDED_ROBOTS[key], key)
     path = Path(path_or_name)
-    text = read_text(path, RobotFileError)
+    text = read_text(path, RobotFileError, limit=MAX_FILE_BYTES)
     data, _ = load_yaml(text, str(path), RobotFileError)  # bounded: size, depth, aliases; no duplicate keys
     return robot_from_dict(data, source=str(path))
 

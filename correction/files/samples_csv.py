@@ -157,6 +157,9 @@ class _Reader:
             label = fields[0].strip()
             if not label:
                 raise DatasetError(f"{where}, field 'fixture': empty fixture name")
+            if [f.strip() for f in fields] == columns:
+                raise DatasetError(f"{where}, field 'fixture': the header again (two files concatenated? a samples "
+                                   "file has one header; merge the rows without it)")
             labels.append(label)
             values.append([_number(v, f"{where}, field {c!r}") for v, c in zip(fields[1:], columns[1:], strict=True)])
             rows.append(start + k)

@@ -16,7 +16,7 @@ import numpy as np
 
 from ..model import pose_matrix
 from .robot_file import RobotFileError
-from .text_input import read_text
+from .text_input import plain_float, read_text
 
 MOVABLE = ("revolute", "continuous")
 KNOWN_TYPES = ("revolute", "continuous", "prismatic", "fixed", "floating", "planar")
@@ -146,7 +146,7 @@ def _floats(text: str | None, count: int, default: list[float], where: str) -> l
         return default
     parts = text.split()
     try:
-        values = [float(v) for v in parts]
+        values = [plain_float(v) for v in parts]
     except ValueError:
         raise RobotFileError(f"{where}: expected {count} numbers, got {text!r}") from None
     if len(values) != count or not all(math.isfinite(v) for v in values):

@@ -22,6 +22,8 @@ from ..errors import SpherecalError
 
 #: Largest YAML file read [bytes] (a robot or fixtures file is a few kB).
 MAX_BYTES = 1_000_000
+#: Largest YAML file read from disk [bytes]: MAX_BYTES characters of UTF-8 (at most 4 bytes each).
+MAX_FILE_BYTES = 4 * MAX_BYTES
 #: Deepest nesting of mappings and sequences.
 MAX_DEPTH = 50
 #: Most nodes of the document with aliases expanded.

@@ -19,6 +19,11 @@ from .importers import Recording, RecordingError, arm_joint_names, joint_name_ca
 
 #: Default topic.
 TOPIC = "/joint_states"
+#: Fastest joint motion believed between two messages [rad/s] (a cobot's joints reach 2-3 rad/s); faster is
+#: two streams interleaved by their stamps (a clock reset, two recordings or two publishers in one bag).
+MAX_JOINT_SPEED = 10.0
+#: Smallest step checked against :data:`MAX_JOINT_SPEED` [rad] (encoder noise between close stamps is not a jump).
+MIN_JUMP = 0.05
 
 
 def read_bag(path: str | os.PathLike, model: RobotModel, topic: str = TOPIC) -> Recording:
@@ -114,7 +119,41 @@ def read_bag(path: str | os.PathLike, model: RobotModel, topic: str = TOPIC) -> 
     )
     t = np.array(stamps)
     order = np.argsort(t, kind="stable")
-    recording = Recording(np.array(values)[order], t[order], None, str(path), tuple(rows[i] for i in order), notes)
-    recording.check_limits(model)
+    q, t = np.array(values)[order], t[order]
+    recording = Recording(q, t, None, str(path), tuple(rows[i] for i in order), notes)
+    recording.check_limits(model)  # first: degrees in a radians field jump too, and this says which it is
+    _refuse_interleaved(q, t, list(recording.rows), stamps)
     return recording
+
+
+def _refuse_interleaved(q: np.ndarray, t: np.ndarray, rows: list[str], stamps: list[float]) -> None:
+    """Refuse joint angles that jump faster than :data:`MAX_JOINT_SPEED` between stamp-ordered messages.
+
+    Args:
+        q: (T, n) joint angles in stamp order [rad].
+        t: (T,) sorted stamps [s].
+        rows: (T,) the message each sample came from, in stamp order.
+        stamps: (T,) the stamps in the bag's own order [s] (to name where time went back).
+
+    Raises:
+        RecordingError: one line naming the message, the jump and, when the stamps went back in the bag's
+            order, the first message where they did.
+    """
+    if len(t) < 2:
+        return
+    step = np.abs(np.diff(q, axis=0)).max(axis=1)
+    dt = np.diff(t)
+    jumps = np.flatnonzero((step > MIN_JUMP) & (step > MAX_JOINT_SPEED * dt))
+    if not len(jumps):
+        return
+    k = int(jumps[0]) + 1
+    back = np.flatnonzero(np.diff(stamps) < 0)
+    why = (f"its stamps go back {stamps[back[0]] - stamps[back[0] + 1]:.3f} s at message {back[0] + 2} (a clock "
+           "reset or two recordings in one bag?)" if len(back) else
+           "a clock reset, two recordings in one bag or two publishers on one topic?")
+    raise RecordingError(
+        f"{rows[k]}, field 'header.stamp': the joints move {step[k - 1]:.3g} rad in {dt[k - 1]:.3g} s from the "
+        f"message stamped before it (faster than {MAX_JOINT_SPEED:g} rad/s): messages of two streams interleaved by "
+        f"their stamps; {why}"
+    )
 

@@ -81,17 +81,17 @@ class ImportResult:
 def check_out_dir(out: str | os.PathLike, inputs: list[str | os.PathLike]) -> None:
     """Refuse an output folder that exists and is not empty, is a file, or holds (or is) an input."""
     out = Path(out).absolute()
+    try:  # first: the comparisons below resolve it
+        resolved = out.resolve()
+    except (RuntimeError, OSError):  # a symlink loop (RuntimeError before Python 3.13)
+        raise RecordingError(f"{out}: field '--out': a symbolic link loop; choose a new folder") from None
     for item in inputs:
         try:
             item = Path(item).resolve()  # links resolved: compare files, not strings
-        except (RuntimeError, OSError):  # a symlink loop (RuntimeError before Python 3.13)
+        except (RuntimeError, OSError):
             raise RecordingError(f"{item}: field 'SOURCE': cannot read: a symbolic link loop") from None
-        if item == out.resolve() or out.resolve() in item.parents:
+        if item == resolved or resolved in item.parents:
             raise RecordingError(f"{out}: field '--out': holds the input {item}; choose a new folder")
-    try:
-        out.resolve()
-    except (RuntimeError, OSError):
-        raise RecordingError(f"{out}: field '--out': a symbolic link loop; choose a new folder") from None
     if out.exists() and (not out.is_dir() or any(out.iterdir())):
         raise RecordingError(f"{out}: field '--out': exists and is not an empty folder; choose a new folder")
     for parent in out.parents:

@@ -26,8 +26,8 @@ from spherecal.correction.files.csv_rows import (
     read_rows,
 )
 from spherecal.correction.files.fixtures import FixtureSpec
-from spherecal.correction.files.samples import LIMIT_TOL, Dataset, DatasetError, LimitExcess
-from spherecal.correction.files.text_input import finite_number
+from spherecal.correction.files.samples import LIMIT_TOL, Dataset, DatasetError, LimitExcess, configurations_digest
+from spherecal.correction.files.text_input import finite_number, plain_float
 from spherecal.correction.model import RobotModel
 
 #: Default MUKCa socket distance [m] (their printed plate: centres 50 mm apart).
@@ -194,10 +194,15 @@ def read_mukca(
     root = Path(path)
     if not root.is_dir():
         raise RecordingError(f"{root}: field 'SOURCE': a MUKCa source is a folder (placement or folder of them)")
+    placements = sorted(p for p in root.iterdir() if p.is_dir() and _hole_files(p))
     if _hole_files(root):
+        if placements:  # which did the user mean? reading either alone silently drops the other
+            raise RecordingError(
+                f"{root}: field 'SOURCE': holds hole_<k>.csv files and placement folders ({placements[0].name}"
+                f"{', ...' if len(placements) > 1 else ''}) with their own; give one placement folder or a folder "
+                "of placements"
+            )
         placements = [root]
-    else:
-        placements = sorted(p for p in root.iterdir() if p.is_dir() and _hole_files(p))
     if not placements:
         raise RecordingError(f"{root}: field 'hole_0.csv': no hole_<k>.csv here or in its sub-folders")
     n = model.n_joints
@@ -227,6 +232,14 @@ def read_mukca(
             distances.append((f"{folder.name}_h{holes[0][0]}", f"{folder.name}_h{holes[1][0]}", float(distance)))
     recording = Recording(np.array(q, dtype=float), None, np.array(labels), str(root), tuple(rows))
     recording.check_limits(model)
+    seen: dict[str, str] = {}
+    for name in names:  # a hole file copied for another socket: the fit would find two sockets at one point
+        index = np.flatnonzero(recording.labels == name)
+        digest = configurations_digest(recording.q[index])
+        if digest in seen:
+            raise RecordingError(f"{rows[index[0]]}, field 'q*': the same {len(index)} configurations as fixture "
+                                 f"{seen[digest]} (one recording copied for two sockets?)")
+        seen[digest] = name
     return recording, FixtureSpec(names=tuple(names), distances=distances)
 
 
@@ -300,7 +313,7 @@ def read_joint_csv(path: str | os.PathLike, model: RobotModel) -> Recording:
 
 def _is_number(text: str) -> bool:
     try:
-        float(text)
+        plain_float(text)
     except ValueError:
         return False
     return True
@@ -317,6 +330,9 @@ def _careful_block(block: list[str], start: int, path: Path, header: list[str], 
         if len(fields) < len(header):
             missing = header[len(fields)]
             raise RecordingError(f"{where}, field {missing!r}: {len(fields)} fields, the header has {len(header)}")
+        if [f.strip() for f in fields] == header:
+            raise RecordingError(f"{where}, field {header[columns[0]]!r}: the header again (two files concatenated? "
+                                 "a recording has one header; merge the rows without it)")
         values.append([_number(fields[i], f"{where}, field {header[i]!r}") for i in columns])
         if label_col is not None:
             label = fields[label_col].strip()

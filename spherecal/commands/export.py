@@ -58,13 +58,11 @@ def _into(into: str, out: str) -> tuple[str, str]:
     import os
     from pathlib import Path
 
+    from spherecal.correction.files.text_input import read_text
     from spherecal.correction.files.urdf_write import ExportError
 
     source = Path(into)
-    try:
-        text = source.read_text(encoding="utf-8")
-    except (OSError, UnicodeDecodeError) as error:
-        raise ExportError(f"{into}: cannot read: {getattr(error, 'strerror', None) or error}") from None
+    text = read_text(source, ExportError)
     if Path(out).resolve() == source.resolve() or (Path(out).exists() and os.path.samefile(out, source)):
         raise ExportError(f"--out: {out} is the --into file; write the calibrated URDF to another file")
     return text, str(source)

@@ -101,7 +101,7 @@ def test_arm_without_self_motion_is_refused(tmp_path, capsys, panda):
     from spherecal.correction import save_robot, tool_point
 
     arm = replace(panda, **{k: getattr(panda, k)[:3] for k in ("a", "alpha", "d", "theta", "lower", "upper")},
-                  tool=[0.3, 0.0, 0.0])
+                  tool=[0.3, 0.0, 0.0], extras={"inertials": panda.extras["inertials"][:3]})  # one per joint
     robot = save_robot(arm, tmp_path / "r3.yaml")
     centre = tool_point(arm, np.array([0.2, 0.5, 0.1])).tolist()
     fixtures = _write(tmp_path, f"fixtures:\n  A: {{position: {centre}}}\n")

@@ -82,6 +82,25 @@ BAD_FILES = [
     # a misspelt key used to be dropped silently: the base placement or a joint offset read as zero
     ("base typo", lambda d: d.update(base={"xyz": [0, 0, 0], "RPY": [0, 0, 1.5]}), r"base: unknown key 'RPY'"),
     ("joint typo", lambda d: d["joints"][3].update(offset=0.1), r"joints\[3\]: unknown key 'offset'"),
+    # a hand-edited optional block was read only where it was used: a `compliance` or `scale` of the wrong
+    # length was a ValueError traceback in calibrate, a NaN compliance calibrated, and a wrong `joint_names` or
+    # `inertials` block was kept (inertials of 6 links on a 7-joint arm: the elastic candidates silently dropped)
+    ("compliance length", lambda d: d.update(compliance=[0.0, 0.0]),
+     r"field 'compliance': expected a list of 7 finite numbers \[rad/Nm\], got \[0.0, 0.0\]"),
+    ("compliance nan", lambda d: d.update(compliance=[float("nan")] + [0.0] * 6), r"field 'compliance': expected"),
+    ("compliance text", lambda d: d.update(compliance="0"), r"field 'compliance': expected a list of 7"),
+    ("scale length", lambda d: d.update(scale=[0.0] * 8), r"field 'scale': expected a list of 7 finite numbers"),
+    ("joint_names length", lambda d: d.update(joint_names=[f"j{k}" for k in range(6)]),
+     r"field 'joint_names': expected a list of 7 joint names"),
+    ("joint_names twice", lambda d: d.update(joint_names=[f"j{k}" for k in range(6)] + ["j2"]),
+     r"field 'joint_names': 'j2' is named twice"),
+    ("inertials count", lambda d: d["inertials"].pop(), r"field 'inertials': expected a list of 7 \{mass, com\} "
+     r"entries, got 6 entries"),
+    ("inertials mass", lambda d: d["inertials"][2].update(mass=-1.0), r"field 'inertials\[2\]'.mass: expected a "
+     r"finite mass >= 0"),
+    ("inertials millimetres", lambda d: d["inertials"][6].update(com=[10.5, -4.2, 61.6]),
+     r"field 'inertials\[6\]'.com: .* not physical \(at most 10 m; the file is in metres\)"),
+    ("payload", lambda d: d.update(payload={"mass": "lots"}), r"field 'payload'.mass: expected a finite mass"),
 ]
 
 

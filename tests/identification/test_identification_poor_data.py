@@ -81,3 +81,33 @@ def test_a_degenerate_direction_is_not_refused() -> None:
     params = params_of(fit.x)
     assert np.abs(tool_point(nominal.with_params(params), q) - target).max() < 1e-5  # the same tool points
     check_plausible(problem, params)
+
+
+def test_a_fixture_per_pair_of_samples_is_refused_before_the_memory_runs_out(tmp_path) -> None:
+    # a fixture column naming every pair of rows (10 000 fixtures of 2 samples: 30 037 unknowns): the dense
+    # Jacobian would be 14 GB; the process grew until the kernel killed it after a minute, with no message.
+    # Run under a 3 GB address-space limit so that a regression fails here quickly instead of swapping.
+    import resource
+    import subprocess
+    import sys
+
+    from spherecal.correction import save_robot
+    from spherecal.correction.files.samples import Dataset
+    from spherecal.correction.files.samples_csv import write_samples
+
+    panda = load_robot("panda")
+    q = panda.random_configurations(20_000, np.random.default_rng(0))
+    path = write_samples(tmp_path / "samples.csv", Dataset(labels=np.array([f"F{k // 2}" for k in range(20_000)]),
+                                                           q=q))
+    save_robot(panda, tmp_path / "robot.yaml")
+
+    def limit() -> None:
+        resource.setrlimit(resource.RLIMIT_AS, (3_000_000_000, 3_000_000_000))
+
+    run = subprocess.run([sys.executable, "-c", "import sys; from spherecal.cli import main; sys.exit(main())",
+                          "calibrate", "--robot", str(tmp_path / "robot.yaml"), "--samples", str(path), "--out",
+                          str(tmp_path / "cal.yaml")], capture_output=True, text=True, timeout=120, preexec_fn=limit)
+    assert run.returncode == 1 and len(run.stderr.strip().splitlines()) == 1, run.stderr[-800:]
+    assert "field 'fixture': 10000 fixtures and 20000 samples make 30037 unknowns" in run.stderr
+    assert "14.4 GB Jacobian (at most 0.5 GB): does the fixture column name each sample?" in run.stderr
+    assert not (tmp_path / "cal.yaml").exists()

@@ -121,3 +121,19 @@ def test_ambiguous_drifting_or_incomplete_recordings_are_refused(recording, tmp_
     assert "back.csv: row 3, field 't': time goes back" in _refused(
         ["import", str(csv), "--format", "csv", "--robot", str(PANDA), "--out", str(tmp_path / "out")], tmp_path, capsys
     )
+
+
+@pytest.mark.parametrize("kind", ["sqlite3", "ros1"])
+def test_a_bag_whose_clock_goes_back_is_refused_not_interleaved(recording, kind, tmp_path, capsys) -> None:
+    # the stamps jump back 3 s after 8 s (a clock reset, two recordings in one bag): the reader sorted the
+    # messages by stamp, interleaving the two streams; the import then said "no fixture found" here, and on a
+    # three-socket stream exited 0 with one socket dropped and another cut by half
+    true, t, q, _ = recording
+    back = np.where(np.arange(len(t)) < 1600, t, t - 3.0)
+    bag = write_bag(tmp_path / ("back.bag" if kind == "ros1" else "back"), kind, back, q, NAMES)
+    argv = ["import", str(bag), "--format", "bag", "--robot", str(PANDA), "--out", str(tmp_path / "out")]
+    error = _refused(argv, tmp_path, capsys)
+    assert "field 'header.stamp': the joints move" in error and "faster than 10 rad/s" in error
+    assert "messages of two streams interleaved by their stamps" in error
+    bag = write_bag(tmp_path / ("ok.bag" if kind == "ros1" else "ok"), kind, t, q, NAMES)  # the same, in order
+    assert main([*argv[:1], str(bag), *argv[2:]]) == 0

@@ -191,6 +191,6 @@ def test_binary_candidates_file_is_one_line(tmp_path, panda):
     # a binary file escaped as a UnicodeDecodeError traceback
     path = tmp_path / "c.yaml"
     path.write_bytes(b"\x89PNG\r\n\x1a\n\xf0\x90\x80")
-    with pytest.raises(CandidateError, match="cannot read candidates"):
+    with pytest.raises(CandidateError, match="c.yaml: cannot read: not UTF-8"):
         read_candidates(path, panda.n_joints)
 

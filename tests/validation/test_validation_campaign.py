@@ -72,6 +72,13 @@ def test_campaign_is_the_same_on_one_or_two_workers(tmp_path) -> None:
     assert sorted(p.name for p in (tmp_path / "out").iterdir()) == ["table2.csv", "table2.md"]
 
 
+def test_no_progress_bar_on_a_stderr_that_is_not_a_terminal(capsys) -> None:
+    # the campaign's bar was tqdm's default (shown on pipes and log files): `campaign --scheduler` that could not
+    # connect printed two bar lines before its one-line refusal
+    run_campaign(CampaignConfig(sets=2, fixture_sets=("P1",)), workers=1, progress=True, runner=fake_runner)
+    assert capsys.readouterr().err == ""
+
+
 @pytest.mark.slow
 def test_small_real_campaign_is_reproducible(tmp_path) -> None:
     from spherecal.validation.experiments.campaign import run_task

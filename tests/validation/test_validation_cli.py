@@ -65,6 +65,9 @@ def test_recorded_mocap_validation(files, capsys) -> None:
 def _bad_joint_count(files, tmp_path):
     data = robot_to_dict(load_robot(files["calibrated"]))
     data["joints"] = data["joints"][:6]
+    for key in ("inertials", "compliance", "scale", "joint_names"):  # per-joint blocks: one per joint left
+        if key in data:
+            data[key] = data[key][:6]
     path = tmp_path / "six.yaml"
     path.write_text(dump_robot(robot_from_dict(data)))
     return ["--truth", str(files["truth"])], {"calibrated": path}, "field joints: 6 joints"

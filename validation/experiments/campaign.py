@@ -41,6 +41,7 @@ from spherecal.identification.workflow import WorkflowOptions, run_workflow
 from .. import parallel
 from ..parallel import Failure, run_tasks
 from ..pipeline import RANDOM_SET, validate_models
+from ..progress import progress_bar
 from .experiment import default_fixtures, motion_set, nominal_robot, true_robot
 
 #: The paper's simulated Table 2 (mm): row -> (mean of average error, mean of maximal error).
@@ -210,27 +211,27 @@ def run_campaign(
     executor: Executor | None = None,
     scheduler: str | None = None,
 ) -> CampaignRun:
-    """Run every task with a tqdm progress bar that follows finished tasks.
+    """Run every task with a progress bar that follows finished tasks (:func:`..progress.progress_bar`: on a
+    terminal only).
 
     Args:
         config: the protocol.
         workers: processes of the built-in pool (1: in this process), or of ``scheduler="local"``.
-        progress: show the progress bar.
+        progress: show the progress bar (when stderr is a terminal).
         runner: the task function (module-level: it is sent to the workers).
         executor: run on this executor instead (any concurrent.futures.Executor, e.g. a Dask
             client's ``get_executor()``); ``workers`` and ``scheduler`` are then unused.
         scheduler: a dask.distributed scheduler's address, or ``"local"`` (see :func:`validation.parallel.executor`).
     """
-    from tqdm import tqdm  # tqdm: only when a progress bar is shown
-
     todo = tasks(config)
     names = [f"{task.row} set {task.index}" for task in todo]
-    with tqdm(total=len(todo), desc="campaign", unit="set", disable=not progress) as bar:
+    # a bar on a pipe or log file (tqdm's default) put lines before a refusal's one line on stderr
+    with progress_bar(len(todo), "campaign", "set", quiet=not progress) as update:
         if executor is not None:
-            outcome = run_tasks(runner, todo, executor, names, bar.update)
+            outcome = run_tasks(runner, todo, executor, names, update)
         else:
             with parallel.executor(workers, scheduler) as own:
-                outcome = run_tasks(runner, todo, own, names, bar.update)
+                outcome = run_tasks(runner, todo, own, names, update)
     results = [result for result in outcome.results if result is not None]
     return CampaignRun(results, outcome.failures, outcome.workers)
 

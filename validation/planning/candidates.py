@@ -9,7 +9,8 @@ from pathlib import Path
 import numpy as np
 
 from spherecal.correction.errors import SpherecalError
-from spherecal.correction.files.yaml_safe import load_yaml
+from spherecal.correction.files.text_input import read_text
+from spherecal.correction.files.yaml_safe import MAX_FILE_BYTES, load_yaml
 
 #: Most grid points :func:`grid_candidates` makes (each one is surveyed and scored).
 MAX_GRID = 10_000
@@ -98,10 +99,7 @@ def candidate_entries(path: Path, expected: str) -> dict:
     Raises:
         CandidateError: unreadable file, or no non-empty mapping (``expected`` names an entry's form).
     """
-    try:
-        text = path.read_text(encoding="utf-8")
-    except (OSError, UnicodeDecodeError) as error:
-        raise CandidateError(f"{path}: cannot read candidates: {str(error).splitlines()[0]}") from None
+    text = read_text(path, CandidateError, limit=MAX_FILE_BYTES)
     data, _ = load_yaml(text, str(path), CandidateError)
     entries = data.get("candidates") if isinstance(data, dict) else None
     if not isinstance(entries, dict) or not entries:
