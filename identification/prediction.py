@@ -166,7 +166,16 @@ def _linearised(problem: CalibrationProblem, noise: float, sample_weight: float 
     """The pruned problem at its generic point: ``(lin, x_lin, pruned, x, rows, jac, inverse)`` (``rows``: the
     sample rows' weights, ``jac`` weighted by them, ``inverse`` of its normal matrix). ``free``: the parameters a
     calibration identified (indices into the model's), the others left at nominal as it left them; default: pruned
-    at ``noise`` (:func:`.pruning.prune`)."""
+    at ``noise`` (:func:`.pruning.prune`). Kept in ``problem``'s cache: the self-check's record asks for the same
+    one twice (:func:`joint_error_root`, :func:`deviation_root`); the arrays are shared, not to be written."""
+    key = ("linearised", float(noise), float(sample_weight), None if free is None else np.asarray(free).tobytes())
+    if key not in problem._cache:
+        problem._cache[key] = _linearise(problem, noise, sample_weight, free)
+    return problem._cache[key]
+
+
+def _linearise(problem: CalibrationProblem, noise: float, sample_weight: float, free: np.ndarray | None):
+    """:func:`_linearised`, computed."""
     lin, x_lin = problem.generic_point()
     if free is None:
         pruned, x = prune(lin, x_lin, max(noise, SIGMA_FLOOR) / np.sqrt(sample_weight))
