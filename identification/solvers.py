@@ -3,9 +3,11 @@
 ``lm`` is our own column-scaled trust-region Levenberg-Marquardt (:mod:`.levenberg`) on the
 analytic Jacobian: it reaches :func:`scipy.optimize.least_squares`' minimum (cost to 1e-9
 relative, unknowns within std / 100) in 4-5 Jacobian evaluations where scipy's MINPACK takes 6-9,
-without importing scipy.optimize. scipy's ``least_squares`` (imported only then) still solves the
-robust losses ``soft_l1`` / ``huber`` (trust-region reflective, scale: the expected noise) and
-continues from where ours stops when ours used up its budget (:data:`MAX_OURS`).
+without importing scipy.optimize. The robust losses ``soft_l1`` / ``huber`` (scale ``f``: the expected
+noise) are scipy's objective ``f^2 / 2 sum rho(r_i^2 / f^2)`` written as plain least squares on the
+residuals ``f sign(r) sqrt(rho(r^2 / f^2))`` (:func:`robust_residuals`), which ours solves too.
+scipy's ``least_squares`` (imported only then) continues from where ours stops when ours used up its
+budget (:data:`MAX_OURS`), with the same loss.
 
 ``pso`` is the paper's method: pyswarms' ``GlobalBestPSO`` over bounded deviations of the
 identified parameters from the start, minimising eq. 5, the mean distance between each sample's
@@ -79,9 +81,24 @@ def solve_lm(
         raise ValueError(f"unknown loss {loss!r}, expected one of {LOSSES}")
     x0 = problem.x0 if x0 is None else np.asarray(x0, float)
     start = time.perf_counter()
+    residuals, jacobian = problem.residuals, problem.jacobian
     if loss != "linear":
-        return solve_scipy(problem, x0, loss, f_scale, tol, max_nfev, start)
-    ours = levenberg_marquardt(problem.residuals, problem.jacobian, x0, tol, tol, tol, max_nfev or MAX_OURS)
+        scale, last = f_scale or problem.noise, {}
+
+        def robust(x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:  # the Jacobian comes at the last residual's x
+            key = x.tobytes()
+            if key not in last:
+                last.clear()
+                last[key] = robust_residuals(problem.residuals(x), loss, scale)
+            return last[key]
+
+        def residuals(x: np.ndarray) -> np.ndarray:
+            return robust(x)[0]
+
+        def jacobian(x: np.ndarray) -> np.ndarray:
+            return robust(x)[1][:, None] * problem.jacobian(x)
+
+    ours = levenberg_marquardt(residuals, jacobian, x0, tol, tol, tol, max_nfev or MAX_OURS)
     if ours.converged:
         return Solution(ours.x, ours.evaluations, time.perf_counter() - start, ours.message, ours.jacobians)
     rescue = solve_scipy(problem, ours.x, loss, f_scale, tol, max_nfev, start)
@@ -91,6 +108,35 @@ def solve_lm(
         jacobians=rescue.jacobians + ours.jacobians,
         message=f"{ours.message}; scipy continued: {rescue.message}",
     )
+
+
+def robust_residuals(r: np.ndarray, loss: str, f_scale: float) -> tuple[np.ndarray, np.ndarray]:
+    """Residuals whose plain sum of squares is scipy's robust cost, and their slope.
+
+    ``t = f sign(r) sqrt(rho(z))``, ``z = r^2 / f^2``, so ``sum t^2 = f^2 sum rho(z)`` (twice
+    :func:`scipy.optimize.least_squares`' cost with ``loss``, ``f_scale = f``); ``dt/dr = rho'(z) |r| / (f
+    sqrt(rho(z)))``, 1 at ``r = 0`` (``rho(z) ~ z`` there).
+
+    Args:
+        r: (M,) residuals.
+        loss: ``soft_l1`` (``rho = 2 (sqrt(1 + z) - 1)``) or ``huber`` (``z`` up to 1, ``2 sqrt(z) - 1`` beyond).
+        f_scale: ``f``, in the residuals' unit.
+
+    Returns:
+        (M,) ``t`` and (M,) ``dt/dr``.
+    """
+    z = (r / f_scale) ** 2
+    if loss == "soft_l1":
+        rho, slope = 2.0 * (np.sqrt(1.0 + z) - 1.0), 1.0 / np.sqrt(1.0 + z)
+    elif loss == "huber":
+        root = np.sqrt(np.maximum(z, 1.0))
+        rho, slope = np.where(z <= 1.0, z, 2.0 * root - 1.0), np.where(z <= 1.0, 1.0, 1.0 / root)
+    else:
+        raise ValueError(f"unknown robust loss {loss!r}")
+    size = np.sqrt(rho)
+    tiny = size <= 1e-8  # rho ~ z: t ~ r, slope 1
+    gain = np.where(tiny, 1.0, slope * np.abs(r) / (f_scale * np.where(tiny, 1.0, size)))
+    return f_scale * np.sign(r) * size, gain
 
 
 def solve_scipy(

@@ -132,8 +132,36 @@ def test_solve_lm_uses_ours_without_scipy_for_the_plain_loss(truth) -> None:
     ref, std = _reference(problem, problem.x0)
     assert solution.converged and solution.jacobians < ref.njev
     assert np.all(np.abs(solution.x - ref.x) <= std / 100)
-    robust = solve_lm(problem, loss="soft_l1")  # scipy's TRF: a different loss, a different minimum
-    assert robust.jacobians > 0 and "ftol" in robust.message or "gtol" in robust.message or "xtol" in robust.message
+
+
+@pytest.mark.parametrize("loss", ["soft_l1", "huber"])
+def test_a_robust_loss_through_ours_reaches_scipys_robust_minimum(truth, loss) -> None:
+    """The robust losses as plain least squares on ``f sign(r) sqrt(rho(r^2 / f^2))`` (solvers.robust_residuals):
+    the same cost as scipy's TRF with that loss, its minimum within std / 100, with outliers in the data."""
+    from scipy.optimize import least_squares
+
+    from spherecal.identification.solvers import robust_residuals, solve_scipy
+
+    panda, true = truth
+    dataset, spec = _data(true, 3e-4, 3)
+    q = dataset.q.copy()
+    q[::25, 3] += 0.02  # every 25th sample 20 mrad off on joint 4: outliers of ~10 mm
+    dataset = replace(dataset, q=q)
+    problem = build_problem(panda, dataset, spec)
+    x = problem.x0 + 1e-4
+    r = problem.residuals(x)
+    scipy_cost = least_squares(problem.residuals, x, loss=loss, f_scale=problem.noise, max_nfev=1).cost
+    t, slope = robust_residuals(r, loss, problem.noise)
+    assert np.isclose(0.5 * t @ t, scipy_cost, rtol=1e-12)
+    step = 1e-9  # the slope against finite differences of t(r)
+    ahead = robust_residuals(r + step, loss, problem.noise)[0]
+    assert np.allclose((ahead - t) / step, slope, rtol=1e-4, atol=1e-6)
+    ours = solve_lm(problem, loss=loss)
+    reference = solve_scipy(problem, problem.x0, loss)
+    _, std = _reference(problem, problem.x0)
+    assert ours.converged and "scipy" not in ours.message, ours.message
+    assert ours.jacobians < reference.jacobians  # scipy's TRF alone took them all before
+    assert np.all(np.abs(ours.x - reference.x) <= std / 100)
 
 
 def test_elastic_calibration_same_as_with_scipy(truth, monkeypatch) -> None:
