@@ -4,10 +4,11 @@
 analytic Jacobian: it reaches :func:`scipy.optimize.least_squares`' minimum (cost to 1e-9
 relative, unknowns within std / 100) in 4-5 Jacobian evaluations where scipy's MINPACK takes 6-9,
 without importing scipy.optimize. The robust losses ``soft_l1`` / ``huber`` (scale ``f``: the expected
-noise) are scipy's objective ``f^2 / 2 sum rho(r_i^2 / f^2)`` written as plain least squares on the
-residuals ``f sign(r) sqrt(rho(r^2 / f^2))`` (:func:`robust_residuals`), which ours solves too.
-scipy's ``least_squares`` (imported only then) continues from where ours stops when ours used up its
-budget (:data:`MAX_OURS`), with the same loss.
+noise) apply to the samples' rows (not to the known distances, the prior or the scale anchor: a stated
+accuracy is no outlier): scipy's robust cost ``f^2 / 2 sum rho(r_i^2 / f^2)`` written as plain least squares
+on the residuals ``f sign(r) sqrt(rho(r^2 / f^2))`` (:func:`robust_residuals`), which ours solves. scipy's
+MINPACK (``least_squares``, imported only then) continues on the same residuals from where ours stops when
+ours used up its budget (:data:`MAX_OURS`).
 
 ``pso`` is the paper's method: pyswarms' ``GlobalBestPSO`` over bounded deviations of the
 identified parameters from the start, minimising eq. 5, the mean distance between each sample's
@@ -81,23 +82,7 @@ def solve_lm(
         raise ValueError(f"unknown loss {loss!r}, expected one of {LOSSES}")
     x0 = problem.x0 if x0 is None else np.asarray(x0, float)
     start = time.perf_counter()
-    residuals, jacobian = problem.residuals, problem.jacobian
-    if loss != "linear":
-        scale, last = f_scale or problem.noise, {}
-
-        def robust(x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:  # the Jacobian comes at the last residual's x
-            key = x.tobytes()
-            if key not in last:
-                last.clear()
-                last[key] = robust_residuals(problem.residuals(x), loss, scale)
-            return last[key]
-
-        def residuals(x: np.ndarray) -> np.ndarray:
-            return robust(x)[0]
-
-        def jacobian(x: np.ndarray) -> np.ndarray:
-            return robust(x)[1][:, None] * problem.jacobian(x)
-
+    residuals, jacobian = _objective(problem, loss, f_scale)
     ours = levenberg_marquardt(residuals, jacobian, x0, tol, tol, tol, max_nfev or MAX_OURS)
     if ours.converged:
         return Solution(ours.x, ours.evaluations, time.perf_counter() - start, ours.message, ours.jacobians)
@@ -108,6 +93,33 @@ def solve_lm(
         jacobians=rescue.jacobians + ours.jacobians,
         message=f"{ours.message}; scipy continued: {rescue.message}",
     )
+
+
+def _objective(problem: CalibrationProblem, loss: str, f_scale: float | None):
+    """The residual and Jacobian functions of ``problem`` under ``loss``: the sample rows through
+    :func:`robust_residuals` (scale ``f_scale``, default the problem's noise); the known distances, the prior and
+    the scale anchor stay plain (a stated accuracy and a prior are not outliers)."""
+    if loss == "linear":
+        return problem.residuals, problem.jacobian
+    scale, rows, last = f_scale or problem.noise, 3 * problem.dataset.n_samples, {}
+
+    def robust(x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:  # the Jacobian comes at the last residual's x
+        key = x.tobytes()
+        if key not in last:
+            r = problem.residuals(x).copy()
+            slope = np.ones_like(r)
+            r[:rows], slope[:rows] = robust_residuals(r[:rows], loss, scale)
+            last.clear()
+            last[key] = r, slope
+        return last[key]
+
+    def residuals(x: np.ndarray) -> np.ndarray:
+        return robust(x)[0]
+
+    def jacobian(x: np.ndarray) -> np.ndarray:
+        return robust(x)[1][:, None] * problem.jacobian(x)
+
+    return residuals, jacobian
 
 
 def robust_residuals(r: np.ndarray, loss: str, f_scale: float) -> tuple[np.ndarray, np.ndarray]:
@@ -148,8 +160,8 @@ def solve_scipy(
     max_nfev: int | None = None,
     start: float | None = None,
 ) -> Solution:
-    """:func:`scipy.optimize.least_squares` from ``x0`` (MINPACK's LM for the plain loss, else TRF, both
-    with ``x_scale='jac'``): robust losses, the rescue of ours, and the reference ours is measured against.
+    """:func:`scipy.optimize.least_squares` from ``x0`` (MINPACK's LM, ``x_scale='jac'``, on the residuals of
+    ``loss``: :func:`_objective`): the rescue of ours, and the reference ours is measured against.
 
     Args:
         problem, x0, loss, f_scale, tol, max_nfev: as :func:`solve_lm` (``max_nfev``: residual budget).
@@ -158,14 +170,13 @@ def solve_scipy(
     start = time.perf_counter() if start is None else start
     from scipy.optimize import least_squares  # scipy.optimize: heavy, only for robust losses and the rescue
 
+    residuals, jacobian = _objective(problem, loss, f_scale)
     result = least_squares(
-        problem.residuals,
+        residuals,
         x0,
-        jac=problem.jacobian,
-        method="lm" if loss == "linear" else "trf",
+        jac=jacobian,
+        method="lm",
         x_scale="jac",
-        loss=loss,
-        f_scale=f_scale or problem.noise,
         ftol=tol,
         xtol=tol,
         gtol=tol,

@@ -137,7 +137,8 @@ def test_solve_lm_uses_ours_without_scipy_for_the_plain_loss(truth) -> None:
 @pytest.mark.parametrize("loss", ["soft_l1", "huber"])
 def test_a_robust_loss_through_ours_reaches_scipys_robust_minimum(truth, loss) -> None:
     """The robust losses as plain least squares on ``f sign(r) sqrt(rho(r^2 / f^2))`` (solvers.robust_residuals):
-    the same cost as scipy's TRF with that loss, its minimum within std / 100, with outliers in the data."""
+    the same cost as scipy's with that loss, the slope of the transform against finite differences; on the samples'
+    rows of data with outliers, ours reaches MINPACK's minimum of the same objective within std / 100."""
     from scipy.optimize import least_squares
 
     from spherecal.identification.solvers import robust_residuals, solve_scipy
@@ -160,8 +161,11 @@ def test_a_robust_loss_through_ours_reaches_scipys_robust_minimum(truth, loss) -
     reference = solve_scipy(problem, problem.x0, loss)
     _, std = _reference(problem, problem.x0)
     assert ours.converged and "scipy" not in ours.message, ours.message
-    assert ours.jacobians < reference.jacobians  # scipy's TRF alone took them all before
-    assert np.all(np.abs(ours.x - reference.x) <= std / 100)
+    assert ours.jacobians < reference.jacobians  # scipy alone took them all before
+    gap = ours.x - reference.x  # an angle a turn apart is the same arm (MINPACK wanders along a flat one)
+    angle = np.array([n in problem.identified and panda.layout.is_angle(n) for n in problem.unknown_names])
+    gap[angle] = (gap[angle] + np.pi) % (2 * np.pi) - np.pi
+    assert np.all(np.abs(gap) <= std / 100)
 
 
 def test_elastic_calibration_same_as_with_scipy(truth, monkeypatch) -> None:
