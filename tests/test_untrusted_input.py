@@ -245,7 +245,7 @@ def _mocap_case(tmp_path, panda, kind: str):
 
 @pytest.mark.parametrize(("kind", "message"), [
     ("millimetres", "m from the recording's centre, but franka_panda reaches at most"),
-    ("identical rows", "1 distinct configurations in 40 rows, need at least 10"),
+    ("identical rows", "rows 2-41, field q1: 1 distinct configurations in 40 rows, need at least 10"),
     ("outside limits", "row 9: field q4: 1 rad outside the joint limits"),
     ("on one line", "rows 2-41: field x: the tool points lie on one line (0.00 mm RMS off it, at least 1 mm needed)"),
 ])

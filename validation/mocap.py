@@ -305,16 +305,16 @@ def check_mocap(measurement: MocapMeasurement, model: RobotModel, limit_tol: flo
             f"{source}: {row(k)}: field {axis}: tool point {offset[k]:.4g} m from the recording's centre, but "
             f"{model.name} reaches at most {reach:.3g} m (the file is in metres: millimetres?)"
         )
+    lines = f"rows {m.lines[0]}-{m.lines[-1]}" if m.lines is not None else f"samples 1-{len(m.tool)}"
     distinct = np.unique(m.q, axis=0).shape[0]
     if distinct < MIN_CONFIGURATIONS:
         raise MocapError(
-            f"{source}: row ?: field q1: {distinct} distinct configurations in {len(m.q)} rows, need at least "
+            f"{source}: {lines}, field q1: {distinct} distinct configurations in {len(m.q)} rows, need at least "
             f"{MIN_CONFIGURATIONS} (a registration fits fewer exactly, and every model would look perfect)"
         )
     centred = m.tool - m.tool.mean(axis=0)
     off_line = np.linalg.svd(centred, compute_uv=False)[1] / np.sqrt(len(m.tool))  # RMS off the best line [m]
     if off_line < MIN_SPREAD:
-        lines = f"rows {m.lines[0]}-{m.lines[-1]}" if m.lines is not None else f"samples 1-{len(m.tool)}"
         raise MocapError(
             f"{source}: {lines}: field x: the tool points lie on one line ({off_line * 1e3:.2f} mm RMS off it, at "
             f"least {MIN_SPREAD * 1e3:g} mm needed): the rotation about it, so the mocap frame, cannot be registered "
