@@ -126,6 +126,30 @@ def test_simulate_refuses_before_any_work_when_one_of_its_files_cannot_be_writte
             "truth.yaml: field '--out': is a folder")
 
 
+def test_simulate_keeps_a_recording_in_its_out_folder(files, capsys) -> None:
+    # `simulate --out DIR` into a folder holding a real recording (samples.csv, fixtures.yaml) replaced both with
+    # simulated data, exit 0
+    refused(["simulate", "--out", files, "--seconds", "0.01", "--per-fixture", "5"], files, capsys,
+            "samples.csv: field '--out': exists and was not written by an earlier `spherecal simulate`")
+    (files / "fixtures.yaml").unlink()  # the samples alone are still the recording
+    refused(["simulate", "--out", files, "--seconds", "0.01", "--per-fixture", "5"], files, capsys,
+            "samples.csv: field '--out'")
+
+
+def test_simulate_replaces_its_own_earlier_outputs(tmp_path, capsys) -> None:
+    from spherecal.cli import main
+
+    out = tmp_path / "sim"
+    assert main(["simulate", "--out", str(out), "--seconds", "0.01", "--per-fixture", "5", "--seed", "1"]) == 0
+    first = (out / "samples.csv").read_text()
+    assert main(["simulate", "--out", str(out), "--seconds", "0.01", "--per-fixture", "5", "--seed", "2"]) == 0
+    assert (out / "samples.csv").read_text() != first  # replaced by the new run
+    # an imported samples.csv beside the simulation's YAML files is not the simulation's: refused
+    write_samples(out / "samples.csv", Dataset(labels=np.repeat(["A"], 5), q=np.zeros((5, 7))), "command: import")
+    refused(["simulate", "--out", out, "--seconds", "0.01", "--per-fixture", "5"], tmp_path, capsys,
+            "samples.csv: field '--out': exists and was not written")
+
+
 @pytest.mark.parametrize(
     ("argv", "expected"),
     [

@@ -73,7 +73,12 @@ def _check_args(args: argparse.Namespace):
     out = Path(args.out)
     check_folder(args.out)
     # found before the simulation runs, not when the files are written; --fixtures may be out/fixtures.yaml
-    return planned_outputs(args, {"--out": [out / name for name in FILES]})
+    outputs = planned_outputs(args, {"--out": [out / name for name in FILES]})
+    from spherecal.correction.files.earlier_run import refuse_foreign_files
+
+    # a folder holding a recording keeps it: only an earlier simulation's own files are replaced
+    refuse_foreign_files([out / name for name in FILES], "--out", "simulation", "spherecal simulate")
+    return outputs
 
 
 def run(args: argparse.Namespace) -> int:
