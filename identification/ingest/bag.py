@@ -3,7 +3,9 @@
 Read with the pure-Python ``rosbags`` library; joints are matched by name to the robot's
 (:func:`.importers.match_joints`), extra joints (a gripper's fingers) are ignored. A message naming none
 of the arm's joints (a gripper driver publishing its fingers alone on the same topic, interleaved with
-the arm's messages) is skipped and counted: the import report says how many and what they named.
+the arm's messages) is skipped and counted: the import report says how many and what they named. So is a
+message that names joints but carries no positions (its velocities or efforts alone: every array of a
+``JointState`` is optional).
 """
 
 from __future__ import annotations
@@ -75,11 +77,15 @@ def read_bag(path: str | os.PathLike, model: RobotModel, topic: str = TOPIC) -> 
             cache: dict[tuple[str, ...], np.ndarray] = {}
             arm = arm_joint_names(model)
             skipped: dict[tuple[str, ...], int] = {}  # names of messages without any arm joint -> count
+            unpositioned = 0  # messages with names but no positions (a driver publishing velocities or efforts)
             for k, (connection, timestamp, raw) in enumerate(reader.messages(connections=connections)):
                 message = reader.deserialize(raw, connection.msgtype)
                 where = f"{path}: {topic} message {k + 1}"
                 names = tuple(message.name)
                 position = np.asarray(message.position, dtype=float)
+                if not position.size and names:  # JointState's arrays are optional: velocities or efforts alone
+                    unpositioned += 1
+                    continue
                 if position.shape != (len(names),):
                     raise RecordingError(f"{where}, field 'position': {position.size} positions for {len(names)} names")
                 if names not in cache and arm.isdisjoint(names):  # another device's joints (a gripper)
@@ -106,6 +112,9 @@ def read_bag(path: str | os.PathLike, model: RobotModel, topic: str = TOPIC) -> 
     others = "; ".join(f"{count} naming {', '.join(names[:4]) or 'no joint'}{', ...' if len(names) > 4 else ''}"
                        for names, count in skipped.items())
     if not values:
+        if unpositioned and not skipped:
+            raise RecordingError(f"{path}: {topic} message 1, field 'position': none of the {unpositioned} messages "
+                                 "carries joint positions (velocities or efforts only)")
         if skipped:
             expected = " or ".join(dict.fromkeys(names[0] for names in joint_name_candidates(model)))
             raise RecordingError(
@@ -116,7 +125,8 @@ def read_bag(path: str | os.PathLike, model: RobotModel, topic: str = TOPIC) -> 
     notes = (
         (f"skipped {sum(skipped.values())} messages on {topic} without any of the arm's joints ({others}): "
          "another device (a gripper) publishing on the same topic",) if skipped else ()
-    )
+    ) + ((f"skipped {unpositioned} messages on {topic} without positions (velocities or efforts only)",)
+         if unpositioned else ())
     t = np.array(stamps)
     order = np.argsort(t, kind="stable")
     q, t = np.array(values)[order], t[order]

@@ -137,3 +137,42 @@ def test_a_bag_whose_clock_goes_back_is_refused_not_interleaved(recording, kind,
     assert "messages of two streams interleaved by their stamps" in error
     bag = write_bag(tmp_path / ("ok.bag" if kind == "ros1" else "ok"), kind, t, q, NAMES)  # the same, in order
     assert main([*argv[:1], str(bag), *argv[2:]]) == 0
+
+
+def test_messages_without_positions_are_skipped_and_counted(recording, tmp_path, capsys) -> None:
+    # every array of a JointState is optional: a driver publishing the arm's velocities alone between its position
+    # messages made the whole bag a refusal ('message 2, field 'position': 0 positions for 7 names')
+    from rosbags.rosbag2 import Writer
+    from rosbags.typesys import Stores, get_typestore
+
+    true, t, q, truth = recording
+    store = get_typestore(Stores.ROS2_HUMBLE)
+    state, header, time = (store.types[k] for k in ("sensor_msgs/msg/JointState", "std_msgs/msg/Header",
+                                                    "builtin_interfaces/msg/Time"))
+
+    def message(stamp: float, position) -> bytes:
+        sec = int(stamp)
+        head = header(stamp=time(sec=sec, nanosec=int(round((stamp - sec) * 1e9))), frame_id="")
+        data = state(header=head, name=NAMES, position=np.asarray(position, float), velocity=np.zeros(7),
+                     effort=np.zeros(0))
+        return store.serialize_cdr(data, state.__msgtype__)
+
+    bag = tmp_path / "velocities"
+    with Writer(bag, version=9) as writer:
+        connection = writer.add_connection("/joint_states", state.__msgtype__, typestore=store)
+        for k in range(len(t)):
+            writer.write(connection, int(t[k] * 1e9), message(t[k], q[k]))
+            writer.write(connection, int(t[k] * 1e9) + 1000, message(t[k] + 1e-6, []))
+    out = tmp_path / "out"
+    assert main(["import", str(bag), "--format", "bag", "--robot", str(PANDA), "--out", str(out),
+                 "--max-per-fixture", "100000"]) == 0
+    assert f"skipped {len(t)} messages on /joint_states without positions" in capsys.readouterr().out
+    _check_split(out, true, t, q, truth)
+    only = tmp_path / "only_velocities"
+    with Writer(only, version=9) as writer:
+        connection = writer.add_connection("/joint_states", state.__msgtype__, typestore=store)
+        for k in range(10):
+            writer.write(connection, int(t[k] * 1e9), message(t[k], []))
+    error = _refused(["import", str(only), "--format", "bag", "--robot", str(PANDA), "--out", str(tmp_path / "o2")],
+                     tmp_path, capsys)
+    assert "field 'position': none of the 10 messages carries joint positions" in error
