@@ -176,3 +176,48 @@ def test_messages_without_positions_are_skipped_and_counted(recording, tmp_path,
     error = _refused(["import", str(only), "--format", "bag", "--robot", str(PANDA), "--out", str(tmp_path / "o2")],
                      tmp_path, capsys)
     assert "field 'position': none of the 10 messages carries joint positions" in error
+
+
+def _held(out, q, truth) -> list[int]:
+    """Samples per fixture of an import, each checked to be one recorded in its socket (by its joint angles)."""
+    dataset = read_samples(out / "samples.csv", load_robot(PANDA))
+    assert dataset.fixture_names == ("S1", "S2")
+    counts = []
+    for j, name in enumerate(dataset.fixture_names):
+        socket = {row.tobytes() for row in q[truth == j]}
+        assert all(row.tobytes() in socket for row in dataset.for_fixture(name))
+        counts.append(len(dataset.for_fixture(name)))
+    return counts
+
+
+def test_csv_time_in_milliseconds_is_refused_unless_the_header_names_the_unit(recording, tmp_path, capsys) -> None:
+    # stamps in milliseconds were read as seconds (samples 5 s apart) and the import said 'no fixture found';
+    # microseconds above 1e15 were read as nanoseconds; a 'time_ns' column was not a time column at all
+    true, t, q, truth = recording
+    body = lambda scale: "\n".join(f"{float(t[k] - t[0]) * scale!r}," + ",".join(repr(float(v)) for v in q[k])  # noqa: E731
+                                   for k in range(len(t))) + "\n"
+    argv = ["import", "--format", "csv", "--robot", str(PANDA), "--max-per-fixture", "9999"]
+    (tmp_path / "ms.csv").write_text("time," + ",".join(NAMES) + "\n" + body(1e3))
+    error = _refused([*argv, str(tmp_path / "ms.csv"), "--out", str(tmp_path / "a")], tmp_path, capsys)
+    assert "ms.csv: row 3, field 'time': samples 5 s apart (median)" in error and "(milliseconds?)" in error
+    for name, scale in (("time_ms", 1e3), ("stamp [us]", 1e6), ("time_ns", 1e9)):
+        (tmp_path / "unit.csv").write_text(f"{name}," + ",".join(NAMES) + "\n" + body(scale))
+        out = tmp_path / name.replace(" ", "")
+        assert main([*argv, str(tmp_path / "unit.csv"), "--out", str(out)]) == 0, name
+        assert min(_held(out, q, truth)) > 0.8 * np.count_nonzero(truth == 0)
+
+
+def test_a_plotjuggler_csv_of_joint_states_is_read_by_its_position_columns(recording, tmp_path, capsys) -> None:
+    # PlotJuggler exports a topic as '__time,/joint_states/<joint>/position,/joint_states/<joint>/velocity,...':
+    # refused, 'joint franka_panda_joint1 not in the recording'
+    true, t, q, truth = recording
+    columns = ",".join(f"/joint_states/{n}/position,/joint_states/{n}/velocity" for n in reversed(NAMES))
+    rows = [f"{float(t[k] - t[0])!r}," + ",".join(f"{float(v)!r},0.0" for v in q[k, ::-1]) for k in range(len(t))]
+    (tmp_path / "pj.csv").write_text("__time," + columns + "\n" + "\n".join(rows) + "\n")
+    argv = ["import", str(tmp_path / "pj.csv"), "--format", "csv", "--robot", str(PANDA), "--max-per-fixture", "9999"]
+    assert main(argv + ["--out", str(tmp_path / "a")]) == 0
+    assert min(_held(tmp_path / "a", q, truth)) > 0.8 * np.count_nonzero(truth == 0)
+    (tmp_path / "two.csv").write_text("__time," + columns + ",/cmd/panda_joint1/position\n"
+                                      + "\n".join(row + ",0.0" for row in rows) + "\n")
+    error = _refused([*argv[:1], str(tmp_path / "two.csv"), *argv[2:], "--out", str(tmp_path / "b")], tmp_path, capsys)
+    assert "field 'panda_joint1': joint 'panda_joint1' is named twice" in error
