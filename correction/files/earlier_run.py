@@ -15,6 +15,7 @@ to simulated data. A file is the earlier run's own when it carries the run's pro
 from __future__ import annotations
 
 import os
+from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
@@ -52,6 +53,32 @@ def _leading_comments(path: Path) -> list[str]:
             break
         lines.append(line[2:] if line.startswith("# ") else line[1:])
     return lines
+
+
+def leading_comments(path: str | os.PathLike) -> list[str]:
+    """The ``#`` lines a text file starts with (its first :data:`HEAD_BYTES`), ``#`` and one space removed."""
+    return _leading_comments(Path(path))
+
+
+def refuse_unless_own(files: list[str | os.PathLike], option: str, command: str,
+                      own: Callable[[Path], bool]) -> None:
+    """Refuse to replace an existing file among ``files`` for which ``own`` is False.
+
+    Args:
+        files: the files the command will write (some may exist).
+        option: the option naming their folder (``--out``), for the message.
+        command: the command, for the message (``spherecal demo``).
+        own: whether an existing file is an earlier run's own output.
+
+    Raises:
+        OutputError: one line naming the first such file and the option.
+    """
+    for path in map(Path, files):
+        if path.is_file() and not own(path):
+            raise OutputError(
+                f"{path}: field '{option}': exists and was not written by an earlier `{command}` (a recording "
+                "or your own file); choose a new folder or move it away"
+            )
 
 
 def refuse_foreign_files(files: list[str | os.PathLike], option: str, block: str, command: str) -> None:
