@@ -17,7 +17,14 @@ import numpy as np
 
 from spherecal.correction.model import RobotModel
 
-from .importers import Recording, RecordingError, arm_joint_names, joint_name_candidates, match_joints
+from .importers import (
+    Recording,
+    RecordingError,
+    arm_joint_names,
+    joint_name_candidates,
+    match_joints,
+    missing_joints,
+)
 
 #: Default topic.
 TOPIC = "/joint_states"
@@ -78,6 +85,7 @@ def read_bag(path: str | os.PathLike, model: RobotModel, topic: str = TOPIC) -> 
             arm = arm_joint_names(model)
             skipped: dict[tuple[str, ...], int] = {}  # names of messages without any arm joint -> count
             unpositioned = 0  # messages with names but no positions (a driver publishing velocities or efforts)
+            partial: dict[tuple[str, ...], list] = {}  # names of some of the arm's joints -> [count, first message]
             for k, (connection, timestamp, raw) in enumerate(reader.messages(connections=connections)):
                 message = reader.deserialize(raw, connection.msgtype)
                 where = f"{path}: {topic} message {k + 1}"
@@ -90,6 +98,9 @@ def read_bag(path: str | os.PathLike, model: RobotModel, topic: str = TOPIC) -> 
                     raise RecordingError(f"{where}, field 'position': {position.size} positions for {len(names)} names")
                 if names not in cache and arm.isdisjoint(names):  # another device's joints (a gripper)
                     skipped[names] = skipped.get(names, 0) + 1
+                    continue
+                if names not in cache and missing_joints(names, model):  # the arm's state split over messages
+                    partial.setdefault(names, [0, k + 1])[0] += 1
                     continue
                 if names not in cache:
                     cache[names] = match_joints(list(names), model, where)[0]
@@ -111,6 +122,17 @@ def read_bag(path: str | os.PathLike, model: RobotModel, topic: str = TOPIC) -> 
         raise RecordingError(f"{path}: cannot read the bag: {error}") from None
     others = "; ".join(f"{count} naming {', '.join(names[:4]) or 'no joint'}{', ...' if len(names) > 4 else ''}"
                        for names, count in skipped.items())
+    some = "; ".join(f"{count} naming {', '.join(names[:4])}{', ...' if len(names) > 4 else ''} (not "
+                     f"{', '.join(missing_joints(names, model)[:3])})" for names, (count, _) in partial.items())
+    if not values and partial:
+        first = min(k for _, k in partial.values())
+        if len(partial) == 1 or missing_joints(set().union(*partial), model):  # a joint missing from the topic
+            names = next(names for names, (_, k) in partial.items() if k == first)
+            match_joints(list(names), model, f"{path}: {topic} message {first}")  # raises, naming that joint
+        raise RecordingError(
+            f"{path}: {topic} message {first}, field 'name': no message names all of the arm's joints ({some}): "
+            "joint angles split over messages are not of one instant; record all of the arm's joints in one message"
+        )
     if not values:
         if unpositioned and not skipped:
             raise RecordingError(f"{path}: {topic} message 1, field 'position': none of the {unpositioned} messages "
@@ -126,7 +148,8 @@ def read_bag(path: str | os.PathLike, model: RobotModel, topic: str = TOPIC) -> 
         (f"skipped {sum(skipped.values())} messages on {topic} without any of the arm's joints ({others}): "
          "another device (a gripper) publishing on the same topic",) if skipped else ()
     ) + ((f"skipped {unpositioned} messages on {topic} without positions (velocities or efforts only)",)
-         if unpositioned else ())
+         if unpositioned else ()) + ((f"skipped {sum(c for c, _ in partial.values())} messages on {topic} naming "
+                                      f"only some of the arm's joints ({some})",) if partial else ())
     t = np.array(stamps)
     order = np.argsort(t, kind="stable")
     q, t = np.array(values)[order], t[order]

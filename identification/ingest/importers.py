@@ -106,6 +106,12 @@ def arm_joint_names(model: RobotModel) -> set[str]:
     return {name for names in joint_name_candidates(model) for name in names}
 
 
+def missing_joints(available, model: RobotModel) -> list[str]:
+    """The robot's joints ``available`` lacks under the convention it matches best (none: it names them all)."""
+    present = set(available)
+    return min(([name for name in names if name not in present] for names in joint_name_candidates(model)), key=len)
+
+
 def match_joints(available: list[str], model: RobotModel, where: str) -> tuple[np.ndarray, list[str]]:
     """Positions of the robot's joints in ``available`` (extra names, e.g. fingers, are ignored).
 
