@@ -126,6 +126,24 @@ def test_simulate_refuses_before_any_work_when_one_of_its_files_cannot_be_writte
             "truth.yaml: field '--out': is a folder")
 
 
+@pytest.mark.parametrize(("argv", "expected"), [
+    # each wrote its file with exit 0, and the next command read it by its name: 'invalid XML: line 1, column 1'
+    (["calibrate", "--robot", "robot.yaml", "--samples", "samples.csv", "--out", "cal.urdf"],
+     "cal.urdf: field '--out': a calibrated robot file (YAML) named .urdf would be read as URDF; name it .yaml"),
+    (["tool", "calibrated.yaml", "--offset", "0", "0", "0.1", "--out", "tcp.urdf"],
+     "named .urdf would be read as URDF"),
+    (["export", "calibrated.yaml", "--format", "urdf", "--out", "arm.yaml", "--effort", "1,1,1,1,1,1,1"],
+     "arm.yaml: field '--out': a URDF (--format urdf) named .yaml would be read as YAML; name it .urdf"),
+    (["export", "calibrated.yaml", "--format", "mjcf", "--out", "arm.urdf"],
+     "an MJCF model (--format mjcf) named .urdf"),
+    (["export", "calibrated.yaml", "--format", "yaml", "--out", "arm.xml"],
+     "a robot file (YAML) (--format yaml) named .xml"),
+])
+def test_an_output_named_for_another_format_is_refused(files, capsys, monkeypatch, argv, expected) -> None:
+    monkeypatch.chdir(files)
+    refused(argv, files, capsys, expected)
+
+
 def test_simulate_keeps_a_recording_in_its_out_folder(files, capsys) -> None:
     # `simulate --out DIR` into a folder holding a real recording (samples.csv, fixtures.yaml) replaced both with
     # simulated data, exit 0
