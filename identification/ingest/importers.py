@@ -280,8 +280,10 @@ def read_joint_csv(path: str | os.PathLike, model: RobotModel) -> Recording:
         start, first = first, first + len(block)
         if header is None:
             for k, line in enumerate(block):
-                if not is_skipped(line) or line.lstrip().startswith("#"):  # comments only after the header
+                if not is_skipped(line) or line.lstrip().startswith("#"):  # a header may start with '#'
                     where = f"{path}: row {start + k}"
+                    if _comment_before_header(line, model, where):  # provenance lines of samples.csv
+                        continue
                     header = [f.strip() for f in parse_line(line, where, RecordingError)]
                     if all(_is_number(f) for f in header):
                         raise RecordingError(
@@ -348,6 +350,19 @@ def _match_columns(header: list[str], model: RobotModel, where: str) -> tuple[np
             if "named twice" in str(error):  # two topics' columns of one joint: say that, not 'missing'
                 raise error from None
         raise
+
+
+def _comment_before_header(line: str, model: RobotModel, where: str) -> bool:
+    """Whether a ``#`` line before the header is a comment (the provenance block spherecal writes first in
+    samples.csv), not a header that starts with ``#`` (``# time,panda_joint1,...`` of numpy's savetxt)."""
+    if not line.lstrip().startswith("#"):
+        return False
+    try:
+        fields = [f.strip().lstrip("#").strip() for f in parse_line(line, where, RecordingError)]
+    except RecordingError:
+        return True
+    return bool(missing_joints(fields, model)) and bool(
+        missing_joints([_TOPIC_POSITION.sub(r"\1", f) for f in fields], model))
 
 
 def _time_column(header: list[str]) -> tuple[int | None, str | None]:

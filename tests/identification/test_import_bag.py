@@ -236,3 +236,26 @@ def test_a_plotjuggler_csv_of_joint_states_is_read_by_its_position_columns(recor
                                       + "\n".join(row + ",0.0" for row in rows) + "\n")
     error = _refused([*argv[:1], str(tmp_path / "two.csv"), *argv[2:], "--out", str(tmp_path / "b")], tmp_path, capsys)
     assert "field 'panda_joint1': joint 'panda_joint1' is named twice" in error
+
+
+def test_a_samples_csv_with_its_provenance_comments_imports_as_a_labelled_csv(recording, tmp_path, capsys) -> None:
+    # read_joint_csv's docstring says samples.csv is such a file, but the '# command: ...' line spherecal writes
+    # first was taken for the header: 'joint panda_joint1 not in the recording (has # command: ...)'
+    from spherecal.correction.files.samples import Dataset
+    from spherecal.correction.files.samples_csv import write_samples
+
+    _, t, q, truth = recording
+    held = truth >= 0
+    dataset = Dataset(labels=np.where(truth[held] == 0, "A", "B"), q=q[held], t=t[held])
+    write_samples(tmp_path / "samples.csv", dataset, "command: spherecal simulate --seed 3\nseed: 3")
+    out = tmp_path / "out"
+    assert main(["import", str(tmp_path / "samples.csv"), "--format", "csv", "--robot", str(PANDA), "--out", str(out),
+                 "--max-per-fixture", "100000", "--dedup-deg", "0"]) == 0
+    again = read_samples(out / "samples.csv", load_robot(PANDA))
+    assert again.fixture_names == ("A", "B")
+    np.testing.assert_array_equal(again.for_fixture("B"), q[truth == 1])
+    # a recording handed to calibrate as samples: the refusal says what to do with it
+    (tmp_path / "raw.csv").write_text("time," + ",".join(NAMES) + "\n0.0,0,0,0,-2,0,2,0\n")
+    error = _refused(["calibrate", "--robot", str(PANDA), "--samples", str(tmp_path / "raw.csv"), "--out",
+                      str(tmp_path / "c.yaml")], tmp_path, capsys)
+    assert "first column must be 'fixture' (a recording without fixture labels? spherecal import" in error
