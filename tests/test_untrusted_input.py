@@ -355,3 +355,14 @@ def test_an_endless_input_is_refused_not_read_forever(tmp_path, panda, option, d
                           "validate", *map(str, argv)], capture_output=True, text=True, timeout=60)
     assert run.returncode == 1 and len(run.stderr.strip().splitlines()) == 1, run.stderr[-500:]
     assert message in run.stderr, run.stderr
+
+
+@pytest.mark.parametrize(("position", "expected"), [
+    ("[1.5, 0, 0.3]", "fixture A at [1.5, 0.0, 0.3] m is out of reach"),
+    ("[0.0, 0, 0.1]", "fixture A at [0.0, 0.0, 0.1] m is inside the robot"),
+])
+def test_simulate_names_the_file_and_field_of_a_fixture_it_cannot_use(tmp_path, capsys, position, expected) -> None:
+    # the refusal named neither the fixtures file nor the field ('fixture A at [...] m is out of reach (...)')
+    (tmp_path / "fixtures.yaml").write_text(f"fixtures:\n  A: {{position: {position}}}\n")
+    refused(["simulate", "--out", tmp_path / "sim", "--fixtures", tmp_path / "fixtures.yaml", "--seconds", "0.01",
+             "--per-fixture", "5"], tmp_path, capsys, f"fixtures.yaml: field 'fixtures.A.position': {expected}")

@@ -116,7 +116,14 @@ def run(args: argparse.Namespace) -> int:
     compliance_of(true)  # a compliance without inertials: one line naming the field, before simulating
     settings = SelfMotionSettings(seconds=args.seconds, samples=args.per_fixture, mode=args.mode,
                                   noise=args.noise * 1e-3, solver=args.solver)
-    result = collect_self_motion(true, nominal, fixtures, rng, settings)
+    from spherecal.controller.self_motion import UnreachableFixtureError
+
+    try:
+        result = collect_self_motion(true, nominal, fixtures, rng, settings)
+    except UnreachableFixtureError as error:  # name the file and field that put the fixture there
+        source = f"{args.fixtures}: field 'fixtures.{error.fixture}.position'" if args.fixtures else \
+            f"--fixtures (default fixture {error.fixture})"
+        raise fail(f"{source}: {error}") from None
 
     names = result.fixture_names
     distances = []
