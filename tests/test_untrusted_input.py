@@ -366,3 +366,22 @@ def test_simulate_names_the_file_and_field_of_a_fixture_it_cannot_use(tmp_path, 
     (tmp_path / "fixtures.yaml").write_text(f"fixtures:\n  A: {{position: {position}}}\n")
     refused(["simulate", "--out", tmp_path / "sim", "--fixtures", tmp_path / "fixtures.yaml", "--seconds", "0.01",
              "--per-fixture", "5"], tmp_path, capsys, f"fixtures.yaml: field 'fixtures.A.position': {expected}")
+
+
+def test_an_elastic_model_of_an_arm_without_masses_names_the_file_and_the_way_to_give_them(tmp_path, capsys) -> None:
+    # a URDF without <inertial> of an arm no embedded one matches: the refusals named the robot ('ur5e: field
+    # inertials') and not its file, nor --inertials
+    from spherecal.correction import load_robot
+    from tests.correction.ur5e_urdf import ur5e_urdf
+
+    (tmp_path / "ur5e.urdf").write_text(ur5e_urdf())
+    q = load_robot(tmp_path / "ur5e.urdf").random_configurations(40, np.random.default_rng(0))
+    rows = [("A" if k < 20 else "B") + "," + ",".join(repr(float(v)) for v in row) for k, row in enumerate(q)]
+    (tmp_path / "samples.csv").write_text("fixture," + ",".join(f"q{i + 1}" for i in range(6)) + "\n"
+                                          + "\n".join(rows) + "\n")
+    refused(["calibrate", "--robot", tmp_path / "ur5e.urdf", "--samples", tmp_path / "samples.csv", "--model",
+             "elastic", "--out", tmp_path / "cal.yaml"], tmp_path, capsys,
+            "ur5e.urdf: field 'inertials': --model elastic needs the link masses", "--inertials FILE")
+    refused(["simulate", "--robot", tmp_path / "ur5e.urdf", "--stiffness", "1e4", "--out", tmp_path / "sim",
+             "--seconds", "0.01", "--per-fixture", "5"], tmp_path, capsys,
+            "ur5e.urdf: field 'inertials': expected a list of 6 {mass, com} entries, got none", "--inertials FILE")
