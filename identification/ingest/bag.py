@@ -70,6 +70,9 @@ def read_bag(path: str | os.PathLike, model: RobotModel, topic: str = TOPIC) -> 
     try:
         with AnyReader([path], default_typestore=get_typestore(Stores.ROS2_HUMBLE)) as reader:
             connections = [c for c in reader.connections if c.topic == topic]
+            if not connections and not topic.startswith("/"):  # 'joint_states' typed for '/joint_states'
+                connections = [c for c in reader.connections if c.topic == "/" + topic]
+                topic = "/" + topic if connections else topic
             if not connections:
                 topics = sorted({c.topic for c in reader.connections})
                 raise RecordingError(

@@ -259,3 +259,13 @@ def test_a_samples_csv_with_its_provenance_comments_imports_as_a_labelled_csv(re
     error = _refused(["calibrate", "--robot", str(PANDA), "--samples", str(tmp_path / "raw.csv"), "--out",
                       str(tmp_path / "c.yaml")], tmp_path, capsys)
     assert "first column must be 'fixture' (a recording without fixture labels? spherecal import" in error
+
+
+def test_a_topic_typed_without_its_leading_slash_is_the_bags(recording, tmp_path, capsys) -> None:
+    # --topic joint_states: "no topic 'joint_states' in the bag (has /joint_states)"
+    true, t, q, truth = recording
+    bag = write_bag(tmp_path / "rec", "sqlite3", t, q, NAMES)
+    out = tmp_path / "out"
+    assert main(["import", str(bag), "--format", "bag", "--robot", str(PANDA), "--out", str(out), "--topic",
+                 "joint_states", "--max-per-fixture", "100000"]) == 0
+    _check_split(out, true, t, q, truth)
