@@ -9,7 +9,7 @@ import numpy as np
 
 from ..gravity import has_inertials
 from ..model import RobotModel
-from ..tool import ToolError, ToolSwap, tool_in_frame, with_tool
+from ..tool import ToolError, ToolSwap, calibrated_tool, tool_in_frame, with_tool
 from .urdf_to_dh import load_urdf
 
 
@@ -44,6 +44,8 @@ def put_tool(model: RobotModel, offset: np.ndarray | None = None, urdf: str | os
             payload = description.extras["payload"]
     block = model.extras.get("calibration")
     nominal = block.get("nominal_tool") if isinstance(block, dict) else None
+    # a file whose tool an earlier `tool` replaced: the new tool goes on the calibrated one (its correction once)
+    model = replace(model, tool=calibrated_tool(model))
     swap = with_tool(model, offset, payload, nominal_tool=nominal)
     swap = replace(swap, model=_retipped(swap.model, description.extras.get("urdf") if urdf is not None else None))
     if payload is not None:
