@@ -65,10 +65,18 @@ CONTROL_RATE = 250.0
 
 
 class UnreachableFixtureError(SpherecalError):
-    """The tool point of the true robot cannot reach a fixture inside the joint limits."""
+    """The tool point of the true robot cannot reach a fixture inside the joint limits.
+
+    Attributes:
+        fixture: the fixture's name (for the caller to name the file and field that placed it).
+    """
+
+    def __init__(self, message: str, fixture: str | None = None):
+        super().__init__(message)
+        self.fixture = fixture
 
 
-class FixtureInsideRobotError(SpherecalError):
+class FixtureInsideRobotError(UnreachableFixtureError):
     """A fixture lies inside the robot's base column."""
 
 
@@ -196,7 +204,7 @@ def check_fixture(model: RobotModel, name: str, centre: np.ndarray) -> None:
     if distance < BASE_RADIUS:
         raise FixtureInsideRobotError(
             f"fixture {name} at {np.round(centre, 4).tolist()} m is inside the robot "
-            f"({distance * 1e3:.0f} mm from the base column, need >= {BASE_RADIUS * 1e3:.0f} mm)")
+            f"({distance * 1e3:.0f} mm from the base column, need >= {BASE_RADIUS * 1e3:.0f} mm)", name)
 
 
 def reach_fixture(model: RobotModel, name: str, centre: np.ndarray, rng: np.random.Generator,
@@ -213,7 +221,7 @@ def reach_fixture(model: RobotModel, name: str, centre: np.ndarray, rng: np.rand
     if not result.converged:
         raise UnreachableFixtureError(
             f"fixture {name} at {np.round(centre, 4).tolist()} m is out of reach "
-            f"(IK inside the joint limits misses it by {result.position_error * 1e3:.1f} mm)")
+            f"(IK inside the joint limits misses it by {result.position_error * 1e3:.1f} mm)", name)
     return result.q
 
 

@@ -70,12 +70,14 @@ def inertials_of(model: RobotModel, source: str | None = None) -> tuple[np.ndarr
     Raises:
         InertialsError: no ``inertials`` block, wrong length, or a malformed entry.
     """
-    where = source or model.name
+    where = source or model.extras.get("source") or model.name
     block = model.extras.get("inertials")
     n = model.n_joints
     if not isinstance(block, list) or len(block) != n:
         got = "none" if block is None else (f"{len(block)} entries" if isinstance(block, list) else repr(block))
-        raise InertialsError(f"{where}: field 'inertials': expected a list of {n} {{mass, com}} entries, got {got}")
+        hint = " (link masses: --inertials FILE or an inertials block in the robot file)" if block is None else ""
+        raise InertialsError(f"{where}: field 'inertials': expected a list of {n} {{mass, com}} entries, got "
+                             f"{got}{hint}")
     entries = [_entry(v, f"{where}: field 'inertials[{i}]'") for i, v in enumerate(block)]
     payload = model.extras.get("payload")
     entries.append((0.0, np.zeros(3)) if payload is None else _entry(payload, f"{where}: field 'payload'"))

@@ -91,18 +91,19 @@ def with_tool(model: RobotModel, tool: np.ndarray, payload: dict | None = None,
             f"the new tool point {np.array2string(tool, precision=4)} m is {np.linalg.norm(tool):.4g} m from the "
             f"last frame, more than the arm itself ({model.chain_length:.3g} m, sum of |a| and |d|): the offset is in "
             "metres")
+    calibrated = np.asarray(model.tool, dtype=float)
     carried = np.zeros(3)
     if nominal_tool is not None:
         nominal_tool = np.asarray(nominal_tool, dtype=float)
         if nominal_tool.shape != (3,) or not np.all(np.isfinite(nominal_tool)):
             raise ToolError(f"nominal_tool: expected 3 finite coordinates [m], got {np.ravel(nominal_tool).tolist()!r}")
-        carried = model.tool - nominal_tool
+        carried = calibrated - nominal_tool
         tool = tool + carried
-    distance = float(np.linalg.norm(tool - model.tool))
+    distance = float(np.linalg.norm(tool - calibrated))
     extras = dict(model.extras)
     if payload is not None:
         extras["payload"] = payload
-    extras["tool_swap"] = {"calibrated_tool": [float(v) for v in model.tool], "tool": [float(v) for v in tool],
+    extras["tool_swap"] = {"calibrated_tool": [float(v) for v in calibrated], "tool": [float(v) for v in tool],
                            "carried_correction": [float(v) for v in carried]}
     unidentified = float(np.sin(angle) * distance)
     note = (f"new tool {distance * 1e3:.1f} mm from the calibrated tool point: a single-point tool does not "
@@ -114,6 +115,34 @@ def with_tool(model: RobotModel, tool: np.ndarray, payload: dict | None = None,
         note += (f"; the calibration's correction of the old tool point, ({shift}) mm in the last frame (the "
                  f"flange's own error is in it), is carried to the new tool")
     return ToolSwap(replace(model, tool=tool, extras=extras), distance, unidentified, note)
+
+
+def calibrated_tool(model: RobotModel) -> np.ndarray:
+    """(3,) the tool point the model was calibrated with [m]: its own, or, on a model whose tool an earlier
+    :func:`with_tool` replaced, the one that swap recorded (a second swap starts from the calibration, not from
+    the first swap's tool, whose carried correction it would count again). A ``tool_swap`` block whose ``tool``
+    is no longer the model's (a calibration started from a swapped model) is stale and ignored.
+
+    Raises:
+        ToolError: a ``tool_swap`` block whose ``calibrated_tool`` is not 3 finite numbers.
+    """
+    swap = model.extras.get("tool_swap")
+    own = np.asarray(model.tool, dtype=float)
+    if not isinstance(swap, dict) or "calibrated_tool" not in swap:
+        return own
+    try:  # a block whose tool is no longer the model's (a calibration started from a swapped model) is stale
+        if not np.allclose(np.asarray(swap.get("tool"), dtype=float), own, rtol=0.0, atol=1e-12):
+            return own
+    except (TypeError, ValueError):
+        return own
+    try:
+        calibrated = np.asarray(swap["calibrated_tool"], dtype=float)
+    except (TypeError, ValueError):
+        calibrated = np.full(1, np.nan)
+    if calibrated.shape != (3,) or not np.all(np.isfinite(calibrated)):
+        raise ToolError(f"tool_swap.calibrated_tool: expected 3 finite coordinates [m], got "
+                        f"{swap['calibrated_tool']!r}")
+    return calibrated
 
 
 def tool_in_frame(description: RobotModel, model: RobotModel) -> np.ndarray:

@@ -264,8 +264,9 @@ def select_model(requested: str, fit, nominal: RobotModel, dataset: Dataset, spe
         raise ValueError(f"unknown model {requested!r}, expected one of {MODELS}")
     if requested != "auto":
         if requested in NEEDS_INERTIALS and not has_inertials(nominal):
-            raise SpherecalError(f"{nominal.name}: field 'inertials': --model {requested} needs the link masses "
-                                 f"(an inertials block in the robot file)")
+            raise SpherecalError(f"{nominal.extras.get('source') or nominal.name}: field 'inertials': --model "
+                                 f"{requested} needs the link masses ({nominal.name} has none and matches no embedded "
+                                 "arm): give them with --inertials FILE or an inertials block in the robot file")
         return ModelSelection(requested, requested, "requested")
     clock = time.perf_counter()
     names = candidates_for(nominal)

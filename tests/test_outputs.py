@@ -126,6 +126,48 @@ def test_simulate_refuses_before_any_work_when_one_of_its_files_cannot_be_writte
             "truth.yaml: field '--out': is a folder")
 
 
+@pytest.mark.parametrize(("argv", "expected"), [
+    # each wrote its file with exit 0, and the next command read it by its name: 'invalid XML: line 1, column 1'
+    (["calibrate", "--robot", "robot.yaml", "--samples", "samples.csv", "--out", "cal.urdf"],
+     "cal.urdf: field '--out': a calibrated robot file (YAML) named .urdf would be read as URDF; name it .yaml"),
+    (["tool", "calibrated.yaml", "--offset", "0", "0", "0.1", "--out", "tcp.urdf"],
+     "named .urdf would be read as URDF"),
+    (["export", "calibrated.yaml", "--format", "urdf", "--out", "arm.yaml", "--effort", "1,1,1,1,1,1,1"],
+     "arm.yaml: field '--out': a URDF (--format urdf) named .yaml would be read as YAML; name it .urdf"),
+    (["export", "calibrated.yaml", "--format", "mjcf", "--out", "arm.urdf"],
+     "an MJCF model (--format mjcf) named .urdf"),
+    (["export", "calibrated.yaml", "--format", "yaml", "--out", "arm.xml"],
+     "a robot file (YAML) (--format yaml) named .xml"),
+])
+def test_an_output_named_for_another_format_is_refused(files, capsys, monkeypatch, argv, expected) -> None:
+    monkeypatch.chdir(files)
+    refused(argv, files, capsys, expected)
+
+
+def test_simulate_keeps_a_recording_in_its_out_folder(files, capsys) -> None:
+    # `simulate --out DIR` into a folder holding a real recording (samples.csv, fixtures.yaml) replaced both with
+    # simulated data, exit 0
+    refused(["simulate", "--out", files, "--seconds", "0.01", "--per-fixture", "5"], files, capsys,
+            "samples.csv: field '--out': exists and was not written by an earlier `spherecal simulate`")
+    (files / "fixtures.yaml").unlink()  # the samples alone are still the recording
+    refused(["simulate", "--out", files, "--seconds", "0.01", "--per-fixture", "5"], files, capsys,
+            "samples.csv: field '--out'")
+
+
+def test_simulate_replaces_its_own_earlier_outputs(tmp_path, capsys) -> None:
+    from spherecal.cli import main
+
+    out = tmp_path / "sim"
+    assert main(["simulate", "--out", str(out), "--seconds", "0.01", "--per-fixture", "5", "--seed", "1"]) == 0
+    first = (out / "samples.csv").read_text()
+    assert main(["simulate", "--out", str(out), "--seconds", "0.01", "--per-fixture", "5", "--seed", "2"]) == 0
+    assert (out / "samples.csv").read_text() != first  # replaced by the new run
+    # an imported samples.csv beside the simulation's YAML files is not the simulation's: refused
+    write_samples(out / "samples.csv", Dataset(labels=np.repeat(["A"], 5), q=np.zeros((5, 7))), "command: import")
+    refused(["simulate", "--out", out, "--seconds", "0.01", "--per-fixture", "5"], tmp_path, capsys,
+            "samples.csv: field '--out': exists and was not written")
+
+
 @pytest.mark.parametrize(
     ("argv", "expected"),
     [

@@ -292,3 +292,21 @@ def test_socket_validate_prints_the_predicted_spread_beside_the_measured(tmp_pat
     predicted = report["held_out"]["predicted_test_mae"]
     # simulated at the noise of the prediction's model: the measured spread is what it predicts, within 2x
     assert 0.5 < measured / predicted < 2.0, (measured, predicted)
+
+
+def test_validate_says_when_the_calibrated_file_carries_another_tool(tmp_path, capsys) -> None:
+    # `tool --urdf ... --tip-link panda_hand_tcp` on MUKCa's calibration, validated on ball sockets: exit 0 with only
+    # 'WORSE than nominal' (16.8 against 8.0 mm); the cause, a tool 30 mm from the one the data was recorded with,
+    # was not said
+    _, true, _, _, cal = _calibrated(tmp_path, capsys)
+    held, _ = make_dataset(true, per_fixture=30, rng=np.random.default_rng(9), noise=2e-4)
+    write_samples(tmp_path / "held.csv", held)
+    tcp = tmp_path / "tcp.yaml"
+    assert main(["tool", str(cal), "--offset", *map(str, load_robot(cal).tool + [0.0, 0.0, 0.03]),
+                 "--out", str(tcp)]) == 0
+    capsys.readouterr()
+    _, err, _ = _validate(tmp_path, capsys, tmp_path / "held.csv", tcp)
+    assert "warning: the calibrated file's tool was replaced by `spherecal tool` (3" in err  # 30 mm and the correction
+    assert "mm from the tool it was calibrated with): these samples must have been recorded with the new tool" in err
+    _, err, _ = _validate(tmp_path, capsys, tmp_path / "held.csv", cal)
+    assert "spherecal tool" not in err

@@ -222,6 +222,8 @@ def test_robot_file_refuses_non_physical_numbers(tmp_path, panda, edit, field) -
     (["demo", "--configurations", str(10**9)], "an integer in 3..200000"),
     (["validate", "--nominal", "panda", "--calibrated", "panda", "--configurations", str(10**9)], "3..200000"),
     (["campaign", "--per-fixture", str(10**9)], "an integer in 1..100000"),
+    # a row twice: the table said 'sets 2' for one seeded set counted twice (std 0.000), exit 0
+    (["campaign", "--sets", "1", "--rows", "P1,P2,P1", "--out", "c"], "--rows: P1 is given twice"),
     (["calibrate", "--robot", "panda", "--samples", "s.csv", "--out", "c.yaml", "--noise", "1e308"], "plausible"),
 ])
 def test_out_of_range_options_are_one_line(tmp_path, capsys, monkeypatch, argv, message) -> None:
@@ -353,3 +355,33 @@ def test_an_endless_input_is_refused_not_read_forever(tmp_path, panda, option, d
                           "validate", *map(str, argv)], capture_output=True, text=True, timeout=60)
     assert run.returncode == 1 and len(run.stderr.strip().splitlines()) == 1, run.stderr[-500:]
     assert message in run.stderr, run.stderr
+
+
+@pytest.mark.parametrize(("position", "expected"), [
+    ("[1.5, 0, 0.3]", "fixture A at [1.5, 0.0, 0.3] m is out of reach"),
+    ("[0.0, 0, 0.1]", "fixture A at [0.0, 0.0, 0.1] m is inside the robot"),
+])
+def test_simulate_names_the_file_and_field_of_a_fixture_it_cannot_use(tmp_path, capsys, position, expected) -> None:
+    # the refusal named neither the fixtures file nor the field ('fixture A at [...] m is out of reach (...)')
+    (tmp_path / "fixtures.yaml").write_text(f"fixtures:\n  A: {{position: {position}}}\n")
+    refused(["simulate", "--out", tmp_path / "sim", "--fixtures", tmp_path / "fixtures.yaml", "--seconds", "0.01",
+             "--per-fixture", "5"], tmp_path, capsys, f"fixtures.yaml: field 'fixtures.A.position': {expected}")
+
+
+def test_an_elastic_model_of_an_arm_without_masses_names_the_file_and_the_way_to_give_them(tmp_path, capsys) -> None:
+    # a URDF without <inertial> of an arm no embedded one matches: the refusals named the robot ('ur5e: field
+    # inertials') and not its file, nor --inertials
+    from spherecal.correction import load_robot
+    from tests.correction.ur5e_urdf import ur5e_urdf
+
+    (tmp_path / "ur5e.urdf").write_text(ur5e_urdf())
+    q = load_robot(tmp_path / "ur5e.urdf").random_configurations(40, np.random.default_rng(0))
+    rows = [("A" if k < 20 else "B") + "," + ",".join(repr(float(v)) for v in row) for k, row in enumerate(q)]
+    (tmp_path / "samples.csv").write_text("fixture," + ",".join(f"q{i + 1}" for i in range(6)) + "\n"
+                                          + "\n".join(rows) + "\n")
+    refused(["calibrate", "--robot", tmp_path / "ur5e.urdf", "--samples", tmp_path / "samples.csv", "--model",
+             "elastic", "--out", tmp_path / "cal.yaml"], tmp_path, capsys,
+            "ur5e.urdf: field 'inertials': --model elastic needs the link masses", "--inertials FILE")
+    refused(["simulate", "--robot", tmp_path / "ur5e.urdf", "--stiffness", "1e4", "--out", tmp_path / "sim",
+             "--seconds", "0.01", "--per-fixture", "5"], tmp_path, capsys,
+            "ur5e.urdf: field 'inertials': expected a list of 6 {mass, com} entries, got none", "--inertials FILE")

@@ -42,7 +42,11 @@ def check_models(models: dict[str, RobotModel], files: dict[str, str]) -> None:
         gap = np.linalg.norm(tool_point(model, q) - nominal_tool, axis=1)
         if not np.all(gap <= MAX_MODEL_DIFFERENCE):
             worst = float(np.nanmax(np.where(np.isfinite(gap), gap, np.inf)))
+            swapped = isinstance(model.extras.get("tool_swap"), dict)
+            field, why = (("tool", "its tool was replaced by `spherecal tool`: validate the calibrated file it was "
+                           "made from, whose tool point is the one the data was recorded with") if swapped else
+                          ("joints", "a model of another arm?"))
             raise ValidationInputError(
-                f"{files[role]}: field 'joints': tool point up to {worst * 1e3:.0f} mm from the nominal "
-                f"{files['nominal']}'s (more than {MAX_MODEL_DIFFERENCE * 1e3:.0f} mm: a model of another arm?)"
+                f"{files[role]}: field '{field}': tool point up to {worst * 1e3:.0f} mm from the nominal "
+                f"{files['nominal']}'s (more than {MAX_MODEL_DIFFERENCE * 1e3:.0f} mm: {why})"
             )

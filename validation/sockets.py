@@ -29,6 +29,7 @@ from spherecal.correction import RobotModel, tool_point
 from spherecal.correction.files.fixtures import FixtureSpec
 from spherecal.correction.files.robot_file import forced_calibration
 from spherecal.correction.files.samples import Dataset, configurations_digest
+from spherecal.correction.tool import calibrated_tool
 from spherecal.identification.joint_error import LENGTH
 from spherecal.identification.prediction import HeldOut
 from spherecal.identification.training import trained_digests
@@ -287,9 +288,15 @@ def socket_validation(
 
 def remarks(report: SocketReport, calibrated: RobotModel) -> list[str]:
     """What a user must not miss, one line each: a calibration written with ``--force`` although its
-    self-check found the data inconsistent, and a calibrated model worse than nominal on these samples."""
+    self-check found the data inconsistent, a calibrated file whose tool ``spherecal tool`` replaced (the samples
+    must then be of the new tool), and a calibrated model worse than nominal on these samples."""
     forced = forced_calibration(calibrated)
     out = [forced] if forced else []
+    moved = float(np.linalg.norm(calibrated.tool - calibrated_tool(calibrated)))
+    if moved > 0.0:  # a tool swap: the sockets' data must be of the new tool
+        out.append(f"the calibrated file's tool was replaced by `spherecal tool` ({moved * 1e3:.1f} mm from the tool "
+                   "it was calibrated with): these samples must have been recorded with the new tool; for data of the "
+                   "old one, validate the calibrated file it was made from")
     held = any(f.held_out and f.measurable for f in report.fixtures)
     chosen = [f for f in report.fixtures if f.measurable and (f.held_out or not held)]
     if chosen:

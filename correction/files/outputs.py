@@ -245,3 +245,29 @@ class OutputSet:
         except OSError as error:
             raise OutputError(f"{folder}: cannot create the folder: {error.strerror or error}") from None
         self._created.extend(reversed(missing))
+
+
+#: File-name endings that say what a file holds (spherecal reads ``.urdf`` as URDF and a robot file as YAML).
+FORMAT_SUFFIXES = {".urdf": "URDF", ".yaml": "YAML", ".yml": "YAML", ".xml": "XML", ".mjcf": "MJCF",
+                   ".json": "JSON", ".csv": "CSV"}
+
+
+def check_suffix(path: PathLike, option: str, written: str, accepted: tuple[str, ...], hint: str = "") -> None:
+    """Refuse an output whose name says it holds another format than the one written (``calibrate --out
+    cal.urdf`` wrote YAML that every later command then read as URDF: 'invalid XML'). Names without a known
+    ending (:data:`FORMAT_SUFFIXES`) are the user's choice.
+
+    Args:
+        path: the output file.
+        option: its option (``--out``), for the message.
+        written: what is written (``"a YAML robot file"``).
+        accepted: the endings that fit, first the one suggested (``(".yaml", ".yml")``).
+        hint: said after the suggestion (``"; for a URDF: spherecal export --format urdf"``).
+
+    Raises:
+        OutputError: one line naming the option, the file and the ending to use.
+    """
+    suffix = Path(path).suffix.lower()
+    if suffix in FORMAT_SUFFIXES and suffix not in accepted:
+        raise OutputError(f"{path}: field '{option}': {written} named {suffix} would be read as "
+                          f"{FORMAT_SUFFIXES[suffix]}; name it {accepted[0]}{hint}")

@@ -9,6 +9,7 @@ the caller (:mod:`.inertials_file`); the description's own (a robot file's ``ine
 from __future__ import annotations
 
 import os
+import re
 import warnings
 from collections.abc import Callable
 from dataclasses import replace
@@ -97,8 +98,34 @@ def _load(path_or_name: str | os.PathLike, tip_link: str | None, base_link: str 
         return _embedded(EMBEDDED_ROBOTS[key], key)
     path = Path(path_or_name)
     text = read_text(path, RobotFileError, limit=MAX_FILE_BYTES)
+    _refuse_xml(text, key)
     data, _ = load_yaml(text, str(path), RobotFileError)  # bounded: size, depth, aliases; no duplicate keys
     return robot_from_dict(data, source=str(path))
+
+
+#: The first element of an XML document (after the declaration, comments and a DOCTYPE).
+_XML_ROOT = re.compile(r"\A\ufeff?\s*(?:<\?.*?\?>\s*|<!--.*?-->\s*|<!DOCTYPE[^>]*>\s*)*<([A-Za-z_][\w:.-]*)", re.S)
+
+
+def _refuse_xml(text: str, source: str) -> None:
+    """Refuse an XML document in a file read as a robot file (YAML) because it is not named ``.urdf``: a URDF
+    saved as ``robot_description.xml`` or without an ending, an exported MJCF (was: 'expected a mapping at the
+    top level, got str').
+
+    Raises:
+        RobotFileError: one line naming the file and what it holds.
+    """
+    match = _XML_ROOT.match(text[:100_000])
+    if match is None:
+        return
+    root = match.group(1)
+    if root == "robot":
+        why = f"a URDF (<robot>) not named .urdf; name it {Path(source).stem}.urdf (a URDF is read by its ending)"
+    elif root == "mujoco":
+        why = "an MJCF model (<mujoco>): give the robot file (YAML) it was exported from, or the arm's URDF (.urdf)"
+    else:
+        why = f"an XML document (<{root}>), not a robot file (YAML) or a URDF (.urdf)"
+    raise RobotFileError(f"{source}: row 1, field '': {why}")
 
 
 def load_robot(

@@ -39,7 +39,11 @@ def _parse_header(header: list[str], n: int, where: str) -> bool:
             raise DatasetError(f"{where}, field {name!r}: duplicate column")
         seen.add(name)
     if not names or names[0] != "fixture":
-        raise DatasetError(f"{where}, field {names[0] if names else ''!r}: first column must be 'fixture'")
+        hint = ""
+        if names and "fixture" not in names:  # a recording, a MUKCa hole file: not samples yet
+            hint = (" (a recording without fixture labels? spherecal import makes samples.csv of it: --format csv for "
+                    "joint CSVs, mukca for a folder of hole_<k>.csv)")
+        raise DatasetError(f"{where}, field {names[0] if names else ''!r}: first column must be 'fixture'{hint}")
     has_t = len(names) > 1 and names[1] == "t"
     joints = names[2 if has_t else 1 :]
     for k, name in enumerate(joints):

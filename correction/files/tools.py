@@ -3,12 +3,13 @@
 from __future__ import annotations
 
 import os
+from dataclasses import replace
 
 import numpy as np
 
 from ..gravity import has_inertials
 from ..model import RobotModel
-from ..tool import ToolError, ToolSwap, tool_in_frame, with_tool
+from ..tool import ToolError, ToolSwap, calibrated_tool, tool_in_frame, with_tool
 from .urdf_to_dh import load_urdf
 
 
@@ -43,7 +44,10 @@ def put_tool(model: RobotModel, offset: np.ndarray | None = None, urdf: str | os
             payload = description.extras["payload"]
     block = model.extras.get("calibration")
     nominal = block.get("nominal_tool") if isinstance(block, dict) else None
+    # a file whose tool an earlier `tool` replaced: the new tool goes on the calibrated one (its correction once)
+    model = replace(model, tool=calibrated_tool(model))
     swap = with_tool(model, offset, payload, nominal_tool=nominal)
+    swap = replace(swap, model=_retipped(swap.model, description.extras.get("urdf") if urdf is not None else None))
     if payload is not None:
         line = f"payload from {urdf}: {payload['mass']:.3f} kg (what its last link carries)"
     elif "payload" in model.extras:
@@ -52,3 +56,17 @@ def put_tool(model: RobotModel, offset: np.ndarray | None = None, urdf: str | os
     else:
         line = "no payload in the calibrated file"
     return swap, line
+
+
+def _retipped(model: RobotModel, links: dict | None) -> RobotModel:
+    """``model`` whose ``urdf`` block names the new tool's link: ``links`` (the tool URDF's base and tip), or no
+    tip link for an offset (the old one, the ball, is no longer the tool point: ``export --into`` would move it)."""
+    block = model.extras.get("urdf")
+    if not isinstance(block, dict):
+        return model
+    block = dict(block)
+    if links:
+        block.update(base_link=links["base_link"], tip_link=links["tip_link"])
+    else:
+        block.pop("tip_link", None)
+    return replace(model, extras={**model.extras, "urdf": block})

@@ -98,10 +98,28 @@ def _check_same_arm(model: RobotModel, nominal: RobotModel, source: str) -> None
         )
     error = _tool_point_gap(model, nominal)
     if error > SAME_ROBOT_TOL:
+        _refuse_new_tool(model, source, f"{nominal.extras['urdf']['tip_link']!r} is {error * 1e3:.0f} mm from it")
         raise ExportError(
             f"{source}: not the calibrated robot: tool points {error * 1e3:.0f} mm apart "
             f"(more than {SAME_ROBOT_TOL * 1e3:.0f} mm after the best rigid fit)"
         )
+
+
+def _refuse_new_tool(model: RobotModel, source: str, why: str) -> None:
+    """Refuse, naming the new tool, a model whose tool ``spherecal tool`` replaced (its ``tool_swap`` block)
+    when no link of the URDF is at it; return for any other model.
+
+    Raises:
+        ExportError: one line: where the tool is and how to give the URDF a link there.
+    """
+    if "tool_swap" not in model.extras:
+        return
+    tool = ", ".join(f"{v:.4f}" for v in model.tool)
+    raise ExportError(
+        f"{source}: field 'tip_link': the calibrated file carries a new tool (spherecal tool) at [{tool}] m in the "
+        f"last frame and no link of this URDF is at it ({why}); add a link at the new tool (a fixed joint) and put "
+        "the tool on with `spherecal tool --urdf` naming it with --tip-link, then export --into that URDF"
+    )
 
 
 def _tool_point_gap(model: RobotModel, nominal: RobotModel) -> float:
@@ -152,6 +170,9 @@ def urdf_into(model: RobotModel, text: str, source: str = "<urdf>", header: str 
     with warnings.catch_warnings():  # the user was told about parallel axes when the model was imported
         warnings.simplefilter("ignore", NearlyParallelAxesWarning)
         tip_link = links.get("tip_link") or _matching_end(model, tree, links.get("base_link"))
+        base_link = links.get("base_link") or tree.root
+        if tip_link is None and base_link in tree.links and len(tree.chain_ends(base_link)) > 1:
+            _refuse_new_tool(model, source, "none of its chain's ends is there")
         nominal = urdf_model(tree, tip_link, links.get("base_link"))
     base, tip = nominal.extras["urdf"]["base_link"], nominal.extras["urdf"]["tip_link"]
     _check_same_arm(model, nominal, source)

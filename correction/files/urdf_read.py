@@ -199,6 +199,9 @@ def _joint(element: ET.Element, source: str) -> UrdfJoint:
         lower, upper = (_floats(limit.get(k, "0"), 1, [0.0], f"{where} <limit {k}>")[0] for k in ("lower", "upper"))
         if lower > upper:
             raise RobotFileError(f"{where}: <limit> lower ({lower}) > upper ({upper})")
+        if lower == upper:  # URDF's defaults are 0: a <limit effort velocity/> gives a joint that cannot turn
+            raise RobotFileError(f"{where}: <limit> lower and upper are both {lower:g} (missing from it?): a revolute "
+                                 "joint needs its range [rad]")
     mimic = element.find("mimic")
     if mimic is not None and not mimic.get("joint"):
         raise RobotFileError(f"{where}: <mimic> without a joint=...")

@@ -3,7 +3,9 @@
 Read with the pure-Python ``rosbags`` library; joints are matched by name to the robot's
 (:func:`.importers.match_joints`), extra joints (a gripper's fingers) are ignored. A message naming none
 of the arm's joints (a gripper driver publishing its fingers alone on the same topic, interleaved with
-the arm's messages) is skipped and counted: the import report says how many and what they named.
+the arm's messages) is skipped and counted: the import report says how many and what they named. So is a
+message that names joints but carries no positions (its velocities or efforts alone: every array of a
+``JointState`` is optional).
 """
 
 from __future__ import annotations
@@ -15,7 +17,14 @@ import numpy as np
 
 from spherecal.correction.model import RobotModel
 
-from .importers import Recording, RecordingError, arm_joint_names, joint_name_candidates, match_joints
+from .importers import (
+    Recording,
+    RecordingError,
+    arm_joint_names,
+    joint_name_candidates,
+    match_joints,
+    missing_joints,
+)
 
 #: Default topic.
 TOPIC = "/joint_states"
@@ -61,6 +70,9 @@ def read_bag(path: str | os.PathLike, model: RobotModel, topic: str = TOPIC) -> 
     try:
         with AnyReader([path], default_typestore=get_typestore(Stores.ROS2_HUMBLE)) as reader:
             connections = [c for c in reader.connections if c.topic == topic]
+            if not connections and not topic.startswith("/"):  # 'joint_states' typed for '/joint_states'
+                connections = [c for c in reader.connections if c.topic == "/" + topic]
+                topic = "/" + topic if connections else topic
             if not connections:
                 topics = sorted({c.topic for c in reader.connections})
                 raise RecordingError(
@@ -75,15 +87,23 @@ def read_bag(path: str | os.PathLike, model: RobotModel, topic: str = TOPIC) -> 
             cache: dict[tuple[str, ...], np.ndarray] = {}
             arm = arm_joint_names(model)
             skipped: dict[tuple[str, ...], int] = {}  # names of messages without any arm joint -> count
+            unpositioned = 0  # messages with names but no positions (a driver publishing velocities or efforts)
+            partial: dict[tuple[str, ...], list] = {}  # names of some of the arm's joints -> [count, first message]
             for k, (connection, timestamp, raw) in enumerate(reader.messages(connections=connections)):
                 message = reader.deserialize(raw, connection.msgtype)
                 where = f"{path}: {topic} message {k + 1}"
                 names = tuple(message.name)
                 position = np.asarray(message.position, dtype=float)
+                if not position.size and names:  # JointState's arrays are optional: velocities or efforts alone
+                    unpositioned += 1
+                    continue
                 if position.shape != (len(names),):
                     raise RecordingError(f"{where}, field 'position': {position.size} positions for {len(names)} names")
                 if names not in cache and arm.isdisjoint(names):  # another device's joints (a gripper)
                     skipped[names] = skipped.get(names, 0) + 1
+                    continue
+                if names not in cache and missing_joints(names, model):  # the arm's state split over messages
+                    partial.setdefault(names, [0, k + 1])[0] += 1
                     continue
                 if names not in cache:
                     cache[names] = match_joints(list(names), model, where)[0]
@@ -105,7 +125,21 @@ def read_bag(path: str | os.PathLike, model: RobotModel, topic: str = TOPIC) -> 
         raise RecordingError(f"{path}: cannot read the bag: {error}") from None
     others = "; ".join(f"{count} naming {', '.join(names[:4]) or 'no joint'}{', ...' if len(names) > 4 else ''}"
                        for names, count in skipped.items())
+    some = "; ".join(f"{count} naming {', '.join(names[:4])}{', ...' if len(names) > 4 else ''} (not "
+                     f"{', '.join(missing_joints(names, model)[:3])})" for names, (count, _) in partial.items())
+    if not values and partial:
+        first = min(k for _, k in partial.values())
+        if len(partial) == 1 or missing_joints(set().union(*partial), model):  # a joint missing from the topic
+            names = next(names for names, (_, k) in partial.items() if k == first)
+            match_joints(list(names), model, f"{path}: {topic} message {first}")  # raises, naming that joint
+        raise RecordingError(
+            f"{path}: {topic} message {first}, field 'name': no message names all of the arm's joints ({some}): "
+            "joint angles split over messages are not of one instant; record all of the arm's joints in one message"
+        )
     if not values:
+        if unpositioned and not skipped:
+            raise RecordingError(f"{path}: {topic} message 1, field 'position': none of the {unpositioned} messages "
+                                 "carries joint positions (velocities or efforts only)")
         if skipped:
             expected = " or ".join(dict.fromkeys(names[0] for names in joint_name_candidates(model)))
             raise RecordingError(
@@ -116,7 +150,9 @@ def read_bag(path: str | os.PathLike, model: RobotModel, topic: str = TOPIC) -> 
     notes = (
         (f"skipped {sum(skipped.values())} messages on {topic} without any of the arm's joints ({others}): "
          "another device (a gripper) publishing on the same topic",) if skipped else ()
-    )
+    ) + ((f"skipped {unpositioned} messages on {topic} without positions (velocities or efforts only)",)
+         if unpositioned else ()) + ((f"skipped {sum(c for c, _ in partial.values())} messages on {topic} naming "
+                                      f"only some of the arm's joints ({some})",) if partial else ())
     t = np.array(stamps)
     order = np.argsort(t, kind="stable")
     q, t = np.array(values)[order], t[order]

@@ -36,6 +36,11 @@ MUKCA_DISTANCE = 0.050
 TIME_COLUMNS = ("t", "time", "stamp", "timestamp", "%time")
 #: Time values above this are nanoseconds (ROS stamps exported as integers), not seconds.
 NANOSECONDS_ABOVE = 1e15
+#: A time column named with its unit (``time_ns``, ``stamp [ms]``, ``__time`` of PlotJuggler) -> seconds per unit.
+_TIMED = re.compile(r"^(t|time|stamp|timestamp|%time|__time)(?:[ _]?\[?(ns|us|µs|ms|s)\]?)?$", re.I)
+_UNITS = {"ns": 1e-9, "us": 1e-6, "µs": 1e-6, "ms": 1e-3, "s": 1.0}
+#: Sampling steps of a joint recording believed [s]: 10 kHz to 1 Hz (a controller's 1 kHz, a logger's 10 Hz).
+STEP_RANGE = (1e-4, 1.0)
 
 
 class RecordingError(DatasetError):
@@ -99,6 +104,12 @@ def joint_name_candidates(model: RobotModel) -> list[list[str]]:
 def arm_joint_names(model: RobotModel) -> set[str]:
     """Every name any convention of :func:`joint_name_candidates` gives the robot's joints."""
     return {name for names in joint_name_candidates(model) for name in names}
+
+
+def missing_joints(available, model: RobotModel) -> list[str]:
+    """The robot's joints ``available`` lacks under the convention it matches best (none: it names them all)."""
+    present = set(available)
+    return min(([name for name in names if name not in present] for names in joint_name_candidates(model)), key=len)
 
 
 def match_joints(available: list[str], model: RobotModel, where: str) -> tuple[np.ndarray, list[str]]:
@@ -249,12 +260,15 @@ def read_joint_csv(path: str | os.PathLike, model: RobotModel) -> Recording:
 
     Header: the robot's joint names (e.g. ``panda_joint1..7`` as franka_ros names them) or
     ``q1..qn``, in any order, other columns (fingers, velocities) ignored; an optional time
-    column (``t``, ``time``, ``stamp``, ``timestamp`` [s]; values above 1e15 are nanoseconds) and an
-    optional ``fixture`` column (then the recording is labelled). ``samples.csv`` is such a file.
+    column (``t``, ``time``, ``stamp``, ``timestamp`` [s]; values above 1e15 are nanoseconds; or named with
+    its unit: ``time_ns``, ``stamp_us``, ``time [ms]``, PlotJuggler's ``__time`` [s]) and an optional
+    ``fixture`` column (then the recording is labelled). ``samples.csv`` is such a file.
 
     Raises:
         RecordingError: no header, a joint missing from it, a row with a missing field or a bad
-            number, an empty fixture label, an angle outside the joint limits.
+            number, an empty fixture label, an angle outside the joint limits; stamps of an unlabelled
+            recording whose median step is outside :data:`STEP_RANGE` (milliseconds or microseconds in a
+            column read as seconds or nanoseconds).
     """
     path = Path(path)
     header: list[str] | None = None
@@ -266,16 +280,18 @@ def read_joint_csv(path: str | os.PathLike, model: RobotModel) -> Recording:
         start, first = first, first + len(block)
         if header is None:
             for k, line in enumerate(block):
-                if not is_skipped(line) or line.lstrip().startswith("#"):  # comments only after the header
+                if not is_skipped(line) or line.lstrip().startswith("#"):  # a header may start with '#'
                     where = f"{path}: row {start + k}"
+                    if _comment_before_header(line, model, where):  # provenance lines of samples.csv
+                        continue
                     header = [f.strip() for f in parse_line(line, where, RecordingError)]
                     if all(_is_number(f) for f in header):
                         raise RecordingError(
                             f"{where}, field 'header': numbers, not a header naming the joints "
                             "(a MUKCa hole_<k>.csv? import its folder with --format mukca)"
                         )
-                    index, names = match_joints(header, model, where)
-                    time_col = next((header.index(c) for c in TIME_COLUMNS if c in header), None)
+                    index, names = _match_columns(header, model, where)
+                    time_col, unit = _time_column(header)
                     label_col = header.index("fixture") if "fixture" in header else None
                     columns = ([time_col] if time_col is not None else []) + list(index)
                     block, start = block[k + 1 :], start + k + 1
@@ -302,13 +318,89 @@ def read_joint_csv(path: str | os.PathLike, model: RobotModel) -> Recording:
     values = values[:, 1:] if time_col is not None else values
     label_values = np.concatenate(labels) if label_col is not None else None
     t = times
-    if t is not None and np.nanmax(np.abs(t)) > NANOSECONDS_ABOVE:
+    if t is not None and unit is not None:
+        t = t * _UNITS[unit.lower()]
+    elif t is not None and np.nanmax(np.abs(t)) > NANOSECONDS_ABOVE:
         t = t * 1e-9
+    if t is not None and label_values is None:  # the stamps will segment the recording: they must be seconds
+        _check_step(t, path, header[time_col], RowNames(path, np.concatenate(lines)))
     recording = Recording(
         np.ascontiguousarray(values), t, label_values, str(path), RowNames(path, np.concatenate(lines))
     )
     recording.check_limits(model, names)
     return recording
+
+
+#: A column of a topic exported by PlotJuggler: ``/joint_states/panda_joint1/position``.
+_TOPIC_POSITION = re.compile(r"^(?:.*/)?([^/]+)/position$")
+
+
+def _match_columns(header: list[str], model: RobotModel, where: str) -> tuple[np.ndarray, list[str]]:
+    """:func:`match_joints` of a CSV header; a header that names no convention's joints is tried again with
+    its topic columns read as joint names (``/joint_states/<joint>/position``, PlotJuggler's export)."""
+    try:
+        return match_joints(header, model, where)
+    except RecordingError:
+        plain = [m.group(1) if (m := _TOPIC_POSITION.match(name)) else name for name in header]
+        if plain == header:
+            raise
+        try:
+            return match_joints(plain, model, where)
+        except RecordingError as error:
+            if "named twice" in str(error):  # two topics' columns of one joint: say that, not 'missing'
+                raise error from None
+        raise
+
+
+def _comment_before_header(line: str, model: RobotModel, where: str) -> bool:
+    """Whether a ``#`` line before the header is a comment (the provenance block spherecal writes first in
+    samples.csv), not a header that starts with ``#`` (``# time,panda_joint1,...`` of numpy's savetxt)."""
+    if not line.lstrip().startswith("#"):
+        return False
+    try:
+        fields = [f.strip().lstrip("#").strip() for f in parse_line(line, where, RecordingError)]
+    except RecordingError:
+        return True
+    return bool(missing_joints(fields, model)) and bool(
+        missing_joints([_TOPIC_POSITION.sub(r"\1", f) for f in fields], model))
+
+
+def _time_column(header: list[str]) -> tuple[int | None, str | None]:
+    """``(index, unit)`` of the header's time column: one of :data:`TIME_COLUMNS` (unit None: seconds, or
+    nanoseconds above :data:`NANOSECONDS_ABOVE`), else a name with its unit (``time_ns``, ``stamp [ms]``)."""
+    for name in TIME_COLUMNS:
+        if name in header:
+            return header.index(name), None
+    for k, name in enumerate(header):
+        match = _TIMED.match(name)
+        if match:
+            return k, match.group(2) or ("s" if match.group(1) == "__time" else None)
+    return None, None
+
+
+def _check_step(t: np.ndarray, path: Path, field: str, rows) -> None:
+    """Refuse time stamps whose typical step is not a joint recording's in seconds (:data:`STEP_RANGE`).
+
+    Raises:
+        RecordingError: one line naming the column, the median step and the unit it suggests.
+    """
+    steps = np.diff(t)
+    steps = steps[steps > 0]
+    if not steps.size:
+        return
+    step = float(np.median(steps))
+    low, high = STEP_RANGE
+    if low <= step <= high:
+        return
+    guesses = [(1e-9, "nanoseconds"), (1e-6, "microseconds"), (1e-3, "milliseconds")]
+    likely = next((unit for scale, unit in guesses if low <= step * scale <= high), None) if step > high else (
+        "microseconds read as nanoseconds" if low <= step * 1e3 <= high else None)
+    k = int(np.flatnonzero(np.diff(t) > 0)[0]) + 1
+    raise RecordingError(
+        f"{rows[k]}, field {field!r}: samples {step:.3g} s apart (median), a joint recording's are "
+        f"{low:g}-{high:g} s: the column is not in seconds{f' ({likely}?)' if likely else ''}; give seconds, "
+        "nanoseconds as integers above 1e15, or name the unit in the header (time_ns, time_us, time_ms)"
+    )
 
 
 def _is_number(text: str) -> bool:

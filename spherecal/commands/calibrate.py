@@ -79,6 +79,10 @@ def run(args: argparse.Namespace) -> int:
     from spherecal.options import planned_outputs
 
     outputs = planned_outputs(args, {"--out": args.out})  # before any work: never over an input
+    from spherecal.correction.files.outputs import check_suffix
+
+    check_suffix(args.out, "--out", "a calibrated robot file (YAML)", (".yaml", ".yml"),
+                 "; for a URDF or MJCF of it: spherecal export")
     clock = time.perf_counter()
     options = WorkflowOptions(
         method=args.method,

@@ -72,6 +72,9 @@ def run(args: argparse.Namespace) -> int:
     unknown = [r for r in rows if r not in FIXTURE_SETS]
     if unknown or not rows:
         raise fail(f"--rows: unknown {unknown}, choose from {list(FIXTURE_SETS)}")
+    if len(set(rows)) < len(rows):  # the same seeded sets twice: the table counted them as independent
+        twice = next(r for r in rows if rows.count(r) > 1)
+        raise fail(f"--rows: {twice} is given twice (its sets would be counted twice, the same seeds each time)")
     if args.per_fixture < 10:
         raise fail(f"--per-fixture must be >= 10, got {args.per_fixture}")
     if args.source == "mujoco" and args.per_fixture > round(args.seconds * 1000):

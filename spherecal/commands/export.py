@@ -77,6 +77,11 @@ def run(args: argparse.Namespace) -> int:
     from spherecal.options import planned_outputs
 
     outputs = planned_outputs(args, {"--out": args.out})  # never over CAL.yaml, --into or --samples
+    from spherecal.correction.files.outputs import check_suffix
+
+    written, accepted = {"urdf": ("a URDF", (".urdf", ".xml")), "mjcf": ("an MJCF model", (".xml", ".mjcf")),
+                         "yaml": ("a robot file (YAML)", (".yaml", ".yml"))}[args.format]
+    check_suffix(args.out, "--out", f"{written} (--format {args.format})", accepted)
     model = load_robot(args.robot, **urdf_links(args))
     from spherecal.correction.files.robot_file import forced_calibration
 

@@ -73,7 +73,12 @@ def _check_args(args: argparse.Namespace):
     out = Path(args.out)
     check_folder(args.out)
     # found before the simulation runs, not when the files are written; --fixtures may be out/fixtures.yaml
-    return planned_outputs(args, {"--out": [out / name for name in FILES]})
+    outputs = planned_outputs(args, {"--out": [out / name for name in FILES]})
+    from spherecal.correction.files.earlier_run import refuse_foreign_files
+
+    # a folder holding a recording keeps it: only an earlier simulation's own files are replaced
+    refuse_foreign_files([out / name for name in FILES], "--out", "simulation", "spherecal simulate")
+    return outputs
 
 
 def run(args: argparse.Namespace) -> int:
@@ -111,7 +116,14 @@ def run(args: argparse.Namespace) -> int:
     compliance_of(true)  # a compliance without inertials: one line naming the field, before simulating
     settings = SelfMotionSettings(seconds=args.seconds, samples=args.per_fixture, mode=args.mode,
                                   noise=args.noise * 1e-3, solver=args.solver)
-    result = collect_self_motion(true, nominal, fixtures, rng, settings)
+    from spherecal.controller.self_motion import UnreachableFixtureError
+
+    try:
+        result = collect_self_motion(true, nominal, fixtures, rng, settings)
+    except UnreachableFixtureError as error:  # name the file and field that put the fixture there
+        source = f"{args.fixtures}: field 'fixtures.{error.fixture}.position'" if args.fixtures else \
+            f"--fixtures (default fixture {error.fixture})"
+        raise fail(f"{source}: {error}") from None
 
     names = result.fixture_names
     distances = []

@@ -32,6 +32,10 @@ def run(args: argparse.Namespace) -> int:
     if args.urdf is None and (args.tip_link or args.base_link):
         raise fail("--tip-link and --base-link: only with --urdf")
     outputs = planned_outputs(args, {"--out": args.out})
+    from spherecal.correction.files.outputs import check_suffix
+
+    check_suffix(args.out, "--out", "a robot file (YAML)", (".yaml", ".yml"),
+                 "; for a URDF or MJCF of it: spherecal export")
     model = load_robot(args.robot)
     swap, payload = put_tool(model, args.offset, args.urdf, args.tip_link, args.base_link)
     header = f"spherecal tool: {args.robot} with the tool at {[round(v, 6) for v in swap.model.tool]} m (frame n)"

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import re
 from pathlib import Path
 
 import numpy as np
@@ -138,3 +139,18 @@ def test_atomic_files_follow_the_umask(panda, tmp_path) -> None:
     finally:
         os.umask(old)
     assert path.stat().st_mode & 0o777 == 0o644
+
+
+@pytest.mark.parametrize(("name", "text", "expected"), [
+    # each was 'expected a mapping at the top level, got str' (or 'invalid YAML' for a commented MJCF)
+    ("robot_description.xml", '<?xml version="1.0"?>\n<!-- xacro -->\n<robot name="arm"><link name="a"/></robot>\n',
+     "robot_description.xml: row 1, field '': a URDF (<robot>) not named .urdf; name it robot_description.urdf"),
+    ("arm", '\ufeff<robot name="arm"><link name="a"/></robot>', "a URDF (<robot>) not named .urdf"),
+    ("cal.xml", '<!-- spherecal export\n-->\n<mujoco model="arm"><worldbody/></mujoco>\n', "an MJCF model (<mujoco>)"),
+    ("launch.xml", "<launch><node/></launch>", "an XML document (<launch>), not a robot file"),
+])
+def test_an_xml_file_read_as_a_robot_file_says_what_it_holds(tmp_path, name, text, expected) -> None:
+    (tmp_path / name).write_text(text, encoding="utf-8")
+    with pytest.raises(RobotFileError, match=re.escape(expected)) as error:
+        load_robot(tmp_path / name)
+    assert "\n" not in str(error.value)

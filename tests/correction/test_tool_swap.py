@@ -134,3 +134,22 @@ def test_tool_swap_carries_the_flange_error_the_tool_point_absorbed(panda, rng) 
     assert "carried to the new tool" in carried.note
     as_given = with_tool(cal, grip).model
     assert registered_errors(tool_point(as_given, q), truth).mean() > 1e-3
+
+
+def test_a_second_tool_swap_starts_from_the_calibrated_tool(panda, tmp_path) -> None:
+    # `tool` on the output of `tool` carried the calibration's correction from the first new tool: the second
+    # tool point landed 90 mm off (0.111 m instead of 0.2017 m along the last axis), exit 0
+    from dataclasses import replace
+
+    from spherecal.correction import save_robot
+
+    ball = panda.tool + [0.0, 0.0, 0.135]
+    cal = replace(panda, tool=ball + [2e-4, -2e-4, 1.6e-3],  # a calibrated ball: its correction is 1.6 mm
+                  extras={**panda.extras, "calibration": {"nominal_tool": ball.tolist()}})
+    direct, _ = put_tool(cal, offset=panda.tool + [0.0, 0.0, 0.09])
+    first, _ = put_tool(cal, offset=panda.tool + [0.0, 0.0, 0.04])
+    save_robot(first.model, tmp_path / "first.yaml")
+    again, _ = put_tool(load_robot(tmp_path / "first.yaml"), offset=panda.tool + [0.0, 0.0, 0.09])
+    np.testing.assert_allclose(again.model.tool, direct.model.tool, atol=1e-12)
+    np.testing.assert_allclose(direct.model.tool, panda.tool + [2e-4, -2e-4, 0.09 + 1.6e-3], atol=1e-12)
+    assert again.distance == pytest.approx(direct.distance) and again.note == direct.note

@@ -155,3 +155,24 @@ def test_a_model_without_its_tip_link_goes_to_the_chain_end_at_its_tool_point(rn
     with pytest.raises(RobotFileError, match="4 links at different points") as error:
         urdf_into(far, original, "gen3lite.urdf")
     assert "ball_link (180 mm from end_effector_link)" in str(error.value)
+
+
+def test_a_new_tool_goes_to_its_own_link_not_to_the_ball(rng):
+    """`tool --urdf TOOL.urdf --tip-link panda_hand_tcp` then `export --into`: the calibrated file kept the ball as
+    its tip link, and export wrote the new tool point into ball_joint (the ball link moved 30 mm to the TCP, the
+    TCP link left at nominal, exit 0); a tool put by --offset (no link there) was 'not the calibrated robot'."""
+    from spherecal.correction.files.tools import put_tool
+
+    nominal, calibrated = _calibrated("panda", "modified", rng)
+    swap, _ = put_tool(calibrated, urdf=DATA / "panda.urdf", tip_link="panda_hand_tcp")
+    original = _text("panda")
+    written = urdf_into(swap.model, original, "panda.urdf")
+    changed = _changed_joints(original, written)
+    assert "panda_hand_tcp_joint" in changed and "ball_joint" not in changed
+    q = calibrated.random_configurations(100, rng)
+    points, _ = MujocoUrdf(written).body_pose("panda_hand_tcp", calibrated.extras["joint_names"], q)
+    assert np.linalg.norm(points - tool_point(swap.model, q), axis=1).max() < 1e-12
+    offset, _ = put_tool(calibrated, offset=calibrated.tool + [0.0, 0.0, -0.09])
+    with pytest.raises(ExportError, match="field 'tip_link': the calibrated file carries a new tool .* no link of "
+                                          "this URDF is at it .*spherecal tool --urdf"):
+        urdf_into(offset.model, original, "panda.urdf")

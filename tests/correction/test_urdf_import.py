@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import re
 import warnings
 
 import numpy as np
@@ -141,6 +142,9 @@ def test_inertials_lumped_per_joint_match_mujoco_centre_of_mass(rng):
         (lambda t: t.replace('type="revolute"', 'type="sliding"', 1), "unknown type 'sliding'"),
         (lambda t: t.replace("<robot", "<robo").replace("</robot>", "</robo>"), "expected a <robot>"),
         (lambda t: t.replace("</robot>", ""), "invalid XML"),
+        # a <limit> with effort and velocity only: URDF's lower = upper = 0 was 'joints[0].lower: must be below upper'
+        (lambda t: re.sub(r'<limit lower="[^"]*" upper="[^"]*"', "<limit", t, count=1),
+         "joint 'shoulder_pan_joint': <limit> lower and upper are both 0 .missing from it."),
     ],
 )
 def test_bad_urdf_one_line_error(edit, match, tmp_path):

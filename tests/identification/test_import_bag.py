@@ -137,3 +137,135 @@ def test_a_bag_whose_clock_goes_back_is_refused_not_interleaved(recording, kind,
     assert "messages of two streams interleaved by their stamps" in error
     bag = write_bag(tmp_path / ("ok.bag" if kind == "ros1" else "ok"), kind, t, q, NAMES)  # the same, in order
     assert main([*argv[:1], str(bag), *argv[2:]]) == 0
+
+
+def _joint_states(path, messages) -> None:
+    """A ROS 2 bag of ``sensor_msgs/JointState`` on /joint_states: ``messages`` of (stamp [s], names, positions)."""
+    from rosbags.rosbag2 import Writer
+    from rosbags.typesys import Stores, get_typestore
+
+    store = get_typestore(Stores.ROS2_HUMBLE)
+    state, header, time = (store.types[k] for k in ("sensor_msgs/msg/JointState", "std_msgs/msg/Header",
+                                                    "builtin_interfaces/msg/Time"))
+    with Writer(path, version=9) as writer:
+        connection = writer.add_connection("/joint_states", state.__msgtype__, typestore=store)
+        for stamp, names, position in messages:
+            sec = int(stamp)
+            head = header(stamp=time(sec=sec, nanosec=int(round((stamp - sec) * 1e9))), frame_id="")
+            data = state(header=head, name=list(names), position=np.asarray(position, float),
+                         velocity=np.zeros(len(names)), effort=np.zeros(0))
+            writer.write(connection, int(stamp * 1e9), store.serialize_cdr(data, state.__msgtype__))
+
+
+def test_messages_without_positions_are_skipped_and_counted(recording, tmp_path, capsys) -> None:
+    # every array of a JointState is optional: a driver publishing the arm's velocities alone between its position
+    # messages made the whole bag a refusal ('message 2, field 'position': 0 positions for 7 names')
+    true, t, q, truth = recording
+    bag = tmp_path / "velocities"
+    _joint_states(bag, [m for k in range(len(t)) for m in ((t[k], NAMES, q[k]), (t[k] + 1e-6, NAMES, []))])
+    out = tmp_path / "out"
+    assert main(["import", str(bag), "--format", "bag", "--robot", str(PANDA), "--out", str(out),
+                 "--max-per-fixture", "100000"]) == 0
+    assert f"skipped {len(t)} messages on /joint_states without positions" in capsys.readouterr().out
+    _check_split(out, true, t, q, truth)
+    only = tmp_path / "only_velocities"
+    _joint_states(only, [(t[k], NAMES, []) for k in range(10)])
+    error = _refused(["import", str(only), "--format", "bag", "--robot", str(PANDA), "--out", str(tmp_path / "o2")],
+                     tmp_path, capsys)
+    assert "field 'position': none of the 10 messages carries joint positions" in error
+
+
+def test_an_arm_split_over_two_messages_is_refused_saying_so(recording, tmp_path, capsys) -> None:
+    # joints 1-4 and 5-7 in messages of their own (two controllers): the refusal said 'joint panda_joint5 not in the
+    # recording'; beside full messages, such a part stopped the import too
+    true, t, q, truth = recording
+    split = tmp_path / "split"
+    _joint_states(split, [m for k in range(len(t)) for m in ((t[k], NAMES[:4], q[k, :4]),
+                                                              (t[k] + 5e-4, NAMES[4:], q[k, 4:]))])
+    argv = ["import", str(split), "--format", "bag", "--robot", str(PANDA), "--out", str(tmp_path / "a")]
+    error = _refused(argv, tmp_path, capsys)
+    assert "message 1, field 'name': no message names all of the arm's joints" in error
+    assert "naming panda_joint5, panda_joint6, panda_joint7 (not panda_joint1" in error and "one instant" in error
+    both = tmp_path / "both"
+    _joint_states(both, [m for k in range(len(t)) for m in ((t[k], NAMES, q[k]), (t[k] + 5e-4, NAMES[4:], q[k, 4:]))])
+    assert main([*argv[:1], str(both), *argv[2:-1], str(tmp_path / "b"), "--max-per-fixture", "100000"]) == 0
+    assert f"skipped {len(t)} messages on /joint_states naming only some of the arm's joints" in capsys.readouterr().out
+    _check_split(tmp_path / "b", true, t, q, truth)
+
+
+def _held(out, q, truth) -> list[int]:
+    """Samples per fixture of an import, each checked to be one recorded in its socket (by its joint angles)."""
+    dataset = read_samples(out / "samples.csv", load_robot(PANDA))
+    assert dataset.fixture_names == ("S1", "S2")
+    counts = []
+    for j, name in enumerate(dataset.fixture_names):
+        socket = {row.tobytes() for row in q[truth == j]}
+        assert all(row.tobytes() in socket for row in dataset.for_fixture(name))
+        counts.append(len(dataset.for_fixture(name)))
+    return counts
+
+
+def test_csv_time_in_milliseconds_is_refused_unless_the_header_names_the_unit(recording, tmp_path, capsys) -> None:
+    # stamps in milliseconds were read as seconds (samples 5 s apart) and the import said 'no fixture found';
+    # microseconds above 1e15 were read as nanoseconds; a 'time_ns' column was not a time column at all
+    true, t, q, truth = recording
+    body = lambda scale: "\n".join(f"{float(t[k] - t[0]) * scale!r}," + ",".join(repr(float(v)) for v in q[k])  # noqa: E731
+                                   for k in range(len(t))) + "\n"
+    argv = ["import", "--format", "csv", "--robot", str(PANDA), "--max-per-fixture", "9999"]
+    (tmp_path / "ms.csv").write_text("time," + ",".join(NAMES) + "\n" + body(1e3))
+    error = _refused([*argv, str(tmp_path / "ms.csv"), "--out", str(tmp_path / "a")], tmp_path, capsys)
+    assert "ms.csv: row 3, field 'time': samples 5 s apart (median)" in error and "(milliseconds?)" in error
+    for name, scale in (("time_ms", 1e3), ("stamp [us]", 1e6), ("time_ns", 1e9)):
+        (tmp_path / "unit.csv").write_text(f"{name}," + ",".join(NAMES) + "\n" + body(scale))
+        out = tmp_path / name.replace(" ", "")
+        assert main([*argv, str(tmp_path / "unit.csv"), "--out", str(out)]) == 0, name
+        assert min(_held(out, q, truth)) > 0.8 * np.count_nonzero(truth == 0)
+
+
+def test_a_plotjuggler_csv_of_joint_states_is_read_by_its_position_columns(recording, tmp_path, capsys) -> None:
+    # PlotJuggler exports a topic as '__time,/joint_states/<joint>/position,/joint_states/<joint>/velocity,...':
+    # refused, 'joint franka_panda_joint1 not in the recording'
+    true, t, q, truth = recording
+    columns = ",".join(f"/joint_states/{n}/position,/joint_states/{n}/velocity" for n in reversed(NAMES))
+    rows = [f"{float(t[k] - t[0])!r}," + ",".join(f"{float(v)!r},0.0" for v in q[k, ::-1]) for k in range(len(t))]
+    (tmp_path / "pj.csv").write_text("__time," + columns + "\n" + "\n".join(rows) + "\n")
+    argv = ["import", str(tmp_path / "pj.csv"), "--format", "csv", "--robot", str(PANDA), "--max-per-fixture", "9999"]
+    assert main(argv + ["--out", str(tmp_path / "a")]) == 0
+    assert min(_held(tmp_path / "a", q, truth)) > 0.8 * np.count_nonzero(truth == 0)
+    (tmp_path / "two.csv").write_text("__time," + columns + ",/cmd/panda_joint1/position\n"
+                                      + "\n".join(row + ",0.0" for row in rows) + "\n")
+    error = _refused([*argv[:1], str(tmp_path / "two.csv"), *argv[2:], "--out", str(tmp_path / "b")], tmp_path, capsys)
+    assert "field 'panda_joint1': joint 'panda_joint1' is named twice" in error
+
+
+def test_a_samples_csv_with_its_provenance_comments_imports_as_a_labelled_csv(recording, tmp_path, capsys) -> None:
+    # read_joint_csv's docstring says samples.csv is such a file, but the '# command: ...' line spherecal writes
+    # first was taken for the header: 'joint panda_joint1 not in the recording (has # command: ...)'
+    from spherecal.correction.files.samples import Dataset
+    from spherecal.correction.files.samples_csv import write_samples
+
+    _, t, q, truth = recording
+    held = truth >= 0
+    dataset = Dataset(labels=np.where(truth[held] == 0, "A", "B"), q=q[held], t=t[held])
+    write_samples(tmp_path / "samples.csv", dataset, "command: spherecal simulate --seed 3\nseed: 3")
+    out = tmp_path / "out"
+    assert main(["import", str(tmp_path / "samples.csv"), "--format", "csv", "--robot", str(PANDA), "--out", str(out),
+                 "--max-per-fixture", "100000", "--dedup-deg", "0"]) == 0
+    again = read_samples(out / "samples.csv", load_robot(PANDA))
+    assert again.fixture_names == ("A", "B")
+    np.testing.assert_array_equal(again.for_fixture("B"), q[truth == 1])
+    # a recording handed to calibrate as samples: the refusal says what to do with it
+    (tmp_path / "raw.csv").write_text("time," + ",".join(NAMES) + "\n0.0,0,0,0,-2,0,2,0\n")
+    error = _refused(["calibrate", "--robot", str(PANDA), "--samples", str(tmp_path / "raw.csv"), "--out",
+                      str(tmp_path / "c.yaml")], tmp_path, capsys)
+    assert "first column must be 'fixture' (a recording without fixture labels? spherecal import" in error
+
+
+def test_a_topic_typed_without_its_leading_slash_is_the_bags(recording, tmp_path, capsys) -> None:
+    # --topic joint_states: "no topic 'joint_states' in the bag (has /joint_states)"
+    true, t, q, truth = recording
+    bag = write_bag(tmp_path / "rec", "sqlite3", t, q, NAMES)
+    out = tmp_path / "out"
+    assert main(["import", str(bag), "--format", "bag", "--robot", str(PANDA), "--out", str(out), "--topic",
+                 "joint_states", "--max-per-fixture", "100000"]) == 0
+    _check_split(out, true, t, q, truth)

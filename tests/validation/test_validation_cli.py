@@ -87,10 +87,19 @@ def _missing_mocap_value(files, tmp_path):
     return ["--mocap", str(path)], {}, "row 8: field q5: missing value"
 
 
-@pytest.mark.parametrize("case", [_bad_joint_count, _other_convention, _missing_mocap_value])
+def _tool_swapped(files, tmp_path):
+    # a calibrated file given another tool 120 mm on (spherecal tool) validated on the ball's data: the refusal
+    # asked 'a model of another arm?'
+    path = tmp_path / "tcp.yaml"
+    assert main(["tool", str(files["calibrated"]), "--offset", "0", "0", "0.227", "--out", str(path)]) == 0
+    return ["--mocap", str(files["mocap"])], {"calibrated": path}, "its tool was replaced by `spherecal tool`"
+
+
+@pytest.mark.parametrize("case", [_bad_joint_count, _other_convention, _missing_mocap_value, _tool_swapped])
 def test_bad_inputs_exit_nonzero_with_one_line_and_write_nothing(files, tmp_path, capsys, case) -> None:
     extra, replace, message = case(files, tmp_path)
     files = {**files, **replace}
+    capsys.readouterr()
     out, rrd = tmp_path / "out" / "report.json", tmp_path / "out" / "v.rrd"
     before = sorted(p.name for p in tmp_path.rglob("*"))
     code = main(_args(files, *extra, "--out", str(out), "--rrd", str(rrd)))

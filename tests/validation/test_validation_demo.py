@@ -64,6 +64,9 @@ def test_short_demo_writes_everything_and_its_recording_holds_the_documented_ent
         "tables/deviations": 1,
     }
     assert rows == expected_rows
+    from spherecal.validation.experiments.demo import DemoConfig, demo_outputs
+
+    demo_outputs(DemoConfig(out=out))  # a demo run again into its folder replaces its own files
     views = read_view_names(out / "demo.rrd")
     assert any(v.startswith("True robot (simulated) and fixtures") for v in views)
     for start in ("Nominal: error, mean", "Calibrated: error, mean", "Nominal: error histogram [mm]",
@@ -81,6 +84,19 @@ def test_short_demo_writes_everything_and_its_recording_holds_the_documented_ent
         documented = re.sub(r"^(coverage)/P\d$", r"\1/<fixture>", documented)
         documented = re.sub(r"^tables/.*$", "tables/<name>", documented)
         assert f"`{documented}`" in section, documented
+
+
+def test_demo_keeps_a_recording_in_its_out_folder(tmp_path, capsys) -> None:
+    # `demo --out DIR` into a folder holding an imported recording replaced its samples.csv and fixtures.yaml
+    from tests.refusal import refused
+
+    (tmp_path / "samples.csv").write_text("# command: spherecal import --format mukca\nfixture,q1\n")
+    (tmp_path / "fixtures.yaml").write_text("fixtures:\n  front_h0: {}\n")
+    refused(["demo", "--out", tmp_path, "--seconds", "1", "--per-fixture", "60"], tmp_path, capsys,
+            "samples.csv: field '--out': exists and was not written by an earlier `spherecal demo`")
+    (tmp_path / "samples.csv").unlink()
+    refused(["demo", "--out", tmp_path, "--seconds", "1", "--per-fixture", "60"], tmp_path, capsys,
+            "fixtures.yaml: field '--out'")
 
 
 def test_demo_refuses_bad_options_and_writes_nothing(tmp_path, capsys) -> None:

@@ -11,10 +11,12 @@ from pathlib import Path
 import numpy as np
 
 from spherecal.correction import RobotModel, save_robot, tool_point
+from spherecal.correction.files.earlier_run import leading_comments, refuse_unless_own
 from spherecal.correction.files.fixtures import format_fixtures
 from spherecal.correction.files.outputs import OutputSet, check_folder
 from spherecal.correction.files.provenance import comment_block, provenance
 from spherecal.correction.files.samples_csv import format_samples
+from spherecal.correction.files.text_input import read_text
 
 from ..mocap import MARKER_NOISE, MocapMeasurement, write_mocap_csv
 from ..pipeline import RANDOM_SET, ValidationReport, record_parameters, record_validation, validate_models
@@ -178,6 +180,9 @@ def _inputs(config: DemoConfig, data=None) -> dict:
     return inputs
 
 
+#: Largest demo.json read to recognise an earlier demo's report [bytes].
+MAX_REPORT_BYTES = 16_000_000
+
 #: The files of a demo in its folder (``recording`` only with ``rrd``).
 DEMO_FILES = {
     "samples": "samples.csv",
@@ -194,7 +199,24 @@ def demo_outputs(config: DemoConfig) -> OutputSet:
     """The demo's files, checked (before the run) and staged together (see :class:`correction.outputs.OutputSet`)."""
     check_folder(config.out, "--out")
     files = [Path(config.out) / name for key, name in DEMO_FILES.items() if key != "recording" or config.rrd]
-    return OutputSet({"--out": files})
+    outputs = OutputSet({"--out": files})
+    # a folder holding a recording (samples.csv, fixtures.yaml) keeps it: only an earlier demo's files are replaced
+    refuse_unless_own(files, "--out", "spherecal demo", _demo_own)
+    return outputs
+
+
+def _demo_own(path: Path) -> bool:
+    """Whether an existing file is an earlier demo's: text files start with the ``# spherecal demo`` line, the
+    report is the demo's JSON, the recording lies beside such a report."""
+    if path.name == DEMO_FILES["recording"]:
+        return (path.parent / DEMO_FILES["report"]).is_file() and _demo_own(path.parent / DEMO_FILES["report"])
+    if path.name == DEMO_FILES["report"]:
+        try:
+            report = json.loads(read_text(path, OSError, limit=MAX_REPORT_BYTES))
+        except (OSError, ValueError):
+            return False
+        return isinstance(report, dict) and {"provenance", "fixtures_true_centres_m"} <= set(report)
+    return leading_comments(path)[:1] == ["spherecal demo"]
 
 
 def write_results(config: DemoConfig, result: DemoResult, data, fixtures: dict[str, np.ndarray],
