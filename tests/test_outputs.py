@@ -231,16 +231,21 @@ def test_an_unwritable_recording_is_one_line_before_anything_is_written(files, c
     refused(argv, files, capsys, "r.rrd: field '--rrd':", "samples.csv is not a folder")
 
 
-@pytest.mark.parametrize(
-    "argv",
-    [
-        ["calibrate", "--robot", "robot.yaml", "--samples", "samples.csv", "--out", "special"],
-        ["validate", "--nominal", "robot.yaml", "--calibrated", "calibrated.yaml", "--mocap", "mocap.csv",
-         "--out", "special"],
-        ["export", "calibrated.yaml", "--format", "urdf", "--out", "special"],
-        ["tool", "calibrated.yaml", "--offset", "0", "0", "0.1", "--out", "special"],
-    ],
-)
+#: Commands writing one output, the name of which ends each list (``OUT``, replaced per test).
+OUT = "OUT"
+WRITERS = [
+    ["calibrate", "--robot", "robot.yaml", "--samples", "samples.csv", "--out", OUT],
+    ["validate", "--nominal", "robot.yaml", "--calibrated", "calibrated.yaml", "--mocap", "mocap.csv", "--out", OUT],
+    ["export", "calibrated.yaml", "--format", "urdf", "--out", OUT],
+    ["tool", "calibrated.yaml", "--offset", "0", "0", "0.1", "--out", OUT],
+]
+
+
+def _naming(argvs: list[list[str]], name: str) -> list[list[str]]:
+    return [[name if a == OUT else a for a in argv] for argv in argvs]
+
+
+@pytest.mark.parametrize("argv", _naming(WRITERS, "special"))
 def test_an_output_that_is_a_device_or_pipe_is_refused_and_left_in_place(files, capsys, monkeypatch, argv) -> None:
     # `--out /dev/full` (or /dev/null, a named pipe) was staged beside it and renamed over it: as root the device
     # node itself became a regular file holding the result, and the command said "wrote /dev/full"
@@ -268,7 +273,7 @@ def test_atomic_write_refuses_a_device_or_pipe(tmp_path) -> None:
 @pytest.mark.parametrize(
     "argv",
     [
-        ["calibrate", "--robot", "robot.yaml", "--samples", "samples.csv", "--out", "loop.yaml"],
+        *_naming(WRITERS[:1], "loop.yaml"),
         ["validate", "--nominal", "robot.yaml", "--calibrated", "calibrated.yaml", "--mocap", "mocap.csv",
          "--rrd", "loop.yaml"],
         ["export", "calibrated.yaml", "--format", "yaml", "--out", "loop.yaml"],
