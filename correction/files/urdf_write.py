@@ -120,7 +120,8 @@ def _origin(pose: np.ndarray) -> str:
 def _per_joint(values: Sequence[float] | None, default: Sequence[float], n: int, field: str) -> list[float]:
     if values is None:
         if len(default) != n:
-            raise ExportError(f"{field}: no default for a {n}-joint robot, pass {n} values")
+            raise ExportError(f"{field}: no default for a {n}-joint robot, pass {n} values (or export --into the "
+                              "robot's own URDF, which keeps its limits, meshes and inertials)")
         values = default
     values = [float(v) for v in values]
     if len(values) != n or not all(np.isfinite(values)) or min(values) < 0.0:
