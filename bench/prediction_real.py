@@ -22,6 +22,11 @@ Jacobian, the socket's own noise and a fresh draw of the joint-angle error are a
 socket, and the mean distance averaged over 200 draws.
 
     .venv/bin/python bench/prediction_real.py [--data shared/data/mukca] [--out bench/prediction_real.json]
+        [--protocol single|lopo]
+
+``--protocol lopo`` holds each placement out in turn and trains on all the others (one folder of them, imported
+as a user would); a refusal that names a socket to leave out (``calibrate --exclude-fixture NAME``: it drifted
+while recorded) is followed, and the row says so.
 """
 
 from __future__ import annotations
@@ -94,25 +99,72 @@ def row(data: Path, robot: str, placement: str, work: Path) -> dict:
     }
 
 
+def lopo_row(data: Path, robot: str, placement: str, work: Path) -> dict:
+    """Calibrate on every placement of ``robot`` but ``placement`` (one folder of them, as a user imports it),
+    validate on ``placement``. A refusal that names a fixture to leave out (a socket that drifted while it was
+    recorded: ``calibrate --exclude-fixture NAME``) is followed as a user would, and the row says so."""
+    import re
+    import shutil
+
+    urdf = data / "urdf" / ROBOTS[robot]
+    source = work / f"{robot}_without_{placement}"
+    for other in (p for p in (data / "data" / robot).iterdir() if p.is_dir() and p.name != placement):
+        shutil.copytree(other, source / other.name)
+    train, test = work / f"{robot}_without_{placement}_samples", work / f"{robot}_{placement}_alone"
+    _import(source, urdf, train)
+    _import(data / "data" / robot / placement, urdf, test)
+    calibrated = work / f"{robot}_without_{placement}_cal.yaml"
+    argv = ["calibrate", "--robot", urdf, "--tip-link", TIP, "--samples", train / "samples.csv",
+            "--fixtures", train / "fixtures.yaml", "--out", calibrated]
+    code, out, err = _run(argv)
+    decision = "written"
+    advice = re.search(r"calibrate --exclude-fixture (\S+)\)", err)
+    if code and advice:
+        argv += ["--exclude-fixture", advice.group(1)]
+        code, out, err = _run(argv)
+        decision = f"written after --exclude-fixture {advice.group(1)}, as the refusal says"
+    if code:
+        decision = "refused: " + err.split("error: ", 1)[-1].strip()
+        code, out, _ = _run([*argv, "--force"])
+        if code:
+            return {"robot": robot, "train": f"all but {placement}", "decision": decision, "forced": "failed too"}
+    report = work / f"{robot}_{placement}_lopo_validate.json"
+    code, _, err = _run(["validate", "--nominal", urdf, "--tip-link", TIP, "--calibrated", calibrated,
+                         "--samples", test / "samples.csv", "--fixtures", test / "fixtures.yaml", "--out", report])
+    if code:
+        raise SystemExit(err)
+    held = json.loads(report.read_text())["sockets"]["held_out"]
+    measured, predicted = held["calibrated"]["test_mae"], held["predicted_test_mae"]
+    return {"robot": robot, "train": f"all but {placement}", "held_out": placement, "decision": decision,
+            "nominal_mm": held["nominal"]["test_mae"] * 1e3, "measured_mm": measured * 1e3,
+            "predicted_mm": predicted * 1e3, "ratio": measured / predicted}
+
+
 def main_bench() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--data", type=Path, default=bench_common.find_mukca())
-    parser.add_argument("--out", type=Path, default=Path(__file__).with_name("prediction_real.json"))
+    parser.add_argument("--out", type=Path, default=None,
+                        help="result file (default bench/prediction_real.json, or prediction_real_lopo.json)")
+    parser.add_argument("--protocol", choices=("single", "lopo"), default="single",
+                        help="single: each placement trains, the others are held out; lopo: each placement is "
+                             "held out, the others train")
     args = parser.parse_args()
+    args.out = args.out or Path(__file__).with_name(
+        "prediction_real.json" if args.protocol == "single" else "prediction_real_lopo.json")
     print(subprocess.run(["uptime"], capture_output=True, text=True).stdout.strip())
     clock = time.perf_counter()
     rows = []
     with tempfile.TemporaryDirectory() as tmp:
         for robot in ROBOTS:
             for placement in sorted(p.name for p in (args.data / "data" / robot).iterdir() if p.is_dir()):
-                rows.append(row(args.data, robot, placement, Path(tmp)))
-    print(f"{'robot':<14} {'train':<13} {'nominal':>8} {'measured':>9} {'predicted':>10} {'ratio':>6}  decision "
+                rows.append((row if args.protocol == "single" else lopo_row)(args.data, robot, placement, Path(tmp)))
+    print(f"{'robot':<14} {'train':<20} {'nominal':>8} {'measured':>9} {'predicted':>10} {'ratio':>6}  decision "
           "(held-out test MAE [mm], ratio = measured / predicted)")
     for r in rows:
         if "measured_mm" not in r:
-            print(f"{r['robot']:<14} {r['train']:<13} {'-':>8} {'-':>9} {'-':>10} {'-':>6}  {r['decision']}")
+            print(f"{r['robot']:<14} {r['train']:<20} {'-':>8} {'-':>9} {'-':>10} {'-':>6}  {r['decision']}")
             continue
-        print(f"{r['robot']:<14} {r['train']:<13} {r['nominal_mm']:8.3f} {r['measured_mm']:9.3f} "
+        print(f"{r['robot']:<14} {r['train']:<20} {r['nominal_mm']:8.3f} {r['measured_mm']:9.3f} "
               f"{r['predicted_mm']:10.3f} {r['ratio']:6.2f}  {r['decision'][:160]}")
     for robot in ROBOTS:
         ratios = [r["ratio"] for r in rows if r["robot"] == robot and "ratio" in r]

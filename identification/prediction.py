@@ -168,7 +168,11 @@ def _linearised(problem: CalibrationProblem, noise: float, sample_weight: float 
     calibration identified (indices into the model's), the others left at nominal as it left them; default: pruned
     at ``noise`` (:func:`.pruning.prune`). Kept in ``problem``'s cache: the self-check's record asks for the same
     one twice (:func:`joint_error_root`, :func:`deviation_root`); the arrays are shared, not to be written."""
-    key = ("linearised", float(noise), float(sample_weight), None if free is None else np.asarray(free).tobytes())
+    # problems made by dataclasses.replace share their cache (same model and samples): the key holds what else
+    # the linearisation reads of ``problem``
+    key = ("linearised", float(noise), float(sample_weight), None if free is None else np.asarray(free).tobytes(),
+           problem.free.tobytes(), problem.free_centres, problem.pinned, problem.noise, problem.prior_weight,
+           None if problem.prior_curvature is None else problem.prior_curvature.tobytes())
     if key not in problem._cache:
         problem._cache[key] = _linearise(problem, noise, sample_weight, free)
     return problem._cache[key]
