@@ -98,7 +98,8 @@ class LimitExcess:
                 f"({HARD_MARGIN:.3g} rad): not an angle of this joint (another arm's file, or degrees?)"
             )
         for side, past in ((0, below), (1, above)):  # each side of a joint: an arm may pass both
-            for i in np.flatnonzero((past > self.tol).any(axis=0)):
+            # a joint of a full turn (URDF "continuous": no limits stated) has no side to pass: its angles wrap
+            for i in np.flatnonzero((past > self.tol).any(axis=0) & bounded):
                 k = int(np.argmax(past[:, i]))
                 if past[k, i] > self.worst.get((int(i), side), (0.0,))[0]:
                     self.worst[(int(i), side)] = (float(past[k, i]), float(q[k, i]), where(k))

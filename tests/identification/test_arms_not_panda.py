@@ -52,6 +52,24 @@ def test_angles_past_the_limits_warn_once_naming_every_joint_and_are_used(tmp_pa
         read_samples(tmp_path / "samples.csv", panda)
 
 
+def test_a_joint_of_a_full_turn_has_no_limits_to_warn_about(tmp_path, panda) -> None:
+    # a URDF "continuous" joint becomes [-pi, pi]: angles past pi wrap, and the warning said "the arm's range is
+    # wider than its robot file says" of a joint whose file states no range at all
+    from dataclasses import replace
+
+    turning = replace(panda, lower=np.r_[panda.lower[:6], -np.pi], upper=np.r_[panda.upper[:6], np.pi])
+    dataset, _ = make_dataset(panda, per_fixture=10, rng=np.random.default_rng(0))
+    q = dataset.q.copy()
+    q[3, 6] = np.pi + 0.5
+    write_samples(tmp_path / "samples.csv", Dataset(labels=dataset.labels, q=q))
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", JointLimitWarning)
+        read = read_samples(tmp_path / "samples.csv", turning)
+    np.testing.assert_array_equal(read.q, q)
+    with pytest.warns(JointLimitWarning, match="q7 by up to"):  # the same angle on the Panda's own joint 7
+        read_samples(tmp_path / "samples.csv", panda)
+
+
 def test_the_gen3_lite_recordings_past_its_urdf_limits_import_with_one_warning(tmp_path, capsys) -> None:
     # MUKCa's Gen3 lite passes gen3lite.urdf's joint_6 limit of 2.09 rad by up to 0.65 rad: refused before
     argv = ["import", str(MUKCA / "dinova_1/left"), "--format", "mukca", "--robot", str(GEN3LITE), "--tip-link",
