@@ -168,8 +168,9 @@ def group_finding(problem: CalibrationProblem, name: str, kind: tuple, group: Le
         text = f"{name}: the data cannot check it (it alone determines what it constrains)"
         return Finding(name, True, text, {"unchecked": True})
     scale = max(problem.noise, group.sigma_rest)
+    judged = scale**2 + unmodelled  # variance per axis a fixture's samples are judged at (unmodelled: 0 otherwise)
     if what == "fixture":
-        statistic = max(group.delta_ssr, 0.0) / (scale**2 + unmodelled)
+        statistic = max(group.delta_ssr, 0.0) / judged
     else:  # the constraint's value as the rest predicts it, against its stated accuracy, socket play and the fit
         play = SOCKET_STD**2 * (2.0 if what == "distance" else 1.0)
         variance = stated**2 + play + group.fit_var * (scale / weight) ** 2
@@ -183,7 +184,7 @@ def group_finding(problem: CalibrationProblem, name: str, kind: tuple, group: Le
         "log10_p": log10_p,
         "excess": excess,
         "sigma_rest_mm": group.sigma_rest * 1e3,
-        "explained": statistic - group.dof if what == "fixture" else max(group.delta_ssr, 0.0) / scale**2 - group.dof,
+        "explained": max(group.delta_ssr, 0.0) / judged - group.dof,  # residual removed beyond noise
     }
     if unmodelled > 0:
         figures["unmodelled_mm"] = float(np.sqrt(unmodelled)) * 1e3

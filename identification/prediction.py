@@ -35,7 +35,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from spherecal.correction import RobotModel, joint_jacobian, param_jacobian
+from spherecal.correction import RobotModel, param_jacobian
 from spherecal.correction.files.fixtures import FixtureSpec
 from spherecal.correction.files.samples import Dataset
 from spherecal.correction.layout import ParameterLayout
@@ -43,7 +43,7 @@ from spherecal.correction.layout import ParameterLayout
 from .build import build_problem
 from .gauge import anchor_spread
 from .identifiability import Identifiability, normal_inverse
-from .joint_error import LENGTH, draw, field_root, seen_fields
+from .joint_error import LENGTH, draw, seen_fields, tool_fields
 from .problem import NOISE, SIGMA_FLOOR, CalibrationProblem, prior_std
 from .pruning import prune
 
@@ -276,6 +276,13 @@ def deviation_root(
     return np.hstack(columns), pruned, x, std
 
 
+def excess_energy(shown: float, declared: float, dof: float) -> float:
+    """``excess`` of :func:`joint_error_root`: sqrt of the residual energy beyond the declared noise [m],
+    ``sqrt((shown^2 - declared^2) x dof)`` for a residual std ``shown`` per coordinate over ``dof`` degrees of
+    freedom (0 when the residual is within the declared noise)."""
+    return float(np.sqrt(max(shown**2 - declared**2, 0.0) * max(dof, 0.0)))
+
+
 def joint_error_root(
     model: RobotModel, problem: CalibrationProblem, noise: float, excess: float, length: float = LENGTH,
     std: float = 0.0, free: np.ndarray | None = None,
@@ -355,14 +362,10 @@ def held_out_joint_error(
     _, _, pruned, _, _, jac, inverse = _linearised(problem, noise)
     count, fp = pruned.dataset.n_samples, pruned.n_free_params
     absorb = -(inverse @ jac[: 3 * count].T)[:fp]  # (fp, 3K): training error -> identified parameters' shift
-    both = np.concatenate([pruned.dataset.q, q])
-    root = field_root(both, length, rng)
-    joints = joint_jacobian(model, both)  # (K + M, 3, n)
     gains = param_jacobian(model, q)[:, :, pruned.free]  # (M, 3, fp)
     names, index = np.unique(labels, return_inverse=True)
     size = np.bincount(index, minlength=len(names))
-    for j in range(joints.shape[2]):
-        field = joints[:, :, j, None] * root[:, None, :]  # (K + M, 3, r)
+    for field in tool_fields(model, np.concatenate([pruned.dataset.q, q]), length, rng):  # (K + M, 3, r)
         shift = absorb @ field[:count].reshape(3 * count, -1)  # (fp, r)
         error = field[count:] + np.einsum("mip,pr->mir", gains, shift)
         mean = np.zeros((len(names), *error.shape[1:]))

@@ -59,7 +59,7 @@ from .consistency import augmented, group_finding, log10_chi2_sf, name_culprit, 
 from .identifiability import normal_inverse
 from .joint_error import LENGTH, split, tool_fields
 from .leave_out import LeftOut, leave_out
-from .prediction import Workspace, deviation_root, joint_error_root, socket_spreads
+from .prediction import Workspace, deviation_root, excess_energy, joint_error_root, socket_spreads
 from .problem import SIGMA_FLOOR, CalibrationProblem, samples_location
 from .selfcheck_result import Finding, InconsistentDataError, SelfCheck
 
@@ -155,13 +155,15 @@ def self_check(
     findings += trends
     # where a ball sits in a socket, as the residuals show it: the data rows alone (``sigma`` above also holds the
     # prior rows, whose penalty is no noise and dominates it for a few dozen samples of a well-made arm)
+    full = problem.jacobian(x)
+    inverse = normal_inverse(full)  # one SVD: the effective unknowns and the split of the residual
     if unknowns is None:
-        unknowns = problem.effective_unknowns(problem.jacobian(x))
+        unknowns = problem.effective_unknowns(full, inverse)
     shown = problem.data_sigma(x, unknowns)
     judged = max(noise, sigma) if declared else max(sigma, SIGMA_FLOOR)
     prediction, record = _prediction(nominal, built or problem, judged, sigma, shown)
-    count, jac = problem.dataset.n_samples, problem.jacobian(x)
-    parts = split(nominal, problem.dataset.q, r[: 3 * count], jac[: 3 * count], normal_inverse(jac))
+    count = problem.dataset.n_samples
+    parts = split(nominal, problem.dataset.q, r[: 3 * count], full[: 3 * count], inverse)
     _record_held_out(record, nominal, built or problem, judged, noise, shown, problem.n_data - unknowns, parts,
                      prediction.figures["nominal_scale_from_data"], prediction.figures["nominal_scale_measured"],
                      problem.free)
@@ -373,7 +375,7 @@ def _unmodelled(nominal: RobotModel, built: CalibrationProblem, problem: Calibra
     per_excess, _ = joint_error_root(nominal, built, noise, 1.0)  # the std per unit excess (std is linear in it)
     out = {}
     for name, group in rest.items():
-        std = per_excess * float(np.sqrt((group.sigma_rest**2 - noise**2) * group.dof_rest))
+        std = per_excess * excess_energy(group.sigma_rest, noise, group.dof_rest)
         q = problem.dataset.for_fixture(kinds[name][1])
         if std <= 0 or len(q) < 2:
             continue
@@ -408,8 +410,7 @@ def _record_held_out(record: dict, nominal: RobotModel, built: CalibrationProble
     """
     socket = float(min(parts[0], declared))
     record["socket_noise_m"] = socket
-    excess = float(np.sqrt(max(shown**2 - declared**2, 0.0) * max(dof, 0.0)))
-    std, bias = joint_error_root(nominal, built, noise, excess, std=parts[1], free=free)
+    std, bias = joint_error_root(nominal, built, noise, excess_energy(shown, declared, dof), std=parts[1], free=free)
     root, _, _, _ = deviation_root(nominal, built, noise, bias_scale=scale, data_noise=socket, free=free,
                                    unseen_scale=unseen)
     if std > 0:

@@ -168,7 +168,7 @@ def solve_scipy(
         start: ``time.perf_counter()`` the wall time counts from (default: now).
     """
     start = time.perf_counter() if start is None else start
-    from scipy.optimize import least_squares  # scipy.optimize: heavy, only for robust losses and the rescue
+    from scipy.optimize import least_squares  # scipy.optimize: heavy, only for the rescue and the reference
 
     residuals, jacobian = _objective(problem, loss, f_scale)
     result = least_squares(

@@ -73,6 +73,7 @@ from spherecal.identification.joint_error import kernel
 from spherecal.identification.prediction import (
     Prediction,
     Workspace,
+    excess_energy,
     held_out_joint_error,
     joint_error_root,
     predict_accuracy,
@@ -267,7 +268,7 @@ def calibrate_recording(
         share = noise_split(residuals, dataset.q, dataset.labels)
         excess, socket = shown * math.sqrt(share * dof), shown * math.sqrt(1.0 - share)
     else:
-        excess, socket = math.sqrt(max(shown**2 - noise**2, 0.0) * dof), min(shown, noise)
+        excess, socket = excess_energy(shown, noise, dof), min(shown, noise)
     joint_error, _ = joint_error_root(result.problem.model, result.problem, noise, excess)
     return Recorded(
         model=result.model,
