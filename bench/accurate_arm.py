@@ -9,7 +9,10 @@ accurate-arm fix). Printed per seed: written or refused, held-out test MAE (MUKC
 the whole-workspace error against the truth (500 random configurations within the joint limits, after
 registration), the self-check's predicted error and the nominal's expected error.
 
-    .venv/bin/python bench/accurate_arm.py [--seeds 8] [--share 0.15] [--noise 0.15]
+    .venv/bin/python bench/accurate_arm.py [--seeds 8] [--share 0.15] [--noise 0.15] [--joint-error 0.3]
+
+``--joint-error`` adds the arm's smooth joint-angle error (std per joint [mrad], ``identification.joint_error``'s
+process, one draw over every socket) to the recorded angles: real arms show 0.1-0.3 mrad.
 
 Writes bench/accurate_arm.json (versions, seed, inputs, every figure).
 """
@@ -26,6 +29,7 @@ import numpy as np  # noqa: E402
 from spherecal.correction import load_robot, perturb, registered_errors, tool_point  # noqa: E402
 from spherecal.correction.files.fixtures import FixtureSpec  # noqa: E402
 from spherecal.correction.files.samples import Dataset  # noqa: E402
+from spherecal.identification.joint_error import field_root  # noqa: E402
 from spherecal.identification.selfcheck import InconsistentDataError  # noqa: E402
 from spherecal.identification.synthetic import make_dataset  # noqa: E402
 from spherecal.identification.workflow import WorkflowOptions, run_workflow  # noqa: E402
@@ -33,11 +37,15 @@ from spherecal.identification.workflow import WorkflowOptions, run_workflow  # n
 PLACEMENTS = {"a": [0.55, 0.0, 0.10], "b": [0.42, 0.35, 0.05], "c": [0.45, -0.33, 0.30]}
 
 
-def one(nominal, seed: int, share: float, noise: float) -> dict:
+def one(nominal, seed: int, share: float, noise: float, joint_error: float = 0.0) -> dict:
     rng = np.random.default_rng(seed)
     true = perturb(nominal, rng, share * 1e-3, np.deg2rad(share * 0.2), share * 1e-3)
     centres = {f"{k}{h}": np.array(c) + [0.0, (h - 0.5) * 0.05, 0.0] for k, c in PLACEMENTS.items() for h in (0, 1)}
     data, _ = make_dataset(true, centres, 30, rng, noise=noise)
+    if joint_error:  # the arm's smooth joint-angle error (identification.joint_error's process), one draw over all
+        root = field_root(data.q)
+        drift = joint_error * root @ rng.standard_normal((root.shape[1], data.q.shape[1]))
+        data = Dataset(data.labels, data.q + drift, fixture_names=data.fixture_names)
     train = data.select(np.isin(data.labels, ["a0", "a1"]))
     train = Dataset(train.labels, train.q, fixture_names=("a0", "a1"))
     spec = FixtureSpec(("a0", "a1"), distances=(("a0", "a1", 0.05),))
@@ -70,6 +78,8 @@ def main() -> None:
     parser.add_argument("--seeds", type=int, default=8)
     parser.add_argument("--share", type=float, default=0.15, help="true arm's errors over the generic spread")
     parser.add_argument("--noise", type=float, default=0.15, help="socket noise per axis [mm]")
+    parser.add_argument("--joint-error", type=float, default=0.0,
+                        help="the arm's smooth joint-angle error, std per joint [mrad] (MUKCa's Pandas: 0.1-0.3)")
     parser.add_argument("--out", type=Path, default=Path(__file__).with_name("accurate_arm.json"))
     args = parser.parse_args()
     load = subprocess.run(["uptime"], capture_output=True, text=True).stdout.strip()
@@ -77,7 +87,7 @@ def main() -> None:
     nominal = load_robot("iiwa14")
     rows = []
     for seed in range(args.seeds):
-        r = one(nominal, 100 + seed, args.share, args.noise * 1e-3)
+        r = one(nominal, 100 + seed, args.share, args.noise * 1e-3, args.joint_error * 1e-3)
         rows.append(r)
         d, o = r["default"], r["declared_0.3"]
         print(f"seed {r['seed']}: held-out {r['nominal_heldout_mm']:.3f} -> {d['heldout_mm']:.3f} mm "
@@ -91,7 +101,8 @@ def main() -> None:
     print(f"written {written}/{len(rows)} (at a declared 0.3 mm: {before}/{len(rows)}); "
           f"mean held-out ratio {ratio:.2f}")
     bench_common.write_json(args.out, {"uptime": load, "rows": rows}, seed=100,
-                            inputs={"share": args.share, "noise_m": args.noise * 1e-3, "seeds": args.seeds})
+                            inputs={"share": args.share, "noise_m": args.noise * 1e-3, "seeds": args.seeds,
+                                    "joint_error_rad": args.joint_error * 1e-3})
 
 
 if __name__ == "__main__":

@@ -35,7 +35,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from spherecal.correction import RobotModel, param_jacobian
+from spherecal.correction import RobotModel, param_jacobian, tool_point
 from spherecal.correction.files.fixtures import FixtureSpec
 from spherecal.correction.files.samples import Dataset
 from spherecal.correction.layout import ParameterLayout
@@ -46,12 +46,16 @@ from .identifiability import Identifiability, normal_inverse
 from .joint_error import LENGTH, draw, seen_fields, tool_fields
 from .problem import NOISE, SIGMA_FLOOR, CalibrationProblem, prior_std
 from .pruning import prune
+from .synthetic import project_to_point
 
 #: A parameter whose predicted std exceeds this share of its prior spread is "weakly determined".
 WEAK_SHARE = 0.3
 #: Default workspace configurations and Monte Carlo draws of the parameter error.
 CONFIGURATIONS = 1000
 DRAWS = 200
+#: Radius of the region around the recorded tool points where a calibration is judged and used [m]: the plate
+#: placed again on the same table (MUKCa's nearest placements are 0.12-0.27 m apart; :meth:`Workspace.near`).
+NEAR_RADIUS = 0.3
 
 
 @dataclass(frozen=True, eq=False)
@@ -74,6 +78,28 @@ class Workspace:
         q = model.random_configurations(count, rng)
         jac, points = param_jacobian(model, q, return_point=True)
         return Workspace(q=q, sensitivity=remove_rigid_motion(jac.reshape(3 * count, -1), points))
+
+    @staticmethod
+    def near(model: RobotModel, recorded: np.ndarray, count: int = CONFIGURATIONS, radius: float = NEAR_RADIUS,
+             rng: np.random.Generator | None = None) -> Workspace:
+        """Where the recording's calibration is used: tool points within ``radius`` [m] of recorded ones, reached
+        with the recorded postures.
+
+        Each of ``count`` configurations is a recorded one (``recorded`` (K, n) [rad], drawn at random) whose tool
+        point is moved by a random displacement uniform in a ball of ``radius`` (damped Newton steps,
+        :func:`.synthetic.project_to_point`: the nearest configuration there, inside the joint limits): a plate
+        placed again on the same table, held as the person held it. Configurations that do not reach their point
+        within 1 um in 25 steps (out of reach, or held at a joint limit) are dropped (seeded; default seed 0).
+        """
+        rng = np.random.default_rng(0) if rng is None else rng
+        start = np.asarray(recorded, float)[rng.integers(0, len(recorded), count)]
+        direction = rng.standard_normal((count, 3))
+        direction /= np.linalg.norm(direction, axis=1, keepdims=True)
+        shift = direction * radius * rng.uniform(0.0, 1.0, (count, 1)) ** (1.0 / 3.0)
+        q, ok = project_to_point(model, start, tool_point(model, start) + shift, iterations=25, tol=1e-6)
+        q = q[ok]
+        jac, points = param_jacobian(model, q, return_point=True)
+        return Workspace(q=q, sensitivity=remove_rigid_motion(jac.reshape(3 * len(q), -1), points))
 
 
 def remove_rigid_motion(field: np.ndarray, points: np.ndarray) -> np.ndarray:

@@ -93,9 +93,11 @@ class SelfCheck:
     @property
     def warnings(self) -> tuple[str, ...]:
         """Passed checks the user must still know of: a fixture whose residual trends with recording
-        order, residuals above the declared noise judged at the noise they show."""
-        return tuple(f.message for f in self.findings
-                     if f.figures.get("trend") or f.figures.get("honest_noise_warning"))
+        order, residuals above the declared noise judged at the noise they show, a calibration not expected to beat
+        nominal far from the recording."""
+        found = [f.message for f in self.findings if f.figures.get("trend") or f.figures.get("honest_noise_warning")]
+        return tuple(found + [f.figures["region_warning"] for f in self.findings
+                              if isinstance(f.figures.get("region_warning"), str)])
 
     def block(self) -> dict:
         """Plain data for the ``calibration:`` block of the written file."""
