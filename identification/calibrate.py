@@ -11,6 +11,7 @@ import numpy as np
 from spherecal.correction import RobotModel, param_jacobian, registered_errors, tool_point
 from spherecal.correction.files.fixtures import FixtureSpec
 from spherecal.correction.files.samples import Dataset
+from spherecal.correction.layout import COMPLIANCE
 
 from .build import build_problem
 from .identifiability import Identifiability, normal_inverse, predicted_std
@@ -293,6 +294,7 @@ def calibrate(
         warnings.append(_noise_warning(problem, x, sigma, noise))
     if ident.condition_number > 1e8:
         warnings.append(f"ill-conditioned: condition number {ident.condition_number:.3g} at the solution")
+    warnings.extend(_negative_compliances(model, problem.free, std_values))
     return CalibrationResult(
         model=model,
         nominal=nominal,
@@ -380,6 +382,30 @@ def _plausibility_reference(model: RobotModel) -> tuple[np.ndarray, np.ndarray, 
 _REFERENCES: dict[tuple, tuple[np.ndarray, np.ndarray, float]] = {}
 _REFERENCES_LOCK = threading.Lock()
 _MAX_REFERENCES = 8
+
+
+#: A fitted joint compliance this many stds below zero is named (:func:`_negative_compliances`).
+NEGATIVE_STDS = 2.0
+
+
+def _negative_compliances(model: RobotModel, free: np.ndarray, std: np.ndarray) -> list[str]:
+    """One warning naming the identified joint compliances more than :data:`NEGATIVE_STDS` std below zero
+    (``free``: (F,) indices of the identified parameters, ``std``: their stds first).
+
+    No joint gives against its load: a negative compliance is the fit using the term for another error that
+    varies with the gravity torque at that joint (a link that bends, an axis that sags, what the other parameters
+    leave; MUKCa's Pandas fit c2 at -14 +- 6 urad/Nm). It still describes the arm where the data was recorded, and
+    the controller's compensation applies it as fitted; the user must not read it as a stiffness.
+    """
+    layout, params = model.layout, model.params
+    found = [f"{layout.names[i]} {params[i] * 1e6:.3g} +- {s * 1e6:.2g} urad/Nm"
+             for i, s in zip(free, std[: len(free)], strict=True)
+             if layout.kinds[i] is COMPLIANCE and params[i] < -NEGATIVE_STDS * s]
+    if not found:
+        return []
+    return [f"negative joint compliance: {', '.join(found)}: no joint gives against its load; the elastic model "
+            "uses the term for another error that varies with the gravity torque at that joint (a link that bends, "
+            "an axis that sags): an effective correction where the data was recorded, not a stiffness"]
 
 
 def _noise_warning(problem: CalibrationProblem, x: np.ndarray, sigma: float, noise: float) -> str:

@@ -114,3 +114,18 @@ def test_bic_from_one_placement_keeps_dh_on_a_rigid_arm_and_finds_elasticity():
     elastic = [_bic_choice(C_TRUE, 100 + seed) for seed in range(10)]
     assert sum(c == "dh" for c in rigid) >= 9, rigid
     assert sum(c == "elastic" for c in elastic) >= 9, elastic
+
+
+def test_a_negative_compliance_is_named_and_a_positive_one_is_not():
+    # no joint gives against its load: a compliance fitted well below zero is another gravity-dependent error the
+    # term absorbs, and the user is told not to read it as a stiffness (MUKCa's Pandas fit c2 < 0)
+    panda = with_compliance(load_robot("panda"), np.zeros(7))
+    for sign, named in ((-1.0, True), (1.0, False)):
+        _, dataset, spec = _data(sign * C_TRUE, 1e-4, seed=12)
+        result = calibrate(panda, dataset, spec)
+        lines = [w for w in result.warnings if w.startswith("negative joint compliance")]
+        assert bool(lines) == named, result.warnings
+        if named:
+            for i in (2, 3, 4):
+                value = result.model.params[result.model.layout.index(f"c{i}")]
+                assert value < -2 * result.std[f"c{i}"] and f"c{i} " in lines[0]
