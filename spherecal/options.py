@@ -311,7 +311,8 @@ def planned_outputs(args: argparse.Namespace, outputs: dict):
     if getattr(args, "command", None) in ("export", "tool"):  # their robot file is the positional argument
         inputs["CAL.yaml"] = inputs.pop("--robot")
     return OutputSet({k: v for k, v in outputs.items() if v is not None},
-                     {k: v for k, v in inputs.items() if isinstance(v, str)})
+                     {k: v for k, v in inputs.items() if isinstance(v, str)},
+                     file_inputs=[k for k in inputs if k != "SOURCE"])  # only SOURCE may name a folder
 
 
 def check_folder(path: str, option: str = "--out") -> None:
