@@ -19,6 +19,7 @@ import numpy as np
 
 from spherecal.correction import DatasetError, RobotModel, dump_robot, read_samples
 from spherecal.correction.files.provenance import comment_block, matches_record, provenance
+from spherecal.correction.files.text_input import xml_bytes
 from spherecal.correction.files.urdf_into import urdf_into
 from spherecal.correction.files.urdf_write import (
     PANDA_EFFORT,
@@ -47,6 +48,12 @@ class Export:
     text: str
     notes: tuple[str, ...] = ()
     fit: RigidFit | None = None
+
+    @property
+    def data(self) -> bytes:
+        """The document's bytes: UTF-8, or the encoding its XML declaration names (a Latin-1 URDF exported with
+        ``into`` stays a Latin-1 file)."""
+        return xml_bytes(self.text)
 
 
 def provenance_header(source: str, output_format: str) -> str:

@@ -40,6 +40,14 @@ def with_compliance(model: RobotModel, compliance: np.ndarray | None) -> RobotMo
     return with_joint_vector(model, "compliance", compliance)
 
 
+def with_stiffness(model: RobotModel, stiffness) -> RobotModel:
+    """A copy of ``model`` with (n,) joint stiffness [Nm/rad] as its compliance (0 = a rigid joint; every joint
+    0: no compliance at all, removed)."""
+    k = np.asarray(stiffness, dtype=float)
+    compliance = np.divide(1.0, k, out=np.zeros_like(k), where=k > 0)
+    return with_compliance(model, compliance if np.any(compliance) else None)
+
+
 def link_angles(model: RobotModel, q: np.ndarray, compliance: np.ndarray | None = None,
                 torques: np.ndarray | None = None) -> np.ndarray:
     """Link angles ``q - c tau(q)`` of measured angles ``q`` (N, n) or (n,) [rad].

@@ -311,7 +311,8 @@ def planned_outputs(args: argparse.Namespace, outputs: dict):
     if getattr(args, "command", None) in ("export", "tool"):  # their robot file is the positional argument
         inputs["CAL.yaml"] = inputs.pop("--robot")
     return OutputSet({k: v for k, v in outputs.items() if v is not None},
-                     {k: v for k, v in inputs.items() if isinstance(v, str)})
+                     {k: v for k, v in inputs.items() if isinstance(v, str)},
+                     file_inputs=[k for k in inputs if k != "SOURCE"])  # only SOURCE may name a folder
 
 
 def check_folder(path: str, option: str = "--out") -> None:
@@ -319,19 +320,3 @@ def check_folder(path: str, option: str = "--out") -> None:
     from spherecal.correction.files.outputs import check_folder as check
 
     check(path, option)
-
-
-def stiffness_values(text: str | None, n: int) -> list[float] | None:
-    """(n,) joint stiffness [Nm/rad] of ``--stiffness K[,K...]`` (one value for all joints; 0 = rigid),
-    or None when not given."""
-    if text is None:
-        return None
-    try:
-        values = [float(v) for v in text.split(",")]
-    except ValueError:
-        raise fail(f"--stiffness {text!r}: expected numbers [Nm/rad] separated by commas") from None
-    if len(values) == 1:
-        values = values * n
-    if len(values) != n or not all(math.isfinite(v) and v >= 0 for v in values):
-        raise fail(f"--stiffness {text!r}: expected 1 or {n} finite values >= 0 [Nm/rad] (0 = rigid)")
-    return values

@@ -75,6 +75,28 @@ def test_output_set_refuses_an_input_however_named(tmp_path, monkeypatch, link) 
     assert source.read_text() == "x"
 
 
+@pytest.mark.parametrize("command", [
+    ["simulate", "--seconds", "0.1", "--per-fixture", "5"],
+    ["calibrate", "--robot", "panda", "--samples", "SAMPLES"],
+    ["plan", "--predict", "SAMPLES", "--rrd"],
+])
+def test_a_folder_given_for_fixtures_is_named_as_such(tmp_path, capsys, command) -> None:
+    """--fixtures naming a folder that the output lies in was refused as 'the output is inside the --fixtures
+    folder': the mistake is the folder given for a file."""
+    folder = tmp_path / "fixtures"
+    folder.mkdir()
+    samples = tmp_path / "samples.csv"
+    write_samples(samples, Dataset(labels=np.array(["A"] * 3), q=np.zeros((3, 7))))
+    out = str(folder / ("out.rrd" if command[0] == "plan" else "out"))
+    argv = [str(samples) if word == "SAMPLES" else word for word in command]
+    argv += [out] if argv[-1] == "--rrd" else ["--out", out]
+    error = refused([*argv, "--fixtures", str(folder)], tmp_path, capsys)
+    assert error == f"spherecal {command[0]}: error: {folder}: field '--fixtures': is a folder, not a file; give the " \
+                    "file itself\n", error
+    with pytest.raises(OutputError, match="is inside the SOURCE folder"):  # a folder where one is expected: as before
+        OutputSet({"--out": folder / "x"}, {"SOURCE": str(folder)}, file_inputs=["--fixtures"])
+
+
 def test_output_set_refuses_one_file_planned_twice_and_bad_locations(tmp_path) -> None:
     with pytest.raises(OutputError, match="is also the output of --out"):
         OutputSet({"--out": tmp_path / "r.json", "--rrd": tmp_path / "." / "r.json"})

@@ -115,6 +115,8 @@ class OutputSet:
         outputs: option -> the file (or files) it writes, e.g. ``{"--out": [dir/"a.csv", dir/"b.yaml"]}``.
         inputs: option -> the file (or folder) it reads; an output that is one of them, or lies in
             an input folder, is refused. ``None`` values (options not given) are skipped.
+        file_inputs: the options of ``inputs`` that name a file: one given a folder that an output lies in is
+            refused as a folder given for a file (the mistake), not as an output inside an input.
 
     Raises:
         OutputError: a collision or an unwritable location (one line naming the option and file).
@@ -124,8 +126,10 @@ class OutputSet:
         self,
         outputs: Mapping[str, PathLike | Iterable[PathLike] | None],
         inputs: Mapping[str, PathLike | Iterable[PathLike] | None] | None = None,
+        file_inputs: Iterable[str] = (),
     ):
         self.planned: dict[Path, str] = {}
+        file_inputs = set(file_inputs)
         self._staged: dict[Path, Path] = {}
         self._created: list[Path] = []
         input_paths = [(option, p) for option, value in (inputs or {}).items() for p in _paths(value) if p.exists()]
@@ -141,6 +145,9 @@ class OutputSet:
                                           "give two different files")
                 for source, item in input_paths:
                     if same_file(path, item) or _inside(path, item):
+                        if source in file_inputs and item.is_dir():
+                            raise OutputError(f"{item}: field '{source}': is a folder, not a file; give the file "
+                                              "itself")
                         what = f"is the {source} file" if same_file(path, item) else f"is inside the {source} folder"
                         raise OutputError(f"{path}: field '{option}': {what} {item}; an output never overwrites "
                                           "an input")

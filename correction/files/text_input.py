@@ -1,9 +1,12 @@
-"""Reading untrusted text: a whole file as UTF-8, one number of a text field; errors in one line."""
+"""Reading untrusted text: a whole file as UTF-8 (an XML file in the encoding it declares), one number of a text
+field; errors in one line."""
 
 from __future__ import annotations
 
+import codecs
 import math
 import os
+import re
 from pathlib import Path
 
 #: Largest text file read whole [bytes] (robot files, URDFs, fixtures: kilobytes to a few megabytes). A
@@ -24,6 +27,14 @@ def read_text(path: str | os.PathLike, error: type[Exception], encoding: str = "
             with the byte offset).
     """
     path = Path(path)
+    data = _read_bytes(path, error, limit)
+    try:
+        return data.decode(encoding)
+    except UnicodeDecodeError as why:
+        raise error(f"{path}: cannot read: not UTF-8 text (byte {why.start})") from None
+
+
+def _read_bytes(path: Path, error: type[Exception], limit: int) -> bytes:
     try:
         with open(path, "rb") as handle:
             data = handle.read(limit + 1)
@@ -31,10 +42,61 @@ def read_text(path: str | os.PathLike, error: type[Exception], encoding: str = "
         raise error(f"{path}: cannot read: {why.strerror or why}") from None
     if len(data) > limit:
         raise error(f"{path}: cannot read: larger than {limit} bytes (a device or a file of another kind?)")
+    return data
+
+
+#: The encoding named by an XML declaration at the start of a document (ASCII-compatible encodings).
+_DECLARED = re.compile(rb"""<\?xml\s[^>]*?\bencoding\s*=\s*["']([A-Za-z][A-Za-z0-9._-]*)["']""")
+#: Byte-order marks and the encoding each one sets (XML 1.0, appendix F): it takes precedence over a declaration.
+_BOMS = ((codecs.BOM_UTF8, "utf-8-sig"), (codecs.BOM_UTF16_LE, "utf-16"), (codecs.BOM_UTF16_BE, "utf-16"))
+
+
+def xml_encoding(data: bytes) -> str:
+    """The encoding of an XML document's bytes, as the XML standard reads it: a byte-order mark, else the
+    encoding its declaration (``<?xml version="1.0" encoding="ISO-8859-1"?>``) names, else UTF-8."""
+    for bom, name in _BOMS:
+        if data.startswith(bom):
+            return name
+    found = _DECLARED.match(data)
+    return found.group(1).decode("ascii") if found else "utf-8"
+
+
+def read_xml_text(path: str | os.PathLike, error: type[Exception], limit: int = MAX_TEXT_BYTES) -> str:
+    """The text of the XML file ``path`` decoded in its own encoding (:func:`xml_encoding`), at most ``limit``
+    bytes.
+
+    Raises:
+        error: ``"<path>: cannot read: <why>"``: missing, unreadable, too large, an encoding Python does not know,
+            or bytes that are not text in the declared encoding (naming it and the byte offset).
+    """
+    path = Path(path)
+    data = _read_bytes(path, error, limit)
+    encoding = xml_encoding(data)
+    try:
+        codecs.lookup(encoding)
+    except LookupError:
+        raise error(f"{path}: cannot read: its XML declaration names an unknown encoding {encoding!r}") from None
     try:
         return data.decode(encoding)
     except UnicodeDecodeError as why:
-        raise error(f"{path}: cannot read: not UTF-8 text (byte {why.start})") from None
+        declared = "" if encoding == "utf-8" else ", the encoding its XML declaration names"
+        name = "UTF-8" if encoding == "utf-8" else encoding
+        raise error(f"{path}: cannot read: not {name} text (byte {why.start}){declared}") from None
+    except UnicodeError as why:  # a codec that refuses the data as a whole (utf-16 of an odd length)
+        raise error(f"{path}: cannot read: not {encoding} text ({why})") from None
+
+
+def xml_bytes(text: str) -> bytes:
+    """An XML document's text encoded as its declaration says (UTF-8 without one); a character that encoding
+    cannot hold becomes a character reference (``&#8364;``), so a Latin-1 URDF stays a Latin-1 file."""
+    encoding = xml_encoding(text.lstrip("\ufeff").encode("utf-8"))
+    try:
+        codecs.lookup(encoding)
+    except LookupError:
+        encoding = "utf-8"
+    if encoding.lower().replace("_", "-") in ("utf-8", "utf8", "utf-8-sig"):
+        return text.encode("utf-8")
+    return text.encode(encoding, errors="xmlcharrefreplace")
 
 
 def plain_float(text: str) -> float:

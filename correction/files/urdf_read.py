@@ -16,7 +16,7 @@ import numpy as np
 
 from ..model import pose_matrix
 from .robot_file import RobotFileError
-from .text_input import plain_float, read_text
+from .text_input import plain_float, read_xml_text
 
 MOVABLE = ("revolute", "continuous")
 KNOWN_TYPES = ("revolute", "continuous", "prismatic", "fixed", "floating", "planar")
@@ -290,8 +290,9 @@ def parse_urdf(text: str, source: str = "<urdf>") -> UrdfTree:
 
 
 def read_urdf(path: str | os.PathLike) -> UrdfTree:
-    """Read and parse a URDF file (see :func:`parse_urdf`)."""
-    return parse_urdf(read_text(path, RobotFileError), str(path))
+    """Read and parse a URDF file (see :func:`parse_urdf`), decoded in the encoding it declares (UTF-8 without
+    a declaration)."""
+    return parse_urdf(read_xml_text(path, RobotFileError), str(path))
 
 
 def chain(

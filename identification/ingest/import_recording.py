@@ -8,14 +8,16 @@ the output folder and rename it into place.
 from __future__ import annotations
 
 import os
-from dataclasses import dataclass, field
+import warnings
+from dataclasses import dataclass, field, fields
 from pathlib import Path
 
 import numpy as np
 
 from spherecal.correction.files.fixtures import FixtureSpec, write_fixtures
 from spherecal.correction.files.outputs import OutputSet
-from spherecal.correction.files.provenance import comment_block
+from spherecal.correction.files.provenance import comment_block, provenance
+from spherecal.correction.files.robots import load_robot
 from spherecal.correction.files.samples import Dataset, DatasetError
 from spherecal.correction.files.samples_csv import write_samples
 from spherecal.correction.model import RobotModel
@@ -25,6 +27,12 @@ from .importers import MUKCA_DISTANCE, Recording, RecordingError, read_joint_csv
 from .segment import Segment, SegmentSettings, format_segments, labels_of, segment
 
 FORMATS = ("mukca", "bag", "csv")
+#: Sampling rate of a CSV without time stamps when none is given [Hz].
+DEFAULT_RATE = 1000.0
+
+
+class IgnoredRateWarning(UserWarning):
+    """A sampling rate was given for a recording whose own clock or labels decide (one line, naming the source)."""
 
 
 @dataclass(frozen=True)
@@ -34,7 +42,9 @@ class ImportOptions:
     Attributes:
         topic: bag topic of ``sensor_msgs/JointState``.
         distance: MUKCa socket distance [m].
-        rate: sampling rate of a CSV without time stamps [Hz].
+        rate: sampling rate of a CSV without time stamps [Hz]; None: not given, :data:`DEFAULT_RATE`. A rate given
+            for a recording with a time column or fixture labels, or in another format, is not used: an
+            :class:`IgnoredRateWarning` says so (the recording's stamps decide).
         segmentation: thresholds of the automatic split.
         max_per_fixture: samples kept per fixture (random, seeded), None for all.
         dedup_tol: duplicate tolerance [rad].
@@ -43,7 +53,7 @@ class ImportOptions:
 
     topic: str = "/joint_states"
     distance: float = MUKCA_DISTANCE
-    rate: float = 1000.0
+    rate: float | None = None
     segmentation: SegmentSettings = field(default_factory=SegmentSettings)
     max_per_fixture: int | None = 500
     dedup_tol: float = 1e-4
@@ -116,7 +126,7 @@ def label(recording: Recording, model: RobotModel, options: ImportOptions) -> tu
         return recording.dataset(), []
     t = recording.t
     if t is None:
-        t = np.arange(recording.q.shape[0]) / options.rate
+        t = np.arange(recording.q.shape[0]) / (DEFAULT_RATE if options.rate is None else options.rate)
     elif np.any(np.diff(t) < 0):
         k = int(np.flatnonzero(np.diff(t) < 0)[0]) + 1
         raise RecordingError(f"{recording.rows[k]}, field 't': time goes back ({t[k]:.6f} s after {t[k - 1]:.6f} s)")
@@ -158,6 +168,7 @@ def import_recording(
         recording, spec = read_mukca(source, model, options.distance)
     else:
         recording, spec = read_source(source, fmt, model, options), None
+    _warn_unused_rate(recording, fmt, options.rate)
     dataset, segments = label(recording, model, options)
     read = recording.q.shape[0]
     deduplicated = dataset.deduplicated(options.dedup_tol)
@@ -179,6 +190,60 @@ def import_recording(
         kept, spec, read, segments, read - dataset.n_samples, dataset.n_samples - deduplicated.n_samples,
         recording.notes,
     )
+
+
+def _warn_unused_rate(recording: Recording, fmt: str, rate: float | None) -> None:
+    """One :class:`IgnoredRateWarning` when ``rate`` [Hz] was given but the recording's own stamps or labels decide:
+    the time column is used (its median rate said, and whether it disagrees), never the rate typed."""
+    if rate is None:
+        return
+    if fmt != "csv":
+        why = "MUKCa placements are labelled" if fmt == "mukca" else "a bag's messages carry their own time stamps"
+    elif recording.labels is not None:
+        why = "its fixture column labels the samples (nothing is segmented in time)"
+    elif recording.t is not None:
+        steps = np.diff(recording.t)
+        steps = steps[steps > 0]
+        if not steps.size:
+            return  # one time stamp: the time column refuses or labels nothing later
+        stamped = 1.0 / float(np.median(steps))
+        differs = abs(stamped - rate) > 0.01 * rate
+        why = (f"the time column was used (median {stamped:.4g} Hz{', not the rate given' if differs else ''}); "
+               "leave --rate out")
+    else:
+        return  # a CSV without time stamps: the rate is used
+    warnings.warn(f"{recording.source}: --rate {rate:g} Hz ignored: {why}", IgnoredRateWarning, stacklevel=3)
+
+
+def import_files(source: str | os.PathLike, fmt: str, robot: str, out: str | os.PathLike,
+                 options: ImportOptions = ImportOptions(), robot_options: dict | None = None) -> ImportResult:
+    """:func:`import_recording` of ``robot`` loaded by name or file, with the provenance of the import recorded in
+    ``fixtures.yaml`` (``import:``) and ``samples.csv``: source, robot and the options that shaped it.
+
+    Args:
+        source: the recording (see :data:`FORMATS`).
+        fmt: ``mukca``, ``bag`` or ``csv``.
+        robot: a robot file, a URDF or an embedded arm's name (:func:`correction.load_robot`).
+        out: folder to create (absent or empty; never one holding an input).
+        options: see :class:`ImportOptions`.
+        robot_options: keyword arguments of :func:`correction.load_robot` (``tip_link``, ``base_link``,
+            ``inertials``, ``report``).
+    """
+    model = load_robot(robot, **(robot_options or {}))
+    chosen = _relevant(fmt, {f.name: getattr(options, f.name) for f in fields(options) if f.name != "segmentation"})
+    if "rate" in chosen and chosen["rate"] is None:
+        chosen["rate"] = DEFAULT_RATE
+    chosen |= vars(options.segmentation) if fmt != "mukca" else {}
+    extras = {"format": fmt, "provenance": provenance(options.seed, {"source": Path(source), "robot": Path(robot),
+                                                                      **chosen})}
+    inputs = [robot] if robot != "panda" else []
+    return import_recording(source, fmt, model, out, options, inputs, extras)
+
+
+def _relevant(fmt: str, options: dict) -> dict:
+    """The options that shaped an import of ``fmt`` (for the provenance block)."""
+    drop = {"mukca": ("topic", "rate"), "bag": ("distance", "rate"), "csv": ("distance", "topic")}[fmt]
+    return {k: v for k, v in options.items() if k not in drop}
 
 
 def _outputs(out: Path, source, inputs) -> OutputSet:

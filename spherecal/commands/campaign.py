@@ -53,20 +53,19 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    """Run the campaign, print Table 2, write it as CSV and Markdown."""
+    """Check the options, run the campaign, print Table 2 and where it was written (CSV and Markdown)."""
     import sys
-    import time
+    from pathlib import Path
 
-    from spherecal.correction.files.provenance import comment_block, provenance
+    from spherecal.options import check_folder, planned_outputs
     from spherecal.validation.experiments.campaign import (
         FIXTURE_SETS,
         TABLE_FILES,
         CampaignConfig,
         format_table,
-        run_campaign,
-        table,
-        write_tables,
+        run_and_write,
     )
+    from spherecal.validation.experiments.experiment import joint_stiffness
 
     rows = tuple(r.strip() for r in args.rows.split(",") if r.strip())
     unknown = [r for r in rows if r not in FIXTURE_SETS]
@@ -79,15 +78,10 @@ def run(args: argparse.Namespace) -> int:
         raise fail(f"--per-fixture must be >= 10, got {args.per_fixture}")
     if args.source == "mujoco" and args.per_fixture > round(args.seconds * 1000):
         raise fail(f"--per-fixture {args.per_fixture} > {args.seconds:g} s of 1 kHz readings")
-    from pathlib import Path
-
-    from spherecal.options import check_folder, planned_outputs, stiffness_values
-
     check_folder(args.out)
     outputs = planned_outputs(args, {"--out": [Path(args.out) / name for name in TABLE_FILES]})
-    stiffness = stiffness_values(args.stiffness, 7) or ()  # the campaign's arm is the embedded Panda
     config = CampaignConfig(
-        stiffness=tuple(stiffness),
+        stiffness=tuple(joint_stiffness(args.stiffness, 7) or ()),  # the campaign's arm is the embedded Panda
         model=args.model,
         sets=args.sets,
         samples=args.per_fixture,
@@ -97,29 +91,25 @@ def run(args: argparse.Namespace) -> int:
         protocol=args.protocol,
         seed=args.seed,
         fixture_sets=rows,
-        noise_levels=(0.0, args.noise * 1e-3) if args.noise > 0 else (0.0,),
+        noise_levels=(0.0, args.noise * 1e-3) if args.noise > 0 else (0.0,),  # --noise 0: no noisy rows
     )
-    start = time.perf_counter()
-    run = run_campaign(config, workers=args.workers, scheduler=args.scheduler)
-    wall = time.perf_counter() - start
-    results = run.results
-    rows_out = table(results)
-    print(
-        f"Table 2 ({args.protocol} protocol, {args.source} motion): calibrated tool-point error against the exact "
-        "tool point on random workspace configurations, after registration"
-    )
-    print(format_table(rows_out))
-    for result in results:
-        if result.refused:
-            print(f"refused: {result.row} set {result.index}: {result.refused}")
-    inputs = recorded_options(args)
-    info = provenance(args.seed, {**inputs, "wall_time_s": round(wall, 1)}, workers=run.workers)
-    csv_path, md_path = write_tables(rows_out, args.out, comment_block(info), outputs)
-    print(f"written: {csv_path}, {md_path}")
+
+    def show(results, rows) -> None:  # before the files are written: a failed write after hours still shows it
+        print(f"Table 2 ({args.protocol} protocol, {args.source} motion): calibrated tool-point error against the "
+              "exact tool point on random workspace configurations, after registration")
+        print(format_table(rows))
+        for result in results:
+            if result.refused:
+                print(f"refused: {result.row} set {result.index}: {result.refused}")
+
+    done = run_and_write(config, args.out, recorded_options(args), outputs, args.workers, args.scheduler, show)
+    results = done.run.results
+    print(f"written: {done.files[0]}, {done.files[1]}")
     where = f"Dask scheduler {args.scheduler}" if args.scheduler else "process pool"
-    print(f"wall time {wall:.1f} s ({len(results)} sets, {len(run.workers)} worker processes, {where})")
-    if run.failures:  # each also reported as it happened (TaskFailedWarning); the table holds the others
-        print(f"failed: {len(run.failures)} sets ({', '.join(f.name for f in run.failures)}), not in the table",
+    print(f"wall time {done.wall:.1f} s ({len(results)} sets, {len(done.run.workers)} worker processes, {where})")
+    failures = done.run.failures
+    if failures:  # each also reported as it happened (TaskFailedWarning); the table holds the others
+        print(f"failed: {len(failures)} sets ({', '.join(f.name for f in failures)}), not in the table",
               file=sys.stderr)
         return 1
     return 0

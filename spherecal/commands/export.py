@@ -58,11 +58,11 @@ def _into(into: str, out: str) -> tuple[str, str]:
     import os
     from pathlib import Path
 
-    from spherecal.correction.files.text_input import read_text
+    from spherecal.correction.files.text_input import read_xml_text
     from spherecal.correction.files.urdf_write import ExportError
 
     source = Path(into)
-    text = read_text(source, ExportError)
+    text = read_xml_text(source, ExportError)  # in the encoding it declares, written back in it
     if Path(out).resolve() == source.resolve() or (Path(out).exists() and os.path.samefile(out, source)):
         raise ExportError(f"--out: {out} is the --into file; write the calibrated URDF to another file")
     return text, str(source)
@@ -95,7 +95,7 @@ def run(args: argparse.Namespace) -> int:
                             _limits(args.effort, "--effort"), _limits(args.velocity, "--velocity"), into,
                             args.samples, args.seed, Path(args.robot).parent)
     with outputs:
-        path = outputs.write_text(args.out, exported.text)
+        path = outputs.write_bytes(args.out, exported.data)
     print(f"spherecal export: wrote {args.format} of {model.name!r} ({model.convention} DH) to {path}")
     for line in exported.notes:
         print(f"spherecal export: {line}")

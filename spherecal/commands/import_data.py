@@ -35,8 +35,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     )
     add_seed(parser, "the subsampling")
     parser.add_argument(
-        "--rate", type=at_most(1e6, "Hz"), default=1000.0,
-        help="csv without a time column: sampling rate [Hz] (default 1000)",
+        "--rate", type=at_most(1e6, "Hz"), default=None,
+        help="csv without a time column: sampling rate [Hz] (default 1000); a recording's time column is used "
+        "instead, with a warning when --rate is given",
     )
     group = parser.add_argument_group(
         "segmentation (bag, csv without a 'fixture' column): a fixture is where the NOMINAL tool point stays "
@@ -55,21 +56,17 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    """Read, label (or segment), deduplicate, subsample, then write both files together."""
+    """Import: read, label (or segment), deduplicate, subsample, then write both files together."""
     import time
-    from pathlib import Path
 
     import numpy as np
 
-    from spherecal.correction import load_robot
-    from spherecal.correction.files.provenance import provenance
     from spherecal.correction.files.samples import DEDUP_TOL
-    from spherecal.identification.ingest.import_recording import ImportOptions, import_recording
+    from spherecal.identification.ingest.import_recording import ImportOptions, import_files
     from spherecal.identification.ingest.segment import SegmentSettings
     from spherecal.options import urdf_links
 
     clock = time.perf_counter()
-    model = load_robot(args.robot, **urdf_links(args))
     options = ImportOptions(
         topic=args.topic,
         distance=args.distance,
@@ -86,20 +83,7 @@ def run(args: argparse.Namespace) -> int:
         dedup_tol=DEDUP_TOL if args.dedup_deg is None else float(np.deg2rad(args.dedup_deg)),
         seed=args.seed,
     )
-    chosen = _relevant(args.format, {k: v for k, v in vars(options).items() if k != "segmentation"})
-    chosen |= vars(options.segmentation) if args.format != "mukca" else {}
-    extras = {
-        "format": args.format,
-        "provenance": provenance(args.seed, {"source": Path(args.source), "robot": Path(args.robot), **chosen}),
-    }
-    inputs = [args.robot] if args.robot != "panda" else []
-    result = import_recording(args.source, args.format, model, args.out, options, inputs, extras)
+    result = import_files(args.source, args.format, args.robot, args.out, options, urdf_links(args))
     print(result.format())
     print(f"wrote {args.out}/samples.csv and {args.out}/fixtures.yaml in {time.perf_counter() - clock:.2f} s")
     return 0
-
-
-def _relevant(fmt: str, options: dict) -> dict:
-    """The options that shaped an import of ``fmt`` (for the provenance block)."""
-    drop = {"mukca": ("topic", "rate"), "bag": ("distance", "rate"), "csv": ("distance", "topic")}[fmt]
-    return {k: v for k, v in options.items() if k not in drop}

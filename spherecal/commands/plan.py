@@ -98,17 +98,14 @@ class _FixturesOption(argparse.Action):
 
 
 def run(args: argparse.Namespace) -> int:
-    """Plan (or predict, or regenerate the analysis) and print the result."""
+    """Plan (or predict, or regenerate the analysis, or guide the recording) and print the result."""
     import time
 
-    import numpy as np
-
-    from spherecal.correction import load_robot
+    from spherecal.options import planned_outputs
+    from spherecal.validation.planning import plan_files
 
     if args.per_fixture < 10:
         raise fail(f"--per-fixture must be >= 10, got {args.per_fixture}")
-    from spherecal.options import planned_outputs
-
     outputs = planned_outputs(args, {"--rrd": args.rrd, "--analysis": args.analysis, "--out": args.out})
     if args.analysis is not None:
         if args.scheduler is not None:
@@ -119,88 +116,30 @@ def run(args: argparse.Namespace) -> int:
             write_analysis(outputs.stage(args.analysis), AnalysisConfig(seed=args.seed, workers=args.workers))
         print(f"written: {args.analysis}")
         return 0
-    model = load_robot(args.robot, **urdf_links(args))
+    links = urdf_links(args)
     if args.predict is not None:
-        return _predict(args, model)
+        print(plan_files.predict_files(args.robot, args.predict, args.fixtures, args.noise * 1e-3, **links).summary())
+        return 0
     if args.samples is not None:
-        return _guide(args, model, np.random.default_rng(args.seed), outputs)
-    from spherecal.validation.parallel import executor
-    from spherecal.validation.planning.candidates import grid_candidates, read_candidates
-    from spherecal.validation.planning.plan import plan
+        from spherecal.validation.planning.guidance_report import format_guidance
 
-    if args.candidates is None and args.grid is None:
-        raise fail("give --candidates C.yaml or --grid 'xmin,xmax,nx;ymin,ymax,ny;zmin,zmax,nz'")
-    candidates = read_candidates(args.candidates, model.n_joints) if args.candidates else grid_candidates(args.grid)
-    if not 1 <= args.fixture_count <= 4:
-        raise fail(f"--fixture-count must be in 1..4, got {args.fixture_count}")
+        plan_files.guide_files(
+            args.robot, args.samples, args.fixtures, args.candidates, args.plate_grid, args.plate_orientations,
+            args.per_socket, args.min_gain * 1e-3, args.noise * 1e-3, args.seed, recorded_options(args), args.out,
+            args.rrd, outputs, grid=args.grid, show=lambda guidance: print(format_guidance(guidance)), **links)
+        for name in (args.out, args.rrd):
+            if name:
+                print(f"written: {name}")
+        return 0
+    from spherecal.validation.planning.plan_report import format_plan
+
     start = time.perf_counter()
-    with executor(args.workers, args.scheduler) as pool:  # each candidate's survey a task, seeded by its name
-        result = plan(model, candidates, args.fixture_count, args.seed, args.noise * 1e-3, args.per_fixture,
-                      args.motion, args.seconds, executor=pool)
-    from spherecal.validation.planning.plan_report import format_plan, write_recording
-
-    print(format_plan(result))
-    if result.best is None:  # the table above says which candidates failed; the refusal is one line on stderr
-        reachable = sum(s.reachable for s in result.surveys)
-        raise fail(f"no plan: {reachable} of {len(result.surveys)} candidates reachable, fewer than the "
-                   f"{args.fixture_count} fixtures wanted (--fixture-count)")
+    result = plan_files.plan_files(
+        args.robot, args.candidates, args.grid, args.fixture_count, args.seed, args.noise * 1e-3, args.per_fixture,
+        args.motion, args.seconds, recorded_options(args), args.workers, args.scheduler, args.rrd, outputs,
+        show=lambda result: print(format_plan(result)), **links)
     if args.rrd:
-        from spherecal.correction.files.provenance import comment_block, provenance
-
-        inputs = recorded_options(args)
-        with outputs:  # staged, renamed into place once Rerun has written it all
-            info = provenance(args.seed, inputs, workers=result.workers)
-            write_recording(outputs.stage(args.rrd), result, comment_block(info))
         print(f"written: {args.rrd}")
     print(f"wall time {time.perf_counter() - start:.1f} s (survey {result.seconds['survey']:.1f} s, "
           f"scoring {result.seconds['score']:.1f} s, motion: {result.motion})")
-    return 0 if result.best is not None else 1
-
-
-def _predict(args: argparse.Namespace, model) -> int:
-    from spherecal.correction.files.fixtures import read_fixtures
-    from spherecal.correction.files.samples_csv import read_samples
-    from spherecal.identification.prediction import predict_accuracy
-
-    dataset = read_samples(args.predict, model)
-    spec = read_fixtures(args.fixtures) if args.fixtures else None
-    print(predict_accuracy(model, dataset, spec, noise=args.noise * 1e-3).summary())
-    return 0
-
-
-def _guide(args: argparse.Namespace, model, rng, outputs) -> int:
-    """Recording guidance: rank the candidates given what has been recorded (``--samples``)."""
-    import json
-
-    from spherecal.correction.files.fixtures import read_fixtures
-    from spherecal.correction.files.provenance import comment_block, provenance
-    from spherecal.correction.files.samples_csv import read_samples
-    from spherecal.validation.planning.guidance import recording_guidance
-    from spherecal.validation.planning.guidance_report import (
-        format_guidance,
-        guidance_json,
-        write_guidance_recording,
-    )
-    from spherecal.validation.planning.placements import read_placements
-
-    if args.grid is not None:
-        raise fail("--grid places single fixtures for a plan from scratch; with --samples give --plate-grid")
-    if args.candidates is None and args.plate_grid is None:
-        raise fail("with --samples give --candidates C.yaml or --plate-grid 'xmin,xmax,nx;ymin,ymax,ny;zmin,zmax,nz'")
-    dataset = read_samples(args.samples, model)
-    spec = read_fixtures(args.fixtures) if args.fixtures else None
-    candidates = read_placements(args.candidates) if args.candidates else []
-    guidance = recording_guidance(model, dataset, spec, rng, candidates, args.plate_grid, args.plate_orientations,
-                                  args.per_socket, args.min_gain * 1e-3, args.noise * 1e-3)
-    print(format_guidance(guidance))
-    inputs = recorded_options(args)
-    info = provenance(args.seed, inputs)
-    with outputs:  # staged: every output appears, or none
-        if args.out:
-            outputs.stage(args.out).write_text(json.dumps(guidance_json(guidance, info), indent=2) + "\n")
-        if args.rrd:
-            write_guidance_recording(outputs.stage(args.rrd), guidance, comment_block(info))
-    for name in (args.out, args.rrd):
-        if name:
-            print(f"written: {name}")
     return 0

@@ -3,7 +3,7 @@
 import numpy as np
 
 from spherecal.correction import joint_jacobian, load_robot, param_jacobian, tool_point
-from spherecal.correction.elastic import link_angles, motor_angles, with_compliance
+from spherecal.correction.elastic import link_angles, motor_angles, with_compliance, with_stiffness
 from spherecal.correction.gravity import gravity_torques
 from spherecal.correction.layout import COMPLIANCE
 
@@ -76,3 +76,11 @@ def test_joint_jacobian_is_exact_through_the_torque():
         fd = (tool_point(model, q + e) - tool_point(model, q - e)) / (2 * h)
         np.testing.assert_allclose(jac[:, :, k], fd, atol=1e-8)
     assert np.abs(jac - rigid_part).max() > 1e-5  # the torque term is not negligible at this tolerance
+
+
+def test_with_stiffness_is_the_inverse_compliance():
+    panda = with_compliance(load_robot("panda"), C)
+    k = [0.0, 3e4, 0.0, 5e4, 0.0, 0.0, 1e3]  # 0: a rigid joint
+    np.testing.assert_array_equal(with_stiffness(panda, k).extras["compliance"],
+                                  [0.0, 1 / 3e4, 0.0, 1 / 5e4, 0.0, 0.0, 1 / 1e3])
+    assert "compliance" not in with_stiffness(panda, [0.0] * 7).extras  # every joint rigid: the file's is removed

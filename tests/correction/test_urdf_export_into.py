@@ -157,6 +157,26 @@ def test_a_model_without_its_tip_link_goes_to_the_chain_end_at_its_tool_point(rn
     assert "ball_link (180 mm from end_effector_link)" in str(error.value)
 
 
+def test_export_into_a_latin1_urdf_writes_latin1(tmp_path, rng):
+    """--into a URDF declaring ISO-8859-1 (a comment with accents) was refused as 'not UTF-8 text'; it is read in
+    its encoding and the calibrated copy is written in it too: the declaration still tells the truth."""
+    _, calibrated = _calibrated("gen3lite", "standard", rng)
+    cal, into, out = tmp_path / "cal.yaml", tmp_path / "kinova.urdf", tmp_path / "calibrated.urdf"
+    save_robot(calibrated, cal)
+    original = _text("gen3lite").replace('<?xml version="1.0" ?>', '<?xml version="1.0" encoding="ISO-8859-1"?>\n'
+                                         "<!-- bras étalonné: épaule, coude -->", 1)
+    assert "ISO-8859-1" in original
+    into.write_bytes(original.encode("latin-1"))
+    assert main(["export", str(cal), "--format", "urdf", "--into", str(into), "--out", str(out)]) == 0
+    data = out.read_bytes()
+    assert b"\xe9talonn\xe9" in data  # Latin-1 bytes, as declared
+    written = data.decode("latin-1")
+    assert written.startswith('<?xml version="1.0" encoding="ISO-8859-1"?>')
+    q = calibrated.random_configurations(200, rng)
+    points, _ = MujocoUrdf(written).body_pose("ball_link", calibrated.extras["joint_names"], q)
+    assert np.abs(points - tool_point(calibrated, q)).max() < 1e-12
+
+
 def test_a_new_tool_goes_to_its_own_link_not_to_the_ball(rng):
     """`tool --urdf TOOL.urdf --tip-link panda_hand_tcp` then `export --into`: the calibrated file kept the ball as
     its tip link, and export wrote the new tool point into ball_joint (the ball link moved 30 mm to the TCP, the

@@ -223,3 +223,41 @@ def test_gen3lite_default_tip_lists_its_ball_fingers_and_tool_frame(tmp_path, ca
     (source / "hole_1.csv").write_text("0.1,0.2,0.3,0.4,0.5,0.7\n")
     refused(["import", source, "--format", "mukca", "--robot", DATA / "gen3lite.urdf", "--out", tmp_path / "out"],
             tmp_path, capsys, "right_finger_dist_link (116 mm", "ball_link (180 mm", "--tip-link")
+
+
+def _declared(text: str, encoding: str) -> str:
+    """``text`` with an XML declaration naming ``encoding`` and a comment holding non-ASCII characters."""
+    assert text.startswith('<?xml version="1.0"?>')
+    return text.replace('<?xml version="1.0"?>', f'<?xml version="1.0" encoding="{encoding}"?>\n'
+                        "<!-- épaule, coude, poignet: modèle cinématique -->", 1)
+
+
+def test_a_urdf_is_read_in_the_encoding_it_declares(tmp_path):
+    """A Latin-1 URDF declaring ISO-8859-1 was refused as 'not UTF-8 text': the XML standard reads it in the
+    encoding its declaration names; only bytes that are not text in that encoding are refused."""
+    from spherecal.correction import RobotFileError
+
+    plain = tmp_path / "utf8.urdf"
+    plain.write_text(ur5e_urdf(), encoding="utf-8")
+    latin = tmp_path / "latin1.urdf"
+    latin.write_bytes(_declared(ur5e_urdf(), "ISO-8859-1").encode("latin-1"))
+    assert b"\xe9paule" in latin.read_bytes()  # one byte per character: not UTF-8
+    reference, model = load_urdf(plain), load_urdf(latin)
+    np.testing.assert_array_equal(model.params, reference.params)
+    assert model.extras["joint_names"] == reference.extras["joint_names"]
+    utf8 = tmp_path / "declared_utf8.urdf"  # the same characters in UTF-8, declared: the same arm
+    utf8.write_bytes(_declared(ur5e_urdf(), "UTF-8").encode("utf-8"))
+    np.testing.assert_array_equal(load_urdf(utf8).params, reference.params)
+    for encoding, data, match in (
+        ("US-ASCII", _declared(ur5e_urdf(), "US-ASCII").encode("latin-1"),
+         r"not US-ASCII text \(byte \d+\), the encoding its XML declaration names"),
+        ("UTF-8", _declared(ur5e_urdf(), "UTF-8").encode("latin-1"), r"not UTF-8 text \(byte \d+\)"),
+        ("none", _declared(ur5e_urdf(), "UTF-8").replace(' encoding="UTF-8"', "").encode("latin-1"),
+         r"not UTF-8 text \(byte \d+\)$"),
+        ("unknown", _declared(ur5e_urdf(), "x-klingon").encode("latin-1"), "names an unknown encoding 'x-klingon'"),
+    ):
+        bad = tmp_path / f"{encoding}.urdf"
+        bad.write_bytes(data)
+        with pytest.raises(RobotFileError, match=match) as error:
+            load_urdf(bad)
+        assert str(bad) in str(error.value) and "\n" not in str(error.value)

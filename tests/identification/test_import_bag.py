@@ -222,6 +222,33 @@ def test_csv_time_in_milliseconds_is_refused_unless_the_header_names_the_unit(re
         assert min(_held(out, q, truth)) > 0.8 * np.count_nonzero(truth == 0)
 
 
+def test_rate_given_for_a_csv_with_a_time_column_is_ignored_with_one_warning(recording, tmp_path, capsys) -> None:
+    # --rate was silently ignored when the CSV had a time column: the stamps decide, the user is told in one line
+    _, t, q, truth = recording  # 200 Hz stamps
+    rows = "\n".join(f"{float(t[k] - t[0])!r}," + ",".join(repr(float(v)) for v in q[k]) for k in range(len(t)))
+    (tmp_path / "rec.csv").write_text("time," + ",".join(NAMES) + "\n" + rows + "\n")
+    argv = ["import", str(tmp_path / "rec.csv"), "--format", "csv", "--robot", str(PANDA), "--max-per-fixture", "9999"]
+    assert main([*argv, "--out", str(tmp_path / "plain")]) == 0
+    assert capsys.readouterr().err == ""  # no --rate: nothing to say
+    assert main([*argv, "--out", str(tmp_path / "fast"), "--rate", "1000"]) == 0
+    err = capsys.readouterr().err.splitlines()
+    assert err == [f"spherecal import: warning: {tmp_path / 'rec.csv'}: --rate 1000 Hz ignored: the time column was "
+                   "used (median 200 Hz, not the rate given); leave --rate out"], err
+    plain, fast = (read_samples(tmp_path / name / "samples.csv", load_robot(PANDA)) for name in ("plain", "fast"))
+    np.testing.assert_array_equal(fast.t, plain.t)  # the stamps, not 1 kHz
+    np.testing.assert_array_equal(fast.q, plain.q)
+    assert main([*argv, "--out", str(tmp_path / "same"), "--rate", "200"]) == 0  # agrees: still told, no dispute
+    assert capsys.readouterr().err.splitlines()[0].endswith("--rate 200 Hz ignored: the time column was used "
+                                                             "(median 200 Hz); leave --rate out")
+    # without a time column the rate is the clock: no warning, the samples 1 / rate apart
+    (tmp_path / "bare.csv").write_text(",".join(NAMES) + "\n" + "\n".join(r.split(",", 1)[1] for r in rows.split("\n"))
+                                       + "\n")
+    assert main([*argv[:1], str(tmp_path / "bare.csv"), *argv[2:], "--out", str(tmp_path / "bare"),
+                 "--rate", "200"]) == 0
+    assert capsys.readouterr().err == ""
+    assert min(_held(tmp_path / "bare", q, truth)) > 0.8 * np.count_nonzero(truth == 0)
+
+
 def test_a_plotjuggler_csv_of_joint_states_is_read_by_its_position_columns(recording, tmp_path, capsys) -> None:
     # PlotJuggler exports a topic as '__time,/joint_states/<joint>/position,/joint_states/<joint>/velocity,...':
     # refused, 'joint franka_panda_joint1 not in the recording'

@@ -33,6 +33,7 @@ from spherecal.validation.planning.guidance import (
     unexplained_variance,
     workspace_of,
 )
+from spherecal.validation.planning.guidance_report import format_guidance
 from spherecal.validation.planning.hand_guiding import carried_over, hand_guided
 from spherecal.validation.planning.placements import (
     Placement,
@@ -311,6 +312,19 @@ def test_the_plan_starts_from_the_calibration_not_the_nominal_arm(panda, simulat
     nominal = registered_errors(tool_point(panda, q), tool_point(truth, q)).mean()
     assert calibrated < 0.7 * nominal  # closer to the truth than the nominal arm
     assert NOISE / 2 < recorded.noise < 2 * NOISE  # the measured residual, not a declared figure
+
+
+def test_a_gain_that_rounds_to_zero_is_printed_without_a_sign(simulated):
+    """A candidate gaining -0.04 um is printed 0.0000 mm in the table, +0.000 mm on its label, 0 on the stop line,
+    not -0.0000 / -0.000 / -0; a real loss keeps its sign."""
+    guidance = rank_placements(simulated[3], simulated[4][:1], np.random.default_rng(0), min_gain=0.02e-3)
+    tiny = replace(guidance.ranking[0], gain=-4e-8, own_gain=-0.0)
+    text = format_guidance(replace(guidance, ranking=[tiny]))
+    row = next(line for line in text.splitlines() if line.split()[:2] == ["1", "front"])
+    assert row.split("|")[1].split()[1] == "0.0000" and "-0" not in text, text
+    assert "gains 0 mm" in text.splitlines()[-1]
+    lost = format_guidance(replace(guidance, ranking=[replace(tiny, gain=-4e-7)]))
+    assert "-0.0004" in lost
 
 
 # ----------------------------------------------------------------------------------- command line

@@ -34,8 +34,9 @@ from pathlib import Path
 import numpy as np
 
 from spherecal.correction import SpherecalError
-from spherecal.correction.elastic import with_compliance
+from spherecal.correction.elastic import with_stiffness
 from spherecal.correction.files.outputs import OutputSet
+from spherecal.correction.files.provenance import comment_block, provenance
 from spherecal.identification.workflow import WorkflowOptions, run_workflow
 
 from .. import parallel
@@ -156,8 +157,7 @@ def run_task(task: Task) -> TaskResult:
         truth, start = perturbed, nominal
     fixtures = {name: default_fixtures()[name] for name in task.fixtures}
     if any(task.config.stiffness):
-        k = np.asarray(task.config.stiffness, dtype=float)
-        truth = with_compliance(truth, np.divide(1.0, k, out=np.zeros_like(k), where=k > 0))
+        truth = with_stiffness(truth, task.config.stiffness)
     data = motion_set(
         truth, start, fixtures, task.config.samples, task.noise, rng, task.config.source, task.config.seconds
     )
@@ -355,3 +355,46 @@ def write_tables(rows: list[TableRow], folder: str | os.PathLike, comment: str =
         outputs.write_text(csv_path, table_csv(rows, comment))
         outputs.write_text(md_path, table_markdown(rows, comment))
     return csv_path, md_path
+
+
+@dataclass(frozen=True)
+class CampaignOutcome:
+    """What :func:`run_and_write` did.
+
+    Attributes:
+        run: the tasks' results and failures (:class:`CampaignRun`).
+        rows: Table 2 (:func:`table`).
+        files: the written ``table2.csv`` and ``table2.md``.
+        wall: wall time of the tasks [s].
+    """
+
+    run: CampaignRun
+    rows: list[TableRow]
+    files: tuple[Path, Path]
+    wall: float
+
+
+def run_and_write(config: CampaignConfig, folder: str | os.PathLike, inputs: dict, outputs: OutputSet | None = None,
+                  workers: int = 2, scheduler: str | None = None,
+                  show: Callable[[list[TaskResult], list[TableRow]], None] | None = None) -> CampaignOutcome:
+    """Run the campaign (:func:`run_campaign`), make Table 2 and write it into ``folder`` with its provenance.
+
+    Args:
+        config: the protocol.
+        folder: where ``table2.csv`` and ``table2.md`` go (:data:`TABLE_FILES`).
+        inputs: the options of the run as recorded in the provenance (the wall time [s] is added).
+        outputs: the staged outputs holding both files (checked by the caller before the run); None: made here.
+        workers: processes of the built-in pool, or of ``scheduler="local"``.
+        scheduler: a dask.distributed scheduler's address, or ``"local"``; None: the built-in pool.
+        show: called with the results and the table before the files are written (a write that fails after a
+            long run still shows them).
+    """
+    start = time.perf_counter()
+    run = run_campaign(config, workers=workers, scheduler=scheduler)
+    wall = time.perf_counter() - start
+    rows = table(run.results)
+    if show is not None:
+        show(run.results, rows)
+    info = provenance(config.seed, {**inputs, "wall_time_s": round(wall, 1)}, workers=run.workers)
+    files = write_tables(rows, folder, comment_block(info), outputs)
+    return CampaignOutcome(run, rows, files, wall)

@@ -6,14 +6,39 @@ so the demo and the campaign workers run exactly the same steps.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
 
-from spherecal.correction import RobotModel, load_robot, perturb
+from spherecal.correction import RobotModel, SpherecalError, load_robot, perturb
 from spherecal.correction.files.fixtures import FixtureSpec
 from spherecal.identification.calibrate import calibrate
 from spherecal.identification.synthetic import make_dataset
+
+
+class ExperimentError(SpherecalError):
+    """A simulated experiment that cannot be run as asked (one line naming the option, file or field)."""
+
+
+def joint_stiffness(text: str | None, n: int) -> list[float] | None:
+    """(n,) joint stiffness [Nm/rad] of ``K`` (every joint) or ``K,K,...`` (one per joint), 0 = rigid;
+    None when ``text`` is None.
+
+    Raises:
+        ExperimentError: not numbers, not 1 or ``n`` of them, or one not finite and >= 0 (naming ``--stiffness``).
+    """
+    if text is None:
+        return None
+    try:
+        values = [float(v) for v in text.split(",")]
+    except ValueError:
+        raise ExperimentError(f"--stiffness {text!r}: expected numbers [Nm/rad] separated by commas") from None
+    if len(values) == 1:
+        values = values * n
+    if len(values) != n or not all(math.isfinite(v) and v >= 0 for v in values):
+        raise ExperimentError(f"--stiffness {text!r}: expected 1 or {n} finite values >= 0 [Nm/rad] (0 = rigid)")
+    return values
 
 
 def nominal_robot() -> RobotModel:

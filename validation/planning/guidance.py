@@ -218,9 +218,16 @@ class Guidance:
             return "no candidate can be recorded: nothing to add"
         best = self.ranking[0]
         if self.worth_it:
-            return f"record {best.placement.name} next: it gains {best.own_gain * 1e3:.3g} mm, more than {limit}"
+            return f"record {best.placement.name} next: it gains {mm_text(best.own_gain, '.3g')} mm, more than {limit}"
         return (f"more recording is not worth it: the best candidate {best.placement.name} gains "
-                f"{best.own_gain * 1e3:.3g} mm, not more than {limit}")
+                f"{mm_text(best.own_gain, '.3g')} mm, not more than {limit}")
+
+
+def mm_text(value: float, spec: str) -> str:
+    """``value`` [m] in millimetres formatted by ``spec`` (``"7.4f"``, ``"+.3f"``, ``".3g"``); a value that rounds to
+    zero is printed as zero, never ``-0.000`` (a gain or loss too small to show has no sign)."""
+    text = format(value * 1e3, spec)
+    return format(0.0, spec) if float(text) == 0 else text
 
 
 def measured_noise(result) -> float:

@@ -7,6 +7,7 @@ import numpy as np
 from spherecal.correction import tool_point
 
 from . import guidance as guidance_module
+from .guidance import mm_text
 
 #: Parameters named per candidate in the table.
 PINNED_SHOWN = 3
@@ -41,7 +42,7 @@ def format_guidance(guidance) -> str:
     for k, j in enumerate(guidance.ranking):
         x, y, z = j.placement.centre
         lines.append(f"{k + 1:>4} {j.placement.name:<16} {x:7.3f} {y:7.3f} {z:7.3f} | {j.error * 1e3:7.4f} "
-                     f"{j.gain * 1e3:7.4f} | {_pinned(j)}")
+                     f"{mm_text(j.gain, '7.4f')} | {_pinned(j)}")
     lines.extend(f"refused: {j.reason}" for j in guidance.refused)
     lines.append(guidance.stop_line())
     return "\n".join(lines)
@@ -108,7 +109,7 @@ def write_guidance_recording(path: str, guidance, provenance: str = "") -> str:
         colours = [colour_ramp(np.array([1.0 - max(j.gain, 0.0) / top]))[0] for j in guidance.ranking]
         colours += [np.array([150, 150, 150], np.uint8)] * len(guidance.refused)
         each = [len(j.placement.sockets) for j in judged]
-        labels = [f"{j.placement.name} {j.gain * 1e3:+.3f} mm" if not j.reason else f"{j.placement.name} refused"
+        labels = [f"{j.placement.name} {mm_text(j.gain, '+.3f')} mm" if not j.reason else f"{j.placement.name} refused"
                   for j in judged for _ in j.placement.sockets]
         recording.stream.log("world/candidates", recording.rr.Points3D(
             points, colors=np.repeat(np.array(colours), each, axis=0), labels=labels, radii=0.012), static=True)

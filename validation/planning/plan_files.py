@@ -1,0 +1,139 @@
+"""``spherecal plan`` as library calls, files in and files out: a plan from scratch over candidate positions
+(:func:`plan_files`), what to record next on a real arm (:func:`guide_files`) and the predicted accuracy of a
+data set (:func:`predict_files`)."""
+
+from __future__ import annotations
+
+import json
+from collections.abc import Callable
+
+import numpy as np
+
+from spherecal.correction.files.fixtures import read_fixtures
+from spherecal.correction.files.outputs import OutputSet
+from spherecal.correction.files.provenance import comment_block, provenance
+from spherecal.correction.files.robots import load_robot
+from spherecal.correction.files.samples_csv import read_samples
+from spherecal.identification.prediction import Prediction, predict_accuracy
+
+from ..parallel import executor
+from .candidates import CandidateError, grid_candidates, read_candidates
+from .guidance import Guidance, recording_guidance
+from .guidance_report import guidance_json, write_guidance_recording
+from .placements import read_placements
+from .plan import Plan, plan
+from .plan_report import write_recording
+
+#: The box grid's syntax, for the refusals [m].
+GRID = "'xmin,xmax,nx;ymin,ymax,ny;zmin,zmax,nz'"
+
+
+def predict_files(robot: str, samples: str, fixtures: str | None, noise: float, **links) -> Prediction:
+    """The accuracy a calibration from the data set ``samples`` (and its ``fixtures``) will reach.
+
+    Args:
+        robot: a robot file, a URDF or an embedded arm's name; ``links``: :func:`correction.load_robot`'s
+            ``tip_link``, ``base_link``, ``inertials``, ``report``.
+        samples, fixtures: samples.csv and fixtures.yaml (None: nothing known of the fixtures).
+        noise: fixture noise std per axis [m].
+    """
+    model = load_robot(robot, **links)
+    dataset = read_samples(samples, model)
+    spec = read_fixtures(fixtures) if fixtures else None
+    return predict_accuracy(model, dataset, spec, noise=noise)
+
+
+def guide_files(robot: str, samples: str, fixtures: str | None, candidates: str | None, plate_grid: str | None,
+                orientations: int, per_socket: int | None, min_gain: float, noise: float, seed: int,
+                inputs: dict, out: str | None = None, rrd: str | None = None, outputs: OutputSet | None = None,
+                grid: str | None = None, show: Callable[[Guidance], None] | None = None, **links) -> Guidance:
+    """What to record next: rank the candidate placements given the recording so far, write the ranking.
+
+    Args:
+        robot, links: as :func:`predict_files`.
+        samples, fixtures: the recording so far (samples.csv, fixtures.yaml or None).
+        candidates: YAML of candidate placements (:func:`.placements.read_placements`), or None.
+        plate_grid: the recorded plate centred over a box grid [m] or ``"auto"`` (:func:`.guidance.recording_guidance`).
+        orientations: turns of the plate per grid point.
+        per_socket: configurations per candidate socket (None: as recorded).
+        min_gain: smallest gain worth another placement [m].
+        noise: expected fixture noise [m].
+        seed: seeds everything random.
+        inputs: the options of the run as the provenance records them.
+        out: plan.json to write (ranking best first, predicted error [m]), or None.
+        rrd: Rerun recording to write, or None.
+        outputs: the staged outputs holding ``out`` and ``rrd`` (checked by the caller); None: made here.
+        grid: a box grid of single fixtures (the plan from scratch's): refused here, it names no plate.
+        show: called with the guidance before the files are written.
+
+    Raises:
+        CandidateError: ``grid`` given, neither ``candidates`` nor ``plate_grid``, or nothing recordable.
+    """
+    model = load_robot(robot, **links)
+    if grid is not None:
+        raise CandidateError("--grid places single fixtures for a plan from scratch; with --samples give --plate-grid")
+    if candidates is None and plate_grid is None:
+        raise CandidateError(f"with --samples give --candidates C.yaml or --plate-grid {GRID}")
+    dataset = read_samples(samples, model)
+    spec = read_fixtures(fixtures) if fixtures else None
+    placements = read_placements(candidates) if candidates else []
+    guidance = recording_guidance(model, dataset, spec, np.random.default_rng(seed), placements, plate_grid,
+                                  orientations, per_socket, min_gain, noise)
+    if show is not None:
+        show(guidance)
+    info = provenance(seed, inputs)
+    outputs = OutputSet({"--out": out, "--rrd": rrd}) if outputs is None else outputs
+    with outputs:  # staged: every output appears, or none
+        if out:
+            outputs.stage(out).write_text(json.dumps(guidance_json(guidance, info), indent=2) + "\n")
+        if rrd:
+            write_guidance_recording(outputs.stage(rrd), guidance, comment_block(info))
+    return guidance
+
+
+def plan_files(robot: str, candidates: str | None, grid: str | None, fixture_count: int, seed: int, noise: float,
+               per_fixture: int, motion: str, seconds: float, inputs: dict, workers: int = 2,
+               scheduler: str | None = None, rrd: str | None = None, outputs: OutputSet | None = None,
+               show: Callable[[Plan], None] | None = None, **links) -> Plan:
+    """A plan from scratch: survey the candidate fixture positions, choose ``fixture_count`` of them, record it.
+
+    Args:
+        robot, links: as :func:`predict_files`.
+        candidates: YAML of candidate positions (:func:`.candidates.read_candidates`), or None.
+        grid: box grid ``"xmin,xmax,nx;ymin,ymax,ny;zmin,zmax,nz"`` of candidate positions [m], or None.
+        fixture_count: fixtures wanted, 1..4.
+        seed: seeds each candidate's survey (by its name) and the workspace.
+        noise: fixture noise std per axis [m].
+        per_fixture: samples to be recorded per fixture.
+        motion: ``"kinematic"`` or ``"controller"`` self-motion at a candidate.
+        seconds: controller self-motion per candidate [s].
+        inputs: the options of the run as the provenance records them.
+        workers, scheduler: where the surveys run (:func:`validation.parallel.executor`).
+        rrd: Rerun recording of the candidates coloured by score to write, or None.
+        outputs: the staged outputs holding ``rrd`` (checked by the caller); None: made here.
+        show: called with the plan before a refusal or the recording.
+
+    Raises:
+        CandidateError: neither ``candidates`` nor ``grid``, ``fixture_count`` outside 1..4, fewer reachable
+            candidates than fixtures wanted (after ``show``).
+    """
+    model = load_robot(robot, **links)
+    if candidates is None and grid is None:
+        raise CandidateError(f"give --candidates C.yaml or --grid {GRID}")
+    found = read_candidates(candidates, model.n_joints) if candidates else grid_candidates(grid)
+    if not 1 <= fixture_count <= 4:
+        raise CandidateError(f"--fixture-count must be in 1..4, got {fixture_count}")
+    with executor(workers, scheduler) as pool:  # each candidate's survey a task, seeded by its name
+        result = plan(model, found, fixture_count, seed, noise, per_fixture, motion, seconds, executor=pool)
+    if show is not None:
+        show(result)
+    if result.best is None:  # the table shown says which candidates failed; the refusal is one line
+        reachable = sum(s.reachable for s in result.surveys)
+        raise CandidateError(f"no plan: {reachable} of {len(result.surveys)} candidates reachable, fewer than the "
+                             f"{fixture_count} fixtures wanted (--fixture-count)")
+    if rrd:
+        outputs = OutputSet({"--rrd": rrd}) if outputs is None else outputs
+        with outputs:  # staged, renamed into place once Rerun has written it all
+            info = provenance(seed, inputs, workers=result.workers)
+            write_recording(outputs.stage(rrd), result, comment_block(info))
+    return result
