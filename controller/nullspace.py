@@ -10,7 +10,7 @@ from __future__ import annotations
 import mujoco
 import numpy as np
 
-from spherecal.correction import RobotModel
+from spherecal.correction import RobotModel, geometric_part
 
 from .plant import TIMESTEP, build_plant
 from .qp_ik import (
@@ -77,7 +77,9 @@ class NullSpaceController:
         self.closed_form = closed_form
         self.report = StepReport()
         self.last_bounds: tuple[np.ndarray, np.ndarray] | None = None  # (lb, ub) of the last step [rad/s]
-        self._kin = build_plant(model)
+        # its kinematics are the rigid chain's at the measured angles, as a robot controller's are: an elastic model's
+        # plant has a second hinge per joint (motor and link), which the controller does not command
+        self._kin = build_plant(geometric_part(model))
         self._jac = np.zeros((3, self._kin.mj_model.nv))
         self._n = model.n_joints
         self._zero3 = np.zeros(3)

@@ -32,3 +32,22 @@ def test_joint_stiffness():
     for bad in ("1,2", "-5", "x", "nan"):
         with pytest.raises(ExperimentError, match="--stiffness"):
             joint_stiffness(bad, 3)
+
+
+def test_an_elastic_robot_file_simulates_again(tmp_path):
+    # a simulation's elastic truth.yaml given as the robot: its controller crashed (the MuJoCo plant of an elastic
+    # model has a motor and a link hinge per joint, 14 columns of Jacobian for 7 joints); the controller commands
+    # the rigid chain, and the true arm the samples come from is elastic, as the truth file records
+    first = simulate_to_folder(SimulationConfig(out=tmp_path / "a", seed=1, seconds=0.3, samples=20, noise=0.0,
+                                                stiffness="3e4"))
+    assert first.files
+    elastic = load_robot(str(tmp_path / "a" / "truth.yaml"))
+    assert np.any(elastic.extras["compliance"])
+    simulate_to_folder(SimulationConfig(out=tmp_path / "b", seed=2, seconds=0.3, samples=20, noise=0.0,
+                                        robot=str(tmp_path / "a" / "truth.yaml")))
+    truth = load_robot(str(tmp_path / "b" / "truth.yaml"))
+    assert np.any(truth.extras["compliance"])
+    data = read_samples(tmp_path / "b" / "samples.csv", truth)
+    centres = truth.extras["simulation"]["fixtures"]
+    for name in data.fixture_names:  # the elastic truth puts every sample on its fixture
+        assert np.abs(tool_point(truth, data.for_fixture(name)) - centres[name]).max() < 1e-3
