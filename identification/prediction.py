@@ -35,7 +35,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from spherecal.correction import RobotModel, param_jacobian, tool_point
+from spherecal.correction import RobotModel, joint_jacobian, param_jacobian, tool_point
 from spherecal.correction.files.fixtures import FixtureSpec
 from spherecal.correction.files.samples import Dataset
 from spherecal.correction.layout import ParameterLayout
@@ -43,7 +43,7 @@ from spherecal.correction.layout import ParameterLayout
 from .build import build_problem
 from .gauge import anchor_spread
 from .identifiability import Identifiability, normal_inverse
-from .joint_error import LENGTH, draw, seen_fields, tool_fields
+from .joint_error import LENGTH, draw, field_root, seen_fields, tool_fields
 from .problem import NOISE, SIGMA_FLOOR, CalibrationProblem, prior_std
 from .pruning import prune
 from .synthetic import project_to_point
@@ -349,10 +349,36 @@ def joint_error_root(
         shifts.append(shift[:fp])
     if kept <= 0:
         return 0.0, np.zeros((model.n_params, 0))
-    std = max(excess / np.sqrt(kept), std)
+    std = min(max(excess / np.sqrt(kept), std), _joint_error_bound(model, pruned.dataset, length))
     bias = np.zeros((model.n_params, sum(s.shape[1] for s in shifts)))
     bias[pruned.free] = std * np.hstack(shifts)
     return float(std), bias
+
+
+def _joint_error_bound(model: RobotModel, dataset: Dataset, length: float = LENGTH) -> float:
+    """The largest joint-angle error std [rad] the nominal model's own spread at the sockets allows.
+
+    Before calibration, each socket's samples spread about their mean by the whole joint-angle error (only its mean
+    there goes into the centre) plus everything else: ``s^2 |F_c|^2 <= |p - mean|^2`` summed over the sockets, with
+    ``F_c`` the unit process's tool-point field less its mean per socket. The fit may absorb nearly all of a smooth
+    error over a short recording, and the std that leaves the residual's excess then grows without bound (86 mrad
+    per joint from 2 s of self-motion whose nominal spread was 0.6 mm); the nominal's spread bounds it. Infinite
+    when the field has no energy (a socket of one sample).
+    """
+    index = dataset.fixture_index
+    points = tool_point(model, dataset.q)
+    spread = sum(float(((points[index == j] - points[index == j].mean(axis=0)) ** 2).sum())
+                 for j in range(len(dataset.fixture_names)))
+    # |F_c|^2 per joint i without forming the (K, 3, r) field: sum_k |g_k|^2 |L_k|^2 - sum_j |sum_k g_k L_k^T|^2 / K_j
+    # (g_k = dp/dq_i at sample k, L_k its row of the process's root; the second sum per socket j)
+    root = field_root(dataset.q, length)
+    gains = joint_jacobian(model, dataset.q)  # (K, 3, n)
+    weight = np.einsum("kr,kr->k", root, root)
+    energy = float(np.einsum("kin,kin,k->", gains, gains, weight))
+    for j in range(len(dataset.fixture_names)):
+        mine = index == j
+        energy -= float((np.einsum("kin,kr->inr", gains[mine], root[mine]) ** 2).sum()) / max(int(mine.sum()), 1)
+    return float(np.sqrt(spread / energy)) if energy > 0 else float("inf")
 
 
 def held_out_joint_error(
