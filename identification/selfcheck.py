@@ -59,7 +59,15 @@ from .consistency import augmented, group_finding, log10_chi2_sf, name_culprit, 
 from .identifiability import normal_inverse
 from .joint_error import LENGTH, split, tool_fields
 from .leave_out import LeftOut, leave_out
-from .prediction import NEAR_RADIUS, Workspace, deviation_root, excess_energy, joint_error_root, socket_spreads
+from .prediction import (
+    NEAR_RADIUS,
+    Workspace,
+    deviation_root,
+    excess_energy,
+    joint_error_bound,
+    joint_error_root,
+    socket_spreads,
+)
 from .problem import SIGMA_FLOOR, CalibrationProblem, samples_location
 from .selfcheck_result import Finding, InconsistentDataError, SelfCheck
 
@@ -161,10 +169,14 @@ def self_check(
         unknowns = problem.effective_unknowns(full, inverse)
     shown = problem.data_sigma(x, unknowns)
     judged = max(noise, sigma) if declared else max(sigma, SIGMA_FLOOR)
-    prediction, record = _prediction(nominal, built or problem, judged, sigma, shown)
     count = problem.dataset.n_samples
     parts = split(nominal, problem.dataset.q, r[: 3 * count], full[: 3 * count], inverse)
-    _record_held_out(record, nominal, built or problem, judged, noise, shown, problem.n_data - unknowns, parts,
+    # the arm's unmodelled joint-angle error and the bias it bends the parameters by (:mod:`.joint_error`)
+    joint_error = joint_error_root(nominal, built or problem, judged,
+                                   excess_energy(shown, noise, problem.n_data - unknowns), std=parts[1],
+                                   free=problem.free)
+    prediction, record = _prediction(nominal, built or problem, judged, sigma, shown, bias=joint_error[1])
+    _record_held_out(record, nominal, built or problem, judged, noise, parts, joint_error,
                      prediction.figures["nominal_scale_from_data"], prediction.figures["nominal_scale_measured"],
                      problem.free)
     findings, prediction = _honest_noise(findings, prediction)
@@ -376,10 +388,12 @@ def _unmodelled(nominal: RobotModel, built: CalibrationProblem, problem: Calibra
             if kinds[name][0] == "fixture" and g.dof > 0 and g.sigma_rest > noise}
     if not rest:
         return {}
-    per_excess, _ = joint_error_root(nominal, built, noise, 1.0)  # the std per unit excess (std is linear in it)
+    # the std per unit excess (linear in it), at most what the nominal's spread at the sockets holds
+    per_excess, _ = joint_error_root(nominal, built, noise, 1.0, bounded=False)
+    bound = joint_error_bound(nominal, built.dataset)
     out = {}
     for name, group in rest.items():
-        std = per_excess * excess_energy(group.sigma_rest, noise, group.dof_rest)
+        std = min(per_excess * excess_energy(group.sigma_rest, noise, group.dof_rest), bound)
         q = problem.dataset.for_fixture(kinds[name][1])
         if std <= 0 or len(q) < 2:
             continue
@@ -389,7 +403,7 @@ def _unmodelled(nominal: RobotModel, built: CalibrationProblem, problem: Calibra
 
 
 def _record_held_out(record: dict, nominal: RobotModel, built: CalibrationProblem, noise: float, declared: float,
-                     shown: float, dof: float, parts: tuple[float, float], scale: float, unseen: float,
+                     parts: tuple[float, float], joint_error: tuple[float, np.ndarray], scale: float, unseen: float,
                      free: np.ndarray | None = None) -> None:
     """Record what ``validate`` needs at sockets the calibration did not see: the parameter covariance, the socket's
     own noise and the arm's unmodelled joint-angle error (:mod:`.joint_error`).
@@ -397,9 +411,9 @@ def _record_held_out(record: dict, nominal: RobotModel, built: CalibrationProble
     The samples' residual is split by maximum likelihood (``parts``, :func:`.joint_error.split`) into white noise,
     where a ball sits in its socket (at most the declared noise), and a joint-angle error that varies smoothly over
     joint space, the arm's own error that no parameter describes (MUKCa's Pandas: 0.1-0.3 mrad, under residuals
-    below the declared 0.3 mm). What the residual (``shown``, per axis) shows beyond the declared noise is that
-    error too: its std is at least the one that makes the fit leave that excess energy
-    (``(shown^2 - declared^2) x dof``) in its residuals (:func:`.prediction.joint_error_root`). Its bias on the
+    below the declared 0.3 mm). What the residual shows beyond the declared noise is that error too: its std is at
+    least the one that makes the fit leave that excess energy in its residuals (``joint_error``: the std and the
+    root of the bias, :func:`.prediction.joint_error_root`, computed once by :func:`self_check`). Its bias on the
     fitted parameters joins the covariance of the parameters' error, whose samples' part is at the socket noise and
     the prior's at the arm's deviations, ``scale`` prior spreads (:func:`.prediction.deviation_root`'s
     ``data_noise``; the judgement's counts the prior's penalty as noise: 0.19 against 0.13 mm on MUKCa's panda_4
@@ -414,7 +428,7 @@ def _record_held_out(record: dict, nominal: RobotModel, built: CalibrationProble
     """
     socket = float(min(parts[0], declared))
     record["socket_noise_m"] = socket
-    std, bias = joint_error_root(nominal, built, noise, excess_energy(shown, declared, dof), std=parts[1], free=free)
+    std, bias = joint_error
     root, _, _, _ = deviation_root(nominal, built, noise, bias_scale=scale, data_noise=socket, free=free,
                                    unseen_scale=unseen)
     if std > 0:
@@ -437,7 +451,7 @@ def nominal_expected(model: RobotModel, sensitivity: np.ndarray, draws: int = 20
 
 
 def _prediction(nominal: RobotModel, built: CalibrationProblem, noise: float, shown: float,
-                socket: float | None = None) -> tuple[Finding, dict]:
+                socket: float | None = None, bias: np.ndarray | None = None) -> tuple[Finding, dict]:
     """Will the calibration beat nominal where it is used? The predicted mean error against the error the nominal
     model is expected to have there, taken from the data where it can be, after registration, in two regions:
 
@@ -492,23 +506,26 @@ def _prediction(nominal: RobotModel, built: CalibrationProblem, noise: float, sh
     # the nominal model's own error there, scaled as its reference is (an accurate arm is not charged the
     # generic prior's 1 mm / 0.2 deg for the parameters a single placement leaves at nominal)
     root, _, _, _ = deviation_root(nominal, built, noise, bias_scale=scale)
-    z = np.random.default_rng(0).standard_normal((root.shape[1], 100))
 
-    def region(where: Workspace) -> tuple[float, float, float]:
+    def region(where: Workspace, deviation: np.ndarray = root) -> tuple[float, float, float]:
         """(predicted mean, the nominal's expected mean after scaling, the prior's) [m] over ``where``."""
-        field_ = where.sensitivity @ root @ z
+        z = np.random.default_rng(0).standard_normal((deviation.shape[1], 100))
+        field_ = where.sensitivity @ deviation @ z
         prior_reference = nominal_expected(nominal, where.sensitivity)
         return float(np.linalg.norm(field_.reshape(-1, 3, z.shape[1]), axis=1).mean()), \
             scale * prior_reference, prior_reference
 
     whole = region(workspace)
+    # the warning's figure: with the bias the arm's joint-angle error bends the parameters by (what makes a
+    # one-placement calibration of an accurate arm worse far from its data; the judgement's 2x margin holds it near)
+    far = region(workspace, np.hstack([root, bias])) if bias is not None and bias.shape[1] else whole
     is_near = len(near.q) >= count // 4
     predicted_mean, reference, prior_reference = region(near) if is_near else whole
     described = (f"{len(near.q)} configurations within {NEAR_RADIUS * 1e3:.0f} mm of the recorded tool points "
                  "(the recorded postures carried there)" if is_near
                  else f"{count} random configurations within the joint limits")
     with_noise, model_part = spreads(root, socket), spreads(root, 0.0)
-    beyond = is_near and not whole[0] < BEAT * whole[1]
+    beyond = is_near and not far[0] < BEAT * far[1]
     figures = {
         "predicted_mean_mm": predicted_mean * 1e3,
         "noise_used_mm": noise * 1e3,
@@ -519,6 +536,7 @@ def _prediction(nominal: RobotModel, built: CalibrationProblem, noise: float, sh
         "workspace": f"{described}, after registration",
         "whole_workspace_predicted_mean_mm": whole[0] * 1e3,
         "whole_workspace_nominal_expected_mm": whole[1] * 1e3,
+        "whole_workspace_predicted_with_joint_error_mm": far[0] * 1e3,
         "predicted_spread_mm": with_noise * 1e3,
         "predicted_spread_model_mm": model_part * 1e3,
         "residual_noise_mm": socket * 1e3,
@@ -547,8 +565,10 @@ def _prediction(nominal: RobotModel, built: CalibrationProblem, noise: float, sh
         if beyond:  # written: near the recording it helps; say where it is not expected to
             figures["region_warning"] = (
                 f"farther than {NEAR_RADIUS * 1e3:.0f} mm from the recorded tool points the calibration is not "
-                f"expected to beat nominal by {1 / BEAT:g}x (whole workspace: predicted {whole[0] * 1e3:.3g} mm "
-                f"against {whole[1] * 1e3:.3g} mm of the nominal model): record a placement there to calibrate it")
+                f"expected to beat nominal by {1 / BEAT:g}x (whole workspace: predicted {far[0] * 1e3:.3g} mm "
+                f"against {far[1] * 1e3:.3g} mm of the nominal model"
+                + (", with the bias of the arm's joint-angle error" if far is not whole else "")
+                + "): record a placement there to calibrate it")
             text += f"; warning: {figures['region_warning']}"
         return Finding("prediction", True, text, figures), record
     return Finding(

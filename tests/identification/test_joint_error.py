@@ -70,13 +70,13 @@ def test_the_residual_is_split_into_white_noise_and_the_joint_angle_error_that_m
         assert found[:, 1].mean() < 1e-4, found
 
 
-def test_the_joint_error_bound_is_the_nominal_spread_over_the_centred_field() -> None:
+def test_thejoint_error_bound_is_the_nominal_spread_over_the_centred_field() -> None:
     # the nominal's spread at each socket holds the whole joint-angle error but its mean there: the bound against the
     # explicit field (tool_fields, per socket less its mean), and the std a short recording's calibration records stays
     # under it (2 s of self-motion recorded 86 mrad per joint, unbounded, before)
     from spherecal.correction import Dataset
     from spherecal.identification.joint_error import tool_fields
-    from spherecal.identification.prediction import _joint_error_bound
+    from spherecal.identification.prediction import joint_error_bound
 
     panda = load_robot("panda")
     rng = np.random.default_rng(4)
@@ -87,7 +87,7 @@ def test_the_joint_error_bound_is_the_nominal_spread_over_the_centred_field() ->
     spread = sum(((points[labels == n] - points[labels == n].mean(axis=0)) ** 2).sum() for n in "abc")
     energy = sum(((f[labels == n] - f[labels == n].mean(axis=0)) ** 2).sum() for f in tool_fields(panda, q)
                  for n in "abc")
-    assert _joint_error_bound(panda, data) == pytest.approx(np.sqrt(spread / energy), rel=1e-9)
+    assert joint_error_bound(panda, data) == pytest.approx(np.sqrt(spread / energy), rel=1e-9)
 
 
 def test_a_short_recording_records_a_joint_error_within_the_nominal_spread(tmp_path, capsys) -> None:
@@ -98,7 +98,7 @@ def test_a_short_recording_records_a_joint_error_within_the_nominal_spread(tmp_p
 
     from spherecal.cli import main
     from spherecal.correction import read_samples
-    from spherecal.identification.prediction import _joint_error_bound
+    from spherecal.identification.prediction import joint_error_bound
 
     out = tmp_path / "sim"
     assert main(["simulate", "--out", str(out), "--seconds", "2", "--per-fixture", "50", "--seed", "0"]) == 0
@@ -107,5 +107,5 @@ def test_a_short_recording_records_a_joint_error_within_the_nominal_spread(tmp_p
     capsys.readouterr()
     record = yaml.safe_load((tmp_path / "cal.yaml").read_text())["calibration"]["self_check"]["prediction"]
     panda = load_robot("panda")
-    bound = _joint_error_bound(panda, read_samples(out / "samples.csv", panda))
+    bound = joint_error_bound(panda, read_samples(out / "samples.csv", panda))
     assert 0.0 < record["joint_error_rad"] <= 1.01 * bound < 0.01
