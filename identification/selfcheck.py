@@ -60,7 +60,7 @@ from .identifiability import normal_inverse
 from .joint_error import LENGTH, split, tool_fields
 from .leave_out import LeftOut, leave_out
 from .prediction import Workspace, deviation_root, excess_energy, joint_error_root, socket_spreads
-from .problem import SIGMA_FLOOR, CalibrationProblem, samples_location
+from .problem import OUTLIER, SIGMA_FLOOR, CalibrationProblem, samples_location
 from .selfcheck_result import Finding, InconsistentDataError, SelfCheck
 
 __all__ = ["Finding", "InconsistentDataError", "SelfCheck", "self_check", "nominal_expected"]
@@ -71,8 +71,6 @@ MIN_SEPARATION = 0.02
 MIN_MOTION = float(np.deg2rad(2.0))
 #: Residual std per coordinate above this multiple of the declared noise is refused.
 LEVEL_FACTOR = 2.0
-#: With a robust loss, samples farther from their centre than this multiple of the median are outliers.
-OUTLIER = 4.0
 #: A fixture's residual trends with recording order when the rank correlation of its samples' residual
 #: distances with their order has ``|t| >`` this (a few false alarms in 10^4 fixtures of white noise) and the
 #: fitted line changes by more than :data:`TREND_CHANGE` x the declared noise from its first to its last sample.
@@ -125,21 +123,22 @@ def self_check(
         The :class:`SelfCheck` (call :meth:`SelfCheck.raise_if_inconsistent` to refuse).
     """
     noise = problem.noise
-    excluded = 0
-    if loss != "linear":
-        distance = np.linalg.norm(problem.sample_errors(x), axis=1)
-        inliers = distance <= OUTLIER * np.median(distance)
-        excluded = int((~inliers).sum())
-        if excluded and all(
-            np.any(inliers[problem.dataset.fixture_index == j]) for j in range(len(problem.dataset.fixture_names))
-        ):
-            problem = replace(problem, dataset=problem.dataset.select(inliers), _cache={})
-            unknowns = None
+    excluded, outliers = 0, ""
+    if loss != "linear":  # the samples the loss discounted are left out of every figure, the nominal's as well
+        kept = problem.inliers(x)
+        excluded = int((~kept).sum())
+        if excluded:
+            lines = problem.dataset.select(~kept).lines
+            where = "" if lines is None else f" (rows {', '.join(str(k) for k in lines[:5])}{', ...' * (excluded > 5)})"
+            outliers = (f"; {excluded} samples{where} lie over {OUTLIER:g}x the median distance from their centre: "
+                        f"discounted by the {loss} loss and left out of these figures")
+            problem, built, unknowns = problem.with_samples(kept), (built or problem).with_samples(kept), None
     r = problem.residuals(x)
     dof = max(problem.n_residuals - problem.n_unknowns, 1)
     sigma = float(np.sqrt(r @ r / dof))
     findings = _geometry(problem, x)
-    findings.append(_level(problem, r, sigma, dof, excluded, declared))
+    level = _level(problem, r, sigma, dof, excluded, declared)
+    findings.append(replace(level, message=level.message + outliers) if excluded else level)
     jac, res, groups, kinds, spread = augmented(problem, x, r)
     _, _, left = leave_out(jac, res, groups, spread=spread)
     checkable = sum(1 for k, g in left.items() if g.dof > 0 and not sets_scale_alone(problem, kinds[k]))
