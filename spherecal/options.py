@@ -24,6 +24,7 @@ from __future__ import annotations
 
 import argparse
 import math
+import re
 import sys
 
 #: Below this a length in millimetres is taken for the old unit (metres): 10 micrometres (0 is allowed).
@@ -49,7 +50,13 @@ def fail(message: str) -> OptionError:
 
 class Parser(argparse.ArgumentParser):
     """An ArgumentParser whose errors are one line (``spherecal CMD: error: ...``) and exit status 1,
-    like every other refusal of spherecal."""
+    like every other refusal of spherecal. A negative number in exponent notation (``--offset -1e-2 0 0.2``) is
+    a value, as ``-0.01`` is (argparse took it for an option: 'expected 3 arguments')."""
+
+    def __init__(self, *args, **kwargs):
+        super().__init__(*args, **kwargs)
+        self._negative_number_matcher = re.compile(r"^-((\d+\.?\d*|\.\d+)([eE][-+]?\d+)?|inf|infinity|nan)$",
+                                                   re.IGNORECASE)
 
     def error(self, message: str):  # noqa: D102 - argparse's hook
         self.exit(1, f"{self.prog}: error: {message} (see {self.prog} --help)\n")
