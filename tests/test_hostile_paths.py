@@ -5,10 +5,12 @@ field (exit 1, nothing written), or handled and said."""
 
 from __future__ import annotations
 
+from dataclasses import replace
+
 import pytest
 
 from spherecal.cli import main
-from spherecal.correction import load_robot
+from spherecal.correction import load_robot, save_robot
 from tests.correction.urdf_helpers import DATA as URDF
 from tests.refusal import refused
 
@@ -46,3 +48,14 @@ def test_a_negative_number_in_exponent_notation_is_a_value(tmp_path, capsys) -> 
     assert load_robot(out).tool.tolist() == [-0.01, 0.0, 0.2]
     refused(["tool", "panda", "--offset", "-inf", "0", "0.2", "--out", tmp_path / "other.yaml"], tmp_path, capsys,
             "argument --offset: expected a finite number, got '-inf'")
+
+
+def test_a_tool_swap_of_a_forced_calibration_says_so(tmp_path, capsys) -> None:
+    # export and validate warned of a calibration written with --force; tool wrote its new file without a word
+    panda = load_robot("panda")
+    block = {"self_check": {"verdict": "inconsistent", "failed": ["samples.csv: rows 2-9: a reason"]}}
+    save_robot(replace(panda, extras={**panda.extras, "calibration": block}), tmp_path / "forced.yaml")
+    assert main(["tool", str(tmp_path / "forced.yaml"), "--offset", "0", "0", "0.2", "--out",
+                 str(tmp_path / "new.yaml")]) == 0
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "INCONSISTENT: samples.csv: rows 2-9: a reason" in err
