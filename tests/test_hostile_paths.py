@@ -5,14 +5,22 @@ field (exit 1, nothing written), or handled and said."""
 
 from __future__ import annotations
 
+import re
 from dataclasses import replace
+from pathlib import Path
 
+import numpy as np
 import pytest
 
 from spherecal.cli import main
 from spherecal.correction import load_robot, save_robot
+from spherecal.validation.planning.candidates import MAX_CANDIDATES, CandidateError
+from spherecal.validation.planning.placements import plate_placements, read_placements
 from tests.correction.urdf_helpers import DATA as URDF
 from tests.refusal import refused
+
+MUKCA = Path(__file__).resolve().parent / "data" / "mukca"
+PANDA = MUKCA / "panda_ball.yaml"
 
 
 # ----------------------------------------------------------------------------------------- tool
@@ -59,3 +67,57 @@ def test_a_tool_swap_of_a_forced_calibration_says_so(tmp_path, capsys) -> None:
                  str(tmp_path / "new.yaml")]) == 0
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and "INCONSISTENT: samples.csv: rows 2-9: a reason" in err
+
+
+# ----------------------------------------------------------------------------------------- plan
+@pytest.mark.parametrize(("sockets", "distances", "expected"), [
+    ("{a: [0.42, 0.21, 0.02], b: [0.42, 0.26, 0.02]}", "[[a, b, 0.5]]",
+     "field 'candidates.left.distances[0]': a - b is 500 mm here, but their positions are 50 mm apart"),
+    ("{a: [0.42, 0.21, 0.02], b: [0.42, 0.21, 0.02]}", "[]",
+     "field 'candidates.left.sockets.b': 0 mm from socket a: sockets closer than 20 mm are one socket under two names"),
+])
+def test_a_candidate_plate_that_contradicts_itself_is_refused(tmp_path, sockets, distances, expected) -> None:
+    # was: exit 0, a plate whose drawing says 500 mm between sockets placed 50 mm apart ranked as given; two sockets
+    # at one point refused later as 'p2/samples.csv: all rows, field 'fixture': fixture b holds the same ...'
+    path = tmp_path / "candidates.yaml"
+    path.write_text(f"candidates:\n  left:\n    sockets: {sockets}\n    distances: {distances}\n")
+    with pytest.raises(CandidateError, match=re.escape(f"candidates.yaml: {expected}")):
+        read_placements(path)
+    path.write_text("candidates:\n  left:\n    sockets: {a: [0.42, 0.21, 0.02], b: [0.42, 0.26, 0.02]}\n"
+                    "    distances: [[a, b, 0.051]]\n")  # a plate placed by eye: its drawing's distance stands
+    assert read_placements(path)[0].distances == (("a", "b", 0.051),)
+
+
+def test_too_many_candidates_are_refused_before_any_survey(tmp_path, capsys) -> None:
+    # was: 10^4 candidates from a file surveyed for 12 minutes (1000: 70 s on one core)
+    path = tmp_path / "candidates.yaml"
+    path.write_text("candidates:\n" + "".join(f"  C{k}: {{position: [0.5, {k * 1e-4:.4f}, 0.3]}}\n"
+                                              for k in range(MAX_CANDIDATES + 1)))
+    refused(["plan", "--candidates", path], tmp_path, capsys,
+            f"candidates.yaml: field 'candidates': {MAX_CANDIDATES + 1} candidates, at most {MAX_CANDIDATES}")
+    refused(["plan", "--grid", "0.3,0.6,40;-0.3,0.3,40;0.3,0.3,1"], tmp_path, capsys, "1600 points, at most 1000")
+    with pytest.raises(CandidateError, match="500 points x 3 orientations make 1500 placements, at most 1000"):
+        plate_placements({"h0": np.zeros(3), "h1": np.array([0.05, 0, 0])}, "0.3,0.6,50;-0.3,0.3,10;0.02,0.02,1",
+                         3)
+
+
+def test_plan_never_chooses_fixtures_closer_than_the_calibration_accepts(tmp_path, capsys) -> None:
+    # a grid of 5 mm: exit 0, 'best set: C1, C2, C3; measure distances: C2-C3' (5 mm apart; calibrate refuses
+    # fixtures closer than 20 mm)
+    fine = ["plan", "--grid", "0.5,0.51,3;0,0,1;0.3,0.3,1", "--workers", "1", "--per-fixture", "50"]
+    refused(fine, tmp_path, capsys, "no 3 of the 3 reachable candidates lie at least 20 mm apart")
+    assert main([*fine[:2], "0.5,0.53,3;0,0,1;0.3,0.3,1", *fine[3:], "--fixture-count", "2"]) == 0
+    assert "best set (exhaustive search): C1, C3;" in capsys.readouterr().out  # the one pair 20 mm apart or more
+
+
+def test_a_candidate_socket_named_like_a_recorded_fixture_names_the_file(tmp_path, capsys) -> None:
+    # was: 'candidate left: socket 'front_center_h0' is a recorded fixture's name' (no file, no field)
+    out = tmp_path / "recorded"
+    assert main(["import", str(MUKCA / "panda_2_clean"), "--format", "mukca", "--robot", str(PANDA), "--out",
+                 str(out)]) == 0
+    path = tmp_path / "candidates.yaml"
+    path.write_text("candidates:\n  left:\n    sockets: {front_center_h0: [0.42, 0.21, 0.02], x: [0.42, 0.26, 0.02]}\n")
+    refused(["plan", "--robot", PANDA, "--samples", out / "samples.csv", "--fixtures", out / "fixtures.yaml",
+             "--candidates", path, "--workers", "1"], tmp_path, capsys,
+            "candidates.yaml: field 'candidates.left.sockets.front_center_h0': socket 'front_center_h0' is a "
+            "recorded fixture's name")

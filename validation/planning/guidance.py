@@ -437,7 +437,9 @@ def rank_placements(
     for p in placements:
         clash = taken & set(p.sockets)
         if clash:
-            raise CandidateError(f"candidate {p.name}: socket {sorted(clash)[0]!r} is a recorded fixture's name")
+            name = sorted(clash)[0]
+            where = f"{p.source}: field 'candidates.{p.name}.sockets.{name}': " if p.source else f"candidate {p.name}: "
+            raise CandidateError(f"{where}socket {name!r} is a recorded fixture's name (name it differently)")
     # MuJoCo: controller.self_motion imports it at its top (start-up); its base-column check is the one we use
     from spherecal.controller.self_motion import check_fixture
 
@@ -505,6 +507,8 @@ def rank_placements(
                             pinned=pinned_down(baseline.prediction, j.prediction))
             (judged if not j.reason else refused).append(j)
     seconds["prediction"] = time.perf_counter() - clock
+    if not judged:  # every candidate refused: nothing was ranked, which is no advice (was exit 0, 'nothing to add')
+        raise CandidateError(f"no candidate can be recorded: {refused[0].reason}")
     ranking = sorted(judged, key=lambda j: -j.gain)
     order = {p.name: i for i, p in enumerate(given)}
     refused.sort(key=lambda j: order[j.placement.name])
