@@ -13,7 +13,10 @@ import numpy as np
 import pytest
 
 from spherecal.cli import main
-from spherecal.correction import load_robot, save_robot
+from spherecal.correction import load_robot, perturb, save_robot
+from spherecal.correction.files.samples import Dataset
+from spherecal.correction.files.samples_csv import write_samples
+from spherecal.identification.synthetic import make_dataset
 from spherecal.validation.planning.candidates import MAX_CANDIDATES, CandidateError
 from spherecal.validation.planning.placements import plate_placements, read_placements
 from tests.correction.urdf_helpers import DATA as URDF
@@ -121,3 +124,20 @@ def test_a_candidate_socket_named_like_a_recorded_fixture_names_the_file(tmp_pat
              "--candidates", path, "--workers", "1"], tmp_path, capsys,
             "candidates.yaml: field 'candidates.left.sockets.front_center_h0': socket 'front_center_h0' is a "
             "recorded fixture's name")
+
+
+# ------------------------------------------------------------------------------------ validate
+def test_socket_samples_of_another_arm_with_as_many_joints_are_refused(tmp_path, capsys) -> None:
+    # an iiwa's sockets validated with a Panda's files: exit 0, spreads of 112-195 mm per socket and only
+    # 'WORSE than nominal' (the real arms' nominal spreads: 8-12 mm)
+    iiwa, panda = load_robot("iiwa14"), load_robot("panda")
+    dataset, _ = make_dataset(iiwa, per_fixture=20, rng=np.random.default_rng(3))
+    q = np.clip(dataset.q, panda.lower, panda.upper)  # within the Panda's limits: read as its angles
+    write_samples(tmp_path / "iiwa.csv", Dataset(dataset.labels, q))
+    refused(["validate", "--nominal", "panda", "--calibrated", "panda", "--samples", tmp_path / "iiwa.csv"],
+            tmp_path, capsys, "iiwa.csv: rows 2-21, field 'q*': at socket ", "every model spreads the tool points",
+            "samples of another arm")
+    own, _ = make_dataset(perturb(panda, np.random.default_rng(4)), per_fixture=20, rng=np.random.default_rng(5))
+    write_samples(tmp_path / "panda.csv", own)  # a Panda 1 mm / 0.2 deg off its nominal model: validated
+    assert main(["validate", "--nominal", "panda", "--calibrated", "panda", "--samples",
+                 str(tmp_path / "panda.csv")]) == 0

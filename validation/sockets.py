@@ -28,12 +28,18 @@ import numpy as np
 from spherecal.correction import RobotModel, tool_point
 from spherecal.correction.files.fixtures import FixtureSpec
 from spherecal.correction.files.robot_file import forced_calibration
-from spherecal.correction.files.samples import Dataset, configurations_digest
+from spherecal.correction.files.samples import Dataset, DatasetError, configurations_digest
 from spherecal.correction.tool import calibrated_tool
 from spherecal.identification.joint_error import LENGTH
 from spherecal.identification.prediction import HeldOut
+from spherecal.identification.problem import samples_location
 from spherecal.identification.training import trained_digests
 
+#: Largest mean spread [m] at a socket that still describes this arm: a ball held in a socket stays within its
+#: own size, and the nominal model of a real arm spreads it by millimetres (MUKCa's Pandas 8 mm mean, 19 mm at
+#: most; the calibration's self-check refuses residuals over 10 mm per axis). Where every model spreads it
+#: further, the samples are of another arm (an iiwa's recording on a Panda's files: 112-195 mm) or in another unit.
+MAX_SPREAD = 0.05
 #: Fewest distinct configurations (1e-9 rad apart) a spread is measured from: with one the spread is 0
 #: whatever the model, with two it is half their distance.
 MIN_DISTINCT = 3
@@ -277,6 +283,7 @@ def socket_validation(
             predicted = float(prediction.spreads(models["calibrated"], [q])[0])
         fixtures.append(FixtureSpread(name, int(q.shape[0]), name not in fitted, mean, largest, centre, distinct,
                                       predicted))
+    _of_this_arm(fixtures, dataset)
     by_name = {f.name: f for f in fixtures}
     distances = []
     for a, b, known in spec.distances if spec is not None else []:
@@ -284,6 +291,20 @@ def socket_validation(
         distances.append(DistanceCheck(a, b, known, a not in fitted and b not in fitted, measured))
     return SocketReport(tuple(models), fixtures, distances, dataset.source,
                         prediction.joint_error if prediction is not None else 0.0)
+
+
+def _of_this_arm(fixtures: list[FixtureSpread], dataset: Dataset) -> None:
+    """Refuse samples no model keeps within :data:`MAX_SPREAD` at some socket (naming its rows): they cannot be
+    of this arm, and the spreads and 'WORSE than nominal' that followed said nothing (exit 0)."""
+    for f in fixtures:
+        spreads = [v for v in f.mean.values() if v is not None]
+        if spreads and min(spreads) > MAX_SPREAD:
+            where = samples_location(dataset.select(dataset.labels == f.name))
+            figures = ", ".join(f"{k} {v * 1e3:.0f} mm" for k, v in f.mean.items())
+            raise DatasetError(
+                f"{where}, field 'q*': at socket {f.name} every model spreads the tool points {figures} about their "
+                f"mean (a ball held in a socket stays within millimetres; at most {MAX_SPREAD * 1e3:.0f} mm): samples "
+                "of another arm or tool, or joint angles in another unit or order")
 
 
 def remarks(report: SocketReport, calibrated: RobotModel) -> list[str]:
