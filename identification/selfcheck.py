@@ -60,7 +60,7 @@ from .identifiability import normal_inverse
 from .joint_error import LENGTH, split, tool_fields
 from .leave_out import LeftOut, leave_out
 from .prediction import Workspace, deviation_root, excess_energy, joint_error_root, socket_spreads
-from .problem import OUTLIER, SIGMA_FLOOR, CalibrationProblem, samples_location
+from .problem import OUTLIER, PRIOR, SIGMA_FLOOR, CalibrationProblem, samples_location
 from .selfcheck_result import Finding, InconsistentDataError, SelfCheck
 
 __all__ = ["Finding", "InconsistentDataError", "SelfCheck", "self_check", "nominal_expected"]
@@ -85,6 +85,9 @@ NOISE_LIKE = 0.6
 #: nominal model does not describe the arm (a robot file of another convention or arm): both the prediction and
 #: the nominal's expected error are then the prior's, and "beats nominal" says nothing.
 MAX_SOCKET_NOISE = 0.010
+#: A prior weight above this multiple of the default is named among the causes of a refused residual level (a
+#: heavy prior holds the model at nominal: ``--prior 1e6`` on MUKCa's Panda left 4.8 mm per axis).
+HEAVY_PRIOR = 10.0
 #: Fewest samples of a fixture whose trend is judged.
 TREND_SAMPLES = 8
 #: The predicted mean error must be below this share of the nominal model's expected error: a 2x margin,
@@ -342,13 +345,27 @@ def _level(problem: CalibrationProblem, r: np.ndarray, sigma: float, dof: int, e
             text += ("; the declared noise is larger than the residuals show: accuracy is judged at the declared noise"
                      if declared else "; no noise declared (--noise): accuracy is judged at the residuals' noise")
         return Finding("residual level", True, text, figures)
+    where = (f"{samples_location(dataset)}: residual noise {sigma * 1e3:.3g} mm per axis is {sigma / noise:.3g}x the "
+             f"declared {noise * 1e3:.3g} mm (limit {LEVEL_FACTOR:g}x; worst fixture {worst} "
+             f"{per_fixture[worst] * 1e3:.3g} mm)")
+    weight = problem.prior_weight
+    if problem.n_prior:  # the prior's rows are in sigma: is it the samples, or a prior holding the arm at nominal?
+        data = r[~problem.prior_rows()]
+        alone = float(np.sqrt(data @ data / max(problem.n_data - problem.n_unknowns, 1)))
+        figures["data_rows_std_mm"] = alone * 1e3
+        if alone <= LEVEL_FACTOR * noise:
+            return Finding("residual level", False, (
+                f"{where} with the prior's rows, the samples alone {alone * 1e3:.3g} mm: the prior "
+                f"(--prior {weight:g}, default {PRIOR:g}) holds the parameters nearer the nominal model than this arm "
+                "is; lower it"),
+                figures)
+    held = (f", the prior (--prior {weight:g}, default {PRIOR:g}) holding the model at nominal"
+            if weight > HEAVY_PRIOR * PRIOR else "")
     return Finding(
         "residual level",
         False,
-        f"{samples_location(dataset)}: residual noise {sigma * 1e3:.3g} mm per axis is {sigma / noise:.3g}x the "
-        f"declared {noise * 1e3:.3g} mm (limit {LEVEL_FACTOR:g}x; worst fixture {worst} {per_fixture[worst] * 1e3:.3g} "
-        f"mm) and no single fixture, distance or position explains it: samples of another arm, a fixture that "
-        f"moved, a fit that did not converge, or the noise declared too small (--noise)",
+        f"{where} and no single fixture, distance or position explains it: samples of another arm, a fixture that "
+        f"moved, a fit that did not converge{held}, or the noise declared too small (--noise)",
         figures,
     )
 

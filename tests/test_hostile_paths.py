@@ -115,9 +115,7 @@ def test_plan_never_chooses_fixtures_closer_than_the_calibration_accepts(tmp_pat
 
 def test_a_candidate_socket_named_like_a_recorded_fixture_names_the_file(tmp_path, capsys) -> None:
     # was: 'candidate left: socket 'front_center_h0' is a recorded fixture's name' (no file, no field)
-    out = tmp_path / "recorded"
-    assert main(["import", str(MUKCA / "panda_2_clean"), "--format", "mukca", "--robot", str(PANDA), "--out",
-                 str(out)]) == 0
+    out = _imported(tmp_path)
     path = tmp_path / "candidates.yaml"
     path.write_text("candidates:\n  left:\n    sockets: {front_center_h0: [0.42, 0.21, 0.02], x: [0.42, 0.26, 0.02]}\n")
     refused(["plan", "--robot", PANDA, "--samples", out / "samples.csv", "--fixtures", out / "fixtures.yaml",
@@ -141,3 +139,25 @@ def test_socket_samples_of_another_arm_with_as_many_joints_are_refused(tmp_path,
     write_samples(tmp_path / "panda.csv", own)  # a Panda 1 mm / 0.2 deg off its nominal model: validated
     assert main(["validate", "--nominal", "panda", "--calibrated", "panda", "--samples",
                  str(tmp_path / "panda.csv")]) == 0
+
+
+# ------------------------------------------------------------------------------------ calibrate
+def _imported(tmp_path) -> Path:
+    out = tmp_path / "recorded"
+    assert main(["import", str(MUKCA / "panda_2_clean"), "--format", "mukca", "--robot", str(PANDA), "--out",
+                 str(out)]) == 0
+    return out
+
+
+def test_a_prior_too_heavy_for_the_arm_is_named_as_the_cause(tmp_path, capsys) -> None:
+    # MUKCa's Panda at --prior 50: refused as 'residual noise 0.647 mm per axis ... samples of another arm, a fixture
+    # that moved, a fit that did not converge ...' while the samples alone sat at 0.25 mm (the prior's rows were it)
+    out = _imported(tmp_path)
+    argv = ["calibrate", "--robot", PANDA, "--samples", out / "samples.csv", "--fixtures", out / "fixtures.yaml",
+            "--out", tmp_path / "cal.yaml"]
+    err = refused([*argv, "--prior", "50"], tmp_path, capsys, "with the prior's rows, the samples alone 0.25",
+                  "the prior (--prior 50, default 0.5) holds the parameters nearer the nominal model than this arm is")
+    assert "samples of another arm" not in err
+    refused([*argv, "--prior", "1e6"], tmp_path, capsys, "the prior (--prior 1e+06, default 0.5) holding the model "
+                                                         "at nominal")
+    assert main([str(a) for a in argv]) == 0  # the default prior calibrates
