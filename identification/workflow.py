@@ -151,7 +151,8 @@ def run_workflow(nominal: RobotModel, dataset: Dataset, spec: FixtureSpec | None
         return calibrate(begin, data, fixtures, start=warm, loss=options.loss, noise=options.fit_noise,
                          max_change=options.max_change, check=False, prior=options.prior)
 
-    selection = select_model(options.model, fit, nominal, dataset, spec, seed=options.seed)
+    selection = select_model(options.model, fit, nominal, dataset, spec, seed=options.seed,
+                             robust=options.loss != "linear")
     begin = start_for(selection.chosen, nominal)
     if start is not None:
         warm = start_for(selection.chosen, start)
