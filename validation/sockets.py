@@ -28,12 +28,12 @@ import numpy as np
 from spherecal.correction import RobotModel, tool_point
 from spherecal.correction.files.fixtures import FixtureSpec
 from spherecal.correction.files.robot_file import forced_calibration
-from spherecal.correction.files.samples import Dataset, DatasetError, configurations_digest
+from spherecal.correction.files.samples import Dataset, DatasetError, configuration_hashes, configurations_digest
 from spherecal.correction.tool import calibrated_tool
 from spherecal.identification.joint_error import LENGTH
 from spherecal.identification.prediction import HeldOut
 from spherecal.identification.problem import samples_location
-from spherecal.identification.training import trained_digests
+from spherecal.identification.training import trained_digests, trained_sketch
 
 #: Largest mean spread [m] at a socket that still describes this arm: a ball held in a socket stays within its
 #: own size, and the nominal model of a real arm spreads it by millimetres (MUKCa's Pandas 8 mm mean, 19 mm at
@@ -211,13 +211,18 @@ def fitted_fixtures(model: RobotModel, dataset: Dataset | None = None) -> set[st
 
     A fixture counts as trained on when the digest of its joint angles
     (:func:`~spherecal.correction.files.samples.configurations_digest`) is one the file's
-    ``calibration.trained_on`` records, whatever the fixture is called. A file that records no digests
-    (written before them) falls back to the names of ``calibration.samples_per_fixture``.
+    ``calibration.trained_on`` records, whatever the fixture is called, or when one of its samples is in a
+    trained fixture's sketch (:mod:`spherecal.identification.training`: a subset or superset of the training
+    samples, e.g. the recording imported again with another subsample, was counted as held out). A file that
+    records no digests (written before them) falls back to the names of ``calibration.samples_per_fixture``.
     """
     block = model.extras.get("calibration")
     digests = trained_digests(block)
     if digests is not None and dataset is not None:
-        return {name for name in dataset.fixture_names if configurations_digest(dataset.for_fixture(name)) in digests}
+        sketch = np.array(sorted(trained_sketch(block)), dtype=np.uint64)
+        shared = np.isin(configuration_hashes(dataset.q), sketch) if sketch.size else np.zeros(dataset.n_samples, bool)
+        return {name for name in dataset.fixture_names
+                if configurations_digest(dataset.for_fixture(name)) in digests or shared[dataset.labels == name].any()}
     used = block.get("samples_per_fixture") if isinstance(block, dict) else None
     return set(used) if isinstance(used, dict) else set()
 
