@@ -300,6 +300,13 @@ def recorded_options(args: argparse.Namespace) -> dict:
             for k, v in vars(args).items() if not k.startswith("_") and k != "command"}
 
 
+#: Output options whose file holds one format: what it is and the endings that fit (a name ending for another
+#: format is refused, :func:`spherecal.correction.files.outputs.check_suffix`).
+NAMED_OUTPUTS = {"--rrd": ("a Rerun recording", (".rrd",)), "--analysis": ("a Markdown document", (".md",))}
+#: Commands whose ``--out`` is a JSON report.
+JSON_OUT = ("validate", "plan")
+
+
 def planned_outputs(args: argparse.Namespace, outputs: dict):
     """The :class:`spherecal.correction.files.outputs.OutputSet` of a command, checked before any work.
 
@@ -309,10 +316,17 @@ def planned_outputs(args: argparse.Namespace, outputs: dict):
 
     Raises:
         spherecal.correction.files.outputs.OutputError: an output that is an input, is planned twice, is a
-            folder or lies where nothing can be written (one line naming the option and the file).
+            folder, lies where nothing can be written, or is named for another format (one line naming the option
+            and the file).
     """
-    from spherecal.correction.files.outputs import OutputSet  # numpy: not at --help (start-up)
+    from spherecal.correction.files.outputs import OutputSet, check_suffix  # numpy: not at --help (start-up)
 
+    formats = dict(NAMED_OUTPUTS)
+    if getattr(args, "command", None) in JSON_OUT:
+        formats["--out"] = ("a JSON report", (".json",))
+    for option, (written, accepted) in formats.items():  # plan --rrd plan.json wrote a recording named as JSON
+        if isinstance(outputs.get(option), str):
+            check_suffix(outputs[option], option, written, accepted)
     inputs = {f"--{name.replace('_', '-')}" if name != "source" else "SOURCE": getattr(args, name, None)
               for name in INPUT_OPTIONS}
     if getattr(args, "command", None) in ("export", "tool"):  # their robot file is the positional argument
