@@ -15,7 +15,7 @@ import pytest
 from spherecal.cli import main
 from spherecal.correction import load_robot, perturb, save_robot
 from spherecal.correction.files.samples import Dataset
-from spherecal.correction.files.samples_csv import write_samples
+from spherecal.correction.files.samples_csv import read_samples, write_samples
 from spherecal.identification.synthetic import make_dataset
 from spherecal.validation.planning.candidates import MAX_CANDIDATES, CandidateError
 from spherecal.validation.planning.placements import plate_placements, read_placements
@@ -193,3 +193,19 @@ def test_a_held_out_spread_far_beyond_the_prediction_is_remarked(tmp_path, capsy
     _, err, report = _validate(tmp_path, capsys, tmp_path / "moved.csv", cal)
     ratio = report["held_out"]["calibrated"]["test_mae"] / report["held_out"]["predicted_test_mae"]
     assert ratio > 2 and f"is {ratio:.2g}x the " in err and "beyond 2x" in err
+
+
+def test_guidance_on_a_recording_no_model_describes_is_refused(tmp_path, capsys) -> None:
+    # ten samples slipped a tenth of a turn: calibrate refuses the recording (23.8 mm per axis), plan --samples
+    # ranked candidates on it ('now: 46.1 mm') and said 'more recording is not worth it', exit 0
+    out = _imported(tmp_path)
+    dataset = read_samples(out / "samples.csv", load_robot(PANDA))
+    q = dataset.q.copy()
+    q[np.random.default_rng(0).choice(dataset.n_samples, 10, replace=False), 2] += 0.3
+    write_samples(tmp_path / "slipped.csv", Dataset(dataset.labels, q))
+    candidates = tmp_path / "candidates.yaml"
+    candidates.write_text("candidates:\n  left:\n    sockets: {a: [0.42, 0.21, 0.02], b: [0.42, 0.26, 0.02]}\n")
+    refused(["plan", "--robot", PANDA, "--samples", tmp_path / "slipped.csv", "--fixtures", out / "fixtures.yaml",
+             "--candidates", candidates, "--workers", "1"], tmp_path, capsys,
+            "slipped.csv: rows 2-186: the recording so far leaves ", "mm per axis after calibration (a ball held in a "
+            "socket stays within 10 mm): no candidate can be judged on it")
