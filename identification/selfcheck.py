@@ -353,11 +353,16 @@ def _level(problem: CalibrationProblem, r: np.ndarray, sigma: float, dof: int, e
         data = r[~problem.prior_rows()]
         alone = float(np.sqrt(data @ data / max(problem.n_data - problem.n_unknowns, 1)))
         figures["data_rows_std_mm"] = alone * 1e3
-        if alone <= LEVEL_FACTOR * noise:
+        if alone <= LEVEL_FACTOR * noise and weight > PRIOR:
             return Finding("residual level", False, (
                 f"{where} with the prior's rows, the samples alone {alone * 1e3:.3g} mm: the prior "
                 f"(--prior {weight:g}, default {PRIOR:g}) holds the parameters nearer the nominal model than this arm "
-                "is; lower it"),
+                "is; lower it"), figures)
+        if alone <= LEVEL_FACTOR * noise:
+            return Finding("residual level", False, (
+                f"{where} with the prior's rows, the samples alone {alone * 1e3:.3g} mm: they fit only with parameters "
+                "further from the nominal model than a real arm differs from its design: known distances or positions "
+                "that are wrong (all alike, as no single one stands out), or a nominal model of another arm"),
                 figures)
     held = (f", the prior (--prior {weight:g}, default {PRIOR:g}) holding the model at nominal"
             if weight > HEAVY_PRIOR * PRIOR else "")

@@ -209,3 +209,15 @@ def test_guidance_on_a_recording_no_model_describes_is_refused(tmp_path, capsys)
              "--candidates", candidates, "--workers", "1"], tmp_path, capsys,
             "slipped.csv: rows 2-186: the recording so far leaves ", "mm per axis after calibration (a ball held in a "
             "socket stays within 10 mm): no candidate can be judged on it")
+
+
+def test_known_distances_all_wrong_alike_are_named_not_the_prior(tmp_path, capsys) -> None:
+    # MUKCa's plate imported with --distance 0.06 (its sockets are 50 mm apart): 'samples of another arm, a fixture
+    # that moved, a fit that did not converge...' while the samples alone fit at 0.4 mm with a stretched arm
+    out = tmp_path / "recorded"
+    assert main(["import", str(MUKCA / "panda_2_clean"), "--format", "mukca", "--robot", str(PANDA), "--distance",
+                 "0.06", "--out", str(out)]) == 0
+    err = refused(["calibrate", "--robot", PANDA, "--samples", out / "samples.csv", "--fixtures",
+                   out / "fixtures.yaml", "--out", tmp_path / "cal.yaml"], tmp_path, capsys,
+                  "the samples alone 0.4", "known distances or positions that are wrong (all alike")
+    assert "--prior" not in err
