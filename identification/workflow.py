@@ -23,6 +23,7 @@ from pathlib import Path
 import numpy as np
 
 from spherecal.correction import RobotModel, load_robot, save_robot
+from spherecal.correction.errors import SpherecalError
 from spherecal.correction.files.fixtures import FixtureSpec, read_fixtures
 from spherecal.correction.files.outputs import OutputSet
 from spherecal.correction.files.provenance import provenance
@@ -67,6 +68,11 @@ class WorkflowOptions:
     seed: int = 0
     prior: float = PRIOR
     exclude_fixtures: tuple[str, ...] = ()
+
+    def __post_init__(self) -> None:
+        if self.method == "pso" and self.loss != "linear":  # the loss was ignored, the file recorded it as used
+            raise SpherecalError(f"--loss {self.loss}: the pso method fits plain least squares; a robust loss needs "
+                                 "--method lm or pso+lm (its lm stage)")
 
     @property
     def fit_noise(self) -> float:

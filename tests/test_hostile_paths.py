@@ -221,3 +221,12 @@ def test_known_distances_all_wrong_alike_are_named_not_the_prior(tmp_path, capsy
                    out / "fixtures.yaml", "--out", tmp_path / "cal.yaml"], tmp_path, capsys,
                   "the samples alone 0.4", "known distances or positions that are wrong (all alike")
     assert "--prior" not in err
+
+
+def test_a_robust_loss_with_the_pso_method_is_refused(tmp_path, capsys) -> None:
+    # was: exit 0, the loss ignored by PSO while the file recorded 'loss: soft_l1' and the self-check left out the
+    # samples it had 'discounted'
+    out = _imported(tmp_path)
+    refused(["calibrate", "--robot", PANDA, "--samples", out / "samples.csv", "--method", "pso", "--loss", "huber",
+             "--out", tmp_path / "cal.yaml"], tmp_path, capsys,
+            "--loss huber: the pso method fits plain least squares; a robust loss needs --method lm or pso+lm")
