@@ -321,18 +321,19 @@ def planned_outputs(args: argparse.Namespace, outputs: dict):
     """
     from spherecal.correction.files.outputs import OutputSet, check_suffix  # numpy: not at --help (start-up)
 
+    inputs = {f"--{name.replace('_', '-')}" if name != "source" else "SOURCE": getattr(args, name, None)
+              for name in INPUT_OPTIONS}
+    if getattr(args, "command", None) in ("export", "tool"):  # their robot file is the positional argument
+        inputs["CAL.yaml"] = inputs.pop("--robot")
+    planned = OutputSet({k: v for k, v in outputs.items() if v is not None},
+                        {k: v for k, v in inputs.items() if isinstance(v, str)})  # an input or twice: said first
     formats = dict(NAMED_OUTPUTS)
     if getattr(args, "command", None) in JSON_OUT:
         formats["--out"] = ("a JSON report", (".json",))
     for option, (written, accepted) in formats.items():  # plan --rrd plan.json wrote a recording named as JSON
         if isinstance(outputs.get(option), str):
             check_suffix(outputs[option], option, written, accepted)
-    inputs = {f"--{name.replace('_', '-')}" if name != "source" else "SOURCE": getattr(args, name, None)
-              for name in INPUT_OPTIONS}
-    if getattr(args, "command", None) in ("export", "tool"):  # their robot file is the positional argument
-        inputs["CAL.yaml"] = inputs.pop("--robot")
-    return OutputSet({k: v for k, v in outputs.items() if v is not None},
-                     {k: v for k, v in inputs.items() if isinstance(v, str)})
+    return planned
 
 
 def check_folder(path: str, option: str = "--out") -> None:
