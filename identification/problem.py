@@ -90,6 +90,8 @@ PRIOR_TAIL = float("inf")
 DISTANCE_STD = 1e-6
 #: Largest disagreement [m] between a known distance and the distance of two known positions.
 CONSISTENCY_TOL = 1e-3
+#: Fixtures closer than this are degenerate (one socket under two names, or a typo) [m].
+MIN_SEPARATION = 0.02
 #: With a robust loss, samples farther from their centre than this multiple of the median are outliers: the
 #: samples the loss discounted, left out wherever the fit's noise is read (pruning, stds, the self-check).
 OUTLIER = 4.0

@@ -2,8 +2,8 @@
 
 Run on every calibration (:func:`self_check`), its findings travel with the result. Checks:
 
-* **geometry**: two fixtures closer than :data:`MIN_SEPARATION` (declared by a distance or two
-  positions, or where the fit put them), a fixture whose samples hardly move the arm
+* **geometry**: two fixtures closer than :data:`MIN_SEPARATION` (two positions, or where the fit put them; a
+  known distance that small is refused when the problem is built), a fixture whose samples hardly move the arm
   (largest joint range below :data:`MIN_MOTION`);
 * **residual level**: the residual std per coordinate against the declared ``noise``, overall (a
   chi-square with the fit's degrees of freedom ``3 K + distances - unknowns``) and per fixture;
@@ -60,13 +60,11 @@ from .identifiability import normal_inverse
 from .joint_error import LENGTH, split, tool_fields
 from .leave_out import LeftOut, leave_out
 from .prediction import Workspace, deviation_root, excess_energy, joint_error_root, socket_spreads
-from .problem import OUTLIER, PRIOR, SIGMA_FLOOR, CalibrationProblem, samples_location
+from .problem import MIN_SEPARATION, OUTLIER, PRIOR, SIGMA_FLOOR, CalibrationProblem, samples_location
 from .selfcheck_result import Finding, InconsistentDataError, SelfCheck
 
 __all__ = ["Finding", "InconsistentDataError", "SelfCheck", "self_check", "nominal_expected"]
 
-#: Fixtures closer than this are degenerate (one socket under two names, or a typo) [m].
-MIN_SEPARATION = 0.02
 #: A fixture whose largest joint range is below this hardly moves the arm [rad] (2 deg).
 MIN_MOTION = float(np.deg2rad(2.0))
 #: Residual std per coordinate above this multiple of the declared noise is refused.
@@ -185,26 +183,14 @@ def _geometry(problem: CalibrationProblem, x: np.ndarray) -> list[Finding]:
     spec, dataset = problem.spec, problem.dataset
     where = spec.source or "fixtures"
     found: list[Finding] = []
-    for k, (a, b, value) in enumerate(spec.distances):
-        if value < MIN_SEPARATION:
-            found.append(
-                Finding(
-                    f"separation {a}-{b}",
-                    False,
-                    f"{where}: {spec.distance_field(k)}: distance {a}-{b} is "
-                    f"{value * 1e3:.3g} mm: fixtures closer than {MIN_SEPARATION * 1e3:.0f} mm check nothing "
-                    f"(the same socket under two names, or a typo)",
-                    {"declared_mm": value * 1e3},
-                    culprit=True,
-                )
-            )
+    # a known distance below MIN_SEPARATION is refused when the problem is built (build._check_reach)
     _, centres = problem.unpack(x)
     names = dataset.fixture_names
     for i, a in enumerate(names):
         for j in range(i + 1, len(names)):
             b = names[j]
             apart = float(np.linalg.norm(centres[i] - centres[j]))
-            if apart < MIN_SEPARATION and not any(f.check == f"separation {a}-{b}" for f in found):
+            if apart < MIN_SEPARATION:
                 declared = a in spec.positions and b in spec.positions
                 field_name = f"fixtures.{b}.position" if declared else "fixture"
                 place = f"{where}: {spec._row('fixtures.' + b)}" if declared else f"{samples_location(dataset)}, "

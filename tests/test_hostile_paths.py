@@ -6,6 +6,7 @@ field (exit 1, nothing written), or handled and said."""
 from __future__ import annotations
 
 import re
+import time
 from dataclasses import replace
 from pathlib import Path
 
@@ -230,3 +231,16 @@ def test_a_robust_loss_with_the_pso_method_is_refused(tmp_path, capsys) -> None:
     refused(["calibrate", "--robot", PANDA, "--samples", out / "samples.csv", "--method", "pso", "--loss", "huber",
              "--out", tmp_path / "cal.yaml"], tmp_path, capsys,
             "--loss huber: the pso method fits plain least squares; a robust loss needs --method lm or pso+lm")
+
+
+def test_a_known_distance_below_the_socket_separation_is_refused_before_the_fit(tmp_path, capsys) -> None:
+    # MUKCa's panda_2 (16 sockets) imported with --distance 0.0005: calibrate ran for over 90 s (the fit pulling
+    # each pair together under a 1 um weight) before the self-check refused it
+    out = tmp_path / "recorded"
+    assert main(["import", str(MUKCA / "panda_2_clean"), "--format", "mukca", "--robot", str(PANDA), "--distance",
+                 "0.0005", "--out", str(out)]) == 0
+    start = time.process_time()
+    refused(["calibrate", "--robot", PANDA, "--samples", out / "samples.csv", "--fixtures", out / "fixtures.yaml",
+             "--out", tmp_path / "cal.yaml"], tmp_path, capsys, "fixtures.yaml: row ", "field 'distances[0]': "
+            "distance back_left_h0-back_left_h1 is 0.5 mm: fixtures closer than 20 mm check nothing")
+    assert time.process_time() - start < 5.0
