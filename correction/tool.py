@@ -86,9 +86,11 @@ def with_tool(model: RobotModel, tool: np.ndarray, payload: dict | None = None,
     tool = np.asarray(tool, dtype=float)
     if tool.shape != (3,) or not np.all(np.isfinite(tool)):
         raise ToolError(f"tool: expected 3 finite coordinates [m] in the last frame, got {np.ravel(tool).tolist()!r}")
-    if np.linalg.norm(tool) > model.chain_length:
+    largest = float(np.abs(tool).max())
+    distance = largest * float(np.linalg.norm(tool / largest)) if largest > 0 else 0.0  # 1e300 squared is inf
+    if distance > model.chain_length:
         raise ToolError(
-            f"the new tool point {np.array2string(tool, precision=4)} m is {np.linalg.norm(tool):.4g} m from the "
+            f"the new tool point {np.array2string(tool, precision=4)} m is {distance:.4g} m from the "
             f"last frame, more than the arm itself ({model.chain_length:.3g} m, sum of |a| and |d|): the offset is in "
             "metres")
     calibrated = np.asarray(model.tool, dtype=float)

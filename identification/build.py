@@ -21,6 +21,7 @@ from .problem import (
     CONSISTENCY_TOL,
     DISTANCE_STD,
     GAUGE,
+    MIN_SEPARATION,
     NOISE,
     PRIOR_TAIL,
     CalibrationProblem,
@@ -42,7 +43,9 @@ def _check_inputs(dataset: Dataset, spec: FixtureSpec) -> None:
 
 
 def _check_reach(model: RobotModel, spec: FixtureSpec) -> None:
-    """Refuse known positions and distances the arm cannot span (e.g. millimetres typed for metres).
+    """Refuse known positions and distances the arm cannot span (e.g. millimetres typed for metres), and known
+    distances below :data:`.problem.MIN_SEPARATION` (MUKCa's plate imported with ``--distance 0.0005``: the fit
+    pulled the sockets together for over 90 s before the self-check refused it).
 
     Reach bound: ``sum |a| + sum |d| + |tool|`` from the base origin.
     """
@@ -61,6 +64,11 @@ def _check_reach(model: RobotModel, spec: FixtureSpec) -> None:
             raise DatasetError(
                 f"{where}: {spec.distance_field(k)}: {a}-{b} {value:.6g} m is more "
                 f"than the arm can span ({2 * reach:.3g} m); distances are in metres"
+            )
+        if value < MIN_SEPARATION:  # the self-check's refusal, before a fit that pulls two sockets together
+            raise DatasetError(
+                f"{where}: {spec.distance_field(k)}: distance {a}-{b} is {value * 1e3:.3g} mm: fixtures closer than "
+                f"{MIN_SEPARATION * 1e3:.0f} mm check nothing (the same socket under two names, or a typo)"
             )
 
 

@@ -90,6 +90,11 @@ PRIOR_TAIL = float("inf")
 DISTANCE_STD = 1e-6
 #: Largest disagreement [m] between a known distance and the distance of two known positions.
 CONSISTENCY_TOL = 1e-3
+#: Fixtures closer than this are degenerate (one socket under two names, or a typo) [m].
+MIN_SEPARATION = 0.02
+#: With a robust loss, samples farther from their centre than this multiple of the median are outliers: the
+#: samples the loss discounted, left out wherever the fit's noise is read (pruning, stds, the self-check).
+OUTLIER = 4.0
 
 
 class UnidentifiableError(SpherecalError):
@@ -329,6 +334,20 @@ class CalibrationProblem:
         params, centres = self.unpack(x)
         _, fixture = self._layout()
         return tool_point(self.model.with_params(params), self.dataset.q) - centres[fixture]
+
+    def inliers(self, x: np.ndarray) -> np.ndarray:
+        """(K,) False on the samples a robust loss discounts at ``x``: farther from their centre than :data:`OUTLIER`
+        x the median distance; all True when there are none or when a fixture would lose every sample."""
+        distance = np.linalg.norm(self.sample_errors(x), axis=1)
+        kept = distance <= OUTLIER * np.median(distance)
+        index = self.dataset.fixture_index
+        if kept.all() or not all(np.any(kept[index == j]) for j in range(len(self.dataset.fixture_names))):
+            return np.ones(len(kept), dtype=bool)
+        return kept
+
+    def with_samples(self, kept: np.ndarray) -> CalibrationProblem:
+        """The problem on the samples ``kept`` (K,) bool (itself when every one is kept)."""
+        return self if kept.all() else replace(self, dataset=self.dataset.select(kept), _cache={})
 
     def _distances(self, centres: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
         names = self.dataset.fixture_names

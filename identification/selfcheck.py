@@ -2,8 +2,8 @@
 
 Run on every calibration (:func:`self_check`), its findings travel with the result. Checks:
 
-* **geometry**: two fixtures closer than :data:`MIN_SEPARATION` (declared by a distance or two
-  positions, or where the fit put them), a fixture whose samples hardly move the arm
+* **geometry**: two fixtures closer than :data:`MIN_SEPARATION` (two positions, or where the fit put them; a
+  known distance that small is refused when the problem is built), a fixture whose samples hardly move the arm
   (largest joint range below :data:`MIN_MOTION`);
 * **residual level**: the residual std per coordinate against the declared ``noise``, overall (a
   chi-square with the fit's degrees of freedom ``3 K + distances - unknowns``) and per fixture;
@@ -68,19 +68,15 @@ from .prediction import (
     joint_error_root,
     socket_spreads,
 )
-from .problem import SIGMA_FLOOR, CalibrationProblem, samples_location
+from .problem import MIN_SEPARATION, OUTLIER, PRIOR, SIGMA_FLOOR, CalibrationProblem, samples_location
 from .selfcheck_result import Finding, InconsistentDataError, SelfCheck
 
 __all__ = ["Finding", "InconsistentDataError", "SelfCheck", "self_check", "nominal_expected"]
 
-#: Fixtures closer than this are degenerate (one socket under two names, or a typo) [m].
-MIN_SEPARATION = 0.02
 #: A fixture whose largest joint range is below this hardly moves the arm [rad] (2 deg).
 MIN_MOTION = float(np.deg2rad(2.0))
 #: Residual std per coordinate above this multiple of the declared noise is refused.
 LEVEL_FACTOR = 2.0
-#: With a robust loss, samples farther from their centre than this multiple of the median are outliers.
-OUTLIER = 4.0
 #: A fixture's residual trends with recording order when the rank correlation of its samples' residual
 #: distances with their order has ``|t| >`` this (a few false alarms in 10^4 fixtures of white noise) and the
 #: fitted line changes by more than :data:`TREND_CHANGE` x the declared noise from its first to its last sample.
@@ -95,6 +91,9 @@ NOISE_LIKE = 0.6
 #: nominal model does not describe the arm (a robot file of another convention or arm): both the prediction and
 #: the nominal's expected error are then the prior's, and "beats nominal" says nothing.
 MAX_SOCKET_NOISE = 0.010
+#: A prior weight above this multiple of the default is named among the causes of a refused residual level (a
+#: heavy prior holds the model at nominal: ``--prior 1e6`` on MUKCa's Panda left 4.8 mm per axis).
+HEAVY_PRIOR = 10.0
 #: Fewest samples of a fixture whose trend is judged.
 TREND_SAMPLES = 8
 #: The predicted mean error must be below this share of the nominal model's expected error: a 2x margin,
@@ -133,21 +132,22 @@ def self_check(
         The :class:`SelfCheck` (call :meth:`SelfCheck.raise_if_inconsistent` to refuse).
     """
     noise = problem.noise
-    excluded = 0
-    if loss != "linear":
-        distance = np.linalg.norm(problem.sample_errors(x), axis=1)
-        inliers = distance <= OUTLIER * np.median(distance)
-        excluded = int((~inliers).sum())
-        if excluded and all(
-            np.any(inliers[problem.dataset.fixture_index == j]) for j in range(len(problem.dataset.fixture_names))
-        ):
-            problem = replace(problem, dataset=problem.dataset.select(inliers), _cache={})
-            unknowns = None
+    excluded, outliers = 0, ""
+    if loss != "linear":  # the samples the loss discounted are left out of every figure, the nominal's as well
+        kept = problem.inliers(x)
+        excluded = int((~kept).sum())
+        if excluded:
+            lines = problem.dataset.select(~kept).lines
+            where = "" if lines is None else f" (rows {', '.join(str(k) for k in lines[:5])}{', ...' * (excluded > 5)})"
+            outliers = (f"; {excluded} samples{where} lie over {OUTLIER:g}x the median distance from their centre: "
+                        f"discounted by the {loss} loss and left out of these figures")
+            problem, built, unknowns = problem.with_samples(kept), (built or problem).with_samples(kept), None
     r = problem.residuals(x)
     dof = max(problem.n_residuals - problem.n_unknowns, 1)
     sigma = float(np.sqrt(r @ r / dof))
     findings = _geometry(problem, x)
-    findings.append(_level(problem, r, sigma, dof, excluded, declared))
+    level = _level(problem, r, sigma, dof, excluded, declared)
+    findings.append(replace(level, message=level.message + outliers) if excluded else level)
     jac, res, groups, kinds, spread = augmented(problem, x, r)
     _, _, left = leave_out(jac, res, groups, spread=spread)
     checkable = sum(1 for k, g in left.items() if g.dof > 0 and not sets_scale_alone(problem, kinds[k]))
@@ -195,26 +195,14 @@ def _geometry(problem: CalibrationProblem, x: np.ndarray) -> list[Finding]:
     spec, dataset = problem.spec, problem.dataset
     where = spec.source or "fixtures"
     found: list[Finding] = []
-    for k, (a, b, value) in enumerate(spec.distances):
-        if value < MIN_SEPARATION:
-            found.append(
-                Finding(
-                    f"separation {a}-{b}",
-                    False,
-                    f"{where}: {spec.distance_field(k)}: distance {a}-{b} is "
-                    f"{value * 1e3:.3g} mm: fixtures closer than {MIN_SEPARATION * 1e3:.0f} mm check nothing "
-                    f"(the same socket under two names, or a typo)",
-                    {"declared_mm": value * 1e3},
-                    culprit=True,
-                )
-            )
+    # a known distance below MIN_SEPARATION is refused when the problem is built (build._check_reach)
     _, centres = problem.unpack(x)
     names = dataset.fixture_names
     for i, a in enumerate(names):
         for j in range(i + 1, len(names)):
             b = names[j]
             apart = float(np.linalg.norm(centres[i] - centres[j]))
-            if apart < MIN_SEPARATION and not any(f.check == f"separation {a}-{b}" for f in found):
+            if apart < MIN_SEPARATION:
                 declared = a in spec.positions and b in spec.positions
                 field_name = f"fixtures.{b}.position" if declared else "fixture"
                 place = f"{where}: {spec._row('fixtures.' + b)}" if declared else f"{samples_location(dataset)}, "
@@ -359,13 +347,32 @@ def _level(problem: CalibrationProblem, r: np.ndarray, sigma: float, dof: int, e
             text += ("; the declared noise is larger than the residuals show: accuracy is judged at the declared noise"
                      if declared else "; no noise declared (--noise): accuracy is judged at the residuals' noise")
         return Finding("residual level", True, text, figures)
+    where = (f"{samples_location(dataset)}: residual noise {sigma * 1e3:.3g} mm per axis is {sigma / noise:.3g}x the "
+             f"declared {noise * 1e3:.3g} mm (limit {LEVEL_FACTOR:g}x; worst fixture {worst} "
+             f"{per_fixture[worst] * 1e3:.3g} mm)")
+    weight = problem.prior_weight
+    if problem.n_prior:  # the prior's rows are in sigma: is it the samples, or a prior holding the arm at nominal?
+        data = r[~problem.prior_rows()]
+        alone = float(np.sqrt(data @ data / max(problem.n_data - problem.n_unknowns, 1)))
+        figures["data_rows_std_mm"] = alone * 1e3
+        if alone <= LEVEL_FACTOR * noise and weight > PRIOR:
+            return Finding("residual level", False, (
+                f"{where} with the prior's rows, the samples alone {alone * 1e3:.3g} mm: the prior "
+                f"(--prior {weight:g}, default {PRIOR:g}) holds the parameters nearer the nominal model than this arm "
+                "is; lower it"), figures)
+        if alone <= LEVEL_FACTOR * noise:
+            return Finding("residual level", False, (
+                f"{where} with the prior's rows, the samples alone {alone * 1e3:.3g} mm: they fit only with parameters "
+                "further from the nominal model than a real arm differs from its design: known distances or positions "
+                "that are wrong (all alike, as no single one stands out), or a nominal model of another arm"),
+                figures)
+    held = (f", the prior (--prior {weight:g}, default {PRIOR:g}) holding the model at nominal"
+            if weight > HEAVY_PRIOR * PRIOR else "")
     return Finding(
         "residual level",
         False,
-        f"{samples_location(dataset)}: residual noise {sigma * 1e3:.3g} mm per axis is {sigma / noise:.3g}x the "
-        f"declared {noise * 1e3:.3g} mm (limit {LEVEL_FACTOR:g}x; worst fixture {worst} {per_fixture[worst] * 1e3:.3g} "
-        f"mm) and no single fixture, distance or position explains it: samples of another arm, a fixture that "
-        f"moved, a fit that did not converge, or the noise declared too small (--noise)",
+        f"{where} and no single fixture, distance or position explains it: samples of another arm, a fixture that "
+        f"moved, a fit that did not converge{held}, or the noise declared too small (--noise)",
         figures,
     )
 

@@ -23,6 +23,7 @@ from pathlib import Path
 import numpy as np
 
 from spherecal.correction import RobotModel, load_robot, save_robot
+from spherecal.correction.errors import SpherecalError
 from spherecal.correction.files.fixtures import FixtureSpec, read_fixtures
 from spherecal.correction.files.outputs import OutputSet
 from spherecal.correction.files.provenance import provenance
@@ -67,6 +68,11 @@ class WorkflowOptions:
     seed: int = 0
     prior: float = PRIOR
     exclude_fixtures: tuple[str, ...] = ()
+
+    def __post_init__(self) -> None:
+        if self.method == "pso" and self.loss != "linear":  # the loss was ignored, the file recorded it as used
+            raise SpherecalError(f"--loss {self.loss}: the pso method fits plain least squares; a robust loss needs "
+                                 "--method lm or pso+lm (its lm stage)")
 
     @property
     def fit_noise(self) -> float:
@@ -151,7 +157,8 @@ def run_workflow(nominal: RobotModel, dataset: Dataset, spec: FixtureSpec | None
         return calibrate(begin, data, fixtures, start=warm, loss=options.loss, noise=options.fit_noise,
                          max_change=options.max_change, check=False, prior=options.prior)
 
-    selection = select_model(options.model, fit, nominal, dataset, spec, seed=options.seed)
+    selection = select_model(options.model, fit, nominal, dataset, spec, seed=options.seed,
+                             robust=options.loss != "linear")
     begin = start_for(selection.chosen, nominal)
     if start is not None:
         warm = start_for(selection.chosen, start)

@@ -24,6 +24,7 @@ from __future__ import annotations
 
 import argparse
 import math
+import re
 import sys
 
 #: Below this a length in millimetres is taken for the old unit (metres): 10 micrometres (0 is allowed).
@@ -49,7 +50,13 @@ def fail(message: str) -> OptionError:
 
 class Parser(argparse.ArgumentParser):
     """An ArgumentParser whose errors are one line (``spherecal CMD: error: ...``) and exit status 1,
-    like every other refusal of spherecal."""
+    like every other refusal of spherecal. A negative number in exponent notation (``--offset -1e-2 0 0.2``) is
+    a value, as ``-0.01`` is (argparse took it for an option: 'expected 3 arguments')."""
+
+    def __init__(self, *args, **kwargs):
+        super().__init__(*args, **kwargs)
+        self._negative_number_matcher = re.compile(r"^-((\d+\.?\d*|\.\d+)([eE][-+]?\d+)?|inf|infinity|nan)$",
+                                                   re.IGNORECASE)
 
     def error(self, message: str):  # noqa: D102 - argparse's hook
         self.exit(1, f"{self.prog}: error: {message} (see {self.prog} --help)\n")
@@ -293,6 +300,13 @@ def recorded_options(args: argparse.Namespace) -> dict:
             for k, v in vars(args).items() if not k.startswith("_") and k != "command"}
 
 
+#: Output options whose file holds one format: what it is and the endings that fit (a name ending for another
+#: format is refused, :func:`spherecal.correction.files.outputs.check_suffix`).
+NAMED_OUTPUTS = {"--rrd": ("a Rerun recording", (".rrd",)), "--analysis": ("a Markdown document", (".md",))}
+#: Commands whose ``--out`` is a JSON report.
+JSON_OUT = ("validate", "plan")
+
+
 def planned_outputs(args: argparse.Namespace, outputs: dict):
     """The :class:`spherecal.correction.files.outputs.OutputSet` of a command, checked before any work.
 
@@ -302,17 +316,25 @@ def planned_outputs(args: argparse.Namespace, outputs: dict):
 
     Raises:
         spherecal.correction.files.outputs.OutputError: an output that is an input, is planned twice, is a
-            folder or lies where nothing can be written (one line naming the option and the file).
+            folder, lies where nothing can be written, or is named for another format (one line naming the option
+            and the file).
     """
-    from spherecal.correction.files.outputs import OutputSet  # numpy: not at --help (start-up)
+    from spherecal.correction.files.outputs import OutputSet, check_suffix  # numpy: not at --help (start-up)
 
     inputs = {f"--{name.replace('_', '-')}" if name != "source" else "SOURCE": getattr(args, name, None)
               for name in INPUT_OPTIONS}
     if getattr(args, "command", None) in ("export", "tool"):  # their robot file is the positional argument
         inputs["CAL.yaml"] = inputs.pop("--robot")
-    return OutputSet({k: v for k, v in outputs.items() if v is not None},
-                     {k: v for k, v in inputs.items() if isinstance(v, str)},
-                     file_inputs=[k for k in inputs if k != "SOURCE"])  # only SOURCE may name a folder
+    planned = OutputSet({k: v for k, v in outputs.items() if v is not None},
+                        {k: v for k, v in inputs.items() if isinstance(v, str)},
+                        file_inputs=[k for k in inputs if k != "SOURCE"])  # only SOURCE may name a folder
+    formats = dict(NAMED_OUTPUTS)
+    if getattr(args, "command", None) in JSON_OUT:
+        formats["--out"] = ("a JSON report", (".json",))
+    for option, (written, accepted) in formats.items():  # plan --rrd plan.json wrote a recording named as JSON
+        if isinstance(outputs.get(option), str):
+            check_suffix(outputs[option], option, written, accepted)
+    return planned
 
 
 def check_folder(path: str, option: str = "--out") -> None:

@@ -160,6 +160,14 @@ def test_simulate_refuses_before_any_work_when_one_of_its_files_cannot_be_writte
      "an MJCF model (--format mjcf) named .urdf"),
     (["export", "calibrated.yaml", "--format", "yaml", "--out", "arm.xml"],
      "a robot file (YAML) (--format yaml) named .xml"),
+    # plan, validate: a Rerun recording or a JSON report written under a name another reader would take
+    (["plan", "--candidates", "candidates.yaml", "--fixture-count", "1", "--rrd", "plan.json"],
+     "plan.json: field '--rrd': a Rerun recording named .json would be read as JSON; name it .rrd"),
+    (["validate", "--nominal", "robot.yaml", "--calibrated", "calibrated.yaml", "--samples", "samples.csv",
+      "--out", "report.yaml"], "report.yaml: field '--out': a JSON report named .yaml would be read as YAML"),
+    (["validate", "--nominal", "robot.yaml", "--calibrated", "calibrated.yaml", "--samples", "samples.csv",
+      "--rrd", "spread.csv"], "spread.csv: field '--rrd': a Rerun recording named .csv"),
+    (["plan", "--analysis", "design.json"], "design.json: field '--analysis': a Markdown document named .json"),
 ])
 def test_an_output_named_for_another_format_is_refused(files, capsys, monkeypatch, argv, expected) -> None:
     monkeypatch.chdir(files)

@@ -48,6 +48,20 @@ def configurations_digest(q: np.ndarray) -> str:
     return hashlib.sha256(rows[order].tobytes()).hexdigest()
 
 
+def configuration_hashes(q: np.ndarray) -> np.ndarray:
+    """(K,) uint64: each configuration's own hash, the first 8 bytes of the SHA-256 of its joint angles [rad]
+    as little-endian float64 (every bit of every angle counts). A calibrated file records the smallest few of
+    its fixtures' (``calibration.trained_on``), so that ``validate`` recognises samples it shares with the
+    training ones: a subset or a superset of them (a recording imported again with another subsample)."""
+    import hashlib  # standard library; only digests need it
+
+    rows = np.ascontiguousarray(np.asarray(q, dtype="<f8"))
+    if rows.ndim != 2:
+        raise ValueError("q must be (K, n)")
+    return np.array([int.from_bytes(hashlib.sha256(row.tobytes()).digest()[:8], "big") for row in rows],
+                    dtype=np.uint64)
+
+
 class JointLimitWarning(UserWarning):
     """Recorded angles beyond the robot file's joint limits (within :data:`HARD_MARGIN`): used as recorded."""
 

@@ -39,7 +39,7 @@ def put_tool(model: RobotModel, offset: np.ndarray | None = None, urdf: str | os
     payload = None
     if urdf is not None:
         description = load_urdf(urdf, tip_link=tip_link, base_link=base_link)
-        offset = tool_in_frame(description, model)
+        offset = _tool_of(description, model, urdf, base_link)
         if has_inertials(description):
             payload = description.extras["payload"]
     block = model.extras.get("calibration")
@@ -56,6 +56,25 @@ def put_tool(model: RobotModel, offset: np.ndarray | None = None, urdf: str | os
     else:
         line = "no payload in the calibrated file"
     return swap, line
+
+
+def _tool_of(description: RobotModel, model: RobotModel, urdf: str | os.PathLike, base_link: str | None) -> np.ndarray:
+    """:func:`.tool.tool_in_frame`, its refusal naming the URDF, the option and the chain it read: a tool link
+    before the flange (``--tip-link panda_link3``) was 'tool description: joints: 3 joints, expected 7'."""
+    try:
+        return tool_in_frame(description, model)
+    except ToolError as error:
+        links = description.extras.get("urdf", {})
+        chain = f"the chain from '{links.get('base_link')}' to '{links.get('tip_link')}'"
+        field = "--tip-link" if base_link is None else "--base-link"
+        if description.n_joints < model.n_joints:
+            raise ToolError(f"{urdf}: field '{field}': {chain} has {description.n_joints} joints, the calibrated arm "
+                            f"{model.n_joints}: the tool link must lie beyond the arm's last joint (on its flange) and "
+                            "the base link be the arm's base") from None
+        if description.n_joints > model.n_joints:
+            raise ToolError(f"{urdf}: field '--urdf': {chain} has {description.n_joints} joints, the calibrated arm "
+                            f"{model.n_joints}: a URDF of another arm") from None
+        raise ToolError(f"{urdf}: field '--urdf': {chain}: {str(error).removeprefix('tool description: ')}") from None
 
 
 def _retipped(model: RobotModel, links: dict | None) -> RobotModel:

@@ -37,6 +37,13 @@ def run(args: argparse.Namespace) -> int:
     check_suffix(args.out, "--out", "a robot file (YAML)", (".yaml", ".yml"),
                  "; for a URDF or MJCF of it: spherecal export")
     model = load_robot(args.robot)
+    from spherecal.correction.files.robot_file import forced_calibration
+
+    forced = forced_calibration(model)
+    if forced:  # the new file carries the verdict; say it now, as export and validate do
+        import warnings
+
+        warnings.warn(forced, stacklevel=1)
     swap, payload = put_tool(model, args.offset, args.urdf, args.tip_link, args.base_link)
     header = f"spherecal tool: {args.robot} with the tool at {[round(v, 6) for v in swap.model.tool]} m (frame n)"
     with outputs:

@@ -274,6 +274,24 @@ def test_robust_loss_resists_slips(truth, clean) -> None:
     assert robust < 0.5 * plain
 
 
+def test_robust_loss_judges_the_noise_without_the_samples_it_discounted(truth, clean) -> None:
+    # ten samples slipped by a tenth of a turn of joint 3 (about 100 mm at the tool): the robust fit's noise, read
+    # over every sample, was tens of mm, pruning kept one parameter of 25 and the result was refused
+    panda, true = truth
+    dataset, spec = clean
+    dataset = dataset.subsampled(60, np.random.default_rng(6))
+    q = dataset.q.copy()
+    q[np.random.default_rng(7).choice(dataset.n_samples, 10, replace=False), 2] += 0.3
+    bad = Dataset(dataset.labels, q)
+    reference = calibrate(panda, dataset, spec, noise=1e-4, prior=0.5)
+    for loss in ("soft_l1", "huber"):
+        robust = calibrate(panda, bad, spec, loss=loss, noise=1e-4, prior=0.5)
+        assert len(robust.identified) == len(reference.identified)
+        assert _accuracy(robust.model, true).mean() < 1e-4  # 0.1 mm; the nominal is 4.7 mm off, the clean fit 2 um
+        level = next(f for f in robust.selfcheck.findings if f.check == "residual level")
+        assert level.figures["outliers_excluded"] >= 10 and f"discounted by the {loss} loss" in level.message
+
+
 def test_pso_is_seeded_quiet_and_restores_numpy_state(truth, clean, tmp_path, monkeypatch) -> None:
     panda, true = truth
     dataset, spec = clean

@@ -13,7 +13,7 @@ import yaml
 
 from spherecal.correction import load_robot, perturb, registered_errors, tool_point
 from spherecal.correction.files.fixtures import FixtureSpec
-from spherecal.correction.files.samples import Dataset
+from spherecal.correction.files.samples import Dataset, DatasetError
 from spherecal.identification.calibrate import calibrate
 from spherecal.identification.leave_out import leave_out
 from spherecal.identification.problem import PRIOR
@@ -152,7 +152,8 @@ def test_two_fixtures_declared_1mm_apart_are_refused(arm, noisy) -> None:
     panda, _ = arm
     dataset, spec = noisy
     (a, b, _), *rest = spec.distances
-    with pytest.raises(InconsistentDataError, match=r"field 'distances\[0\]': distance P1-P2 is 1 mm: fixtures closer"):
+    # refused when the problem is built, before a fit that pulls the two sockets together
+    with pytest.raises(DatasetError, match=r"field 'distances\[0\]': distance P1-P2 is 1 mm: fixtures closer"):
         calibrate(panda, dataset, FixtureSpec(spec.names, distances=[(a, b, 0.001), *rest]))
 
 

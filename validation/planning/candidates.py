@@ -12,8 +12,10 @@ from spherecal.correction.errors import SpherecalError
 from spherecal.correction.files.text_input import read_text
 from spherecal.correction.files.yaml_safe import MAX_FILE_BYTES, load_yaml
 
-#: Most grid points :func:`grid_candidates` makes (each one is surveyed and scored).
-MAX_GRID = 10_000
+#: Most candidates of one plan, from a grid or a file (each one is surveyed and scored: 1000 single sockets take
+#: 70 s on one core, 1000 plate placements of guidance about 50 s; 10^4 from a file ran for 12 minutes).
+MAX_CANDIDATES = 1000
+MAX_GRID = MAX_CANDIDATES
 
 
 class CandidateError(SpherecalError):
@@ -104,6 +106,9 @@ def candidate_entries(path: Path, expected: str) -> dict:
     entries = data.get("candidates") if isinstance(data, dict) else None
     if not isinstance(entries, dict) or not entries:
         raise CandidateError(f"{path}: field 'candidates': expected a non-empty mapping name -> {expected}")
+    if len(entries) > MAX_CANDIDATES:
+        raise CandidateError(f"{path}: field 'candidates': {len(entries)} candidates, at most {MAX_CANDIDATES} (each "
+                             "is surveyed and scored: about a minute per 1000 on one core)")
     return entries
 
 

@@ -79,7 +79,9 @@ from spherecal.identification.prediction import (
     predict_accuracy,
     remove_rigid_motion,
 )
-from spherecal.identification.problem import NOISE, SIGMA_FLOOR
+from spherecal.identification.problem import NOISE, SIGMA_FLOOR, samples_location
+from spherecal.identification.selfcheck import MAX_SOCKET_NOISE
+from spherecal.identification.selfcheck_result import InconsistentDataError
 from spherecal.identification.workflow import WorkflowOptions, run_workflow
 
 from .candidates import CandidateError
@@ -258,6 +260,8 @@ def calibrate_recording(
 
     Raises:
         DatasetError, UnidentifiableError, ImplausibleCalibrationError: the recording cannot be calibrated.
+        InconsistentDataError: it leaves more than the self-check's :data:`.selfcheck.MAX_SOCKET_NOISE` per axis (a
+            recording of 10 slipped samples: 23.8 mm; the plan ranked candidates on it and said 'not worth it').
     """
     spec = FixtureSpec.unknown(dataset.fixture_names) if spec is None else spec
     # The one calibration workflow, as `calibrate` runs it (prior, model choice); force: the plan judges
@@ -270,6 +274,11 @@ def calibrate_recording(
     # as the self-check: the data rows' residual beyond the declared noise is the arm's own unmodelled error
     unknowns = result.problem.n_unknowns if result.effective_unknowns is None else result.effective_unknowns
     shown = result.problem.data_sigma(result.x, unknowns)
+    if shown > MAX_SOCKET_NOISE:  # the self-check's bar: beyond it no model describes the arm, no gain means anything
+        raise InconsistentDataError(
+            f"{samples_location(dataset)}: the recording so far leaves {shown * 1e3:.3g} mm per axis after calibration "
+            f"(a ball held in a socket stays within {MAX_SOCKET_NOISE * 1e3:.0f} mm): no candidate can be judged on it "
+            "(spherecal calibrate on it says why)")
     dof = max(result.problem.n_data - unknowns, 0.0)
     if UNMODELLED == "variogram":
         share = noise_split(residuals, dataset.q, dataset.labels)
@@ -444,7 +453,9 @@ def rank_placements(
     for p in placements:
         clash = taken & set(p.sockets)
         if clash:
-            raise CandidateError(f"candidate {p.name}: socket {sorted(clash)[0]!r} is a recorded fixture's name")
+            name = sorted(clash)[0]
+            where = f"{p.source}: field 'candidates.{p.name}.sockets.{name}': " if p.source else f"candidate {p.name}: "
+            raise CandidateError(f"{where}socket {name!r} is a recorded fixture's name (name it differently)")
     # MuJoCo: controller.self_motion imports it at its top (start-up); its base-column check is the one we use
     from spherecal.controller.self_motion import check_fixture
 
@@ -512,6 +523,8 @@ def rank_placements(
                             pinned=pinned_down(baseline.prediction, j.prediction))
             (judged if not j.reason else refused).append(j)
     seconds["prediction"] = time.perf_counter() - clock
+    if not judged:  # every candidate refused: nothing was ranked, which is no advice (was exit 0, 'nothing to add')
+        raise CandidateError(f"no candidate can be recorded: {refused[0].reason}")
     ranking = sorted(judged, key=lambda j: -j.gain)
     order = {p.name: i for i, p in enumerate(given)}
     refused.sort(key=lambda j: order[j.placement.name])

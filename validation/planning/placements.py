@@ -24,7 +24,15 @@ import numpy as np
 from spherecal.correction import RobotModel, tool_point
 from spherecal.correction.files.fixtures import FixtureSpec
 
-from .candidates import Candidate, CandidateError, candidate_entries, grid_candidates
+from .candidates import MAX_CANDIDATES, Candidate, CandidateError, candidate_entries, grid_candidates
+
+#: Sockets of one candidate closer than this are one socket under two names (a copied line) [m]; the
+#: calibration's self-check refuses such fixtures (``identification.selfcheck.MIN_SEPARATION``).
+MIN_SOCKET_SEPARATION = 0.02
+#: A known distance farther than this share of itself and :data:`DISTANCE_SLACK` from the distance of its two
+#: sockets' positions is a typo: the positions are where the user will put the plate, the distance its drawing's.
+DISTANCE_SHARE = 0.2
+DISTANCE_SLACK = 0.005  # [m]
 
 
 @dataclass(frozen=True)
@@ -35,11 +43,13 @@ class Placement:
         name: candidate name.
         sockets: socket name -> (3,) centre in the base frame [m].
         distances: known centre-to-centre distances ``(socket_a, socket_b, metres)``.
+        source: the candidates file it was read from ("" when generated), for refusals naming its field.
     """
 
     name: str
     sockets: dict[str, np.ndarray]
     distances: tuple[tuple[str, str, float], ...] = ()
+    source: str = ""
 
     @property
     def centre(self) -> np.ndarray:
@@ -76,6 +86,7 @@ def read_placements(path: str | Path) -> list[Placement]:
             raise CandidateError(f"{where}.sockets': expected a non-empty mapping name -> [x, y, z] [m]")
         else:
             sockets = {str(k): _point(v, f"{where}.sockets.{k}'") for k, v in entry["sockets"].items()}
+        _separated(sockets, where)
         for socket in sockets:
             if socket in seen:
                 raise CandidateError(f"{where}.sockets.{socket}': socket name used by another candidate")
@@ -93,9 +104,24 @@ def read_placements(path: str | Path) -> list[Placement]:
                 raise CandidateError(f"{at}: {a!r} and {b!r} must be two sockets of this candidate")
             if not isinstance(value, (int, float)) or not 0.0 < float(value) <= 10.0:
                 raise CandidateError(f"{at}: the distance must be in (0, 10] m, got {value!r}")
+            apart = float(np.linalg.norm(sockets[a] - sockets[b]))
+            if abs(apart - value) > max(DISTANCE_SHARE * min(apart, value), DISTANCE_SLACK):
+                raise CandidateError(f"{at}: {a} - {b} is {value * 1e3:.4g} mm here, but their positions are "
+                                     f"{apart * 1e3:.4g} mm apart (a typo in one of them?)")
             distances.append((a, b, float(value)))
-        out.append(Placement(str(name), sockets, tuple(distances)))
+        out.append(Placement(str(name), sockets, tuple(distances), str(path)))
     return out
+
+
+def _separated(sockets: dict[str, np.ndarray], where: str) -> None:
+    """Refuse two sockets of one candidate closer than :data:`MIN_SOCKET_SEPARATION`."""
+    names = list(sockets)
+    for i, b in enumerate(names):
+        for a in names[:i]:
+            apart = float(np.linalg.norm(sockets[a] - sockets[b]))
+            if apart < MIN_SOCKET_SEPARATION:
+                raise CandidateError(f"{where}.sockets.{b}': {apart * 1e3:.3g} mm from socket {a}: sockets closer "
+                                     f"than {MIN_SOCKET_SEPARATION * 1e3:.0f} mm are one socket under two names")
 
 
 def _point(value, where: str) -> np.ndarray:
@@ -169,8 +195,12 @@ def plate_placements(layout: dict[str, np.ndarray], grid: str, orientations: int
     offsets = np.array([layout[s] for s in suffixes])
     distances = [(i, j, float(np.linalg.norm(offsets[i] - offsets[j])))
                  for i in range(len(suffixes)) for j in range(i + 1, len(suffixes))]
+    points = grid_candidates(grid)
+    if len(points) * orientations > MAX_CANDIDATES:
+        raise CandidateError(f"--plate-grid {grid!r}: field 'count': {len(points)} points x {orientations} "
+                             f"orientations make {len(points) * orientations} placements, at most {MAX_CANDIDATES}")
     out = []
-    for point in grid_candidates(grid):
+    for point in points:
         for k in range(orientations):
             angle = math.pi * k / orientations
             c, s = math.cos(angle), math.sin(angle)

@@ -36,6 +36,7 @@ from spherecal.correction.errors import SpherecalError
 from spherecal.correction.files.fixtures import FixtureSpec
 from spherecal.correction.files.samples import Dataset
 from spherecal.identification.prediction import Prediction, Workspace, predict_accuracy
+from spherecal.identification.selfcheck import MIN_SEPARATION
 from spherecal.identification.synthetic import fixture_samples, project_to_point
 
 from ..parallel import Outcome, run_tasks
@@ -353,7 +354,21 @@ def plan(
     return Plan(scored, best, search, motion, noise, samples, seconds_taken, outcome.workers)
 
 
+def _apart(group) -> bool:
+    """No two candidates of ``group`` closer than the self-check's :data:`MIN_SEPARATION` (fixtures that close are
+    one socket under two names to the calibration, which refuses them)."""
+    points = [s.candidate.position for s in group]
+    return all(np.linalg.norm(points[i] - points[j]) >= MIN_SEPARATION
+               for i in range(len(points)) for j in range(i + 1, len(points)))
+
+
 def _search(model, usable, fixtures, noise, samples, workspace) -> tuple[FixtureSet, str]:
+    """The best ``fixtures`` of the ``usable`` surveys, at least :data:`MIN_SEPARATION` apart (a grid finer than
+    that chose three points 5 mm apart, which the calibration refuses).
+
+    Raises:
+        CandidateError: no such set.
+    """
     def value(group) -> float:
         try:
             names = tuple(s.candidate.name for s in group)
@@ -361,12 +376,20 @@ def _search(model, usable, fixtures, noise, samples, workspace) -> tuple[Fixture
         except SpherecalError:
             return math.inf
 
+    refusal = CandidateError(f"no {fixtures} of the {len(usable)} reachable candidates lie at least "
+                             f"{MIN_SEPARATION * 1e3:.0f} mm apart: fixtures closer than that are one socket under two "
+                             "names to the calibration (a coarser --grid, or candidates further apart)")
     if math.comb(len(usable), fixtures) <= EXHAUSTIVE_LIMIT:
-        group, search = min(itertools.combinations(usable, fixtures), key=value), "exhaustive"
+        groups = [g for g in itertools.combinations(usable, fixtures) if _apart(g)]
+        if not groups:
+            raise refusal
+        group, search = min(groups, key=value), "exhaustive"
     else:
         ranked = sorted((s for s in usable if s.alone is not None), key=lambda s: s.alone.mean)
         group, search = [ranked[0]] if ranked else [usable[0]], "greedy"
         while len(group) < fixtures:
-            options = [s for s in usable if s not in group]
+            options = [s for s in usable if s not in group and _apart([*group, s])]
+            if not options:
+                raise refusal
             group.append(min(options, key=lambda s: value([*group, s])))
     return choose_distances(model, list(group), noise, samples, workspace), search
