@@ -19,12 +19,12 @@ def _fit(start, data, spec, warm=None):  # as the workflow fits every candidate 
     return calibrate(start, data, spec, start=warm, check=False, prior=PRIOR)
 
 
-def _data(compliance, noise, seed):
+def _data(compliance, noise, seed, per_fixture=150):
     rng = np.random.default_rng(seed)
     truth = perturb(load_robot("panda"), rng)
     if compliance is not None:
         truth = with_compliance(truth, compliance)
-    dataset, spec = make_dataset(truth, per_fixture=150, rng=rng, noise=noise)
+    dataset, spec = make_dataset(truth, per_fixture=per_fixture, rng=rng, noise=noise)
     return truth, dataset, spec
 
 
@@ -121,7 +121,7 @@ def test_a_negative_compliance_is_named_and_a_positive_one_is_not():
     # term absorbs, and the user is told not to read it as a stiffness (MUKCa's Pandas fit c2 < 0)
     panda = with_compliance(load_robot("panda"), np.zeros(7))
     for sign, named in ((-1.0, True), (1.0, False)):
-        _, dataset, spec = _data(sign * C_TRUE, 1e-4, seed=12)
+        _, dataset, spec = _data(sign * C_TRUE, 1e-4, seed=12, per_fixture=80)
         result = calibrate(panda, dataset, spec)
         lines = [w for w in result.warnings if w.startswith("negative joint compliance")]
         assert bool(lines) == named, result.warnings
