@@ -318,10 +318,15 @@ def _of_this_arm(fixtures: list[FixtureSpread], dataset: Dataset) -> None:
 def remarks(report: SocketReport, calibrated: RobotModel) -> list[str]:
     """What a user must not miss, one line each: a calibration written with ``--force`` although its
     self-check found the data inconsistent, a calibrated file whose tool ``spherecal tool`` replaced (the samples
-    must then be of the new tool), a calibrated model worse than nominal on these samples, else a held-out spread
-    over :data:`BAND` x the predicted one."""
+    must then be of the new tool), a calibrated file without its ``calibration`` block (nothing says which sockets
+    trained it), a calibrated model worse than nominal on these samples, else a held-out spread over :data:`BAND` x
+    the predicted one."""
     forced = forced_calibration(calibrated)
     out = [forced] if forced else []
+    if "calibration" not in calibrated.extras:  # deleted by hand, or a robot file that was never calibrated here
+        out.append("the calibrated file has no 'calibration' block: nothing records which samples trained it, so every "
+                   "socket is counted as held out (one it was trained on looks better than a held-out one would) "
+                   "and there is no prediction to compare with")
     moved = float(np.linalg.norm(calibrated.tool - calibrated_tool(calibrated)))
     if moved > 0.0:  # a tool swap: the sockets' data must be of the new tool
         out.append(f"the calibrated file's tool was replaced by `spherecal tool` ({moved * 1e3:.1f} mm from the tool "
