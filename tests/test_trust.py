@@ -261,6 +261,24 @@ def test_validate_says_when_the_calibration_block_was_deleted(tmp_path, capsys) 
     _, err, _ = _validate(tmp_path, capsys, tmp_path / "train.csv", cal)  # with it: no such remark
     assert "no 'calibration' block" not in err
 
+
+@pytest.mark.parametrize("key, value", [("socket_noise_m", -1.0), ("joint_error_rad", float("nan")),
+                                        ("joint_error_length_rad", 1e308)])
+def test_a_hand_edited_prediction_record_is_named_not_used(tmp_path, capsys, key, value) -> None:
+    # a socket noise of -1 m printed a predicted spread of 1597 mm; NaN or 1e308 printed nan and overflow warnings
+    _, true, _, _, cal = _calibrated(tmp_path, capsys)
+    held, _ = make_dataset(true, per_fixture=30, rng=np.random.default_rng(9), noise=2e-4)
+    write_samples(tmp_path / "held.csv", held)
+    model = load_robot(cal)
+    block = model.extras["calibration"]
+    check = {**block["self_check"], "prediction": {**block["self_check"]["prediction"], key: value}}
+    save_robot(replace(model, extras={**model.extras, "calibration": {**block, "self_check": check}}),
+               tmp_path / "edited.yaml")
+    refused(["validate", "--nominal", "panda", "--calibrated", tmp_path / "edited.yaml", "--samples",
+             tmp_path / "held.csv"], tmp_path, capsys,
+            f"edited.yaml: field 'calibration.self_check.prediction.{key}': {value!r} is not what a calibration "
+            "records (expected a number")
+
 def test_validate_says_when_the_calibration_is_worse_than_nominal_or_was_forced(tmp_path, capsys) -> None:
     nominal, true, _, _, cal = _calibrated(tmp_path, capsys)
     held, _ = make_dataset(true, per_fixture=30, rng=np.random.default_rng(9), noise=2e-4)
