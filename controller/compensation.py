@@ -34,6 +34,7 @@ import numpy as np
 
 from spherecal.correction import RobotModel, tool_point, tool_pose
 from spherecal.correction.errors import SpherecalError
+from spherecal.correction.files.samples import HARD_MARGIN
 
 from .ik import UnreachableError, ik
 
@@ -162,6 +163,27 @@ def _check_difference(nominal: RobotModel, calibrated: RobotModel, q: np.ndarray
         )
 
 
+def _seed(q: np.ndarray, model: RobotModel, field: str) -> np.ndarray:
+    """(n,) start joint angles [rad] as floats; a wrong shape, a NaN/inf angle (a joint reading lost on the way)
+    or one more than a quarter turn (:data:`~spherecal.correction.files.samples.HARD_MARGIN`) outside the limits of
+    a joint that has limits (another arm's reading, or degrees) raises, naming the joint, instead of an IK started
+    nowhere ("misses by nan mm") or silently from the nearest limit."""
+    q, n = np.asarray(q, dtype=float), model.n_joints
+    if q.shape != (n,):
+        raise ModelMismatchError(f"{field}: expected {n} joint angles, got shape {q.shape}")
+    bad = np.flatnonzero(~np.isfinite(q))
+    if bad.size:
+        raise SpherecalError(f"{field}: joint {bad[0] + 1} is {q[bad[0]]} (expected {n} finite joint angles [rad])")
+    excess = np.maximum(model.lower - q, q - model.upper)
+    far = np.flatnonzero((excess > HARD_MARGIN) & ~model.full_turn)
+    if far.size:
+        i = far[0]
+        raise SpherecalError(f"{field}: joint {i + 1} is {q[i]:.6g} rad, {excess[i]:.3g} rad outside its limits "
+                             f"[{model.lower[i]:.6g}, {model.upper[i]:.6g}] of {model.name} (more than a quarter "
+                             "turn: a reading of another arm, or degrees?)")
+    return q
+
+
 def _target(target: np.ndarray, orientation: np.ndarray | None) -> tuple[np.ndarray, np.ndarray | None]:
     target = np.asarray(target, dtype=float)
     if target.shape != (3,) or not np.all(np.isfinite(target)):
@@ -272,12 +294,11 @@ def corrected_ik(
 
     Raises:
         ModelMismatchError: ``calibrated`` is not a calibration of ``nominal``.
+        SpherecalError: a NaN or infinite target coordinate, a NaN, infinite or far out of range start angle (named).
         UnreachableError: no joint angles reach the target (outside the workspace).
     """
     target, orientation = _target(target, orientation)
-    q0 = np.asarray(q0, dtype=float)
-    if q0.shape != (calibrated.n_joints,):
-        raise ModelMismatchError(f"q0: expected {calibrated.n_joints} joint angles, got shape {q0.shape}")
+    q0 = _seed(q0, calibrated, "q0")
     if nominal is not None:
         check_models(nominal, calibrated)
         _check_difference(nominal, calibrated, q0, "calibrated model")
@@ -327,15 +348,14 @@ def compensate(
     Raises:
         ModelMismatchError: the calibrated model is of another robot (joint count, convention,
             limits) or differs from the nominal one by more than :data:`MAX_MODEL_DIFFERENCE`.
+        SpherecalError: a NaN or infinite target coordinate, a NaN, infinite or far out of range seed angle (named).
         UnreachableError: the nominal controller cannot reach a command (target outside the
             workspace).
         CompensationError: (``strict`` only) the residual is still above ``tol`` at the end.
     """
     target, orientation = _target(target, orientation)
     check_models(nominal, calibrated)
-    q_seed = np.asarray(q_seed, dtype=float)
-    if q_seed.shape != (nominal.n_joints,):
-        raise ModelMismatchError(f"q_seed: expected {nominal.n_joints} joint angles, got shape {q_seed.shape}")
+    q_seed = _seed(q_seed, nominal, "q_seed")
     if max_iter < 0:
         raise SpherecalError(f"max_iter: expected >= 0 controller evaluations, got {max_iter}")
     _check_difference(nominal, calibrated, q_seed, "calibrated model")

@@ -5,7 +5,9 @@
   joint-side terms (compliance, ...) is written as its best rigid approximation (:mod:`.rigid_fit`), and
   :attr:`Export.notes` says how much that loses.
 * ``mjcf``: the controller's plant (:func:`controller.plant.build_mjcf`; elastic joints kept as flexible
-  hinges): bodies ``link0..n``, hinges ``joint1..n``, site ``tool``.
+  hinges): bodies ``link0..n``, hinges ``joint1..n``, site ``tool``. A hinge's angle is the recorded one and a
+  spring cannot push (:func:`mjcf_lost_terms`): a model with a joint-angle scale or a negative compliance is
+  written as its best rigid fit, as for a URDF, and :attr:`Export.notes` says how much that loses.
 * ``yaml``: the robot file, every term kept.
 """
 
@@ -18,6 +20,7 @@ from pathlib import Path
 import numpy as np
 
 from spherecal.correction import DatasetError, RobotModel, dump_robot, read_samples
+from spherecal.correction.elastic import compliance_of
 from spherecal.correction.files.provenance import comment_block, matches_record, provenance
 from spherecal.correction.files.text_input import xml_bytes
 from spherecal.correction.files.urdf_into import urdf_into
@@ -28,6 +31,7 @@ from spherecal.correction.files.urdf_write import (
     robot_to_urdf,
     xml_comment,
 )
+from spherecal.correction.scale import scale_of
 
 from .rigid_fit import RigidFit, joint_side_terms, rigid_approximation
 
@@ -101,6 +105,15 @@ def recorded_configurations(model: RobotModel, samples: str | os.PathLike | None
     return q, f"{len(q)} recorded configurations from {path} (the calibration's samples)"
 
 
+def mjcf_lost_terms(model: RobotModel) -> tuple[str, ...]:
+    """Names of the joint-side parameters an MJCF hinge cannot carry: a non-zero joint-angle scale ``s{i}`` (the
+    hinge's angle is the recorded one, not ``(1 + s) q``) and a negative compliance ``c{i}`` (a spring of negative
+    stiffness; :func:`controller.plant.build_mjcf` leaves such a joint rigid). Empty: the MJCF is the whole model."""
+    scale, compliance = scale_of(model), compliance_of(model)
+    return (tuple(f"s{i + 1}" for i in np.flatnonzero(scale))
+            + tuple(f"c{i + 1}" for i in np.flatnonzero(compliance < 0)))
+
+
 def export_model(model: RobotModel, output_format: str, header: str = "", prefix: str | None = None,
                  effort: list[float] | None = None, velocity: list[float] | None = None,
                  into: tuple[str, str] | None = None, samples: str | os.PathLike | None = None,
@@ -135,7 +148,14 @@ def export_model(model: RobotModel, output_format: str, header: str = "", prefix
         from spherecal.controller.plant import build_mjcf  # mujoco: the plant module imports it
 
         comments = [xml_comment(header)] if header.strip() else []
-        return Export("\n".join(comments + [provenance_comment(model), build_mjcf(model)]))
+        lost = mjcf_lost_terms(model)
+        if not lost:
+            return Export("\n".join(comments + [provenance_comment(model), build_mjcf(model)]))
+        recorded, where = recorded_configurations(model, None, folder)
+        fit = rigid_approximation(model, recorded, seed=seed)
+        notes = (fit.summary("MJCF") + f" (a hinge turns by the recorded angle and its spring cannot push: "
+                 f"{', '.join(lost)})", f"rigid fit: {where}")
+        return Export("\n".join(comments + [provenance_comment(model), build_mjcf(fit.model)]), notes, fit)
     if into is not None:
         for option, value in (("--prefix", prefix), ("--effort", effort), ("--velocity", velocity)):
             if value is not None:

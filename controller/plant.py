@@ -139,7 +139,9 @@ def build_mjcf(
             lines.append(f'{indent}<geom type="capsule" size="0.025" fromto="0 0 0 {_vec(pos)}"/>')
         placement = f'pos="{_vec(pos)}" quat="{_vec(_quat(rotation))}"'
         hinge = f'pos="{_vec(joint_pos)}" axis="{_vec(axis)}"'
-        motor = f'<joint name="joint{i + 1}" {hinge} range="{_num(model.lower[i])} {_num(model.upper[i])}"/>'
+        # a joint of a whole turn (URDF "continuous") has no range: autolimits leaves it unlimited, as on the arm
+        limits = "" if model.full_turn[i] else f' range="{_num(model.lower[i])} {_num(model.upper[i])}"'
+        motor = f'<joint name="joint{i + 1}" {hinge}{limits}/>'
         if stiffness[i] > 0:
             lines.append(f'{indent}<body name="rotor{i + 1}" {placement} gravcomp="1">')
             lines.append(f'{indent}  <inertial pos="0 0 0" mass="{_num(ROTOR_MASS)}" '

@@ -71,14 +71,17 @@ class RigidFit:
     full_range_rms: float = 0.0
     dropped_full_range_rms: float = 0.0
 
-    def summary(self) -> str:
-        """One line: what the rigid approximation loses against the full model, in mm."""
+    def summary(self, output_format: str = "URDF") -> str:
+        """One line: what the rigid approximation loses against the full model, in mm (``output_format``: the
+        document that cannot carry the terms, named in the line)."""
         if not self.terms:
-            return "the model is rigid: the URDF carries all of it"
+            return f"the model is rigid: the {output_format} carries all of it"
         names = ", ".join(self.terms)
         where = (f"within {SPREAD:g} rad of the {self.recorded} recorded ones" if self.recorded
                  else "uniform in the joint limits")
-        return (f"a URDF cannot carry {names}: wrote the best rigid fit to the full model; it differs from it by "
+        article = "an" if output_format[0] in "AEFHILMNORSX" else "a"  # an MJCF, a URDF
+        return (f"{article} {output_format} cannot carry {names}: wrote the best rigid fit to the full model; "
+                f"it differs from it by "
                 f"{self.workspace_rms * 1e3:.3f} mm rms (max {self.workspace_max * 1e3:.3f} mm) over "
                 f"{self.workspace} configurations {where} (dropping the terms: "
                 f"{self.dropped_workspace_rms * 1e3:.3f} mm), {self.full_range_rms * 1e3:.3f} mm over the whole "

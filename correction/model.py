@@ -25,6 +25,10 @@ def _frozen_array(values: Any, shape: tuple[int, ...], name: str) -> np.ndarray:
     return array
 
 
+#: Tolerance [rad] on a span of exactly one turn (:attr:`RobotModel.full_turn`).
+FULL_TURN_TOL = 1e-9
+
+
 @dataclass(frozen=True, eq=False)
 class RobotModel:
     """DH parameters, joint limits, tool point and base placement of a serial arm.
@@ -98,6 +102,13 @@ class RobotModel:
     def n_joints(self) -> int:
         """Number of joints ``n``."""
         return int(self.a.size)
+
+    @property
+    def full_turn(self) -> np.ndarray:
+        """(n,) bool: the joints whose limits span exactly one turn, as a URDF ``continuous`` joint is read
+        (``[-pi, pi]``): they turn freely and an export writes them without limits (MJCF) or as ``continuous``
+        (URDF). A joint limited to more than a turn (a UR arm's +-2 pi) keeps its limits."""
+        return np.abs(np.asarray(self.upper) - np.asarray(self.lower) - 2 * np.pi) <= FULL_TURN_TOL
 
     @property
     def chain_length(self) -> float:

@@ -318,3 +318,19 @@ def test_an_output_in_a_symbolic_link_loop_is_one_line(files, capsys, monkeypatc
     monkeypatch.chdir(files)
     (files / "loop.yaml").symlink_to(files / "loop.yaml")
     refused(argv, files, capsys, "loop.yaml: field '--")
+
+
+def test_an_output_inside_the_installed_package_is_refused_before_any_work(files, capsys, monkeypatch) -> None:
+    # demo, campaign and export wrote into the package's own folders (exit 0): files mixed into the code
+    import spherecal.controller as controller_package
+    import spherecal.correction as correction_package
+
+    package = Path(controller_package.__file__).parent
+    expected = f"is inside the installed spherecal package ({package.resolve()})"
+    refused(["demo", "--out", package / "demo_out", "--source", "synthetic"], package, capsys, expected)
+    refused(["campaign", "--out", package / "campaign"], package, capsys, expected)
+    refused(["export", files / "robot.yaml", "--format", "yaml", "--out", package / "cal.yaml"], package, capsys,
+            expected)
+    monkeypatch.chdir(Path(correction_package.__file__).parent)  # a relative name, from inside the package
+    refused(["export", files / "robot.yaml", "--format", "urdf", "--out", "cal.urdf"], package, capsys,
+            "cal.urdf: field '--out': is inside the installed spherecal package")

@@ -246,6 +246,39 @@ def test_validate_knows_training_samples_by_content_not_by_name(tmp_path, capsys
     assert not report["fixtures"]["elsewhere"]["held_out"] and "elsewhere (fit)" in printed
 
 
+
+def test_validate_says_when_the_calibration_block_was_deleted(tmp_path, capsys) -> None:
+    # a hand edit deleting the block: the training samples passed as held out, exit 0 and no word
+    _, _, dataset, _, cal = _calibrated(tmp_path, capsys)
+    write_samples(tmp_path / "train.csv", dataset)
+    model = load_robot(cal)
+    save_robot(replace(model, extras={k: v for k, v in model.extras.items() if k != "calibration"}),
+               tmp_path / "bare.yaml")
+    _, err, report = _validate(tmp_path, capsys, tmp_path / "train.csv", tmp_path / "bare.yaml")
+    assert err.count("\n") == 1 and "warning: the calibrated file has no 'calibration' block: nothing records which " \
+        "samples trained it, so every socket is counted as held out" in err
+    assert all(f["held_out"] for f in report["fixtures"].values())
+    _, err, _ = _validate(tmp_path, capsys, tmp_path / "train.csv", cal)  # with it: no such remark
+    assert "no 'calibration' block" not in err
+
+
+@pytest.mark.parametrize("key, value", [("socket_noise_m", -1.0), ("joint_error_rad", float("nan")),
+                                        ("joint_error_length_rad", 1e308)])
+def test_a_hand_edited_prediction_record_is_named_not_used(tmp_path, capsys, key, value) -> None:
+    # a socket noise of -1 m printed a predicted spread of 1597 mm; NaN or 1e308 printed nan and overflow warnings
+    _, true, _, _, cal = _calibrated(tmp_path, capsys)
+    held, _ = make_dataset(true, per_fixture=30, rng=np.random.default_rng(9), noise=2e-4)
+    write_samples(tmp_path / "held.csv", held)
+    model = load_robot(cal)
+    block = model.extras["calibration"]
+    check = {**block["self_check"], "prediction": {**block["self_check"]["prediction"], key: value}}
+    save_robot(replace(model, extras={**model.extras, "calibration": {**block, "self_check": check}}),
+               tmp_path / "edited.yaml")
+    refused(["validate", "--nominal", "panda", "--calibrated", tmp_path / "edited.yaml", "--samples",
+             tmp_path / "held.csv"], tmp_path, capsys,
+            f"edited.yaml: field 'calibration.self_check.prediction.{key}': {value!r} is not what a calibration "
+            "records (expected a number")
+
 def test_validate_says_when_the_calibration_is_worse_than_nominal_or_was_forced(tmp_path, capsys) -> None:
     nominal, true, _, _, cal = _calibrated(tmp_path, capsys)
     held, _ = make_dataset(true, per_fixture=30, rng=np.random.default_rng(9), noise=2e-4)

@@ -27,7 +27,7 @@ import numpy as np
 
 from spherecal.correction import RobotModel, tool_point
 from spherecal.correction.files.fixtures import FixtureSpec
-from spherecal.correction.files.robot_file import forced_calibration
+from spherecal.correction.files.robot_file import RobotFileError, forced_calibration
 from spherecal.correction.files.samples import Dataset, DatasetError, configuration_hashes, configurations_digest
 from spherecal.correction.tool import calibrated_tool
 from spherecal.identification.joint_error import LENGTH
@@ -230,24 +230,48 @@ def fitted_fixtures(model: RobotModel, dataset: Dataset | None = None) -> set[st
     return set(used) if isinstance(used, dict) else set()
 
 
-def recorded_prediction(model: RobotModel) -> HeldOut | None:
+#: Largest socket noise [m], unmodelled joint-angle error [rad], correlation length [rad] and parameter variance
+#: [m^2 or rad^2] a prediction record may hold: beyond, the number was not written by a calibration.
+RECORD_BOUNDS = {"noise": (0.1, "m"), "joint_error": (0.1, "rad"), "length": (1e3, "rad"),
+                 "variance": (1.0, "m^2, rad^2")}
+
+
+def recorded_prediction(model: RobotModel, source: str = "calibrated file") -> HeldOut | None:
     """What the calibrated file predicts at sockets it did not see (its self-check's ``prediction`` record): the
     parameter covariance (``R R^T`` over every parameter of ``model``, its samples' part at the socket's noise, with
     the bias of the arm's unmodelled joint-angle error), the socket's own noise [m] (std
     per axis; ``noise_m`` in files written before it was recorded) and that joint-angle error [rad]; None when it
-    records none."""
+    records none (or not in a form this version reads).
+
+    Raises:
+        RobotFileError: a recorded number that no calibration writes (negative, NaN/inf, or beyond
+            :data:`RECORD_BOUNDS`: a hand edit), one line naming ``source`` and the field; it printed a predicted
+            spread of 1597 mm for a socket noise of -1 m, or NaN and overflow warnings.
+    """
     block = model.extras.get("calibration")
     check = block.get("self_check") if isinstance(block, dict) else None
     record = check.get("prediction") if isinstance(check, dict) else None
     try:
         names = list(record["parameters"])
         covariance = np.asarray(record["covariance"], dtype=float).reshape(len(names), len(names))
-        noise = float(record.get("socket_noise_m", record["noise_m"]))
+        noise_key = "socket_noise_m" if "socket_noise_m" in record else "noise_m"
+        noise = float(record[noise_key])
         joint_error = float(record.get("joint_error_rad", 0.0))
         length = float(record.get("joint_error_length_rad", LENGTH))
         index = [model.param_names.index(n) for n in names]
     except (TypeError, KeyError, ValueError):
         return None
+    field = f"{source}: field 'calibration.self_check.prediction."
+    for key, value, kind in ((noise_key, noise, "noise"), ("joint_error_rad", joint_error, "joint_error"),
+                             ("joint_error_length_rad", length, "length")):
+        bound, unit = RECORD_BOUNDS[kind]
+        if not (0.0 <= value <= bound) or (kind == "length" and value == 0.0):
+            raise RobotFileError(f"{field}{key}': {value!r} is not what a calibration records (expected a number "
+                                 f"{'above' if kind == 'length' else 'from'} 0 to {bound:g} {unit})")
+    variances, largest = np.diag(covariance), RECORD_BOUNDS["variance"][0]
+    if not np.all(np.isfinite(covariance)) or not np.all((variances >= 0) & (variances <= largest)):
+        raise RobotFileError(f"{field}covariance': not a covariance (expected finite numbers with a diagonal from 0 "
+                             f"to {RECORD_BOUNDS['variance'][0]:g} {RECORD_BOUNDS['variance'][1]})")
     values, vectors = np.linalg.eigh((covariance + covariance.T) / 2)
     root = np.zeros((model.n_params, len(names)))
     root[index] = vectors * np.sqrt(np.clip(values, 0.0, None))
@@ -318,10 +342,15 @@ def _of_this_arm(fixtures: list[FixtureSpread], dataset: Dataset) -> None:
 def remarks(report: SocketReport, calibrated: RobotModel) -> list[str]:
     """What a user must not miss, one line each: a calibration written with ``--force`` although its
     self-check found the data inconsistent, a calibrated file whose tool ``spherecal tool`` replaced (the samples
-    must then be of the new tool), a calibrated model worse than nominal on these samples, else a held-out spread
-    over :data:`BAND` x the predicted one."""
+    must then be of the new tool), a calibrated file without its ``calibration`` block (nothing says which sockets
+    trained it), a calibrated model worse than nominal on these samples, else a held-out spread over :data:`BAND` x
+    the predicted one."""
     forced = forced_calibration(calibrated)
     out = [forced] if forced else []
+    if "calibration" not in calibrated.extras:  # deleted by hand, or a robot file that was never calibrated here
+        out.append("the calibrated file has no 'calibration' block: nothing records which samples trained it, so every "
+                   "socket is counted as held out (one it was trained on looks better than a held-out one would) "
+                   "and there is no prediction to compare with")
     moved = float(np.linalg.norm(calibrated.tool - calibrated_tool(calibrated)))
     if moved > 0.0:  # a tool swap: the sockets' data must be of the new tool
         out.append(f"the calibrated file's tool was replaced by `spherecal tool` ({moved * 1e3:.1f} mm from the tool "

@@ -19,6 +19,7 @@ Inputs are compared as files (links resolved, ``os.path.samefile``), never as st
 from __future__ import annotations
 
 import os
+import sys
 import tempfile
 from collections.abc import Iterable, Mapping
 from pathlib import Path
@@ -71,8 +72,25 @@ def _inside(path: Path, folder: Path) -> bool:
         return False
 
 
+#: The packages whose folders hold spherecal's code (looked up in ``sys.modules``, never imported from here).
+_PACKAGES = ("spherecal", "spherecal.identification", "spherecal.controller", "spherecal.validation")
+
+
+def _refuse_package_folder(path: Path, option: str, shown: Path | None = None) -> None:
+    """Refuse an output inside the installed package's code (``--out`` given as a folder of the package, or a
+    path relative to it): a file written there is mixed into the code and goes with the next upgrade."""
+    folders = [Path(__file__).resolve().parents[1]]  # spherecal.correction
+    for name in _PACKAGES:
+        folders += [Path(p) for p in getattr(sys.modules.get(name), "__path__", None) or ()]
+    for folder in folders:
+        if _inside(path, folder):
+            raise OutputError(f"{shown or path}: field '{option}': is inside the installed spherecal package "
+                              f"({folder}); write outputs to a folder of your own")
+
+
 def check_output(path: Path, option: str) -> None:
-    """Refuse an output file that is a folder, lies under a file, or whose folder cannot be written.
+    """Refuse an output file that is a folder, lies under a file or inside the installed package, or whose folder
+    cannot be written.
 
     Raises:
         OutputError: one line naming the option and the file.
@@ -80,6 +98,7 @@ def check_output(path: Path, option: str) -> None:
     if path.is_dir():
         raise OutputError(f"{path}: field '{option}': is a folder, expected a file name")
     refuse_special_file(path, option)
+    _refuse_package_folder(path, option)
     _check_parents(path, option)
 
 
@@ -93,6 +112,7 @@ def check_folder(path: PathLike, option: str) -> None:
     _refuse_link_loop(path, option)
     if path.exists() and not path.is_dir():
         raise OutputError(f"{path}: field '{option}': exists and is not a folder")
+    _refuse_package_folder(path / "_", option, shown=path)
     _check_parents(path / "_", option, shown=path)
 
 

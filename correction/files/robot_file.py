@@ -167,6 +167,10 @@ def _check_extras(extras: dict, n: int, source: str) -> None:
                            for v in values)):
             raise RobotFileError(f"{source}: field '{key}': expected a list of {n} finite numbers {unit}, "
                                  f"got {values!r}")
+    if "calibration" in extras and not isinstance(extras["calibration"], dict):
+        # validate reads which samples trained the model from this block: without it, they pass as held out
+        raise RobotFileError(f"{source}: field 'calibration': expected the mapping calibrate writes (or no such "
+                             f"key), got {type(extras['calibration']).__name__} {str(extras['calibration'])[:40]!r}")
     if "joint_names" in extras:
         names = extras["joint_names"]
         if (not isinstance(names, list) or len(names) != n

@@ -200,14 +200,13 @@ def robot_to_urdf(
     base = f'<origin xyz="{_triple(model.base_xyz)}" rpy="{_triple(model.base_rpy)}"/>'
     fixed(f"{p}base_joint", f"{p}base", f"{p}link0", base)
     for i in range(n):
-        lines.append(f"  <joint name={quoteattr(f'{p}joint{i + 1}')} type=\"revolute\">")
+        kind = "continuous" if model.full_turn[i] else "revolute"  # read back as [-pi, pi], written as it came
+        lines.append(f"  <joint name={quoteattr(f'{p}joint{i + 1}')} type=\"{kind}\">")
         lines.append(f"    <parent link={quoteattr(f'{p}link{i}')}/>\n    <child link={quoteattr(f'{p}link{i + 1}')}/>")
         lines.append(f"    {_origin(origins[i])}")
         lines.append('    <axis xyz="0 0 1"/>')
-        lines.append(
-            f'    <limit lower="{_f(model.lower[i])}" upper="{_f(model.upper[i])}" '
-            f'effort="{_f(effort[i])}" velocity="{_f(velocity[i])}"/>'
-        )
+        bounds = "" if model.full_turn[i] else f'lower="{_f(model.lower[i])}" upper="{_f(model.upper[i])}" '
+        lines.append(f'    <limit {bounds}effort="{_f(effort[i])}" velocity="{_f(velocity[i])}"/>')
         lines.append("  </joint>")
     tool = flange.copy()
     tool[:3, 3] = flange[:3, :3] @ model.tool + flange[:3, 3]

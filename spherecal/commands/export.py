@@ -16,7 +16,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     add_urdf_links(parser)
     parser.add_argument("--format", choices=FORMATS, required=True,
                         help="output format; urdf (kinematics only) holds the best rigid fit to a model with "
-                        "joint compliance, mjcf and yaml the whole model")
+                        "joint compliance, mjcf the whole model (the rigid fit of one with a joint-angle scale or a "
+                        "negative compliance, which a hinge cannot carry), yaml the whole model")
     parser.add_argument("--out", required=True, metavar="FILE", help="output file (written atomically)")
     parser.add_argument(
         "--into",

@@ -61,7 +61,7 @@ def run_sockets(args: argparse.Namespace, models: dict[str, RobotModel], outputs
         spec.check_against(dataset)
     calibrated = models["calibrated"]
     report = socket_validation(models, dataset, spec, fitted_fixtures(calibrated, dataset),
-                               recorded_prediction(calibrated))
+                               recorded_prediction(calibrated, args.calibrated))
     print(report.format())
     for remark in remarks(report, calibrated):
         warnings.warn(remark, stacklevel=1)

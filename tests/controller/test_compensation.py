@@ -202,3 +202,18 @@ def test_bad_arguments_are_one_line_errors(robots, call, message):
     nominal, calibrated = robots[:2]
     with pytest.raises(SpherecalError, match=message):
         call(nominal, calibrated, np.array([0.1, -0.5, 0.2, -2.0, 0.1, 1.6, 0.3]))
+
+
+@pytest.mark.parametrize("bad", [np.nan, np.inf, "degrees"])
+def test_a_lost_joint_reading_in_the_seed_is_named_not_an_ik_from_nowhere(robots, bad):
+    # a NaN seed made the IK "miss by nan mm" (UnreachableError of a reachable target); an inf one was clipped
+    # to the limits and answered with RuntimeWarnings, as if the arm stood there
+    nominal, calibrated, _ = robots
+    q_seed = nominal.lower + 0.5 * (nominal.upper - nominal.lower)
+    target = tool_point(nominal, q_seed)
+    q_seed[2] = np.rad2deg(q_seed[2] + 0.1) if bad == "degrees" else bad  # 0.1 rad: 5.7 "rad", far past 2.9
+    expected = "-?[0-9.]+ rad, [0-9.]+ rad outside its limits" if bad == "degrees" else rf"{bad} \(expected 7 finite"
+    for call in (lambda: corrected_ik(calibrated, target, q_seed, nominal=nominal),
+                 lambda: compensate(target, nominal, calibrated, q_seed)):
+        with pytest.raises(SpherecalError, match=rf"q(0|_seed): joint 3 is {expected}"):
+            call()

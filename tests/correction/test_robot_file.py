@@ -154,3 +154,13 @@ def test_an_xml_file_read_as_a_robot_file_says_what_it_holds(tmp_path, name, tex
     with pytest.raises(RobotFileError, match=re.escape(expected)) as error:
         load_robot(tmp_path / name)
     assert "\n" not in str(error.value)
+
+
+@pytest.mark.parametrize("block", ["deleted", ["a2"], 3])
+def test_a_calibration_block_that_is_not_a_mapping_is_named(tmp_path, panda, block) -> None:
+    # it was kept unread: validate then took the training sockets for held-out ones (no record of them)
+    data = yaml.safe_load(Path(save_robot(panda, tmp_path / "cal.yaml")).read_text())
+    data["calibration"] = block
+    (tmp_path / "bad.yaml").write_text(yaml.safe_dump(data))
+    with pytest.raises(RobotFileError, match=r"bad.yaml: field 'calibration': expected the mapping calibrate writes"):
+        load_robot(tmp_path / "bad.yaml")
