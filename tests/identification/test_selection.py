@@ -122,7 +122,7 @@ def test_a_negative_compliance_is_named_and_a_positive_one_is_not():
     panda = with_compliance(load_robot("panda"), np.zeros(7))
     for sign, named in ((-1.0, True), (1.0, False)):
         _, dataset, spec = _data(sign * C_TRUE, 1e-4, seed=12, per_fixture=80)
-        result = calibrate(panda, dataset, spec)
+        result = calibrate(panda, dataset, spec, check=False)  # the warning does not depend on the self-check
         lines = [w for w in result.warnings if w.startswith("negative joint compliance")]
         assert bool(lines) == named, result.warnings
         if named:
