@@ -295,14 +295,36 @@ def corrected_ik(
     Raises:
         ModelMismatchError: ``calibrated`` is not a calibration of ``nominal``.
         SpherecalError: a NaN or infinite target coordinate, a NaN, infinite or far out of range start angle (named).
-        UnreachableError: no joint angles reach the target (outside the workspace).
+        UnreachableError: no joint angles reach the target from the seed nor from starts near it (outside the
+            workspace).
     """
     target, orientation = _target(target, orientation)
     q0 = _seed(q0, calibrated, "q0")
     if nominal is not None:
         check_models(nominal, calibrated)
         _check_difference(nominal, calibrated, q0, "calibrated model")
-    return nominal_ik_controller(calibrated, target, q0, orientation)
+    try:
+        return nominal_ik_controller(calibrated, target, q0, orientation)
+    except UnreachableError:
+        nearby = _nearby_ik(calibrated, target, np.asarray(q0, dtype=float), orientation)
+        if nearby is None:
+            raise
+        return nearby
+
+
+#: :func:`corrected_ik`'s nearby starts when the seed itself stalls: how many, and their spread per joint [rad].
+NEARBY_STARTS, NEARBY_SPREAD = 16, 0.3
+
+
+def _nearby_ik(model: RobotModel, target: np.ndarray, q0: np.ndarray, orientation: np.ndarray | None):
+    """The converged IK nearest ``q0`` (n,) [rad] from :data:`NEARBY_STARTS` starts around it (seeded, inside the
+    limits), or None. A seed at a singularity held by a joint limit (the Panda stretched out, q4 at its -0.07 rad
+    limit) stalls the Gauss-Newton steps short of a target the arm reaches (92 mm off); starts near it find the
+    configuration near the seed, not a far branch a uniform restart would."""
+    rng = np.random.default_rng(0)
+    starts = np.clip(q0 + rng.normal(0.0, NEARBY_SPREAD, (NEARBY_STARTS, q0.size)), model.lower, model.upper)
+    found = [r.q for r in (ik(model, target, s, orientation=orientation) for s in starts) if r.converged]
+    return min(found, key=lambda q: float(np.linalg.norm(q - q0))) if found else None
 
 
 def compensate(

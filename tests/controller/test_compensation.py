@@ -15,7 +15,7 @@ from spherecal.controller.compensation import (
     nominal_ik_controller,
 )
 from spherecal.controller.ik import UnreachableError
-from spherecal.correction import RobotModel, perturb, to_standard, tool_point, tool_pose
+from spherecal.correction import RobotModel, load_robot, perturb, to_standard, tool_point, tool_pose
 from spherecal.correction.errors import SpherecalError
 
 
@@ -217,3 +217,17 @@ def test_a_lost_joint_reading_in_the_seed_is_named_not_an_ik_from_nowhere(robots
                  lambda: compensate(target, nominal, calibrated, q_seed)):
         with pytest.raises(SpherecalError, match=rf"q(0|_seed): joint 3 is {expected}"):
             call()
+
+
+def test_corrected_ik_from_a_stretched_out_seed_reaches_a_reachable_target():
+    # the Panda stretched out (q4 at its -0.07 rad limit, the rest 0) is a singular seed the Gauss-Newton steps stall
+    # at, 92 mm short of a target the arm reaches: the correction tries starts near the seed and returns the nearest
+    # converged configuration; a target out of the arm's reach is still refused
+    panda = load_robot("panda")
+    seed = np.array([0.0, 0.0, 0.0, -0.0698, 0.0, 0.0, 0.0])
+    target = tool_point(panda, np.array([0.0, -0.3, 0.0, -2.2, 0.0, 2.0, 0.8]))
+    q = corrected_ik(panda, target, seed)
+    assert np.linalg.norm(tool_point(panda, q) - target) < 1e-6
+    assert np.all(q >= panda.lower) and np.all(q <= panda.upper)
+    with pytest.raises(UnreachableError):
+        corrected_ik(panda, np.array([2.0, 0.0, 0.3]), seed)
