@@ -12,11 +12,15 @@ How the prediction is made (identification/prediction.py, identification/joint_e
 validation/sockets.py): the samples' residual is split by maximum likelihood over the space the fit leaves it into
 white noise (where the ball sits in its socket; at most the declared noise) and a joint-angle error per joint, a
 Gaussian process over joint space (length 1 rad) seen through the joint Jacobian, the arm's own error that no
-parameter describes (what lies beyond the declared noise counts as that error too). The calibration's parameter
+parameter describes (what lies beyond the declared noise counts as that error too); its std is read from the
+directions where the fit leaves the process visibly (at least 3 % of the most visible one: noise correlated in time
+is not taken for it), the white noise from every direction. The calibration's parameter
 error is that of its MAP estimate: the samples' noise through the fit, the arm's deviations (at the scale the
 judgement uses) through the prior rows, the biases of what it cannot see (the parameters the calibration left at
 nominal, the scale anchor), drawn from the prior spread times the scale the nominal model's error on the training
-sockets measures (above 1 too), and the bias the joint-angle error's absorbed part leaves.
+sockets measures (above 1 too), and the bias the joint-angle error's absorbed part leaves;
+less the parameter combinations no configuration of the nominal sees (validate reads the covariance through the
+calibrated model).
 For a held-out socket, the parameter error is propagated to the recorded configurations through the parameter
 Jacobian, the socket's own noise and a fresh draw of the joint-angle error are added, all less their mean over the
 socket, and the mean distance averaged over 200 draws.

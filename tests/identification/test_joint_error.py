@@ -109,3 +109,60 @@ def test_a_short_recording_records_a_joint_error_within_the_nominal_spread(tmp_p
     panda = load_robot("panda")
     bound = joint_error_bound(panda, read_samples(out / "samples.csv", panda))
     assert 0.0 < record["joint_error_rad"] <= 1.01 * bound < 0.01
+
+
+def _short_recording(seed: int, joint: float):
+    """MuJoCo self-motion as ``spherecal simulate --seconds 2 --per-fixture 50`` records it (compliance noise 0.3 mm
+    per axis, correlated over 0.05 s) at its three sockets, calibrated with ``calibrate``'s defaults, and two more
+    sockets held out; ``joint`` [rad]: a joint-angle error of the process added to every recorded angle (one draw).
+    Returns the recorded joint error [rad] and the held-out test MAE measured and predicted [m]."""
+    import warnings
+    from dataclasses import replace
+
+    from spherecal.controller.self_motion import SelfMotionSettings, collect_self_motion
+    from spherecal.correction import Dataset, perturb
+    from spherecal.correction.files.fixtures import FixtureSpec
+    from spherecal.identification.workflow import WorkflowOptions, run_workflow
+    from spherecal.validation.experiments.experiment import default_fixtures
+    from spherecal.validation.sockets import recorded_prediction, socket_validation
+
+    panda = load_robot("panda")
+    rng = np.random.default_rng(seed)
+    true = perturb(panda, rng, 1e-3, np.deg2rad(0.2), 1e-3)
+    train_at = default_fixtures()
+    held_at = {"Q1": np.array([0.4, 0.35, 0.3]), "Q2": np.array([0.3, -0.4, 0.45])}
+    run = collect_self_motion(true, panda, {**train_at, **held_at}, rng,
+                              SelfMotionSettings(seconds=2.0, samples=50, noise=3e-4))
+    data = run.dataset()
+    if joint:
+        root = field_root(data.q)
+        data = replace(data, q=data.q - joint * root @ np.random.default_rng(300 + seed).standard_normal(
+            (root.shape[1], data.q.shape[1])))
+    parts = []
+    for names in (tuple(train_at), tuple(held_at)):
+        part = data.select(np.flatnonzero(np.isin(data.labels, names)))
+        parts.append(Dataset(labels=part.labels, q=part.q, t=part.t, fixture_names=names))
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        calibrated = run_workflow(panda, parts[0], FixtureSpec(names=tuple(train_at)),
+                                  WorkflowOptions(force=True)).model
+    prediction = recorded_prediction(calibrated)
+    report = socket_validation({"nominal": panda, "calibrated": calibrated}, parts[1], prediction=prediction)
+    return prediction.joint_error, report.summary("calibrated")[0], report.predicted_summary()
+
+
+@pytest.mark.parametrize("seed", [0, 5])
+def test_time_correlated_noise_of_a_short_recording_is_not_taken_for_a_joint_angle_error(seed) -> None:
+    # no joint-angle error at all: the compliance noise's low frequencies over 2 s, in directions where the fit
+    # absorbs (next to) all of a smooth error, read 85 mrad per joint (1.8 and 1.0 mrad after the nominal's bound),
+    # and validate over-predicted the held-out sockets (measured / predicted 0.36-0.50 on bench/prediction_sim.py)
+    std, measured, predicted = _short_recording(seed, 0.0)
+    assert std < 5e-4, std
+    assert 0.5 < measured / predicted < 2.0, (measured, predicted)
+
+
+def test_a_joint_angle_error_under_a_short_recordings_noise_is_recorded_within_2x() -> None:
+    # the same recording with a 1 mrad joint-angle error (one draw over every socket): read 2.5 mrad before
+    std, measured, predicted = _short_recording(5, 1e-3)
+    assert 0.5e-3 < std < 2e-3, std
+    assert 0.5 < measured / predicted < 2.0, (measured, predicted)
