@@ -111,9 +111,30 @@ def _node_line(node: Any, *path: Any) -> int:
     return node.start_mark.line + 1
 
 
-def _plain_name(name: Any) -> Any:
-    """A fixture numbered in YAML (``1: {}``) is named ``"1"``, as in samples.csv; other keys unchanged."""
-    return str(name) if isinstance(name, int) and not isinstance(name, bool) else name
+def _written_name(node: Any) -> Any:
+    """The fixture name as the file writes it, as a samples.csv label would be: a plain scalar YAML 1.1 would
+    turn into another type (``01`` and ``0x1`` into 1, ``010`` into 8, ``1:30`` into 90, ``yes``/``no``/``on`` into
+    True/False, ``null`` into None, ``2024-01-01`` into a date) keeps its text, so ``1`` and ``01`` stay two
+    fixtures (they were one, the other silently dropped) and ``no`` stays ``no``. Other nodes: None."""
+    return node.value if isinstance(node, yaml.ScalarNode) else None
+
+
+def _name_problem(name: str) -> str | None:
+    """Why ``name`` cannot be a fixture name a samples.csv label can match, or None."""
+    if not name.strip() or "," in name:
+        return "must be a non-empty name without commas"
+    if name != name.strip():
+        return "has spaces around it (samples.csv labels are read without them)"
+    if not name.isprintable():
+        return "holds a control character (a NUL byte, a tab or a line end)"
+    if name.startswith("#"):
+        return "starts with '#' (a samples.csv row starting with '#' is a comment)"
+    return None
+
+
+def _value(mapping: yaml.MappingNode, key: str) -> Any:
+    """The value node of ``key`` in a mapping node (the last, as the constructed mapping keeps)."""
+    return [value for k, value in mapping.value if getattr(k, "value", None) == key][-1]
 
 
 def read_fixtures(path: str | os.PathLike) -> FixtureSpec:
@@ -141,12 +162,22 @@ def read_fixtures(path: str | os.PathLike) -> FixtureSpec:
     fixtures = data.get("fixtures")
     if not isinstance(fixtures, dict) or not fixtures:
         raise fail("expected a non-empty mapping of fixture names", "fixtures")
-    fixtures = {_plain_name(name): entry for name, entry in fixtures.items()}
+    # the names as written (the constructed keys may have merged 1 and 01 into one), the entries from their nodes
+    constructor = yaml.constructor.SafeConstructor()
+    fixtures = {}
+    for key, value in _value(root, "fixtures").value:
+        name = _written_name(key)
+        problem = "is not a name" if not isinstance(name, str) else _name_problem(name)
+        if problem is None and name in fixtures:  # only a '<<' merge gives a name twice (duplicate keys are refused)
+            problem = "is given twice (a '<<' merge?)"
+        if problem:
+            shown = repr(name)[1:-1] if isinstance(name, str) else key.tag.rsplit(":", 1)[-1]
+            raise DatasetError(f"{path}: row {key.start_mark.line + 1}, field 'fixtures.{shown}': fixture name "
+                               f"{repr(name) if isinstance(name, str) else 'of type ' + shown} {problem}")
+        fixtures[name] = constructor.construct_object(value, deep=True)
     names: list[str] = []
     positions: dict[str, np.ndarray] = {}
     for name, entry in fixtures.items():
-        if not isinstance(name, str) or not name.strip() or "," in name:
-            raise fail(f"fixture name must be a non-empty string without commas, got {name!r}", "fixtures", name)
         names.append(name)
         entry = {} if entry is None else entry
         if not isinstance(entry, dict):
@@ -172,7 +203,8 @@ def read_fixtures(path: str | os.PathLike) -> FixtureSpec:
     for k, item in enumerate(raw):
         if not isinstance(item, list) or len(item) != 3:
             raise fail(f"expected [name, name, metres], got {item!r}", "distances", k)
-        a, b, value = _plain_name(item[0]), _plain_name(item[1]), item[2]
+        item_node = _value(root, "distances").value[k]
+        a, b, value = _written_name(item_node.value[0]), _written_name(item_node.value[1]), item[2]
         for j, name in enumerate((a, b)):
             if name not in fixtures:
                 raise fail(f"fixture {name!r} is not listed under 'fixtures'", "distances", k, j)

@@ -10,10 +10,15 @@ each of these in well under a second with one line naming the file, row and fiel
 - mappings and sequences nest at most :data:`MAX_DEPTH` deep;
 - the document, with every alias expanded, has at most :data:`MAX_NODES` nodes;
 - no mapping has the same key twice.
+
+Numbers in exponent notation without a point (``1e-3``, ``5E+2``), which YAML 1.2 and the tools that write it
+(ruamel.yaml, yaml-cpp, ROS parameter files) read as floats, are floats here too: PyYAML's YAML 1.1 rules
+made them strings, and a mass ``1e6`` or a distance ``1e-1`` was refused as "not a number".
 """
 
 from __future__ import annotations
 
+import re
 from typing import Any
 
 import yaml
@@ -35,7 +40,10 @@ class YamlError(SpherecalError):
 
 
 class _Loader(yaml.SafeLoader):
-    """SafeLoader that counts nesting while it composes (before any recursion can overflow)."""
+    """SafeLoader that counts nesting while it composes (before any recursion can overflow), with YAML 1.2's
+    floats in exponent notation without a point (``1e-3``)."""
+
+    yaml_implicit_resolvers = {key: list(value) for key, value in yaml.SafeLoader.yaml_implicit_resolvers.items()}
 
     def __init__(self, stream: str, source: str):
         super().__init__(stream)
@@ -51,6 +59,12 @@ class _Loader(yaml.SafeLoader):
             return super().compose_node(parent, index)
         finally:
             self._depth -= 1
+
+
+#: A float YAML 1.2 reads and YAML 1.1 does not: digits, an optional point, an exponent (``1e6``, ``-2.5E-3``).
+_EXPONENT_FLOAT = re.compile(r"^[-+]?(?:[0-9]+\.?[0-9]*|\.[0-9]+)[eE][-+]?[0-9]+$")
+for _first in "-+0123456789.":
+    _Loader.yaml_implicit_resolvers.setdefault(_first, []).insert(0, ("tag:yaml.org,2002:float", _EXPONENT_FLOAT))
 
 
 def _expanded_size(root: yaml.Node, source: str) -> None:
