@@ -32,6 +32,9 @@ GRAVITY = (0.0, 0.0, -9.81)
 
 #: Farthest a centre of mass may lie from its frame [m]: farther is a file in millimetres, not an arm.
 MAX_COM_DISTANCE = 10.0
+#: Most mass (links and payload) per cubic metre of the chain's length cubed [kg/m^3]: real arms carry 7-16
+#: (Panda, FR3, Gen3 lite, iiwa14) and a 4.7 t KUKA titan about 75; a Panda's masses in grams give 7900.
+MAX_MASS_DENSITY = 1000.0
 
 
 class InertialsError(SpherecalError):
@@ -40,19 +43,19 @@ class InertialsError(SpherecalError):
 
 def _entry(value: Any, where: str) -> tuple[float, np.ndarray]:
     if not isinstance(value, dict) or set(value) - {"mass", "com"} or "mass" not in value:
-        raise InertialsError(f"{where}: expected a mapping {{mass: kg, com: [x, y, z]}}, got {value!r}")
+        raise InertialsError(f"{where}': expected a mapping {{mass: kg, com: [x, y, z]}}, got {value!r}")
     mass = value["mass"]
     if isinstance(mass, bool) or not isinstance(mass, (int, float)) or not np.isfinite(mass) or mass < 0:
-        raise InertialsError(f"{where}.mass: expected a finite mass >= 0 [kg], got {mass!r}")
+        raise InertialsError(f"{where}.mass': expected a finite mass >= 0 [kg], got {mass!r}")
     com = value.get("com", [0.0, 0.0, 0.0])
     try:
         com_array = np.asarray(com, dtype=float)
     except (TypeError, ValueError):
         com_array = np.empty(0)
     if com_array.shape != (3,) or not np.all(np.isfinite(com_array)):
-        raise InertialsError(f"{where}.com: expected 3 finite numbers [m], got {com!r}")
+        raise InertialsError(f"{where}.com': expected 3 finite numbers [m], got {com!r}")
     if np.linalg.norm(com_array) > MAX_COM_DISTANCE:
-        raise InertialsError(f"{where}.com: {com!r} m is {np.linalg.norm(com_array):.4g} m from its frame, not "
+        raise InertialsError(f"{where}.com': {com!r} m is {np.linalg.norm(com_array):.4g} m from its frame, not "
                              f"physical (at most {MAX_COM_DISTANCE:g} m; the file is in metres)")
     return float(mass), com_array
 
@@ -78,15 +81,29 @@ def inertials_of(model: RobotModel, source: str | None = None) -> tuple[np.ndarr
         hint = " (link masses: --inertials FILE or an inertials block in the robot file)" if block is None else ""
         raise InertialsError(f"{where}: field 'inertials': expected a list of {n} {{mass, com}} entries, got "
                              f"{got}{hint}")
-    entries = [_entry(v, f"{where}: field 'inertials[{i}]'") for i, v in enumerate(block)]
+    entries = [_entry(v, f"{where}: field 'inertials[{i}]") for i, v in enumerate(block)]
     payload = model.extras.get("payload")
-    entries.append((0.0, np.zeros(3)) if payload is None else _entry(payload, f"{where}: field 'payload'"))
-    return np.array([m for m, _ in entries]), np.stack([c for _, c in entries])
+    entries.append((0.0, np.zeros(3)) if payload is None else _entry(payload, f"{where}: field 'payload"))
+    masses = np.array([m for m, _ in entries])
+    size = model.chain_length  # 0: a check of the entries alone (a robot file's block before its geometry is read)
+    if size > 0 and masses.sum() > MAX_MASS_DENSITY * size**3:  # grams for kilograms, or a payload of another scale
+        k = int(np.argmax(masses))
+        name = "payload" if k == n else f"inertials[{k}]"
+        raise InertialsError(f"{where}: field '{name}.mass': {masses.sum():.6g} kg in all for an arm of "
+                             f"{size:.3g} m of links, not physical (at most {MAX_MASS_DENSITY * size**3:.3g} kg; "
+                             f"the file is in kilograms)")
+    return masses, np.stack([c for _, c in entries])
 
 
 def has_inertials(model: RobotModel) -> bool:
     """True when ``model.extras`` carries an ``inertials`` block."""
     return "inertials" in model.extras
+
+
+def weighs_nothing(model: RobotModel) -> bool:
+    """True when ``model``'s inertials give every link and the payload 0 kg: gravity loads no joint, and a
+    compliance has nothing to be fitted against (an inertials file of zeros from another tool)."""
+    return has_inertials(model) and not inertials_of(model)[0].any()
 
 
 def gravity_torques(

@@ -62,7 +62,7 @@ import numpy as np
 from spherecal.correction import Dataset, FixtureSpec, RobotModel, geometric_part, tool_point
 from spherecal.correction.elastic import with_compliance
 from spherecal.correction.errors import SpherecalError
-from spherecal.correction.gravity import has_inertials
+from spherecal.correction.gravity import has_inertials, weighs_nothing
 from spherecal.correction.scale import with_scale
 
 from .problem import OUTLIER
@@ -129,7 +129,8 @@ def start_for(name: str, nominal: RobotModel) -> RobotModel:
 
 def candidates_for(nominal: RobotModel) -> tuple[str, ...]:
     """The candidates the robot file allows (the elastic ones need inertials)."""
-    return tuple(c for c in CANDIDATES if c not in NEEDS_INERTIALS or has_inertials(nominal))
+    return tuple(c for c in CANDIDATES
+                 if c not in NEEDS_INERTIALS or (has_inertials(nominal) and not weighs_nothing(nominal)))
 
 
 def information_criterion(result) -> float:
@@ -279,6 +280,11 @@ def select_model(requested: str, fit, nominal: RobotModel, dataset: Dataset, spe
             raise SpherecalError(f"{nominal.extras.get('source') or nominal.name}: field 'inertials': --model "
                                  f"{requested} needs the link masses ({nominal.name} has none and matches no embedded "
                                  "arm): give them with --inertials FILE or an inertials block in the robot file")
+        if requested in NEEDS_INERTIALS and weighs_nothing(nominal):
+            source = nominal.extras.get("inertials_source") or nominal.extras.get("source") or nominal.name
+            raise SpherecalError(f"{source}: field 'inertials': every link mass and the payload are 0 kg, so "
+                                 f"gravity loads no joint and --model {requested} has no compliance to fit (give the "
+                                 "link masses [kg], or --model dh)")
         return ModelSelection(requested, requested, "requested")
     clock = time.perf_counter()
     names = candidates_for(nominal)

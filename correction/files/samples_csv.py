@@ -38,6 +38,15 @@ def _parse_header(header: list[str], n: int, where: str) -> bool:
         if name in seen:
             raise DatasetError(f"{where}, field {name!r}: duplicate column")
         seen.add(name)
+    if len(names) == 1:
+        separator = next((sep for sep in (";", "\t", "|") if sep in names[0]), None)
+        if separator is not None:
+            raise DatasetError(f"{where}, field 'fixture': the columns are separated by {separator!r}, not commas "
+                               "(a spreadsheet's export in a European locale? samples.csv is comma-separated, with "
+                               "decimal points)")
+    if "" in names[1:]:
+        raise DatasetError(f"{where}, field 'column {names.index('', 1) + 1}': a column without a name (a comma at "
+                           "the end of each line?)")
     if not names or names[0] != "fixture":
         hint = ""
         if names and "fixture" not in names:  # a recording, a MUKCa hole file: not samples yet
@@ -50,6 +59,8 @@ def _parse_header(header: list[str], n: int, where: str) -> bool:
         if name != f"q{k + 1}":
             if name == "t":
                 raise DatasetError(f"{where}, field 't': the time column must come right after 'fixture'")
+            if name.lower() == f"q{k + 1}":
+                raise DatasetError(f"{where}, field {name!r}: joint columns are named in lower case, q1..q{n}")
             if not (name.startswith("q") and name[1:].isdigit()):
                 raise DatasetError(f"{where}, field {name!r}: unknown column (expected fixture[,t],q1..q{n})")
             raise DatasetError(f"{where}, field {name!r}: joint columns must be q1..q{n} in order")
@@ -176,6 +187,12 @@ class _Reader:
     def dataset(self) -> Dataset:
         if not self.values:
             raise DatasetError(f"{self.path}: row 2, field 'fixture': no samples after the header")
+        for name in self.names:  # a NUL byte or a control character: no fixtures.yaml name can match it
+            if not name.isprintable():
+                labels = np.concatenate(self.labels)
+                row = np.concatenate(self.lines)[int(np.argmax(labels == name))]
+                raise DatasetError(f"{self.path}: row {row}, field 'fixture': the fixture name {name!r} holds a "
+                                   "control character (a NUL byte? a file of another kind or a damaged copy)")
         self.excess.warn(str(self.path))  # one warning for the whole file, every joint past its limits
         data = np.concatenate(self.values) if len(self.values) > 1 else self.values[0]
         self.values.clear()  # the chunks are not kept beside the whole (peak memory)

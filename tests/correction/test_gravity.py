@@ -118,7 +118,7 @@ def test_bad_inertials_name_the_field():
         inertials_of(replace(panda, extras={}))
     bad = [dict(e) for e in panda.extras["inertials"]]
     bad[2] = {"mass": -1.0, "com": [0, 0, 0]}
-    with pytest.raises(InertialsError, match=r"'inertials\[2\]'.mass"):
+    with pytest.raises(InertialsError, match=r"'inertials\[2\].mass'"):
         inertials_of(replace(panda, extras={"inertials": bad}))
-    with pytest.raises(InertialsError, match="'payload'.com"):
+    with pytest.raises(InertialsError, match="'payload.com'"):
         inertials_of(replace(panda, extras={**panda.extras, "payload": {"mass": 1.0, "com": [0, 0]}}))

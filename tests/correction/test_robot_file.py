@@ -97,11 +97,11 @@ BAD_FILES = [
      r"field 'joint_names': 'j2' is named twice"),
     ("inertials count", lambda d: d["inertials"].pop(), r"field 'inertials': expected a list of 7 \{mass, com\} "
      r"entries, got 6 entries"),
-    ("inertials mass", lambda d: d["inertials"][2].update(mass=-1.0), r"field 'inertials\[2\]'.mass: expected a "
+    ("inertials mass", lambda d: d["inertials"][2].update(mass=-1.0), r"field 'inertials\[2\].mass': expected a "
      r"finite mass >= 0"),
     ("inertials millimetres", lambda d: d["inertials"][6].update(com=[10.5, -4.2, 61.6]),
-     r"field 'inertials\[6\]'.com: .* not physical \(at most 10 m; the file is in metres\)"),
-    ("payload", lambda d: d.update(payload={"mass": "lots"}), r"field 'payload'.mass: expected a finite mass"),
+     r"field 'inertials\[6\].com': .* not physical \(at most 10 m; the file is in metres\)"),
+    ("payload", lambda d: d.update(payload={"mass": "lots"}), r"field 'payload.mass': expected a finite mass"),
 ]
 
 

@@ -1,0 +1,115 @@
+"""Files from a user's own stack: fixtures.yaml, inertials and samples.csv as other tools write them.
+
+Each case once gave a silent wrong result or a misleading refusal; each is now read as written or refused in
+one line naming the file, row and field.
+"""
+
+from __future__ import annotations
+
+import re
+
+import numpy as np
+import pytest
+
+from spherecal.cli import main
+from spherecal.correction.files.fixtures import read_fixtures
+from spherecal.correction.files.inertials_file import with_inertials_file
+from spherecal.correction.files.samples import DatasetError
+from spherecal.correction.files.samples_csv import read_samples
+from spherecal.correction.gravity import InertialsError, inertials_of
+from tests.refusal import refused
+
+
+# ------------------------------------------------------------------------------------ fixtures.yaml
+@pytest.mark.parametrize(("names", "expected"), [
+    (["1", "01"], ["1", "01"]),  # YAML 1.1: both the integer 1, one fixture silently dropped
+    (["0x1", "1"], ["0x1", "1"]),
+    (["yes", "no"], ["yes", "no"]),  # True / False
+    (["on", "null"], ["on", "null"]),  # True / None
+    (["010", "1:30"], ["010", "1:30"]),  # octal 8, sexagesimal 90
+])
+def test_fixture_names_are_read_as_the_file_writes_them(tmp_path, names, expected) -> None:
+    path = tmp_path / "fixtures.yaml"
+    path.write_text("fixtures:\n" + "".join(f"  {name}: {{}}\n" for name in names)
+                    + f"distances:\n  - [{names[0]}, {names[1]}, 0.3]\n")
+    spec = read_fixtures(path)
+    assert list(spec.names) == expected
+    assert spec.distances == [(expected[0], expected[1], 0.3)]
+
+
+@pytest.mark.parametrize(("key", "problem"), [
+    ('"P\\x001"', "control character"), ('"P\\n1"', "control character"), ("'#P1'", "starts with '#'"),
+    ("' P1'", "spaces around it"),
+])
+def test_a_fixture_name_no_samples_label_can_match_is_refused_on_one_line(tmp_path, key, problem) -> None:
+    path = tmp_path / "fixtures.yaml"
+    path.write_text(f"fixtures:\n  P0: {{}}\n  {key}: {{}}\n")
+    with pytest.raises(DatasetError, match=f"row 3, field 'fixtures.*{problem}") as error:
+        read_fixtures(path)
+    assert "\n" not in str(error.value) and str(path) in str(error.value)
+
+
+def test_numbers_in_exponent_notation_are_numbers(tmp_path) -> None:
+    """YAML 1.2 (ruamel.yaml, yaml-cpp) reads 1e-1 as a float; PyYAML's 1.1 rules made it the string '1e-1'."""
+    path = tmp_path / "fixtures.yaml"
+    path.write_text("fixtures:\n  P1: {position: [5e-1, 0, 3E-1]}\n  P2: {}\ndistances:\n  - [P1, P2, 1e-1]\n")
+    spec = read_fixtures(path)
+    assert spec.positions["P1"].tolist() == [0.5, 0.0, 0.3] and spec.distances == [("P1", "P2", 0.1)]
+
+
+# ----------------------------------------------------------------------------------------- inertials
+def _inertials_text(masses, coms, payload: str = "") -> str:
+    rows = "".join(f"  - {{mass: {float(m)!r}, com: {[float(v) for v in c]}}}\n"
+                   for m, c in zip(masses, coms, strict=True))
+    return "inertials:\n" + rows + payload
+
+
+@pytest.mark.parametrize(("scale", "payload", "field"), [
+    (1000.0, "", "inertials[0].mass"),  # the Panda's masses in grams
+    (1.0, "payload: {mass: 1e6, com: [0, 0, 0.1]}\n", "payload.mass"),  # was the string '1e6'; 1.0e6 was read
+    (1.0, "payload: {mass: 1.0e+6, com: [0, 0, 0.1]}\n", "payload.mass"),
+])
+def test_masses_no_arm_of_its_size_carries_are_refused(tmp_path, panda, scale, payload, field) -> None:
+    masses, coms = inertials_of(panda)
+    path = tmp_path / "inertials.yaml"
+    path.write_text(_inertials_text(masses[:7] * scale, coms[:7], payload))
+    with pytest.raises(InertialsError, match=rf"field '{re.escape(field)}': .* kg in all for an arm"
+                                             r" of 1.29 m of links, not physical .*kilograms"):
+        with_inertials_file(panda, path)
+    path.write_text(_inertials_text(masses[:7], coms[:7], "payload: {mass: 3e0, com: [0, 0, 1e-1]}\n"))
+    assert inertials_of(with_inertials_file(panda, path))[0][-1] == 3.0  # a real payload, exponent notation
+
+
+def test_elastic_calibration_with_masses_of_zero_is_refused(tmp_path, panda, capsys) -> None:
+    assert main(["simulate", "--out", str(tmp_path / "sim"), "--seconds", "3", "--per-fixture", "30",
+                 "--stiffness", "20000", "--seed", "1"]) == 0
+    _, coms = inertials_of(panda)
+    (tmp_path / "zero.yaml").write_text(_inertials_text([0.0] * 7, coms[:7]))
+    sim = tmp_path / "sim"
+    refused(["calibrate", "--robot", "panda", "--samples", sim / "samples.csv", "--fixtures", sim / "fixtures.yaml",
+             "--model", "elastic", "--inertials", tmp_path / "zero.yaml", "--out", tmp_path / "out.yaml"],
+            tmp_path, capsys, "zero.yaml: field 'inertials': every link mass and the payload are 0 kg")
+
+
+# ---------------------------------------------------------------------------------------- samples.csv
+@pytest.mark.parametrize(("header", "message"), [
+    ("fixture;q1;q2;q3;q4;q5;q6;q7", "row 1, field 'fixture': the columns are separated by ';', not commas"),
+    ("fixture\tq1\tq2\tq3\tq4\tq5\tq6\tq7", "row 1, field 'fixture': the columns are separated by '\\t'"),
+    ("fixture,q1,q2,q3,q4,q5,q6,q7,", "row 1, field 'column 9': a column without a name"),
+    ("fixture,Q1,Q2,Q3,Q4,Q5,Q6,Q7", "row 1, field 'Q1': joint columns are named in lower case, q1..q7"),
+])
+def test_a_header_from_another_tool_is_named_for_what_it_is(tmp_path, panda, header, message) -> None:
+    path = tmp_path / "samples.csv"
+    path.write_text(header + "\n" + header.replace("fixture", "P1").replace("q", "0.").replace("Q", "0.") + "\n")
+    with pytest.raises(DatasetError, match=message.replace("(", r"\(").replace("'\\t'", "'\\\\t'")):
+        read_samples(path, panda)
+
+
+def test_a_fixture_label_with_a_nul_byte_is_refused_naming_its_row(tmp_path, panda) -> None:
+    q = panda.random_configurations(3, np.random.default_rng(0))
+    rows = ["fixture,q1,q2,q3,q4,q5,q6,q7"] + [",".join([label] + [repr(float(v)) for v in r])
+                                               for label, r in zip(["P1", "P\x001", "P1"], q, strict=True)]
+    path = tmp_path / "samples.csv"
+    path.write_text("\n".join(rows) + "\n")
+    with pytest.raises(DatasetError, match=r"row 3, field 'fixture': the fixture name 'P\\x001' holds a control"):
+        read_samples(path, panda)
