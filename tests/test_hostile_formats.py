@@ -7,6 +7,7 @@ one line naming the file, row and field.
 from __future__ import annotations
 
 import re
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -113,3 +114,27 @@ def test_a_fixture_label_with_a_nul_byte_is_refused_naming_its_row(tmp_path, pan
     path.write_text("\n".join(rows) + "\n")
     with pytest.raises(DatasetError, match=r"row 3, field 'fixture': the fixture name 'P\\x001' holds a control"):
         read_samples(path, panda)
+
+
+# ---------------------------------------------------------------------------------------------- URDF
+PANDA_URDF = Path(__file__).parent / "data" / "urdf" / "panda.urdf"
+XACRO = 'xmlns:xacro="http://www.ros.org/wiki/xacro"'
+
+
+@pytest.mark.parametrize(("old", "new", "message"), [
+    ('rpy="-1.5707963267948966 0 0"', 'rpy="${-pi/2} 0 0"',  # was 'expected 3 numbers'
+     "joint 'panda_joint2' <origin rpy>: '${-pi/2} 0 0' holds an unexpanded xacro expression"),
+    ('<robot name="panda">', f'<robot name="panda" {XACRO}><xacro:include filename="$(find pkg)/hand.xacro"/>',
+     "<xacro:include> element: a .xacro file, not yet a URDF"),  # was read without the hand it includes
+    ('xyz="0 0 0.333"', 'xyz="0 0 333"',  # millimetres: was 'joints[1].a: 5.4e+18 m' after a warning
+     "joint 'panda_joint1' <origin xyz>: '0 0 333' is not physical (at most 10 m in magnitude; a URDF is in metres)"),
+    ('lower="-2.8973" upper="2.8973"', 'lower="-166" upper="166"',  # degrees: was 'joints[0].lower: -166.0 rad'
+     "joint 'panda_joint1' <limit lower>: -166 rad is not physical"),
+])
+def test_a_urdf_not_ready_for_use_is_refused_naming_the_joint(tmp_path, capsys, old, new, message) -> None:
+    text = PANDA_URDF.read_text()
+    assert old in text
+    path = tmp_path / "robot.urdf"
+    path.write_text(text.replace(old, new, 1))
+    refused(["calibrate", "--robot", path, "--samples", tmp_path / "samples.csv", "--out", tmp_path / "out.yaml"],
+            tmp_path, capsys, f"{path}: {message}")

@@ -15,7 +15,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..model import pose_matrix
-from .robot_file import RobotFileError
+from .robot_file import MAX_ANGLE, MAX_LENGTH, RobotFileError
 from .text_input import plain_float, read_xml_text
 
 MOVABLE = ("revolute", "continuous")
@@ -30,6 +30,10 @@ MAX_CHAIN_JOINTS = 64
 SAME_POINT_TOL = 1e-6
 #: Most chain ends a refusal lists.
 MAX_LISTED = 8
+#: The xacro namespace: an element in it is a macro not yet expanded.
+XACRO_NAMESPACE = "{http://www.ros.org/wiki/xacro}"
+#: How to expand a xacro file (for refusals).
+EXPAND = "a .xacro file, not yet a URDF: expand it first (xacro robot.urdf.xacro > robot.urdf)"
 
 
 @dataclass(frozen=True)
@@ -144,6 +148,8 @@ class UrdfTree:
 def _floats(text: str | None, count: int, default: list[float], where: str) -> list[float]:
     if text is None:
         return default
+    if "${" in text or "$(" in text:
+        raise RobotFileError(f"{where}: {text!r} holds an unexpanded xacro expression ({EXPAND})")
     parts = text.split()
     try:
         values = [plain_float(v) for v in parts]
@@ -160,6 +166,9 @@ def _origin(element: ET.Element | None, where: str) -> np.ndarray:
         return np.eye(4)
     xyz = _floats(element.get("xyz"), 3, [0.0] * 3, f"{where} <origin xyz>")
     rpy = _floats(element.get("rpy"), 3, [0.0] * 3, f"{where} <origin rpy>")
+    if max(abs(v) for v in xyz) > MAX_LENGTH:  # millimetres; the DH conversion would make it 1e18 m elsewhere
+        raise RobotFileError(f"{where} <origin xyz>: {element.get('xyz')!r} is not physical (at most {MAX_LENGTH:g} m "
+                             "in magnitude; a URDF is in metres)")
     return pose_matrix(np.array(xyz), np.array(rpy))
 
 
@@ -197,6 +206,10 @@ def _joint(element: ET.Element, source: str) -> UrdfJoint:
         if limit is None:
             raise RobotFileError(f"{where}: a revolute joint needs <limit lower upper>")
         lower, upper = (_floats(limit.get(k, "0"), 1, [0.0], f"{where} <limit {k}>")[0] for k in ("lower", "upper"))
+        for key, value in (("lower", lower), ("upper", upper)):
+            if abs(value) > MAX_ANGLE:
+                raise RobotFileError(f"{where} <limit {key}>: {value:g} rad is not physical (at most {MAX_ANGLE:.6g} "
+                                     "rad in magnitude; a URDF is in radians, not degrees)")
         if lower > upper:
             raise RobotFileError(f"{where}: <limit> lower ({lower}) > upper ({upper})")
         if lower == upper:  # URDF's defaults are 0: a <limit effort velocity/> gives a joint that cannot turn
@@ -236,6 +249,9 @@ def parse_urdf(text: str, source: str = "<urdf>") -> UrdfTree:
         raise RobotFileError(f"{source}: invalid XML: {error}") from None
     if root.tag != "robot":
         raise RobotFileError(f"{source}: expected a <robot> root element, got <{root.tag}>")
+    macro = next((e for e in root.iter() if isinstance(e.tag, str) and e.tag.startswith(XACRO_NAMESPACE)), None)
+    if macro is not None:  # an include or a macro call brings links and joints this file does not hold
+        raise RobotFileError(f"{source}: <xacro:{macro.tag[len(XACRO_NAMESPACE):]}> element: {EXPAND}")
     for tag in ("link", "joint"):  # bounded work: counted before anything is built or walked
         count = sum(1 for _ in root.iterfind(tag))
         if count > MAX_LINKS:
