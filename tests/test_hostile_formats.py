@@ -11,8 +11,10 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+import yaml
 
 from spherecal.cli import main
+from spherecal.correction import RobotFileError, dump_robot, load_robot
 from spherecal.correction.files.fixtures import read_fixtures
 from spherecal.correction.files.inertials_file import with_inertials_file
 from spherecal.correction.files.samples import DatasetError
@@ -138,3 +140,31 @@ def test_a_urdf_not_ready_for_use_is_refused_naming_the_joint(tmp_path, capsys, 
     path.write_text(text.replace(old, new, 1))
     refused(["calibrate", "--robot", path, "--samples", tmp_path / "samples.csv", "--out", tmp_path / "out.yaml"],
             tmp_path, capsys, f"{path}: {message}")
+
+
+# ------------------------------------------------------------------------------- robot files of other tools
+@pytest.mark.parametrize(("rename", "message"), [
+    (("payload", "payloads"), "field 'payloads': unknown key (did you mean 'payload'?"),  # 0.76 kg silently dropped
+    (("inertials", "inertial"), "field 'inertial': unknown key (did you mean 'inertials'?"),
+])
+def test_a_misspelt_block_of_a_robot_file_is_refused(tmp_path, panda, rename, message) -> None:
+    path = tmp_path / "robot.yaml"
+    path.write_text(dump_robot(panda).replace(f"\n{rename[0]}:", f"\n{rename[1]}:"))
+    with pytest.raises(RobotFileError, match=re.escape(f"{path}: {message}")):
+        load_robot(path)
+
+
+@pytest.mark.parametrize(("text", "message"), [
+    ("robot:\n  dh:\n    - [0, 0, 0.333, 0]\n", "field 'robot': not a spherecal robot file (keys 'robot'"),  # 'name'
+    (None, "field 'joints': 210 joints, at most 64 (not a serial arm)"),  # was read, refused only for its inertials
+])
+def test_a_robot_file_of_another_tool_or_no_arm_is_named(tmp_path, panda, text, message) -> None:
+    path = tmp_path / "robot.yaml"
+    if text is None:
+        data = yaml.safe_load(dump_robot(panda))
+        data["joints"] *= 30
+        del data["inertials"], data["payload"]
+        text = yaml.safe_dump(data)
+    path.write_text(text)
+    with pytest.raises(RobotFileError, match=re.escape(f"{path}: {message}")):
+        load_robot(path)

@@ -13,6 +13,7 @@ Schema (other top-level keys are kept in :attr:`RobotModel.extras` and written b
 
 from __future__ import annotations
 
+import difflib
 import math
 import os
 from pathlib import Path
@@ -28,6 +29,11 @@ JOINT_KEYS: tuple[str, ...] = JOINT_FIELDS + ("lower", "upper")
 #: Optional per-joint key: a joint with ``beta`` carries a Hayati angle (see RobotModel.hayati).
 OPTIONAL_JOINT_KEYS: tuple[str, ...] = ("beta",)
 _KNOWN_KEYS = ("name", "convention", "joints", "tool", "base")
+#: Every top-level key spherecal reads or writes (others are kept unread, unless one is a misspelling of these).
+READ_KEYS = _KNOWN_KEYS + ("inertials", "payload", "inertials_source", "compliance", "scale", "calibration",
+                           "joint_names", "tool_swap", "urdf", "source")
+#: Most joints of a robot file (the URDF reader's chain bound): a serial arm has 6-7.
+MAX_JOINTS = 64
 #: Robots shipped inside the package, loadable by name.
 EMBEDDED_ROBOTS: dict[str, str] = {
     "panda": "panda.yaml", "franka_panda": "panda.yaml", "fr3": "fr3.yaml", "franka_fr3": "fr3.yaml",
@@ -86,6 +92,15 @@ def robot_from_dict(data: Any, source: str = "<robot>") -> RobotModel:
     """
     if not isinstance(data, dict):
         raise RobotFileError(f"{source}: expected a mapping at the top level, got {type(data).__name__}")
+    if not any(key in data for key in _KNOWN_KEYS):  # another tool's file (a ROS parameter file, a DH table)
+        found = ", ".join(repr(k) for k in list(data)[:4])
+        raise RobotFileError(f"{source}: field '{next(iter(data), '')}': not a spherecal robot file (keys {found}; "
+                             f"expected {', '.join(_KNOWN_KEYS)}: see correction.files.robot_file)")
+    for key in data:  # a misspelt block would be kept unread: 'inertial' left the embedded arm's masses in use
+        near = difflib.get_close_matches(str(key), READ_KEYS, n=1, cutoff=0.8)
+        if key not in READ_KEYS and near and near[0] not in data:
+            raise RobotFileError(f"{source}: field {str(key)!r}: unknown key (did you mean {near[0]!r}? as written, "
+                                 "it would be ignored)")
     for key in ("name", "convention", "joints", "tool"):
         if key not in data:
             raise RobotFileError(f"{source}: missing key '{key}'")
@@ -100,6 +115,8 @@ def robot_from_dict(data: Any, source: str = "<robot>") -> RobotModel:
     joints = data["joints"]
     if not isinstance(joints, list) or not joints:
         raise RobotFileError(f"{source}: joints: expected a non-empty list of joint mappings")
+    if len(joints) > MAX_JOINTS:
+        raise RobotFileError(f"{source}: field 'joints': {len(joints)} joints, at most {MAX_JOINTS} (not a serial arm)")
     columns: dict[str, list[float]] = {key: [] for key in JOINT_KEYS + OPTIONAL_JOINT_KEYS}
     hayati: list[int] = []
     for i, joint in enumerate(joints):
