@@ -20,6 +20,7 @@ from spherecal.correction.files.inertials_file import with_inertials_file
 from spherecal.correction.files.samples import DatasetError
 from spherecal.correction.files.samples_csv import read_samples
 from spherecal.correction.gravity import InertialsError, inertials_of
+from spherecal.identification.ingest.importers import RecordingError, read_joint_csv
 from tests.refusal import refused
 
 
@@ -168,3 +169,15 @@ def test_a_robot_file_of_another_tool_or_no_arm_is_named(tmp_path, panda, text, 
     path.write_text(text)
     with pytest.raises(RobotFileError, match=re.escape(f"{path}: {message}")):
         load_robot(path)
+
+
+def test_a_joint_csv_separated_by_semicolons_is_named_so(tmp_path, panda) -> None:
+    """import --format csv: was 'joint franka_panda_joint1 of franka_panda not in the recording'."""
+    header = ["time"] + [f"panda_joint{k}" for k in range(1, 8)]
+    q = panda.random_configurations(3, np.random.default_rng(0))
+    path = tmp_path / "joints.csv"
+    path.write_text(";".join(header) + "\n" + "".join(
+        ";".join([f"{k * 0.001:.3f}"] + [f"{v:.5f}" for v in r]).replace(".", ",") + "\n" for k, r in enumerate(q)))
+    with pytest.raises(RecordingError, match=re.escape(f"{path}: row 1, field 'time': the columns are separated by "
+                                                       "';', not commas")):
+        read_joint_csv(path, panda)

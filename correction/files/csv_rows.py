@@ -59,6 +59,24 @@ def parse_line(line: str, where: str, error: type[SpherecalError] = SpherecalErr
         raise error(f"{where}, field '': CSV syntax: {text}") from None
 
 
+def check_separator(header: list[str], where: str, error: type[SpherecalError] = SpherecalError) -> None:
+    """Refuse a header of one field holding another separator (``;`` or a tab: a spreadsheet's export in a
+    European locale, whose numbers then carry decimal commas), which no column name could match.
+
+    Args:
+        header: the header's fields, split at commas.
+        where: ``"FILE: row N"`` for the message.
+        error: the exception class to raise.
+    """
+    if len(header) != 1:
+        return
+    separator = next((sep for sep in (";", "\t", "|") if sep in header[0]), None)
+    if separator is not None:
+        first = header[0].split(separator)[0].strip()
+        raise error(f"{where}, field {first!r}: the columns are separated by {separator!r}, not commas (a "
+                    "spreadsheet's export in a European locale? the file must be comma-separated, with decimal points)")
+
+
 def open_text(path: Path, error: type[SpherecalError]):
     """``path`` opened for reading as UTF-8 text (a byte-order mark dropped); one-line error."""
     try:

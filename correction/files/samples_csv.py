@@ -19,7 +19,7 @@ from pathlib import Path
 import numpy as np
 
 from spherecal.correction.files.atomic import atomic_write_text
-from spherecal.correction.files.csv_rows import is_skipped, iter_lines, parse_line, plain_values
+from spherecal.correction.files.csv_rows import check_separator, is_skipped, iter_lines, parse_line, plain_values
 from spherecal.correction.files.samples import LIMIT_TOL, Dataset, DatasetError, LimitExcess
 from spherecal.correction.files.text_input import finite_number
 from spherecal.correction.model import RobotModel
@@ -38,12 +38,7 @@ def _parse_header(header: list[str], n: int, where: str) -> bool:
         if name in seen:
             raise DatasetError(f"{where}, field {name!r}: duplicate column")
         seen.add(name)
-    if len(names) == 1:
-        separator = next((sep for sep in (";", "\t", "|") if sep in names[0]), None)
-        if separator is not None:
-            raise DatasetError(f"{where}, field 'fixture': the columns are separated by {separator!r}, not commas "
-                               "(a spreadsheet's export in a European locale? samples.csv is comma-separated, with "
-                               "decimal points)")
+    check_separator(names, where, DatasetError)
     if "" in names[1:]:
         raise DatasetError(f"{where}, field 'column {names.index('', 1) + 1}': a column without a name (a comma at "
                            "the end of each line?)")

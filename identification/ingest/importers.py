@@ -19,6 +19,7 @@ import numpy as np
 from spherecal.correction.files.csv_rows import (
     RowNames,
     block_rows,
+    check_separator,
     is_skipped,
     iter_lines,
     parse_line,
@@ -285,6 +286,7 @@ def read_joint_csv(path: str | os.PathLike, model: RobotModel) -> Recording:
                     if _comment_before_header(line, model, where):  # provenance lines of samples.csv
                         continue
                     header = [f.strip() for f in parse_line(line, where, RecordingError)]
+                    check_separator(header, where, RecordingError)
                     if all(_is_number(f) for f in header):
                         raise RecordingError(
                             f"{where}, field 'header': numbers, not a header naming the joints "
