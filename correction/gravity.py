@@ -60,12 +60,14 @@ def _entry(value: Any, where: str) -> tuple[float, np.ndarray]:
     return float(mass), com_array
 
 
-def inertials_of(model: RobotModel, source: str | None = None) -> tuple[np.ndarray, np.ndarray]:
+def inertials_of(model: RobotModel, source: str | None = None,
+                 rows: dict[str, int] | None = None) -> tuple[np.ndarray, np.ndarray]:
     """Link masses and centres of mass of ``model``, payload appended as an (n+1)-th body.
 
     Args:
         model: a robot whose ``extras`` carry ``inertials`` (and optionally ``payload``).
         source: file name for error messages (default: the robot's name).
+        rows: file line of ``"inertials"``, ``"inertials[i]"`` and ``"payload"`` (for messages), when known.
 
     Returns:
         masses (n+1,) [kg] and coms (n+1, 3) [m], entry ``i < n`` in frame ``i+1``, the last in frame n.
@@ -74,22 +76,27 @@ def inertials_of(model: RobotModel, source: str | None = None) -> tuple[np.ndarr
         InertialsError: no ``inertials`` block, wrong length, or a malformed entry.
     """
     where = source or model.extras.get("source") or model.name
+    rows = rows or {}
+
+    def at(key: str) -> str:
+        return f"{where}: {f'row {rows[key]}, ' if key in rows else ''}field '{key}"
+
     block = model.extras.get("inertials")
     n = model.n_joints
     if not isinstance(block, list) or len(block) != n:
         got = "none" if block is None else (f"{len(block)} entries" if isinstance(block, list) else repr(block))
         hint = " (link masses: --inertials FILE or an inertials block in the robot file)" if block is None else ""
-        raise InertialsError(f"{where}: field 'inertials': expected a list of {n} {{mass, com}} entries, got "
+        raise InertialsError(f"{at('inertials')}': expected a list of {n} {{mass, com}} entries, got "
                              f"{got}{hint}")
-    entries = [_entry(v, f"{where}: field 'inertials[{i}]") for i, v in enumerate(block)]
+    entries = [_entry(v, at(f"inertials[{i}]")) for i, v in enumerate(block)]
     payload = model.extras.get("payload")
-    entries.append((0.0, np.zeros(3)) if payload is None else _entry(payload, f"{where}: field 'payload"))
+    entries.append((0.0, np.zeros(3)) if payload is None else _entry(payload, at("payload")))
     masses = np.array([m for m, _ in entries])
     size = model.chain_length  # 0: a check of the entries alone (a robot file's block before its geometry is read)
     if size > 0 and masses.sum() > MAX_MASS_DENSITY * size**3:  # grams for kilograms, or a payload of another scale
         k = int(np.argmax(masses))
         name = "payload" if k == n else f"inertials[{k}]"
-        raise InertialsError(f"{where}: field '{name}.mass': {masses.sum():.6g} kg in all for an arm of "
+        raise InertialsError(f"{at(name)}.mass': {masses.sum():.6g} kg in all for an arm of "
                              f"{size:.3g} m of links, not physical (at most {MAX_MASS_DENSITY * size**3:.3g} kg; "
                              f"the file is in kilograms)")
     return masses, np.stack([c for _, c in entries])

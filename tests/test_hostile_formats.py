@@ -69,15 +69,15 @@ def _inertials_text(masses, coms, payload: str = "") -> str:
 
 
 @pytest.mark.parametrize(("scale", "payload", "field"), [
-    (1000.0, "", "inertials[0].mass"),  # the Panda's masses in grams
-    (1.0, "payload: {mass: 1e6, com: [0, 0, 0.1]}\n", "payload.mass"),  # was the string '1e6'; 1.0e6 was read
-    (1.0, "payload: {mass: 1.0e+6, com: [0, 0, 0.1]}\n", "payload.mass"),
+    (1000.0, "", "row 2, field 'inertials[0].mass'"),  # the Panda's masses in grams
+    (1.0, "payload: {mass: 1e6, com: [0, 0, 0.1]}\n", "row 9, field 'payload.mass'"),  # was the string '1e6'
+    (1.0, "payload: {mass: 1.0e+6, com: [0, 0, 0.1]}\n", "row 9, field 'payload.mass'"),  # was read
 ])
 def test_masses_no_arm_of_its_size_carries_are_refused(tmp_path, panda, scale, payload, field) -> None:
     masses, coms = inertials_of(panda)
     path = tmp_path / "inertials.yaml"
     path.write_text(_inertials_text(masses[:7] * scale, coms[:7], payload))
-    with pytest.raises(InertialsError, match=rf"field '{re.escape(field)}': .* kg in all for an arm"
+    with pytest.raises(InertialsError, match=rf"{re.escape(str(path))}: {re.escape(field)}: .* kg in all for an arm"
                                              r" of 1.29 m of links, not physical .*kilograms"):
         with_inertials_file(panda, path)
     path.write_text(_inertials_text(masses[:7], coms[:7], "payload: {mass: 3e0, com: [0, 0, 1e-1]}\n"))

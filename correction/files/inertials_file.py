@@ -19,6 +19,8 @@ from __future__ import annotations
 import os
 from dataclasses import replace
 
+import yaml
+
 from ..gravity import InertialsError, inertials_of
 from ..model import RobotModel
 from .text_input import read_text
@@ -27,20 +29,36 @@ from .yaml_safe import MAX_FILE_BYTES, load_yaml
 KEYS = ("inertials", "payload")
 
 
+def _rows(root) -> dict[str, int]:
+    """File line of ``inertials``, each ``inertials[i]`` and ``payload`` in the document's node tree."""
+    rows: dict[str, int] = {}
+    for key, value in getattr(root, "value", []) if isinstance(root, yaml.MappingNode) else []:
+        if getattr(key, "value", None) in KEYS:
+            rows[key.value] = key.start_mark.line + 1
+            if key.value == "inertials" and isinstance(value, yaml.SequenceNode):
+                rows.update({f"inertials[{i}]": item.start_mark.line + 1 for i, item in enumerate(value.value)})
+    return rows
+
+
 def read_inertials(path: str | os.PathLike) -> dict:
     """The ``inertials`` (and ``payload``) blocks of an inertials file, unchecked against any robot.
 
     Raises:
         InertialsError: unreadable file, invalid YAML, a missing ``inertials`` list or an unknown key.
     """
-    data, _ = load_yaml(read_text(path, InertialsError, limit=MAX_FILE_BYTES), str(path), InertialsError)
+    return _read(path)[0]
+
+
+def _read(path: str | os.PathLike) -> tuple[dict, dict[str, int]]:
+    """:func:`read_inertials` and the file line of each block and entry."""
+    data, root = load_yaml(read_text(path, InertialsError, limit=MAX_FILE_BYTES), str(path), InertialsError)
     if not isinstance(data, dict) or "inertials" not in data:
         raise InertialsError(f"{path}: expected a mapping with an 'inertials' list (see correction.files."
                              f"inertials_file)")
     unknown = [key for key in data if key not in KEYS]
     if unknown:
         raise InertialsError(f"{path}: unknown key {unknown[0]!r} (expected {', '.join(KEYS)})")
-    return {key: data[key] for key in KEYS if key in data}
+    return {key: data[key] for key in KEYS if key in data}, _rows(root)
 
 
 def with_inertials_file(model: RobotModel, path: str | os.PathLike) -> RobotModel:
@@ -49,8 +67,8 @@ def with_inertials_file(model: RobotModel, path: str | os.PathLike) -> RobotMode
     Raises:
         InertialsError: one line naming the file and the field (``inertials[2].com``, wrong count, ...).
     """
-    blocks = read_inertials(path)
+    blocks, rows = _read(path)
     extras = {k: v for k, v in model.extras.items() if k not in KEYS}
     out = replace(model, extras={**extras, **blocks, "inertials_source": str(path)})
-    inertials_of(out, source=str(path))  # every entry valid, one per joint
+    inertials_of(out, source=str(path), rows=rows)  # every entry valid, one per joint
     return out

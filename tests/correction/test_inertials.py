@@ -105,7 +105,7 @@ def test_inertials_file_replaces_and_a_bad_one_is_one_line(tmp_path, capsys) -> 
     assert model.extras["inertials_source"] == str(good)
     bad = tmp_path / "bad.yaml"
     bad.write_text("inertials:\n  - {mass: 1.0, com: [0, 0]}\n")
-    with pytest.raises(InertialsError, match="bad.yaml: field 'inertials': expected a list of 7"):
+    with pytest.raises(InertialsError, match="bad.yaml: row 1, field 'inertials': expected a list of 7"):
         load_robot("panda", inertials=bad)
     out = tmp_path / "out.yaml"
     assert main(["export", "panda", "--format", "yaml", "--out", str(out), "--inertials", str(bad)]) == 1
