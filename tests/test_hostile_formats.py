@@ -126,21 +126,24 @@ XACRO = 'xmlns:xacro="http://www.ros.org/wiki/xacro"'
 
 @pytest.mark.parametrize(("old", "new", "message"), [
     ('rpy="-1.5707963267948966 0 0"', 'rpy="${-pi/2} 0 0"',  # was 'expected 3 numbers'
-     "joint 'panda_joint2' <origin rpy>: '${-pi/2} 0 0' holds an unexpanded xacro expression"),
+     "field 'joint panda_joint2 <origin rpy>': '${-pi/2} 0 0' holds an unexpanded xacro expression"),
     ('<robot name="panda">', f'<robot name="panda" {XACRO}><xacro:include filename="$(find pkg)/hand.xacro"/>',
-     "<xacro:include> element: a .xacro file, not yet a URDF"),  # was read without the hand it includes
+     # was read without the hand it includes
+     "field '<xacro:include>': <xacro:include> element: a .xacro file, not yet a URDF"),
     ('xyz="0 0 0.333"', 'xyz="0 0 333"',  # millimetres: was 'joints[1].a: 5.4e+18 m' after a warning
-     "joint 'panda_joint1' <origin xyz>: '0 0 333' is not physical (at most 10 m in magnitude; a URDF is in metres)"),
+     "field 'joint panda_joint1 <origin xyz>': '0 0 333' is not physical (at most 10 m in magnitude; a URDF is in "
+     "metres)"),
     ('lower="-2.8973" upper="2.8973"', 'lower="-166" upper="166"',  # degrees: was 'joints[0].lower: -166.0 rad'
-     "joint 'panda_joint1' <limit lower>: -166 rad is not physical"),
+     "field 'joint panda_joint1 <limit lower>': -166 rad is not physical"),
 ])
 def test_a_urdf_not_ready_for_use_is_refused_naming_the_joint(tmp_path, capsys, old, new, message) -> None:
     text = PANDA_URDF.read_text()
     assert old in text
     path = tmp_path / "robot.urdf"
     path.write_text(text.replace(old, new, 1))
+    row = text[:text.index(old)].count("\n") + 1  # the line of the element the edit is in
     refused(["calibrate", "--robot", path, "--samples", tmp_path / "samples.csv", "--out", tmp_path / "out.yaml"],
-            tmp_path, capsys, f"{path}: {message}")
+            tmp_path, capsys, f"{path}: row {row}, {message}")
 
 
 # ------------------------------------------------------------------------------- robot files of other tools
@@ -150,8 +153,10 @@ def test_a_urdf_not_ready_for_use_is_refused_naming_the_joint(tmp_path, capsys, 
 ])
 def test_a_misspelt_block_of_a_robot_file_is_refused(tmp_path, panda, rename, message) -> None:
     path = tmp_path / "robot.yaml"
-    path.write_text(dump_robot(panda).replace(f"\n{rename[0]}:", f"\n{rename[1]}:"))
-    with pytest.raises(RobotFileError, match=re.escape(f"{path}: {message}")):
+    text = dump_robot(panda).replace(f"\n{rename[0]}:", f"\n{rename[1]}:")
+    path.write_text(text)
+    row = text.splitlines().index(f"{rename[1]}:") + 1  # the misspelt key's line
+    with pytest.raises(RobotFileError, match=re.escape(f"{path}: row {row}, {message}")):
         load_robot(path)
 
 
@@ -167,7 +172,8 @@ def test_a_robot_file_of_another_tool_or_no_arm_is_named(tmp_path, panda, text, 
         del data["inertials"], data["payload"]
         text = yaml.safe_dump(data)
     path.write_text(text)
-    with pytest.raises(RobotFileError, match=re.escape(f"{path}: {message}")):
+    row = text.splitlines().index(message.split("'")[1] + ":") + 1  # the line of the key named
+    with pytest.raises(RobotFileError, match=re.escape(f"{path}: row {row}, {message}")):
         load_robot(path)
 
 

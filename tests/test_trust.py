@@ -138,7 +138,7 @@ def _urdf(n: int = 3, loop: bool = False, mimic: bool = False) -> str:
     (_urdf(loop=True), "link 'a' is not connected to the root 'base': a loop"),
     (_urdf(n=2500), "2501 <link> elements, at most 2000"),
     (_urdf(n=200), "200 revolute joints between 'base' and 'l200', at most 64"),
-    (_urdf(mimic=True), "joint 'j2', field 'mimic': it follows joint 'j1'"),
+    (_urdf(mimic=True), "row 1, field 'joint j2 <mimic>': it follows joint 'j1'"),
 ])
 def test_urdf_loops_sizes_and_mimic_joints_are_refused_at_once(tmp_path, text, message) -> None:
     # was: a loop ran export out of memory after a minute; a <mimic> joint was calibrated as independent

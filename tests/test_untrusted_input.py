@@ -197,13 +197,13 @@ def test_a_file_name_with_a_newline_is_one_line(tmp_path, panda, capsys) -> None
 
 # -------------------------------------------------------------------------------------- numbers
 @pytest.mark.parametrize(("edit", "field"), [
-    (lambda d: d["joints"][3].update(a=1e308), r"joints\[3\].a: 1e\+308 m is not physical"),
-    (lambda d: d["joints"][0].update(d=-12.0), r"joints\[0\].d: -12.0 m is not physical"),
-    (lambda d: d.update(tool=[0.0, 0.0, 20.0]), r"tool\[2\]: 20.0 m is not physical"),
+    (lambda d: d["joints"][3].update(a=1e308), r"row \d+, field 'joints\[3\].a': 1e\+308 m is not physical"),
+    (lambda d: d["joints"][0].update(d=-12.0), r"row \d+, field 'joints\[0\].d': -12.0 m is not physical"),
+    (lambda d: d.update(tool=[0.0, 0.0, 20.0]), r"row \d+, field 'tool\[2\]': 20.0 m is not physical"),
     (lambda d: d.update(base={"xyz": [0, 11, 0], "rpy": [0, 0, 0]}), r"base.xyz\[1\]"),
-    (lambda d: d["joints"][2].update(alpha=100.0), r"joints\[2\].alpha: 100.0 rad is not physical"),
+    (lambda d: d["joints"][2].update(alpha=100.0), r"row \d+, field 'joints\[2\].alpha': 100.0 rad is not physical"),
     (lambda d: d["joints"][1].update(lower=-1e6), r"joints\[1\].lower"),
-    (lambda d: d["joints"][1].update(lower=1.0, upper=1.0), r"joints\[1\].lower: must be below upper"),
+    (lambda d: d["joints"][1].update(lower=1.0, upper=1.0), r"row \d+, field 'joints\[1\].lower': must be below upper"),
 ])
 def test_robot_file_refuses_non_physical_numbers(tmp_path, panda, edit, field) -> None:
     data = yaml.safe_load(dump_robot(panda))

@@ -29,7 +29,7 @@ from spherecal.correction.files.atomic import atomic_write_text
 from spherecal.correction.files.robot_file import MAX_LENGTH
 from spherecal.correction.files.samples import Dataset, DatasetError
 from spherecal.correction.files.text_input import read_text
-from spherecal.correction.files.yaml_safe import MAX_FILE_BYTES, dump_yaml, load_yaml
+from spherecal.correction.files.yaml_safe import MAX_FILE_BYTES, dump_yaml, load_yaml, node_line
 
 
 # ------------------------------------------------------------------------------ fixtures.yaml
@@ -95,22 +95,6 @@ class FixtureSpec:
                     )
 
 
-def _node_line(node: Any, *path: Any) -> int:
-    """1-based line of the YAML node at ``path`` (keys and indices), or of the deepest node found."""
-
-    for key in path:
-        if isinstance(node, yaml.MappingNode):
-            match = [v for k, v in node.value if getattr(k, "value", None) == key]
-            if not match:
-                break
-            node = match[-1]
-        elif isinstance(node, yaml.SequenceNode) and isinstance(key, int) and key < len(node.value):
-            node = node.value[key]
-        else:
-            break
-    return node.start_mark.line + 1
-
-
 def _written_name(node: Any) -> Any:
     """The fixture name as the file writes it, as a samples.csv label would be: a plain scalar YAML 1.1 would
     turn into another type (``01`` and ``0x1`` into 1, ``010`` into 8, ``1:30`` into 90, ``yes``/``no``/``on`` into
@@ -155,7 +139,7 @@ def read_fixtures(path: str | os.PathLike) -> FixtureSpec:
 
     def fail(message: str, *where: Any) -> DatasetError:
         field_name = ".".join(str(w) if not isinstance(w, int) else f"[{w}]" for w in where).replace(".[", "[")
-        return DatasetError(f"{path}: row {_node_line(root, *where)}, field '{field_name}': {message}")
+        return DatasetError(f"{path}: row {node_line(root, *where)}, field '{field_name}': {message}")
 
     if not isinstance(data, dict):
         raise fail(f"expected a mapping at the top level, got {type(data).__name__}")
@@ -227,8 +211,8 @@ def read_fixtures(path: str | os.PathLike) -> FixtureSpec:
         near = difflib.get_close_matches(str(key).lower(), ["fixtures", "distances"], n=1, cutoff=0.75)
         if near:
             raise fail(f"unknown key {key!r} (did you mean {near[0]!r}? as written, it would be ignored)", key)
-    rows = {f"fixtures.{name}": _node_line(root, "fixtures", name) for name in names}
-    rows.update({f"distances[{k}]": _node_line(root, "distances", k) for k in range(len(distances))})
+    rows = {f"fixtures.{name}": node_line(root, "fixtures", name) for name in names}
+    rows.update({f"distances[{k}]": node_line(root, "distances", k) for k in range(len(distances))})
     return FixtureSpec(tuple(names), positions, distances, extras, source=str(path), rows=rows)
 
 

@@ -29,7 +29,7 @@ from .yaml_safe import MAX_FILE_BYTES, load_yaml
 KEYS = ("inertials", "payload")
 
 
-def _rows(root) -> dict[str, int]:
+def inertial_rows(root) -> dict[str, int]:
     """File line of ``inertials``, each ``inertials[i]`` and ``payload`` in the document's node tree."""
     rows: dict[str, int] = {}
     for key, value in getattr(root, "value", []) if isinstance(root, yaml.MappingNode) else []:
@@ -58,7 +58,7 @@ def _read(path: str | os.PathLike) -> tuple[dict, dict[str, int]]:
     unknown = [key for key in data if key not in KEYS]
     if unknown:
         raise InertialsError(f"{path}: unknown key {unknown[0]!r} (expected {', '.join(KEYS)})")
-    return {key: data[key] for key in KEYS if key in data}, _rows(root)
+    return {key: data[key] for key in KEYS if key in data}, inertial_rows(root)
 
 
 def with_inertials_file(model: RobotModel, path: str | os.PathLike) -> RobotModel:

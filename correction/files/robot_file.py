@@ -16,6 +16,8 @@ from __future__ import annotations
 import difflib
 import math
 import os
+import re
+from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
@@ -23,7 +25,8 @@ from ..errors import SpherecalError
 from ..gravity import InertialsError, inertials_of
 from ..model import CONVENTIONS, JOINT_FIELDS, RobotModel
 from .atomic import atomic_write_text
-from .yaml_safe import dump_yaml
+from .inertials_file import inertial_rows
+from .yaml_safe import dump_yaml, node_line
 
 JOINT_KEYS: tuple[str, ...] = JOINT_FIELDS + ("lower", "upper")
 #: Optional per-joint key: a joint with ``beta`` carries a Hayati angle (see RobotModel.hayati).
@@ -55,8 +58,22 @@ class RobotFileError(SpherecalError):
     """A robot file that cannot be read; the message names the file and the field."""
 
 
+def _located(source: str, root: Any) -> Callable[[str], str]:
+    """``at(field)``: the message prefix ``"FILE: row N, field 'F'"`` of a field such as ``joints[1].alpha``, its
+    row the line of that node in ``root`` (the document's node tree; without one, no row)."""
+
+    def at(field: str) -> str:
+        if root is None:
+            return f"{source}: field '{field}'"
+        path = [int(index) if index else key for key, index in re.findall(r"([^.\[\]]+)|\[(\d+)\]", field)]
+        return f"{source}: row {node_line(root, *path, key_line=True)}, field '{field}'"
+
+    return at
+
+
 def _number(value: Any, where: str, bound: tuple[float, str] | None = None) -> float:
-    """A finite number; with ``bound = (limit, unit)`` also ``|value| <= limit`` (a physical magnitude)."""
+    """A finite number; with ``bound = (limit, unit)`` also ``|value| <= limit`` (a physical magnitude).
+    ``where`` is the message prefix (``"FILE: row N, field 'F'"``)."""
     if isinstance(value, bool) or not isinstance(value, (int, float)):
         raise RobotFileError(f"{where}: expected a number, got {value!r}")
     if not math.isfinite(value):
@@ -67,85 +84,89 @@ def _number(value: Any, where: str, bound: tuple[float, str] | None = None) -> f
     return float(value)
 
 
-def _vector3(value: Any, where: str, bound: tuple[float, str] | None = None) -> list[float]:
+def _vector3(value: Any, at: Callable[[str], str], field: str, bound: tuple[float, str] | None = None) -> list[float]:
     if not isinstance(value, (list, tuple)) or len(value) != 3:
-        raise RobotFileError(f"{where}: expected a list of 3 numbers, got {value!r}")
-    return [_number(v, f"{where}[{k}]", bound) for k, v in enumerate(value)]
+        raise RobotFileError(f"{at(field)}: expected a list of 3 numbers, got {value!r}")
+    return [_number(v, at(f"{field}[{k}]"), bound) for k, v in enumerate(value)]
 
 
-def _no_unknown_keys(mapping: dict, known: tuple[str, ...], where: str) -> None:
+def _no_unknown_keys(mapping: dict, known: tuple[str, ...], at: Callable[[str], str], field: str) -> None:
     """A misspelt key would otherwise be dropped and its value read as zero."""
     unknown = [key for key in mapping if key not in known]
     if unknown:
-        raise RobotFileError(f"{where}: unknown key {unknown[0]!r} (expected {', '.join(known)})")
+        raise RobotFileError(f"{at(f'{field}.{unknown[0]}')}: unknown key {unknown[0]!r} (expected {', '.join(known)})")
 
 
-def robot_from_dict(data: Any, source: str = "<robot>") -> RobotModel:
+def robot_from_dict(data: Any, source: str = "<robot>", root: Any = None) -> RobotModel:
     """Validate a parsed robot file and build the model.
 
     Args:
         data: the parsed YAML document.
         source: file name used in error messages.
+        root: the document's node tree (:func:`load_yaml`'s second value), for the row of each message; None
+            (a mapping built in code): messages name the field only.
 
     Raises:
-        RobotFileError: one line naming ``source`` and the offending field.
+        RobotFileError: one line naming ``source``, the row and the offending field.
     """
+    at = _located(source, root)
     if not isinstance(data, dict):
-        raise RobotFileError(f"{source}: expected a mapping at the top level, got {type(data).__name__}")
+        raise RobotFileError(f"{at('')}: expected a mapping at the top level, got {type(data).__name__}")
     if not any(key in data for key in _KNOWN_KEYS):  # another tool's file (a ROS parameter file, a DH table)
         found = ", ".join(repr(k) for k in list(data)[:4])
-        raise RobotFileError(f"{source}: field '{next(iter(data), '')}': not a spherecal robot file (keys {found}; "
+        raise RobotFileError(f"{at(str(next(iter(data), '')))}: not a spherecal robot file (keys {found}; "
                              f"expected {', '.join(_KNOWN_KEYS)}: see correction.files.robot_file)")
     for key in data:  # a misspelt block would be kept unread: 'inertial' left the embedded arm's masses in use
         near = difflib.get_close_matches(str(key), READ_KEYS, n=1, cutoff=0.8)
         if key not in READ_KEYS and near and near[0] not in data:
-            raise RobotFileError(f"{source}: field {str(key)!r}: unknown key (did you mean {near[0]!r}? as written, "
+            raise RobotFileError(f"{at(str(key))}: unknown key (did you mean {near[0]!r}? as written, "
                                  "it would be ignored)")
     for key in ("name", "convention", "joints", "tool"):
         if key not in data:
-            raise RobotFileError(f"{source}: missing key '{key}'")
+            raise RobotFileError(f"{at(key)}: missing key '{key}'")
     name = data["name"]
     if not isinstance(name, str) or not name:
-        raise RobotFileError(f"{source}: name: expected a non-empty string, got {name!r}")
+        raise RobotFileError(f"{at('name')}: expected a non-empty string, got {name!r}")
     convention = data["convention"]
     if convention not in CONVENTIONS:
         raise RobotFileError(
-            f"{source}: convention: unknown convention {convention!r} (expected 'standard' or 'modified')"
+            f"{at('convention')}: unknown convention {convention!r} (expected 'standard' or 'modified')"
         )
     joints = data["joints"]
     if not isinstance(joints, list) or not joints:
-        raise RobotFileError(f"{source}: joints: expected a non-empty list of joint mappings")
+        raise RobotFileError(f"{at('joints')}: expected a non-empty list of joint mappings")
     if len(joints) > MAX_JOINTS:
-        raise RobotFileError(f"{source}: field 'joints': {len(joints)} joints, at most {MAX_JOINTS} (not a serial arm)")
+        raise RobotFileError(f"{at('joints')}: {len(joints)} joints, at most {MAX_JOINTS} (not a serial arm)")
     columns: dict[str, list[float]] = {key: [] for key in JOINT_KEYS + OPTIONAL_JOINT_KEYS}
     hayati: list[int] = []
     for i, joint in enumerate(joints):
-        where = f"{source}: joints[{i}]"
+        field = f"joints[{i}]"
         if not isinstance(joint, dict):
-            raise RobotFileError(f"{where}: expected a mapping, got {joint!r}")
-        _no_unknown_keys(joint, JOINT_KEYS + OPTIONAL_JOINT_KEYS, where)
+            raise RobotFileError(f"{at(field)}: expected a mapping, got {joint!r}")
+        _no_unknown_keys(joint, JOINT_KEYS + OPTIONAL_JOINT_KEYS, at, field)
         for key in JOINT_KEYS:
             if key not in joint:
-                raise RobotFileError(f"{where}: missing key '{key}'")
-            columns[key].append(_number(joint[key], f"{where}.{key}", _BOUNDS[key]))
-        columns["beta"].append(_number(joint.get("beta", 0.0), f"{where}.beta", _ANGLE))
+                raise RobotFileError(f"{at(f'{field}.{key}')}: missing key '{key}'")
+            columns[key].append(_number(joint[key], at(f"{field}.{key}"), _BOUNDS[key]))
+        columns["beta"].append(_number(joint.get("beta", 0.0), at(f"{field}.beta"), _ANGLE))
         if "beta" in joint:
             hayati.append(i)
         if not columns["lower"][-1] < columns["upper"][-1]:
             raise RobotFileError(
-                f"{where}.lower: must be below upper, got lower {columns['lower'][-1]} >= upper {columns['upper'][-1]}"
+                f"{at(f'{field}.lower')}: must be below upper, got lower {columns['lower'][-1]} >= upper "
+                f"{columns['upper'][-1]}"
             )
-    tool = _vector3(data["tool"], f"{source}: tool", _LENGTH)
+    tool = _vector3(data["tool"], at, "tool", _LENGTH)
     base_xyz, base_rpy = [0.0] * 3, [0.0] * 3
     base = data.get("base")
     if base is not None:
         if not isinstance(base, dict):
-            raise RobotFileError(f"{source}: base: expected a mapping with xyz and rpy, got {base!r}")
-        _no_unknown_keys(base, ("xyz", "rpy"), f"{source}: base")
-        base_xyz = _vector3(base.get("xyz", [0.0] * 3), f"{source}: base.xyz", _LENGTH)
-        base_rpy = _vector3(base.get("rpy", [0.0] * 3), f"{source}: base.rpy", _ANGLE)
+            raise RobotFileError(f"{at('base')}: expected a mapping with xyz and rpy, got {base!r}")
+        _no_unknown_keys(base, ("xyz", "rpy"), at, "base")
+        base_xyz = _vector3(base.get("xyz", [0.0] * 3), at, "base.xyz", _LENGTH)
+        base_rpy = _vector3(base.get("rpy", [0.0] * 3), at, "base.rpy", _ANGLE)
     extras = {k: v for k, v in data.items() if k not in _KNOWN_KEYS}
-    _check_extras(extras, len(joints), source)
+    _check_extras(extras, len(joints), source, root)
     return RobotModel(
         name=name,
         convention=convention,
@@ -168,13 +189,14 @@ def robot_from_dict(data: Any, source: str = "<robot>") -> RobotModel:
 _JOINT_VECTORS = {"compliance": "[rad/Nm]", "scale": "(dimensionless)"}
 
 
-def _check_extras(extras: dict, n: int, source: str) -> None:
+def _check_extras(extras: dict, n: int, source: str, root: Any = None) -> None:
     """The optional blocks the library reads (``compliance``, ``scale``, ``joint_names``, ``inertials``,
     ``payload``) have one entry per joint and valid values; others are kept unread.
 
     Raises:
-        RobotFileError: one line naming ``source`` and the field.
+        RobotFileError: one line naming ``source``, the row (with ``root``, the node tree) and the field.
     """
+    at = _located(source, root)
     for key, unit in _JOINT_VECTORS.items():
         if key not in extras:
             continue
@@ -182,26 +204,27 @@ def _check_extras(extras: dict, n: int, source: str) -> None:
         if (not isinstance(values, list) or len(values) != n
                 or not all(isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v)
                            for v in values)):
-            raise RobotFileError(f"{source}: field '{key}': expected a list of {n} finite numbers {unit}, "
+            raise RobotFileError(f"{at(key)}: expected a list of {n} finite numbers {unit}, "
                                  f"got {values!r}")
     if "calibration" in extras and not isinstance(extras["calibration"], dict):
         # validate reads which samples trained the model from this block: without it, they pass as held out
-        raise RobotFileError(f"{source}: field 'calibration': expected the mapping calibrate writes (or no such "
+        raise RobotFileError(f"{at('calibration')}: expected the mapping calibrate writes (or no such "
                              f"key), got {type(extras['calibration']).__name__} {str(extras['calibration'])[:40]!r}")
     if "joint_names" in extras:
         names = extras["joint_names"]
         if (not isinstance(names, list) or len(names) != n
                 or not all(isinstance(v, str) and v for v in names)):
-            raise RobotFileError(f"{source}: field 'joint_names': expected a list of {n} joint names, got {names!r}")
+            raise RobotFileError(f"{at('joint_names')}: expected a list of {n} joint names, got {names!r}")
         twice = next((v for k, v in enumerate(names) if v in names[:k]), None)
         if twice is not None:
-            raise RobotFileError(f"{source}: field 'joint_names': {twice!r} is named twice")
+            again = names.index(twice, names.index(twice) + 1)
+            raise RobotFileError(f"{at(f'joint_names[{again}]')}: {twice!r} is named twice")
     if "inertials" in extras:
         probe = RobotModel(name=source, convention="modified", a=[0.0] * n, alpha=[0.0] * n, d=[0.0] * n,
                            theta=[0.0] * n, lower=[-1.0] * n, upper=[1.0] * n, tool=[0.0] * 3,
                            extras={k: extras[k] for k in ("inertials", "payload") if k in extras})
         try:
-            inertials_of(probe, source)
+            inertials_of(probe, source, inertial_rows(root))
         except InertialsError as error:
             raise RobotFileError(str(error)) from None
 

@@ -46,7 +46,8 @@ def _embedded(file: str, source: str) -> RobotModel:
         with resources.as_file(resource) as path, warnings.catch_warnings():
             warnings.simplefilter("ignore", NearlyParallelAxesWarning)  # the Gen3 lite's joints 2-3
             return load_urdf(path, tip_link=URDF_TIPS[file])
-    return robot_from_dict(load_yaml(resource.read_text(), source, RobotFileError)[0], source=source)
+    data, root = load_yaml(resource.read_text(), source, RobotFileError)
+    return robot_from_dict(data, source=source, root=root)
 
 
 @cache
@@ -99,8 +100,8 @@ def _load(path_or_name: str | os.PathLike, tip_link: str | None, base_link: str 
     path = Path(path_or_name)
     text = read_text(path, RobotFileError, limit=MAX_FILE_BYTES)
     _refuse_xml(text, key)
-    data, _ = load_yaml(text, str(path), RobotFileError)  # bounded: size, depth, aliases; no duplicate keys
-    return robot_from_dict(data, source=str(path))
+    data, root = load_yaml(text, str(path), RobotFileError)  # bounded: size, depth, aliases; no duplicate keys
+    return robot_from_dict(data, source=str(path), root=root)
 
 
 #: The first element of an XML document (after the declaration, comments and a DOCTYPE).

@@ -11,6 +11,7 @@ import math
 import os
 import xml.etree.ElementTree as ET
 from dataclasses import dataclass, field
+from xml.parsers import expat
 
 import numpy as np
 
@@ -49,6 +50,7 @@ class UrdfJoint:
     lower: float | None = None
     upper: float | None = None
     mimic: str | None = None
+    row: int | None = None  # the file line of the <joint> element (for messages)
 
 
 @dataclass(frozen=True)
@@ -160,55 +162,103 @@ def _floats(text: str | None, count: int, default: list[float], where: str) -> l
     return values
 
 
-def _origin(element: ET.Element | None, where: str) -> np.ndarray:
-    """(4, 4) of an ``<origin xyz rpy>`` (identity when absent)."""
+@dataclass(frozen=True)
+class _Rows:
+    """The file line of each element of a parsed URDF, for messages ``FILE: row N, field 'F': ...``."""
+
+    source: str
+    lines: dict[ET.Element, int]
+
+    def at(self, element: ET.Element | None, field: str) -> str:
+        """The message prefix of ``field`` (``joint panda_joint2 <origin rpy>``) at ``element``'s row."""
+        row = self.lines.get(element) if element is not None else None
+        return f"{self.source}: {'' if row is None else f'row {row}, '}field '{field}'"
+
+
+def _xml_tree(text: str, source: str) -> tuple[ET.Element, dict[ET.Element, int]]:
+    """The element tree of XML ``text`` and the file line where each element starts.
+
+    The stdlib's expat parser, as ``ET.fromstring`` uses it (internal entities expanded within expat's
+    amplification limits, external entities never fetched), with its line numbers kept.
+
+    Raises:
+        RobotFileError: invalid XML (one line naming the row).
+    """
+    builder = ET.TreeBuilder()
+    parser = expat.ParserCreate(namespace_separator="}")
+    parser.buffer_text = True
+    lines: dict[ET.Element, int] = {}
+
+    def fixed(name: str) -> str:  # expat's 'uri}tag' to ElementTree's '{uri}tag'
+        return "{" + name if "}" in name else name
+
+    def start(tag: str, attributes: dict[str, str]) -> None:
+        element = builder.start(fixed(tag), {fixed(k): v for k, v in attributes.items()})
+        lines[element] = parser.CurrentLineNumber
+
+    parser.StartElementHandler = start
+    parser.EndElementHandler = lambda tag: builder.end(fixed(tag))
+    parser.CharacterDataHandler = builder.data
+    try:
+        parser.Parse(text, True)
+    except expat.ExpatError as error:
+        raise RobotFileError(f"{source}: row {error.lineno}, field '': invalid XML: {error}") from None
+    return builder.close(), lines
+
+
+def _origin(element: ET.Element | None, rows: _Rows, field: str) -> np.ndarray:
+    """(4, 4) of an ``<origin xyz rpy>`` (identity when absent); ``field`` names its owner (``joint j1``)."""
     if element is None:
         return np.eye(4)
-    xyz = _floats(element.get("xyz"), 3, [0.0] * 3, f"{where} <origin xyz>")
-    rpy = _floats(element.get("rpy"), 3, [0.0] * 3, f"{where} <origin rpy>")
+    xyz = _floats(element.get("xyz"), 3, [0.0] * 3, rows.at(element, f"{field} <origin xyz>"))
+    rpy = _floats(element.get("rpy"), 3, [0.0] * 3, rows.at(element, f"{field} <origin rpy>"))
     if max(abs(v) for v in xyz) > MAX_LENGTH:  # millimetres; the DH conversion would make it 1e18 m elsewhere
-        raise RobotFileError(f"{where} <origin xyz>: {element.get('xyz')!r} is not physical (at most {MAX_LENGTH:g} m "
-                             "in magnitude; a URDF is in metres)")
+        raise RobotFileError(f"{rows.at(element, f'{field} <origin xyz>')}: {element.get('xyz')!r} is not physical "
+                             f"(at most {MAX_LENGTH:g} m in magnitude; a URDF is in metres)")
     return pose_matrix(np.array(xyz), np.array(rpy))
 
 
-def _name(element: ET.Element, where: str) -> str:
+def _name(element: ET.Element, rows: _Rows) -> str:
     name = element.get("name")
     if not name:
-        raise RobotFileError(f"{where}: <{element.tag}> without a name")
+        raise RobotFileError(f"{rows.at(element, f'<{element.tag}>')}: <{element.tag}> without a name")
     return name
 
 
-def _link_ref(joint: ET.Element, tag: str, where: str) -> str:
+def _link_ref(joint: ET.Element, tag: str, rows: _Rows, field: str) -> str:
     ref = joint.find(tag)
     if ref is None or not ref.get("link"):
-        raise RobotFileError(f"{where}: missing <{tag} link=...>")
+        raise RobotFileError(f"{rows.at(joint if ref is None else ref, field)}: missing <{tag} link=...>")
     return ref.get("link")
 
 
-def _joint(element: ET.Element, source: str) -> UrdfJoint:
-    name = _name(element, f"{source}: <joint>")
-    where = f"{source}: joint {name!r}"
+def _joint(element: ET.Element, rows: _Rows) -> UrdfJoint:
+    name = _name(element, rows)
+    field_name = f"joint {name}"
+    where = rows.at(element, field_name)
     kind = element.get("type")
     if kind not in KNOWN_TYPES:
         raise RobotFileError(f"{where}: unknown type {kind!r} (expected one of {', '.join(KNOWN_TYPES)})")
     axis_element = element.find("axis")
     axis = np.array(_floats(axis_element.get("xyz") if axis_element is not None else None, 3, [1.0, 0.0, 0.0],
-                            f"{where} <axis xyz>"))
+                            rows.at(axis_element, f"{field_name} <axis xyz>")))
     lower = upper = None
     if kind in ("revolute", "prismatic"):
         norm = float(np.linalg.norm(axis))
         if norm < 1e-12:
-            raise RobotFileError(f"{where}: <axis xyz> is the zero vector")
+            raise RobotFileError(f"{rows.at(axis_element, f'{field_name} <axis xyz>')}: <axis xyz> is the zero vector")
         axis = axis / norm
     if kind == "revolute":
         limit = element.find("limit")
         if limit is None:
             raise RobotFileError(f"{where}: a revolute joint needs <limit lower upper>")
-        lower, upper = (_floats(limit.get(k, "0"), 1, [0.0], f"{where} <limit {k}>")[0] for k in ("lower", "upper"))
+        lower, upper = (_floats(limit.get(k, "0"), 1, [0.0], rows.at(limit, f"{field_name} <limit {k}>"))[0]
+                        for k in ("lower", "upper"))
+        where = rows.at(limit, f"{field_name} <limit>")
         for key, value in (("lower", lower), ("upper", upper)):
             if abs(value) > MAX_ANGLE:
-                raise RobotFileError(f"{where} <limit {key}>: {value:g} rad is not physical (at most {MAX_ANGLE:.6g} "
+                raise RobotFileError(f"{rows.at(limit, f'{field_name} <limit {key}>')}: {value:g} rad is not physical "
+                                     f"(at most {MAX_ANGLE:.6g} "
                                      "rad in magnitude; a URDF is in radians, not degrees)")
         if lower > upper:
             raise RobotFileError(f"{where}: <limit> lower ({lower}) > upper ({upper})")
@@ -217,22 +267,24 @@ def _joint(element: ET.Element, source: str) -> UrdfJoint:
                                  "joint needs its range [rad]")
     mimic = element.find("mimic")
     if mimic is not None and not mimic.get("joint"):
-        raise RobotFileError(f"{where}: <mimic> without a joint=...")
-    return UrdfJoint(name, kind, _link_ref(element, "parent", where), _link_ref(element, "child", where),
-                     _origin(element.find("origin"), where), axis, lower, upper,
-                     None if mimic is None else mimic.get("joint"))
+        raise RobotFileError(f"{rows.at(mimic, f'{field_name} <mimic>')}: <mimic> without a joint=...")
+    return UrdfJoint(name, kind, _link_ref(element, "parent", rows, f"{field_name} <parent>"),
+                     _link_ref(element, "child", rows, f"{field_name} <child>"),
+                     _origin(element.find("origin"), rows, field_name), axis, lower, upper,
+                     None if mimic is None else mimic.get("joint"), rows.lines.get(element))
 
 
-def _inertial(link: ET.Element, name: str, source: str) -> Inertial | None:
+def _inertial(link: ET.Element, name: str, rows: _Rows) -> Inertial | None:
     element = link.find("inertial")
     if element is None:
         return None
-    where = f"{source}: link {name!r} <inertial>"
+    field_name = f"link {name} <inertial>"
     mass_element = element.find("mass")
-    mass = _floats(mass_element.get("value") if mass_element is not None else None, 1, [0.0], f"{where} <mass>")[0]
+    where = rows.at(element if mass_element is None else mass_element, f"{field_name} <mass>")
+    mass = _floats(mass_element.get("value") if mass_element is not None else None, 1, [0.0], where)[0]
     if mass < 0.0:
-        raise RobotFileError(f"{where} <mass>: negative mass {mass}")
-    com = _origin(element.find("origin"), where)[:3, 3]
+        raise RobotFileError(f"{where}: negative mass {mass}")
+    com = _origin(element.find("origin"), rows, field_name)[:3, 3]
     return Inertial(mass, com)
 
 
@@ -243,52 +295,56 @@ def parse_urdf(text: str, source: str = "<urdf>") -> UrdfTree:
         RobotFileError: invalid XML, a joint naming an unknown link, a link with two parents,
             a loop, several roots (one line naming ``source`` and the element).
     """
-    try:
-        root = ET.fromstring(text)
-    except ET.ParseError as error:
-        raise RobotFileError(f"{source}: invalid XML: {error}") from None
+    root, lines = _xml_tree(text, source)
+    rows = _Rows(source, lines)
     if root.tag != "robot":
-        raise RobotFileError(f"{source}: expected a <robot> root element, got <{root.tag}>")
+        raise RobotFileError(f"{rows.at(root, f'<{root.tag}>')}: expected a <robot> root element, got <{root.tag}>")
     macro = next((e for e in root.iter() if isinstance(e.tag, str) and e.tag.startswith(XACRO_NAMESPACE)), None)
     if macro is not None:  # an include or a macro call brings links and joints this file does not hold
-        raise RobotFileError(f"{source}: <xacro:{macro.tag[len(XACRO_NAMESPACE):]}> element: {EXPAND}")
+        tag = f"<xacro:{macro.tag[len(XACRO_NAMESPACE):]}>"
+        raise RobotFileError(f"{rows.at(macro, tag)}: {tag} element: {EXPAND}")
     for tag in ("link", "joint"):  # bounded work: counted before anything is built or walked
         count = sum(1 for _ in root.iterfind(tag))
         if count > MAX_LINKS:
-            raise RobotFileError(f"{source}: {count} <{tag}> elements, at most {MAX_LINKS} are read (not a robot arm)")
+            raise RobotFileError(f"{rows.at(root, f'<{tag}>')}: {count} <{tag}> elements, at most {MAX_LINKS} are "
+                                 "read (not a robot arm)")
     links: list[str] = []
     inertials: dict[str, Inertial] = {}
     for element in root.findall("link"):
-        name = _name(element, f"{source}: <link>")
+        name = _name(element, rows)
         if name in links:
-            raise RobotFileError(f"{source}: link {name!r} is defined twice")
+            raise RobotFileError(f"{rows.at(element, f'link {name}')}: link {name!r} is defined twice")
         links.append(name)
-        inertial = _inertial(element, name, source)
+        inertial = _inertial(element, name, rows)
         if inertial is not None:
             inertials[name] = inertial
     if not links:
-        raise RobotFileError(f"{source}: no <link> elements")
+        raise RobotFileError(f"{rows.at(root, '<link>')}: no <link> elements")
     joints: dict[str, UrdfJoint] = {}
     names: set[str] = set()
     for element in root.findall("joint"):
-        joint = _joint(element, source)
+        joint = _joint(element, rows)
+        where = rows.at(element, f"joint {joint.name}")
         if joint.name in names:
-            raise RobotFileError(f"{source}: joint {joint.name!r} is defined twice")
+            raise RobotFileError(f"{where}: joint {joint.name!r} is defined twice")
         names.add(joint.name)
         for role, link in (("parent", joint.parent), ("child", joint.child)):
             if link not in links:
-                raise RobotFileError(f"{source}: joint {joint.name!r}: {role} link {link!r} is not defined")
+                raise RobotFileError(f"{rows.at(element.find(role), f'joint {joint.name} <{role}>')}: {role} link "
+                                     f"{link!r} is not defined")
         if joint.child in joints:
             raise RobotFileError(
-                f"{source}: joint {joint.name!r}: link {joint.child!r} has two parents "
+                f"{where}: link {joint.child!r} has two parents "
                 f"({joints[joint.child].parent!r} and {joint.parent!r}): loops are not supported"
             )
         joints[joint.child] = joint
     roots = [link for link in links if link not in joints]
     if len(roots) != 1:
         if not roots:
-            raise RobotFileError(f"{source}: every link has a parent: the joints form a loop")
-        raise RobotFileError(f"{source}: several root links ({', '.join(map(repr, roots))}): not one tree")
+            raise RobotFileError(f"{rows.at(root, '<joint>')}: every link has a parent: the joints form a loop")
+        second = root.findall("link")[links.index(roots[1])]
+        raise RobotFileError(f"{rows.at(second, f'link {roots[1]}')}: several root links "
+                             f"({', '.join(map(repr, roots))}): not one tree")
     tree = UrdfTree(source, root.get("name", ""), tuple(links), joints, roots[0], inertials)
     children: dict[str, list[str]] = {}
     for joint in joints.values():
@@ -299,9 +355,10 @@ def parse_urdf(text: str, source: str = "<urdf>") -> UrdfTree:
             if child not in reached:
                 reached.add(child)
                 stack.append(child)
-    for link in links:  # a cycle detached from the root
+    for link, element in zip(links, root.findall("link"), strict=True):  # a cycle detached from the root
         if link not in reached:
-            raise RobotFileError(f"{source}: link {link!r} is not connected to the root {roots[0]!r}: a loop")
+            raise RobotFileError(f"{rows.at(element, f'link {link}')}: link {link!r} is not connected to the root "
+                                 f"{roots[0]!r}: a loop")
     return tree
 
 
@@ -309,6 +366,11 @@ def read_urdf(path: str | os.PathLike) -> UrdfTree:
     """Read and parse a URDF file (see :func:`parse_urdf`), decoded in the encoding it declares (UTF-8 without
     a declaration)."""
     return parse_urdf(read_xml_text(path, RobotFileError), str(path))
+
+
+def _joint_at(source: str, joint: UrdfJoint, part: str = "") -> str:
+    """The message prefix ``FILE: row N, field 'joint NAME<part>'`` of a parsed joint."""
+    return f"{source}: {'' if joint.row is None else f'row {joint.row}, '}field 'joint {joint.name}{part}'"
 
 
 def chain(
@@ -337,7 +399,7 @@ def chain(
     for joint in joints:
         if joint.type not in MOVABLE + ("fixed",):
             raise RobotFileError(
-                f"{source}: joint {joint.name!r}: a {joint.type} joint between {base!r} and {tip!r} "
+                f"{_joint_at(source, joint)}: a {joint.type} joint between {base!r} and {tip!r} "
                 "(only revolute, continuous and fixed joints can be calibrated)"
             )
     movable = sum(j.type in MOVABLE for j in joints)
@@ -351,7 +413,7 @@ def chain(
     for joint in joints:
         if joint.mimic is not None and joint.type in MOVABLE:
             raise RobotFileError(
-                f"{source}: joint {joint.name!r}, field 'mimic': it follows joint {joint.mimic!r} between {base!r} "
+                f"{_joint_at(source, joint, ' <mimic>')}: it follows joint {joint.mimic!r} between {base!r} "
                 f"and {tip!r}; a coupled joint cannot be calibrated as an independent one (choose --tip-link "
                 "before it, or describe the chain without the coupling)"
             )

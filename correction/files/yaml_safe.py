@@ -157,6 +157,26 @@ def load_yaml(text: str, source: str, error: type[SpherecalError] = YamlError) -
         raise error(f"{source}: row ?, field '': nested too deeply") from None
 
 
+def node_line(node: Any, *path: Any, key_line: bool = False) -> int:
+    """1-based line of the YAML node at ``path`` (keys and indices) below ``node``, or of the deepest node found.
+    With ``key_line``, a path ending at a mapping key gives the key's line (a block's ``name:`` line, not the
+    line below it where the block's value starts)."""
+
+    for step, key in enumerate(path):
+        if isinstance(node, yaml.MappingNode):
+            match = [(k, v) for k, v in node.value if getattr(k, "value", None) == key]
+            if not match:
+                break
+            if key_line and step == len(path) - 1:
+                return match[-1][0].start_mark.line + 1
+            node = match[-1][1]
+        elif isinstance(node, yaml.SequenceNode) and isinstance(key, int) and key < len(node.value):
+            node = node.value[key]
+        else:
+            break
+    return node.start_mark.line + 1
+
+
 def dump_yaml(data: Any, **options: Any) -> str:
     """``yaml.safe_dump(data, **options)`` through libyaml's emitter when PyYAML has it (``CSafeDumper``:
     the same text, 3-4x faster on a calibrated robot file), else PyYAML's own."""

@@ -68,21 +68,22 @@ def _edit(edit) -> dict:
 
 
 BAD_FILES = [
-    ("missing key", lambda d: d.pop("tool"), r"missing key 'tool'"),
-    ("missing joint key", lambda d: d["joints"][2].pop("alpha"), r"joints\[2\]: missing key 'alpha'"),
-    ("wrong type", lambda d: d["joints"][1].update(d="abc"), r"joints\[1\]\.d: expected a number"),
-    ("bool", lambda d: d["joints"][1].update(a=True), r"joints\[1\]\.a: expected a number"),
-    ("nan", lambda d: d["joints"][4].update(theta=float("nan")), r"joints\[4\]\.theta: must be finite"),
-    ("inf", lambda d: d["tool"].__setitem__(2, float("inf")), r"tool\[2\]: must be finite"),
+    ("missing key", lambda d: d.pop("tool"), r"field 'tool': missing key 'tool'"),
+    ("missing joint key", lambda d: d["joints"][2].pop("alpha"), r"field 'joints\[2\]\.alpha': missing key 'alpha'"),
+    ("wrong type", lambda d: d["joints"][1].update(d="abc"), r"field 'joints\[1\]\.d': expected a number"),
+    ("bool", lambda d: d["joints"][1].update(a=True), r"field 'joints\[1\]\.a': expected a number"),
+    ("nan", lambda d: d["joints"][4].update(theta=float("nan")), r"field 'joints\[4\]\.theta': must be finite"),
+    ("inf", lambda d: d["tool"].__setitem__(2, float("inf")), r"field 'tool\[2\]': must be finite"),
     ("lower > upper", lambda d: d["joints"][0].update(lower=1.0, upper=-1.0),
-     r"joints\[0\].lower: must be below upper"),
-    ("convention", lambda d: d.update(convention="craig"), r"convention: unknown convention 'craig'"),
-    ("tool length", lambda d: d.update(tool=[0, 0]), r"tool: expected a list of 3 numbers"),
-    ("base", lambda d: d.update(base={"xyz": [0, 0], "rpy": [0, 0, 0]}), r"base\.xyz: expected a list of 3"),
-    ("joints empty", lambda d: d.update(joints=[]), r"joints: expected a non-empty list"),
+     r"field 'joints\[0\]\.lower': must be below upper"),
+    ("convention", lambda d: d.update(convention="craig"), r"field 'convention': unknown convention 'craig'"),
+    ("tool length", lambda d: d.update(tool=[0, 0]), r"field 'tool': expected a list of 3 numbers"),
+    ("base", lambda d: d.update(base={"xyz": [0, 0], "rpy": [0, 0, 0]}), r"field 'base\.xyz': expected a list of 3"),
+    ("joints empty", lambda d: d.update(joints=[]), r"field 'joints': expected a non-empty list"),
     # a misspelt key used to be dropped silently: the base placement or a joint offset read as zero
-    ("base typo", lambda d: d.update(base={"xyz": [0, 0, 0], "RPY": [0, 0, 1.5]}), r"base: unknown key 'RPY'"),
-    ("joint typo", lambda d: d["joints"][3].update(offset=0.1), r"joints\[3\]: unknown key 'offset'"),
+    ("base typo", lambda d: d.update(base={"xyz": [0, 0, 0], "RPY": [0, 0, 1.5]}),
+     r"field 'base\.RPY': unknown key 'RPY'"),
+    ("joint typo", lambda d: d["joints"][3].update(offset=0.1), r"field 'joints\[3\]\.offset': unknown key 'offset'"),
     # a hand-edited optional block was read only where it was used: a `compliance` or `scale` of the wrong
     # length was a ValueError traceback in calibrate, a NaN compliance calibrated, and a wrong `joint_names` or
     # `inertials` block was kept (inertials of 6 links on a 7-joint arm: the elastic candidates silently dropped)
@@ -94,7 +95,7 @@ BAD_FILES = [
     ("joint_names length", lambda d: d.update(joint_names=[f"j{k}" for k in range(6)]),
      r"field 'joint_names': expected a list of 7 joint names"),
     ("joint_names twice", lambda d: d.update(joint_names=[f"j{k}" for k in range(6)] + ["j2"]),
-     r"field 'joint_names': 'j2' is named twice"),
+     r"field 'joint_names\[6\]': 'j2' is named twice"),
     ("inertials count", lambda d: d["inertials"].pop(), r"field 'inertials': expected a list of 7 \{mass, com\} "
      r"entries, got 6 entries"),
     ("inertials mass", lambda d: d["inertials"][2].update(mass=-1.0), r"field 'inertials\[2\].mass': expected a "
@@ -112,7 +113,7 @@ def test_bad_field_names_file_and_field(tmp_path, label, edit, message) -> None:
     with pytest.raises(RobotFileError, match=message) as error:
         load_robot(path)
     text = str(error.value)
-    assert text.startswith(str(path)) and "\n" not in text
+    assert text.startswith(f"{path}: row ") and ", field '" in text and "\n" not in text
 
 
 def test_unreadable_and_invalid_yaml(tmp_path) -> None:
@@ -162,5 +163,49 @@ def test_a_calibration_block_that_is_not_a_mapping_is_named(tmp_path, panda, blo
     data = yaml.safe_load(Path(save_robot(panda, tmp_path / "cal.yaml")).read_text())
     data["calibration"] = block
     (tmp_path / "bad.yaml").write_text(yaml.safe_dump(data))
-    with pytest.raises(RobotFileError, match=r"bad.yaml: field 'calibration': expected the mapping calibrate writes"):
+    with pytest.raises(RobotFileError, match=r"bad.yaml: row \d+, field 'calibration': expected the mapping "):
         load_robot(tmp_path / "bad.yaml")
+
+
+#: A hand-written two-joint robot file: comments, a flow joint and a block joint (the line numbers are the point).
+HAND_WRITTEN = """\
+# two joints, written by hand
+name: two
+convention: modified
+joints:
+  - {a: 0.0, alpha: 0.0, d: 0.333, theta: 0.0, lower: -2.9, upper: 2.9}
+  - a: 0.0
+    alpha: -1.5707963267948966
+    d: 0.0
+    theta: 0.0
+    lower: -1.76
+    upper: 1.76
+tool: [0.0, 0.0, 0.107]
+base:
+  xyz: [0.0, 0.0, 0.0]
+  rpy: [0.0, 0.0, 0.0]
+"""
+
+
+@pytest.mark.parametrize(("old", "new", "row", "field"), [
+    ("alpha: -1.5707963267948966", "alpha: -90deg", 7, "joints[1].alpha"),
+    ("d: 0.333", "d: .nan", 5, "joints[0].d"),
+    ("[0.0, 0.0, 0.107]", "[0.0, 0.0, 107]", 12, "tool[2]"),
+    ("  rpy: [0.0, 0.0, 0.0]", "  RPY: [0.0, 0.0, 0.0]", 15, "base.RPY"),
+    ("    upper: 1.76\n", "", 6, "joints[1].upper"),  # a missing key: the row of its joint
+    ("convention: modified", "convention: craig", 3, "convention"),
+])
+def test_a_refusal_names_the_row_of_the_field(tmp_path, old, new, row, field) -> None:
+    assert HAND_WRITTEN.count(old) == 1
+    path = tmp_path / "robot.yaml"
+    path.write_text(HAND_WRITTEN.replace(old, new))
+    with pytest.raises(RobotFileError) as error:
+        load_robot(path)
+    assert str(error.value).startswith(f"{path}: row {row}, field '{field}': ")
+    assert load_robot(_written(tmp_path, HAND_WRITTEN)).n_joints == 2  # the file unedited is read
+
+
+def _written(tmp_path: Path, text: str) -> Path:
+    path = tmp_path / "good.yaml"
+    path.write_text(text)
+    return path

@@ -134,7 +134,7 @@ def test_inertials_lumped_per_joint_match_mujoco_centre_of_mass(rng):
     ("edit", "match"),
     [
         (lambda t: t.replace('revolute"><parent link="upper_arm_link"', 'prismatic"><parent link="upper_arm_link"'),
-         "joint 'elbow_joint': a prismatic joint"),
+         r"row \d+, field 'joint elbow_joint': a prismatic joint"),
         (lambda t: t.replace('<child link="flange"/>', '<child link="wrist_2_link"/>'),
          "link 'wrist_2_link' has two parents"),
         (lambda t: t.replace('<parent link="forearm_link"/>', '<parent link="forarm_link"/>'),
@@ -144,7 +144,7 @@ def test_inertials_lumped_per_joint_match_mujoco_centre_of_mass(rng):
         (lambda t: t.replace("</robot>", ""), "invalid XML"),
         # a <limit> with effort and velocity only: URDF's lower = upper = 0 was 'joints[0].lower: must be below upper'
         (lambda t: re.sub(r'<limit lower="[^"]*" upper="[^"]*"', "<limit", t, count=1),
-         "joint 'shoulder_pan_joint': <limit> lower and upper are both 0 .missing from it."),
+         r"row \d+, field 'joint shoulder_pan_joint <limit>': <limit> lower and upper are both 0 .missing from it."),
     ],
 )
 def test_bad_urdf_one_line_error(edit, match, tmp_path):
@@ -261,3 +261,65 @@ def test_a_urdf_is_read_in_the_encoding_it_declares(tmp_path):
         with pytest.raises(RobotFileError, match=match) as error:
             load_urdf(bad)
         assert str(bad) in str(error.value) and "\n" not in str(error.value)
+
+
+#: A hand-written two-joint URDF: a comment, an element over two lines (the line numbers are the point).
+HAND_WRITTEN = """\
+<?xml version="1.0"?>
+<!-- two joints, written by hand -->
+<robot name="two">
+  <link name="base"/>
+  <link name="l1"/>
+  <link name="l2"/>
+  <joint name="j1" type="revolute">
+    <parent link="base"/>
+    <child link="l1"/>
+    <origin xyz="0 0 0.333" rpy="0 0 0"/>
+    <axis xyz="0 0 1"/>
+    <limit lower="-2.9" upper="2.9" effort="87" velocity="2.1"/>
+  </joint>
+  <joint name="j2"
+         type="revolute">
+    <parent link="l1"/>
+    <child link="l2"/>
+    <origin xyz="0 0 0"
+            rpy="-1.5707963267948966 0 0"/>
+    <axis xyz="0 0 1"/>
+    <limit lower="-1.76" upper="1.76" effort="87" velocity="2.1"/>
+  </joint>
+</robot>
+"""
+
+
+@pytest.mark.parametrize(("old", "new", "row", "field"), [
+    ('rpy="-1.5707963267948966 0 0"', 'rpy="-90 deg 0"', 18, "joint j2 <origin rpy>"),  # the element's first line
+    ('<parent link="l1"/>', '<parent link="l0"/>', 16, "joint j2 <parent>"),
+    ('lower="-2.9"', 'lower="-166"', 12, "joint j1 <limit lower>"),
+    ('type="revolute">\n    <parent link="l1"/>', 'type="sliding">\n    <parent link="l1"/>', 14, "joint j2"),
+    ('<axis xyz="0 0 1"/>\n    <limit lower="-1.76"', '<axis xyz="0 0 0"/>\n    <limit lower="-1.76"', 20,
+     "joint j2 <axis xyz>"),
+    ('  <link name="l2"/>\n', '  <link name="l2"/>\n  <link name="l1"/>\n', 7, "link l1"),  # defined twice
+    ("</robot>\n", "", 23, ""),  # invalid XML: the end of the file, where the parser stopped
+])
+def test_a_urdf_refusal_names_the_row_of_the_element(tmp_path, old, new, row, field) -> None:
+    from spherecal.correction import RobotFileError
+
+    assert HAND_WRITTEN.count(old) == 1
+    path = tmp_path / "arm.urdf"
+    path.write_text(HAND_WRITTEN.replace(old, new))
+    with pytest.raises(RobotFileError) as error:
+        load_urdf(path)
+    assert str(error.value).startswith(f"{path}: row {row}, field '{field}': ")
+    assert parse_urdf(HAND_WRITTEN).joints["l2"].row == 14  # the file unedited is read, each joint at its line
+
+
+def test_an_entity_bomb_in_a_urdf_is_refused_at_once(tmp_path) -> None:
+    # the parser that records rows is expat as ElementTree uses it: its amplification limit still applies
+    entities = '<!ENTITY a0 "lol">' + "".join(f'<!ENTITY a{k} "{f"&a{k - 1};" * 10}">' for k in range(1, 10))
+    text = f'<?xml version="1.0"?><!DOCTYPE robot [{entities}]><robot name="&a9;"><link name="b"/></robot>'
+    path = tmp_path / "bomb.urdf"
+    path.write_text(text)
+    from spherecal.correction import RobotFileError
+
+    with pytest.raises(RobotFileError, match=r"bomb.urdf: row 1, field '': invalid XML: "):
+        load_urdf(path)
