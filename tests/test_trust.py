@@ -57,6 +57,29 @@ def test_a_joint_csv_naming_a_joint_twice_is_refused(tmp_path, panda) -> None:
         read_joint_csv(path, load_robot(PANDA))
 
 
+@pytest.mark.parametrize("spelling", [str.upper, str.title, lambda name: name.replace("panda", "Panda")])
+def test_a_joint_csv_in_another_case_is_read_when_unambiguous(tmp_path, panda, spelling) -> None:
+    # was: refused, "field 'panda_joint1': joint 'panda_joint1' of franka_panda not in the recording"
+    q = panda.random_configurations(5, np.random.default_rng(1))
+    order = [6, 0, 1, 2, 3, 4, 5]  # another column order: the index must follow the names
+    path = tmp_path / "joints.csv"
+    path.write_text(",".join(spelling(NAMES[k]) for k in order) + "\n"
+                    + "".join(",".join(repr(float(v)) for v in row[order]) + "\n" for row in q))
+    np.testing.assert_array_equal(read_joint_csv(path, load_robot(PANDA)).q, q)
+
+
+def test_a_joint_csv_whose_names_differ_only_in_case_is_refused(tmp_path, panda) -> None:
+    # Panda_Joint3 beside PANDA_JOINT3: which one is the arm's joint 3 cannot be told, so no case is ignored
+    q = panda.random_configurations(5, np.random.default_rng(2))
+    header = [name.title() for name in NAMES] + ["PANDA_JOINT3"]
+    path = tmp_path / "joints.csv"
+    path.write_text(",".join(header) + "\n" + "".join(",".join(repr(float(v)) for v in np.append(row, row[2])) + "\n"
+                                                      for row in q))
+    with pytest.raises(RecordingError, match=r"joints.csv: row 1, field 'panda_joint1': joint 'panda_joint1' of "
+                                             r"\S+ not in the recording \(has Panda_Joint1"):
+        read_joint_csv(path, load_robot(PANDA))
+
+
 def test_a_csv_source_that_is_a_symlink_loop_is_one_line(tmp_path, capsys) -> None:
     # was: RuntimeError: Symlink loop traceback from check_out_dir
     os.symlink("loop.csv", tmp_path / "loop.csv")

@@ -337,17 +337,47 @@ def read_joint_csv(path: str | os.PathLike, model: RobotModel) -> Recording:
 _TOPIC_POSITION = re.compile(r"^(?:.*/)?([^/]+)/position$")
 
 
-def _match_columns(header: list[str], model: RobotModel, where: str) -> tuple[np.ndarray, list[str]]:
-    """:func:`match_joints` of a CSV header; a header that names no convention's joints is tried again with
-    its topic columns read as joint names (``/joint_states/<joint>/position``, PlotJuggler's export)."""
+def _in_robot_case(header: list[str], model: RobotModel) -> list[str] | None:
+    """``header`` with each name that equals one of the robot's joint names ignoring case written as the robot
+    writes it (``Panda_Joint1`` -> ``panda_joint1``); None when nothing changes or when it is ambiguous: two
+    header names, or two of the robot's names, that equal each other ignoring case."""
+    known: dict[str, set[str]] = {}
+    for name in arm_joint_names(model):
+        known.setdefault(name.casefold(), set()).add(name)
+    hits = [name.casefold() for name in header if name.casefold() in known]
+    if len(set(hits)) != len(hits) or any(len(known[folded]) > 1 for folded in hits):
+        return None
+    respelled = [next(iter(known[name.casefold()])) if name.casefold() in known else name for name in header]
+    return None if respelled == header else respelled
+
+
+def _match_any_case(header: list[str], model: RobotModel, where: str) -> tuple[np.ndarray, list[str]]:
+    """:func:`match_joints`, and when it finds a joint missing, again with the header's names in the robot's
+    case where that is unambiguous (:func:`_in_robot_case`: a spreadsheet's ``Panda_Joint1``)."""
     try:
         return match_joints(header, model, where)
+    except RecordingError as error:
+        respelled = _in_robot_case(header, model)
+        if respelled is None:
+            raise
+        try:
+            return match_joints(respelled, model, where)
+        except RecordingError:
+            raise error from None
+
+
+def _match_columns(header: list[str], model: RobotModel, where: str) -> tuple[np.ndarray, list[str]]:
+    """:func:`match_joints` of a CSV header (names in any case, :func:`_match_any_case`); a header that names no
+    convention's joints is tried again with its topic columns read as joint names
+    (``/joint_states/<joint>/position``, PlotJuggler's export)."""
+    try:
+        return _match_any_case(header, model, where)
     except RecordingError:
         plain = [m.group(1) if (m := _TOPIC_POSITION.match(name)) else name for name in header]
         if plain == header:
             raise
         try:
-            return match_joints(plain, model, where)
+            return _match_any_case(plain, model, where)
         except RecordingError as error:
             if "named twice" in str(error):  # two topics' columns of one joint: say that, not 'missing'
                 raise error from None
