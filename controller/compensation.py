@@ -306,7 +306,7 @@ def corrected_ik(
     try:
         return nominal_ik_controller(calibrated, target, q0, orientation)
     except UnreachableError:
-        nearby = _nearby_ik(calibrated, target, np.asarray(q0, dtype=float), orientation)
+        nearby = _nearby_ik(calibrated, target, q0, orientation)  # q0: (n,) floats, checked by _seed
         if nearby is None:
             raise
         return nearby

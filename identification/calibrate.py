@@ -450,7 +450,7 @@ def _noise_warning(problem: CalibrationProblem, x: np.ndarray, sigma: float, noi
 
 def _sigma(problem: CalibrationProblem, x: np.ndarray, unknowns: float | None = None, loss: str = "linear") -> float:
     """Residual standard deviation per coordinate [m] of the data rows (:meth:`CalibrationProblem.data_sigma`);
-    with a robust loss, of the samples it did not discount (:meth:`CalibrationProblem.without_outliers`): ten
+    with a robust loss, of the samples it did not discount (:meth:`CalibrationProblem.inliers`): ten
     slipped samples of 100 mm read as 5 mm of noise pruned all but one parameter of MUKCa's Panda."""
     if loss != "linear":
         problem = problem.with_samples(problem.inliers(x))

@@ -327,7 +327,7 @@ def excess_energy(shown: float, declared: float, dof: float) -> float:
 
 def joint_error_root(
     model: RobotModel, problem: CalibrationProblem, noise: float, excess: float, length: float = LENGTH,
-    std: float = 0.0, free: np.ndarray | None = None, bounded: bool = True,
+    std: float = 0.0, free: np.ndarray | None = None, bound: float | None = None,
 ) -> tuple[float, np.ndarray]:
     """The unmodelled joint-angle error (:mod:`.joint_error`) that leaves ``excess`` in the residuals, and the bias
     it bends the fitted parameters by.
@@ -346,7 +346,8 @@ def joint_error_root(
         std: the error's std [rad] as estimated otherwise (:func:`.joint_error.split`); the larger of it and the
             excess's is taken.
         free: the parameters the calibration identified, as :func:`deviation_root`'s.
-        bounded: the std at most :func:`joint_error_bound` (False: linear in ``excess``, for a caller that scales it).
+        bound: the largest std [rad]: default :func:`joint_error_bound` of ``problem``'s samples (a caller that has
+            it already passes it); ``inf``: none, the std linear in ``excess`` for a caller that scales it.
 
     Returns:
         ``(s, B)``: the std of each joint's angle error [rad] and (P, c) the root of the bias's covariance
@@ -366,9 +367,8 @@ def joint_error_root(
         shifts.append(shift[:fp])
     if kept <= 0:
         return 0.0, np.zeros((model.n_params, 0))
-    std = max(excess / np.sqrt(kept), std)
-    if bounded:
-        std = min(std, joint_error_bound(model, pruned.dataset, length))
+    bound = joint_error_bound(model, pruned.dataset, length) if bound is None else bound
+    std = min(max(excess / np.sqrt(kept), std), bound)
     bias = np.zeros((model.n_params, sum(s.shape[1] for s in shifts)))
     bias[pruned.free] = std * np.hstack(shifts)
     return float(std), bias

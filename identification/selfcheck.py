@@ -156,7 +156,10 @@ def self_check(
     # the allowance is for the arm's error over its configurations, not for a socket that moved in time: a
     # fixture whose residual trends with recording order is judged without it
     moved = {f"fixture {f.check.removeprefix('trend ')}" for f in trends if f.figures["trend"]}
-    unmodelled = _unmodelled(nominal, built or problem, problem, left, kinds)
+    # the largest joint-angle error the nominal's spread at the sockets holds: bounds the leave-one-out allowance
+    # and the recorded error alike (computed once)
+    bound = joint_error_bound(nominal, (built or problem).dataset)
+    unmodelled = _unmodelled(nominal, built or problem, problem, left, kinds, bound)
     groups = [group_finding(problem, name, kinds[name], group, checkable,
                             0.0 if name in moved else unmodelled.get(name, 0.0))
               for name, group in left.items()]
@@ -175,7 +178,7 @@ def self_check(
     # the arm's unmodelled joint-angle error and the bias it bends the parameters by (:mod:`.joint_error`)
     joint_error = joint_error_root(nominal, built or problem, judged,
                                    excess_energy(shown, noise, problem.n_data - unknowns), std=parts[1],
-                                   free=problem.free)
+                                   free=problem.free, bound=bound)
     prediction, record = _prediction(nominal, built or problem, judged, sigma, shown, bias=joint_error[1])
     _record_held_out(record, nominal, built or problem, judged, noise, parts, joint_error,
                      prediction.figures["nominal_scale_from_data"], prediction.figures["nominal_scale_measured"],
@@ -380,9 +383,10 @@ def _level(problem: CalibrationProblem, r: np.ndarray, sigma: float, dof: int, e
 
 # --------------------------------------------------------------------------------- prediction
 def _unmodelled(nominal: RobotModel, built: CalibrationProblem, problem: CalibrationProblem,
-                left: dict[str, LeftOut], kinds: dict[str, tuple]) -> dict[str, float]:
+                left: dict[str, LeftOut], kinds: dict[str, tuple], bound: float) -> dict[str, float]:
     """Per fixture group, the variance per axis [m^2] of the arm's unmodelled error that a fit of the OTHER rows
-    leaves at its samples (:func:`.consistency.group_finding`'s ``unmodelled``).
+    leaves at its samples (:func:`.consistency.group_finding`'s ``unmodelled``); ``bound``: the largest joint-angle
+    error std [rad] (:func:`.prediction.joint_error_bound`).
 
     The others' residual beyond the declared noise (``sigma_rest^2 - noise^2`` over their degrees of freedom) is
     read as the arm's joint-angle error (:mod:`.joint_error`), as :func:`_record_held_out` reads the whole
@@ -396,9 +400,8 @@ def _unmodelled(nominal: RobotModel, built: CalibrationProblem, problem: Calibra
             if kinds[name][0] == "fixture" and g.dof > 0 and g.sigma_rest > noise}
     if not rest:
         return {}
-    # the std per unit excess (linear in it), at most what the nominal's spread at the sockets holds
-    per_excess, _ = joint_error_root(nominal, built, noise, 1.0, bounded=False)
-    bound = joint_error_bound(nominal, built.dataset)
+    # the std per unit excess (linear in it), at most ``bound``: what the nominal's spread at the sockets holds
+    per_excess, _ = joint_error_root(nominal, built, noise, 1.0, bound=np.inf)
     out = {}
     for name, group in rest.items():
         std = min(per_excess * excess_energy(group.sigma_rest, noise, group.dof_rest), bound)
@@ -518,18 +521,22 @@ def _prediction(nominal: RobotModel, built: CalibrationProblem, noise: float, sh
     # generic prior's 1 mm / 0.2 deg for the parameters a single placement leaves at nominal)
     root, _, _, _ = deviation_root(nominal, built, noise, bias_scale=scale)
 
-    def region(where: Workspace, deviation: np.ndarray = root) -> tuple[float, float, float]:
-        """(predicted mean, the nominal's expected mean after scaling, the prior's) [m] over ``where``."""
+    def predicted(where: Workspace, deviation: np.ndarray = root) -> float:
+        """Predicted mean error [m] over ``where`` of a parameter error of root ``deviation`` (P, k)."""
         z = np.random.default_rng(0).standard_normal((deviation.shape[1], 100))
         field_ = where.sensitivity @ deviation @ z
+        return float(np.linalg.norm(field_.reshape(-1, 3, z.shape[1]), axis=1).mean())
+
+    def region(where: Workspace) -> tuple[float, float, float]:
+        """(predicted mean, the nominal's expected mean after scaling, the prior's) [m] over ``where``."""
         prior_reference = nominal_expected(nominal, where.sensitivity)
-        return float(np.linalg.norm(field_.reshape(-1, 3, z.shape[1]), axis=1).mean()), \
-            scale * prior_reference, prior_reference
+        return predicted(where), scale * prior_reference, prior_reference
 
     whole = region(workspace)
     # the warning's figure: with the bias the arm's joint-angle error bends the parameters by (what makes a
-    # one-placement calibration of an accurate arm worse far from its data; the judgement's 2x margin holds it near)
-    far = region(workspace, np.hstack([root, bias])) if bias is not None and bias.shape[1] else whole
+    # one-placement calibration of an accurate arm worse far from its data; the judgement's 2x margin holds it near),
+    # against the same nominal reference
+    far = (predicted(workspace, np.hstack([root, bias])), whole[1]) if bias is not None and bias.shape[1] else whole
     is_near = len(near.q) >= count // 4
     predicted_mean, reference, prior_reference = region(near) if is_near else whole
     described = (f"{len(near.q)} configurations within {NEAR_RADIUS * 1e3:.0f} mm of the recorded tool points "
