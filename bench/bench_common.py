@@ -73,6 +73,35 @@ def find_mukca() -> Path:
     return Path("../shared/data/mukca")
 
 
+#: MUKCa robot folders by arm family (name prefix): (MUKCa's URDF under ``urdf/``, our robot file to the ball or
+#: None for the URDF itself). MUKCa's repository holds panda_1 ... panda_6, dinova_1/2 and kuka_14.
+MUKCA_FAMILIES = {
+    "panda": ("panda.urdf", "tests/data/mukca/panda_ball.yaml"),
+    "dinova": ("gen3lite.urdf", "tests/data/mukca/gen3lite_ball.yaml"),
+    "kuka": ("iiwa14.urdf", None),
+}
+#: The robots of ``shared/data/mukca``.
+MUKCA_SHARED = ("panda_2_clean", "panda_4_clean", "dinova_1")
+
+
+def mukca_family(robot: str) -> str:
+    """The family key of ``MUKCA_FAMILIES`` a MUKCa robot folder belongs to (by its name's prefix)."""
+    for prefix in MUKCA_FAMILIES:
+        if robot.startswith(prefix):
+            return prefix
+    raise SystemExit(f"{robot}: unknown arm family (a name starting with one of {sorted(MUKCA_FAMILIES)})")
+
+
+def mukca_nominal(root: Path, robot: str):
+    """The nominal model of a MUKCa robot folder to its ball: our robot file, or MUKCa's URDF to ``ball_link``."""
+    from spherecal.correction import load_robot
+
+    urdf, robot_file = MUKCA_FAMILIES[mukca_family(robot)]
+    if robot_file is None:
+        return load_robot(Path(root) / "urdf" / urdf, tip_link="ball_link")
+    return load_robot(Path(__file__).resolve().parents[1] / robot_file)
+
+
 def mukca_panda():
     """The embedded nominal Panda (with its inertials) and its tool point at MUKCa's ball centre, taken from
     ``tests/data/mukca/panda_ball.yaml`` (the fixed joints of MUKCa's ``panda.urdf`` after ``panda_link7``)."""

@@ -24,6 +24,10 @@ the chain end whose tool point is the file's).
 
     .venv/bin/python bench/mukca.py [--data ../shared/data/mukca] [--robots panda_2_clean ...] [--no-urdf]
 
+``--robots`` takes any robot folder of a MUKCa-layout ``--data`` (MUKCa's repository also has panda_1, panda_6,
+kuka_14, ...): the family comes from the name (``bench_common.MUKCA_FAMILIES``); a KUKA's nominal is MUKCa's
+``iiwa14.urdf`` to its ball (its inertials: the embedded iiwa14's, as the importer matches them).
+
 Prints a table and writes ``bench/mukca.json`` (or ``--out``) (versions, seed, command, every figure).
 """
 
@@ -50,14 +54,13 @@ from spherecal.identification.workflow import WorkflowOptions, run_workflow
 HERE = Path(__file__).resolve().parent
 #: MUKCa's published test MAE [mm] for (robot, training placement), where we have it.
 MUKCA = {("panda_2_clean", "front_center"): 0.347, ("panda_4_clean", "front"): 0.278}
-ROBOTS = {"panda_2_clean": "panda", "panda_4_clean": "panda", "dinova_1": "gen3lite"}
 MODELS = ("dh", "scale", "elastic", "elastic+scale", "auto")
 
 
-def _nominal(kind: str):
-    if kind == "panda":
+def _nominal(robot: str, root: Path):
+    if bench_common.mukca_family(robot) == "panda":
         return bench_common.mukca_panda()
-    return load_robot(HERE.parent / "tests" / "data" / "mukca" / "gen3lite_ball.yaml")
+    return bench_common.mukca_nominal(root, robot)
 
 
 def _placement(name: str) -> str:
@@ -127,9 +130,9 @@ def experiment(nominal, train, train_spec, test, model: str, work: Path, urdf: P
     return row
 
 
-def run_robot(root: Path, robot: str, kind: str, work: Path, use_urdf: bool) -> dict:
-    nominal = _nominal(kind)
-    urdf = (root / "urdf" / ("panda.urdf" if kind == "panda" else "gen3lite.urdf")) if use_urdf else None
+def run_robot(root: Path, robot: str, work: Path, use_urdf: bool) -> dict:
+    nominal = _nominal(robot, root)
+    urdf = (root / "urdf" / bench_common.MUKCA_FAMILIES[bench_common.mukca_family(robot)][0]) if use_urdf else None
     dataset, spec = bench_common.mukca_dataset(root, robot, nominal)
     places = list(dict.fromkeys(_placement(n) for n in dataset.fixture_names))
     models = [m for m in MODELS if m == "auto" or m in candidates_for(nominal)]
@@ -173,7 +176,8 @@ def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--data", default=None,
                         help="MUKCa root (data/, urdf/); default: shared/data/mukca beside the checkout")
-    parser.add_argument("--robots", nargs="+", default=list(ROBOTS))
+    parser.add_argument("--robots", nargs="+", default=list(bench_common.MUKCA_SHARED),
+                        help="robot folders under DATA/data (family by name: panda*, dinova*, kuka*)")
     parser.add_argument("--no-urdf", action="store_true", help="skip the exported-URDF column")
     parser.add_argument("--out", type=Path, default=HERE / "mukca.json",
                         help="result file (default bench/mukca.json; a run of some robots only: give another)")
@@ -187,7 +191,7 @@ def main() -> int:
         for robot in args.robots:
             work = Path(tmp) / robot
             work.mkdir()
-            results[robot] = run_robot(root, robot, ROBOTS[robot], work, not args.no_urdf)
+            results[robot] = run_robot(root, robot, work, not args.no_urdf)
     lines = summary(results)
     print("\n".join(lines))
     out = bench_common.write_json(args.out, {

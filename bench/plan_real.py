@@ -37,7 +37,7 @@ from pathlib import Path
 import bench_common  # first: one BLAS thread, no Rerun analytics
 import numpy as np
 
-from spherecal.correction import load_robot, tool_point
+from spherecal.correction import tool_point
 from spherecal.identification.calibrate import calibrate
 from spherecal.validation.planning import guidance as guidance_module
 from spherecal.validation.planning.guidance import calibrate_recording, rank_placements
@@ -45,12 +45,13 @@ from spherecal.validation.planning.placements import Placement
 from spherecal.validation.sockets import socket_validation
 
 HERE = Path(__file__).resolve().parent
-ROBOTS = {
-    "panda_2_clean": HERE.parent / "tests/data/mukca/panda_ball.yaml",
-    "panda_4_clean": HERE.parent / "tests/data/mukca/panda_ball.yaml",
-    "dinova_1": HERE.parent / "tests/data/mukca/gen3lite_ball.yaml",
-}
 SEEDS = 5
+
+
+def _mean_defined(values: list[float]) -> float:
+    """Mean of the defined values; nan when none is (2 candidates: no rank correlation)."""
+    defined = [v for v in values if np.isfinite(v)]
+    return float(np.mean(defined)) if defined else float("nan")
 
 
 def spearman(a: list[float], b: list[float]) -> float:
@@ -61,8 +62,8 @@ def spearman(a: list[float], b: list[float]) -> float:
     return float(np.corrcoef(ra, rb)[0, 1])
 
 
-def robot_rows(root: Path, robot: str, robot_file: Path, seeds: int, how: str = "workflow") -> dict:
-    model = load_robot(robot_file)
+def robot_rows(root: Path, robot: str, seeds: int, how: str = "workflow") -> dict:
+    model = bench_common.mukca_nominal(root, robot)
     everything, _ = bench_common.mukca_dataset(root, robot, model)
     placements = sorted({n.rpartition("_h")[0] for n in everything.fixture_names})
     data = {p: bench_common.mukca_dataset(root, robot, model, [p]) for p in placements}
@@ -137,6 +138,9 @@ def main() -> None:
     parser.add_argument("--actual", choices=("workflow", "plain"), default="workflow",
                         help="how first + candidate is calibrated for the actual outcome (see the module docstring)")
     parser.add_argument("--seeds", type=int, default=SEEDS, help=f"plan seeds 0..N-1 (default {SEEDS})")
+    parser.add_argument("--robots", nargs="+", default=list(bench_common.MUKCA_SHARED),
+                        help="robot folders under DATA/data (family by name: panda*, dinova*, kuka*)")
+    parser.add_argument("--out", type=Path, default=None, help="result file (default: named by the rules, in bench/)")
     args = parser.parse_args()
     guidance_module.SMOOTH = args.smooth
     guidance_module.JUDGED_ON = args.judged_on
@@ -147,19 +151,19 @@ def main() -> None:
     results = {}
     print(f"{'robot':<14} {'first, seed':<21} {'pick':<14} {'rank':>4} {'better':>6} {'rho MAE':>7} {'rho chg':>7} "
           f"{'pick chg':>8} {'random':>8} {'best':>8}  [mm]")
-    for robot, robot_file in ROBOTS.items():
+    for robot in args.robots:
         if not (root / "data" / robot).is_dir():
             print(f"{robot}: not found under {root}, skipped")
             continue
-        rows = robot_rows(root, robot, robot_file, args.seeds, args.actual)
+        rows = robot_rows(root, robot, args.seeds, args.actual)
         for first, r in rows.items():
             print(f"{robot:<14} {first:<21} {r['pick']:<14} {r['pick_rank_by_change']:>4} {str(r['better_half']):>6} "
                   f"{r['spearman_test_mae']:7.2f} {r['spearman_change']:7.2f} {r['pick_change_mm']:8.3f} "
                   f"{r['random_change_mm']:8.3f} {r['best_change_mm']:8.3f}")
         summary = {
             "better_half": f"{sum(r['better_half'] for r in rows.values())}/{len(rows)}",
-            "mean_spearman_test_mae": float(np.nanmean([r["spearman_test_mae"] for r in rows.values()] or [np.nan])),
-            "mean_spearman_change": float(np.nanmean([r["spearman_change"] for r in rows.values()] or [np.nan])),
+            "mean_spearman_test_mae": _mean_defined([r["spearman_test_mae"] for r in rows.values()]),
+            "mean_spearman_change": _mean_defined([r["spearman_change"] for r in rows.values()]),
             "mean_pick_change_mm": float(np.mean([r["pick_change_mm"] for r in rows.values()])),
             "mean_random_change_mm": float(np.mean([r["random_change_mm"] for r in rows.values()])),
             "mean_best_change_mm": float(np.mean([r["best_change_mm"] for r in rows.values()])),
@@ -169,7 +173,8 @@ def main() -> None:
               f"[mm] pick {summary['mean_pick_change_mm']:.3f}, random {summary['mean_random_change_mm']:.3f}, "
               f"best {summary['mean_best_change_mm']:.3f}")
         results[robot] = {"rows": rows, "summary": summary}
-    out = HERE / f"plan_real_{args.judged_on}_{args.unmodelled}_{args.postures}_{args.smooth}_{args.actual}.json"
+    rules = f"{args.judged_on}_{args.unmodelled}_{args.postures}_{args.smooth}_{args.actual}"
+    out = args.out or HERE / f"plan_real_{rules}.json"
     bench_common.write_json(out, {"plan_real": results, "blas_threads": os.environ.get("OPENBLAS_NUM_THREADS")},
                             inputs={"seeds": args.seeds, "smooth": args.smooth, "judged_on": args.judged_on,
                                     "unmodelled": args.unmodelled, "postures": args.postures,

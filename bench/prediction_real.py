@@ -48,7 +48,6 @@ import bench_common  # first: one BLAS thread, no Rerun analytics
 
 from spherecal.cli import main
 
-ROBOTS = {"panda_2_clean": "panda.urdf", "panda_4_clean": "panda.urdf", "dinova_1": "gen3lite.urdf"}
 TIP = "ball_link"  # MUKCa's ball (the Gen3 lite's chain also ends in fingers and a tool frame)
 
 
@@ -67,7 +66,7 @@ def _import(source: Path, urdf: Path, out: Path) -> None:
 
 def row(data: Path, robot: str, placement: str, work: Path) -> dict:
     """Calibrate on ``placement``, validate on every placement of ``robot``."""
-    urdf = data / "urdf" / ROBOTS[robot]
+    urdf = data / "urdf" / bench_common.MUKCA_FAMILIES[bench_common.mukca_family(robot)][0]
     train, everything = work / f"{robot}_{placement}", work / f"{robot}_all"
     _import(data / "data" / robot / placement, urdf, train)
     if not everything.exists():
@@ -110,7 +109,7 @@ def lopo_row(data: Path, robot: str, placement: str, work: Path) -> dict:
     import re
     import shutil
 
-    urdf = data / "urdf" / ROBOTS[robot]
+    urdf = data / "urdf" / bench_common.MUKCA_FAMILIES[bench_common.mukca_family(robot)][0]
     source = work / f"{robot}_without_{placement}"
     for other in (p for p in (data / "data" / robot).iterdir() if p.is_dir() and p.name != placement):
         shutil.copytree(other, source / other.name)
@@ -152,6 +151,8 @@ def main_bench() -> None:
     parser.add_argument("--protocol", choices=("single", "lopo"), default="single",
                         help="single: each placement trains, the others are held out; lopo: each placement is "
                              "held out, the others train")
+    parser.add_argument("--robots", nargs="+", default=list(bench_common.MUKCA_SHARED),
+                        help="robot folders under DATA/data (family by name: panda*, dinova*, kuka*)")
     args = parser.parse_args()
     args.out = args.out or Path(__file__).with_name(
         "prediction_real.json" if args.protocol == "single" else "prediction_real_lopo.json")
@@ -159,7 +160,7 @@ def main_bench() -> None:
     clock = time.perf_counter()
     rows = []
     with tempfile.TemporaryDirectory() as tmp:
-        for robot in ROBOTS:
+        for robot in args.robots:
             for placement in sorted(p.name for p in (args.data / "data" / robot).iterdir() if p.is_dir()):
                 rows.append((row if args.protocol == "single" else lopo_row)(args.data, robot, placement, Path(tmp)))
     print(f"{'robot':<14} {'train':<20} {'nominal':>8} {'measured':>9} {'predicted':>10} {'ratio':>6}  decision "
@@ -170,7 +171,7 @@ def main_bench() -> None:
             continue
         print(f"{r['robot']:<14} {r['train']:<20} {r['nominal_mm']:8.3f} {r['measured_mm']:9.3f} "
               f"{r['predicted_mm']:10.3f} {r['ratio']:6.2f}  {r['decision'][:160]}")
-    for robot in ROBOTS:
+    for robot in args.robots:
         ratios = [r["ratio"] for r in rows if r["robot"] == robot and "ratio" in r]
         inside = sum(0.5 <= x <= 2.0 for x in ratios)
         print(f"{robot}: ratio {min(ratios):.2f} .. {max(ratios):.2f}, {inside} of {len(ratios)} within 0.5x-2x")

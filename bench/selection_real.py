@@ -8,6 +8,7 @@ placement alone (MUKCa's protocol: two sockets, 50 mm apart) and fit every candi
 would have chosen, as mean ratios to dh and to the per-placement best model. Criteria (lower is better):
 
 * ``bic``: the library's (``selection.information_criterion``): ``M ln(RSS/M) + ln(M) k_eff``;
+* ``bic_rigid_elastic``: the same BIC over the candidates without a scale (dh, elastic);
 * ``aic``: ``M ln(RSS/M) + 2 k_eff``;
 * ``evidence``: minus twice the Laplace log evidence of the MAP fit. The prior rows are read as a Gaussian
   prior relative to the noise (std ``sigma s_i / (sqrt(W) noise)``, so the MAP is the fit's), centres flat,
@@ -30,6 +31,7 @@ Then the mechanism of the scale term's failures: joint 4's offset ``theta4`` of 
 joint 4's angle on the training samples (mean and spread over them, mdeg).
 
     .venv/bin/python bench/selection_real.py --data ../shared/data/mukca [--robots panda_2_clean panda_4_clean]
+        (any MUKCa robot folder under DATA/data: panda*, kuka* (MUKCa's iiwa14.urdf to its ball), dinova*)
         [--prior 0.5] [--out bench/selection_real.json]
 
 ``--prior`` changes every fit's prior weight (the library's default :data:`PRIOR` otherwise): how robust
@@ -61,7 +63,7 @@ from spherecal.identification.selection import CANDIDATES, information_criterion
 from spherecal.identification.synthetic import fixture_samples
 
 HERE = Path(__file__).resolve().parent
-CRITERIA = ("bic", "aic", "evidence", "risk", "richest")
+CRITERIA = ("bic", "bic_rigid_elastic", "aic", "evidence", "risk", "richest")
 #: Virtual sockets of the ``risk`` criterion and configurations per socket.
 SOCKETS, PER_SOCKET = 8, 30
 
@@ -140,7 +142,8 @@ def joint4(fits: dict) -> dict:
 
 
 def run_robot(root: Path, robot: str, prior: float, tail: float | None = None) -> dict:
-    nominal = bench_common.mukca_panda()
+    nominal = (bench_common.mukca_panda() if bench_common.mukca_family(robot) == "panda"
+               else bench_common.mukca_nominal(root, robot))
     dataset, _ = bench_common.mukca_dataset(root, robot, nominal)
     sockets = virtual_sockets(nominal)
     out = {}
@@ -158,6 +161,8 @@ def run_robot(root: Path, robot: str, prior: float, tail: float | None = None) -
         names = tuple(fits)
         chosen = {c: min(names, key=lambda k, s=s: (s[k], names.index(k))) for c, s in scores.items()}
         chosen["richest"] = names[-1]
+        plain = tuple(k for k in names if "scale" not in k)
+        chosen["bic_rigid_elastic"] = min(plain, key=lambda k: (scores["bic"][k], plain.index(k)))
         assert chosen["bic"] == selection.chosen
         out[place] = {"test_mae_mm": mae, "scores": scores, "chosen": chosen, "joint4": joint4(fits)}
         j4 = {k: 0.0 for k in ("s4_prior_spreads", "theta4_moved_mdeg", "s4q4_c4tau4_mean_mdeg",
