@@ -334,8 +334,7 @@ def check_plausible(problem: CalibrationProblem, params: np.ndarray, max_change:
             moved most (in prior spreads).
     """
     model = problem.model
-    q, start_points, typical = _plausibility_reference(model)
-    change = float(registered_errors(tool_point(model.with_params(params), q), start_points).mean())
+    change, typical = tool_point_change(model, params)
     if change <= max_change * typical:
         return
     free = problem.free
@@ -350,6 +349,14 @@ def check_plausible(problem: CalibrationProblem, params: np.ndarray, max_change:
         f"{model.layout.format(name, params[free[worst]] - model.params[free[worst]])}: the samples do not determine "
         f"the parameters; record more self-motion (wider joint ranges, more fixtures or known distances)"
     )
+
+
+def tool_point_change(model: RobotModel, params: np.ndarray) -> tuple[float, float]:
+    """(change, typical) [m]: how far ``params`` move ``model``'s tool points (mean over the seeded workspace
+    configurations, after the best rigid fit), and how far a real arm's errors (the prior spreads, gauge and
+    base left out) typically move them: what :func:`check_plausible` compares."""
+    q, start_points, typical = _plausibility_reference(model)
+    return float(registered_errors(tool_point(model.with_params(params), q), start_points).mean()), typical
 
 
 def _plausibility_reference(model: RobotModel) -> tuple[np.ndarray, np.ndarray, float]:

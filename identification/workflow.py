@@ -33,6 +33,7 @@ from spherecal.correction.files.samples_csv import read_samples
 from .calibrate import MAX_CHANGE, CalibrationResult, calibrate
 from .problem import NOISE, PRIOR
 from .selection import ModelSelection, select_model, start_for
+from .tool_fit import recentred_tool
 from .training import exclude_fixtures, training_record
 
 
@@ -152,6 +153,8 @@ def run_workflow(nominal: RobotModel, dataset: Dataset, spec: FixtureSpec | None
         dataset = dataset.deduplicated(options.dedup_tol)
     dropped = read - dataset.n_samples
     dataset = dataset.subsampled(options.max_per_fixture, np.random.default_rng(options.seed))
+    given_tool = nominal.tool
+    nominal, tool_note = recentred_tool(nominal, dataset, options.max_change)
 
     def fit(begin, data, fixtures, warm=None):  # a candidate's or a fold's fit: lm, no self-check
         return calibrate(begin, data, fixtures, start=warm, loss=options.loss, noise=options.fit_noise,
@@ -171,12 +174,14 @@ def run_workflow(nominal: RobotModel, dataset: Dataset, spec: FixtureSpec | None
         noise=options.fit_noise, max_change=options.max_change, force=options.force, prior=options.prior,
         noise_declared=options.noise is not None,
     )
+    if tool_note is not None:
+        result = replace(result, warnings=(tool_note, *result.warnings))
     block = result.block()
     block["model_selection"] = selection.block()
     if selection.seconds:
         block["timings_s"]["model_selection"] = selection.seconds
     block["duplicates_dropped"] = dropped
-    block["nominal_tool"] = [float(v) for v in nominal.tool]  # a tool swap carries the tool's correction over
+    block["nominal_tool"] = [float(v) for v in given_tool]  # a tool swap carries the tool's correction over
     block["trained_on"] = training_record(as_read, dataset)  # validate recognises these samples by content
     block["options"] = options.record()
     block["provenance"] = provenance(options.seed, {**(inputs or {}), **options.record()})

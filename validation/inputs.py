@@ -20,9 +20,18 @@ class ValidationInputError(SpherecalError):
     """Input files that do not fit together (one line naming the file and the field)."""
 
 
+def _with_tool_of(model: RobotModel, reference: RobotModel) -> RobotModel:
+    """``model`` with ``reference``'s tool point: the arms compared alone (a calibration may find the recorded
+    tool centimetres from the robot file's, :mod:`spherecal.identification.tool_fit`)."""
+    params = model.params.copy()
+    params[model.layout.tool] = reference.tool
+    return model.with_params(params)
+
+
 def check_models(models: dict[str, RobotModel], files: dict[str, str]) -> None:
     """Every model describes the nominal arm: same joint count, DH convention and joint limits, and a
-    tool point within :data:`MAX_MODEL_DIFFERENCE` of the nominal one's (as ``compensate`` checks).
+    tool point within :data:`MAX_MODEL_DIFFERENCE` of the nominal one's (as ``compensate`` checks), each model
+    carrying the nominal's tool for that comparison (a tool-swapped file: its own, to name the swap).
 
     Args:
         models: role (``"nominal"``, ``"calibrated"``, ``"truth"``) -> model; ``"nominal"`` first.
@@ -39,10 +48,11 @@ def check_models(models: dict[str, RobotModel], files: dict[str, str]) -> None:
         if mismatch is not None:
             field, what = mismatch
             raise ValidationInputError(f"{files[role]}: field {field}: {what} as in the nominal {files['nominal']}")
-        gap = np.linalg.norm(tool_point(model, q) - nominal_tool, axis=1)
+        swapped = isinstance(model.extras.get("tool_swap"), dict)
+        gap = np.linalg.norm(tool_point(model if swapped else _with_tool_of(model, reference), q) - nominal_tool,
+                             axis=1)
         if not np.all(gap <= MAX_MODEL_DIFFERENCE):
             worst = float(np.nanmax(np.where(np.isfinite(gap), gap, np.inf)))
-            swapped = isinstance(model.extras.get("tool_swap"), dict)
             field, why = (("tool", "its tool was replaced by `spherecal tool`: validate the calibrated file it was "
                            "made from, whose tool point is the one the data was recorded with") if swapped else
                           ("joints", "a model of another arm?"))

@@ -1,0 +1,70 @@
+"""The tool point the samples pin down, for a robot file whose tool is not the one recorded.
+
+A ball on a force-torque sensor, an adapter plate or another holder puts the recorded tool point centimetres
+from the robot file's; the arm's own errors move it by millimetres. Started from the file's tool, the fit
+moves it that far and :func:`.calibrate.check_plausible` refuses the result as noise fitted along directions
+the samples barely see, although every fixture pins the tool point (MUKCa's ``panda_1_with_sensor``: the ball
+36-41 mm further out than ``panda.urdf`` says; calibrated, 0.29-0.33 mm held out against 20-22 mm nominal).
+
+:func:`pivot_tool` is the classic pivot calibration with the arm at its nominal model: each sample's tool point
+is ``p_k + R_k t`` (last joint frame origin and orientation, ``t`` the tool point in that frame), every sample
+of a fixture at one centre, so ``t`` solves the linear least squares of the per-fixture deviations from their
+means. :func:`recentred_tool` uses it only when the robot file's tool is beyond the plausibility limit from it;
+otherwise the calibration is untouched.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from spherecal.correction import Dataset, RobotModel, tool_point
+
+from .calibrate import MAX_CHANGE, tool_point_change
+from .selfcheck import MAX_SOCKET_NOISE
+
+
+def pivot_tool(model: RobotModel, dataset: Dataset) -> tuple[np.ndarray, float]:
+    """(3,) tool point [m] in the last joint frame that best puts each fixture's samples at one point, the
+    rest of ``model`` as it is (its compliance and scale included), and the samples' rms distance from their
+    fixture's mean point per axis with it [m]."""
+    tool = model.layout.tool
+    zero = model.params.copy()
+    zero[tool] = 0.0
+    origin = tool_point(model.with_params(zero), dataset.q)
+    frame = np.empty((dataset.n_samples, 3, 3))
+    for axis in range(3):
+        unit = zero.copy()
+        unit[tool.start + axis] = 1.0
+        frame[:, :, axis] = tool_point(model.with_params(unit), dataset.q) - origin
+    lhs, rhs = frame.copy(), -origin
+    for name in dataset.fixture_names:
+        rows = dataset.labels == name
+        lhs[rows] -= lhs[rows].mean(axis=0)
+        rhs[rows] -= rhs[rows].mean(axis=0)
+    solution, *_ = np.linalg.lstsq(lhs.reshape(-1, 3), rhs.reshape(-1), rcond=None)
+    spread = lhs.reshape(-1, 3) @ solution - rhs.reshape(-1)
+    return solution, float(np.sqrt(np.mean(spread**2)))
+
+
+def recentred_tool(nominal: RobotModel, dataset: Dataset,
+                   max_change: float = MAX_CHANGE) -> tuple[RobotModel, str | None]:
+    """``nominal`` with the tool point the samples pin down, and a warning, when its own is implausibly far.
+
+    Far means what :func:`.calibrate.check_plausible` refuses: the change moves the tool points more than
+    ``max_change`` times what a real arm's errors do. And the tool must explain the samples: with it, they lie
+    within :data:`.selfcheck.MAX_SOCKET_NOISE` per axis of their fixture's point, else the robot file does not
+    describe the arm (another arm, its convention, its units) and the self-check says so. Otherwise
+    ``(nominal, None)``: the calibration starts from, and its prior pulls toward, the robot file as given.
+    """
+    tool, spread = pivot_tool(nominal, dataset)
+    params = nominal.params.copy()
+    params[nominal.layout.tool] = tool
+    change, typical = tool_point_change(nominal, params)
+    if not (np.all(np.isfinite(tool)) and spread <= MAX_SOCKET_NOISE) or change <= max_change * typical:
+        return nominal, None
+    shift = (tool - nominal.tool) * 1e3
+    note = (f"tool point: the samples put it {np.linalg.norm(shift):.1f} mm from the robot file's "
+            f"([{shift[0]:.1f}, {shift[1]:.1f}, {shift[2]:.1f}] mm in the last joint frame; a real arm's errors "
+            f"move it about {typical * 1e3:.1f} mm): an adapter or sensor the description lacks? The calibration "
+            "starts from, and its prior pulls toward, the tool the samples show; check the tool before a tool swap")
+    return nominal.with_params(params), note

@@ -1,0 +1,85 @@
+"""A ball mounted further out than the robot file says (a force-torque sensor or an adapter between flange and
+ball holder: MUKCa's ``panda_1_with_sensor``, 36-41 mm). The samples pin the tool point down; the calibration is
+written with a warning naming the offset, instead of refused as "the samples do not determine the parameters".
+The truth is known (simulation); the pivot fit is checked against the true tool."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from spherecal.correction import load_robot, perturb, tool_point
+from spherecal.correction.files.fixtures import FixtureSpec
+from spherecal.identification.calibrate import calibrate
+from spherecal.identification.problem import ImplausibleCalibrationError
+from spherecal.identification.synthetic import make_dataset
+from spherecal.identification.tool_fit import pivot_tool, recentred_tool
+from spherecal.identification.workflow import WorkflowOptions, run_workflow
+from spherecal.validation.inputs import ValidationInputError, check_models
+
+TRAIN = {"front_h0": [0.5, -0.025, 0.05], "front_h1": [0.5, 0.025, 0.05]}
+HELD = {"side_h0": [0.35, 0.4, 0.25], "side_h1": [0.4, 0.4, 0.25]}
+SENSOR = np.array([0.004, -0.003, 0.038])  # [m] in the last joint frame: what the robot file lacks
+SPEC = FixtureSpec(tuple(TRAIN), distances=(("front_h0", "front_h1", 0.05),))
+
+
+def _with_tool(model, tool):
+    params = model.params.copy()
+    params[model.layout.tool] = tool
+    return model.with_params(params)
+
+
+def _arm(seed: int, extra=SENSOR):
+    """(robot file, true arm: the file's Panda off by the generic spread and its ball ``extra`` further out,
+    training samples, every sample)."""
+    panda = load_robot("panda")
+    rng = np.random.default_rng(seed)
+    true = perturb(panda, rng)
+    true = _with_tool(true, true.tool + extra)
+    data, _ = make_dataset(true, {k: np.array(v) for k, v in {**TRAIN, **HELD}.items()}, 40, rng, noise=1.5e-4)
+    train = data.select(np.isin(data.labels, list(TRAIN)))
+    return panda, true, type(train)(train.labels, train.q, fixture_names=tuple(TRAIN)), data
+
+
+def _held_out(model, data) -> float:
+    points = [tool_point(model, data.for_fixture(name)) for name in HELD]
+    return float(np.mean([np.linalg.norm(p - p.mean(axis=0), axis=1).mean() for p in points]))
+
+
+def test_the_pivot_fit_finds_the_true_tool_of_an_exact_arm() -> None:
+    panda = load_robot("panda")
+    true = _with_tool(panda, panda.tool + SENSOR)
+    data, _ = make_dataset(true, {k: np.array(v) for k, v in TRAIN.items()}, 40, np.random.default_rng(0),
+                           noise=1e-4)
+    tool, spread = pivot_tool(panda, data)
+    assert np.linalg.norm(tool - true.tool) < 2e-4  # 0.1 mm noise over 80 samples
+    assert spread < 2e-4
+    tool_truth, _ = pivot_tool(true, data)  # the right file: the same answer
+    assert np.linalg.norm(tool_truth - tool) < 1e-9
+
+
+@pytest.mark.parametrize("seed", [0, 1])
+def test_a_ball_further_out_than_the_file_says_is_calibrated_with_a_warning(seed) -> None:
+    nominal, true, train, data = _arm(seed)
+    with pytest.raises(ImplausibleCalibrationError, match="do not determine"):  # what it was before
+        calibrate(nominal, train, SPEC, prior=0.5)
+    out = run_workflow(nominal, train, SPEC, WorkflowOptions())
+    note = next(w for w in out.result.warnings if w.startswith("tool point:"))
+    assert "an adapter or sensor the description lacks" in note
+    assert np.linalg.norm(out.model.tool - true.tool) < 2e-3  # the arm's own errors share the last millimetres
+    assert _held_out(out.model, data) < 0.05 * _held_out(nominal, data)  # sockets it never saw
+    assert out.block["nominal_tool"] == pytest.approx(list(nominal.tool))  # the file's tool, for a tool swap
+    # validate compares the arms, not the tools: the calibrated file passes against its robot file ...
+    check_models({"nominal": nominal, "calibrated": out.model}, {"nominal": "panda", "calibrated": "cal.yaml"})
+    # ... and another arm still does not
+    other = perturb(nominal, np.random.default_rng(9), 0.03, np.deg2rad(3.0), 0.03)
+    with pytest.raises(ValidationInputError, match="another arm"):
+        check_models({"nominal": nominal, "calibrated": other}, {"nominal": "panda", "calibrated": "other.yaml"})
+
+
+def test_a_tool_the_file_describes_is_left_alone() -> None:
+    nominal, _, train, _ = _arm(0, extra=np.zeros(3))
+    model, note = recentred_tool(nominal, train)
+    assert model is nominal and note is None
+    out = run_workflow(nominal, train, SPEC, WorkflowOptions(model="dh"))
+    assert not any(w.startswith("tool point:") for w in out.result.warnings)
