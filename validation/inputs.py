@@ -20,9 +20,20 @@ class ValidationInputError(SpherecalError):
     """Input files that do not fit together (one line naming the file and the field)."""
 
 
+def _calibrated_from(model: RobotModel, reference: RobotModel) -> bool:
+    """``model`` is a calibration whose file records ``reference``'s tool as its robot file's (its own tool is
+    then the one its samples showed, which may be centimetres away: :mod:`spherecal.identification.tool_fit`)."""
+    block = model.extras.get("calibration")
+    recorded = block.get("nominal_tool") if isinstance(block, dict) else None
+    try:
+        return (not isinstance(model.extras.get("tool_swap"), dict) and recorded is not None
+                and bool(np.allclose(np.asarray(recorded, dtype=float), reference.tool, rtol=0.0, atol=1e-9)))
+    except (TypeError, ValueError):  # a hand-edited record: compared as it is
+        return False
+
+
 def _with_tool_of(model: RobotModel, reference: RobotModel) -> RobotModel:
-    """``model`` with ``reference``'s tool point: the arms compared alone (a calibration may find the recorded
-    tool centimetres from the robot file's, :mod:`spherecal.identification.tool_fit`)."""
+    """``model`` with ``reference``'s tool point: the arms compared alone."""
     params = model.params.copy()
     params[model.layout.tool] = reference.tool
     return model.with_params(params)
@@ -30,8 +41,8 @@ def _with_tool_of(model: RobotModel, reference: RobotModel) -> RobotModel:
 
 def check_models(models: dict[str, RobotModel], files: dict[str, str]) -> None:
     """Every model describes the nominal arm: same joint count, DH convention and joint limits, and a
-    tool point within :data:`MAX_MODEL_DIFFERENCE` of the nominal one's (as ``compensate`` checks), each model
-    carrying the nominal's tool for that comparison (a tool-swapped file: its own, to name the swap).
+    tool point within :data:`MAX_MODEL_DIFFERENCE` of the nominal one's (as ``compensate`` checks). A calibration
+    of this robot file (its record names the nominal's tool) is compared with the nominal's tool: the arms alone.
 
     Args:
         models: role (``"nominal"``, ``"calibrated"``, ``"truth"``) -> model; ``"nominal"`` first.
@@ -49,8 +60,8 @@ def check_models(models: dict[str, RobotModel], files: dict[str, str]) -> None:
             field, what = mismatch
             raise ValidationInputError(f"{files[role]}: field {field}: {what} as in the nominal {files['nominal']}")
         swapped = isinstance(model.extras.get("tool_swap"), dict)
-        gap = np.linalg.norm(tool_point(model if swapped else _with_tool_of(model, reference), q) - nominal_tool,
-                             axis=1)
+        compared = _with_tool_of(model, reference) if _calibrated_from(model, reference) else model
+        gap = np.linalg.norm(tool_point(compared, q) - nominal_tool, axis=1)
         if not np.all(gap <= MAX_MODEL_DIFFERENCE):
             worst = float(np.nanmax(np.where(np.isfinite(gap), gap, np.inf)))
             field, why = (("tool", "its tool was replaced by `spherecal tool`: validate the calibrated file it was "
