@@ -23,10 +23,11 @@ from .calibrate import MAX_CHANGE, tool_point_change
 from .selfcheck import MAX_SOCKET_NOISE
 
 
-def pivot_tool(model: RobotModel, dataset: Dataset) -> tuple[np.ndarray, float]:
+def pivot_tool(model: RobotModel, dataset: Dataset) -> tuple[np.ndarray, float, float]:
     """(3,) tool point [m] in the last joint frame that best puts each fixture's samples at one point, the
-    rest of ``model`` as it is (its compliance and scale included), and the samples' rms distance from their
-    fixture's mean point per axis with it [m]."""
+    rest of ``model`` as it is (its compliance and scale included); the samples' rms distance from their
+    fixture's mean point per axis with it [m]; and the largest std of the tool's coordinates at that spread
+    [m] (inf when the motion recorded does not determine the tool: too few samples, too little rotation)."""
     tool = model.layout.tool
     zero = model.params.copy()
     zero[tool] = 0.0
@@ -41,9 +42,16 @@ def pivot_tool(model: RobotModel, dataset: Dataset) -> tuple[np.ndarray, float]:
         rows = dataset.labels == name
         lhs[rows] -= lhs[rows].mean(axis=0)
         rhs[rows] -= rhs[rows].mean(axis=0)
-    solution, *_ = np.linalg.lstsq(lhs.reshape(-1, 3), rhs.reshape(-1), rcond=None)
-    spread = lhs.reshape(-1, 3) @ solution - rhs.reshape(-1)
-    return solution, float(np.sqrt(np.mean(spread**2)))
+    lhs, rhs = lhs.reshape(-1, 3), rhs.reshape(-1)
+    solution, *_ = np.linalg.lstsq(lhs, rhs, rcond=None)
+    residual = lhs @ solution - rhs
+    spread = float(np.sqrt(np.mean(residual**2)))
+    dof = rhs.size - 3 - 3 * len(dataset.fixture_names)
+    singular = np.linalg.svd(lhs, compute_uv=False)
+    if dof <= 0 or singular[-1] <= 1e-9 * max(singular[0], 1e-300):
+        return solution, spread, float("inf")
+    std = float(np.sqrt(residual @ residual / dof)) / singular[-1]
+    return solution, spread, std
 
 
 def recentred_tool(nominal: RobotModel, dataset: Dataset,
@@ -51,16 +59,18 @@ def recentred_tool(nominal: RobotModel, dataset: Dataset,
     """``nominal`` with the tool point the samples pin down, and a warning, when its own is implausibly far.
 
     Far means what :func:`.calibrate.check_plausible` refuses: the change moves the tool points more than
-    ``max_change`` times what a real arm's errors do. And the tool must explain the samples: with it, they lie
+    ``max_change`` times what a real arm's errors do. The recorded motion must pin that tool down (its std at the
+    samples' spread within what a real arm's errors move the tool points), and it must explain them: they lie
     within :data:`.selfcheck.MAX_SOCKET_NOISE` per axis of their fixture's point, else the robot file does not
     describe the arm (another arm, its convention, its units) and the self-check says so. Otherwise
     ``(nominal, None)``: the calibration starts from, and its prior pulls toward, the robot file as given.
     """
-    tool, spread = pivot_tool(nominal, dataset)
+    tool, spread, std = pivot_tool(nominal, dataset)
     params = nominal.params.copy()
     params[nominal.layout.tool] = tool
     change, typical = tool_point_change(nominal, params)
-    if not (np.all(np.isfinite(tool)) and spread <= MAX_SOCKET_NOISE) or change <= max_change * typical:
+    determined = np.all(np.isfinite(tool)) and std <= typical  # the motion recorded pins the tool down
+    if not (determined and spread <= MAX_SOCKET_NOISE) or change <= max_change * typical:
         return nominal, None
     shift = (tool - nominal.tool) * 1e3
     note = (f"tool point: the samples put it {np.linalg.norm(shift):.1f} mm from the robot file's "

@@ -51,10 +51,11 @@ def test_the_pivot_fit_finds_the_true_tool_of_an_exact_arm() -> None:
     true = _with_tool(panda, panda.tool + SENSOR)
     data, _ = make_dataset(true, {k: np.array(v) for k, v in TRAIN.items()}, 40, np.random.default_rng(0),
                            noise=1e-4)
-    tool, spread = pivot_tool(panda, data)
+    tool, spread, std = pivot_tool(panda, data)
     assert np.linalg.norm(tool - true.tool) < 2e-4  # 0.1 mm noise over 80 samples
     assert spread < 2e-4
-    tool_truth, _ = pivot_tool(true, data)  # the right file: the same answer
+    assert np.linalg.norm(tool - true.tool) < 5 * std < 1e-3  # its std describes its error
+    tool_truth, _, _ = pivot_tool(true, data)  # the right file: the same answer
     assert np.linalg.norm(tool_truth - tool) < 1e-9
 
 
@@ -75,6 +76,16 @@ def test_a_ball_further_out_than_the_file_says_is_calibrated_with_a_warning(seed
     other = perturb(nominal, np.random.default_rng(9), 0.03, np.deg2rad(3.0), 0.03)
     with pytest.raises(ValidationInputError, match="another arm"):
         check_models({"nominal": nominal, "calibrated": other}, {"nominal": "panda", "calibrated": "other.yaml"})
+
+
+def test_a_motion_that_does_not_pin_the_tool_down_leaves_it_alone() -> None:
+    # one sample per fixture, or every sample of a fixture in one posture: the least squares has no answer, and
+    # its minimum-norm one (the tool at the flange) must not replace the file's
+    nominal, _, train, _ = _arm(0)
+    one = train.select(np.array([0, 40]))
+    assert recentred_tool(nominal, one) == (nominal, None)
+    still = type(train)(train.labels, np.repeat(train.q[[0, 40]], 40, axis=0), fixture_names=train.fixture_names)
+    assert recentred_tool(nominal, still) == (nominal, None)
 
 
 def test_a_tool_the_file_describes_is_left_alone() -> None:
