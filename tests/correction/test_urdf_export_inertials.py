@@ -156,3 +156,17 @@ def test_lumped_matches_point_masses_and_the_parallel_axis_theorem() -> None:
     _, com, tensor = lumped([m, 0.0], [[r, 0, 0], [0, 0, 0]], np.array([rod, np.zeros((3, 3))]))
     np.testing.assert_allclose(com, [r, 0, 0])
     np.testing.assert_allclose(tensor, rod, atol=1e-15)
+
+
+@pytest.mark.parametrize("bad", ["[0.1, 0, 0, 0.1, 0]", "[-0.1, 0, 0, 0.1, 0, 0.1]", "[1e9, 0, 0, 1, 0, 1]"])
+def test_a_malformed_tensor_is_refused_in_one_line(tmp_path, panda, bad) -> None:
+    from spherecal.correction.files.inertials_file import with_inertials_file
+    from spherecal.correction.gravity import InertialsError
+
+    lines = [f"  - {{mass: 1.0, com: [0.0, 0.0, 0.0]{', inertia: ' + bad if k == 2 else ''}}}" for k in range(7)]
+    path = tmp_path / "masses.yaml"
+    path.write_text("inertials:\n" + "\n".join(lines) + "\n")
+    with pytest.raises(InertialsError) as error:
+        with_inertials_file(panda, path)
+    message = str(error.value)
+    assert "\n" not in message and str(path) in message and "row 4" in message and "inertials[2].inertia" in message
