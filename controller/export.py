@@ -1,13 +1,16 @@
 """Export a (calibrated) robot model as URDF, MJCF or the robot file (YAML).
 
 * ``urdf`` (:func:`correction.files.urdf_write.robot_to_urdf`, or the user's own URDF with only its joint
-  origins rewritten, :func:`correction.files.urdf_into.urdf_into`): kinematics only, so a model with
+  origins rewritten, :func:`correction.files.urdf_into.urdf_into`): rigid kinematics, so a model with
   joint-side terms (compliance, ...) is written as its best rigid approximation (:mod:`.rigid_fit`), and
-  :attr:`Export.notes` says how much that loses.
+  :attr:`Export.notes` says how much that loses. Standalone, each link carries the model's inertial (mass,
+  centre of mass, inertia tensor), so MuJoCo, Gazebo or an RNEA load it as is; without inertials a note says
+  what a dynamics stack needs. ``into`` keeps the user's own inertials.
 * ``mjcf``: the controller's plant (:func:`controller.plant.build_mjcf`; elastic joints kept as flexible
-  hinges): bodies ``link0..n``, hinges ``joint1..n``, site ``tool``. A hinge's angle is the recorded one and a
-  spring cannot push (:func:`mjcf_lost_terms`): a model with a joint-angle scale or a negative compliance is
-  written as its best rigid fit, as for a URDF, and :attr:`Export.notes` says how much that loses.
+  hinges): bodies ``link0..n`` with the model's inertials (the URDF's bodies), hinges ``joint1..n``, site
+  ``tool``. A hinge's angle is the recorded one and a spring cannot push (:func:`mjcf_lost_terms`): a model with
+  a joint-angle scale or a negative compliance is written as its best rigid fit, as for a URDF, and
+  :attr:`Export.notes` says how much that loses.
 * ``yaml``: the robot file, every term kept.
 """
 
@@ -27,6 +30,7 @@ from spherecal.correction.files.urdf_into import urdf_into
 from spherecal.correction.files.urdf_write import (
     PANDA_EFFORT,
     ExportError,
+    dynamics_note,
     provenance_comment,
     robot_to_urdf,
     xml_comment,
@@ -149,13 +153,16 @@ def export_model(model: RobotModel, output_format: str, header: str = "", prefix
 
         comments = [xml_comment(header)] if header.strip() else []
         lost = mjcf_lost_terms(model)
+        dynamics = _dynamics(model, output_format)
         if not lost:
-            return Export("\n".join(comments + [provenance_comment(model), build_mjcf(model)]))
+            return Export("\n".join(comments + [provenance_comment(model), build_mjcf(model, inertials=True)]),
+                          dynamics)
         recorded, where = recorded_configurations(model, None, folder)
         fit = rigid_approximation(model, recorded, seed=seed)
         notes = (fit.summary("MJCF") + f" (a hinge turns by the recorded angle and its spring cannot push: "
-                 f"{', '.join(lost)})", f"rigid fit: {where}")
-        return Export("\n".join(comments + [provenance_comment(model), build_mjcf(fit.model)]), notes, fit)
+                 f"{', '.join(lost)})", f"rigid fit: {where}", *dynamics)
+        return Export("\n".join(comments + [provenance_comment(model), build_mjcf(fit.model, inertials=True)]),
+                      notes, fit)
     if into is not None:
         for option, value in (("--prefix", prefix), ("--effort", effort), ("--velocity", velocity)):
             if value is not None:
@@ -174,4 +181,16 @@ def export_model(model: RobotModel, output_format: str, header: str = "", prefix
     else:
         text = robot_to_urdf(rigid, prefix="panda_" if prefix is None else prefix, effort=effort,
                              velocity=velocity, header=header)
+        notes += _dynamics(rigid)
     return Export(text, notes, fit)
+
+
+def _dynamics(model: RobotModel, output_format: str = "urdf") -> tuple[str, ...]:
+    """:func:`correction.files.urdf_write.dynamics_note` as notes (none when every body is complete)."""
+    if output_format == "mjcf":
+        from spherecal.controller.plant import LINK_MASS  # mujoco: the plant module imports it
+
+        line = dynamics_note(model, f"the MJCF's links weigh a placeholder {LINK_MASS:g} kg each at their origins")
+    else:
+        line = dynamics_note(model)
+    return () if line is None else (line,)

@@ -18,7 +18,8 @@ import numpy as np
 from spherecal.correction import RobotModel, link_frames
 from spherecal.correction.elastic import compliance_of, link_angles
 from spherecal.correction.files.urdf_write import xml_comment
-from spherecal.correction.gravity import inertials_of
+from spherecal.correction.gravity import has_inertials, inertials_of
+from spherecal.correction.inertials import link_inertias
 
 #: Physical defaults of the plant (settings that keep the closed chain stable at 1 kHz).
 TIMESTEP = 1e-3  # [s] the Panda's 1 kHz control rate
@@ -46,6 +47,16 @@ def _quat(rotation: np.ndarray) -> np.ndarray:
     quat = np.empty(4)
     mujoco.mju_mat2Quat(quat, np.ascontiguousarray(rotation, dtype=float).ravel())
     return quat
+
+
+def _inertial(mass: float, com: np.ndarray, tensor: np.ndarray) -> str:
+    """An MJCF ``<inertial>``: a diagonal tensor as ``diaginertia`` (the plant's defaults, written as before), any
+    other as ``fullinertia`` (MJCF's order ``ixx iyy izz ixy ixz iyz``) [kg m^2] about ``com`` [m]."""
+    if not np.any(tensor - np.diag(np.diag(tensor))):
+        inertia = f'diaginertia="{_vec(np.diag(tensor))}"'
+    else:
+        inertia = f'fullinertia="{_vec(tensor[[0, 1, 2, 0, 0, 1], [0, 1, 2, 1, 2, 2]])}"'
+    return f'<inertial pos="{_vec(com)}" mass="{_num(mass)}" {inertia}/>'
 
 
 def joint_offsets(model: RobotModel) -> list[tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]]:
@@ -86,6 +97,7 @@ def build_mjcf(
     timestep: float = TIMESTEP,
     connect_solref: tuple[float, float] = CONNECT_SOLREF,
     velocity_gain: float = VELOCITY_GAIN,
+    inertials: bool = False,
 ) -> str:
     """MJCF text of the arm.
 
@@ -105,6 +117,11 @@ def build_mjcf(
         timestep: [s].
         connect_solref: ``solref`` of the connect equalities (time constant [s], damping ratio).
         velocity_gain: ``kv`` of the joint velocity actuators.
+        inertials: every link body (and the payload) gets the model's own mass, centre of mass and inertia tensor
+            (:func:`correction.inertials.link_inertias`), rigid or elastic: the export for a dynamics stack, the
+            same bodies as the URDF export. False (the simulated plant): a rigid model's links weigh
+            :data:`LINK_MASS` at their origins, an elastic one's carry its masses with a :data:`LINK_INERTIA`
+            diagonal. A model without inertials keeps the plant's defaults either way.
 
     Returns:
         The MJCF document (floats written with 17 significant digits).
@@ -115,6 +132,10 @@ def build_mjcf(
     stiffness = stiffness_of(model)
     elastic = bool(np.any(stiffness > 0))
     masses, coms = inertials_of(model) if elastic else (np.append(np.full(n, LINK_MASS), 0.0), np.zeros((n + 1, 3)))
+    tensors = np.broadcast_to(LINK_INERTIA * np.eye(3), (n + 1, 3, 3)).copy()
+    tensors[n] = 1e-3 * np.eye(3)
+    if inertials and has_inertials(model):
+        masses, coms, tensors, _ = link_inertias(model)
     base = model.base_transform
     lines = [
         f"<mujoco model={quoteattr(model.name)}>",
@@ -151,8 +172,7 @@ def build_mjcf(
             placement = ""
         lines.append(f'{indent}<body name="link{i + 1}" {placement} gravcomp="1">')
         indent += "  "
-        inertia = _vec([LINK_INERTIA] * 3)
-        lines.append(f'{indent}<inertial pos="{_vec(coms[i])}" mass="{_num(masses[i])}" diaginertia="{inertia}"/>')
+        lines.append(f'{indent}{_inertial(masses[i], coms[i], tensors[i])}')
         if stiffness[i] > 0:
             damping = 2.0 * FLEX_DAMPING_RATIO * np.sqrt(stiffness[i])
             lines.append(f'{indent}<joint name="flex{i + 1}" {hinge} stiffness="{_num(stiffness[i])}" '
@@ -166,8 +186,7 @@ def build_mjcf(
     for m, offset in enumerate(np.zeros((0, 3)) if markers is None else np.asarray(markers, float).reshape(-1, 3)):
         lines.append(f'{indent}<site name="marker{m}" pos="{_vec(offset)}" rgba="0.2 0.4 1 1"/>')
     if masses[n] > 0:
-        lines.append(f'{indent}<body name="payload" gravcomp="1"><inertial pos="{_vec(coms[n])}" '
-                     f'mass="{_num(masses[n])}" diaginertia="{_vec([1e-3] * 3)}"/></body>')
+        lines.append(f'{indent}<body name="payload" gravcomp="1">{_inertial(masses[n], coms[n], tensors[n])}</body>')
     for _ in range(n + 1 + int(np.sum(stiffness > 0))):
         indent = indent[:-2]
         lines.append(f"{indent}</body>")

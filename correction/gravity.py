@@ -7,6 +7,10 @@ Inertial data live in :attr:`RobotModel.extras`, exactly as a robot file's top-l
       ...
     payload: {mass: 0.73, com: [0.0, 0.0, 0.14]}                # [kg], [m] in the last DH frame
 
+Each entry may also give ``inertia: [ixx, ixy, ixz, iyy, iyz, izz]`` [kg m^2] about its centre of mass, in
+the axes of the same frame (:mod:`.inertia`): gravity does not need it, a dynamics stack does (the URDF and
+MJCF exports write it, :func:`correction.inertials.link_inertias`).
+
 Frame ``i`` is the frame :func:`correction.link_frames` gives for link ``i`` (it moves with joint
 ``i`` in both DH conventions). The payload is what the flange carries (hand, ball), rigidly on the
 last link.
@@ -24,6 +28,7 @@ import numpy as np
 
 from .chain import frames
 from .errors import SpherecalError
+from .inertia import checked_tensor
 from .model import RobotModel
 
 #: Standard gravity in the world (base) frame [m/s^2].
@@ -42,8 +47,9 @@ class InertialsError(SpherecalError):
 
 
 def _entry(value: Any, where: str) -> tuple[float, np.ndarray]:
-    if not isinstance(value, dict) or set(value) - {"mass", "com"} or "mass" not in value:
-        raise InertialsError(f"{where}': expected a mapping {{mass: kg, com: [x, y, z]}}, got {value!r}")
+    if not isinstance(value, dict) or set(value) - {"mass", "com", "inertia"} or "mass" not in value:
+        raise InertialsError(f"{where}': expected a mapping {{mass: kg, com: [x, y, z] m, inertia: [ixx, ixy, ixz, "
+                             f"iyy, iyz, izz] kg m^2 (optional)}}, got {value!r}")
     mass = value["mass"]
     if isinstance(mass, bool) or not isinstance(mass, (int, float)) or not np.isfinite(mass) or mass < 0:
         raise InertialsError(f"{where}.mass': expected a finite mass >= 0 [kg], got {mass!r}")
@@ -57,6 +63,8 @@ def _entry(value: Any, where: str) -> tuple[float, np.ndarray]:
     if np.linalg.norm(com_array) > MAX_COM_DISTANCE:
         raise InertialsError(f"{where}.com': {com!r} m is {np.linalg.norm(com_array):.4g} m from its frame, not "
                              f"physical (at most {MAX_COM_DISTANCE:g} m; the file is in metres)")
+    if "inertia" in value:
+        checked_tensor(value["inertia"], f"{where}.inertia'", InertialsError)
     return float(mass), com_array
 
 

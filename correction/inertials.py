@@ -9,17 +9,21 @@ centre of mass into the other model's frames::
     com_user_i = inv(F_user_i(0)) F_donor_i(0) com_donor_i
 
 with ``F_i(0)`` the world pose of link ``i``'s frame at zero angles (both frames are fixed on link ``i``,
-so the transform between them does not depend on the angles once the joint axes coincide).
+so the transform between them does not depend on the angles once the joint axes coincide); an inertia tensor
+about the centre of mass turns with the frame. :func:`link_inertias` gives every body's mass, centre of mass and
+tensor, as the URDF and MJCF exports write them.
 """
 
 from __future__ import annotations
 
 from dataclasses import replace
+from typing import NamedTuple
 
 import numpy as np
 
 from .chain import link_frames
 from .gravity import inertials_of
+from .inertia import rotated, six_of, sphere, tensor
 from .model import RobotModel
 
 #: Largest distance between corresponding joint axes [m] for two models to be the same arm (the URDFs
@@ -89,8 +93,51 @@ def transfer_inertials(model: RobotModel, donor: RobotModel, distance_tol: float
     mine = link_frames(_placed(model, ignore_base), zero)[1:]  # (n, 4, 4): frame i of link i
     theirs = link_frames(_placed(donor, ignore_base), zero)[1:]
     frame = np.append(np.arange(model.n_joints), model.n_joints - 1)  # the payload rides on link n
-    moved = [np.linalg.solve(mine[f], theirs[f] @ np.append(c, 1.0))[:3] for f, c in zip(frame, coms, strict=True)]
-    inertials = [{"mass": float(m), "com": [float(v) for v in c]} for m, c in zip(masses[:-1], moved[:-1], strict=True)]
-    extras = {**model.extras, "inertials": inertials,
-              "payload": {"mass": float(masses[-1]), "com": [float(v) for v in moved[-1]]}}
+    entries = [*donor.extras["inertials"], donor.extras.get("payload") or {}]
+    moved = []
+    for f, m, c, entry in zip(frame, masses, coms, entries, strict=True):
+        turn = np.linalg.solve(mine[f], theirs[f])  # the donor's frame in this model's
+        out = {"mass": float(m), "com": [float(v) for v in turn[:3, :3] @ c + turn[:3, 3]]}
+        if "inertia" in entry:  # the tensor turns with the frame (about the centre: no shift)
+            out["inertia"] = six_of(rotated(tensor(np.asarray(entry["inertia"], dtype=float)), turn[:3, :3]))
+        moved.append(out)
+    extras = {**model.extras, "inertials": moved[:-1], "payload": moved[-1]}
     return replace(model, extras=extras)
+
+
+class LinkInertias(NamedTuple):
+    """Every body of the arm as a dynamics stack needs it (:func:`link_inertias`).
+
+    Attributes:
+        masses: (n+1,) [kg], links 1..n then the payload.
+        coms: (n+1, 3) centres of mass [m], link ``i`` in DH frame ``i``, the payload in frame ``n``.
+        tensors: (n+1, 3, 3) inertia about each centre of mass, in the axes of the same frame [kg m^2].
+        estimated: (n+1,) bool: no tensor given, a uniform sphere stands in (:func:`correction.inertia.sphere`).
+    """
+
+    masses: np.ndarray
+    coms: np.ndarray
+    tensors: np.ndarray
+    estimated: np.ndarray
+
+
+def link_inertias(model: RobotModel) -> LinkInertias:
+    """Masses, centres of mass and inertia tensors of ``model``'s links and payload.
+
+    A body with a mass but no ``inertia`` in its entry gets a uniform solid sphere of radius
+    :data:`correction.inertia.ESTIMATE_RADIUS` (gravity is exact without it; accelerations are not), flagged in
+    ``estimated``.
+
+    Raises:
+        InertialsError: no ``inertials`` block, or a malformed entry (:func:`correction.gravity.inertials_of`).
+    """
+    masses, coms = inertials_of(model)
+    entries = [*model.extras["inertials"], model.extras.get("payload") or {}]
+    tensors = np.zeros((len(masses), 3, 3))
+    estimated = np.zeros(len(masses), dtype=bool)
+    for k, (mass, entry) in enumerate(zip(masses, entries, strict=True)):
+        if "inertia" in entry:
+            tensors[k] = tensor(np.asarray(entry["inertia"], dtype=float))
+        elif mass > 0:
+            tensors[k], estimated[k] = sphere(mass), True
+    return LinkInertias(masses, coms, tensors, estimated)

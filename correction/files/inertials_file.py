@@ -1,11 +1,14 @@
-"""The inertials file (``--inertials FILE``): link masses and centres of mass of an arm, for gravity torques.
+"""The inertials file (``--inertials FILE``): link masses and centres of mass of an arm, for gravity torques, and
+optionally their inertia tensors, for a dynamics stack (the URDF and MJCF exports write them).
 
 Format (YAML, SI units)::
 
     # one entry per joint i, base to flange: the link that joint i moves, with everything rigidly on it
     inertials:
       - {mass: 4.970684, com: [0.003875, 0.002081, -0.04762]}   # [kg], [m] in DH frame i
-      - ...
+      - {mass: 0.646926, com: [-0.003141, -0.02872, 0.003495],  # optional tensor about the centre of mass,
+         inertia: [0.007962, -0.003925, 0.010254, 0.02811, 0.000704, 0.025995]}  # [kg m^2], axes of frame i,
+      - ...                                                     # URDF order ixx ixy ixz iyy iyz izz
     payload: {mass: 0.76, com: [0.0, 0.0, 0.14]}                # optional: what the flange carries,
                                                                 # [kg], [m] in the last DH frame
 

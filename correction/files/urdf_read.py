@@ -15,6 +15,7 @@ from xml.parsers import expat
 
 import numpy as np
 
+from ..inertia import FIELDS, rotated, tensor
 from ..model import pose_matrix
 from .robot_file import MAX_ANGLE, MAX_LENGTH, RobotFileError
 from .text_input import plain_float, read_xml_text
@@ -55,10 +56,13 @@ class UrdfJoint:
 
 @dataclass(frozen=True)
 class Inertial:
-    """A link's mass [kg] and centre of mass (3,) in the link frame [m]."""
+    """A link's mass [kg], centre of mass (3,) in the link frame [m] and its (3, 3) inertia tensor about the centre
+    of mass in the link frame's axes [kg m^2] (the ``<inertia>`` turned by the ``<origin rpy>``; None without an
+    ``<inertia>`` element)."""
 
     mass: float
     com: np.ndarray
+    inertia: np.ndarray | None = None
 
 
 @dataclass(frozen=True)
@@ -284,8 +288,14 @@ def _inertial(link: ET.Element, name: str, rows: _Rows) -> Inertial | None:
     mass = _floats(mass_element.get("value") if mass_element is not None else None, 1, [0.0], where)[0]
     if mass < 0.0:
         raise RobotFileError(f"{where}: negative mass {mass}")
-    com = _origin(element.find("origin"), rows, field_name)[:3, 3]
-    return Inertial(mass, com)
+    origin = _origin(element.find("origin"), rows, field_name)
+    inertia_element = element.find("inertia")
+    inertia = None
+    if inertia_element is not None:  # read as given (rounded published tensors may break the triangle inequality)
+        where = rows.at(inertia_element, f"{field_name} <inertia>")
+        six = [_floats(inertia_element.get(key), 1, [0.0], f"{where} {key}")[0] for key in FIELDS]
+        inertia = rotated(tensor(np.array(six)), origin[:3, :3])
+    return Inertial(mass, origin[:3, 3], inertia)
 
 
 def parse_urdf(text: str, source: str = "<urdf>") -> UrdfTree:

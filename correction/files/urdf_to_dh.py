@@ -33,6 +33,7 @@ import numpy as np
 
 from ..chain import link_frames
 from ..conversion import convert
+from ..inertia import lumped, rotated, six_of
 from ..model import RobotModel, matrix_rpy
 from .robot_file import RobotFileError, check_robot
 from .urdf_read import MOVABLE, UrdfTree, chain, read_urdf
@@ -180,12 +181,20 @@ def _inertials(tree: UrdfTree, base: str, joints: list, frames: list[np.ndarray]
             groups[owner].append(link)
 
     def lump(links: list[str], frame: np.ndarray) -> dict:
-        items = [(tree.inertials[k].mass, poses[k][:3, :3] @ tree.inertials[k].com + poses[k][:3, 3])
-                 for k in links if k in tree.inertials]
-        mass = float(sum(m for m, _ in items))
-        com = sum(m * p for m, p in items) / mass if mass > 0 else frame[:3, 3]
-        local = frame[:3, :3].T @ (com - frame[:3, 3])
-        return {"mass": mass, "com": [float(v) for v in local]}
+        """One body in ``frame`` (world pose at q = 0): mass, centre of mass and, when every link with a mass
+        gives one, the inertia tensor about the centre (each link's turned into the world, moved by the
+        parallel-axis theorem, turned into ``frame``)."""
+        held = [(tree.inertials[k], poses[k]) for k in links if k in tree.inertials]
+        masses = np.array([i.mass for i, _ in held])
+        centres = np.array([pose[:3, :3] @ i.com + pose[:3, 3] for i, pose in held]).reshape(-1, 3)
+        tensors = np.array([np.zeros((3, 3)) if i.inertia is None else rotated(i.inertia, pose[:3, :3])
+                            for i, pose in held]).reshape(-1, 3, 3)
+        mass, com, total = lumped(masses, centres, tensors)
+        local = frame[:3, :3].T @ ((com if mass > 0 else frame[:3, 3]) - frame[:3, 3])
+        entry = {"mass": mass, "com": [float(v) for v in local]}
+        if held and all(i.inertia is not None for i, _ in held if i.mass > 0):
+            entry["inertia"] = six_of(rotated(total, frame[:3, :3].T))
+        return entry
 
     return [lump(g, frames[i]) for i, g in enumerate(groups)], lump(payload, frames[-1])
 

@@ -1,8 +1,13 @@
 """URDF text of a :class:`RobotModel`: the calibrated arm as a description other stacks load.
 
 The joint origins reproduce the DH chain exactly (to floating-point rounding) in both
-conventions, the base placement included. Kinematics only: no visuals, collisions or
-inertials (a stack that needs masses keeps its own and takes the joint origins from here).
+conventions, the base placement included. No visuals or collisions. When the model has link
+inertials (``extras["inertials"]`` and ``payload``, :mod:`correction.gravity`), each moving link
+gets its ``<inertial>``: mass, centre of mass and inertia tensor moved from DH frame ``i`` into
+that link's frame (:func:`dh_in_links`), the payload on the tool link; a tensor nobody gave is
+a uniform sphere (:func:`correction.inertials.link_inertias`, said by :func:`dynamics_note`).
+Without inertials the file is kinematics only and :func:`dynamics_note` says what a dynamics
+stack (MuJoCo, Gazebo, pinocchio) still needs.
 
 Links and joints (``P`` is the prefix, ``panda_`` by default, ``n`` the joint count), Franka's
 names for a Panda (``panda_link0..8``, ``panda_joint1..7``, the flange ``panda_link8``)::
@@ -20,8 +25,11 @@ names for a Panda (``panda_link0..8``, ``panda_joint1..7``, the flange ``panda_l
   ``Rz(theta)``; ``Plink{i}`` is DH frame ``i-1`` turned by ``theta_i + q_i``, and the last
   joint's trailing part goes into ``Pjoint{n+1}``.
 
-In both, ``Plink{n+1}`` has the pose of :func:`correction.tool_pose` (orientation of the last
-DH frame, origin at the tool point). Floats are written with ``repr``: nothing is rounded.
+``Plink{i}`` is DH frame ``i`` (modified) or DH frame ``i`` is ``Plink{i}`` moved by joint
+``i``'s trailing ``Lz(d) Lx(a) Rx(alpha) Ry(beta)`` (standard): link ``i``'s inertial, given in
+DH frame ``i``, is written in ``Plink{i}`` through that transform. In both, ``Plink{n+1}`` has
+the pose of :func:`correction.tool_pose` (orientation of the last DH frame, origin at the tool
+point). Floats are written with ``repr``: nothing is rounded.
 To change only the joint origins of the user's own URDF, see :mod:`correction.urdf_into`.
 """
 
@@ -35,6 +43,9 @@ import numpy as np
 import yaml
 
 from ..errors import SpherecalError
+from ..gravity import has_inertials
+from ..inertia import rotated, six_of
+from ..inertials import link_inertias
 from ..model import RobotModel, matrix_rpy
 
 #: Franka's datasheet joint torque [N m] and velocity [rad/s] limits, used for 7-joint arms
@@ -87,6 +98,19 @@ def _shift(x: float = 0.0, z: float = 0.0) -> np.ndarray:
     return pose
 
 
+def _trailing(model: RobotModel, i: int) -> np.ndarray:
+    """(4, 4) joint ``i``'s (0-based) part after its turn, standard convention: ``Lz(d) Lx(a) Rx(alpha) Ry(beta)``."""
+    return _shift(z=model.d[i]) @ _shift(x=model.a[i]) @ _rot_x(model.alpha[i]) @ _rot_y(model.beta[i])
+
+
+def dh_in_links(model: RobotModel) -> np.ndarray:
+    """(n, 4, 4) DH frame ``i`` (where link ``i``'s inertial is given) in the frame of the URDF link ``Plink{i}``:
+    the identity for ``modified``, joint ``i``'s trailing ``Lz(d) Lx(a) Rx(alpha) Ry(beta)`` for ``standard``."""
+    if model.convention == "modified":
+        return np.broadcast_to(np.eye(4), (model.n_joints, 4, 4)).copy()
+    return np.array([_trailing(model, i) for i in range(model.n_joints)])
+
+
 def joint_origins(model: RobotModel) -> tuple[np.ndarray, np.ndarray]:
     """Fixed parts of the chain as URDF joint origins.
 
@@ -105,8 +129,7 @@ def joint_origins(model: RobotModel) -> tuple[np.ndarray, np.ndarray]:
             origins[i] = (_rot_x(model.alpha[i]) @ _shift(x=model.a[i]) @ _rot_y(model.beta[i])
                           @ _rot_z(model.theta[i]) @ _shift(z=model.d[i]))
         return origins, np.eye(4)
-    trailing = [_shift(z=model.d[i]) @ _shift(x=model.a[i]) @ _rot_x(model.alpha[i]) @ _rot_y(model.beta[i])
-                for i in range(n)]
+    trailing = [_trailing(model, i) for i in range(n)]
     origins[0] = _rot_z(model.theta[0])
     for i in range(1, n):
         origins[i] = trailing[i - 1] @ _rot_z(model.theta[i])
@@ -145,6 +168,59 @@ def provenance_comment(model: RobotModel) -> str:
     return xml_comment("provenance of the robot file\n" + text)
 
 
+def _inertial(mass: float, com: np.ndarray, inertia: np.ndarray) -> str:
+    """An ``<inertial>`` in its link's axes (``rpy`` zero: the tensor is already turned into them)."""
+    six = " ".join(f"{name}={quoteattr(_f(v))}" for name, v in zip(("ixx", "ixy", "ixz", "iyy", "iyz", "izz"),
+                                                                  six_of(inertia), strict=True))
+    return (f'    <inertial>\n      <origin xyz="{_triple(com)}" rpy="0.0 0.0 0.0"/>\n'
+            f'      <mass value="{_f(mass)}"/>\n      <inertia {six}/>\n    </inertial>')
+
+
+def link_inertials(model: RobotModel, tool: np.ndarray) -> dict[int, str]:
+    """``<inertial>`` text of links ``1..n`` and of the tool link ``n+1`` (the payload), by link number.
+
+    Args:
+        model: a robot with ``inertials`` (:func:`correction.inertials.link_inertias`).
+        tool: (4, 4) pose of ``Plink{n+1}`` in ``Plink{n}``.
+
+    Returns:
+        Link number -> its ``<inertial>``; massless bodies are left out (a URDF link may have none).
+    """
+    bodies = link_inertias(model)
+    places = list(dh_in_links(model))
+    places.append(np.linalg.solve(tool, places[-1]))  # the payload, in DH frame n, on the tool link
+    out = {}
+    for k, place in enumerate(places):
+        if bodies.masses[k] > 0:
+            com = place[:3, :3] @ bodies.coms[k] + place[:3, 3]
+            out[k + 1] = _inertial(bodies.masses[k], com, rotated(bodies.tensors[k], place[:3, :3]))
+    return out
+
+
+def dynamics_note(model: RobotModel, without: str = "the file is kinematics only") -> str | None:
+    """One line on what the exported links carry for a dynamics stack, or None when every body is complete.
+
+    Args:
+        model: the exported model.
+        without: what the file holds when the model has no inertials (an MJCF plant's placeholder masses).
+
+    Returns:
+        Without inertials: ``without`` and how to give them. With bodies whose tensor nobody gave: which, and that
+        a sphere stands in (gravity exact, accelerations approximate). Else None.
+    """
+    if not has_inertials(model):
+        return (f"no link inertials: {without}; a dynamics stack (MuJoCo, Gazebo, pinocchio) needs them: give "
+                "--inertials FILE (masses, centres of mass, tensors per DH link), or export --into your arm's own "
+                "URDF, which keeps its inertials")
+    bodies = link_inertias(model)
+    if not bodies.estimated.any():
+        return None
+    n = model.n_joints
+    names = ", ".join("payload" if k == n else f"link {k + 1}" for k in np.flatnonzero(bodies.estimated))
+    return (f"no inertia tensor for {names}: a uniform sphere of its mass stands in (gravity torques exact, "
+            "accelerations approximate); give 'inertia: [ixx, ixy, ixz, iyy, iyz, izz]' [kg m^2] in the inertials")
+
+
 def robot_to_urdf(
     model: RobotModel,
     prefix: str = "panda_",
@@ -153,7 +229,7 @@ def robot_to_urdf(
     mujoco: bool = False,
     header: str = "",
 ) -> str:
-    """URDF text of a model (kinematics, joint limits, tool frame, provenance comment).
+    """URDF text of a model (kinematics, link inertials when it has them, joint limits, tool frame, provenance).
 
     Args:
         model: the (calibrated) robot.
@@ -180,7 +256,8 @@ def robot_to_urdf(
         '<?xml version="1.0"?>',
         xml_comment(
             f"generated by spherecal from robot {model.name!r} ({model.convention} DH, {n} joints): "
-            "kinematics only, metres and radians"
+            + ("kinematics and link inertials, metres, radians, kilograms" if has_inertials(model)
+               else "kinematics only, metres and radians")
         ),
         *([xml_comment(header)] if header.strip() else []),
         provenance_comment(model),
@@ -188,8 +265,13 @@ def robot_to_urdf(
     ]
     if mujoco:
         lines.append("  " + MUJOCO_EXTENSION)
-    links = [f"{p}base"] + [f"{p}link{i}" for i in range(n + 2)]
-    lines += [f"  <link name={quoteattr(name)}/>" for name in links]
+    tool = flange.copy()
+    tool[:3, 3] = flange[:3, :3] @ model.tool + flange[:3, 3]
+    inertials = link_inertials(model, tool) if has_inertials(model) else {}
+    lines.append(f"  <link name={quoteattr(f'{p}base')}/>")
+    for i in range(n + 2):
+        name = quoteattr(f"{p}link{i}")
+        lines.append(f"  <link name={name}>\n{inertials[i]}\n  </link>" if i in inertials else f"  <link name={name}/>")
 
     def fixed(name: str, parent: str, child: str, origin: str) -> None:
         lines.append(f"  <joint name={quoteattr(name)} type=\"fixed\">")
@@ -208,8 +290,6 @@ def robot_to_urdf(
         bounds = "" if model.full_turn[i] else f'lower="{_f(model.lower[i])}" upper="{_f(model.upper[i])}" '
         lines.append(f'    <limit {bounds}effort="{_f(effort[i])}" velocity="{_f(velocity[i])}"/>')
         lines.append("  </joint>")
-    tool = flange.copy()
-    tool[:3, 3] = flange[:3, :3] @ model.tool + flange[:3, 3]
     fixed(f"{p}joint{n + 1}", f"{p}link{n}", f"{p}link{n + 1}", _origin(tool))
     lines.append("</robot>")
     return "\n".join(lines) + "\n"

@@ -15,9 +15,10 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("robot", metavar="CAL.yaml", help="robot file to export (calibrated or nominal), or 'panda'")
     add_urdf_links(parser)
     parser.add_argument("--format", choices=FORMATS, required=True,
-                        help="output format; urdf (kinematics only) holds the best rigid fit to a model with "
-                        "joint compliance, mjcf the whole model (the rigid fit of one with a joint-angle scale or a "
-                        "negative compliance, which a hinge cannot carry), yaml the whole model")
+                        help="output format; urdf (kinematics and the robot file's link inertials) holds the best "
+                        "rigid fit to a model with joint compliance, mjcf the whole model (the rigid fit of one with "
+                        "a joint-angle scale or a negative compliance, which a hinge cannot carry), yaml the whole "
+                        "model")
     parser.add_argument("--out", required=True, metavar="FILE", help="output file (written atomically)")
     parser.add_argument(
         "--into",
