@@ -182,14 +182,120 @@ def _number(text: str, where: str) -> float:
     return finite_number(text, where, RecordingError)
 
 
+#: Deepest placement folder searched below a MUKCa source (``robot/day1/front/hole_0.csv`` is 2 levels down).
+MUKCA_DEPTH = 4
+#: Most folders visited while searching (a source that is a whole disk is refused, not walked).
+MUKCA_FOLDERS = 10_000
+#: Extra values a headerless hole file's rows may carry after the joints (a gripper's two fingers, appended as
+#: ROS's ``joint_states`` lists them), and the largest magnitude one may take (metres of a finger's travel, or
+#: up to a radian of a gripper joint): anything else is not a finger.
+FINGER_COLUMNS = 2
+FINGER_MAX = 1.0
+
+
+def _placements(root: Path) -> list[Path]:
+    """Every folder holding ``hole_<k>.csv`` files at or below ``root`` (at most :data:`MUKCA_DEPTH` levels; a
+    folder reached twice through links is read once), in name order.
+
+    Raises:
+        RecordingError: a placement folder that also holds placement folders (which did the user mean?), no
+            placement, or more than :data:`MUKCA_FOLDERS` folders to search.
+    """
+    found: list[Path] = []
+    seen: set[Path] = set()
+    stack = [(root, 0)]
+    while stack:
+        folder, depth = stack.pop()
+        real = folder.resolve()
+        if real in seen:
+            continue
+        seen.add(real)
+        if len(seen) > MUKCA_FOLDERS:
+            raise RecordingError(f"{root}: field 'SOURCE': more than {MUKCA_FOLDERS} folders below it: give the "
+                                 "folder of one arm's placements")
+        if _hole_files(folder):
+            found.append(folder)
+        if depth < MUKCA_DEPTH:
+            try:
+                children = sorted(p for p in folder.iterdir() if p.is_dir())
+            except OSError as error:
+                raise RecordingError(f"{folder}: field 'SOURCE': cannot read: {error.strerror or error}") from None
+            stack += [(child, depth + 1) for child in reversed(children)]
+    for folder in found:  # a placement holding placements: reading either alone silently drops the other
+        inner = [p for p in found if p != folder and folder in p.parents]
+        if inner:
+            raise RecordingError(
+                f"{folder}: field 'SOURCE': holds hole_<k>.csv files and placement folders "
+                f"({inner[0].relative_to(folder)}{', ...' if len(inner) > 1 else ''}) with their own; give one "
+                "placement folder or a folder of placements")
+    if not found:
+        raise RecordingError(f"{root}: field 'hole_0.csv': no hole_<k>.csv here or in its sub-folders "
+                             f"({MUKCA_DEPTH} levels searched)")
+    return sorted(found)
+
+
+def _placement_name(root: Path, folder: Path) -> str:
+    """A placement's fixture prefix: its folder name, or its path below ``root`` when deeper than one level
+    (``day1/front``: two recordings of a placement named alike stay two)."""
+    if folder == root:
+        return folder.name
+    return folder.relative_to(root).as_posix()
+
+
+def _hole_rows(file: Path, model: RobotModel) -> tuple[list[list[float]], list[str], list[str]]:
+    """Joint angles [rad], ``"file: row N"`` and notes of one ``hole_<k>.csv``.
+
+    Rows are the robot's joint angles in its order. A first row of names (a header) names the columns: they are
+    matched to the robot's joints as a joint CSV's (any order; others ignored). Without one, rows of up to
+    :data:`FINGER_COLUMNS` more values, each within :data:`FINGER_MAX`, carry a gripper's fingers after the joints:
+    the joints are read, the fingers named in a note.
+    """
+    n = model.n_joints
+    q: list[list[float]] = []
+    rows: list[str] = []
+    notes: list[str] = []
+    names = [f"q{i + 1}" for i in range(n)]
+    columns: list[int] = list(range(n))
+    width = fingers = 0
+    for line, fields in read_rows(file, RecordingError):  # streamed; blank lines, comments skipped
+        where = f"{file}: row {line}"
+        if not width:
+            width = len(fields)
+            if not any(_is_number(f) for f in fields):  # a header naming the columns
+                index, names = _match_columns([f.strip() for f in fields], model, where)
+                columns = [int(k) for k in index]
+                notes.append(f"{file.name}: row {line} is a header: columns matched to the joints by name")
+                continue
+            if width != n and not n < width <= n + FINGER_COLUMNS:
+                raise RecordingError(f"{where}, field 'q*': {width} joint angles, {model.name} has {n}")
+            fingers = width - n
+            if fingers:
+                notes.append(f"{file.name}: {width} values per row: the first {n} read as {model.name}'s joints, "
+                             f"the last {fingers} (a gripper's fingers) not used")
+        if len(fields) != width:
+            raise RecordingError(f"{where}, field 'q*': {len(fields)} joint angles, {model.name} has {n}" if width == n
+                                 else f"{where}, field 'q*': {len(fields)} values, the file's first row has {width}")
+        q.append([_number(fields[k], f"{where}, field {names[i]!r}") for i, k in enumerate(columns)])
+        for j in range(n, n + fingers):
+            if abs(_number(fields[j], f"{where}, field 'q{j + 1}'")) > FINGER_MAX:
+                raise RecordingError(
+                    f"{where}, field 'q{j + 1}': {width} values per row, {model.name} has {n} joints, and "
+                    f"{fields[j].strip()} is no gripper finger's (at most {FINGER_MAX:g}): another arm's file?")
+        rows.append(where)
+    return q, rows, notes
+
+
 def read_mukca(
     path: str | os.PathLike, model: RobotModel, distance: float = MUKCA_DISTANCE
 ) -> tuple[Recording, FixtureSpec]:
     """Read a MUKCa placement folder (``hole_0.csv``, ``hole_1.csv``) or a folder of them.
 
-    Each ``hole_<k>.csv`` has no header and one configuration per row, joint angles [rad] in the
-    URDF's joint order (the robot's order). Fixtures are named ``<placement>_h<k>``; the sockets
-    of one placement are ``distance`` apart (the first two holes of each placement).
+    Each ``hole_<k>.csv`` has one configuration per row, joint angles [rad] in the URDF's joint order (the
+    robot's order), and may start with a header naming the joints, or carry a gripper's fingers after them
+    (:func:`_hole_rows`). Placements are the folders holding hole files at or below ``path`` (one level for
+    MUKCa's ``robot/placement``, deeper for ``robot/day/placement``: :func:`_placements`). Fixtures are named
+    ``<placement>_h<k>``, ``<placement>`` the folder's path below ``path``; the sockets of one placement are
+    ``distance`` apart (the first two holes of each placement).
 
     Args:
         path: a placement folder or a folder of placement folders.
@@ -206,43 +312,32 @@ def read_mukca(
     root = Path(path)
     if not root.is_dir():
         raise RecordingError(f"{root}: field 'SOURCE': a MUKCa source is a folder (placement or folder of them)")
-    placements = sorted(p for p in root.iterdir() if p.is_dir() and _hole_files(p))
-    if _hole_files(root):
-        if placements:  # which did the user mean? reading either alone silently drops the other
-            raise RecordingError(
-                f"{root}: field 'SOURCE': holds hole_<k>.csv files and placement folders ({placements[0].name}"
-                f"{', ...' if len(placements) > 1 else ''}) with their own; give one placement folder or a folder "
-                "of placements"
-            )
-        placements = [root]
-    if not placements:
-        raise RecordingError(f"{root}: field 'hole_0.csv': no hole_<k>.csv here or in its sub-folders")
-    n = model.n_joints
+    placements = _placements(root)
     q: list[list[float]] = []
     labels: list[str] = []
     rows: list[str] = []
     names: list[str] = []
+    notes: list[str] = []
     distances: list[tuple[str, str, float]] = []
     for folder in placements:
         holes = _hole_files(folder)
+        placement = _placement_name(root, folder)
+        if "," in placement:
+            raise RecordingError(f"{folder}: field 'placement': a folder name with a comma cannot name a fixture")
         for k, file in holes:
-            name = f"{folder.name}_h{k}"
-            if "," in name:
-                raise RecordingError(f"{folder}: field 'placement': a folder name with a comma cannot name a fixture")
-            before = len(q)
-            for line, fields in read_rows(file, RecordingError):  # streamed; blank lines, comments skipped
-                where = f"{file}: row {line}"
-                if len(fields) != n:
-                    raise RecordingError(f"{where}, field 'q*': {len(fields)} joint angles, {model.name} has {n}")
-                q.append([_number(v, f"{where}, field 'q{i + 1}'") for i, v in enumerate(fields)])
-                labels.append(name)
-                rows.append(where)
-            if len(q) == before:
+            name = f"{placement}_h{k}"
+            found, where, said = _hole_rows(file, model)
+            if not found:
                 raise RecordingError(f"{file}: row 1, field 'q1': no configurations")
+            q += found
+            rows += where
+            labels += [name] * len(found)
+            notes += said
             names.append(name)
         if len(holes) >= 2:
-            distances.append((f"{folder.name}_h{holes[0][0]}", f"{folder.name}_h{holes[1][0]}", float(distance)))
-    recording = Recording(np.array(q, dtype=float), None, np.array(labels), str(root), tuple(rows))
+            distances.append((f"{placement}_h{holes[0][0]}", f"{placement}_h{holes[1][0]}", float(distance)))
+    recording = Recording(np.array(q, dtype=float), None, np.array(labels), str(root), tuple(rows),
+                          tuple(dict.fromkeys(notes)))
     recording.check_limits(model)
     seen: dict[str, str] = {}
     for name in names:  # a hole file copied for another socket: the fit would find two sockets at one point
