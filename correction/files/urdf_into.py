@@ -89,8 +89,10 @@ def replace_origins(text: str, origins: dict[str, np.ndarray], source: str = "<u
     return text
 
 
-def _check_same_arm(model: RobotModel, nominal: RobotModel, source: str) -> None:
-    names = model.extras.get("joint_names")
+def _check_same_arm(model: RobotModel, nominal: RobotModel, source: str, names: bool = True) -> None:
+    """Refuse a URDF chain that is not the model's arm: joint count, joint names (when ``names``: the model was
+    read from a description naming this URDF's links), tool points after the best rigid fit."""
+    names = model.extras.get("joint_names") if names else None
     if model.n_joints != nominal.n_joints:
         raise ExportError(
             f"{source}: chain {nominal.extras['urdf']['base_link']!r} -> {nominal.extras['urdf']['tip_link']!r} "
@@ -108,6 +110,33 @@ def _check_same_arm(model: RobotModel, nominal: RobotModel, source: str) -> None
             f"{source}: not the calibrated robot: tool points {error * 1e3:.0f} mm apart "
             f"(more than {SAME_ROBOT_TOL * 1e3:.0f} mm after the best rigid fit)"
         )
+
+
+def _named_chain(links: dict) -> list[str]:
+    """The base and tip links a model's ``extras["urdf"]`` names."""
+    return [links[key] for key in ("base_link", "tip_link") if isinstance(links.get(key), str)]
+
+
+def _end_of_another_description(model: RobotModel, tree: UrdfTree, links: dict, source: str) -> str:
+    """For a calibrated file naming links this URDF lacks (a calibration of an embedded arm, or of another file of
+    it): the one end of this URDF's chain at the model's tool point, with one warning that the joints are matched
+    by geometry.
+
+    Raises:
+        ExportError: no end, or several, at the tool point (another arm, or no link at the calibrated tool).
+    """
+    chain = " -> ".join(map(repr, _named_chain(links)))
+    ends = _ends_at(model, tree, None)
+    if len(ends) != 1:
+        raise ExportError(
+            f"{source}: field 'tip_link': the calibrated file's chain {chain} is not in this URDF (robot "
+            f"{tree.name!r}), and {'several' if ends else 'none'} of its chain's ends "
+            f"{'are' if ends else 'is'} at the calibrated tool point: a URDF of another arm, or without a link at the "
+            "calibrated tool?")
+    warnings.warn(f"{source}: field 'tip_link': the calibrated file's chain {chain} is another description's (not in "
+                  f"this URDF): written into its chain to {ends[0]!r}, the joints matched by their geometry, not their "
+                  "names", stacklevel=3)
+    return ends[0]
 
 
 def _tip_at_the_ball(model: RobotModel, nominal: RobotModel, tree: UrdfTree, base_link: str | None,
@@ -205,8 +234,14 @@ def urdf_into(model: RobotModel, text: str, source: str = "<urdf>", header: str 
         ExportError: a chain that does not match the model (joint count, names, geometry), or
             a tip link that is the child of the last revolute joint (nowhere to put the tool).
     """
-    links = model.extras.get("urdf") or {}
     tree = parse_urdf(text, source)
+    # a calibrated file naming a link this URDF lacks (a calibration of an embedded arm, or of another file of it):
+    # its names are another description's, and this URDF's own chain is matched to the model, as for a file that
+    # names none
+    links = model.extras.get("urdf") or {}
+    ours = all(name in tree.links for name in _named_chain(links))
+    if not ours:
+        links = {"tip_link": _end_of_another_description(model, tree, links, source)}
     with warnings.catch_warnings():  # the user was told about parallel axes when the model was imported
         warnings.simplefilter("ignore", NearlyParallelAxesWarning)
         tip_link = links.get("tip_link") or _matching_end(model, tree, links.get("base_link"))
@@ -216,7 +251,7 @@ def urdf_into(model: RobotModel, text: str, source: str = "<urdf>", header: str 
         nominal = urdf_model(tree, tip_link, links.get("base_link"))
         nominal = _tip_at_the_ball(model, nominal, tree, links.get("base_link"), source)
     base, tip = nominal.extras["urdf"]["base_link"], nominal.extras["urdf"]["tip_link"]
-    _check_same_arm(model, nominal, source)
+    _check_same_arm(model, nominal, source, names=ours)
     calibrated = to_modified(model)
     joints = tree.path(base, tip)
     movable = [j for j in joints if j.type in MOVABLE]

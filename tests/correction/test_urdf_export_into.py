@@ -244,3 +244,22 @@ def test_a_calibration_whose_ball_lies_beyond_its_tip_link_is_written_at_the_bal
     stranger = replace(calibrated, extras={k: v for k, v in calibrated.extras.items() if k != "calibration"})
     with pytest.raises(ExportError, match="not the calibrated robot"):  # no record of the tip: another robot
         urdf_into(stranger, _cut_after_flange(_text("panda")), "flange.urdf")
+
+
+def test_a_calibration_of_another_description_of_the_arm_goes_to_the_chain_end_at_its_tool(rng):
+    """A calibration of the embedded iiwa14 (links 'base' -> 'iiwa_link_ee_kuka', joints iiwa_joint_*) exported into
+    MUKCa's iiwa14.urdf (joint_a*, ending at ball_link) was refused "tip link 'iiwa_link_ee_kuka' is not a link of
+    robot 'iiwa14'"; the joints are matched by geometry, the tool goes to the one chain end at it."""
+    nominal, calibrated = _calibrated("panda", "modified", rng)
+    names = [f"arm_joint{i}" for i in range(1, 8)]
+    other = replace(calibrated, extras={**calibrated.extras, "joint_names": names,
+                                        "urdf": {"base_link": "world", "tip_link": "tool_ee"}})
+    with pytest.warns(UserWarning, match="the calibrated file's chain 'world' -> 'tool_ee' is another description's "
+                                         r"\(not in this URDF\): written into its chain to 'ball_link'"):
+        written = urdf_into(other, _text("panda"), "panda.urdf")
+    q = calibrated.random_configurations(100, rng)
+    points, _ = MujocoUrdf(written).body_pose("ball_link", calibrated.extras["joint_names"], q)
+    assert np.abs(points - tool_point(calibrated, q)).max() < 1e-12
+    with pytest.raises(ExportError, match="field 'tip_link': the calibrated file's chain 'world' -> 'tool_ee' is not "
+                                          "in this URDF .* none of its chain's ends is at the calibrated tool point"):
+        urdf_into(other, _cut_after_flange(_text("panda")), "flange.urdf")
