@@ -152,7 +152,7 @@ def match_joints(available: list[str], model: RobotModel, where: str) -> tuple[n
 
 
 # ------------------------------------------------------------------------------------ MUKCa
-_HOLE = re.compile(r"hole_(\d+)\.csv$")
+_HOLE = re.compile(r"hole_(\d+)\.csv$", re.I)  # HOLE_0.CSV of a Windows copy as well
 
 
 def _hole_files(folder: Path) -> list[tuple[int, Path]]:
@@ -175,7 +175,11 @@ def _hole_files(folder: Path) -> list[tuple[int, Path]]:
             what = "a folder" if p.is_dir() else "a link that leads to no file (dangling or a loop)"
             raise RecordingError(f"{p}: row 1, field 'q1': cannot read: {what}, not a file of configurations")
         found.append((int(m.group(1)), p))
-    return sorted(found)
+    found.sort()
+    for (k, first), (j, second) in zip(found, found[1:], strict=False):
+        if k == j:  # hole_1.csv beside hole_01.csv or HOLE_1.CSV: which one is the socket's cannot be told
+            raise RecordingError(f"{second}: row 1, field 'q1': a second file of hole {k} beside {first.name}")
+    return found
 
 
 def _number(text: str, where: str) -> float:
@@ -242,6 +246,16 @@ def _placement_name(root: Path, folder: Path) -> str:
     return folder.relative_to(root).as_posix()
 
 
+def _check_one_field(field: str, where: str) -> None:
+    """Refuse a row of one field holding the values separated otherwise than by commas (``;``, a tab, spaces:
+    numpy's ``savetxt`` default), which would be read as one value or a header."""
+    check_separator([field], where, RecordingError)
+    parts = field.split()
+    if len(parts) > 1 and all(_is_number(part) for part in parts):
+        raise RecordingError(f"{where}, field 'q1': the values are separated by spaces, not commas (numpy's savetxt "
+                             "without delimiter=','?): MUKCa's hole files are comma-separated")
+
+
 def _hole_rows(file: Path, model: RobotModel) -> tuple[list[list[float]], list[str], list[str]]:
     """Joint angles [rad], ``"file: row N"`` and notes of one ``hole_<k>.csv``.
 
@@ -259,15 +273,20 @@ def _hole_rows(file: Path, model: RobotModel) -> tuple[list[list[float]], list[s
     width = fingers = 0
     for line, fields in read_rows(file, RecordingError):  # streamed; blank lines, comments skipped
         where = f"{file}: row {line}"
+        while len(fields) > 1 and not fields[-1].strip():  # a separator ending the row (some exporters write one)
+            fields = fields[:-1]
         if not width:
             width = len(fields)
+            if width == 1:
+                _check_one_field(fields[0], where)
             if not any(_is_number(f) for f in fields):  # a header naming the columns
                 index, names = _match_columns([f.strip() for f in fields], model, where)
                 columns = [int(k) for k in index]
                 notes.append(f"{file.name}: row {line} is a header: columns matched to the joints by name")
                 continue
             if width != n and not n < width <= n + FINGER_COLUMNS:
-                raise RecordingError(f"{where}, field 'q*': {width} joint angles, {model.name} has {n}")
+                raise RecordingError(f"{where}, field 'q*': {width} joint angles, {model.name} has {n}"
+                                     + (" (decimal commas?)" if width == 2 * n else ""))
             fingers = width - n
             if fingers:
                 notes.append(f"{file.name}: {width} values per row: the first {n} read as {model.name}'s joints, "

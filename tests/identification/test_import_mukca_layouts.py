@@ -86,3 +86,23 @@ def test_hole_files_with_a_header_or_finger_columns_read_the_joints(tmp_path, pa
     (folder / "hole_0.csv").write_text("x,y,z,qx,qy,qz,qw\n" + "0.3,0,0.5,0,0,0,1\n")
     with pytest.raises(RecordingError, match=r"hole_0.csv: row 1, field '.*joint1': joint .* not in the recording"):
         read_mukca(folder, panda)
+
+
+def test_hole_files_as_other_tools_write_them(tmp_path, panda) -> None:
+    # a separator ending every row was 'field q8: expected a number', upper-case names (a Windows copy) 'no
+    # hole_<k>.csv here', and space-separated values (numpy's savetxt default) "joint 'q1' ... not in the recording"
+    plain, _ = read_mukca(FRONT, panda)
+    folder = tmp_path / "front_center"
+    folder.mkdir()
+    for hole, name in (("hole_0.csv", "HOLE_0.CSV"), ("hole_1.csv", "Hole_1.csv")):
+        (folder / name).write_text("".join(f"{line},\n" for line in _rows(FRONT / hole)))
+    recording, spec = read_mukca(folder, panda)
+    np.testing.assert_array_equal(recording.q, plain.q)
+    assert spec.names == ("front_center_h0", "front_center_h1")
+    shutil.copy(FRONT / "hole_1.csv", folder / "hole_01.csv")  # two files of one hole: which is the socket's?
+    with pytest.raises(RecordingError, match=r"hole_01.csv: row 1, field 'q1': a second file of hole 1 beside"):
+        read_mukca(folder, panda)
+    (folder / "hole_01.csv").unlink()
+    (folder / "HOLE_0.CSV").write_text("".join(line.replace(",", " ") + "\n" for line in _rows(FRONT / "hole_0.csv")))
+    with pytest.raises(RecordingError, match=r"HOLE_0.CSV: row 1, field 'q1': the values are separated by spaces"):
+        read_mukca(folder, panda)
