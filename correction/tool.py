@@ -36,6 +36,11 @@ FRAME_DISTANCE_TOL = 0.03
 FRAME_ANGLE_TOL = np.deg2rad(5.0)
 
 
+#: A calibrated tool point further than this from the robot file's tool [m] is where the samples put the ball (an
+#: adapter or sensor the description lacks: identification.tool_fit), not a correction of the file's tool link.
+TIP_MOVED = 0.010
+
+
 class ToolError(SpherecalError):
     """A tool that cannot be put on the model; the message names the field."""
 

@@ -23,7 +23,7 @@ from ..conversion import to_modified
 from ..kinematics import tool_point
 from ..model import RobotModel, matrix_rpy
 from ..rigid import registered_errors
-from ..tool import calibrated_from, with_tool_of
+from ..tool import TIP_MOVED, calibrated_from, with_tool_of
 from .robot_file import RobotFileError
 from .urdf_read import MOVABLE, UrdfTree, parse_urdf
 from .urdf_to_dh import NearlyParallelAxesWarning, urdf_model
@@ -32,9 +32,6 @@ from .urdf_write import ExportError, _triple, provenance_comment, xml_comment
 #: Largest tool-point distance [m] (after the best rigid fit) between the calibrated model and the
 #: URDF's nominal arm: beyond it the URDF is another robot (a calibration moves millimetres).
 SAME_ROBOT_TOL = 0.05
-#: A calibrated tool point further than this from the tip link's place in the URDF it was calibrated with [m] is
-#: where the samples put the ball (an adapter or sensor the description lacks), not a correction of the tip link.
-TIP_MOVED = 0.010
 
 _COMMENT = re.compile(r"<!--.*?-->", re.S)
 _JOINT_OPEN = re.compile(r"<joint\b[^>]*?\bname\s*=\s*([\"'])(.*?)\1[^>]*>", re.S)
