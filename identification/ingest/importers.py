@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import os
 import re
+import warnings
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -238,6 +239,21 @@ def _placements(root: Path) -> list[Path]:
     return sorted(found)
 
 
+def _warn_several_groups(root: Path, placements: list[Path]) -> None:
+    """One warning when placements nested deeper than one level come from several folders below ``root``: two days'
+    recordings of one arm, or several arms' (MUKCa's data folder: panda_1, panda_6), which must not be mixed."""
+    groups: dict[str, int] = {}
+    for folder in placements:
+        parts = folder.relative_to(root).parts
+        if len(parts) > 1:
+            groups[parts[0]] = groups.get(parts[0], 0) + 1
+    if len(groups) > 1:
+        listed = ", ".join(f"{name}: {count}" for name, count in groups.items())
+        warnings.warn(f"{root}: field 'SOURCE': placements in {len(groups)} folders below it ({listed} placements), "
+                      "imported as one arm's recordings; if they are several arms', import each arm's folder alone",
+                      stacklevel=3)
+
+
 def _placement_name(root: Path, folder: Path) -> str:
     """A placement's fixture prefix: its folder name, or its path below ``root`` when deeper than one level
     (``day1/front``: two recordings of a placement named alike stay two)."""
@@ -332,6 +348,7 @@ def read_mukca(
     if not root.is_dir():
         raise RecordingError(f"{root}: field 'SOURCE': a MUKCa source is a folder (placement or folder of them)")
     placements = _placements(root)
+    _warn_several_groups(root, placements)
     q: list[list[float]] = []
     labels: list[str] = []
     rows: list[str] = []

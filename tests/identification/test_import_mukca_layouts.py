@@ -44,7 +44,9 @@ def test_a_placement_nested_one_level_deeper_is_read_not_dropped(tmp_path, capsy
     assert [d[:2] for d in spec.distances] == [("day1/front_h0", "day1/front_h1"), ("left_h0", "left_h1")]
     # one placement recorded twice under one name (re-placed plate): two placements, not one socket of both
     shutil.copytree(DATA / "panda_2_clean" / "back_left", robot / "day2" / "front")
-    recording, spec = read_mukca(robot, load_robot(PANDA))
+    with pytest.warns(UserWarning, match=r"placements in 2 folders below it \(day1: 1, day2: 1 placements\), imported "
+                                         "as one arm's recordings; if they are several arms', import each"):
+        recording, spec = read_mukca(robot, load_robot(PANDA))
     assert {"day1/front_h0", "day2/front_h0"} <= set(spec.names)
     # a placement holding another placement deeper down: which one is meant cannot be told
     shutil.copytree(FRONT, robot / "left" / "again" / "x")
