@@ -329,8 +329,8 @@ def read_mukca(
     robot's order), and may start with a header naming the joints, or carry a gripper's fingers after them
     (:func:`_hole_rows`). Placements are the folders holding hole files at or below ``path`` (one level for
     MUKCa's ``robot/placement``, deeper for ``robot/day/placement``: :func:`_placements`). Fixtures are named
-    ``<placement>_h<k>``, ``<placement>`` the folder's path below ``path``; the sockets of one placement are
-    ``distance`` apart (the first two holes of each placement).
+    ``<placement>_h<k>``, ``<placement>`` the folder's path below ``path``; ``hole_0`` and ``hole_1`` of a
+    placement are ``distance`` apart (MUKCa's plate); other holes (a third socket) have no known distance.
 
     Args:
         path: a placement folder or a folder of placement folders.
@@ -370,8 +370,12 @@ def read_mukca(
             labels += [name] * len(found)
             notes += said
             names.append(name)
-        if len(holes) >= 2:
-            distances.append((f"{placement}_h{holes[0][0]}", f"{placement}_h{holes[1][0]}", float(distance)))
+        numbers = [k for k, _ in holes]
+        if 0 in numbers and 1 in numbers:  # the plate's two sockets; a third one's distance is not known
+            distances.append((f"{placement}_h0", f"{placement}_h1", float(distance)))
+        elif len(holes) >= 2:  # hole_0 and hole_2 are not the two sockets --distance apart
+            notes.append(f"{folder.name}: no hole_0.csv and hole_1.csv pair: no known distance (holes "
+                         f"{', '.join(map(str, numbers))}: which two are --distance apart is not known)")
     recording = Recording(np.array(q, dtype=float), None, np.array(labels), str(root), tuple(rows),
                           tuple(dict.fromkeys(notes)))
     recording.check_limits(model)

@@ -108,3 +108,17 @@ def test_hole_files_as_other_tools_write_them(tmp_path, panda) -> None:
     (folder / "HOLE_0.CSV").write_text("".join(line.replace(",", " ") + "\n" for line in _rows(FRONT / "hole_0.csv")))
     with pytest.raises(RecordingError, match=r"HOLE_0.CSV: row 1, field 'q1': the values are separated by spaces"):
         read_mukca(folder, panda)
+
+
+def test_only_hole_0_and_hole_1_are_the_plates_known_distance_apart(tmp_path, panda) -> None:
+    # hole_0.csv beside hole_2.csv (hole_1 deleted, or a third socket): the two were declared --distance apart
+    folder = tmp_path / "front"
+    folder.mkdir()
+    shutil.copy(FRONT / "hole_0.csv", folder / "hole_0.csv")
+    shutil.copy(FRONT / "hole_1.csv", folder / "hole_2.csv")
+    recording, spec = read_mukca(folder, panda)
+    assert spec.names == ("front_h0", "front_h2") and spec.distances == []
+    assert any("no hole_0.csv and hole_1.csv pair: no known distance" in note for note in recording.notes)
+    shutil.copy(DATA / "panda_2_clean" / "mid_right" / "hole_1.csv", folder / "hole_1.csv")  # a third socket
+    recording, spec = read_mukca(folder, panda)
+    assert spec.names == ("front_h0", "front_h1", "front_h2") and spec.distances == [("front_h0", "front_h1", 0.05)]
