@@ -27,6 +27,10 @@ def _frozen_array(values: Any, shape: tuple[int, ...], name: str) -> np.ndarray:
 
 #: Tolerance [rad] on a span of exactly one turn (:attr:`RobotModel.full_turn`).
 FULL_TURN_TOL = 1e-9
+#: Two descriptions of one arm agree on its joint limits within this [rad] (:meth:`RobotModel.mismatch`): files
+#: round them (170 deg is -2.96706 rad in the embedded iiwa14, -2.9668 in MUKCa's iiwa14.urdf); another arm's differ
+#: by tenths of a radian.
+LIMIT_MATCH = 1e-3
 
 
 @dataclass(frozen=True, eq=False)
@@ -199,7 +203,9 @@ class RobotModel:
 
         Args:
             other: the model to compare (a calibration, a truth file, ...).
-            limits: also require the same joint limits (a calibration changes geometry, not limits).
+            limits: also require the same joint limits (a calibration changes geometry, not limits), within
+                :data:`LIMIT_MATCH` (a robot file rounds them: the embedded iiwa14's -2.96706 rad, 170 deg, is
+                -2.9668 in MUKCa's iiwa14.urdf, and its calibration was refused as another arm's).
 
         Returns:
             ``(field, what)``, e.g. ``("joints", "6 joints, expected 7")``, or None when they match.
@@ -216,10 +222,11 @@ class RobotModel:
         if limits:
             for name in ("lower", "upper"):
                 diff = np.abs(getattr(other, name) - getattr(self, name))
-                if np.any(diff > 1e-9):
+                if np.any(diff > LIMIT_MATCH):
                     joint = int(np.argmax(diff))
                     return f"joints[{joint}].{name}", (
-                        f"{getattr(other, name)[joint]!r}, expected {getattr(self, name)[joint]!r}"
+                        f"{float(getattr(other, name)[joint]):.6g} rad, expected "
+                        f"{float(getattr(self, name)[joint]):.6g} rad"
                     )
         return None
 

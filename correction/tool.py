@@ -36,6 +36,11 @@ FRAME_DISTANCE_TOL = 0.03
 FRAME_ANGLE_TOL = np.deg2rad(5.0)
 
 
+#: A calibrated tool point further than this from the robot file's tool [m] is where the samples put the ball (an
+#: adapter or sensor the description lacks: identification.tool_fit), not a correction of the file's tool link.
+TIP_MOVED = 0.010
+
+
 class ToolError(SpherecalError):
     """A tool that cannot be put on the model; the message names the field."""
 
@@ -170,3 +175,24 @@ def tool_in_frame(description: RobotModel, model: RobotModel) -> np.ndarray:
                         f"the model's at zero angles (at most {FRAME_DISTANCE_TOL * 1e3:.0f} mm, "
                         f"{np.rad2deg(FRAME_ANGLE_TOL):.0f} deg): not the same arm, or another DH construction")
     return np.array(description.tool, dtype=float)
+
+
+def calibrated_from(model: RobotModel, reference: RobotModel) -> bool:
+    """``model`` is a calibration whose file records ``reference``'s tool as its robot file's (``calibration.
+    nominal_tool``; not a tool ``spherecal tool`` replaced): its own tool is then the one its samples showed,
+    which may be centimetres away (a ball on a sensor or adapter the description lacks:
+    :mod:`spherecal.identification.tool_fit`), and the arms are compared alone (:func:`with_tool_of`)."""
+    block = model.extras.get("calibration")
+    recorded = block.get("nominal_tool") if isinstance(block, dict) else None
+    try:
+        return (not isinstance(model.extras.get("tool_swap"), dict) and recorded is not None
+                and bool(np.allclose(np.asarray(recorded, dtype=float), reference.tool, rtol=0.0, atol=1e-9)))
+    except (TypeError, ValueError):  # a hand-edited record: compared as it is
+        return False
+
+
+def with_tool_of(model: RobotModel, reference: RobotModel) -> RobotModel:
+    """``model`` with ``reference``'s tool point: the arms compared alone."""
+    params = model.params.copy()
+    params[model.layout.tool] = reference.tool
+    return model.with_params(params)

@@ -65,8 +65,10 @@ class LeftOut:
 
     @property
     def sigma_rest(self) -> float:
-        """Residual std of the other rows at the fit without the group."""
-        return float(np.sqrt(self.ssr_rest / max(self.dof_rest, 1)))
+        """Residual std of the other rows at the fit without the group (a sum of squares a little below zero by
+        rounding, as a fixture of one sample leaves it, is zero: numpy's 'invalid value encountered in sqrt' then
+        reached the user as a warning beside the refusal)."""
+        return float(np.sqrt(max(self.ssr_rest, 0.0) / max(self.dof_rest, 1)))
 
 
 def _pinv(normal: np.ndarray, tol: float) -> tuple[np.ndarray, int]:

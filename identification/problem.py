@@ -427,11 +427,12 @@ def _read_only(array: np.ndarray) -> np.ndarray:
 def samples_location(dataset: Dataset) -> str:
     """``"samples.csv: rows 2-1501"``: where a dataset came from, for one-line errors
     (``"samples: all rows"`` when it was not read from a file)."""
-    rows = (
-        "all rows"
-        if dataset.lines is None or dataset.n_samples == 0
-        else f"rows {dataset.lines.min()}-{dataset.lines.max()}"
-    )
+    if dataset.lines is None or dataset.n_samples == 0:
+        rows = "all rows"
+    elif dataset.lines.min() == dataset.lines.max():  # 'row 37', not 'rows 37-37'
+        rows = f"row {dataset.lines.min()}"
+    else:
+        rows = f"rows {dataset.lines.min()}-{dataset.lines.max()}"
     return f"{dataset.source or 'samples'}: {rows}"
 
 

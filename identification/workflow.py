@@ -31,8 +31,10 @@ from spherecal.correction.files.samples import DEDUP_TOL, Dataset
 from spherecal.correction.files.samples_csv import read_samples
 
 from .calibrate import MAX_CHANGE, CalibrationResult, calibrate
-from .problem import NOISE, PRIOR
+from .misplaced import misplaced
+from .problem import NOISE, PRIOR, ImplausibleCalibrationError
 from .selection import ModelSelection, select_model, start_for
+from .selfcheck_result import InconsistentDataError
 from .tool_fit import recentred_tool
 from .training import exclude_fixtures, training_record
 
@@ -160,8 +162,11 @@ def run_workflow(nominal: RobotModel, dataset: Dataset, spec: FixtureSpec | None
         return calibrate(begin, data, fixtures, start=warm, loss=options.loss, noise=options.fit_noise,
                          max_change=options.max_change, check=False, prior=options.prior)
 
-    selection = select_model(options.model, fit, nominal, dataset, spec, seed=options.seed,
-                             robust=options.loss != "linear")
+    try:
+        selection = select_model(options.model, fit, nominal, dataset, spec, seed=options.seed,
+                                 robust=options.loss != "linear")
+    except (InconsistentDataError, ImplausibleCalibrationError) as refused:
+        raise _named_cause(refused, nominal, dataset, spec) from None
     begin = start_for(selection.chosen, nominal)
     if start is not None:
         warm = start_for(selection.chosen, start)
@@ -169,11 +174,14 @@ def run_workflow(nominal: RobotModel, dataset: Dataset, spec: FixtureSpec | None
         warm = selection.fits[selection.chosen].model  # its full fit: the final solve starts at the answer
     else:
         warm = None
-    result = calibrate(
-        begin, dataset, spec, method=options.method, start=warm, seed=options.seed, loss=options.loss,
-        noise=options.fit_noise, max_change=options.max_change, force=options.force, prior=options.prior,
-        noise_declared=options.noise is not None,
-    )
+    try:
+        result = calibrate(
+            begin, dataset, spec, method=options.method, start=warm, seed=options.seed, loss=options.loss,
+            noise=options.fit_noise, max_change=options.max_change, force=options.force, prior=options.prior,
+            noise_declared=options.noise is not None,
+        )
+    except (InconsistentDataError, ImplausibleCalibrationError) as refused:
+        raise _named_cause(refused, nominal, dataset, spec) from None
     if tool_note is not None:
         result = replace(result, warnings=(tool_note, *result.warnings))
     block = result.block()
@@ -189,6 +197,14 @@ def run_workflow(nominal: RobotModel, dataset: Dataset, spec: FixtureSpec | None
     extras["calibration"] = block
     return WorkflowResult(replace(result.model, extras=extras), result, selection, dropped, options.dedup_tol,
                           block)
+
+
+def _named_cause(refused: SpherecalError, nominal: RobotModel, dataset: Dataset,
+                 spec: FixtureSpec | None) -> SpherecalError:
+    """A refusal with the cause the nominal model already shows in its place (:func:`.misplaced.misplaced`:
+    samples of two sockets under one name, samples in the wrong socket, a wrong known distance), if any."""
+    cause = misplaced(nominal, dataset, spec)
+    return refused if cause is None else type(refused)(cause)
 
 
 def calibrate_files(robot: str, samples: str | Path, fixtures: str | Path | None, out: str | Path,

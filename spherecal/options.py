@@ -48,15 +48,42 @@ def fail(message: str) -> OptionError:
     return OptionError(message)
 
 
+class StoreOnce(argparse._StoreAction):
+    """argparse's ``store``, refusing an option given twice: argparse kept the last silently, so ``calibrate
+    --samples a.csv --samples b.csv`` calibrated on ``b.csv`` alone, the user believing both were used."""
+
+    def __call__(self, parser, namespace, values, option_string=None):  # noqa: D102 - argparse's hook
+        given = namespace.__dict__.setdefault(_GIVEN, {})
+        if option_string is not None and self.dest in given:
+            shown = " ".join(map(str, values)) if isinstance(values, list) else values
+            parser.error(f"field {given[self.dest][0]!r}: given twice ({given[self.dest][1]!r}, then {shown!r}); it "
+                         "takes one value, and the second would silently replace the first")
+        shown = " ".join(map(str, values)) if isinstance(values, list) else values
+        given[self.dest] = (option_string, shown)
+        setattr(namespace, self.dest, values)
+
+
+#: Where :class:`StoreOnce` keeps the options given so far during one parse (removed after it).
+_GIVEN = "_given_once"
+
+
 class Parser(argparse.ArgumentParser):
     """An ArgumentParser whose errors are one line (``spherecal CMD: error: ...``) and exit status 1,
     like every other refusal of spherecal. A negative number in exponent notation (``--offset -1e-2 0 0.2``) is
-    a value, as ``-0.01`` is (argparse took it for an option: 'expected 3 arguments')."""
+    a value, as ``-0.01`` is (argparse took it for an option: 'expected 3 arguments'). An option that takes one
+    value given twice is refused (:class:`StoreOnce`); a repeatable one says so in its help."""
 
     def __init__(self, *args, **kwargs):
         super().__init__(*args, **kwargs)
         self._negative_number_matcher = re.compile(r"^-((\d+\.?\d*|\.\d+)([eE][-+]?\d+)?|inf|infinity|nan)$",
                                                    re.IGNORECASE)
+        self.register("action", None, StoreOnce)
+        self.register("action", "store", StoreOnce)
+
+    def parse_known_args(self, args=None, namespace=None):  # noqa: D102 - argparse's entry
+        namespace, extras = super().parse_known_args(args, namespace)
+        namespace.__dict__.pop(_GIVEN, None)
+        return namespace, extras
 
     def error(self, message: str):  # noqa: D102 - argparse's hook
         self.exit(1, f"{self.prog}: error: {message} (see {self.prog} --help)\n")

@@ -119,3 +119,26 @@ def test_old_spellings_still_work_with_a_warning(capsys) -> None:
 def test_every_subcommand_is_registered_once() -> None:
     assert len(COMMANDS) == len(set(COMMANDS.values()))
     assert all(module.startswith("spherecal.commands.") for module in COMMANDS.values())
+
+
+@pytest.mark.parametrize("argv, field", [
+    (["calibrate", "--robot", "panda", "--samples", "a.csv", "--samples", "b.csv", "--out", "c.yaml"], "--samples"),
+    (["calibrate", "--robot", "panda", "--samples=a.csv", "--sam", "b.csv", "--out", "c.yaml"], "--samples"),
+    (["import", "x", "--format", "mukca", "--robot", "panda", "--distance", "0.05", "--distance", "0.08", "--out",
+      "o"], "--distance"),
+    (["validate", "--nominal", "panda", "--calibrated", "c.yaml", "--samples", "a.csv", "--fixtures", "a.yaml",
+      "--fixtures", "b.yaml"], "--fixtures"),
+])
+def test_an_option_of_one_value_given_twice_is_refused(argv, field, capsys) -> None:
+    # argparse kept the last silently: 'calibrate --samples a.csv --samples b.csv' calibrated on b.csv alone,
+    # the user believing both placements were used
+    assert main(argv) == 1
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and f"error: field '{field}': given twice (" in err
+    assert "the second would silently replace the first" in err
+
+
+def test_a_repeatable_option_may_still_be_repeated() -> None:
+    args = build_parser().parse_args(["calibrate", "--robot", "panda", "--samples", "a.csv", "--exclude-fixture",
+                                      "A", "--exclude-fixture", "B", "--out", "c.yaml"])
+    assert args.exclude_fixture == ["A", "B"] and not hasattr(args, "_given_once")

@@ -323,6 +323,21 @@ def test_validate_says_when_the_calibration_is_worse_than_nominal_or_was_forced(
     assert "INCONSISTENT: a reason" in capsys.readouterr().err
 
 
+def test_validate_says_when_the_nominal_files_tool_is_not_where_the_ball_was(tmp_path, capsys) -> None:
+    # MUKCa's panda_1_with_sensor on panda.urdf, the embedded iiwa14 on MUKCa's kuka_14: the calibration found the ball
+    # 38-41 mm beyond the file's tool, and validate's 'nominal 19.9 mm / 17.3 mm' held that offset without a word
+    _, true, _, _, cal = _calibrated(tmp_path, capsys)
+    held, _ = make_dataset(true, per_fixture=30, rng=np.random.default_rng(9), noise=2e-4)
+    write_samples(tmp_path / "held.csv", held)
+    _, err, _ = _validate(tmp_path, capsys, tmp_path / "held.csv", cal)
+    assert "found the ball" not in err
+    model = load_robot(cal)
+    save_robot(replace(model, tool=model.tool + [0.0, 0.0, 0.04]), tmp_path / "sensor.yaml")
+    _, err, _ = _validate(tmp_path, capsys, tmp_path / "held.csv", tmp_path / "sensor.yaml")
+    assert "warning: the calibration found the ball 4" in err and "mm from the nominal file's tool point (an adapter " \
+        "or sensor the file lacks): the nominal columns measure the file as given" in err
+
+
 @pytest.mark.parametrize("kind", ["one sample", "identical samples"])
 def test_a_spread_from_too_few_configurations_is_not_measurable(tmp_path, capsys, kind) -> None:
     # was: 0.000 mm, as if the models were perfect there

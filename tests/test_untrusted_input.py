@@ -9,6 +9,7 @@ import numpy as np
 import pytest
 import yaml
 
+from spherecal.cli import main
 from spherecal.correction import RobotFileError, dump_robot, load_robot, save_robot, tool_point
 from spherecal.correction.files.fixtures import read_fixtures
 from spherecal.correction.files.samples import Dataset, DatasetError
@@ -269,6 +270,20 @@ def test_validate_refuses_a_calibrated_file_of_another_arm(tmp_path, panda, caps
     save_robot(edit(panda), tmp_path / "cal.yaml")
     refused(["validate", "--nominal", "panda", "--calibrated", tmp_path / "cal.yaml", "--mocap",
              tmp_path / "mocap.csv", "--out", tmp_path / "report.json"], tmp_path, capsys, message)
+
+
+def test_validate_takes_a_calibration_whose_file_rounds_the_joint_limits(tmp_path, panda, capsys) -> None:
+    # the embedded iiwa14's calibration validated against MUKCa's iiwa14.urdf (limits rounded to 4 decimals, 3e-4 rad
+    # apart) was refused as another arm's: "field joints[0].lower: np.float64(-2.96705972839), expected
+    # np.float64(-2.9668)"
+    _mocap_case(tmp_path, panda, "fine")
+    save_robot(replace(panda, lower=np.round(panda.lower, 3) - 2e-4, upper=np.round(panda.upper, 3)),
+               tmp_path / "cal.yaml")
+    argv = ["validate", "--nominal", "panda", "--calibrated", str(tmp_path / "cal.yaml"), "--mocap",
+            str(tmp_path / "mocap.csv")]
+    assert main(argv) == 0, capsys.readouterr().err
+    save_robot(replace(panda, lower=panda.lower - np.r_[0.01, 0, 0, 0, 0, 0, 0]), tmp_path / "cal.yaml")
+    refused(argv, tmp_path, capsys, "field joints[0].lower: -2.9073 rad, expected -2.8973 rad as in the nominal")
 
 
 @pytest.mark.parametrize(("text", "message"), [

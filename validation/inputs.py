@@ -8,6 +8,7 @@ from __future__ import annotations
 import numpy as np
 
 from spherecal.correction import RobotModel, SpherecalError, tool_point
+from spherecal.correction.tool import calibrated_from, with_tool_of
 
 #: A model whose tool point lies further than this from the nominal one's on some configuration is
 #: not a description of the same arm [m] (as :data:`controller.compensation.MAX_MODEL_DIFFERENCE`).
@@ -18,25 +19,6 @@ _PROBES = 200
 
 class ValidationInputError(SpherecalError):
     """Input files that do not fit together (one line naming the file and the field)."""
-
-
-def _calibrated_from(model: RobotModel, reference: RobotModel) -> bool:
-    """``model`` is a calibration whose file records ``reference``'s tool as its robot file's (its own tool is
-    then the one its samples showed, which may be centimetres away: :mod:`spherecal.identification.tool_fit`)."""
-    block = model.extras.get("calibration")
-    recorded = block.get("nominal_tool") if isinstance(block, dict) else None
-    try:
-        return (not isinstance(model.extras.get("tool_swap"), dict) and recorded is not None
-                and bool(np.allclose(np.asarray(recorded, dtype=float), reference.tool, rtol=0.0, atol=1e-9)))
-    except (TypeError, ValueError):  # a hand-edited record: compared as it is
-        return False
-
-
-def _with_tool_of(model: RobotModel, reference: RobotModel) -> RobotModel:
-    """``model`` with ``reference``'s tool point: the arms compared alone."""
-    params = model.params.copy()
-    params[model.layout.tool] = reference.tool
-    return model.with_params(params)
 
 
 def check_models(models: dict[str, RobotModel], files: dict[str, str]) -> None:
@@ -60,7 +42,7 @@ def check_models(models: dict[str, RobotModel], files: dict[str, str]) -> None:
             field, what = mismatch
             raise ValidationInputError(f"{files[role]}: field {field}: {what} as in the nominal {files['nominal']}")
         swapped = isinstance(model.extras.get("tool_swap"), dict)
-        compared = _with_tool_of(model, reference) if _calibrated_from(model, reference) else model
+        compared = with_tool_of(model, reference) if calibrated_from(model, reference) else model
         gap = np.linalg.norm(tool_point(compared, q) - nominal_tool, axis=1)
         if not np.all(gap <= MAX_MODEL_DIFFERENCE):
             worst = float(np.nanmax(np.where(np.isfinite(gap), gap, np.inf)))

@@ -23,6 +23,7 @@ from ..conversion import to_modified
 from ..kinematics import tool_point
 from ..model import RobotModel, matrix_rpy
 from ..rigid import registered_errors
+from ..tool import TIP_MOVED, calibrated_from, with_tool_of
 from .robot_file import RobotFileError
 from .urdf_read import MOVABLE, UrdfTree, parse_urdf
 from .urdf_to_dh import NearlyParallelAxesWarning, urdf_model
@@ -85,8 +86,10 @@ def replace_origins(text: str, origins: dict[str, np.ndarray], source: str = "<u
     return text
 
 
-def _check_same_arm(model: RobotModel, nominal: RobotModel, source: str) -> None:
-    names = model.extras.get("joint_names")
+def _check_same_arm(model: RobotModel, nominal: RobotModel, source: str, names: bool = True) -> None:
+    """Refuse a URDF chain that is not the model's arm: joint count, joint names (when ``names``: the model was
+    read from a description naming this URDF's links), tool points after the best rigid fit."""
+    names = model.extras.get("joint_names") if names else None
     if model.n_joints != nominal.n_joints:
         raise ExportError(
             f"{source}: chain {nominal.extras['urdf']['base_link']!r} -> {nominal.extras['urdf']['tip_link']!r} "
@@ -96,13 +99,69 @@ def _check_same_arm(model: RobotModel, nominal: RobotModel, source: str) -> None
         raise ExportError(
             f"{source}: joint names {nominal.extras['joint_names']} differ from the calibrated model's {list(names)}"
         )
-    error = _tool_point_gap(model, nominal)
+    # a calibration of this URDF's tip whose samples put the ball elsewhere: the arms are compared alone
+    error = _tool_point_gap(with_tool_of(model, nominal) if calibrated_from(model, nominal) else model, nominal)
     if error > SAME_ROBOT_TOL:
         _refuse_new_tool(model, source, f"{nominal.extras['urdf']['tip_link']!r} is {error * 1e3:.0f} mm from it")
         raise ExportError(
             f"{source}: not the calibrated robot: tool points {error * 1e3:.0f} mm apart "
             f"(more than {SAME_ROBOT_TOL * 1e3:.0f} mm after the best rigid fit)"
         )
+
+
+def _named_chain(links: dict) -> list[str]:
+    """The base and tip links a model's ``extras["urdf"]`` names."""
+    return [links[key] for key in ("base_link", "tip_link") if isinstance(links.get(key), str)]
+
+
+def _end_of_another_description(model: RobotModel, tree: UrdfTree, links: dict, source: str) -> str:
+    """For a calibrated file naming links this URDF lacks (a calibration of an embedded arm, or of another file of
+    it): the one end of this URDF's chain at the model's tool point, with one warning that the joints are matched
+    by geometry.
+
+    Raises:
+        ExportError: no end, or several, at the tool point (another arm, or no link at the calibrated tool).
+    """
+    chain = " -> ".join(map(repr, _named_chain(links)))
+    ends = _ends_at(model, tree, None)
+    if len(ends) != 1:
+        raise ExportError(
+            f"{source}: field 'tip_link': the calibrated file's chain {chain} is not in this URDF (robot "
+            f"{tree.name!r}), and {'several' if ends else 'none'} of its chain's ends "
+            f"{'are' if ends else 'is'} at the calibrated tool point: a URDF of another arm, or without a link at the "
+            "calibrated tool?")
+    warnings.warn(f"{source}: field 'tip_link': the calibrated file's chain {chain} is another description's (not in "
+                  f"this URDF): written into its chain to {ends[0]!r}, the joints matched by their geometry, not their "
+                  "names", stacklevel=3)
+    return ends[0]
+
+
+def _tip_at_the_ball(model: RobotModel, nominal: RobotModel, tree: UrdfTree, base_link: str | None,
+                     source: str) -> RobotModel:
+    """The chain to write: ``nominal``'s, unless the model is a calibration of its tip whose samples put the ball
+    centimetres from it (:data:`TIP_MOVED`; a tip short of the ball, the flange or a gripper's TCP, with a sensor
+    or adapter the description lacks). Then the one end of this URDF at the calibrated tool point, if any (MUKCa's
+    ``ball_link``), with one warning; else the tip link itself, with one warning that it now stands for the ball."""
+    if not calibrated_from(model, nominal):
+        return nominal
+    moved = float(np.linalg.norm(np.asarray(model.tool, float) - nominal.tool))
+    if moved <= TIP_MOVED:
+        return nominal
+    tip = nominal.extras["urdf"]["tip_link"]
+    ends = _ends_at(model, tree, base_link)
+    end = ends[0] if len(ends) == 1 else None
+    if end is not None and end != tip:
+        warnings.warn(
+            f"{source}: field 'tip_link': the calibration's tool point is {moved * 1e3:.0f} mm from {tip!r}, the "
+            f"tip link it was calibrated with, and at {end!r} of this URDF: written at {end!r} ({tip!r} kept where "
+            "this URDF has it)", stacklevel=3)
+        return urdf_model(tree, end, base_link)
+    warnings.warn(
+        f"{source}: field 'tip_link': {tip!r} written at the calibrated tool point, {moved * 1e3:.0f} mm from its "
+        "place in this URDF (the samples put the ball there: an adapter or sensor the URDF lacks); "
+        f"{tip!r} of the written file is the ball, not the link it was: give the ball its own link (a fixed joint) "
+        f"and calibrate with it as --tip-link to keep {tip!r} where it is", stacklevel=3)
+    return nominal
 
 
 def _refuse_new_tool(model: RobotModel, source: str, why: str) -> None:
@@ -133,9 +192,16 @@ def _matching_end(model: RobotModel, tree: UrdfTree, base_link: str | None) -> s
     (within :data:`SAME_ROBOT_TOL`; a gripper's fingers, a tool frame and a ball are ends far apart), or None
     (one end, none matching, or several: the default tip and its refusal then apply)."""
     base = tree.root if base_link is None else base_link
-    ends = [leaf for leaf, _ in tree.chain_ends(base)] if base in tree.links else []
-    if len(ends) < 2:
+    if base not in tree.links or len(tree.chain_ends(base)) < 2:
         return None
+    matching = _ends_at(model, tree, base_link)
+    return matching[0] if len(matching) == 1 else None
+
+
+def _ends_at(model: RobotModel, tree: UrdfTree, base_link: str | None) -> list[str]:
+    """The ends of the URDF's chain whose tool point is the model's, within :data:`SAME_ROBOT_TOL`."""
+    base = tree.root if base_link is None else base_link
+    ends = [leaf for leaf, _ in tree.chain_ends(base)] if base in tree.links else []
     matching = []
     for leaf in ends:
         try:
@@ -146,7 +212,7 @@ def _matching_end(model: RobotModel, tree: UrdfTree, base_link: str | None) -> s
             continue
         if nominal.n_joints == model.n_joints and _tool_point_gap(model, nominal) <= SAME_ROBOT_TOL:
             matching.append(leaf)
-    return matching[0] if len(matching) == 1 else None
+    return matching
 
 
 def urdf_into(model: RobotModel, text: str, source: str = "<urdf>", header: str = "") -> str:
@@ -165,8 +231,14 @@ def urdf_into(model: RobotModel, text: str, source: str = "<urdf>", header: str 
         ExportError: a chain that does not match the model (joint count, names, geometry), or
             a tip link that is the child of the last revolute joint (nowhere to put the tool).
     """
-    links = model.extras.get("urdf") or {}
     tree = parse_urdf(text, source)
+    # a calibrated file naming a link this URDF lacks (a calibration of an embedded arm, or of another file of it):
+    # its names are another description's, and this URDF's own chain is matched to the model, as for a file that
+    # names none
+    links = model.extras.get("urdf") or {}
+    ours = all(name in tree.links for name in _named_chain(links))
+    if not ours:
+        links = {"tip_link": _end_of_another_description(model, tree, links, source)}
     with warnings.catch_warnings():  # the user was told about parallel axes when the model was imported
         warnings.simplefilter("ignore", NearlyParallelAxesWarning)
         tip_link = links.get("tip_link") or _matching_end(model, tree, links.get("base_link"))
@@ -174,8 +246,9 @@ def urdf_into(model: RobotModel, text: str, source: str = "<urdf>", header: str 
         if tip_link is None and base_link in tree.links and len(tree.chain_ends(base_link)) > 1:
             _refuse_new_tool(model, source, "none of its chain's ends is there")
         nominal = urdf_model(tree, tip_link, links.get("base_link"))
+        nominal = _tip_at_the_ball(model, nominal, tree, links.get("base_link"), source)
     base, tip = nominal.extras["urdf"]["base_link"], nominal.extras["urdf"]["tip_link"]
-    _check_same_arm(model, nominal, source)
+    _check_same_arm(model, nominal, source, names=ours)
     calibrated = to_modified(model)
     joints = tree.path(base, tip)
     movable = [j for j in joints if j.type in MOVABLE]

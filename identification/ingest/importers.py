@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import os
 import re
+import warnings
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -152,7 +153,7 @@ def match_joints(available: list[str], model: RobotModel, where: str) -> tuple[n
 
 
 # ------------------------------------------------------------------------------------ MUKCa
-_HOLE = re.compile(r"hole_(\d+)\.csv$")
+_HOLE = re.compile(r"hole_(\d+)\.csv$", re.I)  # HOLE_0.CSV of a Windows copy as well
 
 
 def _hole_files(folder: Path) -> list[tuple[int, Path]]:
@@ -175,11 +176,148 @@ def _hole_files(folder: Path) -> list[tuple[int, Path]]:
             what = "a folder" if p.is_dir() else "a link that leads to no file (dangling or a loop)"
             raise RecordingError(f"{p}: row 1, field 'q1': cannot read: {what}, not a file of configurations")
         found.append((int(m.group(1)), p))
-    return sorted(found)
+    found.sort()
+    for (k, first), (j, second) in zip(found, found[1:], strict=False):
+        if k == j:  # hole_1.csv beside hole_01.csv or HOLE_1.CSV: which one is the socket's cannot be told
+            raise RecordingError(f"{second}: row 1, field 'q1': a second file of hole {k} beside {first.name}")
+    return found
 
 
 def _number(text: str, where: str) -> float:
     return finite_number(text, where, RecordingError)
+
+
+#: Deepest placement folder searched below a MUKCa source (``robot/day1/front/hole_0.csv`` is 2 levels down).
+MUKCA_DEPTH = 4
+#: Most folders visited while searching (a source that is a whole disk is refused, not walked).
+MUKCA_FOLDERS = 10_000
+#: Extra values a headerless hole file's rows may carry after the joints (a gripper's two fingers, appended as
+#: ROS's ``joint_states`` lists them), and the largest magnitude one may take (metres of a finger's travel, or
+#: up to a radian of a gripper joint): anything else is not a finger.
+FINGER_COLUMNS = 2
+FINGER_MAX = 1.0
+
+
+def _placements(root: Path) -> list[Path]:
+    """Every folder holding ``hole_<k>.csv`` files at or below ``root`` (at most :data:`MUKCA_DEPTH` levels; a
+    folder reached twice through links is read once), in name order.
+
+    Raises:
+        RecordingError: a placement folder that also holds placement folders (which did the user mean?), no
+            placement, or more than :data:`MUKCA_FOLDERS` folders to search.
+    """
+    found: list[Path] = []
+    seen: set[Path] = set()
+    stack = [(root, 0)]
+    while stack:
+        folder, depth = stack.pop()
+        real = folder.resolve()
+        if real in seen:
+            continue
+        seen.add(real)
+        if len(seen) > MUKCA_FOLDERS:
+            raise RecordingError(f"{root}: field 'SOURCE': more than {MUKCA_FOLDERS} folders below it: give the "
+                                 "folder of one arm's placements")
+        if _hole_files(folder):
+            found.append(folder)
+        if depth < MUKCA_DEPTH:
+            try:
+                children = sorted(p for p in folder.iterdir() if p.is_dir())
+            except OSError as error:
+                raise RecordingError(f"{folder}: field 'SOURCE': cannot read: {error.strerror or error}") from None
+            stack += [(child, depth + 1) for child in reversed(children)]
+    for folder in found:  # a placement holding placements: reading either alone silently drops the other
+        inner = [p for p in found if p != folder and folder in p.parents]
+        if inner:
+            raise RecordingError(
+                f"{folder}: field 'SOURCE': holds hole_<k>.csv files and placement folders "
+                f"({inner[0].relative_to(folder)}{', ...' if len(inner) > 1 else ''}) with their own; give one "
+                "placement folder or a folder of placements")
+    if not found:
+        raise RecordingError(f"{root}: field 'hole_0.csv': no hole_<k>.csv here or in its sub-folders "
+                             f"({MUKCA_DEPTH} levels searched)")
+    return sorted(found)
+
+
+def _warn_several_groups(root: Path, placements: list[Path]) -> None:
+    """One warning when placements nested deeper than one level come from several folders below ``root``: two days'
+    recordings of one arm, or several arms' (MUKCa's data folder: panda_1, panda_6), which must not be mixed."""
+    groups: dict[str, int] = {}
+    for folder in placements:
+        parts = folder.relative_to(root).parts
+        if len(parts) > 1:
+            groups[parts[0]] = groups.get(parts[0], 0) + 1
+    if len(groups) > 1:
+        listed = ", ".join(f"{name}: {count}" for name, count in groups.items())
+        warnings.warn(f"{root}: field 'SOURCE': placements in {len(groups)} folders below it ({listed} placements), "
+                      "imported as one arm's recordings; if they are several arms', import each arm's folder alone",
+                      stacklevel=3)
+
+
+def _placement_name(root: Path, folder: Path) -> str:
+    """A placement's fixture prefix: its folder name, or its path below ``root`` when deeper than one level
+    (``day1/front``: two recordings of a placement named alike stay two)."""
+    if folder == root:
+        return folder.name
+    return folder.relative_to(root).as_posix()
+
+
+def _check_one_field(field: str, where: str) -> None:
+    """Refuse a row of one field holding the values separated otherwise than by commas (``;``, a tab, spaces:
+    numpy's ``savetxt`` default), which would be read as one value or a header."""
+    check_separator([field], where, RecordingError)
+    parts = field.split()
+    if len(parts) > 1 and all(_is_number(part) for part in parts):
+        raise RecordingError(f"{where}, field 'q1': the values are separated by spaces, not commas (numpy's savetxt "
+                             "without delimiter=','?): MUKCa's hole files are comma-separated")
+
+
+def _hole_rows(file: Path, model: RobotModel) -> tuple[list[list[float]], list[str], list[str]]:
+    """Joint angles [rad], ``"file: row N"`` and notes of one ``hole_<k>.csv``.
+
+    Rows are the robot's joint angles in its order. A first row of names (a header) names the columns: they are
+    matched to the robot's joints as a joint CSV's (any order; others ignored). Without one, rows of up to
+    :data:`FINGER_COLUMNS` more values, each within :data:`FINGER_MAX`, carry a gripper's fingers after the joints:
+    the joints are read, the fingers named in a note.
+    """
+    n = model.n_joints
+    q: list[list[float]] = []
+    rows: list[str] = []
+    notes: list[str] = []
+    names = [f"q{i + 1}" for i in range(n)]
+    columns: list[int] = list(range(n))
+    width = fingers = 0
+    for line, fields in read_rows(file, RecordingError):  # streamed; blank lines, comments skipped
+        where = f"{file}: row {line}"
+        while len(fields) > 1 and not fields[-1].strip():  # a separator ending the row (some exporters write one)
+            fields = fields[:-1]
+        if not width:
+            width = len(fields)
+            if width == 1:
+                _check_one_field(fields[0], where)
+            if not any(_is_number(f) for f in fields):  # a header naming the columns
+                index, names = _match_columns([f.strip() for f in fields], model, where)
+                columns = [int(k) for k in index]
+                notes.append(f"{file.name}: row {line} is a header: columns matched to the joints by name")
+                continue
+            if width != n and not n < width <= n + FINGER_COLUMNS:
+                raise RecordingError(f"{where}, field 'q*': {width} joint angles, {model.name} has {n}"
+                                     + (" (decimal commas?)" if width == 2 * n else ""))
+            fingers = width - n
+            if fingers:
+                notes.append(f"{file.name}: {width} values per row: the first {n} read as {model.name}'s joints, "
+                             f"the last {fingers} (a gripper's fingers) not used")
+        if len(fields) != width:
+            raise RecordingError(f"{where}, field 'q*': {len(fields)} joint angles, {model.name} has {n}" if width == n
+                                 else f"{where}, field 'q*': {len(fields)} values, the file's first row has {width}")
+        q.append([_number(fields[k], f"{where}, field {names[i]!r}") for i, k in enumerate(columns)])
+        for j in range(n, n + fingers):
+            if abs(_number(fields[j], f"{where}, field 'q{j + 1}'")) > FINGER_MAX:
+                raise RecordingError(
+                    f"{where}, field 'q{j + 1}': {width} values per row, {model.name} has {n} joints, and "
+                    f"{fields[j].strip()} is no gripper finger's (at most {FINGER_MAX:g}): another arm's file?")
+        rows.append(where)
+    return q, rows, notes
 
 
 def read_mukca(
@@ -187,9 +325,12 @@ def read_mukca(
 ) -> tuple[Recording, FixtureSpec]:
     """Read a MUKCa placement folder (``hole_0.csv``, ``hole_1.csv``) or a folder of them.
 
-    Each ``hole_<k>.csv`` has no header and one configuration per row, joint angles [rad] in the
-    URDF's joint order (the robot's order). Fixtures are named ``<placement>_h<k>``; the sockets
-    of one placement are ``distance`` apart (the first two holes of each placement).
+    Each ``hole_<k>.csv`` has one configuration per row, joint angles [rad] in the URDF's joint order (the
+    robot's order), and may start with a header naming the joints, or carry a gripper's fingers after them
+    (:func:`_hole_rows`). Placements are the folders holding hole files at or below ``path`` (one level for
+    MUKCa's ``robot/placement``, deeper for ``robot/day/placement``: :func:`_placements`). Fixtures are named
+    ``<placement>_h<k>``, ``<placement>`` the folder's path below ``path``; ``hole_0`` and ``hole_1`` of a
+    placement are ``distance`` apart (MUKCa's plate); other holes (a third socket) have no known distance.
 
     Args:
         path: a placement folder or a folder of placement folders.
@@ -206,43 +347,37 @@ def read_mukca(
     root = Path(path)
     if not root.is_dir():
         raise RecordingError(f"{root}: field 'SOURCE': a MUKCa source is a folder (placement or folder of them)")
-    placements = sorted(p for p in root.iterdir() if p.is_dir() and _hole_files(p))
-    if _hole_files(root):
-        if placements:  # which did the user mean? reading either alone silently drops the other
-            raise RecordingError(
-                f"{root}: field 'SOURCE': holds hole_<k>.csv files and placement folders ({placements[0].name}"
-                f"{', ...' if len(placements) > 1 else ''}) with their own; give one placement folder or a folder "
-                "of placements"
-            )
-        placements = [root]
-    if not placements:
-        raise RecordingError(f"{root}: field 'hole_0.csv': no hole_<k>.csv here or in its sub-folders")
-    n = model.n_joints
+    placements = _placements(root)
+    _warn_several_groups(root, placements)
     q: list[list[float]] = []
     labels: list[str] = []
     rows: list[str] = []
     names: list[str] = []
+    notes: list[str] = []
     distances: list[tuple[str, str, float]] = []
     for folder in placements:
         holes = _hole_files(folder)
+        placement = _placement_name(root, folder)
+        if "," in placement:
+            raise RecordingError(f"{folder}: field 'placement': a folder name with a comma cannot name a fixture")
         for k, file in holes:
-            name = f"{folder.name}_h{k}"
-            if "," in name:
-                raise RecordingError(f"{folder}: field 'placement': a folder name with a comma cannot name a fixture")
-            before = len(q)
-            for line, fields in read_rows(file, RecordingError):  # streamed; blank lines, comments skipped
-                where = f"{file}: row {line}"
-                if len(fields) != n:
-                    raise RecordingError(f"{where}, field 'q*': {len(fields)} joint angles, {model.name} has {n}")
-                q.append([_number(v, f"{where}, field 'q{i + 1}'") for i, v in enumerate(fields)])
-                labels.append(name)
-                rows.append(where)
-            if len(q) == before:
+            name = f"{placement}_h{k}"
+            found, where, said = _hole_rows(file, model)
+            if not found:
                 raise RecordingError(f"{file}: row 1, field 'q1': no configurations")
+            q += found
+            rows += where
+            labels += [name] * len(found)
+            notes += said
             names.append(name)
-        if len(holes) >= 2:
-            distances.append((f"{folder.name}_h{holes[0][0]}", f"{folder.name}_h{holes[1][0]}", float(distance)))
-    recording = Recording(np.array(q, dtype=float), None, np.array(labels), str(root), tuple(rows))
+        numbers = [k for k, _ in holes]
+        if 0 in numbers and 1 in numbers:  # the plate's two sockets; a third one's distance is not known
+            distances.append((f"{placement}_h0", f"{placement}_h1", float(distance)))
+        elif len(holes) >= 2:  # hole_0 and hole_2 are not the two sockets --distance apart
+            notes.append(f"{folder.name}: no hole_0.csv and hole_1.csv pair: no known distance (holes "
+                         f"{', '.join(map(str, numbers))}: which two are --distance apart is not known)")
+    recording = Recording(np.array(q, dtype=float), None, np.array(labels), str(root), tuple(rows),
+                          tuple(dict.fromkeys(notes)))
     recording.check_limits(model)
     seen: dict[str, str] = {}
     for name in names:  # a hole file copied for another socket: the fit would find two sockets at one point

@@ -63,7 +63,7 @@ def run_sockets(args: argparse.Namespace, models: dict[str, RobotModel], outputs
     report = socket_validation(models, dataset, spec, fitted_fixtures(calibrated, dataset),
                                recorded_prediction(calibrated, args.calibrated))
     print(report.format())
-    for remark in remarks(report, calibrated):
+    for remark in remarks(report, calibrated, models["nominal"]):
         warnings.warn(remark, stacklevel=1)
     inputs = recorded_options(args)
     result = {"provenance": provenance(args.seed, inputs), "sockets": report.to_dict()}

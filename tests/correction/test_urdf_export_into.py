@@ -196,3 +196,70 @@ def test_a_new_tool_goes_to_its_own_link_not_to_the_ball(rng):
     with pytest.raises(ExportError, match="field 'tip_link': the calibrated file carries a new tool .* no link of "
                                           "this URDF is at it .*spherecal tool --urdf"):
         urdf_into(offset.model, original, "panda.urdf")
+
+
+def _cut_after_flange(text: str) -> str:
+    """panda.urdf without the hand, its TCP, the ball and the fingers: a URDF that ends at the flange."""
+    import re
+
+    for name in ("panda_hand_joint", "panda_hand_tcp_joint", "ball_joint", "panda_finger_joint1",
+                 "panda_finger_joint2"):
+        text = re.sub(rf'<joint name="{name}".*?</joint>', "", text, flags=re.S)
+    for name in ("panda_hand", "panda_hand_tcp", "ball_link", "panda_leftfinger", "panda_rightfinger"):
+        text = re.sub(rf'<link name="{name}"\s*/>', "", text)
+        text = re.sub(rf'<link name="{name}">.*?</link>', "", text, flags=re.S)
+    return text
+
+
+def test_a_calibration_whose_ball_lies_beyond_its_tip_link_is_written_at_the_ball(rng):
+    """Calibrated with a URDF that ends at the flange (the ball 137 mm further out, found by the samples:
+    identification.tool_fit), then `export --into` that URDF or the whole panda.urdf: both were refused 'not the
+    calibrated robot: tool points 157 mm apart', the same arm compared with two tools."""
+    from spherecal.correction.tool import with_tool_of
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", NearlyParallelAxesWarning)
+        flange = urdf_model(parse_urdf(_text("panda"), "panda"), tip_link="panda_link8")
+        ball = urdf_model(parse_urdf(_text("panda"), "panda"), tip_link="ball_link")
+    calibrated = perturb(flange, rng, 1e-3, np.deg2rad(0.2), 1e-3)
+    params = calibrated.params.copy()
+    params[calibrated.layout.tool] = ball.tool + [0.004, -0.003, 0.006]  # where the samples put the ball
+    calibrated = calibrated.with_params(params)
+    record = {"nominal_tool": flange.tool.tolist()}  # what calibrate writes: the robot file's tool
+    calibrated = replace(calibrated, extras={**calibrated.extras, "calibration": record})
+    names, q = calibrated.extras["joint_names"], calibrated.random_configurations(100, rng)
+    with pytest.warns(UserWarning, match="the calibration's tool point is 1.. mm from 'panda_link8', the tip link "
+                                         "it was calibrated with, and at 'ball_link' of this URDF: written at "
+                                         "'ball_link'"):
+        written = urdf_into(calibrated, _text("panda"), "panda.urdf")
+    points, _ = MujocoUrdf(written).body_pose("ball_link", names, q)
+    assert np.abs(points - tool_point(calibrated, q)).max() < 1e-12
+    points, _ = MujocoUrdf(written).body_pose("panda_link8", names, q)  # the flange where the URDF has it
+    assert np.abs(points - tool_point(with_tool_of(calibrated, flange), q)).max() < 1e-12
+    with pytest.warns(UserWarning, match="'panda_link8' written at the calibrated tool point, 1.. mm from its place "
+                                         "in this URDF .*'panda_link8' of the written file is the ball"):
+        written = urdf_into(calibrated, _cut_after_flange(_text("panda")), "flange.urdf")
+    points, _ = MujocoUrdf(written).body_pose("panda_link8", names, q)
+    assert np.abs(points - tool_point(calibrated, q)).max() < 1e-12
+    stranger = replace(calibrated, extras={k: v for k, v in calibrated.extras.items() if k != "calibration"})
+    with pytest.raises(ExportError, match="not the calibrated robot"):  # no record of the tip: another robot
+        urdf_into(stranger, _cut_after_flange(_text("panda")), "flange.urdf")
+
+
+def test_a_calibration_of_another_description_of_the_arm_goes_to_the_chain_end_at_its_tool(rng):
+    """A calibration of the embedded iiwa14 (links 'base' -> 'iiwa_link_ee_kuka', joints iiwa_joint_*) exported into
+    MUKCa's iiwa14.urdf (joint_a*, ending at ball_link) was refused "tip link 'iiwa_link_ee_kuka' is not a link of
+    robot 'iiwa14'"; the joints are matched by geometry, the tool goes to the one chain end at it."""
+    nominal, calibrated = _calibrated("panda", "modified", rng)
+    names = [f"arm_joint{i}" for i in range(1, 8)]
+    other = replace(calibrated, extras={**calibrated.extras, "joint_names": names,
+                                        "urdf": {"base_link": "world", "tip_link": "tool_ee"}})
+    with pytest.warns(UserWarning, match="the calibrated file's chain 'world' -> 'tool_ee' is another description's "
+                                         r"\(not in this URDF\): written into its chain to 'ball_link'"):
+        written = urdf_into(other, _text("panda"), "panda.urdf")
+    q = calibrated.random_configurations(100, rng)
+    points, _ = MujocoUrdf(written).body_pose("ball_link", calibrated.extras["joint_names"], q)
+    assert np.abs(points - tool_point(calibrated, q)).max() < 1e-12
+    with pytest.raises(ExportError, match="field 'tip_link': the calibrated file's chain 'world' -> 'tool_ee' is not "
+                                          "in this URDF .* none of its chain's ends is at the calibrated tool point"):
+        urdf_into(other, _cut_after_flange(_text("panda")), "flange.urdf")
