@@ -106,18 +106,15 @@ def transfer_inertials(model: RobotModel, donor: RobotModel, distance_tol: float
 
 
 class LinkInertias(NamedTuple):
-    """Every body of the arm as a dynamics stack needs it (:func:`link_inertias`).
+    """Every body of the arm as a dynamics stack needs it (:func:`link_inertias`): links 1..n, then the payload."""
 
-    Attributes:
-        masses: (n+1,) [kg], links 1..n then the payload.
-        coms: (n+1, 3) centres of mass [m], link ``i`` in DH frame ``i``, the payload in frame ``n``.
-        tensors: (n+1, 3, 3) inertia about each centre of mass, in the axes of the same frame [kg m^2].
-        estimated: (n+1,) bool: no tensor given, a uniform sphere stands in (:func:`correction.inertia.sphere`).
-    """
-
+    #: (n+1,) masses [kg].
     masses: np.ndarray
+    #: (n+1, 3) centres of mass [m], link ``i`` in DH frame ``i``, the payload in frame ``n``.
     coms: np.ndarray
+    #: (n+1, 3, 3) inertia about each centre of mass, in the axes of the same frame [kg m^2].
     tensors: np.ndarray
+    #: (n+1,) bool: no tensor given, a uniform sphere stands in (:func:`correction.inertia.sphere`).
     estimated: np.ndarray
 
 
