@@ -42,7 +42,7 @@ from spherecal.correction.layout import ParameterLayout
 
 from .build import build_problem
 from .gauge import anchor_spread
-from .identifiability import Identifiability, normal_inverse
+from .identifiability import Identifiability, normal_inverse, symmetric_root
 from .joint_error import LENGTH, draw, field_root, seen_fields, tool_fields
 from .problem import NOISE, SIGMA_FLOOR, CalibrationProblem, prior_std
 from .pruning import prune
@@ -279,9 +279,8 @@ def deviation_root(
         cov = 0.5 * (cov + cov.T)
     free = pruned.free
     std = np.sqrt(np.diag(cov))
-    values, vectors = np.linalg.eigh(cov)
     columns = [np.zeros((model.n_params, fp))]
-    columns[0][free] = vectors * np.sqrt(np.clip(values, 0.0, None))
+    columns[0][free] = symmetric_root(cov)
     # biases, one column per standard-normal source
     dropped = np.setdiff1d(lin.free, free)
     if dropped.size:  # barely excited parameters left at nominal: the fit absorbs what it can

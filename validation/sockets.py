@@ -30,6 +30,7 @@ from spherecal.correction.files.fixtures import FixtureSpec
 from spherecal.correction.files.robot_file import RobotFileError, forced_calibration
 from spherecal.correction.files.samples import Dataset, DatasetError, configuration_hashes, configurations_digest
 from spherecal.correction.tool import TIP_MOVED, calibrated_from, calibrated_tool
+from spherecal.identification.identifiability import symmetric_root
 from spherecal.identification.joint_error import LENGTH
 from spherecal.identification.prediction import HeldOut
 from spherecal.identification.problem import samples_location
@@ -272,9 +273,8 @@ def recorded_prediction(model: RobotModel, source: str = "calibrated file") -> H
     if not np.all(np.isfinite(covariance)) or not np.all((variances >= 0) & (variances <= largest)):
         raise RobotFileError(f"{field}covariance': not a covariance (expected finite numbers with a diagonal from 0 "
                              f"to {RECORD_BOUNDS['variance'][0]:g} {RECORD_BOUNDS['variance'][1]})")
-    values, vectors = np.linalg.eigh((covariance + covariance.T) / 2)
     root = np.zeros((model.n_params, len(names)))
-    root[index] = vectors * np.sqrt(np.clip(values, 0.0, None))
+    root[index] = symmetric_root(covariance)
     return HeldOut(root, noise, joint_error, length)
 
 

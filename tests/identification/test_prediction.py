@@ -6,9 +6,9 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from spherecal.correction import param_jacobian, registered_errors, tool_point
-from spherecal.identification.identifiability import normal_inverse, predicted_std
-from spherecal.identification.prediction import Workspace, predict_accuracy, remove_rigid_motion
+from spherecal.correction import load_robot, param_jacobian, registered_errors, tool_point
+from spherecal.identification.identifiability import normal_inverse, predicted_std, symmetric_root
+from spherecal.identification.prediction import Workspace, predict_accuracy, remove_rigid_motion, socket_spreads
 from spherecal.identification.synthetic import make_dataset
 
 FIXTURES = {"P1": (0.5, -0.25, 0.5), "P2": (0.5, 0.0, 0.4), "P3": (0.45, 0.25, 0.45)}
@@ -149,3 +149,27 @@ def test_the_error_covariance_at_the_samples_noise_is_the_map_estimates_over_ref
     assert abs(predicted / measured - 1.0) < 0.08, (predicted, measured)
     judged, _, _, _ = deviation_root(panda, problem, noise, bias_scale=scale)
     assert np.sum((gains @ judged) ** 2) / measured < 0.7  # the prior's part charged at the samples' noise
+
+
+def test_the_draws_root_does_not_depend_on_how_eigh_signs_its_vectors() -> None:
+    # a prediction moved 2 % between two calibrations equal to 1e-15 (MUKCa's kuka_14 raised_left, validate: 0.442
+    # and 0.450 mm): eigh flipped eigenvector signs, and every Monte Carlo draw through the root with them
+    rng = np.random.default_rng(3)
+    a = rng.standard_normal((12, 8))
+    cov = a @ a.T * 1e-8  # rank 8 of 12, as a covariance with gauge directions
+    root = symmetric_root(cov)
+    assert np.allclose(root @ root.T, cov, rtol=0, atol=1e-20)
+    perm = rng.permutation(12)  # the same matrix handed to eigh in another order: other signs
+    again = symmetric_root(cov[np.ix_(perm, perm)])[np.argsort(perm)]
+    assert np.abs(again - root).max() < 1e-6 * np.abs(root).max()  # the zero directions: rounding (1e-8)
+    kept = symmetric_root(cov, floor=1e-9)  # the zero directions left out
+    assert kept.shape == (12, 8) and np.allclose(kept @ kept.T, cov, rtol=0, atol=1e-20)
+    # the same draws, so the same predicted spread, through the function validate calls
+    panda = load_robot("panda")
+    q = [panda.random_configurations(20, np.random.default_rng(1))]
+    wide = np.zeros((panda.n_params, 12))
+    wide[:12] = root
+    wide_again = np.zeros((panda.n_params, 12))
+    wide_again[:12] = again
+    assert socket_spreads(panda, wide, q, 1e-4)[0] == pytest.approx(socket_spreads(panda, wide_again, q, 1e-4)[0],
+                                                                    rel=1e-6)
