@@ -237,13 +237,13 @@ def test_demo_and_campaign_refuse_before_any_work(files, capsys) -> None:
 
 def test_validate_writes_report_and_recording_together(files, capsys, monkeypatch) -> None:
     # the report used to be written first; a recording failing after it left a report without its recording
-    import spherecal.validation.pipeline as pipeline
+    import spherecal.validation.validate_files as validate_files  # the recording's writer, where validate calls it
 
     def broken(recording, *args, **kwargs):
         recording.stream.log("x", recording.rr.Points3D([[0.0, 0.0, 0.0]]))  # something was recorded already
         raise OutputError("disk full (simulated)")
 
-    monkeypatch.setattr(pipeline, "record_validate_run", broken)
+    monkeypatch.setattr(validate_files, "record_validate_run", broken)
     argv = ["validate", "--nominal", files / "robot.yaml", "--calibrated", files / "calibrated.yaml",
             "--mocap", files / "mocap.csv", "--out", files / "r.json", "--rrd", files / "r.rrd"]
     refused(argv, files, capsys, "disk full (simulated)")

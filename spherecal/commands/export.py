@@ -43,62 +43,21 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     add_seed(parser, "the rigid fit's workspace sample")
 
 
-def _limits(text: str | None, option: str) -> list[float] | None:
-    """A comma-separated option as floats (None when not given)."""
-    from spherecal.options import fail
-
-    if text is None:
-        return None
-    try:
-        return [float(v) for v in text.split(",")]
-    except ValueError:
-        raise fail(f"{option}: expected comma-separated numbers, got {text!r}") from None
-
-
-def _into(into: str, out: str) -> tuple[str, str]:
-    """The text of ``--into`` and its name; refused when ``--out`` would overwrite it."""
-    import os
-    from pathlib import Path
-
-    from spherecal.correction.files.text_input import read_xml_text
-    from spherecal.correction.files.urdf_write import ExportError
-
-    source = Path(into)
-    text = read_xml_text(source, ExportError)  # in the encoding it declares, written back in it
-    if Path(out).resolve() == source.resolve() or (Path(out).exists() and os.path.samefile(out, source)):
-        raise ExportError(f"--out: {out} is the --into file; write the calibrated URDF to another file")
-    return text, str(source)
-
-
 def run(args: argparse.Namespace) -> int:
-    """Load, export; nothing is written unless the whole document was built."""
-    from pathlib import Path
-
-    from spherecal.controller.export import export_model, provenance_header
-    from spherecal.correction import load_robot
+    """Export (one library call: load, build, write; nothing is written unless the whole document was built)."""
+    from spherecal.controller.export_file import ExportConfig, export_file
     from spherecal.options import planned_outputs
 
     outputs = planned_outputs(args, {"--out": args.out})  # never over CAL.yaml, --into or --samples
-    from spherecal.correction.files.outputs import check_suffix
-
-    written, accepted = {"urdf": ("a URDF", (".urdf", ".xml")), "mjcf": ("an MJCF model", (".xml", ".mjcf")),
-                         "yaml": ("a robot file (YAML)", (".yaml", ".yml"))}[args.format]
-    check_suffix(args.out, "--out", f"{written} (--format {args.format})", accepted)
-    model = load_robot(args.robot, **urdf_links(args))
-    from spherecal.correction.files.robot_file import forced_calibration
-
-    forced = forced_calibration(model)
-    if forced:
-        import warnings
-
-        warnings.warn(forced, stacklevel=1)
-    into = None if args.into is None else _into(args.into, args.out)
-    exported = export_model(model, args.format, provenance_header(args.robot, args.format), args.prefix,
-                            _limits(args.effort, "--effort"), _limits(args.velocity, "--velocity"), into,
-                            args.samples, args.seed, Path(args.robot).parent)
-    with outputs:
-        path = outputs.write_bytes(args.out, exported.data)
-    print(f"spherecal export: wrote {args.format} of {model.name!r} ({model.convention} DH) to {path}")
-    for line in exported.notes:
+    links = urdf_links(args)
+    config = ExportConfig(
+        robot=args.robot, output_format=args.format, out=args.out, into=args.into, prefix=args.prefix,
+        effort=args.effort, velocity=args.velocity, samples=args.samples, seed=args.seed,
+        tip_link=links["tip_link"], base_link=links["base_link"], inertials=links["inertials"],
+    )
+    result = export_file(config, outputs, report=links["report"])
+    model = result.model
+    print(f"spherecal export: wrote {args.format} of {model.name!r} ({model.convention} DH) to {result.path}")
+    for line in result.notes:
         print(f"spherecal export: {line}")
     return 0

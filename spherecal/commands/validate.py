@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import argparse
 
-from spherecal.options import fail, recorded_options, urdf_links
+from spherecal.options import recorded_options, urdf_links
 
 HELP = "Compare nominal and calibrated models against the truth, motion-capture data or socket samples alone."
 
@@ -40,79 +40,28 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    """Load and check every input, validate, print the table, then write the outputs."""
-
-    import numpy as np
-
-    from spherecal.correction import load_robot
-    from spherecal.correction.files.provenance import provenance
-    from spherecal.validation.inputs import check_models
-    from spherecal.validation.mocap import check_mocap, read_mocap_csv
-    from spherecal.validation.pipeline import record_validate_run, validate_models
-    from spherecal.validation.progress import progress_bar
-
-    if args.truth is None and args.mocap is None and args.samples is None:
-        raise fail("give --truth (simulation), --mocap (recorded data) or --samples (socket-only)")
-    if args.fixtures is not None and (args.truth is not None or args.mocap is not None or args.samples is None):
-        raise fail("--fixtures goes with --samples alone (socket-only check)")
+    """Validate (one library call: read, check, compare, write), printing the tables before the files appear."""
     from spherecal.options import planned_outputs
+    from spherecal.validation.validate_files import ValidateConfig, validate_files
 
+    links = urdf_links(args)
+    config = ValidateConfig(
+        nominal=args.nominal, calibrated=args.calibrated, truth=args.truth, mocap=args.mocap, samples=args.samples,
+        fixtures=args.fixtures, configurations=args.configurations, noise=args.mocap_noise * 1e-3, seed=args.seed,
+        out=args.out, rrd=args.rrd, spawn=args.spawn, tip_link=links["tip_link"], base_link=links["base_link"],
+        inertials=links["inertials"], options=recorded_options(args),
+    )
     outputs = planned_outputs(args, {"--out": args.out, "--rrd": args.rrd})
-    files = {"nominal": args.nominal, "calibrated": args.calibrated}
-    if args.truth is not None:
-        files["truth"] = args.truth
-    # --tip-link/--base-link describe the URDF among the models (a calibrated file is a robot file)
-    urdf = [role for role, path in files.items() if str(path).lower().endswith(".urdf")] or ["nominal"]
-    models = {role: load_robot(path, **(urdf_links(args) if role in urdf else {})) for role, path in files.items()}
-    check_models(models, files)
-    from spherecal.correction.files.robot_file import forced_calibration
-
-    if forced_calibration(models["calibrated"]) and (args.truth is not None or args.mocap is not None):
-        import warnings  # the socket-only branch says it among its remarks
-
-        warnings.warn(forced_calibration(models["calibrated"]), stacklevel=1)
-    if args.truth is None and args.mocap is None:
-        from spherecal.commands.validate_sockets import run_sockets
-
-        return run_sockets(args, models, outputs)
-    n = models["nominal"].n_joints
-    measurement = None
-    if args.mocap is not None:
-        measurement = read_mocap_csv(args.mocap, n)
-        check_mocap(measurement, models["nominal"])
-    self_motion = None
-    if args.samples is not None:
-        from spherecal.correction.files.samples_csv import read_samples
-
-        dataset = read_samples(args.samples, models.get("truth", models["nominal"]))
-        self_motion = {name: dataset.for_fixture(name) for name in dataset.fixture_names}
-
-    total = args.configurations + sum(len(q) for q in (self_motion or {}).values()) if measurement is None else 0
-    with progress_bar(total, "validation", "configurations", quiet=measurement is not None) as advance:
-        report = validate_models(
-            models["nominal"],
-            models["calibrated"],
-            np.random.default_rng(args.seed),
-            truth=models.get("truth"),
-            measurement=measurement,
-            self_motion=self_motion,
-            configurations=args.configurations,
-            noise=args.mocap_noise * 1e-3,
-            progress=advance,
-        )
-    print(report.format())
-    if report.deviations is not None:
-        print("\nparameter deviations from the truth:\n" + report.deviations.format())
-    inputs = recorded_options(args)
-    result = {"provenance": provenance(args.seed, inputs), "validation": report.to_dict()}
-
-    drawn = "truth" if "truth" in models else "calibrated"
-    title = f"{'True' if drawn == 'truth' else 'Calibrated'} robot and fixtures, validation configurations"
-
-    def record(recording) -> None:
-        record_validate_run(recording, report, models, drawn)
-
-    from spherecal.commands.validate_sockets import write_validation
-
-    write_validation(args, outputs, result, record, title)
+    validate_files(config, outputs, show=_show, report=links["report"])
+    if args.out:
+        print(f"report: {args.out}")
+    if args.rrd:
+        print(f"recording: {args.rrd}")
     return 0
+
+
+def _show(report) -> None:
+    """Print a validation's tables: the comparison (and the parameter deviations from a truth) or the sockets'."""
+    print(report.format())
+    if getattr(report, "deviations", None) is not None:
+        print("\nparameter deviations from the truth:\n" + report.deviations.format())

@@ -1,0 +1,128 @@
+"""``spherecal export`` as a library call, file in and file out: a robot file exported as URDF, MJCF or YAML
+(:func:`export_file`); nothing is written unless the whole document was built."""
+
+from __future__ import annotations
+
+import os
+import warnings
+from collections.abc import Callable
+from dataclasses import dataclass
+from pathlib import Path
+
+from spherecal.correction import RobotModel, load_robot
+from spherecal.correction.files.outputs import OutputSet, check_suffix
+from spherecal.correction.files.robot_file import forced_calibration
+from spherecal.correction.files.text_input import read_xml_text
+from spherecal.correction.files.urdf_write import ExportError
+
+from .export import export_model, provenance_header
+
+#: Per format: what the file holds and the name endings that fit it (the first is suggested).
+SUFFIXES = {"urdf": ("a URDF", (".urdf", ".xml")), "mjcf": ("an MJCF model", (".xml", ".mjcf")),
+            "yaml": ("a robot file (YAML)", (".yaml", ".yml"))}
+
+
+@dataclass(frozen=True)
+class ExportConfig:
+    """What ``spherecal export`` exports, how, and where.
+
+    Attributes:
+        robot: the robot file to export (calibrated or nominal), a URDF, or an embedded arm's name.
+        output_format: ``urdf``, ``mjcf`` or ``yaml`` (:mod:`spherecal.controller.export`).
+        out: the file to write.
+        into: urdf only: the user's URDF of the same arm whose joint origins are rewritten (None: standalone).
+        prefix: URDF link and joint name prefix (None: ``panda_``).
+        effort: URDF joint torque limits as given, ``"E1,...,En"`` [N m] (None: Franka's, 7-joint arms).
+        velocity: URDF joint velocity limits as given, ``"V1,...,Vn"`` [rad/s] (None: Franka's, 7-joint arms).
+        samples: urdf only: samples.csv the rigid fit must match (None: the calibration's own, if unchanged).
+        seed: seed of the rigid fit's workspace sample.
+        tip_link, base_link, inertials: a URDF ``robot``: its chain and inertials (:func:`correction.load_robot`).
+    """
+
+    robot: str
+    output_format: str
+    out: str
+    into: str | None = None
+    prefix: str | None = None
+    effort: str | None = None
+    velocity: str | None = None
+    samples: str | None = None
+    seed: int = 0
+    tip_link: str | None = None
+    base_link: str | None = None
+    inertials: str | None = None
+
+
+@dataclass(frozen=True)
+class ExportedFile:
+    """What :func:`export_file` wrote.
+
+    Attributes:
+        path: the written file.
+        model: the exported model.
+        notes: lines for the user (what the format could not carry and what that costs, where the recorded
+            configurations came from).
+    """
+
+    path: Path
+    model: RobotModel
+    notes: tuple[str, ...]
+
+
+def export_file(config: ExportConfig, outputs: OutputSet, report: Callable[[str], None] | None = None) -> ExportedFile:
+    """Check the output's name, load and export ``config.robot``, then write ``config.out``.
+
+    Args:
+        config: the model, the format, its options and the output.
+        outputs: the output (``--out``), checked before the call (never over the robot file, ``into`` or
+            ``samples``); written atomically at the end.
+        report: printer of the one line saying where a URDF's inertials came from.
+
+    Returns:
+        The written file, the model and the notes of :class:`spherecal.controller.export.Export`.
+
+    Raises:
+        spherecal.correction.errors.SpherecalError: an output named for another format, an input that cannot be
+            read, limits that are not numbers, an option the format does not take (one line); nothing is written.
+    """
+    written, accepted = SUFFIXES[config.output_format]
+    check_suffix(config.out, "--out", f"{written} (--format {config.output_format})", accepted)
+    model = load_robot(config.robot, tip_link=config.tip_link, base_link=config.base_link,
+                       inertials=config.inertials, report=report)
+    forced = forced_calibration(model)
+    if forced:
+        warnings.warn(forced, stacklevel=1)
+    into = None if config.into is None else _into(config.into, config.out)
+    exported = export_model(model, config.output_format, provenance_header(config.robot, config.output_format),
+                            config.prefix, _limits(config.effort, "--effort"), _limits(config.velocity, "--velocity"),
+                            into, config.samples, config.seed, Path(config.robot).parent)
+    with outputs:
+        path = outputs.write_bytes(config.out, exported.data)
+    return ExportedFile(path, model, exported.notes)
+
+
+def _limits(text: str | None, option: str) -> list[float] | None:
+    """Comma-separated limits as floats (None when not given).
+
+    Raises:
+        ExportError: a value that is not a number.
+    """
+    if text is None:
+        return None
+    try:
+        return [float(v) for v in text.split(",")]
+    except ValueError:
+        raise ExportError(f"{option}: expected comma-separated numbers, got {text!r}") from None
+
+
+def _into(into: str, out: str) -> tuple[str, str]:
+    """The text of ``into`` and its name.
+
+    Raises:
+        ExportError: ``out`` would overwrite it.
+    """
+    source = Path(into)
+    text = read_xml_text(source, ExportError)  # in the encoding it declares, written back in it
+    if Path(out).resolve() == source.resolve() or (Path(out).exists() and os.path.samefile(out, source)):
+        raise ExportError(f"--out: {out} is the --into file; write the calibrated URDF to another file")
+    return text, str(source)
