@@ -30,6 +30,7 @@ from spherecal.correction.files.provenance import provenance
 from spherecal.correction.files.samples import DEDUP_TOL, Dataset
 from spherecal.correction.files.samples_csv import read_samples
 
+from .build import build_problem
 from .calibrate import MAX_CHANGE, CalibrationResult, calibrate
 from .misplaced import misplaced
 from .problem import NOISE, PRIOR, ImplausibleCalibrationError
@@ -155,7 +156,7 @@ def run_workflow(nominal: RobotModel, dataset: Dataset, spec: FixtureSpec | None
         dataset = dataset.deduplicated(options.dedup_tol)
     dropped = read - dataset.n_samples
     dataset = dataset.subsampled(options.max_per_fixture, np.random.default_rng(options.seed))
-    given_tool = nominal.tool
+    given = nominal
     nominal, tool_note = recentred_tool(nominal, dataset, options.max_change)
 
     def fit(begin, data, fixtures, warm=None):  # a candidate's or a fold's fit: lm, no self-check
@@ -182,14 +183,15 @@ def run_workflow(nominal: RobotModel, dataset: Dataset, spec: FixtureSpec | None
         )
     except (InconsistentDataError, ImplausibleCalibrationError) as refused:
         raise _named_cause(refused, nominal, dataset, spec) from None
-    if tool_note is not None:
-        result = replace(result, warnings=(tool_note, *result.warnings))
+    if tool_note is not None:  # 'before' is the robot file as given, not the tool the samples showed
+        result = replace(result, residual_before=_residual_of(given, dataset, spec, options.fit_noise),
+                         warnings=(tool_note, *result.warnings))
     block = result.block()
     block["model_selection"] = selection.block()
     if selection.seconds:
         block["timings_s"]["model_selection"] = selection.seconds
     block["duplicates_dropped"] = dropped
-    block["nominal_tool"] = [float(v) for v in given_tool]  # a tool swap carries the tool's correction over
+    block["nominal_tool"] = [float(v) for v in given.tool]  # a tool swap carries the tool's correction over
     block["trained_on"] = training_record(as_read, dataset)  # validate recognises these samples by content
     block["options"] = options.record()
     block["provenance"] = provenance(options.seed, {**(inputs or {}), **options.record()})
@@ -197,6 +199,13 @@ def run_workflow(nominal: RobotModel, dataset: Dataset, spec: FixtureSpec | None
     extras["calibration"] = block
     return WorkflowResult(replace(result.model, extras=extras), result, selection, dropped, options.dedup_tol,
                           block)
+
+
+def _residual_of(model: RobotModel, dataset: Dataset, spec: FixtureSpec | None, noise: float) -> np.ndarray:
+    """(K,) distance [m] of each sample's tool point from its fixture's start centre at ``model``, as
+    :func:`.calibrate.calibrate` measures 'before' (known positions, else the samples' mean point)."""
+    problem = build_problem(model, dataset, spec, noise=noise)
+    return np.linalg.norm(problem.sample_errors(problem.x0), axis=1)
 
 
 def _named_cause(refused: SpherecalError, nominal: RobotModel, dataset: Dataset,

@@ -70,6 +70,11 @@ def test_a_ball_further_out_than_the_file_says_is_calibrated_with_a_warning(seed
     assert np.linalg.norm(out.model.tool - true.tool) < 2e-3  # the arm's own errors share the last millimetres
     assert _held_out(out.model, data) < 0.05 * _held_out(nominal, data)  # sockets it never saw
     assert out.block["nominal_tool"] == pytest.approx(list(nominal.tool))  # the file's tool, for a tool swap
+    # 'before' is the robot file as given: each sample's distance from its fixture's mean point with the file's tool
+    points = tool_point(nominal, train.q)
+    given = [np.linalg.norm(points[train.labels == n] - points[train.labels == n].mean(axis=0), axis=1)
+             for n in train.fixture_names]
+    assert out.result.rms_before == pytest.approx(np.sqrt(np.mean(np.concatenate(given) ** 2)), rel=1e-9)
     # validate compares the arms, not the tools: the calibrated file passes against its robot file ...
     check_models({"nominal": nominal, "calibrated": out.model}, {"nominal": "panda", "calibrated": "cal.yaml"})
     # ... and another arm still does not
