@@ -193,6 +193,19 @@ def calibrated_from(model: RobotModel, reference: RobotModel) -> bool:
 
 def with_tool_of(model: RobotModel, reference: RobotModel) -> RobotModel:
     """``model`` with ``reference``'s tool point: the arms compared alone."""
-    params = model.params.copy()
-    params[model.layout.tool] = reference.tool
-    return model.with_params(params)
+    return replace(model, tool=np.array(reference.tool, dtype=float))
+
+
+def arm_of(model: RobotModel, reference: RobotModel) -> RobotModel:
+    """``model`` as compared with ``reference`` to tell whether both describe one arm: with ``reference``'s tool
+    when it is a calibration of ``reference`` (:func:`calibrated_from`: its tool is where its samples put the
+    ball), else as it is."""
+    return with_tool_of(model, reference) if calibrated_from(model, reference) else model
+
+
+def tip_moved(model: RobotModel, reference: RobotModel) -> float:
+    """How far [m] a calibration of ``reference`` (:func:`calibrated_from`) found the ball from ``reference``'s tool
+    point; 0 for any other model. Beyond :data:`TIP_MOVED` it is an adapter or sensor the description lacks."""
+    if not calibrated_from(model, reference):
+        return 0.0
+    return float(np.linalg.norm(np.asarray(model.tool, dtype=float) - reference.tool))

@@ -8,7 +8,7 @@ from __future__ import annotations
 import numpy as np
 
 from spherecal.correction import RobotModel, SpherecalError, tool_point
-from spherecal.correction.tool import calibrated_from, with_tool_of
+from spherecal.correction.tool import arm_of
 
 #: A model whose tool point lies further than this from the nominal one's on some configuration is
 #: not a description of the same arm [m] (as :data:`controller.compensation.MAX_MODEL_DIFFERENCE`).
@@ -42,8 +42,7 @@ def check_models(models: dict[str, RobotModel], files: dict[str, str]) -> None:
             field, what = mismatch
             raise ValidationInputError(f"{files[role]}: field {field}: {what} as in the nominal {files['nominal']}")
         swapped = isinstance(model.extras.get("tool_swap"), dict)
-        compared = with_tool_of(model, reference) if calibrated_from(model, reference) else model
-        gap = np.linalg.norm(tool_point(compared, q) - nominal_tool, axis=1)
+        gap = np.linalg.norm(tool_point(arm_of(model, reference), q) - nominal_tool, axis=1)
         if not np.all(gap <= MAX_MODEL_DIFFERENCE):
             worst = float(np.nanmax(np.where(np.isfinite(gap), gap, np.inf)))
             field, why = (("tool", "its tool was replaced by `spherecal tool`: validate the calibrated file it was "

@@ -29,7 +29,7 @@ from spherecal.correction import RobotModel, tool_point
 from spherecal.correction.files.fixtures import FixtureSpec
 from spherecal.correction.files.robot_file import RobotFileError, forced_calibration
 from spherecal.correction.files.samples import Dataset, DatasetError, configuration_hashes, configurations_digest
-from spherecal.correction.tool import TIP_MOVED, calibrated_from, calibrated_tool
+from spherecal.correction.tool import TIP_MOVED, calibrated_tool, tip_moved
 from spherecal.identification.identifiability import symmetric_root
 from spherecal.identification.joint_error import LENGTH
 from spherecal.identification.prediction import HeldOut
@@ -348,12 +348,11 @@ def remarks(report: SocketReport, calibrated: RobotModel, nominal: RobotModel | 
     samples, else a held-out spread over :data:`BAND` x the predicted one."""
     forced = forced_calibration(calibrated)
     out = [forced] if forced else []
-    if nominal is not None and calibrated_from(calibrated, nominal):
-        offset = float(np.linalg.norm(calibrated_tool(calibrated) - nominal.tool))
-        if offset > TIP_MOVED:  # MUKCa's panda_1_with_sensor on panda.urdf: 'nominal' 19.9 mm, the arm's own ~8
-            out.append(f"the calibration found the ball {offset * 1e3:.0f} mm from the nominal file's tool point (an "
-                       "adapter or sensor the file lacks): the nominal columns measure the file as given, that offset "
-                       "included, not the arm's own error")
+    offset = tip_moved(calibrated, nominal) if nominal is not None else 0.0
+    if offset > TIP_MOVED:  # MUKCa's panda_1_with_sensor on panda.urdf: 'nominal' 19.9 mm, the arm's own ~8
+        out.append(f"the calibration found the ball {offset * 1e3:.0f} mm from the nominal file's tool point (an "
+                   "adapter or sensor the file lacks): the nominal columns measure the file as given, that offset "
+                   "included, not the arm's own error")
     if "calibration" not in calibrated.extras:  # deleted by hand, or a robot file that was never calibrated here
         out.append("the calibrated file has no 'calibration' block: nothing records which samples trained it, so every "
                    "socket is counted as held out (one it was trained on looks better than a held-out one would) "

@@ -119,8 +119,9 @@ def validate_files(config: ValidateConfig, outputs: OutputSet,
              "report": report}
     models = {role: load_robot(path, **(links if role in urdf else {})) for role, path in files.items()}
     check_models(models, files)
-    if forced_calibration(models["calibrated"]) and simulated_or_recorded:
-        warnings.warn(forced_calibration(models["calibrated"]), stacklevel=1)  # socket-only: among its remarks
+    forced = forced_calibration(models["calibrated"])
+    if forced and simulated_or_recorded:
+        warnings.warn(forced, stacklevel=1)  # socket-only: among its remarks
     if not simulated_or_recorded:
         return _validate_sockets(config, models, outputs, show)
     measurement = None

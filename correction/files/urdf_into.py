@@ -23,7 +23,7 @@ from ..conversion import to_modified
 from ..kinematics import tool_point
 from ..model import RobotModel, matrix_rpy
 from ..rigid import registered_errors
-from ..tool import TIP_MOVED, calibrated_from, with_tool_of
+from ..tool import TIP_MOVED, arm_of, tip_moved
 from .robot_file import RobotFileError
 from .urdf_read import MOVABLE, UrdfTree, parse_urdf
 from .urdf_to_dh import NearlyParallelAxesWarning, urdf_model
@@ -100,7 +100,7 @@ def _check_same_arm(model: RobotModel, nominal: RobotModel, source: str, names: 
             f"{source}: joint names {nominal.extras['joint_names']} differ from the calibrated model's {list(names)}"
         )
     # a calibration of this URDF's tip whose samples put the ball elsewhere: the arms are compared alone
-    error = _tool_point_gap(with_tool_of(model, nominal) if calibrated_from(model, nominal) else model, nominal)
+    error = _tool_point_gap(arm_of(model, nominal), nominal)
     if error > SAME_ROBOT_TOL:
         _refuse_new_tool(model, source, f"{nominal.extras['urdf']['tip_link']!r} is {error * 1e3:.0f} mm from it")
         raise ExportError(
@@ -142,9 +142,7 @@ def _tip_at_the_ball(model: RobotModel, nominal: RobotModel, tree: UrdfTree, bas
     centimetres from it (:data:`TIP_MOVED`; a tip short of the ball, the flange or a gripper's TCP, with a sensor
     or adapter the description lacks). Then the one end of this URDF at the calibrated tool point, if any (MUKCa's
     ``ball_link``), with one warning; else the tip link itself, with one warning that it now stands for the ball."""
-    if not calibrated_from(model, nominal):
-        return nominal
-    moved = float(np.linalg.norm(np.asarray(model.tool, float) - nominal.tool))
+    moved = tip_moved(model, nominal)
     if moved <= TIP_MOVED:
         return nominal
     tip = nominal.extras["urdf"]["tip_link"]

@@ -44,7 +44,7 @@ import yaml
 
 from ..errors import SpherecalError
 from ..gravity import has_inertials
-from ..inertia import rotated, six_of
+from ..inertia import FIELDS, rotated, six_of
 from ..inertials import link_inertias
 from ..model import RobotModel, matrix_rpy
 
@@ -170,8 +170,7 @@ def provenance_comment(model: RobotModel) -> str:
 
 def _inertial(mass: float, com: np.ndarray, inertia: np.ndarray) -> str:
     """An ``<inertial>`` in its link's axes (``rpy`` zero: the tensor is already turned into them)."""
-    six = " ".join(f"{name}={quoteattr(_f(v))}" for name, v in zip(("ixx", "ixy", "ixz", "iyy", "iyz", "izz"),
-                                                                  six_of(inertia), strict=True))
+    six = " ".join(f"{name}={quoteattr(_f(v))}" for name, v in zip(FIELDS, six_of(inertia), strict=True))
     return (f'    <inertial>\n      <origin xyz="{_triple(com)}" rpy="0.0 0.0 0.0"/>\n'
             f'      <mass value="{_f(mass)}"/>\n      <inertia {six}/>\n    </inertial>')
 
