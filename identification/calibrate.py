@@ -29,6 +29,11 @@ from .selfcheck import InconsistentDataError, SelfCheck, self_check
 from .solvers import solve_lm, solve_pso
 
 METHODS: tuple[str, ...] = ("lm", "pso", "pso+lm")
+#: The ``auto`` loss's Huber scale, in multiples of the noise the first (least-squares) fit's residuals show
+#: (:func:`robust_noise`): Rousseeuw and Leroy's 2.5 sigma cut-off of reweighted least squares ("Robust
+#: Regression and Outlier Detection", 1987). Rows within it are least squares, so Gaussian noise loses
+#: almost nothing; a press taken before the ball sat in its socket pulls with a bounded weight.
+ROBUST_CUT = 2.5
 #: Largest plausible tool-point change of a calibration, in multiples of what a real arm's
 #: errors (1 mm, 0.2 deg) typically move it (about 6 mm on the Panda, so about 24 mm).
 MAX_CHANGE = 4.0
@@ -62,6 +67,8 @@ class CalibrationResult:
         selfcheck: the statistical self-check (:mod:`.selfcheck`), None when it was not run.
         effective_unknowns: effective number of unknowns of the (regularised) fit, the trace of its hat
             matrix (:meth:`CalibrationProblem.effective_unknowns`); the unknowns' count without a prior.
+        loss: the loss the fit used: ``linear``, ``soft_l1`` or ``huber`` (``auto`` resolves to ``huber``).
+        loss_scale: its residual scale [m] (None with ``linear``).
     """
 
     model: RobotModel
@@ -81,6 +88,8 @@ class CalibrationResult:
     x: np.ndarray | None = None
     selfcheck: SelfCheck | None = None
     effective_unknowns: float | None = None
+    loss: str = "linear"
+    loss_scale: float | None = None
 
     @staticmethod
     def _stats(r: np.ndarray) -> tuple[float, float]:
@@ -124,6 +133,8 @@ class CalibrationResult:
             "prior_tail_spreads": (float(self.problem.prior_tail)
                                    if self.problem and np.isfinite(self.problem.prior_tail) else None),
             "effective_unknowns": self.effective_unknowns,
+            "loss": self.loss,
+            "loss_scale_m": self.loss_scale,
             **({"self_check": self.selfcheck.block()} if self.selfcheck is not None else {}),
             "timings_s": {k: float(v) for k, v in self.timings.items()},
         }
@@ -140,6 +151,15 @@ class CalibrationResult:
         names = self.model.param_names
         return [f"beyond the prior's {problem.prior_tail:g}-spread core (large errors of this arm): "
                 + ", ".join(f"{names[i]} {z[i]:+.1f} spreads" for i in tail)]
+
+    def _loss_line(self) -> list[str]:
+        """How many samples a robust loss weighed less (a coordinate beyond its scale), if any."""
+        if self.loss == "linear" or self.loss_scale is None or self.problem is None or self.x is None:
+            return []
+        beyond = np.abs(self.problem.sample_errors(self.x)) > self.loss_scale
+        count = int(beyond.any(axis=1).sum())
+        return [f"{self.loss} loss at {self.loss_scale * 1e3:.3f} mm: {count} of {len(beyond)} samples beyond it "
+                "weigh less"]
 
     def summary(self) -> str:
         """One screen: residuals before/after, parameter changes with std, fixed parameters, warnings."""
@@ -161,6 +181,7 @@ class CalibrationResult:
             scale, unit = kind.display_scale, kind.display_unit
             lines.append(f"  {name:<9} {unit:<7} {(end - start) * scale:10.5f} {std * scale:10.5f}")
         lines.extend(self._tail_line())
+        lines.extend(self._loss_line())
         groups: dict[str, list[str]] = {}
         for name, reason in self.fixed.items():
             groups.setdefault(reason, []).append(name)
@@ -213,7 +234,9 @@ def calibrate(
         start: start model of the identified parameters (default ``nominal``); the fixed ones keep
             their nominal values.
         seed: seeds PSO.
-        loss: ``linear``, ``soft_l1`` or ``huber`` (``lm`` only).
+        loss: ``linear``, ``soft_l1`` or ``huber`` at the scale ``noise`` (``lm`` only), or ``auto``: least
+            squares, then Huber at :data:`ROBUST_CUT` x the noise its residuals show (:func:`robust_noise`)
+            from there (least squares with ``pso``).
         noise: expected fixture noise [m] (robust-loss scale, distance weight).
         pso_options: keyword arguments of :func:`solve_pso`.
         max_change: largest plausible tool-point change from the start model, in multiples of what
@@ -251,32 +274,40 @@ def calibrate(
     if method in ("pso", "pso+lm"):
         solution = solve_pso(problem, seed=seed, x0=x, **(pso_options or {}))
         x, timings["pso"] = solution.x, solution.seconds
+    # ``auto``: the solves use Huber at the residuals' scale, every figure (pruning, stds, the self-check) reads
+    # all samples as least squares does: a press 50 mm off (the wrong socket) is refused and named, not discounted
+    figures = "linear" if loss == "auto" else loss
+    fit_loss, scale = ("linear" if loss == "auto" else loss), None
     if method in ("lm", "pso+lm"):
         x_start = x
-        solution = solve_lm(problem, x, loss=loss)
+        solution = solve_lm(problem, x, loss=fit_loss)
         x, timings["lm"] = solution.x, solution.seconds
+        if loss == "auto":
+            fit_loss, scale = "huber", ROBUST_CUT * robust_noise(problem, x)
+            solution = solve_lm(problem, x, loss=fit_loss, f_scale=scale)
+            x, timings["lm"] = solution.x, timings["lm"] + solution.seconds
         # The data's own noise decides what it can see, judged near the start (a poorly excited
         # data set lets the first fit wander to a far, wrong basin); re-solve without what it cannot
         # see, from the start again rather than from where the first fit wandered.
-        sigma = max(_sigma(problem, x, loss=loss), SIGMA_FLOOR)
+        sigma = max(_sigma(problem, x, loss=figures), SIGMA_FLOOR)
         pruned, _ = prune(problem, x, sigma, jac=problem.generic_jacobian())
         if pruned is not problem:
             x_restart = pruned.pack(*problem.unpack(x_start))
             problem = pruned
-            solution = solve_lm(problem, x_restart, loss=loss)
+            solution = solve_lm(problem, x_restart, loss=fit_loss, f_scale=scale)
             x, timings["lm"] = solution.x, timings["lm"] + solution.seconds
     clock = time.perf_counter()
     problem = problem.reweighted(x)  # a heavy-tailed prior's rows at their curvature here (stds, self-check)
     jac = problem.jacobian(x)
     inverse = normal_inverse(jac)  # one SVD for both
     edf = problem.effective_unknowns(jac, inverse)
-    sigma = _sigma(problem, x, edf, loss)
+    sigma = _sigma(problem, x, edf, figures)
     std_values = predicted_std(jac, sigma, inverse)
     ident = Identifiability.of(jac)
     params, centres = problem.unpack(x)
     timings["covariance"] = time.perf_counter() - clock
     clock = time.perf_counter()
-    checked = (self_check(problem, x, nominal, built, loss=loss, declared=noise_declared, unknowns=edf)
+    checked = (self_check(problem, x, nominal, built, loss=figures, declared=noise_declared, unknowns=edf)
                if check else None)
     timings["self_check"] = time.perf_counter() - clock
     if checked is not None and not force:
@@ -315,7 +346,16 @@ def calibrate(
         x=x,
         selfcheck=checked,
         effective_unknowns=edf,
+        loss=fit_loss,
+        loss_scale=None if fit_loss == "linear" else (scale or noise),
     )
+
+
+def robust_noise(problem: CalibrationProblem, x: np.ndarray) -> float:
+    """The noise per coordinate [m] the sample residuals at ``x`` show, robustly: 1.4826 x the median absolute
+    residual coordinate (the normal distribution's std from its median absolute deviation; a few presses taken
+    before the ball sat in its socket do not move it), at least :data:`.problem.SIGMA_FLOOR`."""
+    return max(1.4826 * float(np.median(np.abs(problem.sample_errors(x)))), SIGMA_FLOOR)
 
 
 def check_plausible(problem: CalibrationProblem, params: np.ndarray, max_change: float = MAX_CHANGE) -> None:

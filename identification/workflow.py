@@ -47,7 +47,8 @@ class WorkflowOptions:
     Attributes:
         method: ``lm``, ``pso`` or ``pso+lm``.
         model: ``dh``, ``elastic``, ``scale``, ``elastic+scale`` or ``auto`` (:mod:`.selection`).
-        loss: ``linear``, ``soft_l1`` or ``huber``.
+        loss: ``auto`` (default: least squares, then Huber at the scale the residuals show,
+            :func:`.calibrate.calibrate`), ``linear``, ``soft_l1`` or ``huber``.
         noise: declared fixture noise std per axis [m], or None (default): not declared, the fit weighs the
             samples at :data:`.problem.NOISE` and the self-check judges the accuracy at the noise the residuals
             show (a declared noise is a floor of that judgement: :func:`.selfcheck.self_check`).
@@ -63,7 +64,7 @@ class WorkflowOptions:
 
     method: str = "lm"
     model: str = "auto"
-    loss: str = "linear"
+    loss: str = "auto"
     noise: float | None = None
     max_per_fixture: int | None = None
     dedup_tol: float | None = DEDUP_TOL
@@ -74,7 +75,8 @@ class WorkflowOptions:
     exclude_fixtures: tuple[str, ...] = ()
 
     def __post_init__(self) -> None:
-        if self.method == "pso" and self.loss != "linear":  # the loss was ignored, the file recorded it as used
+        # pso fits least squares: a robust loss would be ignored and recorded as used (auto resolves to linear)
+        if self.method == "pso" and self.loss not in ("linear", "auto"):
             raise SpherecalError(f"--loss {self.loss}: the pso method fits plain least squares; a robust loss needs "
                                  "--method lm or pso+lm (its lm stage)")
 
@@ -159,13 +161,15 @@ def run_workflow(nominal: RobotModel, dataset: Dataset, spec: FixtureSpec | None
     given = nominal
     nominal, tool_note = recentred_tool(nominal, dataset, options.max_change)
 
+    candidate_loss = "linear" if options.loss == "auto" else options.loss  # auto's Huber: the final fit's
+
     def fit(begin, data, fixtures, warm=None):  # a candidate's or a fold's fit: lm, no self-check
-        return calibrate(begin, data, fixtures, start=warm, loss=options.loss, noise=options.fit_noise,
+        return calibrate(begin, data, fixtures, start=warm, loss=candidate_loss, noise=options.fit_noise,
                          max_change=options.max_change, check=False, prior=options.prior)
 
     try:
         selection = select_model(options.model, fit, nominal, dataset, spec, seed=options.seed,
-                                 robust=options.loss != "linear")
+                                 robust=candidate_loss != "linear")
     except (InconsistentDataError, ImplausibleCalibrationError) as refused:
         raise _named_cause(refused, nominal, dataset, spec) from None
     begin = start_for(selection.chosen, nominal)

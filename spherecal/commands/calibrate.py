@@ -22,10 +22,13 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="keep at most N samples per fixture (random; default all)")
     add_deprecated(parser, "--max-samples", "--max-per-fixture", count(1))
     add_seed(parser, "subsampling and PSO")
-    parser.add_argument("--loss", choices=("linear", "soft_l1", "huber"), default="linear", help="lm loss")
+    parser.add_argument(
+        "--loss", choices=("auto", "linear", "soft_l1", "huber"), default="auto",
+        help="lm loss (default auto: least squares, then Huber at 2.5x the noise its residuals show, so a press "
+             "taken before the ball sat in its socket pulls with a bounded weight; soft_l1 / huber: at --noise)")
     parser.add_argument(
         "--noise", type=positive_noise_mm, default=None,
-        help="fixture noise std per axis you know of this recording [mm] (robust-loss scale, residual check, "
+        help="fixture noise std per axis you know of this recording [mm] (soft_l1 / huber scale, residual check, "
              "and a floor of the accuracy judgement); default: the fit weighs samples at 0.3 and the accuracy "
              "is judged at the noise the residuals show",
     )

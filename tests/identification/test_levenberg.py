@@ -178,7 +178,8 @@ def test_elastic_calibration_same_as_with_scipy(truth, monkeypatch) -> None:
     panda, true = truth
     dataset, spec = _data(true, 3e-4, 3, per_fixture=200)
     ours = pipeline.calibrate(elastic_start(panda), dataset, spec, check=False)
-    monkeypatch.setattr(pipeline, "solve_lm", lambda problem, x0, loss: solve_scipy(problem, x0, loss))
+    monkeypatch.setattr(pipeline, "solve_lm",
+                        lambda problem, x0, loss, f_scale=None: solve_scipy(problem, x0, loss, f_scale))
     ref = pipeline.calibrate(elastic_start(panda), dataset, spec, check=False)
     assert ours.identified == ref.identified and any(n.startswith("c") for n in ours.identified)
     cost = [float(r @ r) for r in (res.problem.residuals(res.x) for res in (ours, ref))]
