@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import math
 import threading
 import time
 from dataclasses import dataclass, field
@@ -153,13 +154,17 @@ class CalibrationResult:
                 + ", ".join(f"{names[i]} {z[i]:+.1f} spreads" for i in tail)]
 
     def _loss_line(self) -> list[str]:
-        """How many samples a robust loss weighed less (a coordinate beyond its scale), if any."""
+        """How many samples a robust loss weighed less (a coordinate beyond its scale), beside the share Gaussian
+        noise at the residuals' own level puts there."""
         if self.loss == "linear" or self.loss_scale is None or self.problem is None or self.x is None:
             return []
         beyond = np.abs(self.problem.sample_errors(self.x)) > self.loss_scale
         count = int(beyond.any(axis=1).sum())
-        return [f"{self.loss} loss at {self.loss_scale * 1e3:.3f} mm: {count} of {len(beyond)} samples beyond it "
-                "weigh less"]
+        shown = robust_noise(self.problem, self.x)
+        gaussian = 1.0 - (1.0 - math.erfc(self.loss_scale / shown / math.sqrt(2.0))) ** 3
+        return [f"loss: {self.loss} at {self.loss_scale * 1e3:.3f} mm ({self.loss_scale / shown:.1f}x the "
+                f"{shown * 1e3:.3f} mm per axis the residuals show): {count} of {len(beyond)} samples beyond it weigh "
+                f"less (Gaussian noise puts {100 * gaussian:.1f} % there)"]
 
     def summary(self) -> str:
         """One screen: residuals before/after, parameter changes with std, fixed parameters, warnings."""
