@@ -273,7 +273,7 @@ def calibrate(
     clock = time.perf_counter()
     problem = build_problem(nominal, dataset, spec, noise=noise, prior_weight=prior, prior_tail=prior_tail)
     built = problem
-    before = np.linalg.norm(problem.sample_errors(problem.x0), axis=1)
+    before = problem.start_distances()
     timings["build"] = time.perf_counter() - clock
     x = problem.x0 if start is None else problem.start_from(start)
     if method in ("pso", "pso+lm"):

@@ -335,6 +335,11 @@ class CalibrationProblem:
         _, fixture = self._layout()
         return tool_point(self.model.with_params(params), self.dataset.q) - centres[fixture]
 
+    def start_distances(self) -> np.ndarray:
+        """(K,) distance [m] of each sample's tool point from its fixture's start centre at the start model (known
+        positions, else the samples' mean point): a calibration's 'residual before'."""
+        return np.linalg.norm(self.sample_errors(self.x0), axis=1)
+
     def inliers(self, x: np.ndarray) -> np.ndarray:
         """(K,) False on the samples a robust loss discounts at ``x``: farther from their centre than :data:`OUTLIER`
         x the median distance; all True when there are none or when a fixture would lose every sample."""

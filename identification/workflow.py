@@ -188,8 +188,8 @@ def run_workflow(nominal: RobotModel, dataset: Dataset, spec: FixtureSpec | None
     except (InconsistentDataError, ImplausibleCalibrationError) as refused:
         raise _named_cause(refused, nominal, dataset, spec) from None
     if tool_note is not None:  # 'before' is the robot file as given, not the tool the samples showed
-        result = replace(result, residual_before=_residual_of(given, dataset, spec, options.fit_noise),
-                         warnings=(tool_note, *result.warnings))
+        before = build_problem(given, dataset, spec, noise=options.fit_noise).start_distances()
+        result = replace(result, residual_before=before, warnings=(tool_note, *result.warnings))
     block = result.block()
     block["model_selection"] = selection.block()
     if selection.seconds:
@@ -203,13 +203,6 @@ def run_workflow(nominal: RobotModel, dataset: Dataset, spec: FixtureSpec | None
     extras["calibration"] = block
     return WorkflowResult(replace(result.model, extras=extras), result, selection, dropped, options.dedup_tol,
                           block)
-
-
-def _residual_of(model: RobotModel, dataset: Dataset, spec: FixtureSpec | None, noise: float) -> np.ndarray:
-    """(K,) distance [m] of each sample's tool point from its fixture's start centre at ``model``, as
-    :func:`.calibrate.calibrate` measures 'before' (known positions, else the samples' mean point)."""
-    problem = build_problem(model, dataset, spec, noise=noise)
-    return np.linalg.norm(problem.sample_errors(problem.x0), axis=1)
 
 
 def _named_cause(refused: SpherecalError, nominal: RobotModel, dataset: Dataset,
