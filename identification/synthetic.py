@@ -129,3 +129,25 @@ def make_dataset(
         (a, b, float(np.linalg.norm(centres[a] - centres[b]))) for i, a in enumerate(names) for b in names[i + 1 :]
     ]
     return dataset, FixtureSpec(names=names, distances=distances)
+
+
+def unseated(model: RobotModel, dataset: Dataset, centres: dict[str, np.ndarray], count: int, offset: float,
+             rng: np.random.Generator) -> Dataset:
+    """``dataset`` with the first ``count`` presses of every fixture taken before the ball sat in its socket:
+    their tool point (on the true ``model``) ``offset`` [m] from the centre, in a random direction.
+
+    Args:
+        model: the true robot.
+        dataset: the samples (from :func:`make_dataset` on ``model``).
+        centres: name -> (3,) fixture centre [m], every fixture of ``dataset``.
+        count: presses per fixture to move.
+        offset: how far [m].
+        rng: seeded generator.
+    """
+    q = dataset.q.copy()
+    for name in dataset.fixture_names:
+        for row in np.flatnonzero(dataset.labels == name)[:count]:
+            direction = rng.normal(size=3)
+            q[row] = fixture_samples(model, np.asarray(centres[name]) + offset * direction / np.linalg.norm(direction),
+                                     1, rng)[0]
+    return Dataset(labels=dataset.labels, q=q, fixture_names=dataset.fixture_names, source=dataset.source)

@@ -9,41 +9,30 @@ import numpy as np
 import pytest
 
 from spherecal.cli import main
-from spherecal.correction import Dataset, load_robot, perturb, tool_point
+from spherecal.correction import Dataset, load_robot, perturb, registered_errors, tool_point
 from spherecal.correction.files.fixtures import write_fixtures
 from spherecal.correction.files.samples_csv import write_samples
 from spherecal.identification.build import build_problem
 from spherecal.identification.calibrate import ROBUST_CUT, robust_noise
-from spherecal.identification.synthetic import PANDA_FIXTURES, fixture_samples, make_dataset
+from spherecal.identification.synthetic import PANDA_FIXTURES, make_dataset, unseated
 from spherecal.identification.workflow import WorkflowOptions, run_workflow
 
 NOISE, PER_FIXTURE = 1.5e-4, 60
 
 
 def _aligned_error(model, true, q) -> float:
-    """RMS distance [m] of ``model``'s tool points from ``true``'s at ``q`` after the best rigid alignment (the
-    world frame of a calibration from unknown sockets is free)."""
-    a, b = tool_point(model, q), tool_point(true, q)
-    a, b = a - a.mean(axis=0), b - b.mean(axis=0)
-    u, _, vt = np.linalg.svd(a.T @ b)
-    rotation = u @ np.diag([1.0, 1.0, np.sign(np.linalg.det(u @ vt))]) @ vt
-    return float(np.sqrt(np.mean(np.sum((a @ rotation - b) ** 2, axis=1))))
+    """RMS distance [m] of ``model``'s tool points from ``true``'s at ``q`` after the best rigid fit (the world frame
+    of a calibration from unknown sockets is free)."""
+    return float(np.sqrt(np.mean(registered_errors(tool_point(model, q), tool_point(true, q)) ** 2)))
 
 
-def _recording(seed: int, unseated: int, offset: float = 1.5e-3):
-    """(nominal Panda, true arm, samples): three sockets, ``unseated`` presses per socket ``offset`` [m] from it in
-    a random direction."""
+def _recording(seed: int, count: int, offset: float = 1.5e-3):
+    """(nominal Panda, true arm, samples, spec): three sockets, ``count`` presses per socket ``offset`` [m] off."""
     panda = load_robot("panda")
     rng = np.random.default_rng(seed)
     true = perturb(panda, rng)
     data, spec = make_dataset(true, per_fixture=PER_FIXTURE, rng=rng, noise=NOISE)
-    q = data.q.copy()
-    for name in data.fixture_names:
-        for row in np.flatnonzero(data.labels == name)[:unseated]:
-            direction = rng.normal(size=3)
-            q[row] = fixture_samples(true, PANDA_FIXTURES[name] + offset * direction / np.linalg.norm(direction),
-                                     1, rng)[0]
-    return panda, true, Dataset(labels=data.labels, q=q, fixture_names=data.fixture_names), spec
+    return panda, true, unseated(true, data, PANDA_FIXTURES, count, offset, rng), spec
 
 
 def _errors(seed: int, unseated: int) -> dict[str, float]:
