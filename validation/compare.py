@@ -19,6 +19,7 @@ import numpy as np
 from spherecal.correction import RobotModel, registered_errors, tool_point
 from spherecal.correction.elastic import compliance_of, with_compliance
 from spherecal.correction.layout import ANGLE, ParameterLayout, ParamKind
+from spherecal.correction.scale import scale_of, with_scale
 
 #: Validation configurations drawn uniformly inside the joint limits (the paper's "large random set").
 RANDOM_CONFIGURATIONS = 5000
@@ -255,9 +256,12 @@ def sum_groups(fixed: dict[str, str], layout: ParameterLayout) -> dict[str, list
 
 def parameter_deviations(nominal: RobotModel, calibrated: RobotModel, truth: RobotModel) -> ParameterDeviations:
     """Deviations of the nominal and calibrated parameters from the truth (same convention; when one of them
-    is elastic, the others count as rigid: compliance 0)."""
-    if len({nominal.n_params, calibrated.n_params, truth.n_params}) > 1:
-        nominal, calibrated, truth = (with_compliance(m, compliance_of(m)) for m in (nominal, calibrated, truth))
+    has joint compliance or joint-angle scale, the others count as without: compliance or scale 0)."""
+    models = (nominal, calibrated, truth)
+    for key, value_of, lift in (("compliance", compliance_of, with_compliance), ("scale", scale_of, with_scale)):
+        if any(key in m.extras for m in models):
+            models = tuple(lift(m, value_of(m)) for m in models)
+    nominal, calibrated, truth = models
     return ParameterDeviations(
         layout=truth.layout,
         nominal=nominal.params - truth.params,

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from dataclasses import replace
+
 import numpy as np
 import pytest
 
@@ -89,6 +91,24 @@ def test_parameter_deviations(panda, truth) -> None:
     i = panda.param_index("alpha2")
     assert deviations.display(deviations.nominal)[i] == pytest.approx(np.rad2deg(panda.alpha[1] - truth.alpha[1]))
     assert "alpha2" in deviations.format()
+
+
+@pytest.mark.parametrize("extras", [{"scale": [1e-3] * 7}, {"compliance": [1e-3] * 7},
+                                    {"scale": [1e-3] * 7, "compliance": [1e-3] * 7}])
+def test_parameter_deviations_of_a_scale_or_elastic_calibration_against_a_rigid_truth(panda, truth, extras) -> None:
+    # validate --truth on an elastic+scale calibration raised 'operands could not be broadcast together with
+    # shapes (51,) (44,)': only compliance was lifted to a common layout
+    calibrated = replace(truth, extras={**truth.extras, **extras})
+    deviations = parameter_deviations(panda, calibrated, truth)
+    names = deviations.layout.names
+    for key, values in extras.items():
+        prefix = "c" if key == "compliance" else "s"
+        rows = [names.index(f"{prefix}{j}") for j in range(1, 8)]
+        np.testing.assert_allclose(deviations.calibrated[rows], values)  # the truth has none: 0
+        np.testing.assert_allclose(deviations.nominal[rows], 0.0)
+    geometric = [names.index(n) for n in truth.layout.names]
+    np.testing.assert_allclose(deviations.calibrated[geometric], 0.0, atol=1e-15)
+    np.testing.assert_allclose(deviations.nominal[geometric], panda.params - truth.params)
 
 
 @pytest.mark.parametrize("markers", [False, True])
