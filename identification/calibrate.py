@@ -70,6 +70,8 @@ class CalibrationResult:
             matrix (:meth:`CalibrationProblem.effective_unknowns`); the unknowns' count without a prior.
         loss: the loss the fit used: ``linear``, ``soft_l1`` or ``huber`` (``auto`` resolves to ``huber``).
         loss_scale: its residual scale [m] (None with ``linear``).
+        loss_noise: with ``auto``, the noise per coordinate [m] the least-squares residuals showed
+            (:func:`robust_noise`), of which ``loss_scale`` is :data:`ROBUST_CUT` times; None otherwise.
     """
 
     model: RobotModel
@@ -91,6 +93,7 @@ class CalibrationResult:
     effective_unknowns: float | None = None
     loss: str = "linear"
     loss_scale: float | None = None
+    loss_noise: float | None = None
 
     @staticmethod
     def _stats(r: np.ndarray) -> tuple[float, float]:
@@ -154,17 +157,19 @@ class CalibrationResult:
                 + ", ".join(f"{names[i]} {z[i]:+.1f} spreads" for i in tail)]
 
     def _loss_line(self) -> list[str]:
-        """How many samples a robust loss weighed less (a coordinate beyond its scale), beside the share Gaussian
-        noise at the residuals' own level puts there."""
+        """How many samples a robust loss weighed less (a coordinate beyond its scale); with ``auto``, beside the
+        share Gaussian noise puts beyond 2.5 sigma (a few bad presses, or residuals with heavy tails)."""
         if self.loss == "linear" or self.loss_scale is None or self.problem is None or self.x is None:
             return []
         beyond = np.abs(self.problem.sample_errors(self.x)) > self.loss_scale
-        count = int(beyond.any(axis=1).sum())
-        shown = robust_noise(self.problem, self.x)
-        gaussian = 1.0 - (1.0 - math.erfc(self.loss_scale / shown / math.sqrt(2.0))) ** 3
-        return [f"loss: {self.loss} at {self.loss_scale * 1e3:.3f} mm ({self.loss_scale / shown:.1f}x the "
-                f"{shown * 1e3:.3f} mm per axis the residuals show): {count} of {len(beyond)} samples beyond it weigh "
-                f"less (Gaussian noise puts {100 * gaussian:.1f} % there)"]
+        count = f"{int(beyond.any(axis=1).sum())} of {len(beyond)} samples beyond it weigh less"
+        if self.loss_noise is None:
+            return [f"loss: {self.loss} at {self.loss_scale * 1e3:.3f} mm (the fit's noise, --noise): {count}"]
+        ratio = self.loss_scale / self.loss_noise
+        gaussian = 1.0 - (1.0 - math.erfc(ratio / math.sqrt(2.0))) ** 3
+        return [f"loss: {self.loss} at {self.loss_scale * 1e3:.3f} mm, {ratio:g}x the {self.loss_noise * 1e3:.3f} mm "
+                f"per axis the least-squares residuals show by their median: {count} (Gaussian noise puts "
+                f"{100 * gaussian:.1f} % there)"]
 
     def summary(self) -> str:
         """One screen: residuals before/after, parameter changes with std, fixed parameters, warnings."""
@@ -353,6 +358,7 @@ def calibrate(
         effective_unknowns=edf,
         loss=fit_loss,
         loss_scale=None if fit_loss == "linear" else (scale or noise),
+        loss_noise=None if scale is None else scale / ROBUST_CUT,
     )
 
 

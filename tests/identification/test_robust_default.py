@@ -79,11 +79,12 @@ def test_the_file_and_report_name_the_loss_and_linear_stays_plain(tmp_path, caps
     assert block["options"]["loss"] == "auto" and block["loss"] == "huber"
     assert block["loss_scale_m"] == pytest.approx(ROBUST_CUT * NOISE, rel=0.25)
     line = next(line for line in printed.splitlines() if line.startswith("loss: huber at "))
-    assert f"at {block['loss_scale_m'] * 1e3:.3f} mm (" in line, line  # 2.5x at the least-squares solution
-    shown = float(line.split("x the ")[1].split(" mm")[0])  # the residuals' noise, printed
-    assert shown == pytest.approx(NOISE * 1e3, rel=0.25), line
-    beyond = int(line.split("): ")[1].split(" of ")[0])
+    assert f"at {block['loss_scale_m'] * 1e3:.3f} mm, 2.5x the " in line, line
+    shown = float(line.split("x the ")[1].split(" mm")[0])  # the least-squares residuals' noise, printed
+    assert shown == pytest.approx(block["loss_scale_m"] * 1e3 / ROBUST_CUT, abs=1e-3), line
+    beyond = int(line.split("median: ")[1].split(" of ")[0])
     assert 2 * len(data.fixture_names) <= beyond <= 2 * len(data.fixture_names) + 0.15 * data.n_samples, line
+    assert "(Gaussian noise puts 3.7 % there)" in line
     assert main([*base, "--loss", "linear", "--out", str(tmp_path / "linear.yaml")]) == 0
     block = load_robot(tmp_path / "linear.yaml").extras["calibration"]
     assert block["loss"] == "linear" and block["loss_scale_m"] is None
