@@ -16,9 +16,11 @@ from spherecal.correction.layout import COMPLIANCE
 
 from .build import build_problem
 from .identifiability import Identifiability, normal_inverse, predicted_std
+from .misplaced import misplaced
 from .problem import (
     GAUGE,
     NOISE,
+    OUTLIER,
     SIGMA_FLOOR,
     CalibrationProblem,
     ImplausibleCalibrationError,
@@ -319,6 +321,16 @@ def calibrate(
     clock = time.perf_counter()
     checked = (self_check(problem, x, nominal, built, loss=figures, declared=noise_declared, unknowns=edf)
                if check else None)
+    discounted = ""
+    if checked is not None and not checked.consistent and scale is not None:
+        # ``auto`` refused at least squares' figures: a few presses far off (taken before the ball sat) are what
+        # the Huber fit is for; judged without them as ``--loss huber`` judges, unless the nominal model already
+        # shows a gross misplacement (a press in the other socket, two recordings under one name, a wrong distance)
+        robust = self_check(problem, x, nominal, built, loss=fit_loss, declared=noise_declared)
+        if robust.consistent and misplaced(nominal, dataset, spec) is None:
+            checked, discounted = robust, _discounted(problem, x, fit_loss)
+            sigma = _sigma(problem, x, edf, fit_loss)
+            std_values = predicted_std(jac, sigma, inverse)
     timings["self_check"] = time.perf_counter() - clock
     if checked is not None and not force:
         try:
@@ -336,6 +348,8 @@ def calibrate(
     if ident.condition_number > 1e8:
         warnings.append(f"ill-conditioned: condition number {ident.condition_number:.3g} at the solution")
     warnings.extend(_negative_compliances(model, problem.free, std_values))
+    if discounted:
+        warnings.append(discounted)
     if method == "pso":
         warnings.extend(_short_of_minimum(problem, x, jac, inverse))
     return CalibrationResult(
@@ -360,6 +374,19 @@ def calibrate(
         loss_scale=None if fit_loss == "linear" else (scale or noise),
         loss_noise=None if scale is None else scale / ROBUST_CUT,
     )
+
+
+def _discounted(problem: CalibrationProblem, x: np.ndarray, loss: str) -> str:
+    """The warning of an ``auto`` calibration judged without the samples its Huber loss discounted."""
+    far = problem.dataset.select(~problem.inliers(x))
+    lines = far.lines
+    rows = (f" ({'rows' if far.n_samples > 1 else 'row'} {', '.join(str(k) for k in lines[:6])}"
+            f"{', ...' * (far.n_samples > 6)})" if lines is not None else "")
+    one = far.n_samples == 1
+    return (f"{far.n_samples} {'sample' if one else 'samples'}{rows} {'lies' if one else 'lie'} over {OUTLIER:g}x the "
+            f"median distance from {'its' if one else 'their'} socket (pressed before the ball sat?): the {loss} loss "
+            f"weighs {'it' if one else 'them'} less and the self-check leaves {'it' if one else 'them'} out; --loss "
+            "linear refuses this recording")
 
 
 def robust_noise(problem: CalibrationProblem, x: np.ndarray) -> float:
