@@ -78,8 +78,10 @@ def misplaced(nominal: RobotModel, dataset: Dataset, spec: FixtureSpec | None = 
 
 
 def _rows(dataset: Dataset, rows: np.ndarray) -> str:
-    """``"rows 12, 19, 48"`` (file lines when read from a file, else sample numbers)."""
+    """``"rows 12, 19, 48"`` or ``"row 37"`` (file lines when read from a file, else sample numbers)."""
     lines = dataset.lines[rows] if dataset.lines is not None else rows + 1
+    if len(lines) == 1:
+        return f"row {int(lines[0])}"
     return f"rows {', '.join(str(int(k)) for k in lines[:SHOWN])}{', ...' * (len(lines) > SHOWN)}"
 
 
@@ -130,8 +132,10 @@ def _far_samples(dataset: Dataset, points: np.ndarray, middles: dict, scales: di
     where = (f"; {len(elsewhere)} of them among another fixture's samples ({', '.join(dict.fromkeys(elsewhere))}): "
              "pressed into the wrong socket?" if elsewhere else "")
     typical = max(scales.values())
-    return (f"{dataset.source or 'samples'}: {_rows(dataset, far_rows)}, field 'fixture': {len(far_rows)} samples lie "
-            f"{min(gaps) * 1e3:.0f}-{max(gaps) * 1e3:.0f} mm from the rest of their fixture at the nominal model (the "
+    span = f"{min(gaps) * 1e3:.0f}" if len(gaps) == 1 else f"{min(gaps) * 1e3:.0f}-{max(gaps) * 1e3:.0f}"
+    counted = "1 sample lies" if len(far_rows) == 1 else f"{len(far_rows)} samples lie"
+    return (f"{dataset.source or 'samples'}: {_rows(dataset, far_rows)}, field 'fixture': {counted} "
+            f"{span} mm from the rest of their fixture at the nominal model (the "
             f"rest within {typical * 1e3:.2g} mm of its middle, as a real arm's errors put them){where}; remove them, "
             "or calibrate --loss soft_l1 to discount them")
 

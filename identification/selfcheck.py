@@ -342,8 +342,9 @@ def _level(problem: CalibrationProblem, r: np.ndarray, sigma: float, dof: int, e
         "outliers_excluded": excluded,
     }
     worst = max(per_fixture, key=per_fixture.get)
+    stated = "the declared noise" if declared else "the fit's noise (none declared)"
     text = (
-        f"residual {sigma * 1e3:.3g} mm per axis ({sigma / noise:.2g}x the declared noise {noise * 1e3:.3g} mm; "
+        f"residual {sigma * 1e3:.3g} mm per axis ({sigma / noise:.2g}x {stated} {noise * 1e3:.3g} mm; "
         f"chi2 {statistic:.4g} on {dof} dof); worst fixture {worst} {per_fixture[worst] * 1e3:.3g} mm"
     )
     if sigma <= LEVEL_FACTOR * noise:
@@ -351,8 +352,9 @@ def _level(problem: CalibrationProblem, r: np.ndarray, sigma: float, dof: int, e
             text += ("; the declared noise is larger than the residuals show: accuracy is judged at the declared noise"
                      if declared else "; no noise declared (--noise): accuracy is judged at the residuals' noise")
         return Finding("residual level", True, text, figures)
-    where = (f"{samples_location(dataset)}: residual noise {sigma * 1e3:.3g} mm per axis is {sigma / noise:.3g}x the "
-             f"declared {noise * 1e3:.3g} mm (limit {LEVEL_FACTOR:g}x; worst fixture {worst} "
+    against = "the declared" if declared else stated
+    where = (f"{samples_location(dataset)}: residual noise {sigma * 1e3:.3g} mm per axis is {sigma / noise:.3g}x "
+             f"{against} {noise * 1e3:.3g} mm (limit {LEVEL_FACTOR:g}x; worst fixture {worst} "
              f"{per_fixture[worst] * 1e3:.3g} mm)")
     weight = problem.prior_weight
     if problem.n_prior:  # the prior's rows are in sigma: is it the samples, or a prior holding the arm at nominal?

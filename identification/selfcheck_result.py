@@ -3,6 +3,7 @@ and the refusal (:class:`InconsistentDataError`, one line)."""
 
 from __future__ import annotations
 
+import re
 from dataclasses import dataclass, field
 
 from spherecal.correction.errors import SpherecalError
@@ -74,13 +75,13 @@ class SelfCheck:
             return self.culprit.message
         figures = [f for f in failed if f.check in ("residual level", "prediction")]
         if figures:
-            trends = [f.message.split(": ", 1)[-1] for f in self.findings if f.figures.get("trend")]
+            trends = [_without_location(f.message) for f in self.findings if f.figures.get("trend")]
             return "; ".join([figures[0].message, *trends])
         worst = max(failed, key=lambda f: f.figures.get("statistic", 0.0) - f.figures.get("dof", 0))
         others = len(failed) - 1
         trend = next((f for f in self.findings if f.figures.get("trend") and worst.check.endswith(
             " " + f.check.removeprefix("trend "))), None)
-        text = worst.message + (f"; {trend.message.split(': ', 1)[-1]}" if trend is not None else "")
+        text = worst.message + (f"; {_without_location(trend.message)}" if trend is not None else "")
         if not others:
             return text
         return f"{text}; {others} other check(s) failed too and no single one explains the data"
@@ -137,3 +138,11 @@ class SelfCheck:
 def _worst_group(findings: tuple[Finding, ...]) -> Finding | None:
     groups = [f for f in findings if "log10_p" in f.figures and f.passed and not f.figures.get("unchecked")]
     return min(groups, key=lambda f: f.figures["log10_p"]) if groups else None
+
+
+def _without_location(message: str) -> str:
+    """A finding's message without its leading ``"samples.csv: rows 7-26, field 'fixture': "`` (joined after
+    another finding that already says where)."""
+    found = re.match(r".*?field '[^']*': ", message)
+    return message[found.end():] if found else message.split(": ", 1)[-1]
+

@@ -112,3 +112,22 @@ def test_a_press_taken_before_the_ball_sat_is_weighed_less_by_default_and_named(
     assert any("pressed before the ball sat?" in w for w in calibrated.extras["calibration"]["warnings"])
     (tmp_path / "c.yaml").unlink()
     refused([*argv, "--loss", "linear"], tmp_path, capsys, "samples.csv: rows ", "field 'fixture'")
+
+
+def test_one_press_in_the_other_socket_is_named_in_the_singular(tmp_path, capsys) -> None:
+    # 'rows 37, field 'fixture': 1 samples lie 52-52 mm' (review helper)
+    a, b = _holes("front_center")
+    a = a.copy()
+    a[5] = b[7]
+    samples = _samples(tmp_path / "samples.csv", [("A", a), ("B", b)])
+    err = refused(_calibrate(tmp_path, samples), tmp_path, capsys,
+                  "samples.csv: row 7, field 'fixture': 1 sample lies ", "pressed into the wrong socket?")
+    assert "-" not in err.split("1 sample lies ")[1].split(" mm")[0], err  # one distance, not a range
+
+
+def test_a_refusal_joining_two_findings_says_where_once() -> None:
+    from spherecal.identification.selfcheck_result import _without_location
+
+    assert _without_location("s.csv: rows 7-26, field 'fixture': the residual at fixture A moves 13.5 mm") == (
+        "the residual at fixture A moves 13.5 mm")
+    assert _without_location("samples: all rows: residual 2 mm") == "all rows: residual 2 mm"
