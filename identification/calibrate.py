@@ -326,8 +326,10 @@ def calibrate(
         # ``auto`` refused at least squares' figures: a few presses far off (taken before the ball sat) are what
         # the Huber fit is for; judged without them as ``--loss huber`` judges, unless the nominal model already
         # shows a gross misplacement (a press in the other socket, two recordings under one name, a wrong distance)
-        robust = self_check(problem, x, nominal, built, loss=fit_loss, declared=noise_declared)
-        if robust.consistent and misplaced(nominal, dataset, spec) is None:
+        # or a socket's residual trends with recording order (it moved: leave it out, as that refusal says)
+        moved = any(f.figures.get("trend") for f in checked.findings)
+        robust = None if moved else self_check(problem, x, nominal, built, loss=fit_loss, declared=noise_declared)
+        if robust is not None and robust.consistent and misplaced(nominal, dataset, spec) is None:
             checked, discounted = robust, _discounted(problem, x, fit_loss)
             sigma = _sigma(problem, x, edf, fit_loss)
             std_values = predicted_std(jac, sigma, inverse)
