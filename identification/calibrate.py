@@ -321,24 +321,23 @@ def calibrate(
     clock = time.perf_counter()
     checked = (self_check(problem, x, nominal, built, loss=figures, declared=noise_declared, unknowns=edf)
                if check else None)
-    discounted = ""
+    hint = ""
     if checked is not None and not checked.consistent and scale is not None:
-        # ``auto`` refused at least squares' figures: a few presses far off (taken before the ball sat) are what
-        # the Huber fit is for; judged without them as ``--loss huber`` judges, unless the nominal model already
-        # shows a gross misplacement (a press in the other socket, two recordings under one name, a wrong distance)
-        # or a socket's residual trends with recording order (it moved: leave it out, as that refusal says)
+        # ``auto`` refused at least squares' figures. Where a few presses far off are all that is wrong (judged
+        # without them, as --loss huber judges, the data is consistent) the refusal names them and the remedies; the
+        # user decides. Writing such recordings anyway hid a wrong known distance, a share of a socket recorded in a
+        # second place and rows of another arm (review). Not where the nominal model already shows a gross
+        # misplacement or a socket's residual trends with recording order: those refusals name their own cause.
         moved = any(f.figures.get("trend") for f in checked.findings)
-        robust = None if moved else self_check(problem, x, nominal, built, loss=fit_loss, declared=noise_declared)
-        if robust is not None and robust.consistent and misplaced(nominal, dataset, spec) is None:
-            checked, discounted = robust, _discounted(problem, x, fit_loss)
-            sigma = _sigma(problem, x, edf, fit_loss)
-            std_values = predicted_std(jac, sigma, inverse)
+        if not moved and misplaced(nominal, dataset, spec) is None:
+            if self_check(problem, x, nominal, built, loss=fit_loss, declared=noise_declared).consistent:
+                hint = _far_presses(problem, x)
     timings["self_check"] = time.perf_counter() - clock
     if checked is not None and not force:
         try:
             checked.raise_if_inconsistent()
         except InconsistentDataError as refused:
-            raise InconsistentDataError(f"{refused}{_already_calibrated(nominal, checked)}") from None
+            raise InconsistentDataError(f"{refused}{hint}{_already_calibrated(nominal, checked)}") from None
     clock = time.perf_counter()
     check_plausible(problem, params, max_change)
     model = problem.model.with_params(params)
@@ -350,8 +349,8 @@ def calibrate(
     if ident.condition_number > 1e8:
         warnings.append(f"ill-conditioned: condition number {ident.condition_number:.3g} at the solution")
     warnings.extend(_negative_compliances(model, problem.free, std_values))
-    if discounted:
-        warnings.append(discounted)
+    if hint:  # written with --force: the refusal's remedy stays with the file
+        warnings.append(hint.removeprefix("; "))
     if method == "pso":
         warnings.extend(_short_of_minimum(problem, x, jac, inverse))
     return CalibrationResult(
@@ -378,17 +377,17 @@ def calibrate(
     )
 
 
-def _discounted(problem: CalibrationProblem, x: np.ndarray, loss: str) -> str:
-    """The warning of an ``auto`` calibration judged without the samples its Huber loss discounted."""
+def _far_presses(problem: CalibrationProblem, x: np.ndarray) -> str:
+    """The clause a refusal gains when a few samples far from their socket are all that is wrong (``auto``)."""
     far = problem.dataset.select(~problem.inliers(x))
     lines = far.lines
-    rows = (f" ({'rows' if far.n_samples > 1 else 'row'} {', '.join(str(k) for k in lines[:6])}"
-            f"{', ...' * (far.n_samples > 6)})" if lines is not None else "")
     one = far.n_samples == 1
-    return (f"{far.n_samples} {'sample' if one else 'samples'}{rows} {'lies' if one else 'lie'} over {OUTLIER:g}x the "
-            f"median distance from {'its' if one else 'their'} socket (pressed before the ball sat?): the {loss} loss "
-            f"weighs {'it' if one else 'them'} less and the self-check leaves {'it' if one else 'them'} out; --loss "
-            "linear refuses this recording")
+    rows = ("" if lines is None else f" ({'row' if one else 'rows'} {', '.join(str(k) for k in lines[:6])}"
+            f"{', ...' * (far.n_samples > 6)})")
+    return (f"; {far.n_samples} of {problem.dataset.n_samples} samples{rows} {'lies' if one else 'lie'} over "
+            f"{OUTLIER:g}x the median distance from {'its' if one else 'their'} socket, and without them the rest is "
+            "consistent: remove them if the ball was not seated in its socket, or calibrate --loss huber to discount "
+            "them")
 
 
 def robust_noise(problem: CalibrationProblem, x: np.ndarray) -> float:
