@@ -25,6 +25,7 @@ from .problem import (
     CalibrationProblem,
     ImplausibleCalibrationError,
     prior_std,
+    row_list,
     samples_location,
 )
 from .pruning import prune
@@ -288,8 +289,8 @@ def calibrate(
         x, timings["pso"] = solution.x, solution.seconds
     # ``auto``: the solves use Huber at the residuals' scale, every figure (pruning, stds, the self-check) reads
     # all samples as least squares does: a press 50 mm off (the wrong socket) is refused and named, not discounted
-    figures = "linear" if loss == "auto" else loss
-    fit_loss, scale = ("linear" if loss == "auto" else loss), None
+    figures = fit_loss = "linear" if loss == "auto" else loss
+    scale = None
     if method in ("lm", "pso+lm"):
         x_start = x
         solution = solve_lm(problem, x, loss=fit_loss)
@@ -379,12 +380,11 @@ def calibrate(
 
 def _far_presses(problem: CalibrationProblem, x: np.ndarray) -> str:
     """The clause a refusal gains when a few samples far from their socket are all that is wrong (``auto``)."""
-    far = problem.dataset.select(~problem.inliers(x))
-    lines = far.lines
-    one = far.n_samples == 1
-    rows = ("" if lines is None else f" ({'row' if one else 'rows'} {', '.join(str(k) for k in lines[:6])}"
-            f"{', ...' * (far.n_samples > 6)})")
-    return (f"; {far.n_samples} of {problem.dataset.n_samples} samples{rows} {'lies' if one else 'lie'} over "
+    dataset = problem.dataset
+    far = np.flatnonzero(~problem.inliers(x))
+    one = far.size == 1
+    rows = "" if dataset.lines is None else f" ({row_list(dataset, far)})"
+    return (f"; {far.size} of {dataset.n_samples} samples{rows} {'lies' if one else 'lie'} over "
             f"{OUTLIER:g}x the median distance from {'its' if one else 'their'} socket, and without them the rest is "
             "consistent: remove them if the ball was not seated in its socket, or calibrate --loss huber to discount "
             "them")

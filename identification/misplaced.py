@@ -25,6 +25,8 @@ from spherecal.correction import RobotModel, tool_point
 from spherecal.correction.files.fixtures import FixtureSpec
 from spherecal.correction.files.samples import Dataset
 
+from .problem import row_list
+
 #: A sample lies in another fixture's socket when it is farther than this from its own fixture's middle point at the
 #: nominal model [m] and nearer another's than half that; a run of samples is another socket's when its middle is
 #: this far and :data:`GROSS_FACTOR` times the runs' spread from the first run's. MUKCa's real Pandas spread 8 mm on
@@ -42,8 +44,6 @@ DISTANCE_OFF = 0.020
 #: Beyond this median distance of a fixture's samples from its middle point [m] the nominal model does not describe
 #: the arm (another convention, another arm: hundreds of millimetres), and nothing is judged from it.
 MAX_SCALE = 0.025
-#: Rows listed in a message at most.
-SHOWN = 6
 
 
 def misplaced(nominal: RobotModel, dataset: Dataset, spec: FixtureSpec | None = None) -> str | None:
@@ -75,14 +75,6 @@ def misplaced(nominal: RobotModel, dataset: Dataset, spec: FixtureSpec | None = 
     if found:
         return found
     return _wrong_distance(spec, middles, scales) if spec is not None else None
-
-
-def _rows(dataset: Dataset, rows: np.ndarray) -> str:
-    """``"rows 12, 19, 48"`` or ``"row 37"`` (file lines when read from a file, else sample numbers)."""
-    lines = dataset.lines[rows] if dataset.lines is not None else rows + 1
-    if len(lines) == 1:
-        return f"row {int(lines[0])}"
-    return f"rows {', '.join(str(int(k)) for k in lines[:SHOWN])}{', ...' * (len(lines) > SHOWN)}"
 
 
 def _span(dataset: Dataset, rows: np.ndarray) -> str:
@@ -134,7 +126,7 @@ def _far_samples(dataset: Dataset, points: np.ndarray, middles: dict, scales: di
     typical = max(scales.values())
     span = f"{min(gaps) * 1e3:.0f}" if len(gaps) == 1 else f"{min(gaps) * 1e3:.0f}-{max(gaps) * 1e3:.0f}"
     counted = "1 sample lies" if len(far_rows) == 1 else f"{len(far_rows)} samples lie"
-    return (f"{dataset.source or 'samples'}: {_rows(dataset, far_rows)}, field 'fixture': {counted} "
+    return (f"{dataset.source or 'samples'}: {row_list(dataset, far_rows)}, field 'fixture': {counted} "
             f"{span} mm from the rest of their fixture at the nominal model (the "
             f"rest within {typical * 1e3:.2g} mm of its middle, as a real arm's errors put them){where}; remove them, "
             "or calibrate --loss soft_l1 to discount them")

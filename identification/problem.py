@@ -429,6 +429,19 @@ def _read_only(array: np.ndarray) -> np.ndarray:
     return array
 
 
+#: Rows a one-line message lists at most (:func:`row_list`).
+SHOWN_ROWS = 6
+
+
+def row_list(dataset: Dataset, rows: np.ndarray) -> str:
+    """``"rows 12, 19, 48"`` or ``"row 37"``: the samples ``rows`` (indices) as file lines when read from a file, else
+    sample numbers; at most :data:`SHOWN_ROWS`, then ``", ..."``."""
+    lines = dataset.lines[rows] if dataset.lines is not None else np.asarray(rows) + 1
+    if len(lines) == 1:
+        return f"row {int(lines[0])}"
+    return f"rows {', '.join(str(int(k)) for k in lines[:SHOWN_ROWS])}{', ...' * (len(lines) > SHOWN_ROWS)}"
+
+
 def samples_location(dataset: Dataset) -> str:
     """``"samples.csv: rows 2-1501"``: where a dataset came from, for one-line errors
     (``"samples: all rows"`` when it was not read from a file)."""

@@ -145,4 +145,3 @@ def _without_location(message: str) -> str:
     another finding that already says where)."""
     found = re.match(r".*?field '[^']*': ", message)
     return message[found.end():] if found else message.split(": ", 1)[-1]
-

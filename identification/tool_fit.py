@@ -17,7 +17,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from spherecal.correction import Dataset, RobotModel, tool_point
+from spherecal.correction import Dataset, RobotModel, tool_pose
 
 from .calibrate import MAX_CHANGE, tool_point_change
 from .selfcheck import MAX_SOCKET_NOISE
@@ -28,15 +28,9 @@ def pivot_tool(model: RobotModel, dataset: Dataset) -> tuple[np.ndarray, float, 
     rest of ``model`` as it is (its compliance and scale included); the samples' rms distance from their
     fixture's mean point per axis with it [m]; and the largest std of the tool's coordinates at that spread
     [m] (inf when the motion recorded does not determine the tool: too few samples, too little rotation)."""
-    tool = model.layout.tool
-    zero = model.params.copy()
-    zero[tool] = 0.0
-    origin = tool_point(model.with_params(zero), dataset.q)
-    frame = np.empty((dataset.n_samples, 3, 3))
-    for axis in range(3):
-        unit = zero.copy()
-        unit[tool.start + axis] = 1.0
-        frame[:, :, axis] = tool_point(model.with_params(unit), dataset.q) - origin
+    pose = tool_pose(model, dataset.q).reshape(-1, 4, 4)  # the last joint frame, origin at the tool point
+    frame = pose[:, :3, :3]
+    origin = pose[:, :3, 3] - frame @ np.asarray(model.tool, dtype=float)
     lhs, rhs = frame.copy(), -origin
     for name in dataset.fixture_names:
         rows = dataset.labels == name
