@@ -69,7 +69,7 @@ from .prediction import (
     seen_part,
     socket_spreads,
 )
-from .problem import MIN_SEPARATION, OUTLIER, PRIOR, SIGMA_FLOOR, CalibrationProblem, samples_location
+from .problem import MIN_SEPARATION, OUTLIER, PRIOR, SIGMA_FLOOR, CalibrationProblem, row_list, samples_location
 from .selfcheck_result import Finding, InconsistentDataError, SelfCheck
 
 __all__ = ["Finding", "InconsistentDataError", "SelfCheck", "self_check", "nominal_expected"]
@@ -138,10 +138,11 @@ def self_check(
         kept = problem.inliers(x)
         excluded = int((~kept).sum())
         if excluded:
-            lines = problem.dataset.select(~kept).lines
-            where = "" if lines is None else f" (rows {', '.join(str(k) for k in lines[:5])}{', ...' * (excluded > 5)})"
-            outliers = (f"; {excluded} samples{where} lie over {OUTLIER:g}x the median distance from their centre: "
-                        f"discounted by the {loss} loss and left out of these figures")
+            where = row_list(problem.dataset, np.flatnonzero(~kept))
+            outliers = (f"; {excluded} sample{'s' * (excluded > 1)} ({where}) "
+                        f"{'lie' if excluded > 1 else 'lies'} over {OUTLIER:g}x the median distance from "
+                        f"{'their' if excluded > 1 else 'its'} centre: discounted by the {loss} loss and left out of "
+                        "these figures")
             problem, built, unknowns = problem.with_samples(kept), (built or problem).with_samples(kept), None
     r = problem.residuals(x)
     dof = max(problem.n_residuals - problem.n_unknowns, 1)

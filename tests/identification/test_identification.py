@@ -290,6 +290,7 @@ def test_robust_loss_judges_the_noise_without_the_samples_it_discounted(truth, c
         assert _accuracy(robust.model, true).mean() < 1e-4  # 0.1 mm; the nominal is 4.7 mm off, the clean fit 2 um
         level = next(f for f in robust.selfcheck.findings if f.check == "residual level")
         assert level.figures["outliers_excluded"] >= 10 and f"discounted by the {loss} loss" in level.message
+        assert " samples (rows " in level.message  # named as every refusal names rows (problem.row_list)
 
 
 def test_pso_is_seeded_quiet_and_restores_numpy_state(truth, clean, tmp_path, monkeypatch) -> None:
