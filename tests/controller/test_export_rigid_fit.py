@@ -125,3 +125,31 @@ def test_real_panda_held_out_sockets_through_the_exported_urdf(tmp_path, capsys)
     q = recording.q[held][:50]
     ball, _ = MujocoUrdf(into.read_text()).body_pose("ball_link", model.extras["joint_names"], q)
     np.testing.assert_allclose(ball, tool_point(rigid, q), atol=1e-9)
+
+
+def test_nearly_parallel_axes_without_a_hayati_beta_keep_a_physical_urdf(tmp_path) -> None:
+    # A hand-written robot file with joint_3's axis antiparallel to joint_2's as a plain DH alpha = -pi (no Hayati
+    # beta), calibrated with a joint-angle scale: alpha3 ends 2.2 mrad off -pi. The rigid fit traded d2 against d3
+    # along their common normal and moved both by 17.7 m, and `export --into` MUKCa's gen3lite.urdf refused its own
+    # output ('joint joint_2 <origin xyz>' not physical).
+    from spherecal.correction.scale import with_scale
+    from tests.correction.urdf_helpers import DATA
+
+    nominal = load_robot(os.path.join(os.path.dirname(__file__), "..", "data", "mukca", "gen3lite_ball.yaml"))
+    model = nominal.with_params(nominal.params + np.where(
+        np.isin(nominal.param_names, ["alpha3"]), 2.2e-3, 0.0))
+    model = with_scale(model, np.array([0.0, 0.0, 2e-3, -1.5e-3, 0.0, 0.0]))
+    rng = np.random.default_rng(0)
+    recorded = np.clip(rng.uniform(-0.5, 0.5, (40, 6)) + np.array([0.0, 0.6, 1.9, 0.0, 1.0, 0.0]),
+                       model.lower, model.upper)
+    fit = rigid_approximation(model, recorded)
+    assert np.all(np.abs(fit.model.d - nominal.d) < 0.05), fit.model.d  # millimetres of calibration, not metres
+    assert fit.fit_rms <= fit.dropped_fit_rms and fit.workspace_rms < fit.dropped_workspace_rms
+    samples = write_samples(tmp_path / "samples.csv", Dataset(np.repeat(["a", "b"], 20), recorded))
+    made = {"provenance": {"inputs": {"samples": input_record(samples)}}}
+    cal = save_robot(replace(model, extras={**model.extras, "calibration": made}), tmp_path / "cal.yaml")
+    out = tmp_path / "cal.urdf"
+    assert main(["export", str(cal), "--format", "urdf", "--into", str(DATA / "gen3lite.urdf"),
+                 "--out", str(out)]) == 0
+    back = load_robot(out, tip_link="ball_link")
+    assert _rms(tool_point(back, recorded), tool_point(fit.model, recorded)) < 1e-6
