@@ -57,7 +57,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         help="dh: geometry only; elastic: plus joint compliance under gravity (rad/Nm; needs the robot file's "
         "inertials); scale: plus a per-joint angle scale (q -> (1 + s) q); elastic+scale: both; auto (default): "
         "the candidate that predicts held-out fixture groups best by cross-validation (>= 3 groups: placements "
-        "<placement>_h<k> or fixtures), else the lowest BIC with the fit's effective number of unknowns",
+        "<placement>_h<k> or fixtures), else the lowest BIC with the fit's effective number of unknowns among dh, "
+        "scale and elastic",
     )
     parser.add_argument(
         "--prior", type=at_most(1e6, "(a weight)", allow_zero=True), default=0.5,  # identification.problem.PRIOR
