@@ -23,7 +23,7 @@ embedded Gen3 lite, whose published inertials it takes: every model runs; its ex
 the chain end whose tool point is the file's).
 
     .venv/bin/python bench/mukca.py [--data ../shared/data/mukca] [--robots panda_2_clean ...] [--no-urdf]
-        [--mukca-runs DIR]
+        [--mukca-runs DIR] [--mukca-lopo-runs DIR]
 
 ``--mukca-runs DIR``: MUKCa's own calibrations, one per training placement, as ``DIR/<robot>/<placement>/
 calibrated.urdf`` (the URDF MUKCa writes, its tool link ``ball_link``). Each is scored on the same held-out
@@ -35,7 +35,8 @@ tkinter), with ``ParameterOptimizer.optimize``'s own defaults (socket variance +
 regulariser: the paper's objective; the script at that commit switches the last two off, which shrinks the arm).
 Check: it gives panda_2_clean front_center 0.348 mm and panda_4_clean front 0.278 mm (published: 0.347, 0.278),
 and MUKCa's shipped ``calibrated_urdf/panda_6`` (trained on ``front``) and this reproduction put the ball within
-0.2 mm of each other on panda_6's placements.
+0.2 mm of each other on panda_6's placements. ``--mukca-lopo-runs DIR``: the same for leave one placement out,
+``DIR/<robot>/<left-out placement>/calibrated.urdf`` (MUKCa trained on all the others at once).
 
 ``--robots`` takes any robot folder of a MUKCa-layout ``--data`` (MUKCa's repository also has panda_1, panda_6,
 kuka_14, ...): the family comes from the name (``bench_common.MUKCA_FAMILIES``); a KUKA's nominal is MUKCa's
@@ -144,20 +145,22 @@ def experiment(nominal, train, train_spec, test, model: str, work: Path, urdf: P
 
 
 def mukca_run(runs: Path | None, robot: str, place: str, test) -> float | None:
-    """Held-out test MAE [mm] of MUKCa's own calibration trained on ``place`` (``--mukca-runs``), or None."""
+    """Held-out test MAE [mm] of MUKCa's own calibration named ``place`` under ``runs`` (trained on that placement,
+    ``--mukca-runs``, or on all others, ``--mukca-lopo-runs``), or None."""
     urdf = None if runs is None else runs / robot / place / "calibrated.urdf"
     if urdf is None or not urdf.exists():
         return None
     return held_out(load_robot(urdf, tip_link="ball_link"), test)[0] * 1e3
 
 
-def run_robot(root: Path, robot: str, work: Path, use_urdf: bool, runs: Path | None = None) -> dict:
+def run_robot(root: Path, robot: str, work: Path, use_urdf: bool, runs: dict | None = None) -> dict:
     nominal = _nominal(robot, root)
     urdf = (root / "urdf" / bench_common.MUKCA_FAMILIES[bench_common.mukca_family(robot)][0]) if use_urdf else None
     dataset, spec = bench_common.mukca_dataset(root, robot, nominal)
     places = list(dict.fromkeys(_placement(n) for n in dataset.fixture_names))
     models = [m for m in MODELS if m == "auto" or m in candidates_for(nominal)]
     out: dict = {"nominal": {}, "single": {}, "lopo": {}, "models": models}
+    runs = runs or {"single": None, "lopo": None}
     for protocol in ("single", "lopo"):
         for place in places:
             chosen = [place] if protocol == "single" else [p for p in places if p != place]
@@ -168,9 +171,9 @@ def run_robot(root: Path, robot: str, work: Path, use_urdf: bool, runs: Path | N
             out[protocol][place] = rows
             line = "  ".join(f"{m} {r.get('test_mae_mm', float('nan')):.3f}"
                              + ("*" if r.get("refused") else "") for m, r in rows.items())
-            theirs = mukca_run(runs, robot, place, test) if protocol == "single" else None
+            theirs = mukca_run(runs[protocol], robot, place, test)
             if theirs is not None:
-                out.setdefault("mukca_run", {})[place] = theirs
+                out.setdefault("mukca_run" if protocol == "single" else "mukca_lopo_run", {})[place] = theirs
                 line += f"  MUKCa {theirs:.3f}"
             print(f"{robot:<14} {protocol:<6} {place:<13} nominal {out['nominal'][protocol][place]:7.3f}  {line}  "
                   f"(auto: {rows['auto'].get('chosen')})", flush=True)
@@ -193,13 +196,14 @@ def summary(results: dict) -> list[str]:
                     for (rb, place), figure in MUKCA.items():
                         if rb == robot and place in out["single"]:
                             ratio = f"{out['single'][place][m].get('test_mae_mm', np.nan) / figure:.2f}x ({place})"
-                theirs = out.get("mukca_run", {})
-                if protocol == "single" and theirs:  # every placement MUKCa was run on: the ratio of the means
-                    mine = np.mean([out["single"][p][m].get("test_mae_mm", np.nan) for p in theirs])
+                theirs = out.get("mukca_run" if protocol == "single" else "mukca_lopo_run", {})
+                if theirs:  # every placement MUKCa was run on: the ratio of the means
+                    mine = np.mean([out[protocol][p][m].get("test_mae_mm", np.nan) for p in theirs])
                     ratio = f"{mine / np.mean(list(theirs.values())):.2f}x (MUKCa run, {len(theirs)}) {ratio}"
                 lines.append(f"{robot:<14} {protocol:<7} {m:<14} {mae:7.3f} {urdf:7.3f} {dist:7.3f}{star:1} {ratio}")
-        if out.get("mukca_run"):
-            lines.append(f"{robot:<14} single  MUKCa run      {np.mean(list(out['mukca_run'].values())):7.3f}")
+        for protocol, key in (("single", "mukca_run"), ("lopo", "mukca_lopo_run")):
+            if out.get(key):
+                lines.append(f"{robot:<14} {protocol:<7} MUKCa run      {np.mean(list(out[key].values())):7.3f}")
     return lines
 
 
@@ -212,6 +216,9 @@ def main() -> int:
     parser.add_argument("--no-urdf", action="store_true", help="skip the exported-URDF column")
     parser.add_argument("--mukca-runs", type=Path, default=None,
                         help="MUKCa's own calibrations: DIR/<robot>/<placement>/calibrated.urdf (module docstring)")
+    parser.add_argument("--mukca-lopo-runs", type=Path, default=None,
+                        help="MUKCa trained on all placements but one: "
+                        "DIR/<robot>/<left-out placement>/calibrated.urdf")
     parser.add_argument("--out", type=Path, default=HERE / "mukca.json",
                         help="result file (default bench/mukca.json; a run of some robots only: give another)")
     args = parser.parse_args()
@@ -224,13 +231,15 @@ def main() -> int:
         for robot in args.robots:
             work = Path(tmp) / robot
             work.mkdir()
-            results[robot] = run_robot(root, robot, work, not args.no_urdf, args.mukca_runs)
+            results[robot] = run_robot(root, robot, work, not args.no_urdf,
+                                       {"single": args.mukca_runs, "lopo": args.mukca_lopo_runs})
     lines = summary(results)
     print("\n".join(lines))
     out = bench_common.write_json(args.out, {
         "uptime": uptime, "mukca_figures_mm": {f"{r}/{p}": v for (r, p), v in MUKCA.items()},
         "seconds": time.perf_counter() - clock, "results": results}, seed=0,
-        inputs={"data": Path(root), "mukca_runs": None if args.mukca_runs is None else str(args.mukca_runs)}, indent=1)
+        inputs={"data": Path(root), "mukca_runs": None if args.mukca_runs is None else str(args.mukca_runs),
+                "mukca_lopo_runs": None if args.mukca_lopo_runs is None else str(args.mukca_lopo_runs)}, indent=1)
     print(f"wrote {out}")
     return 0
 
