@@ -284,9 +284,14 @@ def _trends(problem: CalibrationProblem, x: np.ndarray) -> list[Finding]:
 def _honest_noise(findings: list[Finding], prediction: Finding) -> tuple[list[Finding], Finding]:
     """Residuals above the declared noise that look like noise (:data:`NOISE_LIKE`), and no culprit: the
     calibration is judged at the noise they show. Expected to beat nominal there (the predicted mean error
-    below the nominal's expected error near the recording, and not above it over the whole workspace; the 2x margin
-    :data:`BEAT` is for data at its declared noise): written,
-    the level failure a warning. Otherwise the refusal says the noise they show and what it would reach."""
+    below the nominal's expected error near the recording; the 2x margin :data:`BEAT` is for data at its declared
+    noise): written, the level failure a warning, and where the whole workspace is not expected to beat nominal, a
+    warning that says so. Otherwise the refusal says the noise they show and what it would reach.
+
+    The whole workspace warns, it does not refuse: a second real Gen3 lite (MUKCa's dinova_2, trained on
+    ``front_rotated``, 1.3 mm of noise per axis) was refused with 5.17 mm predicted over the whole workspace against
+    4.68 mm of nominal, and the calibration it refused halved the error at five sockets recorded elsewhere (5.58 ->
+    2.90 mm; MUKCa's own calibration 3.91 mm)."""
     if any(f.culprit and not f.passed for f in findings):
         return findings, prediction
     level = next((f for f in findings if f.check == "residual level" and not f.passed), None)
@@ -299,19 +304,23 @@ def _honest_noise(findings: list[Finding], prediction: Finding) -> tuple[list[Fi
             "its DH convention, its units?)"))
         return [level if f.check == "residual level" else f for f in findings], prediction
     figures = prediction.figures
-    # near the recording, and not worse over the whole workspace: without the 2x margin, a calibration that barely
-    # helps near its data must not be expected to make the rest of the workspace worse
-    beats = (figures["predicted_mean_mm"] < figures["nominal_expected_mean_mm"]
-             and figures["whole_workspace_predicted_mean_mm"] < figures["whole_workspace_nominal_expected_mm"])
-    if beats:
+    if figures["predicted_mean_mm"] < figures["nominal_expected_mean_mm"]:  # near the recording, where it is used
         shown = level.message.split(": ", 1)[-1].split(" and no single")[0]
         level = replace(level, passed=True, figures={**level.figures, "honest_noise_warning": True}, message=(
             f"warning: {shown}; judged at that noise, the calibration is still expected to beat nominal "
             f"({figures['predicted_mean_mm']:.3g} mm against {figures['nominal_expected_mean_mm']:.3g} mm, the "
             f"prediction below): written"))
         if not prediction.passed:
-            prediction = replace(prediction, passed=True, message=prediction.message.split(
-                "cannot be expected to beat the nominal model: ", 1)[-1].split(f" (at most {BEAT:g}x needed)")[0])
+            message = prediction.message.split("cannot be expected to beat the nominal model: ", 1)[-1].split(
+                f" (at most {BEAT:g}x needed)")[0]
+            whole = figures["whole_workspace_predicted_mean_mm"], figures["whole_workspace_nominal_expected_mm"]
+            if not whole[0] < whole[1] and not isinstance(figures.get("region_warning"), str):
+                warning = (f"over the whole workspace the calibration is not expected to beat nominal (predicted "
+                           f"{whole[0]:.3g} mm against {whole[1]:.3g} mm): use it near the recorded postures, or "
+                           "record a placement where the arm will work")
+                figures = {**figures, "region_warning": warning}
+                message += f"; warning: {warning}"
+            prediction = replace(prediction, passed=True, message=message, figures=figures)
     else:
         level = replace(level, message=f"{level.message}; at the noise the residuals show, {prediction.message}")
     return [level if f.check == "residual level" else f for f in findings], prediction
