@@ -201,6 +201,11 @@ def group_finding(problem: CalibrationProblem, name: str, kind: tuple, group: Le
             f"fixtures by {size * 1e3:.3g} mm rms (the others alone: residual {group.sigma_rest * 1e3:.3g} mm per "
             f"axis{_unmodelled_clause(unmodelled)}): samples of another arm, a fixture that moved, or a wrong label"
         )
+        linked = [k for k, (a, b, _) in enumerate(spec.distances) if key in (a, b)]
+        if linked:  # a wrong known distance moves the fixtures it joins: the fixture is blamed for it
+            text += "; or a wrong known distance (" + ", ".join(
+                f"{where}: {spec.distance_field(k)}: {spec.distances[k][0]}-{spec.distances[k][1]} "
+                f"{spec.distances[k][2]:.6g} m" for k in linked[:2]) + ")"
     else:
         value = group.predicted / weight
         size = float(np.linalg.norm(value))

@@ -184,7 +184,7 @@ def self_check(
     _record_held_out(record, nominal, built or problem, judged, noise, parts, joint_error,
                      prediction.figures["nominal_scale_from_data"], prediction.figures["nominal_scale_measured"],
                      problem.free)
-    findings, prediction = _honest_noise(findings, prediction)
+    findings, prediction = _honest_noise(findings, prediction, len(problem.dataset.fixture_names) == 1)
     if record.get("joint_error_rad"):  # say it: validate's predicted spreads include it
         std = record["joint_error_rad"]
         prediction = replace(prediction, figures={**prediction.figures, "joint_error_mrad": std * 1e3}, message=(
@@ -281,17 +281,21 @@ def _trends(problem: CalibrationProblem, x: np.ndarray) -> list[Finding]:
     return out
 
 
-def _honest_noise(findings: list[Finding], prediction: Finding) -> tuple[list[Finding], Finding]:
+def _honest_noise(findings: list[Finding], prediction: Finding, one_fixture: bool = False
+                  ) -> tuple[list[Finding], Finding]:
     """Residuals above the declared noise that look like noise (:data:`NOISE_LIKE`), and no culprit: the
     calibration is judged at the noise they show. Expected to beat nominal there (the predicted mean error
     below the nominal's expected error near the recording; the 2x margin :data:`BEAT` is for data at its declared
     noise): written, the level failure a warning, and where the whole workspace is not expected to beat nominal, a
-    warning that says so. Otherwise the refusal says the noise they show and what it would reach.
+    warning that says so. From ``one_fixture`` (a single socket) it must not be expected to make the whole workspace
+    worse either. Otherwise the refusal says the noise they show and what it would reach.
 
-    The whole workspace warns, it does not refuse: a second real Gen3 lite (MUKCa's dinova_2, trained on
-    ``front_rotated``, 1.3 mm of noise per axis) was refused with 5.17 mm predicted over the whole workspace against
-    4.68 mm of nominal, and the calibration it refused halved the error at five sockets recorded elsewhere (5.58 ->
-    2.90 mm; MUKCa's own calibration 3.91 mm)."""
+    Why the whole workspace warns: real Gen3 lite recordings with two sockets and a few presses each (MUKCa's
+    dinova_2 ``front_rotated``, 1.3-1.7 mm of noise per axis, its first 8 or 6 presses per socket) were refused for
+    it, and each calibration beat nominal at five sockets recorded at other placements (0.86x, 0.83x). Why not from
+    one socket: five single-socket Gen3 lite recordings (dinova_1 ``front_h0``, four of dinova_2's placements) that
+    it refused were 1.02-1.30x nominal there; "near the recording" (within 300 mm) is too wide for what one socket
+    pins down (a review, stop 9)."""
     if any(f.culprit and not f.passed for f in findings):
         return findings, prediction
     level = next((f for f in findings if f.check == "residual level" and not f.passed), None)
@@ -304,7 +308,9 @@ def _honest_noise(findings: list[Finding], prediction: Finding) -> tuple[list[Fi
             "its DH convention, its units?)"))
         return [level if f.check == "residual level" else f for f in findings], prediction
     figures = prediction.figures
-    if figures["predicted_mean_mm"] < figures["nominal_expected_mean_mm"]:  # near the recording, where it is used
+    whole = figures["whole_workspace_predicted_mean_mm"], figures["whole_workspace_nominal_expected_mm"]
+    # near the recording, where it is used; from one socket, not worse over the whole workspace either
+    if figures["predicted_mean_mm"] < figures["nominal_expected_mean_mm"] and (whole[0] < whole[1] or not one_fixture):
         shown = level.message.split(": ", 1)[-1].split(" and no single")[0]
         level = replace(level, passed=True, figures={**level.figures, "honest_noise_warning": True}, message=(
             f"warning: {shown}; judged at that noise, the calibration is still expected to beat nominal "
@@ -313,7 +319,6 @@ def _honest_noise(findings: list[Finding], prediction: Finding) -> tuple[list[Fi
         if not prediction.passed:
             message = prediction.message.split("cannot be expected to beat the nominal model: ", 1)[-1].split(
                 f" (at most {BEAT:g}x needed)")[0]
-            whole = figures["whole_workspace_predicted_mean_mm"], figures["whole_workspace_nominal_expected_mm"]
             if not whole[0] < whole[1] and not isinstance(figures.get("region_warning"), str):
                 warning = (f"over the whole workspace the calibration is not expected to beat nominal (predicted "
                            f"{whole[0]:.3g} mm against {whole[1]:.3g} mm): use it near the recorded postures, or "

@@ -166,30 +166,17 @@ def test_more_noise_than_declared_is_judged_at_the_noise_the_residuals_show(pand
         return float(registered_errors(tool_point(model, q), tool_point(true, q)).mean())
 
     assert error(result.model) < 0.5 * error(panda)
-    # 5 mm noise declared as 0.3 mm, 20 samples at one fixture: near the recording it is still expected to beat
-    # nominal (and does, by the truth), over the whole workspace not (and it does not): written, with a warning
-    # that says so. Refused until stop 9, which also refused a real Gen3 lite (MUKCa's dinova_2) whose calibration
-    # halved the error at five sockets recorded elsewhere
+    # 5 mm noise declared as 0.3 mm, 20 samples at one fixture: near the recording it is expected to beat nominal
+    # (and by the truth does, barely), over the whole workspace not (and it does not). From one socket that refuses;
+    # the refusal says what noise the residuals show and what the calibration would reach at it
     few, _ = make_dataset(true, {"P1": PANDA_FIXTURES["P1"]}, 20, np.random.default_rng(3), noise=5e-3)
-    written = calibrate(panda, few, noise=3e-4)
-    assert any(w.startswith("over the whole workspace the calibration is not expected to beat nominal")
-               for w in written.selfcheck.warnings), written.selfcheck.warnings
-    near = np.clip(few.q[np.random.default_rng(5).integers(0, few.n_samples, 500)]
-                   + np.random.default_rng(6).normal(0.0, 0.3, (500, 7)), panda.lower, panda.upper)
-    assert error(written.model) > error(panda)  # the whole workspace: worse, as warned
-
-    def near_error(model):
-        return float(registered_errors(tool_point(model, near), tool_point(true, near)).mean())
-
-    assert near_error(written.model) < near_error(panda)
-    # 8 mm noise declared as 0.3 mm, 12 samples: not expected to beat nominal even near the recording; the refusal
-    # says what noise the residuals show and what the calibration would reach at it
-    fewer, _ = make_dataset(true, {"P1": PANDA_FIXTURES["P1"]}, 12, np.random.default_rng(3), noise=8e-3)
     from spherecal.identification.selfcheck import InconsistentDataError
 
     with pytest.raises(InconsistentDataError, match=r"residual noise \d\.\d+ mm per axis is .*at the noise the "
-                                                    r"residuals show, .*predicted spread \d"):
-        calibrate(panda, fewer, noise=3e-4)
+                       r"residuals show, .*over the whole workspace .*predicted spread \d"):
+        calibrate(panda, few, noise=3e-4)
+    written = calibrate(panda, few, noise=3e-4, force=True)
+    assert error(written.model) > error(panda)  # the whole workspace: worse, as predicted
 
 
 def test_gen3_lite_trained_on_each_real_placement_is_written_or_refused_with_its_reason(tmp_path, capsys) -> None:
@@ -270,41 +257,53 @@ def test_another_arms_fixture_is_still_named_on_an_arm_with_unmodelled_error(pan
         calibrate(panda, wrong, spec, noise=3e-4)
 
 
-def test_a_second_gen3_lite_is_written_where_it_helps_although_the_whole_workspace_is_not_expected_to(
+def test_a_second_gen3_lite_with_few_presses_is_written_where_it_helps_with_a_whole_workspace_warning(
         tmp_path, capsys) -> None:
-    """MUKCa's dinova_2 (a second real Gen3 lite), trained on its one two-socket placement ``front_rotated``, 1.3 mm
-    noise per axis. Its socket front_rotated_h1 trends with recording order and disagrees with h0: refused, named,
-    with the remedy. Left out as the refusal says, the calibration is written with a warning that it is not expected
-    to beat nominal over the whole workspace (refused until stop 9 for that prediction), and at the five sockets
-    recorded at other placements it cuts the error to 0.56x of nominal (5.58 -> 3.13 mm; MUKCa's own calibration
-    of both sockets reaches 3.91)."""
+    """MUKCa's dinova_2 (a second real Gen3 lite): its one two-socket placement ``front_rotated``, 1.3 mm of noise per
+    axis. All 20 presses per socket: front_rotated_h1 trends with recording order and disagrees with h0, refused and
+    named. The first 8 presses per socket: judged at the noise they show (1.6 mm), expected to beat nominal near
+    the recording and not over the whole workspace: written with a warning that says so (refused until stop 9), and
+    at the five sockets recorded at other placements it beats nominal (5.58 -> 4.77 mm). Left with h0 alone (one
+    socket), the whole workspace refuses: single-socket Gen3 lite calibrations were 1.02-1.30x nominal there."""
     data = MUKCA / "dinova_2"
     assert main(["import", str(data / "front_rotated"), "--format", "mukca", "--robot", str(GEN3LITE), "--tip-link",
-                 "ball_link", "--out", str(tmp_path / "train")]) == 0
+                 "ball_link", "--out", str(tmp_path / "all")]) == 0
+    first = tmp_path / "first8"
+    for hole in ("hole_0.csv", "hole_1.csv"):
+        (first / "front_rotated").mkdir(parents=True, exist_ok=True)
+        lines = (data / "front_rotated" / hole).read_text().splitlines(keepends=True)
+        (first / "front_rotated" / hole).write_text("".join(lines[:8]))
+    assert main(["import", str(first / "front_rotated"), "--format", "mukca", "--robot", str(GEN3LITE), "--tip-link",
+                 "ball_link", "--out", str(tmp_path / "few")]) == 0
     capsys.readouterr()
-    argv = ["calibrate", "--robot", str(GEN3LITE), "--tip-link", "ball_link", "--samples",
-            str(tmp_path / "train" / "samples.csv"), "--fixtures", str(tmp_path / "train" / "fixtures.yaml"), "--out",
-            str(tmp_path / "cal.yaml")]
-    assert main(argv) == 1 and not (tmp_path / "cal.yaml").exists()
+
+    def calibrate_on(folder: str, *extra: str) -> int:
+        return main(["calibrate", "--robot", str(GEN3LITE), "--tip-link", "ball_link", "--samples",
+                     str(tmp_path / folder / "samples.csv"), "--fixtures", str(tmp_path / folder / "fixtures.yaml"),
+                     "--out", str(tmp_path / f"cal_{folder}.yaml"), *extra])
+
+    assert calibrate_on("all") == 1 and not (tmp_path / "cal_all.yaml").exists()
     err = capsys.readouterr().err
     assert "fixture front_rotated_h1 disagree" in err and "--exclude-fixture front_rotated_h1" in err
-    assert main([*argv, "--exclude-fixture", "front_rotated_h1"]) == 0
-    out = capsys.readouterr().out
-    assert "warning: over the whole workspace the calibration is not expected to beat nominal" in out
+    assert "or a wrong known distance (" in err  # the two sockets are joined by their 50 mm
+    assert calibrate_on("all", "--exclude-fixture", "front_rotated_h1") == 1
+    assert "at the noise the residuals show" in capsys.readouterr().err
+    assert calibrate_on("few") == 0
+    assert "warning: over the whole workspace the calibration is not expected to beat nominal" in \
+        capsys.readouterr().out
     nominal = load_robot(GEN3LITE, tip_link="ball_link")
-    calibrated = load_robot(tmp_path / "cal.yaml")
-    ratios = []
+    calibrated = load_robot(tmp_path / "cal_few.yaml")
+    from spherecal.correction import tool_point
+
+    def spread(model, q):
+        p = tool_point(model, q)
+        return float(np.linalg.norm(p - p.mean(axis=0), axis=1).mean())
+
+    pairs = []
     for placement in sorted(p.name for p in data.iterdir() if p.name != "front_rotated"):
         assert main(["import", str(data / placement), "--format", "mukca", "--robot", str(GEN3LITE), "--tip-link",
                      "ball_link", "--out", str(tmp_path / placement)]) == 0
-        held = read_samples(tmp_path / placement / "samples.csv", nominal)
-
-        def spread(model, q=held.q):
-            from spherecal.correction import tool_point
-
-            p = tool_point(model, q)
-            return float(np.linalg.norm(p - p.mean(axis=0), axis=1).mean())
-
-        ratios.append((spread(calibrated), spread(nominal)))
-    mean = np.mean(ratios, axis=0)
-    assert len(ratios) == 5 and mean[0] < 0.7 * mean[1], ratios
+        q = read_samples(tmp_path / placement / "samples.csv", nominal).q
+        pairs.append((spread(calibrated, q), spread(nominal, q)))
+    mean = np.mean(pairs, axis=0)
+    assert len(pairs) == 5 and mean[0] < 0.9 * mean[1], pairs
