@@ -29,7 +29,7 @@ from .problem import (
     samples_location,
 )
 from .pruning import prune
-from .selfcheck import InconsistentDataError, SelfCheck, self_check
+from .selfcheck import MAX_SOCKET_NOISE, InconsistentDataError, SelfCheck, self_check
 from .solvers import solve_lm, solve_pso
 
 METHODS: tuple[str, ...] = ("lm", "pso", "pso+lm")
@@ -421,12 +421,18 @@ def check_plausible(problem: CalibrationProblem, params: np.ndarray, max_change:
     worst = int(np.argmax(ratio))
     name = model.param_names[free[worst]]
     dataset = problem.dataset
+    remedy = ("the samples do not determine the parameters; record more self-motion (wider joint ranges, more "
+              "fixtures or known distances)")
+    start = float(np.sqrt(np.mean(problem.start_distances() ** 2)))
+    if start > MAX_SOCKET_NOISE:  # no arm is that far off its own description: another arm's file (review, stop 9)
+        remedy = (f"the nominal model puts the samples {start * 1e3:.3g} mm rms from their fixtures' centres, farther "
+                  f"than a ball held in a socket moves (at most {MAX_SOCKET_NOISE * 1e3:g} mm): is the robot file this "
+                  "arm's (its DH convention, its units)?")
     raise ImplausibleCalibrationError(
         f"{samples_location(dataset)}, field '{name}': the fit moves the tool point "
         f"{change * 1e3:.1f} mm from the nominal model (mean over the workspace; a real arm's errors move it "
         f"about {typical * 1e3:.1f} mm, limit {max_change:g}x), changing {name} by "
-        f"{model.layout.format(name, params[free[worst]] - model.params[free[worst]])}: the samples do not determine "
-        f"the parameters; record more self-motion (wider joint ranges, more fixtures or known distances)"
+        f"{model.layout.format(name, params[free[worst]] - model.params[free[worst]])}: {remedy}"
     )
 
 

@@ -55,6 +55,23 @@ def test_a_wild_fit_is_refused_with_one_line() -> None:
     with pytest.raises(ImplausibleCalibrationError, match=r"field 'alpha3': the fit moves the tool point .* mm") as e:
         check_plausible(problem, params)
     assert "\n" not in str(e.value) and "changing alpha3 by 150 deg" in str(e.value)
+    assert "record more self-motion" in str(e.value) and "robot file" not in str(e.value)
+
+
+def test_a_wild_fit_from_another_arms_file_asks_for_the_robot_file() -> None:
+    # a review fed a real Panda's recording to MUKCa's iiwa14 URDF (both 7 joints): refused as 'the samples do not
+    # determine the parameters; record more self-motion', which sends the user to record again. The nominal model
+    # puts the samples far more than a socket's play from their centres: the refusal asks about the robot file
+    nominal = load_robot("panda")
+    true = perturb(nominal, np.random.default_rng(1))
+    dataset, spec = make_dataset(true, per_fixture=40, rng=np.random.default_rng(2))
+    wrong = nominal.with_params(nominal.params + 0.08 * np.eye(nominal.n_params)[nominal.param_index("d3")])
+    problem = build_problem(wrong, dataset, spec)
+    params = wrong.params.copy()
+    params[wrong.param_index("alpha3")] += np.deg2rad(150.0)
+    with pytest.raises(ImplausibleCalibrationError, match=r"the nominal model puts the samples [\d.]+ mm rms from their "
+                                                          r"fixtures' centres.*is the robot file this arm's"):
+        check_plausible(problem, params)
 
 
 def test_a_degenerate_direction_is_not_refused() -> None:
