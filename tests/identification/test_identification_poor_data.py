@@ -69,7 +69,7 @@ def test_a_wild_fit_from_another_arms_file_asks_for_the_robot_file() -> None:
     problem = build_problem(wrong, dataset, spec)
     params = wrong.params.copy()
     params[wrong.param_index("alpha3")] += np.deg2rad(150.0)
-    asked = r"the nominal model puts the samples [\d.]+ mm rms from their fixtures' centres.*is the robot file this arm's"
+    asked = r"the nominal model puts the samples [\d.]+ mm rms from their fixtures' centres.*is the robot file this"
     with pytest.raises(ImplausibleCalibrationError, match=asked):
         check_plausible(problem, params)
 
