@@ -22,13 +22,12 @@ from pathlib import Path
 
 import numpy as np
 
-from spherecal.correction import DatasetError, RobotModel, dump_robot, read_samples
+from spherecal.correction import DatasetError, RobotModel, dump_robot, geometric_part, read_samples
 from spherecal.correction.elastic import compliance_of
 from spherecal.correction.files.provenance import comment_block, matches_record, provenance
 from spherecal.correction.files.text_input import xml_bytes
 from spherecal.correction.files.urdf_into import urdf_into
 from spherecal.correction.files.urdf_write import (
-    PANDA_EFFORT,
     ExportError,
     dynamics_note,
     provenance_comment,
@@ -128,8 +127,9 @@ def export_model(model: RobotModel, output_format: str, header: str = "", prefix
         model: the (calibrated) model.
         output_format: ``urdf``, ``mjcf`` or ``yaml`` (see the module docstring).
         header: comment lines on top (inputs, versions: :func:`provenance_header`).
-        prefix: URDF name prefix (``panda_`` when None); refused for the other formats.
-        effort, velocity: (n,) URDF joint limits [N m], [rad/s]; Franka's for a 7-joint arm when None,
+        prefix: URDF name prefix (:func:`correction.files.urdf_write.default_prefix` when None, the joints keeping
+            their own names); refused for the other formats.
+        effort, velocity: (n,) URDF joint limits [N m], [rad/s]; Franka's for a Franka arm when None,
             required for other arms; refused for the other formats and with ``into``.
         into: ``(text, source)`` of the user's URDF of the same arm, whose joint origins are rewritten.
         samples: samples file for the rigid fit (default: the calibration's own, :func:`recorded_configurations`).
@@ -168,10 +168,7 @@ def export_model(model: RobotModel, output_format: str, header: str = "", prefix
             if value is not None:
                 raise ExportError(f"{option}: not with --into (the URDF keeps its own names and limits)")
     else:
-        n = model.n_joints
-        for option, values in (("--effort", effort), ("--velocity", velocity)):
-            if values is None and n != len(PANDA_EFFORT):
-                raise ExportError(f"{option}: no default for a {n}-joint robot, give {n} comma-separated values")
+        robot_to_urdf(geometric_part(model), prefix, effort, velocity)  # names and limits refused before any fit
     recorded, where = (None, "") if not joint_side_terms(model) else recorded_configurations(model, samples, folder)
     fit = rigid_approximation(model, recorded, seed=seed)
     notes = (fit.summary(), f"rigid fit: {where}") if fit.terms else ()
@@ -179,8 +176,7 @@ def export_model(model: RobotModel, output_format: str, header: str = "", prefix
     if into is not None:
         text = urdf_into(rigid, into[0], into[1], header)
     else:
-        text = robot_to_urdf(rigid, prefix="panda_" if prefix is None else prefix, effort=effort,
-                             velocity=velocity, header=header)
+        text = robot_to_urdf(rigid, prefix=prefix, effort=effort, velocity=velocity, header=header)
         notes += _dynamics(rigid)
     return Export(text, notes, fit)
 

@@ -9,8 +9,10 @@ a uniform sphere (:func:`correction.inertials.link_inertias`, said by :func:`dyn
 Without inertials the file is kinematics only and :func:`dynamics_note` says what a dynamics
 stack (MuJoCo, Gazebo, pinocchio) still needs.
 
-Links and joints (``P`` is the prefix, ``panda_`` by default, ``n`` the joint count), Franka's
-names for a Panda (``panda_link0..8``, ``panda_joint1..7``, the flange ``panda_link8``)::
+Links and joints (``P`` is the prefix, ``n`` the joint count), Franka's names for a Franka arm (``panda_link0..8``,
+``panda_joint1..7``, the flange ``panda_link8``). Another arm (:func:`default_prefix`) gets its own name as the prefix
+and its joints the names its description gave them (``extras["joint_names"]``, ``joint_a1`` for MUKCa's iiwa14), so a
+controller matching ``joint_states`` by name finds them::
 
     P{base}  --fixed Pbase_joint: base_xyz, base_rpy-->  Plink0      (DH frame 0)
     Plink{i-1}  --revolute Pjoint{i}, axis z-->  Plink{i}            i = 1..n
@@ -48,10 +50,37 @@ from ..inertia import FIELDS, rotated, six_of
 from ..inertials import link_inertias
 from ..model import RobotModel, matrix_rpy
 
-#: Franka's datasheet joint torque [N m] and velocity [rad/s] limits, used for 7-joint arms
-#: when none are given (URDF requires both on a revolute joint).
+#: Franka's datasheet joint torque [N m] and velocity [rad/s] limits, used for a Franka arm (:func:`is_franka`)
+#: when none are given (URDF requires both on a revolute joint); another arm's must be given.
 PANDA_EFFORT: tuple[float, ...] = (87.0, 87.0, 87.0, 87.0, 12.0, 12.0, 12.0)
 PANDA_VELOCITY: tuple[float, ...] = (2.175, 2.175, 2.175, 2.175, 2.61, 2.61, 2.61)
+#: Joint position limits [rad] (lower, upper) of the Franka arms (Panda, FR3) as their descriptions give them.
+FRANKA_LIMITS: tuple[tuple[tuple[float, ...], tuple[float, ...]], ...] = (
+    ((-2.8973, -1.7628, -2.8973, -3.0718, -2.8973, -0.0175, -2.8973),
+     (2.8973, 1.7628, 2.8973, -0.0698, 2.8973, 3.7525, 2.8973)),
+    ((-2.7437, -1.7837, -2.9007, -3.0421, -2.8065, 0.5445, -3.0159),
+     (2.7437, 1.7837, 2.9007, -0.1518, 2.8065, 4.5169, 3.0159)),
+)
+
+
+def is_franka(model: RobotModel) -> bool:
+    """A Franka arm (Panda, FR3): 7 joints, named so (``panda``, ``fr3`` or ``franka`` in the robot's name) or with
+    Franka's position limits (within 1e-3 rad). Another 7-joint arm (a KUKA iiwa14) got Franka's names and torque
+    limits without a word before (a review, stop 9)."""
+    if model.n_joints != 7:
+        return False
+    if re.search(r"panda|fr3|franka", model.name, re.I):
+        return True
+    return any(np.allclose(model.lower, lower, atol=1e-3) and np.allclose(model.upper, upper, atol=1e-3)
+               for lower, upper in FRANKA_LIMITS)
+
+
+def default_prefix(model: RobotModel) -> str:
+    """``panda_`` for a Franka arm, else the model's name made a valid URDF name, then ``_`` (``kuka_iiwa14_``)."""
+    if is_franka(model):
+        return "panda_"
+    name = re.sub(r"[^A-Za-z0-9_.:-]", "_", model.name).strip("_") or "robot"
+    return f"{name}_"
 
 #: Makes MuJoCo compile the kinematic URDF: keep fixed links as bodies, give massless
 #: moving links a token mass (MuJoCo refuses zero-mass moving bodies). Other readers
@@ -222,7 +251,7 @@ def dynamics_note(model: RobotModel, without: str = "the file is kinematics only
 
 def robot_to_urdf(
     model: RobotModel,
-    prefix: str = "panda_",
+    prefix: str | None = None,
     effort: Sequence[float] | None = None,
     velocity: Sequence[float] | None = None,
     mujoco: bool = False,
@@ -232,9 +261,10 @@ def robot_to_urdf(
 
     Args:
         model: the (calibrated) robot.
-        prefix: prepended to every link and joint name (``panda_link3``, ``panda_joint3``).
-        effort: (n,) joint torque limits [N m]; Franka's for a 7-joint arm by default.
-        velocity: (n,) joint velocity limits [rad/s]; Franka's for a 7-joint arm by default.
+        prefix: prepended to every link and joint name (``panda_link3``, ``panda_joint3``); None:
+            :func:`default_prefix`, and the joints keep the names the model's description gave them.
+        effort: (n,) joint torque limits [N m]; Franka's for a Franka arm by default, required otherwise.
+        velocity: (n,) joint velocity limits [rad/s]; Franka's for a Franka arm by default, required otherwise.
         mujoco: add :data:`MUJOCO_EXTENSION` so that MuJoCo compiles the file as is.
         header: more lines for the top comment (inputs, versions).
 
@@ -244,9 +274,18 @@ def robot_to_urdf(
     Raises:
         ExportError: a prefix that is not a valid name, or limits of the wrong length.
     """
+    n = model.n_joints
+    named = model.extras.get("joint_names") if prefix is None else None
+    joint_names = ([str(k) for k in named] if isinstance(named, list) and len(named) == n and len(set(named)) == n
+                   and all(_NAME.match(str(k)) for k in named) else None)
+    prefix = default_prefix(model) if prefix is None else prefix
     if not _NAME.match(prefix):
         raise ExportError(f"prefix: {prefix!r} may contain only letters, digits and _ . / : -")
-    n = model.n_joints
+    missing = [field for field, given in (("--effort", effort), ("--velocity", velocity)) if given is None]
+    if missing and not is_franka(model):
+        raise ExportError(f"{', '.join(missing)}: no default for {model.name!r} (Franka's are for a Franka arm, whose "
+                          f"joint limits these are not): give {n} comma-separated values each, or export --into the "
+                          "robot's own URDF, which keeps its limits, meshes and inertials")
     effort = _per_joint(effort, PANDA_EFFORT, n, "effort")
     velocity = _per_joint(velocity, PANDA_VELOCITY, n, "velocity")
     origins, flange = joint_origins(model)
@@ -282,7 +321,8 @@ def robot_to_urdf(
     fixed(f"{p}base_joint", f"{p}base", f"{p}link0", base)
     for i in range(n):
         kind = "continuous" if model.full_turn[i] else "revolute"  # read back as [-pi, pi], written as it came
-        lines.append(f"  <joint name={quoteattr(f'{p}joint{i + 1}')} type=\"{kind}\">")
+        joint = joint_names[i] if joint_names else f"{p}joint{i + 1}"
+        lines.append(f"  <joint name={quoteattr(joint)} type=\"{kind}\">")
         lines.append(f"    <parent link={quoteattr(f'{p}link{i}')}/>\n    <child link={quoteattr(f'{p}link{i + 1}')}/>")
         lines.append(f"    {_origin(origins[i])}")
         lines.append('    <axis xyz="0 0 1"/>')

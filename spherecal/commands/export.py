@@ -31,12 +31,15 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument(
         "--prefix",
         default=None,
-        help="prefix of URDF link and joint names (default: panda_); the MJCF keeps the plant's names",
+        help="prefix of URDF link and joint names (default: panda_ for a Franka arm, else the robot's name, and "
+        "the joints keep the names its description gave them); the MJCF keeps the plant's names",
     )
     parser.add_argument("--effort", default=None, metavar="E1,...,En",
-                        help="URDF joint torque limits [Nm], comma-separated (default: Franka's, 7-joint arms)")
+                        help="URDF joint torque limits [Nm], comma-separated (default: Franka's for a Franka arm; "
+                        "required for another arm)")
     parser.add_argument("--velocity", default=None, metavar="V1,...,Vn",
-                        help="URDF joint velocity limits [rad/s], comma-separated (default: Franka's, 7-joint arms)")
+                        help="URDF joint velocity limits [rad/s], comma-separated (default: Franka's for a Franka "
+                        "arm; required for another arm)")
     parser.add_argument("--samples", default=None,
                         help="urdf only: samples.csv of recorded joint angles the rigid fit must match "
                         "(default: the samples file the calibration names, if unchanged)")

@@ -8,7 +8,7 @@ import mujoco
 import numpy as np
 import pytest
 
-from spherecal.correction import to_standard, tool_point, tool_pose
+from spherecal.correction import load_robot, to_standard, tool_point, tool_pose
 from spherecal.correction.files.urdf_write import ExportError, robot_to_urdf
 from tests.conftest import perturbed
 
@@ -82,3 +82,28 @@ def test_bad_options_raise_named_errors(panda):
         robot_to_urdf(panda, prefix='a"b')
     with pytest.raises(ExportError, match="effort"):
         robot_to_urdf(panda, effort=[1.0, 2.0])
+
+
+def test_another_arm_keeps_its_joint_names_and_must_give_its_limits(tmp_path, capsys) -> None:
+    # a review exported a calibrated KUKA iiwa14 standalone: panda_joint1..7 and Franka's 87 / 12 N m, silently
+    from spherecal.cli import main
+    from spherecal.correction import save_robot
+    from spherecal.correction.files.urdf_write import is_franka
+
+    iiwa = load_robot("iiwa14")
+    assert not is_franka(iiwa) and is_franka(load_robot("panda")) and is_franka(load_robot("fr3"))
+    with pytest.raises(ExportError, match=r"--effort, --velocity: no default for 'kuka_iiwa14'"):
+        robot_to_urdf(iiwa)
+    cal = save_robot(iiwa, tmp_path / "iiwa.yaml")
+    out = tmp_path / "iiwa.urdf"
+    assert main(["export", str(cal), "--format", "urdf", "--out", str(out)]) == 1 and not out.exists()
+    assert "--effort, --velocity: no default" in capsys.readouterr().err
+    effort, velocity = "320,320,176,176,110,40,40", "1.48,1.48,1.75,1.31,2.27,2.36,2.36"
+    assert main(["export", str(cal), "--format", "urdf", "--out", str(out), "--effort", effort,
+                 "--velocity", velocity]) == 0
+    text = out.read_text()
+    assert all(f'<joint name="iiwa_joint_{i}" type="revolute">' in text for i in range(1, 8))
+    assert 'effort="320.0" velocity="1.48"' in text and "panda_" not in text
+    back = load_robot(out)
+    q = iiwa.random_configurations(20, np.random.default_rng(0))
+    np.testing.assert_allclose(tool_point(back, q), tool_point(iiwa, q), atol=1e-9)
