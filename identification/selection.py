@@ -366,6 +366,8 @@ def select_model(requested: str, fit, nominal: RobotModel, dataset: Dataset, spe
                               seconds=time.perf_counter() - clock)
     scores = {k: information_criterion(f) for k, f in fits.items()}
     best = min(names, key=lambda k: (scores[k], names.index(k)))
+    margin = (f"{scores['dh'] - scores[best]:.1f} below dh" if best != "dh" else
+              f"{min(v for k, v in scores.items() if k != 'dh') - scores['dh']:.1f} below the next candidate")
     reason = (f"{len(groups)} fixture group(s), too few to cross-validate (need 3): lowest BIC "
-              f"(effective unknowns of the regularised fit), {scores['dh'] - scores[best]:.1f} below dh")
+              f"(effective unknowns of the regularised fit), {margin}")
     return ModelSelection("auto", best, reason + note, "BIC", scores, fits=fits, seconds=time.perf_counter() - clock)

@@ -14,7 +14,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("robot", metavar="CAL.yaml", help="calibrated robot file")
     tool = parser.add_mutually_exclusive_group(required=True)
     tool.add_argument("--offset", nargs=3, type=finite, metavar=("X", "Y", "Z"),
-                      help="the new tool point in the last DH frame [m]")
+                      help="the new tool's nominal point in the last DH frame [m], as its drawing gives it; the "
+                      "calibration's correction of the old tool point is carried over and added")
     tool.add_argument("--urdf", default=None, metavar="TOOL.urdf",
                       help="a URDF of the same arm with the new tool (its last DH frame must be the calibrated "
                       "file's); --tip-link names the tool link")

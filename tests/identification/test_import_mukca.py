@@ -302,6 +302,7 @@ def test_a_robot_file_of_the_wrong_convention_is_refused_not_written(imported, t
     error = _refused(argv, tmp_path, capsys)
     assert "mm per axis is not a ball held in a socket (at most 10 mm): the nominal model does not describe this " \
            "arm" in error
+    assert "--exclude-fixture" not in error  # every residual moves: no socket to leave out (a review, stop 9)
 
 
 def test_a_calibrated_file_given_as_nominal_is_named_in_the_refusal(imported, tmp_path, capsys) -> None:
