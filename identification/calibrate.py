@@ -427,7 +427,7 @@ def check_plausible(problem: CalibrationProblem, params: np.ndarray, max_change:
     if start > MAX_SOCKET_NOISE:  # no arm is that far off its own description: another arm's file (review, stop 9)
         remedy = (f"the nominal model puts the samples {start * 1e3:.3g} mm rms from their fixtures' centres, farther "
                   f"than a ball held in a socket moves (at most {MAX_SOCKET_NOISE * 1e3:g} mm): is the robot file this "
-                  "arm's (its DH convention, its units)?")
+                  "arm's, its tool point the ball's (an adapter or sensor it lacks), its DH convention and units?")
     raise ImplausibleCalibrationError(
         f"{samples_location(dataset)}, field '{name}': the fit moves the tool point "
         f"{change * 1e3:.1f} mm from the nominal model (mean over the workspace; a real arm's errors move it "

@@ -62,7 +62,8 @@ def test_the_pivot_fit_finds_the_true_tool_of_an_exact_arm() -> None:
 @pytest.mark.parametrize("seed", [0, 1])
 def test_a_ball_further_out_than_the_file_says_is_calibrated_with_a_warning(seed) -> None:
     nominal, true, train, data = _arm(seed)
-    with pytest.raises(ImplausibleCalibrationError, match="do not determine"):  # what it was before
+    # what it was before: refused, asking about the robot file and its tool point (the workflow finds the tool first)
+    with pytest.raises(ImplausibleCalibrationError, match="is the robot file this arm's, its tool point the ball's"):
         calibrate(nominal, train, SPEC, prior=0.5)
     out = run_workflow(nominal, train, SPEC, WorkflowOptions())
     note = next(w for w in out.result.warnings if w.startswith("tool point:"))
