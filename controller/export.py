@@ -22,7 +22,7 @@ from pathlib import Path
 
 import numpy as np
 
-from spherecal.correction import DatasetError, RobotModel, dump_robot, geometric_part, read_samples
+from spherecal.correction import DatasetError, RobotModel, dump_robot, read_samples
 from spherecal.correction.elastic import compliance_of
 from spherecal.correction.files.provenance import comment_block, matches_record, provenance
 from spherecal.correction.files.text_input import xml_bytes
@@ -30,6 +30,7 @@ from spherecal.correction.files.urdf_into import urdf_into
 from spherecal.correction.files.urdf_write import (
     ExportError,
     dynamics_note,
+    names_and_limits,
     provenance_comment,
     robot_to_urdf,
     xml_comment,
@@ -168,7 +169,7 @@ def export_model(model: RobotModel, output_format: str, header: str = "", prefix
             if value is not None:
                 raise ExportError(f"{option}: not with --into (the URDF keeps its own names and limits)")
     else:
-        robot_to_urdf(geometric_part(model), prefix, effort, velocity)  # names and limits refused before any fit
+        names_and_limits(model, prefix, effort, velocity)  # refused before the rigid fit, not after it
     recorded, where = (None, "") if not joint_side_terms(model) else recorded_configurations(model, samples, folder)
     fit = rigid_approximation(model, recorded, seed=seed)
     notes = (fit.summary(), f"rigid fit: {where}") if fit.terms else ()

@@ -168,12 +168,11 @@ def rigid_approximation(model: RobotModel, recorded: np.ndarray | None = None,
         rigid, misfit, cost = trial, trial_misfit, trial_cost
         if improvement <= RELATIVE_TOL * start:
             break
-    cost = misfit
     check = tool_point(model, check_q)
     distance = np.linalg.norm(tool_point(rigid, check_q) - check, axis=1)
     return RigidFit(
         model=rigid, dropped=dropped, terms=terms,
-        fit_rms=float(np.sqrt(cost / len(fit_q))), dropped_fit_rms=float(np.sqrt(start / len(fit_q))),
+        fit_rms=float(np.sqrt(misfit / len(fit_q))), dropped_fit_rms=float(np.sqrt(start / len(fit_q))),
         workspace_rms=float(np.sqrt(np.mean(distance**2))), workspace_max=float(distance.max()),
         dropped_workspace_rms=_rms(tool_point(dropped, check_q), check),
         recorded=count, workspace=workspace, seed=seed,

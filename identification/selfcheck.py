@@ -302,7 +302,7 @@ def _honest_noise(findings: list[Finding], prediction: Finding, one_fixture: boo
     if level is None or level.figures.get("robust_ratio", 0.0) < NOISE_LIKE:
         return findings, prediction
     if level.figures["residual_std_mm"] > MAX_SOCKET_NOISE * 1e3:
-        level = replace(level, message=(
+        level = replace(level, figures={**level.figures, "not_a_socket": True}, message=(
             f"{level.message}; {level.figures['residual_std_mm']:.3g} mm per axis is not a ball held in a socket (at "
             f"most {MAX_SOCKET_NOISE * 1e3:g} mm): the nominal model does not describe this arm (another arm's file, "
             "its DH convention, its units?)"))

@@ -76,7 +76,7 @@ class SelfCheck:
         figures = [f for f in failed if f.check in ("residual level", "prediction")]
         if figures:
             # a model that does not describe the arm moves every residual: its trends are no moved socket to leave out
-            alien = "is not a ball held in a socket" in figures[0].message
+            alien = figures[0].figures.get("not_a_socket", False)
             trends = [] if alien else [_without_location(f.message) for f in self.findings if f.figures.get("trend")]
             return "; ".join([figures[0].message, *trends])
         worst = max(failed, key=lambda f: f.figures.get("statistic", 0.0) - f.figures.get("dof", 0))

@@ -249,6 +249,33 @@ def dynamics_note(model: RobotModel, without: str = "the file is kinematics only
             "accelerations approximate); give 'inertia: [ixx, ixy, ixz, iyy, iyz, izz]' [kg m^2] in the inertials")
 
 
+def names_and_limits(model: RobotModel, prefix: str | None = None, effort: Sequence[float] | None = None,
+                     velocity: Sequence[float] | None = None) -> tuple[str, list[str] | None, list[float], list[float]]:
+    """The names and joint limits :func:`robot_to_urdf` writes (its arguments of the same names; see there), checked.
+
+    Returns:
+        ``(prefix, joint names or None for <prefix>joint<i>, effort [N m], velocity [rad/s])``.
+
+    Raises:
+        ExportError: a prefix that is not a valid name, limits of the wrong length, or none for an arm that is not a
+            Franka arm.
+    """
+    n = model.n_joints
+    named = model.extras.get("joint_names") if prefix is None else None
+    joint_names = ([str(k) for k in named] if isinstance(named, list) and len(named) == n and len(set(named)) == n
+                   and all(_NAME.match(str(k)) for k in named) else None)
+    prefix = default_prefix(model) if prefix is None else prefix
+    if not _NAME.match(prefix):
+        raise ExportError(f"prefix: {prefix!r} may contain only letters, digits and _ . / : -")
+    missing = [field for field, given in (("--effort", effort), ("--velocity", velocity)) if given is None]
+    if missing and not is_franka(model):
+        raise ExportError(f"{', '.join(missing)}: no default for {model.name!r} (Franka's are for a Franka arm, whose "
+                          f"joint limits these are not): give {n} comma-separated values each, or export --into the "
+                          "robot's own URDF, which keeps its limits, meshes and inertials")
+    return (prefix, joint_names, _per_joint(effort, PANDA_EFFORT, n, "effort"),
+            _per_joint(velocity, PANDA_VELOCITY, n, "velocity"))
+
+
 def robot_to_urdf(
     model: RobotModel,
     prefix: str | None = None,
@@ -272,22 +299,11 @@ def robot_to_urdf(
         The URDF document as text.
 
     Raises:
-        ExportError: a prefix that is not a valid name, or limits of the wrong length.
+        ExportError: a prefix that is not a valid name, limits of the wrong length, or none for an arm that is not a
+            Franka arm (:func:`names_and_limits`).
     """
     n = model.n_joints
-    named = model.extras.get("joint_names") if prefix is None else None
-    joint_names = ([str(k) for k in named] if isinstance(named, list) and len(named) == n and len(set(named)) == n
-                   and all(_NAME.match(str(k)) for k in named) else None)
-    prefix = default_prefix(model) if prefix is None else prefix
-    if not _NAME.match(prefix):
-        raise ExportError(f"prefix: {prefix!r} may contain only letters, digits and _ . / : -")
-    missing = [field for field, given in (("--effort", effort), ("--velocity", velocity)) if given is None]
-    if missing and not is_franka(model):
-        raise ExportError(f"{', '.join(missing)}: no default for {model.name!r} (Franka's are for a Franka arm, whose "
-                          f"joint limits these are not): give {n} comma-separated values each, or export --into the "
-                          "robot's own URDF, which keeps its limits, meshes and inertials")
-    effort = _per_joint(effort, PANDA_EFFORT, n, "effort")
-    velocity = _per_joint(velocity, PANDA_VELOCITY, n, "velocity")
+    prefix, joint_names, effort, velocity = names_and_limits(model, prefix, effort, velocity)
     origins, flange = joint_origins(model)
     p = prefix
     lines = [
