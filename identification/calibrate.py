@@ -27,6 +27,7 @@ from .problem import (
     prior_std,
     row_list,
     samples_location,
+    tolerance,
 )
 from .pruning import prune
 from .selfcheck import MAX_SOCKET_NOISE, InconsistentDataError, SelfCheck, self_check
@@ -39,7 +40,8 @@ METHODS: tuple[str, ...] = ("lm", "pso", "pso+lm")
 #: almost nothing; a press taken before the ball sat in its socket pulls with a bounded weight.
 ROBUST_CUT = 2.5
 #: Largest plausible tool-point change of a calibration, in multiples of what a real arm's
-#: errors (1 mm, 0.2 deg) typically move it (about 6 mm on the Panda, so about 24 mm).
+#: errors (:func:`.problem.tolerance`: 1 mm, 0.2 deg, a joint's zero 1 deg) typically move it (about 15 mm on the
+#: Panda, so about 62 mm).
 MAX_CHANGE = 4.0
 #: Residual noise above this multiple of the expected ``noise`` gets a warning (a wrong distance or
 #: position, a moved fixture, or ``noise`` set too small).
@@ -400,8 +402,8 @@ def robust_noise(problem: CalibrationProblem, x: np.ndarray) -> float:
 def check_plausible(problem: CalibrationProblem, params: np.ndarray, max_change: float = MAX_CHANGE) -> None:
     """Refuse a calibrated model that moves the tool point implausibly far from the start model.
 
-    Real arms differ from their design by millimetres: the parameter spread of :func:`prior_std`
-    (1 mm, 0.2 deg) moves the tool point by ``typical`` (RMS over the workspace, the gauge
+    Real arms differ from their design by millimetres: the parameter spread of :func:`.problem.tolerance`
+    (1 mm, 0.2 deg, a joint's zero 1 deg) moves the tool point by ``typical`` (RMS over the workspace, the gauge
     parameters left out). A fit whose tool points, after the best rigid fit, move ``max_change``
     times further than that has fitted noise along directions the samples barely see and would make
     the arm less accurate than its nominal model. Judged on tool points, not parameters: along a
@@ -417,7 +419,7 @@ def check_plausible(problem: CalibrationProblem, params: np.ndarray, max_change:
     if change <= max_change * typical:
         return
     free = problem.free
-    ratio = np.abs(params - model.params)[free] / prior_std(model)[free]
+    ratio = np.abs(params - model.params)[free] / tolerance(model)[free]
     worst = int(np.argmax(ratio))
     name = model.param_names[free[worst]]
     dataset = problem.dataset
@@ -436,29 +438,32 @@ def check_plausible(problem: CalibrationProblem, params: np.ndarray, max_change:
     )
 
 
-def tool_point_change(model: RobotModel, params: np.ndarray) -> tuple[float, float]:
+def tool_point_change(model: RobotModel, params: np.ndarray, zeros: bool = True) -> tuple[float, float]:
     """(change, typical) [m]: how far ``params`` move ``model``'s tool points (mean over the seeded workspace
-    configurations, after the best rigid fit), and how far a real arm's errors (the prior spreads, gauge and
-    base left out) typically move them: what :func:`check_plausible` compares."""
-    q, start_points, typical = _plausibility_reference(model)
+    configurations, after the best rigid fit), and how far a real arm's errors (:func:`.problem.tolerance`, gauge
+    and base left out) typically move them: what :func:`check_plausible` compares. ``zeros=False``: the joints'
+    zeros at their prior spread too (:func:`.tool_fit.recentred_tool` judges a tool against the geometry's errors,
+    not against a zero's)."""
+    q, start_points, typical = _plausibility_reference(model, zeros)
     return float(registered_errors(tool_point(model.with_params(params), q), start_points).mean()), typical
 
 
-def _plausibility_reference(model: RobotModel) -> tuple[np.ndarray, np.ndarray, float]:
+def _plausibility_reference(model: RobotModel, zeros: bool = True) -> tuple[np.ndarray, np.ndarray, float]:
     """What :func:`check_plausible` judges a fit starting from ``model`` against: the configurations
     ((C, n) [rad], seeded), the start model's tool points there ((C, 3) [m]) and the tool-point change a real
-    arm's errors typically cause [m]. They depend on the start model alone, so they are computed once per
-    model content and reused (every fold of one model-selection candidate and the final fit start from the
-    same model: 13 fits, 4 distinct start models)."""
+    arm's errors typically cause [m] (``zeros``: see :func:`tool_point_change`). They depend on the start model
+    alone, so they are computed once per model content and reused (every fold of one model-selection candidate
+    and the final fit start from the same model: 13 fits, 4 distinct start models)."""
     key = (
         model.convention, model.hayati, model.params.tobytes(), model.lower.tobytes(), model.upper.tobytes(),
         repr(model.extras),  # compliance, scale, inertials: what the tool point depends on beside the geometry
+        zeros,
     )
     with _REFERENCES_LOCK:  # a Dask worker may run calibrations in threads
         found = _REFERENCES.get(key)
     if found is None:
         q = model.random_configurations(PLAUSIBILITY_CONFIGURATIONS, np.random.default_rng(0))
-        prior = prior_std(model)
+        prior = tolerance(model) if zeros else prior_std(model)
         prior[[model.param_index(name) for name in GAUGE[model.convention]]] = 0.0
         prior[model.layout.base] = 0.0
         typical = float(np.sqrt(((param_jacobian(model, q) * prior) ** 2).sum(axis=(1, 2))).mean())

@@ -7,13 +7,14 @@ from dataclasses import replace
 import numpy as np
 
 from .identifiability import predicted_std
-from .problem import CalibrationProblem, prior_std
+from .problem import CalibrationProblem, tolerance, zero_indices
 
 
 def prune(
     problem: CalibrationProblem, x: np.ndarray, sigma: float, jac: np.ndarray | None = None
 ) -> tuple[CalibrationProblem, np.ndarray]:
-    """Fix, one at a time, the parameters whose predicted std exceeds their prior spread.
+    """Fix, one at a time, the parameters whose predicted std exceeds their tolerance (:func:`.problem.tolerance`: the
+    prior spread, and for a joint's zero the wider :data:`.problem.ZERO_TOLERANCE`).
 
     Args:
         problem: a solved problem.
@@ -26,7 +27,8 @@ def prune(
         The problem without the barely excited parameters (they go back to the start model's value)
         and the matching unknown vector; the inputs when nothing is pruned.
     """
-    prior = prior_std(problem.model)
+    prior = tolerance(problem.model)
+    zeros = set(zero_indices(problem.model).tolist())
     names = problem.model.param_names
     params, centres = problem.unpack(x)
     jac = problem.jacobian(x) if jac is None else jac
@@ -42,9 +44,11 @@ def prune(
             break
         name = names[problem.free[keep[worst]]]
         fmt = problem.model.layout.format
+        limit = fmt(name, prior[problem.free[keep[worst]]])
         fixed[name] = (
             f"barely excited: predicted std {fmt(name, std[worst])} at {sigma * 1e3:.3g} mm residual noise "
-            f"exceeds the prior spread {fmt(name, prior[problem.free[keep[worst]]])}"
+            + (f"exceeds the {limit} a joint's zero may be off" if problem.free[keep[worst]] in zeros
+               else f"exceeds the prior spread {limit}")
         )
         keep = np.delete(keep, worst)
     if keep.size == fp:

@@ -62,7 +62,7 @@ def recentred_tool(nominal: RobotModel, dataset: Dataset,
     tool, spread, std = pivot_tool(nominal, dataset)
     params = nominal.params.copy()
     params[nominal.layout.tool] = tool
-    change, typical = tool_point_change(nominal, params)
+    change, typical = tool_point_change(nominal, params, zeros=False)  # a tool against the geometry's errors
     determined = np.all(np.isfinite(tool)) and std <= typical  # the motion recorded pins the tool down
     if not (determined and spread <= MAX_SOCKET_NOISE) or change <= max_change * typical:
         return nominal, None

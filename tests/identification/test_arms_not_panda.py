@@ -166,16 +166,19 @@ def test_more_noise_than_declared_is_judged_at_the_noise_the_residuals_show(pand
         return float(registered_errors(tool_point(model, q), tool_point(true, q)).mean())
 
     assert error(result.model) < 0.5 * error(panda)
-    # 5 mm noise declared as 0.3 mm, 20 samples at one fixture: near the recording it is expected to beat nominal
-    # (and by the truth does, barely), over the whole workspace not (and it does not). From one socket that refuses;
-    # the refusal says what noise the residuals show and what the calibration would reach at it
-    few, _ = make_dataset(true, {"P1": PANDA_FIXTURES["P1"]}, 20, np.random.default_rng(3), noise=5e-3)
+    # 5 mm noise declared as 0.3 mm at one fixture. 20 samples: expected to beat nominal near the recording and over
+    # the whole workspace, and by the truth it does (written; refused before stop 10, when the joints' zeros were
+    # pruned at 0.2 deg). 10 samples: over the whole workspace not (and it does not); from one socket that refuses,
+    # saying what noise the residuals show and what the calibration would reach at it
     from spherecal.identification.selfcheck import InconsistentDataError
 
+    few, _ = make_dataset(true, {"P1": PANDA_FIXTURES["P1"]}, 20, np.random.default_rng(3), noise=5e-3)
+    assert error(calibrate(panda, few, noise=3e-4).model) < error(panda)
+    fewer, _ = make_dataset(true, {"P1": PANDA_FIXTURES["P1"]}, 10, np.random.default_rng(3), noise=5e-3)
     with pytest.raises(InconsistentDataError, match=r"residual noise \d\.\d+ mm per axis is .*at the noise the "
                        r"residuals show, .*over the whole workspace .*predicted spread \d"):
-        calibrate(panda, few, noise=3e-4)
-    written = calibrate(panda, few, noise=3e-4, force=True)
+        calibrate(panda, fewer, noise=3e-4)
+    written = calibrate(panda, fewer, noise=3e-4, force=True)
     assert error(written.model) > error(panda)  # the whole workspace: worse, as predicted
 
 
@@ -257,14 +260,13 @@ def test_another_arms_fixture_is_still_named_on_an_arm_with_unmodelled_error(pan
         calibrate(panda, wrong, spec, noise=3e-4)
 
 
-def test_a_second_gen3_lite_with_few_presses_is_written_where_it_helps_with_a_whole_workspace_warning(
-        tmp_path, capsys) -> None:
+def test_a_second_gen3_lite_is_written_where_it_helps_with_its_trending_socket_named(tmp_path, capsys) -> None:
     """MUKCa's dinova_2 (a second real Gen3 lite): its one two-socket placement ``front_rotated``, 1.3 mm of noise per
-    axis. All 20 presses per socket: front_rotated_h1 trends with recording order and disagrees with h0, refused and
-    named. The first 8 presses per socket: judged at the noise they show (1.6 mm), expected to beat nominal near
-    the recording and not over the whole workspace: written with a warning that says so (refused until stop 9), and
-    at the five sockets recorded at other placements it beats nominal (5.58 -> 4.77 mm). Left with h0 alone (one
-    socket), the whole workspace refuses: single-socket Gen3 lite calibrations were 1.02-1.30x nominal there."""
+    axis. All 20 presses per socket: front_rotated_h1 trends with recording order; refused until stop 10 (the trend
+    took the leave-one-out's allowance for the arm's error away, and the joint zeros were pruned at 0.2 deg), now
+    written, the trend named, and at the five sockets recorded at other placements it beats nominal (5.58 -> 2.59 mm;
+    MUKCa 3.91). The first 8 presses per socket: written too (2.51 mm). Left with h0 alone (one socket), refused:
+    single-socket Gen3 lite calibrations were 1.02-1.30x nominal there."""
     data = MUKCA / "dinova_2"
     assert main(["import", str(data / "front_rotated"), "--format", "mukca", "--robot", str(GEN3LITE), "--tip-link",
                  "ball_link", "--out", str(tmp_path / "all")]) == 0
@@ -277,33 +279,30 @@ def test_a_second_gen3_lite_with_few_presses_is_written_where_it_helps_with_a_wh
                  "ball_link", "--out", str(tmp_path / "few")]) == 0
     capsys.readouterr()
 
-    def calibrate_on(folder: str, *extra: str) -> int:
+    def calibrate_on(folder: str, *extra: str, out: str | None = None) -> int:
         return main(["calibrate", "--robot", str(GEN3LITE), "--tip-link", "ball_link", "--samples",
                      str(tmp_path / folder / "samples.csv"), "--fixtures", str(tmp_path / folder / "fixtures.yaml"),
-                     "--out", str(tmp_path / f"cal_{folder}.yaml"), *extra])
+                     "--out", str(tmp_path / (out or f"cal_{folder}.yaml")), *extra])
 
-    assert calibrate_on("all") == 1 and not (tmp_path / "cal_all.yaml").exists()
-    err = capsys.readouterr().err
-    assert "fixture front_rotated_h1 disagree" in err and "--exclude-fixture front_rotated_h1" in err
-    assert "or a wrong known distance (" in err  # the two sockets are joined by their 50 mm
-    assert calibrate_on("all", "--exclude-fixture", "front_rotated_h1") == 1
+    assert calibrate_on("all") == 0
+    said = capsys.readouterr().out
+    assert "the residual at fixture front_rotated_h1 moves" in said and "--exclude-fixture front_rotated_h1" in said
+    assert calibrate_on("all", "--exclude-fixture", "front_rotated_h1", out="h0.yaml") == 1
     assert "at the noise the residuals show" in capsys.readouterr().err
+    assert not (tmp_path / "h0.yaml").exists()
     assert calibrate_on("few") == 0
-    assert "warning: over the whole workspace the calibration is not expected to beat nominal" in \
-        capsys.readouterr().out
     nominal = load_robot(GEN3LITE, tip_link="ball_link")
-    calibrated = load_robot(tmp_path / "cal_few.yaml")
     from spherecal.correction import tool_point
 
     def spread(model, q):
         p = tool_point(model, q)
         return float(np.linalg.norm(p - p.mean(axis=0), axis=1).mean())
 
-    pairs = []
+    held = []
     for placement in sorted(p.name for p in data.iterdir() if p.name != "front_rotated"):
         assert main(["import", str(data / placement), "--format", "mukca", "--robot", str(GEN3LITE), "--tip-link",
                      "ball_link", "--out", str(tmp_path / placement)]) == 0
         q = read_samples(tmp_path / placement / "samples.csv", nominal).q
-        pairs.append((spread(calibrated, q), spread(nominal, q)))
-    mean = np.mean(pairs, axis=0)
-    assert len(pairs) == 5 and mean[0] < 0.9 * mean[1], pairs
+        held.append([spread(load_robot(tmp_path / f"cal_{f}.yaml"), q) for f in ("all", "few")] + [spread(nominal, q)])
+    mean = np.mean(held, axis=0)
+    assert len(held) == 5 and mean[0] < 0.6 * mean[2] and mean[1] < 0.6 * mean[2], held

@@ -176,7 +176,7 @@ def test_calibration_on_one_placement_holds_on_the_others(imported, capsys) -> N
     )
 
 
-def test_kinova_calibrated_on_one_placement_beats_the_nominal_on_another(tmp_path) -> None:
+def test_kinova_calibrated_on_one_placement_beats_the_nominal_on_another(tmp_path, capsys) -> None:
     assert (
         main(
             [
@@ -218,10 +218,13 @@ def test_kinova_calibrated_on_one_placement_beats_the_nominal_on_another(tmp_pat
         "--out",
         str(tmp_path / "cal.yaml"),
     ]
-    # the Gen3 lite fits its own sockets to 2.6 mm per axis, 8.7x the declared 0.3 mm (and at an honest
-    # 3 mm it cannot be expected to beat nominal): the self-check refuses it; --force writes it anyway
-    assert main(calibrate) == 1 and not (tmp_path / "cal.yaml").exists()
-    assert main([*calibrate, "--force"]) == 0
+    # the Gen3 lite fits its own sockets to 2.6 mm per axis, 8.5x the declared 0.3 mm, and front_h0 trends with
+    # recording order: refused until stop 10 (the trend took the leave-one-out's allowance for the arm's error, the
+    # offsets were pruned); now written with both named, and it beats nominal on the held-out placement
+    assert main(calibrate) == 0
+    said = capsys.readouterr().out
+    assert "judged at that noise, the calibration is still expected to beat nominal" in said
+    assert "the residual at fixture front_h0 moves" in said
     assert (
         main(
             [
@@ -241,7 +244,7 @@ def test_kinova_calibrated_on_one_placement_beats_the_nominal_on_another(tmp_pat
         == 0
     )
     held = json.loads((tmp_path / "v.json").read_text())["sockets"]["held_out"]
-    # measured: 4.22 -> 2.72 mm; the Gen3 lite fits its own training sockets only to ~4 mm rms (see the README)
+    # measured: 4.22 -> 2.30 mm (2.72 forced before stop 10); the Gen3 lite fits its training sockets only to ~4 mm
     assert held["calibrated"]["test_mae"] < held["nominal"]["test_mae"]
 
 
@@ -300,8 +303,9 @@ def test_a_robot_file_of_the_wrong_convention_is_refused_not_written(imported, t
     argv = ["calibrate", "--robot", wrong, "--samples", imported / "train/samples.csv", "--fixtures",
             imported / "train/fixtures.yaml", "--out", tmp_path / "cal.yaml"]
     error = _refused(argv, tmp_path, capsys)
-    assert "mm per axis is not a ball held in a socket (at most 10 mm): the nominal model does not describe this " \
-           "arm" in error
+    # refused by the self-check's level ("not a ball held in a socket") or, where the fit turned a joint's zero far
+    # enough to pass it, by the plausibility limit: either way naming the 10 mm a socket allows and the convention
+    assert "(at most 10 mm)" in error and "DH convention" in error
     assert "--exclude-fixture" not in error  # every residual moves: no socket to leave out (a review, stop 9)
 
 
