@@ -77,7 +77,7 @@ def find_mukca() -> Path:
 #: None for the URDF itself). MUKCa's repository holds panda_1 ... panda_6, dinova_1/2 and kuka_14.
 MUKCA_FAMILIES = {
     "panda": ("panda.urdf", "tests/data/mukca/panda_ball.yaml"),
-    "dinova": ("gen3lite.urdf", "tests/data/mukca/gen3lite_ball.yaml"),
+    "dinova": ("gen3lite.urdf", None),
     "kuka": ("iiwa14.urdf", None),
 }
 #: The robots of ``shared/data/mukca``.

@@ -18,9 +18,9 @@ MUKCa's own figures available here: panda_2_clean front_center 0.347 mm (their p
 panda_4_clean front 0.278 mm (issue 20's table); none for dinova_1 (not in ``shared``).
 
 Models: the Pandas use the embedded Panda (with its inertials) with the tool point at MUKCa's ball
-(``bench_common.mukca_panda``); the Gen3 lite uses ``tests/data/mukca/gen3lite_ball.yaml`` (its joint axes match the
-embedded Gen3 lite, whose published inertials it takes: every model runs; its exported URDF goes to the ball,
-the chain end whose tool point is the file's).
+(``bench_common.mukca_panda``); the Gen3 lite is MUKCa's ``gen3lite.urdf`` to ``ball_link``, as a user imports it (its
+own inertials: every model runs; until stop 10 the hand-written ``tests/data/mukca/gen3lite_ball.yaml``, without the
+Hayati beta the URDF's nearly parallel joints 2 and 3 get).
 
     .venv/bin/python bench/mukca.py [--data ../shared/data/mukca] [--robots panda_2_clean ...] [--no-urdf]
         [--mukca-runs DIR] [--mukca-lopo-runs DIR]
