@@ -42,7 +42,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         type=at_most(1000.0, "(a factor)"),
         default=4.0,
         help="refuse a fit that moves the tool point more than this many times what a real arm's errors "
-        "(1 mm, 0.2 deg) typically do (a factor; 4: about 24 mm on the Panda)",
+        "(1 mm, 0.2 deg, a joint's zero 1 deg) typically do (a factor; 4: about 62 mm on the Panda)",
     )
     parser.add_argument(
         "--force",
