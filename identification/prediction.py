@@ -44,7 +44,7 @@ from .build import build_problem
 from .gauge import anchor_spread
 from .identifiability import Identifiability, normal_inverse, symmetric_root
 from .joint_error import LENGTH, draw, field_root, seen_fields, tool_fields
-from .problem import NOISE, SIGMA_FLOOR, CalibrationProblem, prior_std
+from .problem import NOISE, SIGMA_FLOOR, CalibrationProblem, prior_std, tolerance
 from .pruning import prune
 from .synthetic import project_to_point
 
@@ -285,7 +285,7 @@ def deviation_root(
     dropped = np.setdiff1d(lin.free, free)
     if dropped.size:  # barely excited parameters left at nominal: the fit absorbs what it can
         cols = [int(np.flatnonzero(lin.free == i)[0]) for i in dropped]
-        spread = unseen_scale * prior_std(model)[dropped]
+        spread = unseen_scale * tolerance(model)[dropped]  # pruned against it: a zero may be 1 deg off
         bias = np.zeros((model.n_params, dropped.size))
         moved = np.zeros((pruned.n_residuals, len(cols)))  # their data columns in the pruned problem's rows
         moved[~pruned.prior_rows()] = lin.jacobian(x_lin)[~lin.prior_rows()][:, cols]

@@ -173,3 +173,20 @@ def test_the_draws_root_does_not_depend_on_how_eigh_signs_its_vectors() -> None:
     wide_again[:12] = again
     assert socket_spreads(panda, wide, q, 1e-4)[0] == pytest.approx(socket_spreads(panda, wide_again, q, 1e-4)[0],
                                                                     rel=1e-6)
+
+
+def test_a_parameter_left_at_nominal_is_charged_at_its_tolerance() -> None:
+    """What the calibration left at nominal is charged at what pruning judged it against: a joint's zero at its
+    1 deg tolerance (stop 10: a real arm's zero is 1-3 deg off), a length at its 1 mm prior spread."""
+    from spherecal.identification.build import build_problem
+    from spherecal.identification.prediction import deviation_root
+    from spherecal.identification.problem import ZERO_TOLERANCE
+
+    panda = load_robot("panda")
+    dataset, spec = make_dataset(panda, per_fixture=30, rng=np.random.default_rng(0))
+    problem = build_problem(panda, dataset, spec)
+    left = [panda.param_index("theta4"), panda.param_index("d3")]
+    root, *_ = deviation_root(panda, problem, 3e-4, free=np.setdiff1d(problem.free, left))
+    std = np.sqrt((root**2).sum(axis=1))
+    assert std[left[0]] == pytest.approx(ZERO_TOLERANCE, rel=1e-9) and ZERO_TOLERANCE == pytest.approx(np.deg2rad(1))
+    assert std[left[1]] == pytest.approx(1e-3, rel=1e-9)
