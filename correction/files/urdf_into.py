@@ -99,8 +99,10 @@ def _check_same_arm(model: RobotModel, nominal: RobotModel, source: str, names: 
         raise ExportError(
             f"{source}: joint names {nominal.extras['joint_names']} differ from the calibrated model's {list(names)}"
         )
-    # a calibration of this URDF's tip whose samples put the ball elsewhere: the arms are compared alone
-    error = _tool_point_gap(arm_of(model, nominal), nominal)
+    # a calibration of this URDF's tip whose samples put the ball elsewhere: the arms are compared alone, and with
+    # the URDF's joint zeros (a calibration moves a zero by degrees, a real arm's are 1-3 deg off: dinova_2's 3 deg
+    # put its tool points 51 mm from the URDF's; another robot differs in its lengths)
+    error = _tool_point_gap(with_zeros_of(arm_of(model, nominal), nominal), nominal)
     if error > SAME_ROBOT_TOL:
         _refuse_new_tool(model, source, f"{nominal.extras['urdf']['tip_link']!r} is {error * 1e3:.0f} mm from it")
         raise ExportError(
@@ -179,6 +181,18 @@ def _refuse_new_tool(model: RobotModel, source: str, why: str) -> None:
     )
 
 
+def with_zeros_of(model: RobotModel, reference: RobotModel) -> RobotModel:
+    """``model`` with ``reference``'s joint zeros (``theta_i``) when both describe their joints alike (convention,
+    Hayati betas, parameter names); else ``model`` as it is."""
+    if (model.convention, model.hayati, model.param_names) != (reference.convention, reference.hayati,
+                                                                reference.param_names):
+        return model
+    zeros = [model.param_index(f"theta{i + 1}") for i in range(model.n_joints)]
+    params = model.params.copy()
+    params[zeros] = reference.params[zeros]
+    return model.with_params(params)
+
+
 def _tool_point_gap(model: RobotModel, nominal: RobotModel) -> float:
     """Largest tool-point distance [m] between two arms after the best rigid fit (200 seeded configurations)."""
     q = model.random_configurations(200, np.random.default_rng(0))
@@ -208,7 +222,7 @@ def _ends_at(model: RobotModel, tree: UrdfTree, base_link: str | None) -> list[s
                 nominal = urdf_model(tree, leaf, base_link)
         except RobotFileError:
             continue
-        if nominal.n_joints == model.n_joints and _tool_point_gap(model, nominal) <= SAME_ROBOT_TOL:
+        if nominal.n_joints == model.n_joints and _tool_point_gap(with_zeros_of(model, nominal), nominal) <= SAME_ROBOT_TOL:
             matching.append(leaf)
     return matching
 

@@ -263,3 +263,26 @@ def test_a_calibration_of_another_description_of_the_arm_goes_to_the_chain_end_a
     with pytest.raises(ExportError, match="field 'tip_link': the calibrated file's chain 'world' -> 'tool_ee' is not "
                                           "in this URDF .* none of its chain's ends is at the calibrated tool point"):
         urdf_into(other, _cut_after_flange(_text("panda")), "flange.urdf")
+
+
+def test_a_joint_zero_moved_by_degrees_is_still_this_arm(rng):
+    """A calibration moves a joint's zero by degrees (real Gen3 lites: 1-3 deg; dinova_2's -3 deg put its tool points
+    51 mm from the URDF's, past the 50 mm that tells another robot, and export --into refused its own arm): the arms
+    are compared with the URDF's zeros, the written URDF carries the calibrated zero, and another robot (a link 0.3 m
+    longer) is still refused."""
+    nominal, calibrated = _calibrated("gen3lite", "modified", rng)
+    params = calibrated.params.copy()
+    params[calibrated.param_index("theta2")] += np.deg2rad(6.0)
+    moved = calibrated.with_params(params)
+    written = urdf_into(moved, _text("gen3lite"), "gen3lite.urdf")
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", NearlyParallelAxesWarning)
+        back = urdf_model(parse_urdf(written, "written"), tip_link="ball_link", convention="modified")
+    q = moved.random_configurations(50, rng)
+    assert np.abs(tool_point(back, q) - tool_point(moved, q)).max() < 1e-6
+    bigger = ur5e_urdf().replace("-0.425 0 0", "-0.725 0 0")
+    _, ur5e = _calibrated("ur5e", "modified", rng)
+    params = ur5e.params.copy()
+    params[ur5e.param_index("theta2")] += np.deg2rad(6.0)
+    with pytest.raises(ExportError, match="not the calibrated robot"):
+        urdf_into(ur5e.with_params(params), bigger, "bigger.urdf")
