@@ -222,7 +222,9 @@ def _ends_at(model: RobotModel, tree: UrdfTree, base_link: str | None) -> list[s
                 nominal = urdf_model(tree, leaf, base_link)
         except RobotFileError:
             continue
-        if nominal.n_joints == model.n_joints and _tool_point_gap(with_zeros_of(model, nominal), nominal) <= SAME_ROBOT_TOL:
+        if nominal.n_joints != model.n_joints:
+            continue
+        if _tool_point_gap(with_zeros_of(model, nominal), nominal) <= SAME_ROBOT_TOL:
             matching.append(leaf)
     return matching
 
