@@ -343,7 +343,8 @@ def calibrate(
         try:
             checked.raise_if_inconsistent()
         except InconsistentDataError as refused:
-            raise InconsistentDataError(f"{refused}{hint}{_already_calibrated(nominal, checked)}") from None
+            raise InconsistentDataError(f"{refused}{hint}{_already_calibrated(nominal, checked)}",
+                                        refused.moved) from None
     clock = time.perf_counter()
     check_plausible(problem, params, max_change)
     model = problem.model.with_params(params)

@@ -10,7 +10,17 @@ from spherecal.correction.errors import SpherecalError
 
 
 class InconsistentDataError(SpherecalError):
-    """The samples, fixtures and declared noise contradict each other, or the result cannot beat nominal."""
+    """The samples, fixtures and declared noise contradict each other, or the result cannot beat nominal.
+
+    Attributes:
+        moved: fixtures the refusal advises leaving out (their residual trends with recording order: the socket or
+            the ball moved while they were recorded); the workflow says what leaving them out gives
+            (:func:`.workflow.run_workflow`).
+    """
+
+    def __init__(self, message: str, moved: tuple[str, ...] = ()) -> None:
+        super().__init__(message)
+        self.moved = tuple(moved)
 
 
 @dataclass(frozen=True)
@@ -68,30 +78,37 @@ class SelfCheck:
     def refusal(self) -> str:
         """The one line of a refusal ("" when consistent): the culprit, else the failed level or
         prediction figure, else the most inconsistent group with the note that no single one explains it."""
+        return self._refusal()[0]
+
+    def _refusal(self) -> tuple[str, tuple[str, ...]]:
+        """(:attr:`refusal`, the fixtures whose trend it names and so advises leaving out)."""
         failed = self.failed
         if not failed:
-            return ""
+            return "", ()
         if self.culprit is not None:
-            return self.culprit.message
+            return self.culprit.message, ()
         figures = [f for f in failed if f.check in ("residual level", "prediction")]
         if figures:
             # a model that does not describe the arm moves every residual: its trends are no moved socket to leave out
             alien = figures[0].figures.get("not_a_socket", False)
-            trends = [] if alien else [_without_location(f.message) for f in self.findings if f.figures.get("trend")]
-            return "; ".join([figures[0].message, *trends])
+            trends = [] if alien else [f for f in self.findings if f.figures.get("trend")]
+            return ("; ".join([figures[0].message, *(_without_location(f.message) for f in trends)]),
+                    tuple(f.check.removeprefix("trend ") for f in trends))
         worst = max(failed, key=lambda f: f.figures.get("statistic", 0.0) - f.figures.get("dof", 0))
         others = len(failed) - 1
         trend = next((f for f in self.findings if f.figures.get("trend") and worst.check.endswith(
             " " + f.check.removeprefix("trend "))), None)
         text = worst.message + (f"; {_without_location(trend.message)}" if trend is not None else "")
+        moved = () if trend is None else (trend.check.removeprefix("trend "),)
         if not others:
-            return text
-        return f"{text}; {others} other check(s) failed too and no single one explains the data"
+            return text, moved
+        return f"{text}; {others} other check(s) failed too and no single one explains the data", moved
 
     def raise_if_inconsistent(self) -> None:
-        """Raises :class:`InconsistentDataError` with :attr:`refusal` unless consistent."""
+        """Raises :class:`InconsistentDataError` with :attr:`refusal` (and the fixtures it advises leaving out)
+        unless consistent."""
         if not self.consistent:
-            raise InconsistentDataError(self.refusal)
+            raise InconsistentDataError(*self._refusal())
 
     @property
     def warnings(self) -> tuple[str, ...]:

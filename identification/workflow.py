@@ -133,7 +133,7 @@ class WorkflowResult:
 
 def run_workflow(nominal: RobotModel, dataset: Dataset, spec: FixtureSpec | None,
                  options: WorkflowOptions = WorkflowOptions(), start: RobotModel | None = None,
-                 inputs: dict | None = None) -> WorkflowResult:
+                 inputs: dict | None = None, try_remedy: bool = True) -> WorkflowResult:
     """Deduplicate, subsample, select the model, calibrate and assemble the result block.
 
     Args:
@@ -144,6 +144,9 @@ def run_workflow(nominal: RobotModel, dataset: Dataset, spec: FixtureSpec | None
         start: start of the final optimisation (default ``nominal``; rigid or elastic as chosen).
         inputs: name -> input file (a :class:`~pathlib.Path`, recorded with its digest) or value, for
             the provenance block (``correction.files.provenance.provenance``).
+        try_remedy: a refusal that advises leaving out fixtures whose residual trends with recording order says
+            what that gives: this workflow is run once more without them, and the refusal ends with its verdict
+            (the rest written, or refused too), so that the advice is never a loop.
 
     Returns:
         The :class:`WorkflowResult`.
@@ -151,6 +154,7 @@ def run_workflow(nominal: RobotModel, dataset: Dataset, spec: FixtureSpec | None
     Raises:
         SpherecalError: the data cannot support the calibration (see :func:`.calibrate.calibrate`).
     """
+    recorded = (dataset, spec)  # as given, for the remedy's run
     dataset, spec = exclude_fixtures(dataset, spec, options.exclude_fixtures)
     as_read = dataset
     read = dataset.n_samples
@@ -186,7 +190,10 @@ def run_workflow(nominal: RobotModel, dataset: Dataset, spec: FixtureSpec | None
             noise_declared=options.noise is not None,
         )
     except (InconsistentDataError, ImplausibleCalibrationError) as refused:
-        raise _named_cause(refused, nominal, dataset, spec) from None
+        named = _named_cause(refused, nominal, dataset, spec)
+        if named is refused and try_remedy and getattr(refused, "moved", ()):
+            named = _remedy_tried(refused, given, *recorded, options, start)
+        raise named from None
     if tool_note is not None:  # 'before' is the robot file as given, not the tool the samples showed
         before = build_problem(given, dataset, spec, noise=options.fit_noise).start_distances()
         result = replace(result, residual_before=before, warnings=(tool_note, *result.warnings))
@@ -211,6 +218,25 @@ def _named_cause(refused: SpherecalError, nominal: RobotModel, dataset: Dataset,
     samples of two sockets under one name, samples in the wrong socket, a wrong known distance), if any."""
     cause = misplaced(nominal, dataset, spec)
     return refused if cause is None else type(refused)(cause)
+
+
+def _remedy_tried(refused: InconsistentDataError, nominal: RobotModel, dataset: Dataset, spec: FixtureSpec | None,
+                  options: WorkflowOptions, start: RobotModel | None) -> InconsistentDataError:
+    """``refused``, which advises leaving out the fixtures it names as moved (:attr:`.InconsistentDataError.moved`),
+    ending with what that gives: the workflow run again without them either writes the rest (the advice holds) or
+    refuses it too (then only recording them again helps: a real Gen3 lite's drifting socket left one socket that
+    cannot be calibrated, and the advice sent the user from one refusal to the next)."""
+    names = refused.moved
+    flags = " ".join(f"--exclude-fixture {name}" for name in (*options.exclude_fixtures, *names))
+    them = "it" if len(names) == 1 else "them"
+    without = replace(options, exclude_fixtures=(*options.exclude_fixtures, *names))
+    try:
+        run_workflow(nominal, dataset, spec, without, start=start, try_remedy=False)
+    except SpherecalError:
+        verdict = f"without {them} the rest is refused too (calibrate {flags} says why): record {them} again"
+    else:
+        verdict = f"without {them} the rest is consistent and is written (calibrate {flags})"
+    return InconsistentDataError(f"{refused}; {verdict}", names)
 
 
 def calibrate_files(robot: str, samples: str | Path, fixtures: str | Path | None, out: str | Path,
