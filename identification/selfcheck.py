@@ -309,9 +309,8 @@ def _trends(problem: CalibrationProblem, x: np.ndarray) -> list[Finding]:
         text = (
             f"{samples_location(dataset.select(order))}, field 'fixture': the residual at fixture {name} moves "
             f"{change * 1e3:.3g} mm with recording order over its {len(e)} samples (its distance from the centre "
-            f"goes from {first * 1e3:.3g} to {last * 1e3:.3g} mm): the socket or the ball moved while it was "
-            f"recorded; leave it out (calibrate --exclude-fixture {name}) or record it again"
-        )
+            f"goes from {first * 1e3:.3g} to {last * 1e3:.3g} mm)"
+        )  # what it means and what to do: :func:`.selfcheck_result.trend_text` (a refusal, a written file's warning)
         # a trend is named, not refused: the level and leave-one-out checks judge what it does to the fit
         out.append(Finding(f"trend {name}", True, text if trends else f"no trend at {name}", figures))
     return out

@@ -92,13 +92,13 @@ class SelfCheck:
             # a model that does not describe the arm moves every residual: its trends are no moved socket to leave out
             alien = figures[0].figures.get("not_a_socket", False)
             trends = [] if alien else [f for f in self.findings if f.figures.get("trend")]
-            return ("; ".join([figures[0].message, *(_without_location(f.message) for f in trends)]),
+            return ("; ".join([figures[0].message, *(_without_location(trend_text(f, False)) for f in trends)]),
                     tuple(f.check.removeprefix("trend ") for f in trends))
         worst = max(failed, key=lambda f: f.figures.get("statistic", 0.0) - f.figures.get("dof", 0))
         others = len(failed) - 1
         trend = next((f for f in self.findings if f.figures.get("trend") and worst.check.endswith(
             " " + f.check.removeprefix("trend "))), None)
-        text = worst.message + (f"; {_without_location(trend.message)}" if trend is not None else "")
+        text = worst.message + (f"; {_without_location(trend_text(trend, False))}" if trend is not None else "")
         moved = () if trend is None else (trend.check.removeprefix("trend "),)
         if not others:
             return text, moved
@@ -115,7 +115,8 @@ class SelfCheck:
         """Passed checks the user must still know of: a fixture whose residual trends with recording
         order, residuals above the declared noise judged at the noise they show, a calibration not expected to beat
         nominal far from the recording."""
-        found = [f.message for f in self.findings if f.figures.get("trend") or f.figures.get("honest_noise_warning")]
+        found = [trend_text(f, self.consistent) if f.figures.get("trend") else f.message for f in self.findings
+                 if f.figures.get("trend") or f.figures.get("honest_noise_warning")]
         return tuple(found + [f.figures["region_warning"] for f in self.findings
                               if isinstance(f.figures.get("region_warning"), str)])
 
@@ -136,7 +137,7 @@ class SelfCheck:
         head = "consistent" if self.consistent else f"INCONSISTENT ({len(self.failed)} failed)"
         lines = [f"self-check: {head}"]
         lines += [f"  {f.message}" for f in self.findings if f.check in ("residual level", "prediction") and f.passed]
-        lines += [f"  {f.message}" for f in self.findings if f.figures.get("trend")]
+        lines += [f"  {trend_text(f, self.consistent)}" for f in self.findings if f.figures.get("trend")]
         worst = _worst_group(self.findings)
         if worst is not None:
             figures = worst.figures
@@ -152,6 +153,22 @@ class SelfCheck:
         lines += [f"  unchecked: {f.message}" for f in self.findings if f.figures.get("unchecked")]
         lines += [f"  FAILED: {f.message}" for f in self.failed]
         return lines
+
+
+def trend_text(finding: Finding, kept: bool) -> str:
+    """A trend finding's message (a fixture whose residual trends with recording order) with what it means and what
+    to do: in a refusal, leave the fixture out or record it again; in a written calibration (``kept``), the checks
+    found the fixture consistent with the others and it was kept, and how to leave it out. A written file's warning
+    does not advise leaving it out: on every real Gen3 lite recording written with a trending socket, the
+    calibration with the socket beat the one without it at sockets it never saw (stop 10), and leaving out MUKCa's
+    dinova_2 ``front_rotated_h1`` leaves one socket, which is refused."""
+    name = finding.check.removeprefix("trend ")
+    if kept:
+        return (f"{finding.message}: the socket or the ball moved while it was recorded, or the arm's own error "
+                f"changes along the self-motion; the checks find it consistent with the other fixtures, so it is kept "
+                f"(calibrate --exclude-fixture {name} leaves it out)")
+    return (f"{finding.message}: the socket or the ball moved while it was recorded; leave it out "
+            f"(calibrate --exclude-fixture {name}) or record it again")
 
 
 def _worst_group(findings: tuple[Finding, ...]) -> Finding | None:
