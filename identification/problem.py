@@ -135,7 +135,7 @@ def tolerance(model: RobotModel) -> np.ndarray:
 
 def zero_indices(model: RobotModel) -> np.ndarray:
     """Indices of the joints' zeros ``theta1..thetan`` in ``model.params``."""
-    return np.array([model.param_index(f"theta{i + 1}") for i in range(model.n_joints)], dtype=int)
+    return model.layout.field("theta")
 
 
 @dataclass(frozen=True, eq=False)

@@ -187,7 +187,7 @@ def with_zeros_of(model: RobotModel, reference: RobotModel) -> RobotModel:
     if (model.convention, model.hayati, model.param_names) != (reference.convention, reference.hayati,
                                                                 reference.param_names):
         return model
-    zeros = [model.param_index(f"theta{i + 1}") for i in range(model.n_joints)]
+    zeros = model.layout.field("theta")
     params = model.params.copy()
     params[zeros] = reference.params[zeros]
     return model.with_params(params)
