@@ -187,13 +187,15 @@ def test_a_candidate_whose_own_terms_are_all_barely_excited_is_no_candidate() ->
     from pathlib import Path
 
     from spherecal.correction import load_robot
+    from spherecal.correction.files.samples import JointLimitWarning
     from spherecal.identification.ingest.importers import read_mukca
 
     root = Path(__file__).resolve().parents[1] / "data" / "mukca"
     urdf = root.parent / "urdf" / "gen3lite.urdf"  # MUKCa's, to its ball
     with pytest.warns(Warning):  # joint_3 nearly parallel to joint_2: described with a Hayati beta
         nominal = load_robot(urdf, tip_link="ball_link")
-    recording, spec = read_mukca(root / "dinova_1" / "left", nominal)
+    with pytest.warns(JointLimitWarning, match="used as recorded"):  # q6 beyond gen3lite.urdf's limits, said
+        recording, spec = read_mukca(root / "dinova_1" / "left", nominal)
     dataset = Dataset(labels=recording.labels, q=recording.q, fixture_names=spec.names)
     auto = run_workflow(nominal, dataset, spec, WorkflowOptions())
     dh = run_workflow(nominal, dataset, spec, WorkflowOptions(model="dh"))
