@@ -234,6 +234,8 @@ def _remedy_tried(refused: InconsistentDataError, nominal: RobotModel, dataset: 
         run_workflow(nominal, dataset, spec, without, start=start, try_remedy=False)
     except SpherecalError:
         verdict = f"without {them} the rest is refused too (calibrate {flags} says why): record {them} again"
+    except Exception:  # noqa: BLE001 - the remedy's run is advice: a fault in it must not hide the refusal itself
+        return refused
     else:
         verdict = f"without {them} the rest is consistent and is written (calibrate {flags})"
     return InconsistentDataError(f"{refused}; {verdict}", names)
