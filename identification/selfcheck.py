@@ -301,15 +301,16 @@ def _trends(problem: CalibrationProblem, x: np.ndarray) -> list[Finding]:
         std = np.sqrt((rest**2).sum(axis=0) / max(len(e) - 2, 1)) / np.sqrt(k @ k)
         t = float(np.max(np.abs(slope) / np.maximum(std, 1e-15)))
         change = float(np.linalg.norm(slope) * (len(e) - 1))
-        distance = np.linalg.norm(e, axis=1)
-        first, last = np.polyval(np.polyfit(k, distance, 1), [k[0], k[-1]])
+        # the fitted line's residual at the first and the last sample: its length, never negative (a line fitted to
+        # the distances went below zero on a socket that drifted through its centre)
+        first, last = np.linalg.norm(e.mean(axis=0) + np.outer(k[[0, -1]], slope), axis=1)
         trends = t > TREND_T and change > TREND_CHANGE * problem.noise
         figures = {"t": t, "change_mm": change * 1e3, "first_mm": float(first) * 1e3, "last_mm": float(last) * 1e3,
                    "samples": int(len(e)), "trend": bool(trends)}
         text = (
             f"{samples_location(dataset.select(order))}, field 'fixture': the residual at fixture {name} moves "
-            f"{change * 1e3:.3g} mm with recording order over its {len(e)} samples (its distance from the centre "
-            f"goes from {first * 1e3:.3g} to {last * 1e3:.3g} mm)"
+            f"{change * 1e3:.3g} mm with recording order over its {len(e)} samples (from {first * 1e3:.3g} mm off "
+            f"the centre at the first to {last * 1e3:.3g} mm off at the last)"
         )  # what it means and what to do: :func:`.selfcheck_result.trend_text` (a refusal, a written file's warning)
         # a trend is named, not refused: the level and leave-one-out checks judge what it does to the fit
         out.append(Finding(f"trend {name}", True, text if trends else f"no trend at {name}", figures))

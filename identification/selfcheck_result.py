@@ -86,23 +86,31 @@ class SelfCheck:
         if not failed:
             return "", ()
         if self.culprit is not None:
-            return self.culprit.message, ()
+            return self._with_trend(self.culprit)
         figures = [f for f in failed if f.check in ("residual level", "prediction")]
         if figures:
             # a model that does not describe the arm moves every residual: its trends are no moved socket to leave out
             alien = figures[0].figures.get("not_a_socket", False)
-            trends = [] if alien else [f for f in self.findings if f.figures.get("trend")]
+            trends = [] if alien else sorted((f for f in self.findings if f.figures.get("trend")),
+                                             key=lambda f: -f.figures.get("change_mm", 0.0))  # strongest first
             return ("; ".join([figures[0].message, *(_without_location(trend_text(f, False)) for f in trends)]),
                     tuple(f.check.removeprefix("trend ") for f in trends))
         worst = max(failed, key=lambda f: f.figures.get("statistic", 0.0) - f.figures.get("dof", 0))
         others = len(failed) - 1
-        trend = next((f for f in self.findings if f.figures.get("trend") and worst.check.endswith(
-            " " + f.check.removeprefix("trend "))), None)
-        text = worst.message + (f"; {_without_location(trend_text(trend, False))}" if trend is not None else "")
-        moved = () if trend is None else (trend.check.removeprefix("trend "),)
+        text, moved = self._with_trend(worst)
         if not others:
             return text, moved
         return f"{text}; {others} other check(s) failed too and no single one explains the data", moved
+
+    def _with_trend(self, finding: Finding) -> tuple[str, tuple[str, ...]]:
+        """A fixture's failed ``finding`` with the trend of the same fixture, if its residual trends with recording
+        order (then the fixture is the one to leave out), and that fixture."""
+        trend = next((f for f in self.findings if f.figures.get("trend") and finding.check.endswith(
+            " " + f.check.removeprefix("trend "))), None)
+        if trend is None:
+            return finding.message, ()
+        return (f"{finding.message}; {_without_location(trend_text(trend, False))}",
+                (trend.check.removeprefix("trend "),))
 
     def raise_if_inconsistent(self) -> None:
         """Raises :class:`InconsistentDataError` with :attr:`refusal` (and the fixtures it advises leaving out)

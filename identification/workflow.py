@@ -222,23 +222,33 @@ def _named_cause(refused: SpherecalError, nominal: RobotModel, dataset: Dataset,
 
 def _remedy_tried(refused: InconsistentDataError, nominal: RobotModel, dataset: Dataset, spec: FixtureSpec | None,
                   options: WorkflowOptions, start: RobotModel | None) -> InconsistentDataError:
-    """``refused``, which advises leaving out the fixtures it names as moved (:attr:`.InconsistentDataError.moved`),
-    ending with what that gives: the workflow run again without them either writes the rest (the advice holds) or
-    refuses it too (then only recording them again helps: a real Gen3 lite's drifting socket left one socket that
-    cannot be calibrated, and the advice sent the user from one refusal to the next)."""
+    """``refused``, which advises leaving out the fixtures it names as moved (:attr:`.InconsistentDataError.moved`,
+    strongest trend first), ending with what that gives. The workflow runs again without the strongest, then without
+    the two strongest, ..., until the rest is written (the advice holds for those: the others are not left out, a
+    socket that did not move keeps its samples and its known distances) or every one is left out and the rest is
+    refused too (then leaving them out does not help: a real Gen3 lite's drifting socket left one socket that cannot
+    be calibrated, and the advice sent the user from one refusal to the next)."""
     names = refused.moved
-    flags = " ".join(f"--exclude-fixture {name}" for name in (*options.exclude_fixtures, *names))
+    for count in range(1, len(names) + 1):
+        left_out = names[:count]
+        flags = " ".join(f"--exclude-fixture {name}" for name in (*options.exclude_fixtures, *left_out))
+        without = replace(options, exclude_fixtures=(*options.exclude_fixtures, *left_out))
+        try:
+            done = run_workflow(nominal, dataset, spec, without, start=start, try_remedy=False)
+        except SpherecalError:
+            continue
+        except Exception:  # noqa: BLE001 - the remedy's run is advice: a fault in it must not hide the refusal itself
+            return refused
+        them = ", ".join(left_out) if count < len(names) else ("it" if count == 1 else "them")
+        check = done.result.selfcheck
+        said = len(done.result.warnings) + (len(check.warnings) if check is not None else 0)
+        warned = f", with {said} warning{'s' * (said > 1)}" if said else ""
+        return InconsistentDataError(f"{refused}; without {them} the rest is consistent and is written{warned} "
+                                     f"(calibrate {flags})", left_out)
     them = "it" if len(names) == 1 else "them"
-    without = replace(options, exclude_fixtures=(*options.exclude_fixtures, *names))
-    try:
-        run_workflow(nominal, dataset, spec, without, start=start, try_remedy=False)
-    except SpherecalError:
-        verdict = f"without {them} the rest is refused too (calibrate {flags} says why): record {them} again"
-    except Exception:  # noqa: BLE001 - the remedy's run is advice: a fault in it must not hide the refusal itself
-        return refused
-    else:
-        verdict = f"without {them} the rest is consistent and is written (calibrate {flags})"
-    return InconsistentDataError(f"{refused}; {verdict}", names)
+    flags = " ".join(f"--exclude-fixture {name}" for name in (*options.exclude_fixtures, *names))
+    return InconsistentDataError(f"{refused}; leaving {them} out does not help: without {them} the rest is refused too "
+                                 f"(calibrate {flags} says why)", names)
 
 
 def calibrate_files(robot: str, samples: str | Path, fixtures: str | Path | None, out: str | Path,

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from types import SimpleNamespace
+
 import pytest
 
 import spherecal.identification.workflow as workflow
@@ -11,30 +13,49 @@ from spherecal.identification.selfcheck_result import Finding, InconsistentDataE
 from spherecal.identification.workflow import WorkflowOptions
 
 
-def _refused() -> InconsistentDataError:
-    return InconsistentDataError("samples.csv: rows 1-20, field 'fixture': ... leave it out", ("P2",))
+def _refused(*moved: str) -> InconsistentDataError:
+    return InconsistentDataError("samples.csv: rows 1-20, field 'fixture': ... leave it out", moved or ("P2",))
 
 
-@pytest.mark.parametrize(("outcome", "verdict"), [
-    (None, "without it the rest is consistent and is written (calibrate --exclude-fixture P1 --exclude-fixture P2)"),
-    (DatasetError("samples.csv: field 'fixture': --exclude-fixture leaves no fixture"),
-     "without it the rest is refused too (calibrate --exclude-fixture P1 --exclude-fixture P2 says why): record it "
-     "again"),
+def _written(warnings: int = 0):
+    result = SimpleNamespace(warnings=("w",) * warnings, selfcheck=None)
+    return SimpleNamespace(result=result)
+
+
+@pytest.mark.parametrize(("writes", "verdict", "advised"), [
+    ({("P1", "P2")}, "without P2 the rest is consistent and is written (calibrate --exclude-fixture P1 "
+                     "--exclude-fixture P2)", ("P2",)),
+    ({("P1", "P2", "P3")}, "without them the rest is consistent and is written (calibrate --exclude-fixture P1 "
+                           "--exclude-fixture P2 --exclude-fixture P3)", ("P2", "P3")),
+    (set(), "leaving them out does not help: without them the rest is refused too (calibrate --exclude-fixture P1 "
+            "--exclude-fixture P2 --exclude-fixture P3 says why)", ("P2", "P3")),
 ])
-def test_the_remedy_is_run_without_the_named_fixtures_and_its_verdict_ends_the_refusal(monkeypatch, outcome,
-                                                                                       verdict) -> None:
-    seen = {}
+def test_the_remedy_leaves_out_the_strongest_trends_first_and_its_verdict_ends_the_refusal(monkeypatch, writes,
+                                                                                          verdict, advised) -> None:
+    """Two drifting sockets named, strongest first (P2): without P2 alone, then without both; a socket that did not
+    move keeps its samples when leaving out the stronger one is enough (a review: a refusal had named four sockets,
+    two of them untouched, and its command wrote the rest from 2 of 6)."""
+    tried = []
 
     def run(nominal, dataset, spec, options, start=None, try_remedy=True):
-        seen.update(excluded=options.exclude_fixtures, again=try_remedy)
-        if outcome is not None:
-            raise outcome
+        tried.append((options.exclude_fixtures, try_remedy))
+        if options.exclude_fixtures not in writes:
+            raise DatasetError("samples.csv: refused")
+        return _written()
 
     monkeypatch.setattr(workflow, "run_workflow", run)
-    said = workflow._remedy_tried(_refused(), load_robot("panda"), None, None,
+    said = workflow._remedy_tried(_refused("P2", "P3"), load_robot("panda"), None, None,
                                   WorkflowOptions(exclude_fixtures=("P1",)), None)
-    assert seen == {"excluded": ("P1", "P2"), "again": False}  # the user's exclusions kept; tried once, not again
-    assert str(said).endswith("leave it out; " + verdict) and said.moved == ("P2",)
+    assert tried[0] == (("P1", "P2"), False)  # the user's exclusions kept; the remedy is not tried again inside
+    assert len(tried) == (1 if advised == ("P2",) else 2)
+    assert str(said).endswith("leave it out; " + verdict) and said.moved == advised
+
+
+def test_the_verdict_counts_the_warnings_of_what_would_be_written(monkeypatch) -> None:
+    monkeypatch.setattr(workflow, "run_workflow", lambda *args, **kwargs: _written(2))
+    said = workflow._remedy_tried(_refused(), load_robot("panda"), None, None, WorkflowOptions(), None)
+    assert str(said).endswith("without it the rest is consistent and is written, with 2 warnings "
+                              "(calibrate --exclude-fixture P2)")
 
 
 def test_a_fault_in_the_remedy_run_leaves_the_refusal_as_it_was(monkeypatch) -> None:
@@ -46,9 +67,31 @@ def test_a_fault_in_the_remedy_run_leaves_the_refusal_as_it_was(monkeypatch) -> 
     assert workflow._remedy_tried(refused, load_robot("panda"), None, None, WorkflowOptions(), None) is refused
 
 
-def _trend(name: str) -> Finding:
+def _trend(name: str, change_mm: float = 6.0) -> Finding:
     return Finding(f"trend {name}", True, f"samples.csv: rows 21-40, field 'fixture': the residual at fixture {name} "
-                   "moves 6 mm with recording order", {"trend": True})
+                   f"moves {change_mm:g} mm with recording order", {"trend": True, "change_mm": change_mm})
+
+
+def test_the_fixtures_to_leave_out_come_strongest_trend_first() -> None:
+    level = Finding("residual level", False, "samples.csv: rows 1-60: residual noise 2 mm per axis")
+    check = SelfCheck((level, _trend("P2", 5.0), _trend("P3", 9.0)), 3e-4, 2e-3)
+    with pytest.raises(InconsistentDataError) as refused:
+        check.raise_if_inconsistent()
+    assert refused.value.moved == ("P3", "P2")
+
+
+def test_a_fixture_blamed_alone_is_advised_out_when_it_also_drifts() -> None:
+    """A review drifted one socket of a real Panda by 0.5-2 deg over its presses: the refusal blamed that fixture
+    alone ('the samples at fixture X disagree ...') and said nothing of its trend nor of leaving it out."""
+    blamed = Finding("fixture P2", False, "samples.csv: rows 21-40, field 'fixture': the samples at fixture P2 "
+                     "disagree with the other fixtures by 3 mm rms", culprit=True)
+    check = SelfCheck((blamed, _trend("P2"), _trend("P3")), 3e-4, 3e-4)
+    with pytest.raises(InconsistentDataError) as refused:
+        check.raise_if_inconsistent()
+    assert refused.value.moved == ("P2",)
+    assert str(refused.value).endswith("by 3 mm rms; the residual at fixture P2 moves 6 mm with recording order: the "
+                                       "socket or the ball moved while it was recorded; leave it out (calibrate "
+                                       "--exclude-fixture P2) or record it again")
 
 
 @pytest.mark.parametrize("alien", [False, True])
