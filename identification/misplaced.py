@@ -46,13 +46,16 @@ DISTANCE_OFF = 0.020
 MAX_SCALE = 0.025
 
 
-def misplaced(nominal: RobotModel, dataset: Dataset, spec: FixtureSpec | None = None) -> str | None:
+def misplaced(nominal: RobotModel, dataset: Dataset, spec: FixtureSpec | None = None,
+              discounted: bool = False) -> str | None:
     """The first gross misplacement the nominal model shows (see the module), as one line, or None.
 
     Args:
         nominal: the robot (with the tool the samples show: :func:`.tool_fit.recentred_tool`).
         dataset: the samples calibrated.
         spec: known distances (None: none).
+        discounted: the fit already used a robust loss (``soft_l1``, ``huber``): far samples are not advised to be
+            discounted by one (a review: the advice repeated the loss the user had given).
 
     Returns:
         ``"samples.csv: rows 7-36 and 69-98, field 'fixture': ..."``, or None (also when the nominal model spreads
@@ -71,7 +74,7 @@ def misplaced(nominal: RobotModel, dataset: Dataset, spec: FixtureSpec | None = 
         found = _two_runs(dataset, points, np.flatnonzero(index == j), name)
         if found:
             return found
-    found = _far_samples(dataset, points, middles, scales)
+    found = _far_samples(dataset, points, middles, scales, discounted)
     if found:
         return found
     return _wrong_distance(spec, middles, scales) if spec is not None else None
@@ -101,7 +104,8 @@ def _two_runs(dataset: Dataset, points: np.ndarray, rows: np.ndarray, name: str)
     return None
 
 
-def _far_samples(dataset: Dataset, points: np.ndarray, middles: dict, scales: dict) -> str | None:
+def _far_samples(dataset: Dataset, points: np.ndarray, middles: dict, scales: dict,
+                 discounted: bool = False) -> str | None:
     """Samples far from their fixture's middle point; when one lies near another fixture's, says so."""
     names = dataset.fixture_names
     far: list[int] = []
@@ -128,8 +132,8 @@ def _far_samples(dataset: Dataset, points: np.ndarray, middles: dict, scales: di
     counted = "1 sample lies" if len(far_rows) == 1 else f"{len(far_rows)} samples lie"
     return (f"{dataset.source or 'samples'}: {row_list(dataset, far_rows)}, field 'fixture': {counted} "
             f"{span} mm from the rest of their fixture at the nominal model (the "
-            f"rest within {typical * 1e3:.2g} mm of its middle, as a real arm's errors put them){where}; remove them, "
-            "or calibrate --loss soft_l1 to discount them")
+            f"rest within {typical * 1e3:.2g} mm of its middle, as a real arm's errors put them){where}; remove them"
+            + ("" if discounted else ", or calibrate --loss soft_l1 to discount them"))
 
 
 def _wrong_distance(spec: FixtureSpec, middles: dict, scales: dict) -> str | None:

@@ -175,7 +175,7 @@ def run_workflow(nominal: RobotModel, dataset: Dataset, spec: FixtureSpec | None
         selection = select_model(options.model, fit, nominal, dataset, spec, seed=options.seed,
                                  robust=candidate_loss != "linear")
     except (InconsistentDataError, ImplausibleCalibrationError) as refused:
-        raise _named_cause(refused, nominal, dataset, spec) from None
+        raise _named_cause(refused, nominal, dataset, spec, options) from None
     begin = start_for(selection.chosen, nominal)
     if start is not None:
         warm = start_for(selection.chosen, start)
@@ -190,7 +190,7 @@ def run_workflow(nominal: RobotModel, dataset: Dataset, spec: FixtureSpec | None
             noise_declared=options.noise is not None,
         )
     except (InconsistentDataError, ImplausibleCalibrationError) as refused:
-        named = _named_cause(refused, nominal, dataset, spec)
+        named = _named_cause(refused, nominal, dataset, spec, options)
         if named is refused and try_remedy and getattr(refused, "moved", ()):
             named = _remedy_tried(refused, given, *recorded, options, start)
         raise named from None
@@ -212,11 +212,11 @@ def run_workflow(nominal: RobotModel, dataset: Dataset, spec: FixtureSpec | None
                           block)
 
 
-def _named_cause(refused: SpherecalError, nominal: RobotModel, dataset: Dataset,
-                 spec: FixtureSpec | None) -> SpherecalError:
+def _named_cause(refused: SpherecalError, nominal: RobotModel, dataset: Dataset, spec: FixtureSpec | None,
+                 options: WorkflowOptions) -> SpherecalError:
     """A refusal with the cause the nominal model already shows in its place (:func:`.misplaced.misplaced`:
     samples of two sockets under one name, samples in the wrong socket, a wrong known distance), if any."""
-    cause = misplaced(nominal, dataset, spec)
+    cause = misplaced(nominal, dataset, spec, discounted=options.loss in ("soft_l1", "huber"))
     return refused if cause is None else type(refused)(cause)
 
 

@@ -128,3 +128,19 @@ def test_a_refusal_joining_two_findings_says_where_once() -> None:
     assert _without_location("s.csv: rows 7-26, field 'fixture': the residual at fixture A moves 13.5 mm") == (
         "the residual at fixture A moves 13.5 mm")
     assert _without_location("samples: all rows: residual 2 mm") == "all rows: residual 2 mm"
+
+
+def test_presses_far_off_under_a_robust_loss_are_not_advised_that_loss_again() -> None:
+    # a refusal under --loss soft_l1 ended 'remove them, or calibrate --loss soft_l1 to discount them' (a review,
+    # stop 10: four presses of another placement appended to a socket, three placements): the workflow says whether
+    # the fit already discounted them
+    from spherecal.correction import Dataset
+
+    model = load_robot(PANDA)
+    a, b = _holes("front_center")
+    a = np.vstack([a, _holes("back_left")[0][:4]])  # four presses 0.25 m away
+    dataset = Dataset(labels=np.array(["A"] * len(a) + ["B"] * len(b)), q=np.vstack([a, b]))
+    advised = misplaced(model, dataset)
+    loss = ", or calibrate --loss soft_l1 to discount them"
+    assert "4 samples lie" in advised and advised.endswith("; remove them" + loss)
+    assert misplaced(model, dataset, discounted=True) == advised.removesuffix(loss)
