@@ -145,8 +145,9 @@ def run_workflow(nominal: RobotModel, dataset: Dataset, spec: FixtureSpec | None
         inputs: name -> input file (a :class:`~pathlib.Path`, recorded with its digest) or value, for
             the provenance block (``correction.files.provenance.provenance``).
         try_remedy: a refusal that advises leaving out fixtures whose residual trends with recording order says
-            what that gives: this workflow is run once more without them, and the refusal ends with its verdict
-            (the rest written, or refused too), so that the advice is never a loop.
+            what that gives: this workflow is run again without them (the strongest trend first, then the next, up
+            to all of them), and the refusal ends with its verdict (the rest written without the fewest that
+            suffice, or refused too), so that the advice is never a loop.
 
     Returns:
         The :class:`WorkflowResult`.
