@@ -94,7 +94,7 @@ class SelfCheck:
             trends = [] if alien else sorted((f for f in self.findings if f.figures.get("trend")),
                                              key=lambda f: -f.figures.get("change_mm", 0.0))  # strongest first
             return ("; ".join([figures[0].message, *(_without_location(trend_text(f, False)) for f in trends)]),
-                    tuple(f.check.removeprefix("trend ") for f in trends))
+                    tuple(_fixture_of(f) for f in trends))
         worst = max(failed, key=lambda f: f.figures.get("statistic", 0.0) - f.figures.get("dof", 0))
         others = len(failed) - 1
         text, moved = self._with_trend(worst)
@@ -106,11 +106,11 @@ class SelfCheck:
         """A fixture's failed ``finding`` with the trend of the same fixture, if its residual trends with recording
         order (then the fixture is the one to leave out), and that fixture."""
         trend = next((f for f in self.findings if f.figures.get("trend") and finding.check.endswith(
-            " " + f.check.removeprefix("trend "))), None)
+            " " + _fixture_of(f))), None)
         if trend is None:
             return finding.message, ()
         return (f"{finding.message}; {_without_location(trend_text(trend, False))}",
-                (trend.check.removeprefix("trend "),))
+                (_fixture_of(trend),))
 
     def raise_if_inconsistent(self) -> None:
         """Raises :class:`InconsistentDataError` with :attr:`refusal` (and the fixtures it advises leaving out)
@@ -170,13 +170,18 @@ def trend_text(finding: Finding, kept: bool) -> str:
     does not advise leaving it out: on every real Gen3 lite recording written with a trending socket, the
     calibration with the socket beat the one without it at sockets it never saw (stop 10), and leaving out MUKCa's
     dinova_2 ``front_rotated_h1`` leaves one socket, which is refused."""
-    name = finding.check.removeprefix("trend ")
+    name = _fixture_of(finding)
     if kept:
         return (f"{finding.message}: the socket or the ball moved while it was recorded, or the arm's own error "
                 f"changes along the self-motion; the checks find it consistent with the other fixtures, so it is kept "
                 f"(calibrate --exclude-fixture {name} leaves it out)")
     return (f"{finding.message}: the socket or the ball moved while it was recorded; leave it out "
             f"(calibrate --exclude-fixture {name}) or record it again")
+
+
+def _fixture_of(trend: Finding) -> str:
+    """The fixture a trend finding (check ``"trend NAME"``) is about."""
+    return trend.check.removeprefix("trend ")
 
 
 def _worst_group(findings: tuple[Finding, ...]) -> Finding | None:

@@ -230,9 +230,12 @@ def _remedy_tried(refused: InconsistentDataError, nominal: RobotModel, dataset: 
     refused too (then leaving them out does not help: a real Gen3 lite's drifting socket left one socket that cannot
     be calibrated, and the advice sent the user from one refusal to the next)."""
     names = refused.moved
+
+    def flags(left_out: tuple[str, ...]) -> str:  # the command line of the run without them
+        return " ".join(f"--exclude-fixture {name}" for name in (*options.exclude_fixtures, *left_out))
+
     for count in range(1, len(names) + 1):
         left_out = names[:count]
-        flags = " ".join(f"--exclude-fixture {name}" for name in (*options.exclude_fixtures, *left_out))
         without = replace(options, exclude_fixtures=(*options.exclude_fixtures, *left_out))
         try:
             done = run_workflow(nominal, dataset, spec, without, start=start, try_remedy=False)
@@ -245,11 +248,10 @@ def _remedy_tried(refused: InconsistentDataError, nominal: RobotModel, dataset: 
         said = len(done.result.warnings) + (len(check.warnings) if check is not None else 0)
         warned = f", with {said} warning{'s' * (said > 1)}" if said else ""
         return InconsistentDataError(f"{refused}; without {them} the rest is consistent and is written{warned} "
-                                     f"(calibrate {flags})", left_out)
+                                     f"(calibrate {flags(left_out)})", left_out)
     them = "it" if len(names) == 1 else "them"
-    flags = " ".join(f"--exclude-fixture {name}" for name in (*options.exclude_fixtures, *names))
     return InconsistentDataError(f"{refused}; leaving {them} out does not help: without {them} the rest is refused too "
-                                 f"(calibrate {flags} says why)", names)
+                                 f"(calibrate {flags(names)} says why)", names)
 
 
 def calibrate_files(robot: str, samples: str | Path, fixtures: str | Path | None, out: str | Path,
