@@ -15,6 +15,7 @@ from spherecal.correction.files.samples import Dataset
 from spherecal.correction.layout import COMPLIANCE
 
 from .build import build_problem
+from .fixture_noise import FixtureNoise, fixture_noise
 from .identifiability import Identifiability, normal_inverse, predicted_std
 from .misplaced import misplaced
 from .problem import (
@@ -37,9 +38,10 @@ from .solvers import solve_lm, solve_pso
 
 METHODS: tuple[str, ...] = ("lm", "pso", "pso+lm")
 #: The ``auto`` loss's Huber scale, in multiples of the noise the first (least-squares) fit's residuals show
-#: (:func:`robust_noise`): Rousseeuw and Leroy's 2.5 sigma cut-off of reweighted least squares ("Robust
-#: Regression and Outlier Detection", 1987). Rows within it are least squares, so Gaussian noise loses
-#: almost nothing; a press taken before the ball sat in its socket pulls with a bounded weight.
+#: (:attr:`.FixtureNoise.level`, each fixture's rows weighed to it): Rousseeuw and Leroy's 2.5 sigma cut-off of
+#: reweighted least squares ("Robust Regression and Outlier Detection", 1987). Rows within it are least squares,
+#: so Gaussian noise loses almost nothing; a press taken before the ball sat in its socket pulls with a bounded
+#: weight.
 ROBUST_CUT = 2.5
 #: Largest plausible tool-point change of a calibration, in multiples of what a real arm's
 #: errors (:func:`.problem.tolerance`: 1 mm, 0.2 deg, a joint's zero 1 deg) typically move it (about 15 mm on the
@@ -78,7 +80,9 @@ class CalibrationResult:
         loss: the loss the fit used: ``linear``, ``soft_l1`` or ``huber`` (``auto`` resolves to ``huber``).
         loss_scale: its residual scale [m] (None with ``linear``).
         loss_noise: with ``auto``, the noise per coordinate [m] the least-squares residuals showed
-            (:func:`robust_noise`), of which ``loss_scale`` is :data:`ROBUST_CUT` times; None otherwise.
+            (:attr:`.FixtureNoise.level`), of which ``loss_scale`` is :data:`ROBUST_CUT` times; None otherwise.
+        fixture_noise: with ``auto``, the noise each fixture showed and the weights its rows had in the solves
+            (:mod:`.fixture_noise`); None otherwise.
     """
 
     model: RobotModel
@@ -101,6 +105,7 @@ class CalibrationResult:
     loss: str = "linear"
     loss_scale: float | None = None
     loss_noise: float | None = None
+    fixture_noise: FixtureNoise | None = None
 
     @staticmethod
     def _stats(r: np.ndarray) -> tuple[float, float]:
@@ -146,6 +151,7 @@ class CalibrationResult:
             "effective_unknowns": self.effective_unknowns,
             "loss": self.loss,
             "loss_scale_m": self.loss_scale,
+            **({"fixture_noise": self.fixture_noise.block()} if self.fixture_noise is not None else {}),
             **({"self_check": self.selfcheck.block()} if self.selfcheck is not None else {}),
             "timings_s": {k: float(v) for k, v in self.timings.items()},
         }
@@ -168,15 +174,23 @@ class CalibrationResult:
         share Gaussian noise puts beyond 2.5 sigma (a few bad presses, or residuals with heavy tails)."""
         if self.loss == "linear" or self.loss_scale is None or self.problem is None or self.x is None:
             return []
-        beyond = np.abs(self.problem.sample_errors(self.x)) > self.loss_scale
+        errors = self.problem.sample_errors(self.x)
+        shown = self.fixture_noise
+        if shown is not None:  # each fixture's rows at its weight: the loss's scale is in units of its own noise
+            errors = errors * self.problem.weighted(shown.weights).sample_weights()[:, None]
+        beyond = np.abs(errors) > self.loss_scale
         count = f"{int(beyond.any(axis=1).sum())} of {len(beyond)} samples beyond it weigh less"
         if self.loss_noise is None:
             return [f"loss: {self.loss} at {self.loss_scale * 1e3:.3f} mm (the fit's noise, --noise): {count}"]
         ratio = self.loss_scale / self.loss_noise
         gaussian = 1.0 - (1.0 - math.erfc(ratio / math.sqrt(2.0))) ** 3
-        return [f"loss: {self.loss} at {self.loss_scale * 1e3:.3f} mm, {ratio:g}x the {self.loss_noise * 1e3:.3f} mm "
-                f"per axis the least-squares residuals show by their median: {count} (Gaussian noise puts "
-                f"{100 * gaussian:.1f} % there)"]
+        lines = [f"loss: {self.loss} at {self.loss_scale * 1e3:.3f} mm, {ratio:g}x the {self.loss_noise * 1e3:.3f} mm "
+                 f"per axis the least-squares residuals show by their median: {count} (Gaussian noise puts "
+                 f"{100 * gaussian:.1f} % there)"]
+        if shown is not None and shown.uneven():
+            lines.append(f"fixtures weighed by the noise each shows (per axis, least squares; a quieter socket "
+                         f"counts more): {shown.text()}")
+        return lines
 
     def summary(self) -> str:
         """One screen: residuals before/after, parameter changes with std, fixed parameters, warnings."""
@@ -252,8 +266,8 @@ def calibrate(
             their nominal values.
         seed: seeds PSO.
         loss: ``linear``, ``soft_l1`` or ``huber`` at the scale ``noise`` (``lm`` only), or ``auto``: least
-            squares, then Huber at :data:`ROBUST_CUT` x the noise its residuals show (:func:`robust_noise`)
-            from there (least squares with ``pso``).
+            squares, then from there each fixture's rows weighed by the noise they show and Huber at
+            :data:`ROBUST_CUT` x that noise (:mod:`.fixture_noise`; least squares with ``pso``).
         noise: expected fixture noise [m] (robust-loss scale, distance weight).
         pso_options: keyword arguments of :func:`solve_pso`.
         max_change: largest plausible tool-point change from the start model, in multiples of what
@@ -294,15 +308,17 @@ def calibrate(
         x, timings["pso"] = solution.x, solution.seconds
     # ``auto``: the solves use Huber at the residuals' scale, every figure (pruning, stds, the self-check) reads
     # all samples as least squares does: a press 50 mm off (the wrong socket) is refused and named, not discounted
+    # and weighs each fixture by the noise it shows (:mod:`.fixture_noise`), read from the least-squares fit
     figures = fit_loss = "linear" if loss == "auto" else loss
-    scale = None
+    scale, shown = None, None
     if method in ("lm", "pso+lm"):
         x_start = x
         solution = solve_lm(problem, x, loss=fit_loss)
         x, timings["lm"] = solution.x, solution.seconds
         if loss == "auto":
-            fit_loss, scale = "huber", ROBUST_CUT * robust_noise(problem, x)
-            solution = solve_lm(problem, x, loss=fit_loss, f_scale=scale)
+            shown = fixture_noise(problem, x)
+            fit_loss, scale = "huber", ROBUST_CUT * shown.level
+            solution = solve_lm(problem.weighted(shown.weights), x, loss=fit_loss, f_scale=scale)
             x, timings["lm"] = solution.x, timings["lm"] + solution.seconds
         # The data's own noise decides what it can see, judged near the start (a poorly excited
         # data set lets the first fit wander to a far, wrong basin); re-solve without what it cannot
@@ -312,7 +328,8 @@ def calibrate(
         if pruned is not problem:
             x_restart = pruned.pack(*problem.unpack(x_start))
             problem = pruned
-            solution = solve_lm(problem, x_restart, loss=fit_loss, f_scale=scale)
+            solving = problem if shown is None else problem.weighted(shown.weights)
+            solution = solve_lm(solving, x_restart, loss=fit_loss, f_scale=scale)
             x, timings["lm"] = solution.x, timings["lm"] + solution.seconds
     clock = time.perf_counter()
     problem = problem.reweighted(x)  # a heavy-tailed prior's rows at their curvature here (stds, self-check)
@@ -382,6 +399,7 @@ def calibrate(
         loss=fit_loss,
         loss_scale=None if fit_loss == "linear" else (scale or noise),
         loss_noise=None if scale is None else scale / ROBUST_CUT,
+        fixture_noise=shown,
     )
 
 
@@ -400,8 +418,9 @@ def _far_presses(problem: CalibrationProblem, x: np.ndarray) -> str:
 def robust_noise(problem: CalibrationProblem, x: np.ndarray) -> float:
     """The noise per coordinate [m] the sample residuals at ``x`` show, robustly: 1.4826 x the median absolute
     residual coordinate (the normal distribution's std from its median absolute deviation; a few presses taken
-    before the ball sat in its socket do not move it), at least :data:`.problem.SIGMA_FLOOR`."""
-    return max(1.4826 * float(np.median(np.abs(problem.sample_errors(x)))), SIGMA_FLOOR)
+    before the ball sat in its socket do not move it), at least :data:`.problem.SIGMA_FLOOR`
+    (:attr:`.FixtureNoise.common`)."""
+    return fixture_noise(problem, x).common
 
 
 def check_plausible(problem: CalibrationProblem, params: np.ndarray, max_change: float = MAX_CHANGE) -> None:

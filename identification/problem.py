@@ -161,6 +161,9 @@ class CalibrationProblem:
         prior_centre: (P,) parameters the prior pulls toward (the nominal model's), or None (``model``'s).
         prior_tail: where the prior's tail starts [prior spreads] (inf: Gaussian; :data:`PRIOR_TAIL`).
         prior_curvature: (P,) frozen IRLS weights of the prior rows (:meth:`reweighted`), or None.
+        fixture_weights: ``(fixture, w)`` pairs: that fixture's sample rows are multiplied by ``w`` (the solves of
+            ``--loss auto`` weigh each fixture by the noise it shows, :mod:`.fixture_noise`); a fixture not named,
+            and every one when empty, weighs 1.
     """
 
     model: RobotModel
@@ -179,6 +182,7 @@ class CalibrationProblem:
     prior_centre: np.ndarray | None = None
     prior_tail: float = np.inf
     prior_curvature: np.ndarray | None = None
+    fixture_weights: tuple[tuple[str, float], ...] = ()
     _cache: dict = field(default_factory=dict, repr=False)
 
     # ------------------------------------------------------------------------------ sizes
@@ -378,6 +382,18 @@ class CalibrationProblem:
             return np.ones(len(kept), dtype=bool)
         return kept
 
+    def weighted(self, weights: dict[str, float]) -> CalibrationProblem:
+        """This problem with each fixture's sample rows multiplied by ``weights[fixture]`` (fixture -> w; one not
+        named weighs 1, ``{}`` is unweighted): the same unknowns, another cost."""
+        return replace(self, fixture_weights=tuple((str(k), float(v)) for k, v in weights.items()))
+
+    def sample_weights(self) -> np.ndarray | None:
+        """(K,) the weight of every sample's rows (:attr:`fixture_weights`), or None when unweighted."""
+        if not self.fixture_weights:
+            return None
+        table = dict(self.fixture_weights)
+        return np.array([table.get(name, 1.0) for name in self.dataset.fixture_names])[self.dataset.fixture_index]
+
     def with_samples(self, kept: np.ndarray) -> CalibrationProblem:
         """The problem on the samples ``kept`` (K,) bool (itself when every one is kept)."""
         return self if kept.all() else replace(self, dataset=self.dataset.select(kept), _cache={})
@@ -391,8 +407,11 @@ class CalibrationProblem:
         return a, b, target, delta
 
     def residuals(self, x: np.ndarray) -> np.ndarray:
-        """(M,) residual vector [m]: samples (3 K, x y z per sample), distances, prior rows, anchor."""
-        sample = self.sample_errors(x).ravel()
+        """(M,) residual vector [m]: samples (3 K, x y z per sample; times their fixture's weight, if any), distances,
+        prior rows, anchor."""
+        sample = self.sample_errors(x)
+        weights = self.sample_weights()
+        sample = (sample if weights is None else sample * weights[:, None]).ravel()
         if not self.spec.distances and self.anchor is None and not self.n_prior:
             return sample
         params, centres = self.unpack(x)
@@ -444,6 +463,9 @@ class CalibrationProblem:
             if slot[j] >= 0:
                 delta = centres[j] - point
                 jac[-1, fp + 3 * slot[j] : fp + 3 * slot[j] + 3] = self.distance_weight * delta / np.linalg.norm(delta)
+        weights = self.sample_weights()
+        if weights is not None:
+            jac[: 3 * count] *= np.repeat(weights, 3)[:, None]
         return jac
 
     def centre_dict(self, centres: np.ndarray) -> dict[str, np.ndarray]:
