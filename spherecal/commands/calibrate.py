@@ -24,8 +24,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     add_seed(parser, "subsampling and PSO")
     parser.add_argument(
         "--loss", choices=("auto", "linear", "soft_l1", "huber"), default="auto",
-        help="lm loss (default auto: least squares, then Huber at 2.5x the noise its residuals show, so a press "
-             "taken before the ball sat in its socket pulls with a bounded weight; soft_l1 / huber: at --noise)")
+        help="lm loss (default auto: least squares, then each fixture weighed by the noise its residuals show and "
+             "Huber at 2.5x that noise, so a noisier socket pulls less and a press taken before the ball sat in its "
+             "socket pulls with a bounded weight; soft_l1 / huber: at --noise, every fixture alike)")
     parser.add_argument(
         "--noise", type=positive_noise_mm, default=None,
         help="fixture noise std per axis you know of this recording [mm] (soft_l1 / huber scale, residual check, "
