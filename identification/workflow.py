@@ -172,11 +172,17 @@ def run_workflow(nominal: RobotModel, dataset: Dataset, spec: FixtureSpec | None
         return calibrate(begin, data, fixtures, start=warm, loss=candidate_loss, noise=options.fit_noise,
                          max_change=options.max_change, check=False, prior=options.prior)
 
+    def refusal(refused: SpherecalError) -> SpherecalError:  # its named cause, or the remedy's verdict
+        named = _named_cause(refused, nominal, dataset, spec, options)
+        if named is refused and try_remedy and getattr(refused, "moved", ()):
+            named = _remedy_tried(refused, given, *recorded, options, start)
+        return named
+
     try:
         selection = select_model(options.model, fit, nominal, dataset, spec, seed=options.seed,
                                  robust=candidate_loss != "linear")
     except (InconsistentDataError, ImplausibleCalibrationError) as refused:
-        raise _named_cause(refused, nominal, dataset, spec, options) from None
+        raise refusal(refused) from None
     begin = start_for(selection.chosen, nominal)
     if start is not None:
         warm = start_for(selection.chosen, start)
@@ -191,10 +197,7 @@ def run_workflow(nominal: RobotModel, dataset: Dataset, spec: FixtureSpec | None
             noise_declared=options.noise is not None,
         )
     except (InconsistentDataError, ImplausibleCalibrationError) as refused:
-        named = _named_cause(refused, nominal, dataset, spec, options)
-        if named is refused and try_remedy and getattr(refused, "moved", ()):
-            named = _remedy_tried(refused, given, *recorded, options, start)
-        raise named from None
+        raise refusal(refused) from None
     if tool_note is not None:  # 'before' is the robot file as given, not the tool the samples showed
         before = build_problem(given, dataset, spec, noise=options.fit_noise).start_distances()
         result = replace(result, residual_before=before, warnings=(tool_note, *result.warnings))
