@@ -184,12 +184,14 @@ class CalibrationResult:
             return [f"loss: {self.loss} at {self.loss_scale * 1e3:.3f} mm (the fit's noise, --noise): {count}"]
         ratio = self.loss_scale / self.loss_noise
         gaussian = 1.0 - (1.0 - math.erfc(ratio / math.sqrt(2.0))) ** 3
+        uneven = shown is not None and shown.uneven()
+        shows = ("every fixture's rows show at their weight (below)" if uneven else
+                 "the least-squares residuals show by their median")
         lines = [f"loss: {self.loss} at {self.loss_scale * 1e3:.3f} mm, {ratio:g}x the {self.loss_noise * 1e3:.3f} mm "
-                 f"per axis the least-squares residuals show by their median: {count} (Gaussian noise puts "
-                 f"{100 * gaussian:.1f} % there)"]
-        if shown is not None and shown.uneven():
-            lines.append(f"fixtures weighed by the noise each shows (per axis, least squares; a quieter socket "
-                         f"counts more): {shown.text()}")
+                 f"per axis {shows}: {count} (Gaussian noise puts {100 * gaussian:.1f} % there)"]
+        if uneven:
+            lines.append(f"fixtures weighed by the noise each shows (per axis, by the median of its least-squares "
+                         f"residuals; a quieter socket counts more): {shown.text()}")
         return lines
 
     def summary(self) -> str:
