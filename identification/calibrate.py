@@ -362,8 +362,10 @@ def calibrate(
         try:
             checked.raise_if_inconsistent()
         except InconsistentDataError as refused:
+            # far presses explain it: the remedy is theirs (a crowded socket, or none for a few presses), not the
+            # culprit fixture's (without a trend: a hint is only sought then)
             raise InconsistentDataError(f"{refused}{hint}{_already_calibrated(nominal, checked)}",
-                                        refused.moved or moved_by_hint) from None
+                                        moved_by_hint if hint else refused.moved) from None
     clock = time.perf_counter()
     check_plausible(problem, params, max_change)
     model = problem.model.with_params(params)
@@ -429,8 +431,9 @@ def _far_presses(problem: CalibrationProblem, x: np.ndarray) -> tuple[str, tuple
     if 2 * held >= far.size and held > MOVED_SHARE * total:
         name = dataset.fixture_names[j]
         return (f"{head}; {'all' if held == far.size else held} of them are at fixture {name}, {held} of its {total} "
-                f"samples: too many for presses taken before the ball sat; the socket or the ball moved while it was "
-                f"recorded; leave it out (calibrate --exclude-fixture {name}) or record it again", (name,))
+                f"samples: too many for presses taken before the ball sat; the ball plays in that socket, or the "
+                f"socket or the ball moved while it was recorded; leave it out (calibrate --exclude-fixture {name}) or "
+                f"record it again", (name,))
     return (f"{head}: remove them if the ball was not seated in its socket, or calibrate --loss huber to discount "
             "them", ())
 

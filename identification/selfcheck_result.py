@@ -13,9 +13,9 @@ class InconsistentDataError(SpherecalError):
     """The samples, fixtures and declared noise contradict each other, or the result cannot beat nominal.
 
     Attributes:
-        moved: fixtures the refusal advises leaving out (their residual trends with recording order: the socket or
-            the ball moved while they were recorded); the workflow says what leaving them out gives
-            (:func:`.workflow.run_workflow`).
+        moved: fixtures the refusal names: whose residual trends with recording order (the socket or the ball moved
+            while they were recorded), or the one fixture that alone explains the inconsistency (the culprit); the
+            workflow says what leaving them out gives (:func:`.workflow.run_workflow`).
     """
 
     def __init__(self, message: str, moved: tuple[str, ...] = ()) -> None:
@@ -85,8 +85,10 @@ class SelfCheck:
         failed = self.failed
         if not failed:
             return "", ()
-        if self.culprit is not None:
-            return self._with_trend(self.culprit)
+        if self.culprit is not None:  # a culprit fixture is named for leaving out even without a trend
+            text, moved = self._with_trend(self.culprit)
+            fixture = self.culprit.check.removeprefix("fixture ")
+            return text, moved or ((fixture,) if self.culprit.check.startswith("fixture ") else ())
         figures = [f for f in failed if f.check in ("residual level", "prediction")]
         if figures:
             # a model that does not describe the arm moves every residual: its trends are no moved socket to leave out

@@ -144,10 +144,11 @@ def run_workflow(nominal: RobotModel, dataset: Dataset, spec: FixtureSpec | None
         start: start of the final optimisation (default ``nominal``; rigid or elastic as chosen).
         inputs: name -> input file (a :class:`~pathlib.Path`, recorded with its digest) or value, for
             the provenance block (``correction.files.provenance.provenance``).
-        try_remedy: a refusal that advises leaving out fixtures whose residual trends with recording order says
-            what that gives: this workflow is run again without them (the strongest trend first, then the next, up
-            to all of them), and the refusal ends with its verdict (the rest written without the fewest that
-            suffice, or refused too), so that the advice is never a loop.
+        try_remedy: a refusal that names fixtures to leave out (whose residual trends with recording order, or the
+            one fixture that alone explains the inconsistency) says what that gives: this workflow is run again
+            without them (the strongest trend first, then the next, up to all of them), and the refusal ends with
+            its verdict (the rest written without the fewest that suffice, or refused too), so that the advice is
+            never a loop.
 
     Returns:
         The :class:`WorkflowResult`.
@@ -246,13 +247,13 @@ def _remedy_tried(refused: InconsistentDataError, nominal: RobotModel, dataset: 
             continue
         except Exception:  # noqa: BLE001 - the remedy's run is advice: a fault in it must not hide the refusal itself
             return refused
-        them = ", ".join(left_out) if count < len(names) else ("it" if count == 1 else "them")
+        them = " and ".join(left_out)
         check = done.result.selfcheck
         said = len(done.result.warnings) + (len(check.warnings) if check is not None else 0)
         warned = f", with {said} warning{'s' * (said > 1)}" if said else ""
         return InconsistentDataError(f"{refused}; without {them} the rest is consistent and is written{warned} "
                                      f"(calibrate {flags(left_out)})", left_out)
-    them = "it" if len(names) == 1 else "them"
+    them = " and ".join(names)
     return InconsistentDataError(f"{refused}; leaving {them} out does not help: without {them} the rest is refused too "
                                  f"(calibrate {flags(names)} says why)", names)
 

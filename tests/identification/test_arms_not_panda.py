@@ -204,8 +204,8 @@ def test_gen3_lite_trained_on_each_real_placement_is_written_or_refused_with_its
     assert calibrate_on("front") == 1
     err = capsys.readouterr().err
     assert "fixture front_h0" in err and "the residual at fixture front_h0 moves" in err
-    assert ("leaving it out does not help: without it the rest is refused too (calibrate --exclude-fixture front_h0 "
-            "says why)" in err)
+    assert ("leaving front_h0 out does not help: without front_h0 the rest is refused too (calibrate "
+            "--exclude-fixture front_h0 says why)" in err)
     assert calibrate_on("front", "--exclude-fixture", "front_h0") == 1  # as the refusal said
     assert "--exclude-fixture front_h0" not in capsys.readouterr().err
     assert calibrate_on("left") == 0
@@ -241,7 +241,7 @@ def test_gen3_lite_placements_that_a_rigid_model_cannot_join_within_a_millimetre
     assert main(calibrate_argv) == 1
     err = capsys.readouterr().err
     assert "fixture front_h0 disagree" in err and "the residual at fixture front_h0 moves" in err
-    assert re.search(r"without it the rest is consistent and is written(, with \d+ warnings?)? \(calibrate "
+    assert re.search(r"without front_h0 the rest is consistent and is written(, with \d+ warnings?)? \(calibrate "
                      r"--exclude-fixture front_h0\)", err), err
     assert not (tmp_path / "cal.yaml").exists()
     assert main([*calibrate_argv, "--exclude-fixture", "front_h0"]) == 0, capsys.readouterr().err

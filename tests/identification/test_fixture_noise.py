@@ -123,7 +123,7 @@ def test_far_samples_crowded_at_one_socket_name_it_and_the_remedy_is_tried() -> 
     said = str(refused.value)
     assert "of them are at fixture P2, " in said and "of its 60 samples: too many for presses taken" in said, said
     assert "--loss huber" not in said
-    assert said.endswith("without it the rest is consistent and is written (calibrate --exclude-fixture P2)"), said
+    assert said.endswith("without P2 the rest is consistent and is written (calibrate --exclude-fixture P2)"), said
     assert refused.value.moved == ("P2",)
     left = run_workflow(panda, drifted, spec, WorkflowOptions(exclude_fixtures=("P2",)))  # the command it names
     assert _aligned_error(left.model, true, panda.random_configurations(1000, np.random.default_rng(7))) < 2e-4
@@ -137,3 +137,16 @@ def test_the_noise_warning_says_whether_the_noise_was_declared() -> None:
     assert any("the 0.3 mm the fit assumes (none declared; --noise states it)" in w for w in assumed), assumed
     declared = run_workflow(panda, data, spec, WorkflowOptions(model="dh", force=True, noise=3e-4)).result.warnings
     assert any("the expected 0.3 mm (--noise)" in w for w in declared), declared
+
+
+def test_a_culprit_fixture_without_a_trend_is_left_out_by_the_remedy() -> None:
+    """A socket scattering 6x the others' noise, no trend, plain least squares (no far-press clause): refused as the
+    one fixture that explains the inconsistency, and the refusal says what leaving it out gives (before, it named
+    the fixture and its possible causes with no command that works)."""
+    panda, _, data, spec = _recording(0, {"P1": 1.5e-4, "P2": 1.5e-4, "P3": 9e-4})
+    with pytest.raises(InconsistentDataError) as refused:
+        run_workflow(panda, data, spec, WorkflowOptions(loss="linear"))
+    said = str(refused.value)
+    assert "the samples at fixture P3 disagree with the other fixtures" in said and "moves" not in said, said
+    assert said.endswith("; without P3 the rest is consistent and is written (calibrate --exclude-fixture P3)"), said
+    assert refused.value.moved == ("P3",)

@@ -25,10 +25,10 @@ def _written(warnings: int = 0):
 @pytest.mark.parametrize(("writes", "verdict", "advised"), [
     ({("P1", "P2")}, "without P2 the rest is consistent and is written (calibrate --exclude-fixture P1 "
                      "--exclude-fixture P2)", ("P2",)),
-    ({("P1", "P2", "P3")}, "without them the rest is consistent and is written (calibrate --exclude-fixture P1 "
+    ({("P1", "P2", "P3")}, "without P2 and P3 the rest is consistent and is written (calibrate --exclude-fixture P1 "
                            "--exclude-fixture P2 --exclude-fixture P3)", ("P2", "P3")),
-    (set(), "leaving them out does not help: without them the rest is refused too (calibrate --exclude-fixture P1 "
-            "--exclude-fixture P2 --exclude-fixture P3 says why)", ("P2", "P3")),
+    (set(), "leaving P2 and P3 out does not help: without P2 and P3 the rest is refused too (calibrate "
+            "--exclude-fixture P1 --exclude-fixture P2 --exclude-fixture P3 says why)", ("P2", "P3")),
 ])
 def test_the_remedy_leaves_out_the_strongest_trends_first_and_its_verdict_ends_the_refusal(monkeypatch, writes,
                                                                                           verdict, advised) -> None:
@@ -54,7 +54,7 @@ def test_the_remedy_leaves_out_the_strongest_trends_first_and_its_verdict_ends_t
 def test_the_verdict_counts_the_warnings_of_what_would_be_written(monkeypatch) -> None:
     monkeypatch.setattr(workflow, "run_workflow", lambda *args, **kwargs: _written(2))
     said = workflow._remedy_tried(_refused(), load_robot("panda"), None, None, WorkflowOptions(), None)
-    assert str(said).endswith("without it the rest is consistent and is written, with 2 warnings "
+    assert str(said).endswith("without P2 the rest is consistent and is written, with 2 warnings "
                               "(calibrate --exclude-fixture P2)")
 
 
