@@ -308,9 +308,9 @@ def calibrate(
     if method in ("pso", "pso+lm"):
         solution = solve_pso(problem, seed=seed, x0=x, **(pso_options or {}))
         x, timings["pso"] = solution.x, solution.seconds
-    # ``auto``: the solves use Huber at the residuals' scale, every figure (pruning, stds, the self-check) reads
-    # all samples as least squares does: a press 50 mm off (the wrong socket) is refused and named, not discounted
-    # and weighs each fixture by the noise it shows (:mod:`.fixture_noise`), read from the least-squares fit
+    # ``auto``: the solves weigh each fixture by the noise it shows in the least-squares fit (:mod:`.fixture_noise`)
+    # and use Huber at that scale; every figure (pruning, stds, the self-check) reads all samples as least squares
+    # does: a press 50 mm off (the wrong socket) is refused and named, not discounted
     figures = fit_loss = "linear" if loss == "auto" else loss
     scale, shown = None, None
     if method in ("lm", "pso+lm"):
