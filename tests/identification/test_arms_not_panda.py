@@ -241,7 +241,7 @@ def test_gen3_lite_placements_that_a_rigid_model_cannot_join_within_a_millimetre
     assert main(calibrate_argv) == 1
     err = capsys.readouterr().err
     assert "fixture front_h0 disagree" in err and "the residual at fixture front_h0 moves" in err
-    assert re.search(r"without front_h0 the rest is consistent and is written(, with \d+ warnings?)? \(calibrate "
+    assert re.search(r"without front_h0 the rest is consistent and is written(, with warnings)? \(calibrate "
                      r"--exclude-fixture front_h0\)", err), err
     assert not (tmp_path / "cal.yaml").exists()
     assert main([*calibrate_argv, "--exclude-fixture", "front_h0"]) == 0, capsys.readouterr().err

@@ -51,11 +51,14 @@ def test_the_remedy_leaves_out_the_strongest_trends_first_and_its_verdict_ends_t
     assert str(said).endswith("leave it out; " + verdict) and said.moved == advised
 
 
-def test_the_verdict_counts_the_warnings_of_what_would_be_written(monkeypatch) -> None:
+def test_the_verdict_says_whether_what_would_be_written_warns(monkeypatch) -> None:
     monkeypatch.setattr(workflow, "run_workflow", lambda *args, **kwargs: _written(2))
     said = workflow._remedy_tried(_refused(), load_robot("panda"), None, None, WorkflowOptions(), None)
-    assert str(said).endswith("without P2 the rest is consistent and is written, with 2 warnings "
+    assert str(said).endswith("without P2 the rest is consistent and is written, with warnings "
                               "(calibrate --exclude-fixture P2)")
+    monkeypatch.setattr(workflow, "run_workflow", lambda *args, **kwargs: _written(0))
+    said = workflow._remedy_tried(_refused(), load_robot("panda"), None, None, WorkflowOptions(), None)
+    assert str(said).endswith("without P2 the rest is consistent and is written (calibrate --exclude-fixture P2)")
 
 
 def test_a_fault_in_the_remedy_run_leaves_the_refusal_as_it_was(monkeypatch) -> None:
