@@ -150,3 +150,19 @@ def test_a_culprit_fixture_without_a_trend_is_left_out_by_the_remedy() -> None:
     assert "the samples at fixture P3 disagree with the other fixtures" in said and "moves" not in said, said
     assert said.endswith("; without P3 the rest is consistent and is written (calibrate --exclude-fixture P3)"), said
     assert refused.value.moved == ("P3",)
+
+
+def test_a_robust_loss_that_discounts_a_socket_says_so() -> None:
+    """--loss huber discounts samples over 4x the median distance and judges without them: a joint drifting 2 deg over
+    one socket's presses is written, and the warning says that socket's samples were discounted (a review: written
+    with no word of it, where the default loss refuses it and names the socket)."""
+    panda, _, data, spec = _recording(4, {"P1": 1.5e-4, "P2": 1.5e-4, "P3": 1.5e-4})
+    q = data.q.copy()
+    rows = np.flatnonzero(data.labels == "P2")
+    q[rows, 4] += np.linspace(0.0, np.deg2rad(2.0), len(rows))
+    drifted = Dataset(labels=data.labels, q=q, fixture_names=data.fixture_names)
+    done = run_workflow(panda, drifted, spec, WorkflowOptions(loss="huber"))
+    said = [w for w in done.result.warnings if "were discounted by the huber loss" in w]
+    assert len(said) == 1 and "at fixture P2" in said[0] and "--exclude-fixture P2" in said[0], done.result.warnings
+    clean = run_workflow(panda, data, spec, WorkflowOptions(loss="huber"))
+    assert not any("were discounted" in w for w in clean.result.warnings), clean.result.warnings
