@@ -85,10 +85,11 @@ class SelfCheck:
         failed = self.failed
         if not failed:
             return "", ()
-        if self.culprit is not None:  # a culprit fixture is named for leaving out even without a trend
+        if self.culprit is not None:
             text, moved = self._with_trend(self.culprit)
-            fixture = self.culprit.check.removeprefix("fixture ")
-            return text, moved or ((fixture,) if self.culprit.check.startswith("fixture ") else ())
+            if not moved and self.culprit.check.startswith("fixture "):  # left out even without a trend
+                moved = (self.culprit.check.removeprefix("fixture "),)
+            return text, moved
         figures = [f for f in failed if f.check in ("residual level", "prediction")]
         if figures:
             # a model that does not describe the arm moves every residual: its trends are no moved socket to leave out

@@ -247,7 +247,7 @@ def _remedy_tried(refused: InconsistentDataError, nominal: RobotModel, dataset: 
             continue
         except Exception:  # noqa: BLE001 - the remedy's run is advice: a fault in it must not hide the refusal itself
             return refused
-        them = " and ".join(left_out)
+        them = _listed(left_out)
         check = done.result.selfcheck
         # whether it warns, not how often: the run also prints the robot file's and the recording's own warnings,
         # and the self-check's trend lines carry no 'warning:' label, so a count never matched what it prints (a
@@ -255,9 +255,14 @@ def _remedy_tried(refused: InconsistentDataError, nominal: RobotModel, dataset: 
         warned = ", with warnings" if done.result.warnings or (check is not None and check.warnings) else ""
         return InconsistentDataError(f"{refused}; without {them} the rest is consistent and is written{warned} "
                                      f"(calibrate {flags(left_out)})", left_out)
-    them = " and ".join(names)
+    them = _listed(names)
     return InconsistentDataError(f"{refused}; leaving {them} out does not help: without {them} the rest is refused too "
                                  f"(calibrate {flags(names)} says why)", names)
+
+
+def _listed(names: tuple[str, ...]) -> str:
+    """``"P1"``, ``"P1 and P2"``, ``"P1, P2 and P3"``."""
+    return names[0] if len(names) == 1 else f"{', '.join(names[:-1])} and {names[-1]}"
 
 
 def calibrate_files(robot: str, samples: str | Path, fixtures: str | Path | None, out: str | Path,

@@ -120,3 +120,9 @@ def test_a_written_calibration_keeps_its_drifting_fixture_and_advises_no_exclusi
     (warning,) = check.warnings
     assert warning.endswith("so it is kept (calibrate --exclude-fixture P2 leaves it out)")
     assert "leave it out" not in warning
+
+
+def test_the_verdict_lists_the_fixtures_it_names() -> None:
+    assert workflow._listed(("P2",)) == "P2"
+    assert workflow._listed(("P2", "P3")) == "P2 and P3"
+    assert workflow._listed(("P1", "P2", "P3")) == "P1, P2 and P3"
