@@ -87,7 +87,8 @@ class SelfCheck:
         return self._refusal()[0]
 
     def _refusal(self) -> tuple[str, tuple[str, ...]]:
-        """(:attr:`refusal`, the fixtures whose trend it names and so advises leaving out)."""
+        """(:attr:`refusal`, the fixtures it names for leaving out: a culprit fixture, a trending one, and on a refusal
+        of the residual level the fixture that stands out before the trending ones)."""
         failed = self.failed
         if not failed:
             return "", ()

@@ -227,12 +227,12 @@ def _named_cause(refused: SpherecalError, nominal: RobotModel, dataset: Dataset,
 
 def _remedy_tried(refused: InconsistentDataError, nominal: RobotModel, dataset: Dataset, spec: FixtureSpec | None,
                   options: WorkflowOptions, start: RobotModel | None) -> InconsistentDataError:
-    """``refused``, which advises leaving out the fixtures it names as moved (:attr:`.InconsistentDataError.moved`,
-    strongest trend first), ending with what that gives. The workflow runs again without the strongest, then without
-    the two strongest, ..., until the rest is written (the advice holds for those: the others are not left out, a
-    socket that did not move keeps its samples and its known distances) or every one is left out and the rest is
-    refused too (then leaving them out does not help: a real Gen3 lite's drifting socket left one socket that cannot
-    be calibrated, and the advice sent the user from one refusal to the next)."""
+    """``refused``, which names fixtures to leave out (:attr:`.InconsistentDataError.moved`, in the order to try them:
+    the fixture that stands out, then the strongest trend first), ending with what that gives. The workflow runs
+    again without the first, then without the first two, ..., until the rest is written (the advice holds for those:
+    the others are not left out, a socket that did not move keeps its samples and its known distances) or every one
+    is left out and the rest is refused too (then leaving them out does not help: a real Gen3 lite's drifting socket
+    left one socket that cannot be calibrated, and the advice sent the user from one refusal to the next)."""
     names = refused.moved
 
     def flags(left_out: tuple[str, ...]) -> str:  # the command line of the run without them
