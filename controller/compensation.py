@@ -152,10 +152,14 @@ def _check_difference(nominal: RobotModel, calibrated: RobotModel, q: np.ndarray
         tools = float(np.linalg.norm(nominal.tool - calibrated.tool))
         swapped = replace(calibrated, tool=nominal.tool)  # the same arm with the controller's tool?
         same_tool = float(np.linalg.norm(tool_point(nominal, q) - tool_point(swapped, q)))
+        record = calibrated.extras.get("calibration")
+        # the command carries the calibration's tool correction over (its nominal_tool); the call must be told it
+        carried = (", nominal_tool=calibrated.extras['calibration']['nominal_tool']"
+                   if isinstance(record, dict) and "nominal_tool" in record else "")
         why = (f"its tool point is {tools * 1e3:.0f} mm from the controller model's in the last frame: a calibration "
                f"ends at its own tool (the ball); put the controller's tool on it first: "
-               f"correction.with_tool(calibrated, {np.round(nominal.tool, 6).tolist()}) or `spherecal tool CAL.yaml "
-               f"--offset {' '.join(f'{v:g}' for v in nominal.tool)} --out NEW.yaml`"
+               f"correction.with_tool(calibrated, {np.round(nominal.tool, 6).tolist()}{carried}).model or `spherecal "
+               f"tool CAL.yaml --offset {' '.join(f'{v:g}' for v in nominal.tool)} --out NEW.yaml`"
                if same_tool <= MAX_MODEL_DIFFERENCE else "not a calibration of this robot")
         raise ModelMismatchError(
             f"{source}: tool point differs from the controller's model by {gap * 1e3:.0f} mm at the seed "

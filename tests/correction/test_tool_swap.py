@@ -8,6 +8,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+import spherecal.correction
 from spherecal.cli import main
 from spherecal.controller.compensation import ModelMismatchError, compensate, corrected_ik
 from spherecal.correction import load_robot, load_urdf, perturb, tool_point
@@ -81,11 +82,16 @@ def test_readme_controller_example_on_a_real_calibration(tmp_path) -> None:
     nominal, calibrated = load_robot("panda"), load_robot(cal)  # the README's two lines
     q_now = np.array([0.0, -0.3, 0.0, -2.2, 0.0, 2.0, 0.8])
     target = tool_point(nominal, q_now) + [0.03, 0.02, -0.02]
-    with pytest.raises(ModelMismatchError, match="mm at the seed .*put the controller's tool on it"):  # the ball
-        compensate(target, nominal, calibrated, q_now)
+    with pytest.raises(ModelMismatchError, match="mm at the seed .*put the controller's tool on it") as error:
+        compensate(target, nominal, calibrated, q_now)  # the ball
     out = tmp_path / "cal_flange.yaml"
     assert main(["tool", str(cal), "--offset", *map(str, nominal.tool), "--out", str(out)]) == 0
     flange = load_robot(out)  # the same calibrated arm, its tool at the nominal model's (the flange)
+    # the message's two remedies put the same tool on: its Python call, run as printed, is the command's
+    call = str(error.value).split("first: ", 1)[1].split(" or `spherecal tool")[0]
+    assert "nominal_tool=" in call
+    swapped = eval(call, {"correction": spherecal.correction, "calibrated": calibrated})  # noqa: S307 - our message
+    np.testing.assert_allclose(swapped.tool, flange.tool, atol=1e-12)
     result = compensate(target, nominal, flange, q_now)
     assert np.linalg.norm(tool_point(flange, result.q) - target) < 1e-9 and result.gain > 1e-4
     q = corrected_ik(flange, target, q_now, nominal=nominal)
