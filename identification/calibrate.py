@@ -43,6 +43,10 @@ METHODS: tuple[str, ...] = ("lm", "pso", "pso+lm")
 #: so Gaussian noise loses almost nothing; a press taken before the ball sat in its socket pulls with a bounded
 #: weight.
 ROBUST_CUT = 2.5
+#: The summary names the identified parameters whose estimate the data gives less than this share of
+#: (:meth:`.problem.CalibrationProblem.data_share`): the prior toward nominal holds them near their start (a
+#: compliance of a joint gravity barely loads, such as a vertical first joint's). A report line only: it fixes nothing.
+PRIOR_HELD = 0.1
 #: Largest plausible tool-point change of a calibration, in multiples of what a real arm's
 #: errors (:func:`.problem.tolerance`: 1 mm, 0.2 deg, a joint's zero 1 deg) typically move it (about 15 mm on the
 #: Panda, so about 62 mm).
@@ -77,6 +81,8 @@ class CalibrationResult:
         selfcheck: the statistical self-check (:mod:`.selfcheck`), None when it was not run.
         effective_unknowns: effective number of unknowns of the (regularised) fit, the trace of its hat
             matrix (:meth:`CalibrationProblem.effective_unknowns`); the unknowns' count without a prior.
+        data_share: identified parameter -> the share of its estimate the data gives, 0..1
+            (:meth:`CalibrationProblem.data_share`; the prior toward nominal gives the rest).
         loss: the loss the fit used: ``linear``, ``soft_l1`` or ``huber`` (``auto`` resolves to ``huber``).
         loss_scale: its residual scale [m] (None with ``linear``).
         loss_noise: with ``auto``, the noise per coordinate [m] the least-squares residuals showed
@@ -102,6 +108,7 @@ class CalibrationResult:
     x: np.ndarray | None = None
     selfcheck: SelfCheck | None = None
     effective_unknowns: float | None = None
+    data_share: dict[str, float] = field(default_factory=dict)
     loss: str = "linear"
     loss_scale: float | None = None
     loss_noise: float | None = None
@@ -149,6 +156,7 @@ class CalibrationResult:
             "prior_tail_spreads": (float(self.problem.prior_tail)
                                    if self.problem and np.isfinite(self.problem.prior_tail) else None),
             "effective_unknowns": self.effective_unknowns,
+            "data_share": {k: float(v) for k, v in self.data_share.items()},
             "loss": self.loss,
             "loss_scale_m": self.loss_scale,
             **({"fixture_noise": self.fixture_noise.block()} if self.fixture_noise is not None else {}),
@@ -206,13 +214,19 @@ class CalibrationResult:
             f"identified {len(self.identified)} parameters, condition number {self.condition_number:.3g}"
             + (f", prior weight {self.problem.prior_weight:g} ({self.effective_unknowns:.1f} effective unknowns)"
                if self.problem is not None and self.problem.prior_weight > 0 else ""),
-            f"  {'parameter':<9} {'unit':<7} {'change':>10} {'std':>10}",
+            f"  {'parameter':<9} {'unit':<7} {'change':>10} {'std':>10}"
+            + (f" {'data %':>7}" if self.data_share else ""),
         ]
         for name, start, end, std in self.changes():
             layout = self.model.layout
             kind = layout.kinds[layout.index(name)]
             scale, unit = kind.display_scale, kind.display_unit
-            lines.append(f"  {name:<9} {unit:<7} {(end - start) * scale:10.5f} {std * scale:10.5f}")
+            share = f" {100 * self.data_share[name]:7.0f}" if name in self.data_share else ""
+            lines.append(f"  {name:<9} {unit:<7} {(end - start) * scale:10.5f} {std * scale:10.5f}{share}")
+        held = [name for name, v in self.data_share.items() if v < PRIOR_HELD]
+        if held:  # the data barely moves them: the prior toward nominal holds them
+            lines.append(f"  held by the prior (the data gives under {100 * PRIOR_HELD:g} % of the estimate): "
+                         + ", ".join(held))
         lines.extend(self._tail_line())
         lines.extend(self._loss_line())
         groups: dict[str, list[str]] = {}
@@ -402,6 +416,7 @@ def calibrate(
         x=x,
         selfcheck=checked,
         effective_unknowns=edf,
+        data_share=dict(zip(problem.identified, (float(v) for v in problem.data_share(jac, inverse)), strict=True)),
         loss=fit_loss,
         loss_scale=None if fit_loss == "linear" else (scale or noise),
         loss_noise=None if scale is None else scale / ROBUST_CUT,

@@ -233,6 +233,19 @@ class CalibrationProblem:
         inverse = normal_inverse(jac) if inverse is None else inverse
         return float(self.n_unknowns - np.einsum("ij,jk,ik->", jp, inverse, jp))
 
+    def data_share(self, jac: np.ndarray, inverse: np.ndarray | None = None) -> np.ndarray:
+        """(Fp,) share of each identified parameter's estimate that comes from the data, between 0 and 1: its
+        diagonal term of the data rows' hat matrix, ``1 - (J_p^T J_p (J^T J)^-1)_ii`` for the prior rows ``J_p`` of
+        ``jac`` (M, F) (``inverse``: ``(J^T J)^-1`` when already computed). 1 where the data alone determines it, 0
+        where the prior alone holds it (a compliance of a joint gravity does not load); the shares and the centres'
+        one each sum to :meth:`effective_unknowns`. All ones without a prior."""
+        fp = self.n_free_params
+        if not self.n_prior:
+            return np.ones(fp)
+        inverse = normal_inverse(jac) if inverse is None else inverse
+        prior = np.sum(jac[self.prior_rows()][:, :fp] ** 2, axis=0)  # one prior row per parameter: its square
+        return np.clip(1.0 - prior * np.diag(inverse)[:fp], 0.0, 1.0)
+
     def _prior_scale(self) -> np.ndarray:
         """(Fp,) ``sqrt(W) noise / s_i`` of the identified parameters [m per unit of the parameter]."""
         spread = prior_std(self.model)[self.free]

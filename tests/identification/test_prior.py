@@ -10,6 +10,7 @@ from spherecal.identification.calibrate import calibrate
 from spherecal.identification.identifiability import normal_inverse, predicted_std
 from spherecal.identification.problem import PRIOR
 from spherecal.identification.selection import start_for
+from spherecal.identification.solvers import solve_lm
 from spherecal.identification.synthetic import fixture_samples, make_dataset
 
 
@@ -131,3 +132,32 @@ def test_a_joint_zero_far_off_is_found_as_an_offset_not_a_scale():
     assert held_out(fits[TAIL].model) < 0.8 * held_out(fits[np.inf].model)
     assert s4[TAIL] < 0.6 * s4[np.inf] and off[TAIL] < 0.6 * off[np.inf]
     assert "theta4" in fits[TAIL].summary().split("beyond the prior's 3-spread core")[1].splitlines()[0]
+
+
+def test_data_share_is_how_little_the_estimate_follows_the_prior():
+    """Each parameter's data share against an independent reading: move the prior's centre of that parameter by
+    ``delta`` and solve again; the estimate follows by ``(1 - share) delta`` (the prior's part of it). A compliance
+    gravity does not load (a vertical first joint: ``c1``) has share 0; the shares and one per centre coordinate sum to
+    the effective unknowns; the summary names the parameters the prior holds."""
+    panda = load_robot("panda")
+    truth = perturb(panda, np.random.default_rng(5))  # quiet data, as a real Panda's (0.1 mm): pruning keeps c1
+    dataset, spec = make_dataset(truth, per_fixture=40, rng=np.random.default_rng(6), noise=1e-4)
+    elastic = start_for("elastic", panda)
+    result = calibrate(elastic, dataset, spec, check=False, loss="linear", prior=PRIOR)
+    problem, x = result.problem, result.x
+    share = problem.data_share(problem.jacobian(x))
+    centre_coords = problem.n_unknowns - problem.n_free_params
+    assert abs(share.sum() + centre_coords - result.effective_unknowns) < 1e-6
+    assert result.data_share == dict(zip(result.identified, share.tolist(), strict=True))
+    names = list(result.identified)
+    assert result.data_share["c1"] < 1e-6 and result.data_share["c2"] > 0.3 and result.data_share["tool_x"] > 0.99
+    spread = elastic.layout.spread()
+    for name in ("c1", "c6", "alpha7", "theta6", "d6", "c4", "c2"):  # shares 0 .. 0.99
+        i, k = elastic.param_index(name), names.index(name)
+        delta = 0.5 * spread[i]
+        centre = problem.prior_centre.copy()
+        centre[i] += delta
+        moved = solve_lm(replace(problem, prior_centre=centre, _cache={}), x).x
+        followed = (moved[k] - x[k]) / delta
+        assert abs(followed - (1.0 - share[k])) < 0.02, (name, followed, share[k])
+    assert "held by the prior (the data gives under 10 % of the estimate): c1" in result.summary()
