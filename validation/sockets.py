@@ -154,6 +154,7 @@ class SocketReport:
                 name = f"{d.a} - {d.b}" + ("" if d.held_out else " (fit)")
                 lines.append(f"{name:<40} {d.known * 1e3:8.3f} {cells}")
         held = sum(f.held_out and f.measurable for f in self.fixtures)
+        fixtures = f"{held} fixture{'s' * (held != 1)}"
         lines.append("")
         if held == 0:
             lines.append("no measurable held-out fixture (every fixture used in the fit, or too few distinct "
@@ -162,12 +163,16 @@ class SocketReport:
             spread, error = self.summary(m)
             text = "-" if error is None else f"{error * 1e3:.3f}"
             mae = f"{'-':>8}" if spread is None else f"{spread * 1e3:8.3f}"
-            lines.append(f"held-out ({held} fixtures) {m:<11} test MAE {mae} mm   mean |distance error| {text} mm")
+            lines.append(f"held-out ({fixtures}) {m:<11} test MAE {mae} mm   mean |distance error| {text} mm")
         forecast = self.predicted_summary()
         if forecast is not None:
-            lines.append(f"held-out ({held} fixtures) predicted   test MAE {forecast * 1e3:8.3f} mm (the calibration's "
+            lines.append(f"held-out ({fixtures}) predicted   test MAE {forecast * 1e3:8.3f} mm (the calibration's "
                          f"own prediction for these configurations; measured within {1 / BAND:g}x-{BAND:g}x of it is "
                          "as expected)")
+            measured = self.summary("calibrated")[0] if "calibrated" in self.models else None
+            if measured is not None and measured * BAND < forecast:  # above the band is a remark (:func:`remarks`)
+                lines.append(f"  measured {measured * 1e3:.3f} mm is {measured / forecast:.2g}x of it, below the band: "
+                             "better than the calibration predicted (its prediction is cautious here)")
             if self.joint_error > 0:
                 lines.append(f"  the prediction includes the arm's unmodelled joint-angle error, "
                              f"{self.joint_error * 1e3:.2g} mrad per joint, that its training residuals show")

@@ -12,6 +12,7 @@ from spherecal.correction.files.samples_csv import write_samples
 from spherecal.validation.inputs import ValidationInputError
 from spherecal.validation.mocap import MocapError, MocapMeasurement, read_mocap_csv, write_mocap_csv
 from spherecal.validation.pipeline import validate_models
+from spherecal.validation.sockets import FixtureSpread, SocketReport
 from spherecal.validation.validate_files import ValidateConfig, validate_files
 
 
@@ -85,3 +86,18 @@ def test_socket_only_spreads_are_those_of_the_tool_points(files, tmp_path):
 def test_a_config_without_a_reference_is_refused(given, message):
     with pytest.raises(ValidationInputError, match=message):
         ValidateConfig(nominal="panda", calibrated="c.yaml", **given)
+
+
+def test_report_says_when_held_out_sockets_beat_the_prediction_and_counts_one_fixture() -> None:
+    """The printed band '0.5x-2x of it is as expected': a held-out spread below it is said (better than predicted),
+    inside it nothing is added; one held-out socket is '1 fixture'."""
+
+    def report(measured: float) -> str:
+        spread = FixtureSpread("front_h0", 20, True, {"nominal": 6e-3, "calibrated": measured},
+                               {"nominal": 9e-3, "calibrated": 2 * measured}, {}, distinct=20, predicted=4e-3)
+        return SocketReport(("nominal", "calibrated"), [spread], [], "test").format()
+
+    low, inside = report(1.5e-3), report(2.5e-3)
+    assert "held-out (1 fixture) calibrated" in low and "fixtures)" not in low
+    assert "measured 1.500 mm is 0.38x of it, below the band: better than the calibration predicted" in low
+    assert "below the band" not in inside
