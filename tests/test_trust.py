@@ -87,6 +87,32 @@ def test_a_csv_source_that_is_a_symlink_loop_is_one_line(tmp_path, capsys) -> No
             tmp_path, capsys, "loop.csv: field 'SOURCE': cannot read: a symbolic link loop")
 
 
+@pytest.mark.parametrize("fmt", ["mukca", "bag", "csv"])
+def test_a_missing_source_says_it_does_not_exist_in_every_format(tmp_path, capsys, fmt) -> None:
+    # was (mukca): "a MUKCa source is a folder (placement or folder of them)"; (bag, csv): no field named
+    refused(["import", tmp_path / "nowhere", "--format", fmt, "--robot", PANDA, "--out", tmp_path / "out"],
+            tmp_path, capsys, f"{tmp_path / 'nowhere'}: field 'SOURCE': does not exist")
+
+
+def test_a_mukca_folder_is_recorded_by_its_digest_once_the_importer_has_read_it(tmp_path, capsys,
+                                                                                  monkeypatch) -> None:
+    # a folder's digest reads every file below it: never of a source the importer refuses (`/` for a placement)
+    import yaml
+
+    from spherecal.correction.files import provenance
+
+    read = []
+    monkeypatch.setattr(provenance, "folder_digest", lambda path: read.append(path) or "d1g35t")
+    (tmp_path / "empty").mkdir()
+    refused(["import", tmp_path / "empty", "--format", "mukca", "--robot", PANDA, "--out", tmp_path / "out"],
+            tmp_path, capsys, "no hole_<k>.csv here")
+    assert read == []
+    source = DATA / "panda_2_clean" / "front_center"
+    assert main(["import", str(source), "--format", "mukca", "--robot", str(PANDA), "--out", str(tmp_path / "o")]) == 0
+    made = yaml.safe_load((tmp_path / "o" / "fixtures.yaml").read_text())["import"]["provenance"]
+    assert made["inputs"]["source"] == {"path": str(source), "sha256": "d1g35t"} and read == [source]
+
+
 def _bag(path: Path, messages: list[tuple[float, list[str], np.ndarray]]) -> Path:
     """A ROS 2 (sqlite3) bag of sensor_msgs/JointState ``(t [s], names, positions [rad])``."""
     from rosbags.rosbag2 import StoragePlugin, Writer

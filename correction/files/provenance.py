@@ -7,7 +7,7 @@ The block (:func:`provenance`) is the same everywhere::
     created: 2026-11-25T01:58:49+00:00     # UTC
     versions: {python: 3.12.3, spherecal: 0.1.0, numpy: 2.1.3, ...}
     seed: 0                                 # null when nothing random was drawn
-    inputs:                                 # files with their SHA-256, options as given
+    inputs:                                 # files and folders with their SHA-256, options as given
       samples: {path: out/samples.csv, sha256: 9f2c...}
       robot: {path: panda, sha256: embedded}
       loss: linear
@@ -22,6 +22,7 @@ import hashlib
 import os
 import platform
 import socket
+import stat
 import sys
 from datetime import datetime, timezone
 from importlib.metadata import PackageNotFoundError, version
@@ -54,11 +55,55 @@ def file_digest(path: str | os.PathLike) -> str:
     return digest.hexdigest()
 
 
+def folder_digest(path: str | os.PathLike) -> str:
+    r"""SHA-256 (hex) of a folder: of the lines ``<file's SHA-256>  <relative path>\n`` (``sha256sum``'s), one per
+    regular file at any depth, in relative-path order (``/``-separated, sorted by code point).
+
+    Links are followed as the importers follow them (a folder reached twice is read once: no loop); pipes,
+    sockets and devices are skipped (reading them blocks); a file that cannot be read counts with the digest
+    ``unreadable``. Every file is read in blocks: a bag folder of gigabytes is not held in memory. For
+    ordinary names the same as ``find -L . -type f -printf '%P\n' | LC_ALL=C sort | xargs -d '\n' sha256sum |
+    sha256sum`` run inside the folder.
+    """
+    lines = hashlib.sha256()
+    for name, file in _regular_files(Path(path)):
+        try:
+            digest = file_digest(file)
+        except OSError:
+            digest = "unreadable"
+        lines.update(f"{digest}  {name}\n".encode("utf-8", "surrogateescape"))
+    return lines.hexdigest()
+
+
+def _regular_files(root: Path) -> list[tuple[str, Path]]:
+    """(relative path, path) of the regular files below ``root``, links followed, each folder once, sorted."""
+    found: list[tuple[str, Path]] = []
+    seen: set[str] = set()
+    for folder, children, files in os.walk(root, followlinks=True):
+        real = os.path.realpath(folder)
+        if real in seen:  # a link back up, or a second link to one folder
+            children[:] = []
+            continue
+        seen.add(real)
+        children.sort()
+        for name in files:
+            file = Path(folder, name)
+            try:
+                regular = stat.S_ISREG(file.stat().st_mode)
+            except OSError:  # a dangling link: nothing to read
+                continue
+            if regular:
+                found.append((file.relative_to(root).as_posix(), file))
+    return sorted(found)
+
+
 def input_record(path: str | os.PathLike) -> dict[str, str]:
-    """``{"path", "sha256"}`` of an input; one that is not a file (an embedded robot such as
-    ``"panda"``, a recording folder) has ``"sha256": "embedded"`` or ``"folder"``."""
-    kind = "folder" if Path(path).is_dir() else "embedded"
-    return {"path": str(path), "sha256": file_digest(path) if Path(path).is_file() else kind}
+    """``{"path", "sha256"}`` of an input: the SHA-256 of a file (:func:`file_digest`) or of a folder (a
+    recording folder: :func:`folder_digest`); a name that is neither (an embedded robot such as ``"panda"``)
+    has ``"sha256": "embedded"``."""
+    if Path(path).is_file():
+        return {"path": str(path), "sha256": file_digest(path)}
+    return {"path": str(path), "sha256": folder_digest(path) if Path(path).is_dir() else "embedded"}
 
 
 def provenance(seed: int | None, inputs: dict[str, Any], command: list[str] | None = None,

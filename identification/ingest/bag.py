@@ -11,7 +11,6 @@ message that names joints but carries no positions (its velocities or efforts al
 from __future__ import annotations
 
 import os
-from pathlib import Path
 
 import numpy as np
 
@@ -21,6 +20,7 @@ from .importers import (
     Recording,
     RecordingError,
     arm_joint_names,
+    check_source,
     joint_name_candidates,
     match_joints,
     missing_joints,
@@ -55,9 +55,7 @@ def read_bag(path: str | os.PathLike, model: RobotModel, topic: str = TOPIC) -> 
     from rosbags.highlevel import AnyReader, AnyReaderError  # rosbags loads in ~0.3 s: only when a bag is read
     from rosbags.typesys import Stores, get_typestore  # (same)
 
-    path = Path(path)
-    if not path.exists():
-        raise RecordingError(f"{path}: cannot read: No such file or directory")
+    path = check_source(path)
     if path.is_dir() and not (path / "metadata.yaml").is_file():  # rosbags would say the folder is a missing file
         mukca = any(path.glob("hole_*.csv")) or any(path.glob("*/hole_*.csv"))
         hint = "; it holds MUKCa per-socket files: use --format mukca" if mukca else ""

@@ -145,6 +145,7 @@ def import_recording(
     options: ImportOptions = ImportOptions(),
     inputs: list[str | os.PathLike] = (),
     extras: dict | None = None,
+    recorded: dict | None = None,
 ) -> ImportResult:
     """Import a recording and write ``out/samples.csv`` and ``out/fixtures.yaml``.
 
@@ -155,7 +156,10 @@ def import_recording(
         out: folder to create (absent or empty; never one holding an input).
         options: see :class:`ImportOptions`.
         inputs: other input files that ``out`` must not hold (the robot file).
-        extras: written into ``fixtures.yaml`` under ``import:`` (provenance).
+        extras: written into ``fixtures.yaml`` under ``import:``.
+        recorded: the inputs of the provenance block written under ``import: provenance:``
+            (:func:`correction.files.provenance.provenance`), built once the source is read: a folder's digest
+            reads every file below it, never for a source the importer refuses (``/`` typed for a placement).
 
     Raises:
         RecordingError, SegmentationError, DatasetError: bad input (one line); nothing is written.
@@ -179,6 +183,8 @@ def import_recording(
     if missing:
         raise DatasetError(f"{source}: field 'fixture': {missing[0]!r} has no samples left")
     block = dict(extras or {})
+    if recorded is not None:
+        block["provenance"] = provenance(options.seed, recorded)
     if segments:
         block["segments"] = {
             s.name: {"from_s": s.start, "to_s": s.end, "samples": int(len(s.rows)), "spread_max_m": s.spread_max}
@@ -234,10 +240,9 @@ def import_files(source: str | os.PathLike, fmt: str, robot: str, out: str | os.
     if "rate" in chosen and chosen["rate"] is None:
         chosen["rate"] = DEFAULT_RATE
     chosen |= vars(options.segmentation) if fmt != "mukca" else {}
-    extras = {"format": fmt, "provenance": provenance(options.seed, {"source": Path(source), "robot": Path(robot),
-                                                                      **chosen})}
+    recorded = {"source": Path(source), "robot": Path(robot), **chosen}
     inputs = [robot] if robot != "panda" else []
-    return import_recording(source, fmt, model, out, options, inputs, extras)
+    return import_recording(source, fmt, model, out, options, inputs, {"format": fmt}, recorded)
 
 
 def _relevant(fmt: str, options: dict) -> dict:

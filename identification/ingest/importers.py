@@ -49,6 +49,18 @@ class RecordingError(DatasetError):
     """A recording that cannot be imported; one line naming the file, row and field."""
 
 
+def check_source(path: str | os.PathLike) -> Path:
+    """``path`` as a :class:`~pathlib.Path`, refused first when nothing is there (every format says it alike).
+
+    Raises:
+        RecordingError: no file or folder at ``path`` (or a link to none).
+    """
+    path = Path(path)
+    if not path.exists():
+        raise RecordingError(f"{path}: field 'SOURCE': does not exist")
+    return path
+
+
 @dataclass(frozen=True, eq=False)
 class Recording:
     """Joint angles read from a source, in the robot's joint order.
@@ -341,10 +353,10 @@ def read_mukca(
         The labelled recording (no time stamps) and the fixtures with their known distances.
 
     Raises:
-        RecordingError: no hole files, a row with the wrong number of fields or a bad number, an
+        RecordingError: no such folder, no hole files, a row with the wrong number of fields or a bad number, an
             angle outside the joint limits.
     """
-    root = Path(path)
+    root = check_source(path)
     if not root.is_dir():
         raise RecordingError(f"{root}: field 'SOURCE': a MUKCa source is a folder (placement or folder of them)")
     placements = _placements(root)
@@ -401,12 +413,12 @@ def read_joint_csv(path: str | os.PathLike, model: RobotModel) -> Recording:
     ``fixture`` column (then the recording is labelled). ``samples.csv`` is such a file.
 
     Raises:
-        RecordingError: no header, a joint missing from it, a row with a missing field or a bad
+        RecordingError: no such file, no header, a joint missing from it, a row with a missing field or a bad
             number, an empty fixture label, an angle outside the joint limits; stamps of an unlabelled
             recording whose median step is outside :data:`STEP_RANGE` (milliseconds or microseconds in a
             column read as seconds or nanoseconds).
     """
-    path = Path(path)
+    path = check_source(path)
     header: list[str] | None = None
     blocks: list[np.ndarray] = []  # [t,] joints, in blocks of 50 000 lines: a long recording stays small
     labels: list[np.ndarray] = []
