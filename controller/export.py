@@ -64,10 +64,26 @@ class Export:
         return xml_bytes(self.text)
 
 
-def provenance_header(source: str, output_format: str) -> str:
-    """Comment lines naming the input file (and its SHA-256) and the versions that wrote the export."""
-    block = comment_block(provenance(None, {"robot": Path(source)}))
-    return f"spherecal export to {output_format} of {source}\n{block}"
+def provenance_header(source: str, output_format: str, seed: int | None = None) -> str:
+    """Comment lines naming the input file (and its SHA-256), the seed and the versions that wrote the export.
+
+    Args:
+        source: the robot file exported.
+        output_format: ``urdf``, ``mjcf`` or ``yaml``; an XML format's header says how its command line's double
+            hyphens are written (:func:`correction.files.urdf_write.xml_comment`).
+        seed: the seed of the rigid fit's workspace samples (:func:`fit_seed`); None when nothing was drawn.
+    """
+    block = comment_block(provenance(seed, {"robot": Path(source)}))
+    xml = "" if output_format == "yaml" else " (a double hyphen written '- -': an XML comment cannot hold two in a row)"
+    return f"spherecal export to {output_format} of {source}{xml}\n{block}"
+
+
+def fit_seed(model: RobotModel, output_format: str, seed: int) -> int | None:
+    """``seed`` when :func:`export_model` draws the rigid fit's workspace samples with it, else None (a YAML
+    export, a model without joint-side terms, an MJCF that carries every term: nothing random is drawn)."""
+    if output_format == "yaml" or not joint_side_terms(model):
+        return None
+    return None if output_format == "mjcf" and not mjcf_lost_terms(model) else seed
 
 
 def recorded_configurations(model: RobotModel, samples: str | os.PathLike | None = None,

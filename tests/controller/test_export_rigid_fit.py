@@ -153,3 +153,19 @@ def test_nearly_parallel_axes_without_a_hayati_beta_keep_a_physical_urdf(tmp_pat
                  "--out", str(out)]) == 0
     back = load_robot(out, tip_link="ball_link")
     assert _rms(tool_point(back, recorded), tool_point(fit.model, recorded)) < 1e-6
+
+
+def test_the_urdf_header_records_the_seed_the_rigid_fit_drew_with(tmp_path, capsys, rng) -> None:
+    # was: "seed 0" printed for the rigid fit, "seed: None" in the URDF's header
+    model = with_compliance(perturb(load_robot("panda"), rng), COMPLIANCE)
+    samples = write_samples(tmp_path / "samples.csv", Dataset(np.repeat(["a", "b", "c"], 20),
+                                                               model.random_configurations(60, rng)))
+    made = {"provenance": {"inputs": {"samples": input_record(samples)}}}
+    cal = save_robot(replace(model, extras={**model.extras, "calibration": made}), tmp_path / "cal.yaml")
+    rigid = save_robot(geometric_part(model), tmp_path / "rigid.yaml")
+    for source, seed, recorded in ((cal, "5", "seed: 5"), (rigid, "5", "seed: None")):
+        out = tmp_path / f"{source.stem}.urdf"
+        assert main(["export", str(source), "--format", "urdf", "--out", str(out), "--seed", seed]) == 0
+        text = out.read_text()
+        assert recorded in text.splitlines() and text.count("a double hyphen written '- -'") == 1
+    assert "; seed 5" in capsys.readouterr().out  # the rigid fit's summary: the same seed
