@@ -15,7 +15,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     tool = parser.add_mutually_exclusive_group(required=True)
     tool.add_argument("--offset", nargs=3, type=finite, metavar=("X", "Y", "Z"),
                       help="the new tool's nominal point in the last DH frame [m], as its drawing gives it; the "
-                      "calibration's correction of the old tool point is carried over and added")
+                      "calibration's correction of the old tool point is carried over and added. The old tool's "
+                      "nominal point (the ball's) is calibration.nominal_tool in CAL.yaml, e.g. its z + 0.1 for a "
+                      "tool 0.1 m further along z; the command prints both points")
     tool.add_argument("--urdf", default=None, metavar="TOOL.urdf",
                       help="a URDF of the same arm with the new tool (its last DH frame must be the calibrated "
                       "file's); --tip-link names the tool link")
@@ -51,6 +53,24 @@ def run(args: argparse.Namespace) -> int:
         path = outputs.write_text(args.out, dump_robot(swap.model, header=header))
     print(f"spherecal tool: wrote {path}: tool point {swap.model.tool.round(6).tolist()} m in the last frame "
           f"(was {model.tool.round(6).tolist()})")
+    print(f"spherecal tool: {_nominal_points(model, swap.model)}")
     print(f"spherecal tool: {swap.note}")
     print(f"spherecal tool: {payload}")
     return 0
+
+
+def _nominal_points(model, swapped) -> str:
+    """One line: the calibration's nominal tool point (``calibration.nominal_tool``) and the new tool's [m], in the
+    last frame, the points ``--offset`` is compared with (before the calibration's correction is added)."""
+    import numpy as np
+
+    block = model.extras.get("calibration")
+    recorded = block.get("nominal_tool") if isinstance(block, dict) else None
+    swap = swapped.extras["tool_swap"]
+    new = np.asarray(swap["tool"], dtype=float) - np.asarray(swap["carried_correction"], dtype=float)
+    if recorded is None:
+        return (f"nominal tool point [m] in the last frame: the new tool's {new.round(6).tolist()}; the calibrated "
+                "file records no calibration.nominal_tool (the point is put as given, no correction carried)")
+    old = np.asarray(recorded, dtype=float).round(6).tolist()
+    return (f"nominal tool points [m] in the last frame: the calibration's {old} (calibration.nominal_tool), "
+            f"the new tool's {new.round(6).tolist()}")

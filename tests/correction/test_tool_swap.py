@@ -159,3 +159,39 @@ def test_a_second_tool_swap_starts_from_the_calibrated_tool(panda, tmp_path) -> 
     np.testing.assert_allclose(again.model.tool, direct.model.tool, atol=1e-12)
     np.testing.assert_allclose(direct.model.tool, panda.tool + [2e-4, -2e-4, 0.09 + 1.6e-3], atol=1e-12)
     assert again.distance == pytest.approx(direct.distance) and again.note == direct.note
+
+
+def test_tool_command_says_where_the_nominal_tool_is_and_prints_both_points(panda, tmp_path, capsys) -> None:
+    # was: --help said "the new tool's nominal point" only; the old tool's was to be dug out of the YAML
+    from dataclasses import replace
+
+    from spherecal.correction import save_robot
+
+    assert main(["tool", "--help"]) == 0
+    assert "calibration.nominal_tool in CAL.yaml" in " ".join(capsys.readouterr().out.split())
+    ball = panda.tool + [0.0, 0.0, 0.135]
+    cal = save_robot(replace(panda, tool=ball + [2e-4, -2e-4, 1.6e-3],
+                             extras={**panda.extras, "calibration": {"nominal_tool": ball.tolist()}}),
+                     tmp_path / "cal.yaml")
+    assert main(["tool", str(cal), "--offset", *map(str, ball + [0.0, 0.0, 0.1]), "--out",
+                 str(tmp_path / "new.yaml")]) == 0
+    printed = capsys.readouterr().out
+    assert (f"nominal tool points [m] in the last frame: the calibration's {ball.round(6).tolist()} "
+            f"(calibration.nominal_tool), the new tool's {(ball + [0.0, 0.0, 0.1]).round(6).tolist()}") in printed
+
+
+def test_the_guides_tool_swap_snippet_prints_a_few_short_lines(panda, tmp_path, capsys, monkeypatch) -> None:
+    # was: `swap.model, ...` as the snippet's last line: a RobotModel repr of tens of thousands of characters
+    import re
+    from dataclasses import replace
+
+    from spherecal.correction import save_robot
+
+    guide = (Path(__file__).resolve().parents[2] / "docs" / "guide.md").read_text()
+    snippet = next(b for b in re.findall(r"```python\n(.*?)```", guide, re.S) if "with_tool(cal" in b)
+    save_robot(replace(panda, extras={**panda.extras, "calibration": {"nominal_tool": panda.tool.tolist()}}),
+               tmp_path / "cal.yaml")
+    monkeypatch.chdir(tmp_path)
+    exec(snippet, {})  # noqa: S102 - our own documentation
+    printed = capsys.readouterr().out
+    assert "0.2104" in printed and "from the calibrated tool point" in printed and len(printed) < 1000
