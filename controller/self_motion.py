@@ -179,7 +179,7 @@ class SelfMotionRun:
     def coverage_table(self) -> str:
         """Per-fixture coverage [%] per joint, violation [mm] and limit excess [rad], as text."""
         n = self.coverage.shape[1]
-        head = "fixture " + " ".join(f"{'q' + str(j + 1):>5}" for j in range(n)) + "   min%  viol_mm  limit_rad"
+        head = "fixture " + " ".join(f"{f'q{j + 1}%':>5}" for j in range(n)) + "   min%  viol_mm  limit_rad"
         rows = [head]
         for k, name in enumerate(self.fixture_names):
             cov = self.coverage[k] * 100

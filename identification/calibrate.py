@@ -235,8 +235,9 @@ class CalibrationResult:
         lines.append(f"fixed {len(self.fixed)} parameters:")
         for reason, names in groups.items():
             lines.append(f"  {', '.join(names)}: {reason}")
+        fixed_point = {"float_kind": "{:.6f}".format}  # metres to the micrometre, never an exponent
         for name, c in self.centres.items():
-            lines.append(f"centre {name} [m]: {np.array2string(np.asarray(c), precision=6)}")
+            lines.append(f"centre {name} [m]: {np.array2string(np.asarray(c), formatter=fixed_point)}")
         lines.extend(f"warning: {w}" for w in self.warnings)
         if self.selfcheck is not None:
             lines.extend(self.selfcheck.lines())

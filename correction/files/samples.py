@@ -129,7 +129,7 @@ class LimitExcess:
             parts.append(f"{self.names[i]} by up to {excess:.3g} rad ({np.rad2deg(excess):.3g} deg) {side} ({place})")
         text = (
             f"{source}: recorded angles beyond the joint limits of {self.model_name}, used as recorded: "
-            f"{'; '.join(parts)} (the arm's range is wider than its robot file says)"
+            f"{'; '.join(parts)} (the arm's range is wider than its robot file says, or the file is another arm's)"
         )
         warnings.warn(text, JointLimitWarning, stacklevel=3)
         return text

@@ -9,6 +9,7 @@ from spherecal.controller.exploration import Ramp, joint_coverage
 from spherecal.controller.self_motion import (
     DEFAULT_FIXTURES,
     FixtureInsideRobotError,
+    SelfMotionRun,
     SelfMotionSettings,
     UnreachableFixtureError,
     collect_self_motion,
@@ -93,6 +94,17 @@ def test_ramp_is_smooth():
 def test_joint_coverage():
     q = np.array([[0.0, 0.0], [1.0, -0.5], [0.5, 0.5]])
     assert np.allclose(joint_coverage(q, np.array([-1.0, -1.0]), np.array([1.0, 1.0])), [0.5, 0.5])
+
+
+def test_coverage_table_labels_every_column_with_its_unit():
+    # was: "q1 ... q7" without the % that "min%" had
+    from types import SimpleNamespace
+
+    run = SimpleNamespace(coverage=np.array([[0.5, 0.25]]), fixture_names=["P1"], max_violation=np.array([2e-6]),
+                          limit_excess=np.array([0.0]))
+    head, row = SelfMotionRun.coverage_table(run).splitlines()
+    assert head.split() == ["fixture", "q1%", "q2%", "min%", "viol_mm", "limit_rad"]
+    assert row.split()[:4] == ["P1", "50.0", "25.0", "25.0"]
 
 
 @pytest.mark.slow

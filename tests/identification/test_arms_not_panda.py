@@ -48,6 +48,7 @@ def test_angles_past_the_limits_warn_once_naming_every_joint_and_are_used(tmp_pa
     assert "q1 by up to 0.1 rad (5.73 deg) below -2.897 (row 6)" in text
     assert "q6 by up to 0.4 rad (22.9 deg) above 3.752 (row 9)" in text
     assert "q6 by up to 0.2 rad (11.5 deg) below -0.0175 (row 7)" in text
+    assert text.endswith("(the arm's range is wider than its robot file says, or the file is another arm's)")
     np.testing.assert_array_equal(read.q, q)  # used as recorded
     q[7, 5] = panda.upper[5] + 2.0  # beyond a quarter turn: not an angle of that joint
     write_samples(tmp_path / "samples.csv", Dataset(labels=dataset.labels, q=q))

@@ -121,6 +121,7 @@ def test_unreachable_candidates_are_reported(panda):
     assert result.best.prediction.mean < result.best.without_distances.mean
     text = format_plan(result)
     assert text.count("unreachable:") == 2 and "inside the robot" in text and "best set" in text
+    assert "rank name       x [m]   y [m]   z [m] |" in text  # was: x y z without their unit
     # ranked by predicted error alone, unreachable last
     ranked = [s.candidate.name for s in result.ranked()]
     assert ranked[-2:] in (["far", "inside"], ["inside", "far"])

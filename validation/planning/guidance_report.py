@@ -36,7 +36,7 @@ def format_guidance(guidance) -> str:
         f"{what} [mm] now: {now.error * 1e3:.4f} "
         f"(parameters {now.parameters * 1e3:.4f}, unexplained {now.unexplained * 1e3:.4f}); each candidate's error "
         f"and gain over {where}",
-        f"{'rank':>4} {'candidate':<16} {'x':>7} {'y':>7} {'z':>7} | {'error':>7} {'gain':>7} | pins down "
+        f"{'rank':>4} {'candidate':<16} {'x [m]':>7} {'y [m]':>7} {'z [m]':>7} | {'error':>7} {'gain':>7} | pins down "
         "(std ratio to now)",
     ]
     for k, j in enumerate(guidance.ranking):
