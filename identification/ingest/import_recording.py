@@ -22,6 +22,8 @@ from spherecal.correction.files.samples import Dataset, DatasetError
 from spherecal.correction.files.samples_csv import write_samples
 from spherecal.correction.model import RobotModel
 
+from ..selfcheck import MAX_SOCKET_NOISE
+from ..tool_fit import pivot_tool, recentred_tool
 from .bag import read_bag
 from .importers import MUKCA_DISTANCE, Recording, RecordingError, read_joint_csv, read_mukca
 from .segment import Segment, SegmentSettings, format_segments, labels_of, segment
@@ -33,6 +35,11 @@ DEFAULT_RATE = 1000.0
 
 class IgnoredRateWarning(UserWarning):
     """A sampling rate was given for a recording whose own clock or labels decide (one line, naming the source)."""
+
+
+class DescriptionWarning(UserWarning):
+    """The robot file does not describe what was recorded: a tool point centimetres from the file's (another
+    ``--tip-link``, an adapter), or samples no tool point puts at their sockets (another arm's file)."""
 
 
 @dataclass(frozen=True)
@@ -191,11 +198,33 @@ def import_recording(
             for s in segments
         }
     spec = FixtureSpec(spec.names, spec.positions, spec.distances, {"import": block} if block else {})
+    _warn_description(kept, model, source)
     _write_together(_outputs(Path(out), source, inputs), kept, spec)
     return ImportResult(
         kept, spec, read, segments, read - dataset.n_samples, dataset.n_samples - deduplicated.n_samples,
         recording.notes,
     )
+
+
+def _warn_description(dataset: Dataset, model: RobotModel, source: str | os.PathLike) -> None:
+    """One :class:`DescriptionWarning` when the nominal model does not describe the recording, what ``calibrate``
+    says later, said where the robot file and tip link are chosen: the samples pin a tool point implausibly far from
+    the file's (:func:`..tool_fit.recentred_tool`: a wrong ``--tip-link``, an adapter the file lacks), or even with
+    the tool point they pin down they lie beyond :data:`..selfcheck.MAX_SOCKET_NOISE` per axis from their fixture's
+    point (another arm's file: an iiwa14 URDF on a Panda's angles warned only of joint limits)."""
+    if dataset.n_samples < 2:
+        return
+    _, note = recentred_tool(model, dataset)
+    if note is not None:
+        message = f"{note}; --tip-link names the link at the ball's centre"
+    else:
+        _, spread, _ = pivot_tool(model, dataset)
+        if not spread > MAX_SOCKET_NOISE:
+            return
+        message = (f"the samples lie {spread * 1e3:.3g} mm per axis from their fixture's point with the best tool "
+                   "point for them (a ball held in a socket: within a few mm): the robot file does not describe this "
+                   "arm (another arm's file, its DH convention, its units?); calibrate will refuse it")
+    warnings.warn(f"{source}: {message}", DescriptionWarning, stacklevel=3)
 
 
 def _warn_unused_rate(recording: Recording, fmt: str, rate: float | None) -> None:

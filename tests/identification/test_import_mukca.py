@@ -400,3 +400,25 @@ def test_joints_are_matched_by_name_whatever_the_order_and_extras() -> None:
         match_joints([n for n in names if n != "panda_joint5"], load_robot("panda"), "rec")
     kinova = load_robot(KINOVA)
     assert list(match_joints([f"joint_{k}" for k in range(6, 0, -1)], kinova, "rec")[0]) == [5, 4, 3, 2, 1, 0]
+
+
+def test_import_warns_when_the_robot_file_does_not_describe_the_recording(tmp_path, capsys) -> None:
+    """What calibrate says of a wrong tip link or another arm's file is said at import, where they are chosen: the
+    tool point the samples pin down 144 mm from panda_link8's; an iiwa14 URDF on a Panda's angles 69 mm per axis off
+    its sockets with its best tool point. The right file warns of neither. The files are written either way."""
+    urdf = Path(__file__).parents[1] / "data" / "urdf"
+    source = str(DATA / "panda_2_clean/front_center")
+
+    def warned(robot: Path | str, tip: str | None, out: str) -> str:
+        argv = ["import", source, "--format", "mukca", "--robot", str(robot), "--out", str(tmp_path / out)]
+        assert main([*argv, *(["--tip-link", tip] if tip else [])]) == 0
+        assert (tmp_path / out / "samples.csv").is_file()
+        return capsys.readouterr().err
+
+    assert "robot file does not describe" not in (right := warned(PANDA, None, "right")) and "tool point" not in right
+    wrong_tip = warned(urdf / "panda.urdf", "panda_link8", "tip")
+    assert "tool point: the samples put it 14" in wrong_tip
+    assert "--tip-link names the link at the ball's centre" in wrong_tip
+    other_arm = warned(urdf / "iiwa14.urdf", "ball_link", "iiwa")
+    assert "mm per axis from their fixture's point with the best tool point" in other_arm
+    assert "the robot file does not describe this arm" in other_arm
