@@ -303,14 +303,18 @@ def _trends(problem: CalibrationProblem, x: np.ndarray) -> list[Finding]:
         change = float(np.linalg.norm(slope) * (len(e) - 1))
         # the fitted line's residual at the first and the last sample: its length, never negative (a line fitted to
         # the distances went below zero on a socket that drifted through its centre)
-        first, last = np.linalg.norm(e.mean(axis=0) + np.outer(k[[0, -1]], slope), axis=1)
+        ends = e.mean(axis=0) + np.outer(k[[0, -1]], slope)
+        first, last = np.linalg.norm(ends, axis=1)
+        # through the centre (the ends on opposite sides): the move is their sum, not their difference (a review read
+        # 'moves 6.36 mm (from 3.1 mm off the centre to 3.51 mm off)' as a contradiction)
+        across = float(ends[0] @ ends[1]) < 0.0
         trends = t > TREND_T and change > TREND_CHANGE * problem.noise
         figures = {"t": t, "change_mm": change * 1e3, "first_mm": float(first) * 1e3, "last_mm": float(last) * 1e3,
                    "samples": int(len(e)), "trend": bool(trends)}
         text = (
             f"{samples_location(dataset.select(order))}, field 'fixture': the residual at fixture {name} moves "
             f"{change * 1e3:.3g} mm with recording order over its {len(e)} samples (from {first * 1e3:.3g} mm off "
-            f"the centre at the first to {last * 1e3:.3g} mm off at the last)"
+            f"the centre at the first to {last * 1e3:.3g} mm off{' on the other side' if across else ''} at the last)"
         )  # what it means and what to do: :func:`.selfcheck_result.trend_text` (a refusal, a written file's warning)
         # a trend is named, not refused: the level and leave-one-out checks judge what it does to the fit
         out.append(Finding(f"trend {name}", True, text if trends else f"no trend at {name}", figures))
@@ -394,8 +398,14 @@ def _level(problem: CalibrationProblem, r: np.ndarray, sigma: float, dof: int, e
     }
     worst = max(per_fixture, key=per_fixture.get)
     stated = "the declared noise" if declared else "the fit's noise (none declared)"
+    alone = None
+    if problem.n_prior:  # the prior's rows are in sigma: the samples' own figure beside it (a reader compares it with
+        data = r[~problem.prior_rows()]  # the summary's residual, which holds the samples alone)
+        alone = float(np.sqrt(data @ data / max(problem.n_data - problem.n_unknowns, 1)))
+        figures["data_rows_std_mm"] = alone * 1e3
+    with_prior = "" if alone is None else f" with the prior's rows (the samples alone {alone * 1e3:.3g} mm)"
     text = (
-        f"residual {sigma * 1e3:.3g} mm per axis ({sigma / noise:.2g}x {stated} {noise * 1e3:.3g} mm; "
+        f"residual {sigma * 1e3:.3g} mm per axis{with_prior} ({sigma / noise:.2g}x {stated} {noise * 1e3:.3g} mm; "
         f"chi2 {statistic:.4g} on {dof} dof); worst fixture {worst} {per_fixture[worst] * 1e3:.3g} mm"
     )
     if sigma <= LEVEL_FACTOR * noise:
@@ -404,22 +414,19 @@ def _level(problem: CalibrationProblem, r: np.ndarray, sigma: float, dof: int, e
                      if declared else "; no noise declared (--noise): accuracy is judged at the residuals' noise")
         return Finding("residual level", True, text, figures)
     against = "the declared" if declared else stated
-    where = (f"{samples_location(dataset)}: residual noise {sigma * 1e3:.3g} mm per axis is {sigma / noise:.3g}x "
-             f"{against} {noise * 1e3:.3g} mm (limit {LEVEL_FACTOR:g}x; worst fixture {worst} "
+    where = (f"{samples_location(dataset)}: residual noise {sigma * 1e3:.3g} mm per axis{with_prior} is "
+             f"{sigma / noise:.3g}x {against} {noise * 1e3:.3g} mm (limit {LEVEL_FACTOR:g}x; worst fixture {worst} "
              f"{per_fixture[worst] * 1e3:.3g} mm)")
     weight = problem.prior_weight
-    if problem.n_prior:  # the prior's rows are in sigma: is it the samples, or a prior holding the arm at nominal?
-        data = r[~problem.prior_rows()]
-        alone = float(np.sqrt(data @ data / max(problem.n_data - problem.n_unknowns, 1)))
-        figures["data_rows_std_mm"] = alone * 1e3
+    if alone is not None:  # the prior's rows are in sigma: is it the samples, or a prior holding the arm at nominal?
         if alone <= LEVEL_FACTOR * noise and weight > PRIOR:
             return Finding("residual level", False, (
-                f"{where} with the prior's rows, the samples alone {alone * 1e3:.3g} mm: the prior "
+                f"{where}: the prior "
                 f"(--prior {weight:g}, default {PRIOR:g}) holds the parameters nearer the nominal model than this arm "
                 "is; lower it"), figures)
         if alone <= LEVEL_FACTOR * noise:
             return Finding("residual level", False, (
-                f"{where} with the prior's rows, the samples alone {alone * 1e3:.3g} mm: they fit only with parameters "
+                f"{where}: the samples fit only with parameters "
                 "further from the nominal model than a real arm differs from its design: known distances or positions "
                 "that are wrong (all alike, as no single one stands out), or a nominal model of another arm"),
                 figures)

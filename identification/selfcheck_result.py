@@ -169,7 +169,8 @@ class SelfCheck:
 
     def lines(self) -> list[str]:
         """A few lines for the printed summary."""
-        head = "consistent" if self.consistent else f"INCONSISTENT ({len(self.failed)} failed)"
+        head = (f"consistent{', with warnings' if self.warnings else ''}" if self.consistent
+                else f"INCONSISTENT ({len(self.failed)} failed)")  # warnings: the lines below that say 'warning'
         lines = [f"self-check: {head}"]
         lines += [f"  {f.message}" for f in self.findings if f.check in ("residual level", "prediction") and f.passed]
         lines += [f"  {trend_text(f, self.consistent)}" for f in self.findings if f.figures.get("trend")]

@@ -158,7 +158,7 @@ def test_a_prior_too_heavy_for_the_arm_is_named_as_the_cause(tmp_path, capsys) -
     out = _imported(tmp_path)
     argv = ["calibrate", "--robot", PANDA, "--samples", out / "samples.csv", "--fixtures", out / "fixtures.yaml",
             "--out", tmp_path / "cal.yaml"]
-    err = refused([*argv, "--prior", "50"], tmp_path, capsys, "with the prior's rows, the samples alone 0.2",
+    err = refused([*argv, "--prior", "50"], tmp_path, capsys, "with the prior's rows (the samples alone 0.2",
                   "the prior (--prior 50, default 0.5) holds the parameters nearer the nominal model than this arm is")
     assert "samples of another arm" not in err
     refused([*argv, "--prior", "1e6"], tmp_path, capsys, "the prior (--prior 1e+06, default 0.5) holding the model "

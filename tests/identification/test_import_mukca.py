@@ -225,6 +225,9 @@ def test_kinova_calibrated_on_one_placement_beats_the_nominal_on_another(tmp_pat
     said = capsys.readouterr().out
     assert "judged at that noise, the calibration is still expected to beat nominal" in said
     assert "the residual at fixture front_h0 moves" in said
+    # written with warnings, and the header says so; the level's figure holds the prior's rows, the samples' beside it
+    assert "self-check: consistent, with warnings" in said and "with the prior's rows (the samples alone " in said
+    assert "mm off on the other side at the last" in said  # the drift passes through the centre: 14 mm, 7 + 7
     assert (
         main(
             [
