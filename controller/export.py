@@ -64,16 +64,20 @@ class Export:
         return xml_bytes(self.text)
 
 
-def provenance_header(source: str, output_format: str, seed: int | None = None) -> str:
-    """Comment lines naming the input file (and its SHA-256), the seed and the versions that wrote the export.
+def provenance_header(source: str, output_format: str, seed: int | None = None,
+                      inputs: dict[str, str | os.PathLike] | None = None) -> str:
+    """Comment lines naming the input files (and their SHA-256), the seed and the versions that wrote the export.
 
     Args:
         source: the robot file exported.
         output_format: ``urdf``, ``mjcf`` or ``yaml``; an XML format's header says how its command line's double
             hyphens are written (:func:`correction.files.urdf_write.xml_comment`).
         seed: the seed of the rigid fit's workspace samples (:func:`fit_seed`); None when nothing was drawn.
+        inputs: the other files the export read, by role (``into``: the URDF written into; ``samples``: the
+            rigid fit's recorded configurations).
     """
-    block = comment_block(provenance(seed, {"robot": Path(source)}))
+    block = comment_block(provenance(seed, {"robot": Path(source),
+                                            **{k: Path(v) for k, v in (inputs or {}).items()}}))
     xml = "" if output_format == "yaml" else " (a double hyphen written '- -': an XML comment cannot hold two in a row)"
     return f"spherecal export to {output_format} of {source}{xml}\n{block}"
 
@@ -104,6 +108,20 @@ def recorded_configurations(model: RobotModel, samples: str | os.PathLike | None
     if samples is not None:
         q = read_samples(samples, model).q
         return q, f"{len(q)} recorded configurations from {samples}"
+    path, why = calibration_samples(model, folder)
+    if path is None:
+        return None, why
+    try:
+        q = read_samples(path, model).q
+    except DatasetError as error:
+        return None, f"no recorded configurations ({error})"
+    return q, f"{len(q)} recorded configurations from {path} (the calibration's samples)"
+
+
+def calibration_samples(model: RobotModel, folder: str | os.PathLike | None = None) -> tuple[Path | None, str]:
+    """The samples file the calibrated ``model`` was made from, when it is still there unchanged: the one its
+    ``calibration.provenance.inputs.samples`` names, tried as written, then beside ``folder`` (the calibrated file's),
+    relative to it and to its parent, each accepted only with the recorded SHA-256. ``(None, why not)`` otherwise."""
     made = (model.extras.get("calibration") or {}).get("provenance") or {}
     record = (made.get("inputs") or {}).get("samples") or {}
     path = record.get("path") if isinstance(record, dict) else None
@@ -117,12 +135,7 @@ def recorded_configurations(model: RobotModel, samples: str | os.PathLike | None
     found = [c for c in candidates if matches_record(c, record)]
     if not found:
         return None, f"no recorded configurations ({path} is gone or changed since the calibration)"
-    path = found[0]
-    try:
-        q = read_samples(path, model).q
-    except DatasetError as error:
-        return None, f"no recorded configurations ({error})"
-    return q, f"{len(q)} recorded configurations from {path} (the calibration's samples)"
+    return found[0], ""
 
 
 def mjcf_lost_terms(model: RobotModel) -> tuple[str, ...]:

@@ -15,7 +15,7 @@ from spherecal.correction.files.robot_file import forced_calibration
 from spherecal.correction.files.text_input import read_xml_text
 from spherecal.correction.files.urdf_write import ExportError
 
-from .export import export_model, fit_seed, provenance_header
+from .export import calibration_samples, export_model, fit_seed, provenance_header
 
 #: Per format: what the file holds and the name endings that fit it (the first is suggested).
 SUFFIXES = {"urdf": ("a URDF", (".urdf", ".xml")), "mjcf": ("an MJCF model", (".xml", ".mjcf")),
@@ -93,7 +93,12 @@ def export_file(config: ExportConfig, outputs: OutputSet, report: Callable[[str]
     if forced:
         warnings.warn(forced, stacklevel=1)
     into = None if config.into is None else _into(config.into, config.out)
-    header = provenance_header(config.robot, config.output_format, fit_seed(model, config.output_format, config.seed))
+    seed = fit_seed(model, config.output_format, config.seed)
+    read: dict[str, str | Path] = {} if config.into is None else {"into": config.into}
+    if seed is not None:  # the rigid fit reads the recorded configurations: --samples, or the calibration's own file
+        samples = config.samples or calibration_samples(model, Path(config.robot).parent)[0]
+        read |= {} if samples is None else {"samples": samples}
+    header = provenance_header(config.robot, config.output_format, seed, read)
     exported = export_model(model, config.output_format, header,
                             config.prefix, _limits(config.effort, "--effort"), _limits(config.velocity, "--velocity"),
                             into, config.samples, config.seed, Path(config.robot).parent)

@@ -168,4 +168,8 @@ def test_the_urdf_header_records_the_seed_the_rigid_fit_drew_with(tmp_path, caps
         assert main(["export", str(source), "--format", "urdf", "--out", str(out), "--seed", seed]) == 0
         text = out.read_text()
         assert recorded in text.splitlines() and text.count("a double hyphen written '- -'") == 1
+        # the rigid fit's recorded configurations are an input: named with their SHA-256 (found through the
+        # calibration's provenance here); a rigid model draws nothing and reads none
+        named = f"samples={samples} (sha256 {input_record(samples)['sha256']})"
+        assert (named in text) == (source == cal)
     assert "; seed 5" in capsys.readouterr().out  # the rigid fit's summary: the same seed

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import difflib
+import hashlib
 import warnings
 import xml.etree.ElementTree as ET
 from dataclasses import replace
@@ -114,6 +115,10 @@ def test_export_cli_into(tmp_path, rng, capsys):
     points, _ = MujocoUrdf(out.read_text()).body_pose("ball_link", calibrated.extras["joint_names"], q)
     assert np.abs(points - tool_point(calibrated, q)).max() < 1e-12
     assert into.read_text() == _text("gen3lite")
+    # the header names the URDF written into with its SHA-256, as it names the calibrated file (a review: only the
+    # calibrated file was recorded)
+    digest = hashlib.sha256(into.read_bytes()).hexdigest()
+    assert f"into={into} (sha256 {digest})" in out.read_text()
     # --out naming the --into file (also through a symbolic link) is refused, nothing written.
     link = tmp_path / "link.urdf"
     link.symlink_to(into)
