@@ -192,6 +192,7 @@ def _write(config: ValidateConfig, outputs: OutputSet, result: dict, record: Cal
             recording = Recording(outputs.stage(config.rrd) if config.rrd else None, spawn=config.spawn,
                                   application_id="spherecal_validate", title=title)
             try:
+                recording.provenance(result["provenance"])  # as the JSON report records it
                 record(recording)
             except BaseException:
                 recording.abort()

@@ -19,7 +19,7 @@ from spherecal.correction import load_robot, tool_point
 from spherecal.correction.files.fixtures import read_fixtures
 from spherecal.correction.files.samples_csv import read_samples
 from spherecal.identification.ingest.importers import RecordingError, match_joints
-from spherecal.validation.viewer.recording import read_entity_rows, read_view_names
+from spherecal.validation.viewer.recording import read_entity_rows, read_provenance, read_view_names
 from tests.refusal import refused
 
 from .urdf_chain import GEN3LITE, GEN3LITE_BALL, chain_point
@@ -159,6 +159,10 @@ def test_calibration_on_one_placement_holds_on_the_others(imported, capsys) -> N
     assert rows["world/robot/arm"] == samples + 1  # the calibrated arm through every recorded configuration
     views = read_view_names(imported / "v.rrd")
     assert sum(v in (f"Socket {f} [mm]" for f in names) for v in views) == 6 and "Socket validation table (mm)" in views
+    # the recording's provenance is the JSON report's: the calibrated file and the samples by their SHA-256
+    made = read_provenance(imported / "v.rrd")
+    assert made == json.loads((imported / "v.json").read_text())["provenance"] and rows["tables/provenance"] == 1
+    assert made["inputs"]["calibrated"]["sha256"] == hashlib.sha256((imported / "cal.yaml").read_bytes()).hexdigest()
     held = report["held_out"]
     # measured on these files: nominal 6.30 mm, calibrated 0.33 mm (MUKCa's own: 7.79 -> 0.347 on all placements)
     assert held["nominal"]["test_mae"] > 5e-3

@@ -62,8 +62,13 @@ def test_short_demo_writes_everything_and_its_recording_holds_the_documented_ent
         "tables/validation": 1,
         "tables/calibration": 1,
         "tables/deviations": 1,
+        "tables/provenance": 1,
     }
     assert rows == expected_rows
+    # the recording records its provenance as every other output does (a review: the .rrd recorded none)
+    from spherecal.validation.viewer.recording import read_provenance
+
+    assert read_provenance(out / "demo.rrd") == json.loads((out / "demo.json").read_text())["provenance"]
     from spherecal.validation.experiments.demo import DemoConfig, demo_outputs
 
     demo_outputs(DemoConfig(out=out))  # a demo run again into its folder replaces its own files

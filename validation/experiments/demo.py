@@ -246,17 +246,20 @@ def write_results(config: DemoConfig, result: DemoResult, data, fixtures: dict[s
         }
         outputs.write_text(files["report"], json.dumps(report, indent=2) + "\n")
         if config.rrd or config.spawn:
-            write_recording(config, result, data, fixtures, outputs.stage(files["recording"]) if config.rrd else None)
+            write_recording(config, result, data, fixtures, outputs.stage(files["recording"]) if config.rrd else None,
+                            info)
     return {k: v for k, v in files.items() if k != "recording" or config.rrd}
 
 
 def write_recording(config: DemoConfig, result: DemoResult, data, fixtures: dict[str, np.ndarray],
-                    path: Path | None = None) -> Path | None:
+                    path: Path | None = None, info: dict | None = None) -> Path | None:
     """The demo's Rerun recording (entity paths and layout in :mod:`validation.recording`), into ``path``
-    (the staged ``demo.rrd``), or a live viewer only."""
+    (the staged ``demo.rrd``), or a live viewer only; ``info``: the provenance block the demo's other files hold."""
 
     recording = Recording(path, spawn=config.spawn, title="True robot (simulated) and fixtures, self-motion on 'time'")
     try:
+        if info is not None:
+            recording.provenance(info)
         recording.fixtures(list(fixtures), np.array(list(fixtures.values())))
         trajectory = data.trajectory
         if trajectory is not None:

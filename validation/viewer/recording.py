@@ -19,7 +19,11 @@ path                                 archetype      timeline    what
 ``coverage/<fixture>``               BarChart       static      share of each joint's range [%]
 ``sockets/<fixture>/*``              Points3D       static      predicted tool points at a socket [mm]
 ``tables/<name>``                    TextDocument   static      the printed tables
+``tables/provenance``                TextDocument   static      command, versions, seed, inputs (SHA-256)
 ===================================  =============  ==========  ======================================
+
+A recording of ``validate`` or ``demo`` also carries its provenance block as the recording property
+``spherecal_provenance`` (JSON), the block its JSON report holds (:meth:`Recording.provenance`).
 
 Histograms and bars are static, so they show whatever the timeline selector is on. Rerun is imported
 only when a recording is made. Saving a recording with the Python SDK writes no analytics file and
@@ -301,6 +305,15 @@ class Recording:
             )
         self._note("sockets", fixture, f"Socket {fixture} [mm]")
 
+    def provenance(self, block: dict) -> None:
+        """The provenance block (:func:`correction.files.provenance.provenance`: command, versions, seed, inputs with
+        their SHA-256) as a text panel (``tables/provenance``) and as the recording property ``spherecal_provenance``
+        (JSON), as every other output of the command records it."""
+        from spherecal.correction.files.provenance import comment_block
+
+        self.text("provenance", comment_block(block), "Provenance")
+        self.stream.send_property("spherecal_provenance", self.rr.AnyValues(provenance=json.dumps(block)))
+
     def text(self, name: str, text: str, title: str) -> None:
         """A printed table as a text panel (``tables/<name>``)."""
         document = self.rr.TextDocument(f"```\n{text}\n```", media_type=self.rr.MediaType.MARKDOWN)  # monospace
@@ -363,18 +376,28 @@ def read_entity_rows(path: str | os.PathLike) -> dict[str, int]:
     return counts
 
 
-def read_layout(path: str | os.PathLike) -> dict:
-    """What a recording's blueprint was built from (``contents``, ``title``, ``bounds``,
-    ``application_id``; see :func:`validation.blueprint.build_blueprint`), or {} if it has none."""
+def _read_property(path: str | os.PathLike, name: str, field: str) -> dict:
+    """The JSON value ``field`` of the recording property ``name`` of a saved recording, or {} if it has none."""
     from rerun.chunk import RrdReader  # Rerun: heavy, only when a recording is written
 
     _rerun()
     for chunk in RrdReader(str(path)).stream().to_chunks():
-        if chunk.entity_path.endswith("spherecal_layout"):
+        if chunk.entity_path.endswith(name):
             batch = chunk.to_record_batch()
-            column = next(n for n in batch.schema.names if n.endswith("layout"))
+            column = next(n for n in batch.schema.names if n.endswith(field))
             return json.loads(batch.column(column).to_pylist()[0][0])
     return {}
+
+
+def read_layout(path: str | os.PathLike) -> dict:
+    """What a recording's blueprint was built from (``contents``, ``title``, ``bounds``,
+    ``application_id``; see :func:`validation.blueprint.build_blueprint`), or {} if it has none."""
+    return _read_property(path, "spherecal_layout", "layout")
+
+
+def read_provenance(path: str | os.PathLike) -> dict:
+    """The provenance block a saved recording carries (:meth:`Recording.provenance`), or {} if it has none."""
+    return _read_property(path, "spherecal_provenance", "provenance")
 
 
 def read_view_names(path: str | os.PathLike) -> list[str]:
