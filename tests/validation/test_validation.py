@@ -193,7 +193,7 @@ def test_recording_holds_the_documented_entities_and_its_blueprint(tmp_path, pan
         assert rows[path] == 1, path
     views = read_view_names(tmp_path / "r.rrd")
     assert "Robot" in views and "Calibration table" in views
-    assert "Nominal: error, mean 1.000 mm" in views and "Residuals after calibration [mm]: rms 0.100 mm" in views
+    assert any(v.startswith("Nominal: error, mean 1.000 mm over ") for v in views) and "Residuals after calibration [mm]: rms 0.100 mm" in views
     assert any(v.startswith("Joint coverage at P2") for v in views)
     assert "Lengths [mm]: change, +-1 std, white dot = true change" in views
     assert sorted(p.name for p in tmp_path.iterdir()) == ["r.rrd"]
@@ -216,7 +216,7 @@ def test_socket_spread_is_drawn_in_mm_around_the_calibrated_mean(tmp_path, rng) 
     assert {k: v for k, v in rows.items() if k.startswith("sockets/")} == {
         f"sockets/S1/{key}{end}": 1 for key in ("nominal", "calibrated") for end in ("", "_mean")
     }
-    rms = [np.sqrt(np.mean(np.sum((p - p.mean(0)) ** 2, axis=1))) * 1e3 for p in (nominal, calibrated)]
+    spread = [np.mean(np.linalg.norm(p - p.mean(0), axis=1)) * 1e3 for p in (nominal, calibrated)]  # the table's
     assert "Socket S1 [mm]" in read_view_names(tmp_path / "s.rrd")
     reader = RrdReader(str(tmp_path / "s.rrd"))
     logged, labels = {}, {}
@@ -225,8 +225,8 @@ def test_socket_spread_is_drawn_in_mm_around_the_calibrated_mean(tmp_path, rng) 
         if chunk.entity_path.endswith("_mean"):
             logged[chunk.entity_path] = np.array(batch.column("Points3D:positions").to_pylist()[0][0])
             labels[chunk.entity_path] = batch.column("Points3D:labels").to_pylist()[0][0]
-    assert labels["/sockets/S1/nominal_mean"] == f"nominal mean, rms {rms[0]:.3f} mm"
-    assert labels["/sockets/S1/calibrated_mean"] == f"calibrated mean, rms {rms[1]:.3f} mm"
+    assert labels["/sockets/S1/nominal_mean"] == f"nominal mean point, spread {spread[0]:.3f} mm"
+    assert labels["/sockets/S1/calibrated_mean"] == f"calibrated mean point, spread {spread[1]:.3f} mm"
     # means in mm from the calibrated mean: the calibrated one at 0, the nominal one about 2 mm along x
     assert np.allclose(logged["/sockets/S1/calibrated_mean"], 0.0, atol=1e-9)
     expected = (nominal.mean(0) - calibrated.mean(0)) * 1e3
@@ -249,3 +249,25 @@ def test_saving_a_recording_writes_no_analytics_files(tmp_path) -> None:
     assert out.returncode == 0, out.stderr
     assert "Welcome to Rerun" not in out.stdout + out.stderr
     assert [p.name for p in tmp_path.rglob("*") if p.is_file()] == ["r.rrd"]
+
+
+def test_a_colour_scale_beside_flat_points_is_tall_enough_to_read(tmp_path, rng) -> None:
+    """Sockets on a plate lie within millimetres of one height: the scale beside them spans the points' largest
+    extent (at least SCALE_HEIGHT), its spheres apart, not 21 spheres of 3 cm stacked in 0.6 mm (a review)."""
+    from rerun.chunk import RrdReader
+
+    from spherecal.validation.viewer.recording import SCALE_HEIGHT, Recording
+
+    points = np.column_stack([rng.uniform(0.3, 0.7, 60), rng.uniform(-0.2, 0.2, 60), 0.1 + rng.normal(0, 3e-4, 60)])
+    recording = Recording(tmp_path / "flat.rrd")
+    recording.workspace_errors("calibrated", points, rng.uniform(0, 3e-4, 60), "its socket's mean point")
+    recording.close()
+    for chunk in RrdReader(str(tmp_path / "flat.rrd")).stream().to_chunks():
+        if chunk.entity_path.endswith("colour_scale"):
+            batch = chunk.to_record_batch()
+            scale = np.array(batch.column("Points3D:positions").to_pylist()[0])
+            radius = batch.column("Points3D:radii").to_pylist()[0][0]
+    extent = np.max(points.max(0) - points.min(0))
+    span = scale[:, 2].max() - scale[:, 2].min()
+    assert span == pytest.approx(max(extent, SCALE_HEIGHT)) and 2 * radius < span / 20  # apart, one above another
+    assert abs(np.mean(scale[:, 2]) - 0.1) < 1e-3  # centred on the points' height

@@ -54,6 +54,9 @@ COLOURS = {
     "truth": (40, 170, 80),
 }
 FIXTURE_COLOURS = [(250, 170, 20), (160, 80, 200), (20, 170, 170), (200, 90, 60), (90, 160, 40)]
+#: Least height of a colour scale [m]: the points' largest extent when larger (sockets on a plate lie in a few mm
+#: of z, a 2 m workspace in metres).
+SCALE_HEIGHT = 0.3
 #: Capsule radius of the links and of the tool segment [m].
 LINK_RADIUS, TOOL_RADIUS = 0.04, 0.012
 
@@ -191,20 +194,25 @@ class Recording:
         self.stream.log(f"errors/{key}/points", dots, static=True)
         low, high = points.min(axis=0), points.max(axis=0)
         steps = np.linspace(0.0, 1.0, 21)
+        # as tall as the points' largest extent: sockets on a flat plate span millimetres in z, and a scale that
+        # tall stacked its 21 spheres into one ball with every label on top of the others (a review)
+        height = max(float(np.max(high - low)), SCALE_HEIGHT)
+        bottom = 0.5 * (low[2] + high[2]) - 0.5 * height if high[2] - low[2] < height else low[2]
         scale = np.column_stack([np.full(21, high[0] + 0.15), np.full(21, 0.5 * (low[1] + high[1])),
-                                 low[2] + steps * (high[2] - low[2])])
+                                 bottom + steps * height])
         labels = [f"{s * top:.2f} mm" if k % 5 == 0 else "" for k, s in enumerate(steps)]
         labels[-1] = f">= {top:.2f} mm"
         self.stream.log(
             f"errors/{key}/colour_scale",
-            rr.Points3D(scale, radii=0.03, colors=colour_ramp(steps), labels=labels, show_labels=True),
+            rr.Points3D(scale, radii=min(0.03, 0.4 * height / 20), colors=colour_ramp(steps), labels=labels,
+                        show_labels=True),
             static=True,
         )
         counts, left, width = histogram(mm)
         self.stream.log(f"errors/{key}/histogram", rr.BarChart(counts, abscissa=left, widths=width), static=True)
         label_room = scale[-1] + 0.4 * np.array([1.3, 1.0, 0.0]) / np.hypot(1.3, 1.0)  # the labels, to the right
         self.extend_bounds(f"errors/{key}", np.vstack([points, scale, label_room]))
-        self._note("errors", key, f"{key.capitalize()}: error, mean {mm.mean():.3f} mm")
+        self._note("errors", key, f"{key.capitalize()}: error, mean {mm.mean():.3f} mm over {mm.size} points")
         self.errors_against = against
 
     def residuals(self, before: np.ndarray, after: np.ndarray) -> None:
@@ -279,7 +287,7 @@ class Recording:
         A socket-only validation has no measured position: a good model puts every configuration's
         tool point at one point, so the spread of the predictions is its error. The points are drawn
         in a view of their own, in millimetres from the calibrated points' mean, with each model's mean
-        as a larger labelled point (the label gives its rms spread).
+        as a larger labelled point (the label gives its spread: the mean distance from it, the table's figure).
 
         Args:
             fixture: the socket's name (entity ``sockets/<fixture>``).
@@ -293,14 +301,14 @@ class Recording:
         for key, points in sets.items():
             mm = (points - centre) * 1e3
             mean = mm.mean(axis=0)
-            rms = float(np.sqrt(np.mean(np.sum((mm - mean) ** 2, axis=1))))
+            spread = float(np.mean(np.linalg.norm(mm - mean, axis=1)))  # the socket table's figure
             dots = self.rr.Points3D(mm, radii=self.rr.Radius.ui_points(2.0), colors=_colour(key))
             self.stream.log(f"sockets/{fixture}/{key}", dots, static=True)
             self.extend_bounds(f"sockets/{fixture}", mm)
             self.stream.log(
                 f"sockets/{fixture}/{key}_mean",
                 self.rr.Points3D(mean[None], radii=self.rr.Radius.ui_points(6.0), colors=_colour(key),
-                                 labels=[f"{key} mean, rms {rms:.3f} mm"], show_labels=True),
+                                 labels=[f"{key} mean point, spread {spread:.3f} mm"], show_labels=True),
                 static=True,
             )
         self._note("sockets", fixture, f"Socket {fixture} [mm]")
