@@ -21,7 +21,7 @@ import numpy as np
 from ..chain import link_frames
 from ..conversion import to_modified
 from ..kinematics import tool_point
-from ..model import RobotModel, matrix_rpy
+from ..model import RobotModel, geometric_part, matrix_rpy
 from ..rigid import registered_errors
 from ..tool import TIP_MOVED, arm_of, tip_moved
 from .robot_file import RobotFileError
@@ -183,13 +183,13 @@ def _refuse_new_tool(model: RobotModel, source: str, why: str) -> None:
 
 def with_zeros_of(model: RobotModel, reference: RobotModel) -> RobotModel:
     """``model`` with ``reference``'s joint zeros (``theta_i``) when both describe their joints alike (convention,
-    Hayati betas, parameter names); else ``model`` as it is."""
-    if (model.convention, model.hayati, model.param_names) != (reference.convention, reference.hayati,
-                                                                reference.param_names):
+    Hayati betas, geometric parameter names: a compliance or scale block beside them does not count, a review found
+    an elastic Gen3 lite file with every compliance 0 refused where its dh twin was written); else ``model``."""
+    if (model.convention, model.hayati, geometric_part(model).param_names) != (
+            reference.convention, reference.hayati, geometric_part(reference).param_names):
         return model
-    zeros = model.layout.field("theta")
     params = model.params.copy()
-    params[zeros] = reference.params[zeros]
+    params[model.layout.field("theta")] = reference.params[reference.layout.field("theta")]
     return model.with_params(params)
 
 

@@ -193,7 +193,8 @@ def test_recording_holds_the_documented_entities_and_its_blueprint(tmp_path, pan
         assert rows[path] == 1, path
     views = read_view_names(tmp_path / "r.rrd")
     assert "Robot" in views and "Calibration table" in views
-    assert any(v.startswith("Nominal: error, mean 1.000 mm over ") for v in views) and "Residuals after calibration [mm]: rms 0.100 mm" in views
+    assert any(v.startswith("Nominal: error, mean 1.000 mm over ") for v in views)
+    assert "Residuals after calibration [mm]: rms 0.100 mm" in views
     assert any(v.startswith("Joint coverage at P2") for v in views)
     assert "Lengths [mm]: change, +-1 std, white dot = true change" in views
     assert sorted(p.name for p in tmp_path.iterdir()) == ["r.rrd"]
