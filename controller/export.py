@@ -38,6 +38,7 @@ from spherecal.correction.files.urdf_write import (
 from spherecal.correction.scale import scale_of
 
 from .rigid_fit import RigidFit, joint_side_terms, rigid_approximation
+from .stiffness import MAX_FLEX_STIFFNESS
 
 FORMATS = ("urdf", "mjcf", "yaml")
 
@@ -141,10 +142,13 @@ def calibration_samples(model: RobotModel, folder: str | os.PathLike | None = No
 def mjcf_lost_terms(model: RobotModel) -> tuple[str, ...]:
     """Names of the joint-side parameters an MJCF hinge cannot carry: a non-zero joint-angle scale ``s{i}`` (the
     hinge's angle is the recorded one, not ``(1 + s) q``) and a negative compliance ``c{i}`` (a spring of negative
-    stiffness; :func:`controller.plant.build_mjcf` leaves such a joint rigid). Empty: the MJCF is the whole model."""
+    stiffness; :func:`controller.plant.build_mjcf` leaves such a joint rigid) beyond ``-1 / MAX_FLEX_STIFFNESS``
+    (nearer 0 either way a joint is a rigid hinge, :func:`.stiffness.stiffness_of`: a compliance at float noise,
+    -4e-26 rad/Nm, sent a whole elastic model to the rigid fit). Empty: the MJCF is the whole model."""
     scale, compliance = scale_of(model), compliance_of(model)
+    stiff = 1.0 / MAX_FLEX_STIFFNESS
     return (tuple(f"s{i + 1}" for i in np.flatnonzero(scale))
-            + tuple(f"c{i + 1}" for i in np.flatnonzero(compliance < 0)))
+            + tuple(f"c{i + 1}" for i in np.flatnonzero(compliance < -stiff)))
 
 
 def export_model(model: RobotModel, output_format: str, header: str = "", prefix: str | None = None,

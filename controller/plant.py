@@ -16,10 +16,12 @@ import mujoco
 import numpy as np
 
 from spherecal.correction import RobotModel, link_frames
-from spherecal.correction.elastic import compliance_of, link_angles
+from spherecal.correction.elastic import link_angles
 from spherecal.correction.files.urdf_write import xml_comment
 from spherecal.correction.gravity import has_inertials, inertials_of
 from spherecal.correction.inertials import link_inertias
+
+from .stiffness import stiffness_of
 
 #: Physical defaults of the plant (settings that keep the closed chain stable at 1 kHz).
 TIMESTEP = 1e-3  # [s] the Panda's 1 kHz control rate
@@ -82,12 +84,6 @@ def joint_offsets(model: RobotModel) -> list[tuple[np.ndarray, np.ndarray, np.nd
         else:
             out.append((pos, rotation, -rotation.T @ pos, rotation.T @ z))
     return out
-
-
-def stiffness_of(model: RobotModel) -> np.ndarray:
-    """(n,) joint stiffness [Nm/rad] of ``model``'s ``compliance`` (``1 / c``; 0 marks a rigid joint)."""
-    c = compliance_of(model)
-    return np.divide(1.0, c, out=np.zeros_like(c), where=c > 0)
 
 
 def build_mjcf(

@@ -90,3 +90,29 @@ def test_ik_on_the_elastic_model_puts_the_sagging_plant_on_target():
     landed = build_plant(model).tool_points(result.q[None])[0]  # MuJoCo's sagged links, not our formula
     assert np.linalg.norm(landed - target) < 1e-6
     assert np.linalg.norm(tool_point(load_robot("panda"), result.q) - target) > 1e-4  # rigid IK would miss
+
+
+def test_a_compliance_the_data_left_at_float_noise_is_a_rigid_hinge_and_the_plant_stays_still():
+    """A calibration leaves a compliance the data does not see at float noise or a few 1e-9 rad/Nm (MUKCa panda_6:
+    c1 1.16e-24, c7 1.5e-9 rad/Nm); as springs of 8.6e23 and 6.8e8 Nm/rad MuJoCo diverged within 3 steps (a review).
+    Such joints are rigid hinges; the real compliances stay springs; a negative one at float noise keeps the MJCF
+    whole (it sent an elastic model to the rigid fit)."""
+    from spherecal.controller.export import mjcf_lost_terms
+    from spherecal.controller.stiffness import MAX_FLEX_STIFFNESS
+
+    compliance = np.array([1.16e-24, 1 / 3e4, 1 / 3e4, 1 / 3e4, 2e-8, 1 / 2e5, 1.5e-9])
+    plant = build_plant(with_compliance(load_robot("panda"), compliance))
+    assert plant.flex_joints.tolist() == [1, 2, 3, 5]  # springs softer than MAX_FLEX_STIFFNESS only
+    assert 1.0 / compliance[4] > MAX_FLEX_STIFFNESS > 1.0 / compliance[5]
+    plant.set_state(np.array([0.3, -0.5, 0.4, -2.0, 0.2, 1.8, 0.5]))
+    m, d = plant.mj_model, plant.mj_data
+    for _ in range(1000):
+        mujoco.mj_step1(m, d)
+        plant.apply_joint_gravity()
+        d.ctrl[:] = 0.0
+        mujoco.mj_step2(m, d)
+    assert np.all(np.isfinite(d.qacc)) and d.warning[mujoco.mjtWarning.mjWARN_BADQACC].number == 0
+    assert np.abs(d.qvel).max() < 1e-3
+    noise = with_compliance(load_robot("panda"), np.array([-4.1e-26, 1 / 3e4, 1 / 3e4, 1 / 3e4, 0.0, 0.0, 0.0]))
+    assert mjcf_lost_terms(noise) == ()
+    assert mjcf_lost_terms(with_compliance(load_robot("panda"), -compliance)) == ("c2", "c3", "c4", "c6")
