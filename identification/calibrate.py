@@ -212,7 +212,8 @@ class CalibrationResult:
             f"residual [mm]   before: rms {rms_b * 1e3:.4f}  max {max_b * 1e3:.4f}"
             f"   after: rms {rms_a * 1e3:.4f}  max {max_a * 1e3:.4f}",
             f"identified {len(self.identified)} parameters, condition number {self.condition_number:.3g}"
-            + (f", prior weight {self.problem.prior_weight:g} ({self.effective_unknowns:.1f} effective unknowns)"
+            + (f", prior weight {self.problem.prior_weight:g} ({self.effective_unknowns:.1f} effective unknowns with "
+               f"the {self.problem.n_unknowns - self.problem.n_free_params} fixture centre coordinates)"
                if self.problem is not None and self.problem.prior_weight > 0 else ""),
             f"  {'parameter':<9} {'unit':<7} {'change':>10} {'std':>10}"
             + (f" {'data %':>7}" if self.data_share else ""),

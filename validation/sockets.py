@@ -161,9 +161,9 @@ class SocketReport:
                          "configurations): this is no held-out check")
         for m in self.models:
             spread, error = self.summary(m)
-            text = "-" if error is None else f"{error * 1e3:.3f}"
+            text = "" if error is None else f"   mean |distance error| {error * 1e3:.3f} mm"  # none held out: not said
             mae = f"{'-':>8}" if spread is None else f"{spread * 1e3:8.3f}"
-            lines.append(f"held-out ({fixtures}) {m:<11} test MAE {mae} mm   mean |distance error| {text} mm")
+            lines.append(f"held-out ({fixtures}) {m:<11} test MAE {mae} mm{text}")
         forecast = self.predicted_summary()
         if forecast is not None:
             lines.append(f"held-out ({fixtures}) predicted   test MAE {forecast * 1e3:8.3f} mm (the calibration's "

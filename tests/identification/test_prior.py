@@ -161,3 +161,6 @@ def test_data_share_is_how_little_the_estimate_follows_the_prior():
         followed = (moved[k] - x[k]) / delta
         assert abs(followed - (1.0 - share[k])) < 0.02, (name, followed, share[k])
     assert "held by the prior (the data gives under 10 % of the estimate): c1" in result.summary()
+    # the summary's effective unknowns count the centres too, and says so (a review read them as parameters)
+    assert (f"({result.effective_unknowns:.1f} effective unknowns with the {centre_coords} fixture centre "
+            "coordinates)") in result.summary()

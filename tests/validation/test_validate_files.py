@@ -99,5 +99,6 @@ def test_report_says_when_held_out_sockets_beat_the_prediction_and_counts_one_fi
 
     low, inside = report(1.5e-3), report(2.5e-3)
     assert "held-out (1 fixture) calibrated" in low and "fixtures)" not in low
+    assert "distance error" not in low  # no known distance held out: nothing said (it printed '... | -  mm')
     assert "measured 1.500 mm is 0.38x of it, below the band: better than the calibration predicted" in low
     assert "below the band" not in inside
