@@ -53,6 +53,11 @@ def test_mjcf_and_urdf_carry_the_same_bodies(panda, rng, elastic) -> None:
     q = model.random_configurations(5, rng)
     ours = _bodies(mjcf, [f"link{i}" for i in range(1, 8)] + ["payload"], q, [f"joint{i}" for i in range(1, 8)])
     theirs = _bodies(urdf, [f"arm_link{i}" for i in range(1, 9)], q, [f"arm_joint{i}" for i in range(1, 8)])
+    if elastic:  # each rotor's mass is its link's, on the hinge axis: the link and its rotor carry the URDF link's
+        rotors = _bodies(mjcf, [f"rotor{i}" for i in range(1, 8)], q, [f"joint{i}" for i in range(1, 8)])
+        rotors = [r for k in range(len(q)) for r in [*rotors[7 * k: 7 * k + 7], (0.0, np.zeros(3), None)]]  # payload
+        ours = [(m1 + mr, (m1 * c1 + mr * cr) / (m1 + mr), i1) for (m1, c1, i1), (mr, cr, _)
+                in zip(ours, rotors, strict=True)]
     for (m1, c1, i1), (m2, c2, i2) in zip(ours, theirs, strict=True):
         assert m1 == pytest.approx(m2, rel=1e-12) and m1 > 0.0
         np.testing.assert_allclose(c1, c2, rtol=0.0, atol=1e-12)
