@@ -218,7 +218,10 @@ def nominal_ik_controller(model: RobotModel, target: np.ndarray, q_seed: np.ndar
     if not result.converged:
         raise UnreachableError(
             f"target {np.round(target, 4).tolist()} m: out of reach of {model.name!r} from the seed "
-            f"(IK misses by {result.position_error * 1e3:.3f} mm, {np.rad2deg(result.orientation_error):.3f} deg)"
+            f"(IK misses by {result.position_error * 1e3:.3f} mm, {np.rad2deg(result.orientation_error):.3f} deg): the "
+            "nominal controller, modelled as IK from the seed without restarts, stalls there (a joint limit, a "
+            "singular posture); a seed nearer the target, or corrected_ik (it tries starts around the seed), may "
+            "reach it"
         )
     return result.q
 

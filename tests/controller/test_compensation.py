@@ -231,3 +231,18 @@ def test_corrected_ik_from_a_stretched_out_seed_reaches_a_reachable_target():
     assert np.all(q >= panda.lower) and np.all(q <= panda.upper)
     with pytest.raises(UnreachableError):
         corrected_ik(panda, np.array([2.0, 0.0, 0.3]), seed)
+
+
+def test_a_target_the_seeds_ik_stalls_short_of_names_what_may_reach_it() -> None:
+    """From a singular seed held by a joint limit the nominal controller's model (IK from the seed, no restarts)
+    stalls short of a target the arm reaches: the refusal says so and names corrected_ik (a review read 'out of reach'
+    of targets corrected_ik reached to 1e-11 m)."""
+    from spherecal.controller.compensation import nominal_ik_controller
+
+    panda = load_robot("panda")
+    q_seed = np.array([0.0, 0.0, 0.0, -0.0698, 0.0, 0.0, 0.0])  # stretched out, q4 at its limit: singular
+    target = tool_point(panda, np.array([1.852, 0.646, 1.664, -2.497, 1.752, 0.704, -2.425]))
+    reached = corrected_ik(panda, target, q_seed, nominal=panda)
+    assert np.linalg.norm(tool_point(panda, reached) - target) < 1e-9
+    with pytest.raises(UnreachableError, match="IK from the seed without restarts, stalls there .* corrected_ik"):
+        nominal_ik_controller(panda, target, q_seed)
