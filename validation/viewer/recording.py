@@ -42,6 +42,7 @@ import numpy as np
 
 from spherecal.correction import RobotModel, link_frames, tool_point
 from spherecal.correction.files.atomic import OutputError
+from spherecal.correction.files.provenance import comment_block
 from spherecal.correction.layout import ParamKind
 
 from .blueprint import build_blueprint
@@ -317,8 +318,6 @@ class Recording:
         """The provenance block (:func:`correction.files.provenance.provenance`: command, versions, seed, inputs with
         their SHA-256) as a text panel (``tables/provenance``) and as the recording property ``spherecal_provenance``
         (JSON), as every other output of the command records it."""
-        from spherecal.correction.files.provenance import comment_block
-
         self.text("provenance", comment_block(block), "Provenance")
         self.stream.send_property("spherecal_provenance", self.rr.AnyValues(provenance=json.dumps(block)))
 
