@@ -41,7 +41,9 @@ NANOSECONDS_ABOVE = 1e15
 #: A time column named with its unit (``time_ns``, ``stamp [ms]``, ``__time`` of PlotJuggler) -> seconds per unit.
 _TIMED = re.compile(r"^(t|time|stamp|timestamp|%time|__time)(?:[ _]?\[?(ns|us|µs|ms|s)\]?)?$", re.I)
 _UNITS = {"ns": 1e-9, "us": 1e-6, "µs": 1e-6, "ms": 1e-3, "s": 1.0}
-#: Sampling steps of a joint recording believed [s]: 10 kHz to 1 Hz (a controller's 1 kHz, a logger's 10 Hz).
+#: Sampling steps of a joint recording believed [s]: 10 kHz up to, not including, 1 Hz (a controller's 1 kHz, a
+#: logger's 10 Hz); a step of exactly 1 is a 1 kHz stream stamped in milliseconds (a review: read as seconds, its
+#: stillness segmentation failed on a '30314 s' stretch).
 STEP_RANGE = (1e-4, 1.0)
 
 
@@ -569,16 +571,16 @@ def _check_step(t: np.ndarray, path: Path, field: str, rows) -> None:
         return
     step = float(np.median(steps))
     low, high = STEP_RANGE
-    if low <= step <= high:
+    if low <= step < high:
         return
     guesses = [(1e-9, "nanoseconds"), (1e-6, "microseconds"), (1e-3, "milliseconds")]
-    likely = next((unit for scale, unit in guesses if low <= step * scale <= high), None) if step > high else (
-        "microseconds read as nanoseconds" if low <= step * 1e3 <= high else None)
+    likely = next((unit for scale, unit in guesses if low <= step * scale < high), None) if step >= high else (
+        "microseconds read as nanoseconds" if low <= step * 1e3 < high else None)
     k = int(np.flatnonzero(np.diff(t) > 0)[0]) + 1
     raise RecordingError(
         f"{rows[k]}, field {field!r}: samples {step:.3g} s apart (median), a joint recording's are "
-        f"{low:g}-{high:g} s: the column is not in seconds{f' ({likely}?)' if likely else ''}; give seconds, "
-        "nanoseconds as integers above 1e15, or name the unit in the header (time_ns, time_us, time_ms)"
+        f"{low:g} s to under {high:g} s: the column is not in seconds{f' ({likely}?)' if likely else ''}; give "
+        "seconds, nanoseconds as integers above 1e15, or name the unit in the header (time_ns, time_us, time_ms)"
     )
 
 

@@ -171,7 +171,9 @@ def segment(
                     f"{where}field 'q': ambiguous: still stretches {first.start:.2f}-{first.end:.2f} s and "
                     f"{second.start:.2f}-{second.end:.2f} s are {gap * 1e3:.1f} mm apart (less than "
                     f"{s.min_separation * 1e3:g} mm): one socket twice or two sockets too close; label the "
-                    "fixtures (a 'fixture' column)"
+                    "fixtures (a 'fixture' column), or, where the arm moved on in one socket without leaving it, let "
+                    f"the stillness take the nominal model's own error (a real arm's several mm over a self-motion): "
+                    f"--still-radius above {s.still_radius * 1e3:g} mm"
                 )
     return found
 

@@ -296,3 +296,14 @@ def test_a_topic_typed_without_its_leading_slash_is_the_bags(recording, tmp_path
     assert main(["import", str(bag), "--format", "bag", "--robot", str(PANDA), "--out", str(out), "--topic",
                  "joint_states", "--max-per-fixture", "100000"]) == 0
     _check_split(out, true, t, q, truth)
+
+
+def test_a_1khz_csv_stamped_in_milliseconds_is_refused(tmp_path, capsys) -> None:
+    """Milliseconds at 1 kHz step by exactly 1: read as seconds (the step range's upper end was inclusive), the
+    stillness segmentation failed on a '50.00-30314.00 s' stretch (a review)."""
+    q = np.tile([0.0, -0.3, 0.0, -2.2, 0.0, 2.0, 0.8], (50, 1))
+    rows = "\n".join(f"{k}.0," + ",".join(repr(float(v)) for v in q[k]) for k in range(50))
+    (tmp_path / "ms.csv").write_text("time," + ",".join(NAMES) + "\n" + rows + "\n")
+    argv = ["import", str(tmp_path / "ms.csv"), "--format", "csv", "--robot", str(PANDA), "--out", str(tmp_path / "o")]
+    error = _refused(argv, tmp_path, capsys)
+    assert "field 'time': samples 1 s apart (median)" in error and "(milliseconds?)" in error
