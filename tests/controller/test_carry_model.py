@@ -5,7 +5,6 @@ from __future__ import annotations
 
 from dataclasses import replace
 
-import mujoco
 import numpy as np
 import pytest
 
@@ -23,6 +22,7 @@ from spherecal.correction import (
     tool_pose,
 )
 from spherecal.correction.elastic import with_compliance
+from tests.controller.settle import settle
 
 COMPLIANCE = np.array([0.0, 1 / 2e4, 1 / 3e4, 1 / 3e4, 1 / 1e4, 0.0, 0.0])
 HOME = np.array([0.0, -0.3, 0.0, -2.2, 0.0, 2.0, 0.8])
@@ -61,12 +61,7 @@ def test_ik_with_orientation_lands_the_elastic_plant_on_the_target() -> None:
     landing = {}
     for name, q in (("elastic", result.q), ("rigid", rigid.q)):
         plant.set_state(q)
-        m, d = plant.mj_model, plant.mj_data
-        for _ in range(3000):
-            mujoco.mj_step1(m, d)
-            plant.apply_joint_gravity()
-            d.ctrl[:] = 0.0
-            mujoco.mj_step2(m, d)
+        settle(plant)
         landing[name] = np.linalg.norm(plant.tool_position() - target)
     assert landing["rigid"] > 3e-4  # the rigid model's answer sags off the target
     assert landing["elastic"] < 2e-5  # the full model's lands (second order in the sag)

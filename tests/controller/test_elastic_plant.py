@@ -9,6 +9,7 @@ import pytest
 from spherecal.controller.plant import build_plant
 from spherecal.correction import SpherecalError, load_robot, tool_point
 from spherecal.correction.elastic import link_angles, with_compliance
+from tests.controller.settle import settle
 
 COMPLIANCE = np.array([0.0, 1 / 3e4, 1 / 3e4, 1 / 3e4, 0.0, 0.0, 0.0])
 
@@ -19,13 +20,9 @@ def test_sag_settles_where_the_elastic_model_puts_it():
     assert plant.elastic and plant.flex_joints.tolist() == [1, 2, 3]
     q0 = np.array([0.3, -0.5, 0.4, -2.0, 0.2, 1.8, 0.5])
     plant.set_state(q0)
-    m, d = plant.mj_model, plant.mj_data
+    d = plant.mj_data
     d.qpos[plant.flex_qpos] = 0.0  # start rigid: MuJoCo's dynamics must find the sag
-    for _ in range(3000):
-        mujoco.mj_step1(m, d)
-        plant.apply_joint_gravity()
-        d.ctrl[:] = 0.0
-        mujoco.mj_step2(m, d)
+    settle(plant, 3000)
     assert np.abs(plant.q - q0).max() < 1e-6  # the motors (readings) held
     sag = d.qpos[plant.flex_qpos]
     expected = (link_angles(model, plant.q) - plant.q)[[1, 2, 3]]
@@ -105,12 +102,8 @@ def test_a_compliance_the_data_left_at_float_noise_is_a_rigid_hinge_and_the_plan
     assert plant.flex_joints.tolist() == [1, 2, 3, 5]  # springs softer than MAX_FLEX_STIFFNESS only
     assert 1.0 / compliance[4] > MAX_FLEX_STIFFNESS > 1.0 / compliance[5]
     plant.set_state(np.array([0.3, -0.5, 0.4, -2.0, 0.2, 1.8, 0.5]))
-    m, d = plant.mj_model, plant.mj_data
-    for _ in range(1000):
-        mujoco.mj_step1(m, d)
-        plant.apply_joint_gravity()
-        d.ctrl[:] = 0.0
-        mujoco.mj_step2(m, d)
+    d = plant.mj_data
+    settle(plant, 1000)
     assert np.all(np.isfinite(d.qacc)) and d.warning[mujoco.mjtWarning.mjWARN_BADQACC].number == 0
     assert np.abs(d.qvel).max() < 1e-3
     noise = with_compliance(load_robot("panda"), np.array([-4.1e-26, 1 / 3e4, 1 / 3e4, 1 / 3e4, 0.0, 0.0, 0.0]))
@@ -130,12 +123,8 @@ def test_the_plant_sags_as_the_elastic_model_with_every_joint_compliant(conventi
                             np.array([0.0, *[1 / 3e4] * 6]))
     plant = build_plant(model)
     plant.set_state(np.array([0.4, -0.3, 0.5, -2.2, 0.6, 2.1, -0.4]))
-    m, d = plant.mj_model, plant.mj_data
-    for _ in range(3000):
-        mujoco.mj_step1(m, d)
-        plant.apply_joint_gravity()
-        d.ctrl[:] = 0.0
-        mujoco.mj_step2(m, d)
+    settle(plant, 3000)
+    m = plant.mj_model
     assert np.linalg.norm(plant.tool_position() - tool_point(model, plant.q)) < 3e-6
     total = m.body_subtreemass[m.body("link0").id]
     assert total == pytest.approx(sum(e["mass"] for e in model.extras["inertials"]) + model.extras["payload"]["mass"]
