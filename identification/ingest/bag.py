@@ -17,10 +17,12 @@ import numpy as np
 from spherecal.correction.model import RobotModel
 
 from .importers import (
+    MAX_JOINT_SPEED,
     Recording,
     RecordingError,
     arm_joint_names,
     check_source,
+    first_jump,
     joint_name_candidates,
     match_joints,
     missing_joints,
@@ -28,11 +30,6 @@ from .importers import (
 
 #: Default topic.
 TOPIC = "/joint_states"
-#: Fastest joint motion believed between two messages [rad/s] (a cobot's joints reach 2-3 rad/s); faster is
-#: two streams interleaved by their stamps (a clock reset, two recordings or two publishers in one bag).
-MAX_JOINT_SPEED = 10.0
-#: Smallest step checked against :data:`MAX_JOINT_SPEED` [rad] (encoder noise between close stamps is not a jump).
-MIN_JUMP = 0.05
 
 
 def read_bag(path: str | os.PathLike, model: RobotModel, topic: str = TOPIC) -> Recording:
@@ -173,20 +170,17 @@ def _refuse_interleaved(q: np.ndarray, t: np.ndarray, rows: list[str], stamps: l
         RecordingError: one line naming the message, the jump and, when the stamps went back in the bag's
             order, the first message where they did.
     """
-    if len(t) < 2:
+    found = first_jump(q, t)
+    if found is None:
         return
-    step = np.abs(np.diff(q, axis=0)).max(axis=1)
-    dt = np.diff(t)
-    jumps = np.flatnonzero((step > MIN_JUMP) & (step > MAX_JOINT_SPEED * dt))
-    if not len(jumps):
-        return
-    k = int(jumps[0]) + 1
+    k, step, dt = found
     back = np.flatnonzero(np.diff(stamps) < 0)
     why = (f"its stamps go back {stamps[back[0]] - stamps[back[0] + 1]:.3f} s at message {back[0] + 2} (a clock "
            "reset or two recordings in one bag?)" if len(back) else
-           "a clock reset, two recordings in one bag or two publishers on one topic?")
+           "a clock reset, two recordings in one bag or two publishers on one topic? Or, back where it was a few "
+           "messages on, one joint reading that jumped (an encoder glitch)")
     raise RecordingError(
-        f"{rows[k]}, field 'header.stamp': the joints move {step[k - 1]:.3g} rad in {dt[k - 1]:.3g} s from the "
+        f"{rows[k]}, field 'header.stamp': the joints move {step:.3g} rad in {dt:.3g} s from the "
         f"message stamped before it (faster than {MAX_JOINT_SPEED:g} rad/s): messages of two streams interleaved by "
         f"their stamps; {why}"
     )

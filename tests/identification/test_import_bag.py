@@ -307,3 +307,20 @@ def test_a_1khz_csv_stamped_in_milliseconds_is_refused(tmp_path, capsys) -> None
     argv = ["import", str(tmp_path / "ms.csv"), "--format", "csv", "--robot", str(PANDA), "--out", str(tmp_path / "o")]
     error = _refused(argv, tmp_path, capsys)
     assert "field 'time': samples 1 s apart (median)" in error and "(milliseconds?)" in error
+
+
+def test_a_joint_reading_that_jumps_is_refused_in_a_csv_as_in_a_bag(recording, tmp_path, capsys) -> None:
+    """One row of joint 7 0.08 rad off (an encoder glitch): a bag refused it, a CSV passed it to the segmentation and
+    wrote its fixtures (a review). Both refuse it now, naming the row and the glitch."""
+    true, t, q, _ = recording
+    glitch = q.copy()
+    glitch[700, 6] += 0.08
+    rows = "\n".join(f"{float(t[k])!r}," + ",".join(repr(float(v)) for v in glitch[k]) for k in range(len(t)))
+    (tmp_path / "rec.csv").write_text("time," + ",".join(NAMES) + "\n" + rows + "\n")
+    argv = ["import", str(tmp_path / "rec.csv"), "--format", "csv", "--robot", str(PANDA), "--out", str(tmp_path / "o")]
+    error = _refused(argv, tmp_path, capsys)
+    assert "rec.csv: row 702, field 'time': the joints move 0.08" in error
+    assert "an encoder glitch: remove the row" in error
+    bag = write_bag(tmp_path / "rec", "sqlite3", t, glitch, NAMES)
+    error = _refused(["import", str(bag), "--format", "bag", *argv[4:]], tmp_path, capsys)
+    assert "one joint reading that jumped (an encoder glitch)" in error
