@@ -37,7 +37,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from spherecal.correction import RobotModel, geometric_part, param_jacobian, tool_point
+from spherecal.correction import RobotModel, geometric_part, param_jacobian, tool_point, tool_pose
 
 #: Workspace configurations drawn for the fit, and as many again to measure the loss.
 WORKSPACE_SAMPLES = 2000
@@ -66,6 +66,8 @@ class RigidFit:
         seed: seed of both workspace samples.
         full_range_rms, dropped_full_range_rms: rms distance to the full model over configurations uniform in
             the joint limits, of the fit and of the dropped model [m] (where the arm was not calibrated).
+        workspace_turn_max: largest angle between the tool frames of the fit and of the full model over the
+            independent workspace sample [rad] (the fit matches points, a tool's orientation follows the frame).
     """
 
     model: RobotModel
@@ -81,6 +83,7 @@ class RigidFit:
     seed: int = 0
     full_range_rms: float = 0.0
     dropped_full_range_rms: float = 0.0
+    workspace_turn_max: float = 0.0
 
     def summary(self, output_format: str = "URDF") -> str:
         """One line: what the rigid approximation loses against the full model, in mm (``output_format``: the
@@ -96,7 +99,8 @@ class RigidFit:
                 f"{self.workspace_rms * 1e3:.3f} mm rms (max {self.workspace_max * 1e3:.3f} mm) over "
                 f"{self.workspace} configurations {where} (dropping the terms: "
                 f"{self.dropped_workspace_rms * 1e3:.3f} mm), {self.full_range_rms * 1e3:.3f} mm over the whole "
-                f"joint range (dropping: {self.dropped_full_range_rms * 1e3:.3f} mm); seed {self.seed}")
+                f"joint range (dropping: {self.dropped_full_range_rms * 1e3:.3f} mm); its tool frame turns by up to "
+                f"{np.rad2deg(self.workspace_turn_max):.3g} deg there; seed {self.seed}")
 
 
 def joint_side_terms(model: RobotModel) -> tuple[str, ...]:
@@ -174,6 +178,7 @@ def rigid_approximation(model: RobotModel, recorded: np.ndarray | None = None,
             break
     check = tool_point(model, check_q)
     distance = np.linalg.norm(tool_point(rigid, check_q) - check, axis=1)
+    turn = _largest_turn(tool_pose(rigid, check_q)[:, :3, :3], tool_pose(model, check_q)[:, :3, :3])
     return RigidFit(
         model=rigid, dropped=dropped, terms=terms,
         fit_rms=float(np.sqrt(misfit / len(fit_q))), dropped_fit_rms=float(np.sqrt(start / len(fit_q))),
@@ -182,4 +187,15 @@ def rigid_approximation(model: RobotModel, recorded: np.ndarray | None = None,
         recorded=count, workspace=workspace, seed=seed,
         full_range_rms=_rms(tool_point(rigid, full_q), tool_point(model, full_q)),
         dropped_full_range_rms=_rms(tool_point(dropped, full_q), tool_point(model, full_q)),
+        workspace_turn_max=turn,
     )
+
+
+def _largest_turn(a: np.ndarray, b: np.ndarray) -> float:
+    """Largest rotation angle [rad] between (N, 3, 3) rotations ``a`` and ``b``, pair by pair (atan2 of the relative
+    rotation's axis part and its trace: accurate near zero, where arccos of the trace is not)."""
+    relative = np.einsum("nji,njk->nik", a, b)
+    axis = np.stack([relative[:, 2, 1] - relative[:, 1, 2], relative[:, 0, 2] - relative[:, 2, 0],
+                     relative[:, 1, 0] - relative[:, 0, 1]], axis=1)
+    trace = np.trace(relative, axis1=1, axis2=2)
+    return float(np.max(np.arctan2(0.5 * np.linalg.norm(axis, axis=1), 0.5 * (trace - 1.0)))) if len(a) else 0.0
