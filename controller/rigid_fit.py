@@ -97,10 +97,10 @@ class RigidFit:
         return (f"{article} {output_format} cannot carry {names}: wrote the best rigid fit to the full model; "
                 f"it differs from it by "
                 f"{self.workspace_rms * 1e3:.3f} mm rms (max {self.workspace_max * 1e3:.3f} mm) over "
-                f"{self.workspace} configurations {where} (dropping the terms: "
+                f"{self.workspace} configurations {where}, where its tool frame turns by up to "
+                f"{np.rad2deg(self.workspace_turn_max):.3g} deg (dropping the terms: "
                 f"{self.dropped_workspace_rms * 1e3:.3f} mm), {self.full_range_rms * 1e3:.3f} mm over the whole "
-                f"joint range (dropping: {self.dropped_full_range_rms * 1e3:.3f} mm); its tool frame turns by up to "
-                f"{np.rad2deg(self.workspace_turn_max):.3g} deg there; seed {self.seed}")
+                f"joint range (dropping: {self.dropped_full_range_rms * 1e3:.3f} mm); seed {self.seed}")
 
 
 def joint_side_terms(model: RobotModel) -> tuple[str, ...]:
