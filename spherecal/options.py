@@ -210,6 +210,23 @@ def spread_mm(text: str) -> float:
     return millimetres(text, upper=100.0)
 
 
+#: Least length of the stillness segmentation [mm] (a radius, a drift, a separation): a joint reading's own jitter
+#: moves a tool point about this much, so a smaller one tells nothing apart; below it, metres were typed (a review:
+#: '--min-separation 0.03' for 30 mm was read as 0.03 mm, turning the check off).
+SEGMENT_FLOOR_MM = 0.1
+
+
+def segment_mm(text: str) -> float:
+    """A length of the stillness segmentation [mm]: from :data:`SEGMENT_FLOOR_MM` to 100 mm (never 0)."""
+    value = millimetres(text, allow_zero=False, upper=100.0)
+    if value < SEGMENT_FLOOR_MM:
+        raise argparse.ArgumentTypeError(
+            f"{text} mm is below {SEGMENT_FLOOR_MM:g} mm, less than a joint reading's jitter moves the tool point: "
+            f"this option is in millimetres; for {value * 1e3:g} mm write {value * 1e3:g}"
+        )
+    return value
+
+
 # ----------------------------------------------------------------------------- deprecations
 def warn(message: str) -> None:
     """A one-line warning on stderr."""

@@ -142,3 +142,15 @@ def test_a_repeatable_option_may_still_be_repeated() -> None:
     args = build_parser().parse_args(["calibrate", "--robot", "panda", "--samples", "a.csv", "--exclude-fixture",
                                       "A", "--exclude-fixture", "B", "--out", "c.yaml"])
     assert args.exclude_fixture == ["A", "B"] and not hasattr(args, "_given_once")
+
+
+@pytest.mark.parametrize("option", ["--still-radius", "--max-spread", "--min-separation"])
+def test_segmentation_lengths_typed_in_metres_or_zero_are_refused(option, tmp_path, capsys) -> None:
+    """'--min-separation 0.03' (30 mm typed in metres) was read as 0.03 mm and turned the check off; 0 passed to the
+    segmentation, which then blamed the data (a review). Below 0.1 mm, or 0, the option is refused in one line."""
+    out = tmp_path / "out"
+    for value, said in (("0.03", "for 30 mm write 30"), ("0", "expected a number > 0 [mm]")):
+        assert main(["import", str(tmp_path / "rec.csv"), "--format", "csv", "--robot", "panda", option, value,
+                     "--out", str(out)]) == 1
+        err = capsys.readouterr().err
+        assert err.count("\n") == 1 and option in err and said in err and not out.exists()

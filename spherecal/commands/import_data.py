@@ -11,7 +11,7 @@ FORMATS = ("mukca", "bag", "csv")
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     """Register the options of `spherecal import`."""
-    from spherecal.options import add_robot, add_seed, at_most, count, duration, spread_mm
+    from spherecal.options import add_robot, add_seed, at_most, count, duration, segment_mm
 
     parser.add_argument(
         "source",
@@ -44,14 +44,14 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         "still; defaults measured on MUKCa's real Panda (nominal spread in a socket: 8 mm mean, 19 mm max)"
     )
     group.add_argument("--window", type=duration, default=0.5, help="stillness window [s] (default 0.5)")
-    group.add_argument("--still-radius", type=spread_mm, default=3.0,
+    group.add_argument("--still-radius", type=segment_mm, default=3.0,
                        help="tool point within this of itself over a window [mm] (default 3)")
     group.add_argument("--min-duration", type=duration, default=2.0, help="shortest fixture [s] (default 2)")
     group.add_argument("--min-configurations", type=count(1), default=20,
                        help="fewest distinct configurations of a fixture (default 20)")
-    group.add_argument("--max-spread", type=spread_mm, default=20.0,
+    group.add_argument("--max-spread", type=segment_mm, default=20.0,
                        help="refuse a fixture drifting further from its mean [mm] (default 20)")
-    group.add_argument("--min-separation", type=spread_mm, default=30.0,
+    group.add_argument("--min-separation", type=segment_mm, default=30.0,
                        help="refuse two fixtures closer than this [mm] (default 30)")
 
 
