@@ -272,3 +272,23 @@ def test_a_colour_scale_beside_flat_points_is_tall_enough_to_read(tmp_path, rng)
     span = scale[:, 2].max() - scale[:, 2].min()
     assert span == pytest.approx(max(extent, SCALE_HEIGHT)) and 2 * radius < span / 20  # apart, one above another
     assert abs(np.mean(scale[:, 2]) - 0.1) < 1e-3  # centred on the points' height
+
+
+def test_a_viewer_that_cannot_start_is_one_line_and_leaves_nothing(tmp_path, monkeypatch) -> None:
+    """--spawn without a Rerun viewer on PATH (or a display) ended in a traceback of 30 lines (a review: a message
+    naming 'None'); it is one line naming --spawn, and a staged .rrd is removed."""
+    import rerun
+
+    from spherecal.correction.files.atomic import OutputError
+    from spherecal.validation.viewer.recording import Recording
+
+    def no_viewer(self, *args, **kwargs):
+        raise RuntimeError("Failed to find Rerun Viewer executable in PATH.\n\n    You can install ...")
+
+    monkeypatch.setattr(rerun.RecordingStream, "spawn", no_viewer)
+    for path in (None, tmp_path / "v.rrd"):
+        with pytest.raises(OutputError) as refused:
+            Recording(path, spawn=True)
+        assert str(refused.value).startswith("--spawn: cannot start a Rerun viewer: Failed to find Rerun Viewer")
+        assert "\n" not in str(refused.value)
+    assert list(tmp_path.iterdir()) == []

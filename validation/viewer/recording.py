@@ -108,7 +108,12 @@ class Recording:
                 self.abort()
                 raise OutputError(f"{self.path}: cannot write the recording: {_first_line(error)}") from None
         if spawn:
-            self.stream.spawn(connect=self.path is None)
+            try:
+                self.stream.spawn(connect=self.path is None)
+            except Exception as error:  # no viewer on PATH, no display: one line, nothing left behind
+                self.abort()
+                raise OutputError(f"--spawn: cannot start a Rerun viewer: {_first_line(error)} (or write the "
+                                  "recording with --rrd FILE and open it elsewhere)") from None
 
     def _note(self, section: str, key: str, name: str) -> None:
         self.contents.setdefault(section, {})[key] = name
@@ -348,7 +353,9 @@ class Recording:
             os.replace(self._tmp, self.path)
         except Exception as error:  # Rerun raises its own types; the user sees one line
             self.abort()
-            raise OutputError(f"{self.path}: cannot write the recording: {_first_line(error)}") from None
+            where = (f"{self.path}: cannot write the recording" if self.path is not None else
+                     "--spawn: cannot stream the recording to a Rerun viewer (no display? write it with --rrd FILE)")
+            raise OutputError(f"{where}: {_first_line(error)}") from None
         return self.path
 
     def abort(self) -> None:
