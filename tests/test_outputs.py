@@ -334,3 +334,29 @@ def test_an_output_inside_the_installed_package_is_refused_before_any_work(files
     monkeypatch.chdir(Path(correction_package.__file__).parent)  # a relative name, from inside the package
     refused(["export", files / "robot.yaml", "--format", "urdf", "--out", "cal.urdf"], package, capsys,
             "cal.urdf: field '--out': is inside the installed spherecal package")
+
+
+def test_campaign_and_plan_keep_a_users_file_and_replace_their_own(tmp_path, capsys, monkeypatch) -> None:
+    """`campaign --out DIR` replaced a user's own table2.csv and `plan --out FILE` a user's FILE, exit 0 (a review);
+    as simulate and demo do, they replace only what an earlier run of theirs wrote (its provenance line)."""
+    from spherecal.cli import main
+    from spherecal.correction.files.earlier_run import written_by
+
+    campaign = ["campaign", "--sets", "1", "--per-fixture", "20", "--configurations", "50", "--rows", "P1", "--out"]
+    mine = tmp_path / "mine"
+    mine.mkdir()
+    (mine / "table2.csv").write_text("my own table\n")
+    refused([*campaign, mine], tmp_path, capsys,
+            "table2.csv: field '--out': exists and was not written by an earlier `spherecal campaign`")
+    assert (mine / "table2.csv").read_text() == "my own table\n"
+    monkeypatch.setattr("sys.argv", ["spherecal", *campaign, str(tmp_path / "c")])  # the command line it records
+    assert main([*campaign, str(tmp_path / "c")]) == 0 and main([*campaign, str(tmp_path / "c")]) == 0  # its own
+    assert written_by(tmp_path / "c" / "table2.csv", "spherecal campaign")
+    assert written_by(tmp_path / "c" / "table2.md", "spherecal campaign")
+    assert not written_by(tmp_path / "c" / "table2.csv", "spherecal plan")
+    report = tmp_path / "report.json"
+    report.write_text('{"provenance": {"command": "spherecal plan --out report.json"}}')
+    assert written_by(report, "spherecal plan") and not written_by(report, "spherecal campaign")
+    report.write_text('{"a": 1}')
+    refused(["plan", "--samples", tmp_path / "c" / "table2.csv", "--out", report], tmp_path, capsys,
+            "report.json: field '--out': exists and was not written by an earlier `spherecal plan`")

@@ -14,6 +14,7 @@ to simulated data. A file is the earlier run's own when it carries the run's pro
 
 from __future__ import annotations
 
+import json
 import os
 from collections.abc import Callable
 from pathlib import Path
@@ -58,6 +59,28 @@ def _leading_comments(path: Path) -> list[str]:
 def leading_comments(path: str | os.PathLike) -> list[str]:
     """The ``#`` lines a text file starts with (its first :data:`HEAD_BYTES`), ``#`` and one space removed."""
     return _leading_comments(Path(path))
+
+
+def written_by(path: str | os.PathLike, command: str) -> bool:
+    """Whether an existing file carries the provenance of an earlier ``command`` run (``spherecal plan``): a JSON
+    report whose ``provenance.command`` starts with it, or a text file (CSV, Markdown) whose leading comment holds
+    the line ``command: <command> ...`` (``# `` lines, or an opening ``<!--``). The command line is the one
+    :func:`~.provenance.provenance` recorded (the program's name, ``spherecal``, then its arguments): a run through
+    another entry point does not count as one, and its outputs are kept (the safe way round)."""
+    path = Path(path)
+    if path.suffix == ".json":
+        try:
+            data = json.loads(read_text(path, SpherecalError, limit=MAX_FILE_BYTES))
+        except (SpherecalError, OSError, UnicodeDecodeError, ValueError):
+            return False
+        made = data.get("provenance") if isinstance(data, dict) else None
+        return isinstance(made, dict) and str(made.get("command", "")).startswith(f"{command} ")
+    try:
+        with open(path, "rb") as handle:
+            head = handle.read(HEAD_BYTES).decode("utf-8", errors="replace").splitlines()[:3]
+    except OSError:
+        return False
+    return any(line.lstrip("#<!- ").startswith(f"command: {command} ") for line in head)
 
 
 def refuse_unless_own(files: list[str | os.PathLike], option: str, command: str,

@@ -63,6 +63,7 @@ def run(args: argparse.Namespace) -> int:
         TABLE_FILES,
         CampaignConfig,
         format_table,
+        refuse_foreign_tables,
         run_and_write,
     )
     from spherecal.validation.experiments.experiment import joint_stiffness
@@ -80,6 +81,7 @@ def run(args: argparse.Namespace) -> int:
         raise fail(f"--per-fixture {args.per_fixture} > {args.seconds:g} s of 1 kHz readings")
     check_folder(args.out)
     outputs = planned_outputs(args, {"--out": [Path(args.out) / name for name in TABLE_FILES]})
+    refuse_foreign_tables(args.out)
     config = CampaignConfig(
         stiffness=tuple(joint_stiffness(args.stiffness, 7) or ()),  # the campaign's arm is the embedded Panda
         model=args.model,

@@ -107,6 +107,7 @@ def run(args: argparse.Namespace) -> int:
     if args.per_fixture < 10:
         raise fail(f"--per-fixture must be >= 10, got {args.per_fixture}")
     outputs = planned_outputs(args, {"--rrd": args.rrd, "--analysis": args.analysis, "--out": args.out})
+    plan_files.refuse_foreign_outputs({"--out": args.out, "--analysis": args.analysis, "--rrd": args.rrd})
     if args.analysis is not None:
         if args.scheduler is not None:
             raise fail("--scheduler: the --analysis runs on the built-in process pool (--workers) only")

@@ -35,6 +35,7 @@ import numpy as np
 
 from spherecal.correction import SpherecalError
 from spherecal.correction.elastic import with_stiffness
+from spherecal.correction.files.earlier_run import refuse_unless_own, written_by
 from spherecal.correction.files.outputs import OutputSet
 from spherecal.correction.files.provenance import comment_block, provenance
 from spherecal.identification.workflow import WorkflowOptions, run_workflow
@@ -343,6 +344,18 @@ def table_markdown(rows: list[TableRow], comment: str = "") -> str:
 
 #: The files :func:`write_tables` writes into its folder.
 TABLE_FILES = ("table2.csv", "table2.md")
+
+
+def refuse_foreign_tables(folder: str | os.PathLike) -> None:
+    """Refuse to replace an existing ``table2.csv`` or ``table2.md`` in ``folder`` that an earlier ``spherecal
+    campaign`` did not write (its provenance line), as ``simulate`` and ``demo`` do (a review: a user's own
+    ``table2.csv`` was overwritten).
+
+    Raises:
+        OutputError: one line naming the file and ``--out``.
+    """
+    refuse_unless_own([Path(folder) / name for name in TABLE_FILES], "--out", "spherecal campaign",
+                      lambda path: written_by(path, "spherecal campaign"))
 
 
 def write_tables(rows: list[TableRow], folder: str | os.PathLike, comment: str = "",

@@ -6,9 +6,11 @@ from __future__ import annotations
 
 import json
 from collections.abc import Callable
+from pathlib import Path
 
 import numpy as np
 
+from spherecal.correction.files.earlier_run import refuse_unless_own, written_by
 from spherecal.correction.files.fixtures import read_fixtures
 from spherecal.correction.files.outputs import OutputSet
 from spherecal.correction.files.provenance import comment_block, provenance
@@ -26,6 +28,31 @@ from .plan_report import write_recording
 
 #: The box grid's syntax, for the refusals [m].
 GRID = "'xmin,xmax,nx;ymin,ymax,ny;zmin,zmax,nz'"
+
+
+def refuse_foreign_outputs(outputs: dict[str, str | None]) -> None:
+    """Refuse to replace an existing file a plan would write (``--out``, ``--analysis``, ``--rrd``) that an earlier
+    ``spherecal plan`` did not write, as ``simulate`` and ``demo`` do (a review: a user's file at ``--out`` was
+    overwritten). A report or analysis is the plan's by its provenance line; a recording by its ``tables/plan``
+    panel.
+
+    Raises:
+        OutputError: one line naming the file and the option.
+    """
+    for option, path in outputs.items():
+        if path is not None:
+            refuse_unless_own([path], option, "spherecal plan", _plan_own)
+
+
+def _plan_own(path: Path) -> bool:
+    if path.suffix != ".rrd":
+        return written_by(path, "spherecal plan")
+    from spherecal.validation.viewer.recording import read_entity_rows  # rerun: only for an existing --rrd
+
+    try:
+        return "tables/plan" in read_entity_rows(path)
+    except Exception:  # noqa: BLE001 - not a readable recording: not the plan's
+        return False
 
 
 def predict_files(robot: str, samples: str, fixtures: str | None, noise: float, **links) -> Prediction:
