@@ -357,6 +357,9 @@ def test_campaign_and_plan_keep_a_users_file_and_replace_their_own(tmp_path, cap
     report = tmp_path / "report.json"
     report.write_text('{"provenance": {"command": "spherecal plan --out report.json"}}')
     assert written_by(report, "spherecal plan") and not written_by(report, "spherecal campaign")
+    old = tmp_path / "design.md"  # written before the program's path was shortened to its name
+    old.write_text("<!--\ncommand: /work/venv/bin/spherecal plan --analysis design.md\ncreated: 2026-11-22\n-->\n")
+    assert written_by(old, "spherecal plan") and not written_by(old, "spherecal plant")
     report.write_text('{"a": 1}')
     refused(["plan", "--samples", tmp_path / "c" / "table2.csv", "--out", report], tmp_path, capsys,
             "report.json: field '--out': exists and was not written by an earlier `spherecal plan`")

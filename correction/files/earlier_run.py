@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import json
 import os
+import re
 from collections.abc import Callable
 from pathlib import Path
 from typing import Any
@@ -68,19 +69,23 @@ def written_by(path: str | os.PathLike, command: str) -> bool:
     :func:`~.provenance.provenance` recorded (the program's name, ``spherecal``, then its arguments): a run through
     another entry point does not count as one, and its outputs are kept (the safe way round)."""
     path = Path(path)
+    # the program as its name or a path to it (outputs written before the path was shortened: /work/venv/bin/...)
+    program, _, sub = command.partition(" ")
+    pattern = re.compile(rf"(?:\S*/)?{re.escape(program)} {re.escape(sub)} ")
     if path.suffix == ".json":
         try:
             data = json.loads(read_text(path, SpherecalError, limit=MAX_FILE_BYTES))
         except (SpherecalError, OSError, UnicodeDecodeError, ValueError):
             return False
         made = data.get("provenance") if isinstance(data, dict) else None
-        return isinstance(made, dict) and str(made.get("command", "")).startswith(f"{command} ")
+        return isinstance(made, dict) and pattern.match(f"{made.get('command', '')} ") is not None
     try:
         with open(path, "rb") as handle:
             head = handle.read(HEAD_BYTES).decode("utf-8", errors="replace").splitlines()[:3]
     except OSError:
         return False
-    return any(line.lstrip("#<!- ").startswith(f"command: {command} ") for line in head)
+    lines = [line.lstrip("#<!- ") for line in head]
+    return any(line.startswith("command: ") and pattern.match(line[len("command: "):]) for line in lines)
 
 
 def refuse_unless_own(files: list[str | os.PathLike], option: str, command: str,
