@@ -35,6 +35,7 @@ import numpy as np
 from spherecal.correction import RobotModel, tool_point, tool_pose
 from spherecal.correction.errors import SpherecalError
 from spherecal.correction.files.samples import HARD_MARGIN
+from spherecal.correction.rigid import rotation_angle
 
 from .ik import UnreachableError, ik
 
@@ -199,12 +200,6 @@ def _target(target: np.ndarray, orientation: np.ndarray | None) -> tuple[np.ndar
             or np.linalg.det(orientation) < 0):
         raise SpherecalError("orientation: expected a (3, 3) rotation matrix (orthonormal, det +1)")
     return target, orientation
-
-
-def _angle(rotation: np.ndarray) -> float:
-    """Rotation angle of a (3, 3) rotation [rad], accurate near zero (atan2, not arccos)."""
-    axis = np.array([rotation[2, 1] - rotation[1, 2], rotation[0, 2] - rotation[2, 0], rotation[1, 0] - rotation[0, 1]])
-    return float(np.arctan2(0.5 * np.linalg.norm(axis), 0.5 * (np.trace(rotation) - 1.0)))
 
 
 def nominal_ik_controller(model: RobotModel, target: np.ndarray, q_seed: np.ndarray,
@@ -399,7 +394,7 @@ def compensate(
         miss = target - pose[:3, 3]
         history.append(float(np.linalg.norm(miss)))
         turn = None if orientation is None else orientation @ pose[:3, :3].T
-        angle = 0.0 if turn is None else _angle(turn)
+        angle = 0.0 if turn is None else float(rotation_angle(turn))
         current = CompensationResult(command, command_rot, q, pose[:3, 3], history[-1], angle, iteration,
                                      np.array(history))
         if history[-1] <= tol and angle <= orientation_tol:

@@ -38,6 +38,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from spherecal.correction import RobotModel, geometric_part, param_jacobian, tool_point, tool_pose
+from spherecal.correction.rigid import rotation_angle
 
 #: Workspace configurations drawn for the fit, and as many again to measure the loss.
 WORKSPACE_SAMPLES = 2000
@@ -192,10 +193,6 @@ def rigid_approximation(model: RobotModel, recorded: np.ndarray | None = None,
 
 
 def _largest_turn(a: np.ndarray, b: np.ndarray) -> float:
-    """Largest rotation angle [rad] between (N, 3, 3) rotations ``a`` and ``b``, pair by pair (atan2 of the relative
-    rotation's axis part and its trace: accurate near zero, where arccos of the trace is not)."""
-    relative = np.einsum("nji,njk->nik", a, b)
-    axis = np.stack([relative[:, 2, 1] - relative[:, 1, 2], relative[:, 0, 2] - relative[:, 2, 0],
-                     relative[:, 1, 0] - relative[:, 0, 1]], axis=1)
-    trace = np.trace(relative, axis1=1, axis2=2)
-    return float(np.max(np.arctan2(0.5 * np.linalg.norm(axis, axis=1), 0.5 * (trace - 1.0)))) if len(a) else 0.0
+    """Largest rotation angle [rad] between (N, 3, 3) rotations ``a`` and ``b``, pair by pair
+    (:func:`correction.rigid.rotation_angle` of ``a^T b``); 0 for none."""
+    return float(np.max(rotation_angle(np.einsum("nji,njk->nik", a, b)))) if len(a) else 0.0

@@ -1,4 +1,4 @@
-"""Best rigid transform between two point sets (Kabsch / Horn, by SVD)."""
+"""Best rigid transform between two point sets (Kabsch / Horn, by SVD), and the angle of a rotation."""
 
 from __future__ import annotations
 
@@ -41,3 +41,13 @@ def registered_errors(predicted: np.ndarray, reference: np.ndarray) -> np.ndarra
     ``predicted`` onto ``reference`` (the base placement is not observable, so it is fitted)."""
     fitted = apply_transform(fit_rigid_transform(predicted, reference), predicted)
     return np.linalg.norm(fitted - reference, axis=1)
+
+
+def rotation_angle(rotation: np.ndarray) -> np.ndarray:
+    """Rotation angle [rad], in [0, pi], of a (3, 3) rotation or each of a (..., 3, 3) stack: atan2 of the skew
+    part's length and the trace's share, accurate near zero where arccos of the trace is not."""
+    rotation = np.asarray(rotation, dtype=float)
+    axis = np.stack([rotation[..., 2, 1] - rotation[..., 1, 2], rotation[..., 0, 2] - rotation[..., 2, 0],
+                     rotation[..., 1, 0] - rotation[..., 0, 1]], axis=-1)
+    trace = np.trace(rotation, axis1=-2, axis2=-1)
+    return np.arctan2(0.5 * np.linalg.norm(axis, axis=-1), 0.5 * (trace - 1.0))
