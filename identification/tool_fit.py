@@ -48,8 +48,8 @@ def pivot_tool(model: RobotModel, dataset: Dataset) -> tuple[np.ndarray, float, 
     return solution, spread, std
 
 
-def recentred_tool(nominal: RobotModel, dataset: Dataset,
-                   max_change: float = MAX_CHANGE) -> tuple[RobotModel, str | None]:
+def recentred_tool(nominal: RobotModel, dataset: Dataset, max_change: float = MAX_CHANGE,
+                   pivot: tuple[np.ndarray, float, float] | None = None) -> tuple[RobotModel, str | None]:
     """``nominal`` with the tool point the samples pin down, and a warning, when its own is implausibly far.
 
     Far means what :func:`.calibrate.check_plausible` refuses: the change moves the tool points more than
@@ -58,8 +58,9 @@ def recentred_tool(nominal: RobotModel, dataset: Dataset,
     within :data:`.selfcheck.MAX_SOCKET_NOISE` per axis of their fixture's point, else the robot file does not
     describe the arm (another arm, its convention, its units) and the self-check says so. Otherwise
     ``(nominal, None)``: the calibration starts from, and its prior pulls toward, the robot file as given.
+    ``pivot``: :func:`pivot_tool` of ``nominal`` and ``dataset`` when the caller has it already.
     """
-    tool, spread, std = pivot_tool(nominal, dataset)
+    tool, spread, std = pivot_tool(nominal, dataset) if pivot is None else pivot
     params = nominal.params.copy()
     params[nominal.layout.tool] = tool
     change, typical = tool_point_change(nominal, params, zeros=False)  # a tool against the geometry's errors

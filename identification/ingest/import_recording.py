@@ -214,11 +214,12 @@ def _warn_description(dataset: Dataset, model: RobotModel, source: str | os.Path
     point (another arm's file: an iiwa14 URDF on a Panda's angles warned only of joint limits)."""
     if dataset.n_samples < 2:
         return
-    _, note = recentred_tool(model, dataset)
+    pivot = pivot_tool(model, dataset)  # one fit for both tests
+    _, note = recentred_tool(model, dataset, pivot=pivot)
     if note is not None:
         message = f"{note}; --tip-link names the link at the ball's centre"
     else:
-        _, spread, _ = pivot_tool(model, dataset)
+        spread = pivot[1]
         if not spread > MAX_SOCKET_NOISE:
             return
         message = (f"the samples lie {spread * 1e3:.3g} mm per axis from their fixture's point with the best tool "
