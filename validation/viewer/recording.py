@@ -55,9 +55,10 @@ COLOURS = {
     "truth": (40, 170, 80),
 }
 FIXTURE_COLOURS = [(250, 170, 20), (160, 80, 200), (20, 170, 170), (200, 90, 60), (90, 160, 40)]
-#: Least height of a colour scale [m]: the points' largest extent when larger (sockets on a plate lie in a few mm
-#: of z, a 2 m workspace in metres).
-SCALE_HEIGHT = 0.3
+#: Least height of a colour scale [m]: the points' largest extent when larger (a workspace spans metres, two sockets
+#: on a plate 50 mm, one socket's predictions a few mm). The scale's place, its spheres and the room left for its
+#: labels follow that height, so the view frames the points and the scale alike.
+SCALE_HEIGHT = 0.01
 #: Capsule radius of the links and of the tool segment [m].
 LINK_RADIUS, TOOL_RADIUS = 0.04, 0.012
 
@@ -204,19 +205,21 @@ class Recording:
         # tall stacked its 21 spheres into one ball with every label on top of the others (a review)
         height = max(float(np.max(high - low)), SCALE_HEIGHT)
         bottom = 0.5 * (low[2] + high[2]) - 0.5 * height if high[2] - low[2] < height else low[2]
-        scale = np.column_stack([np.full(21, high[0] + 0.15), np.full(21, 0.5 * (low[1] + high[1])),
+        # beside the points, its spheres and its labels' room as a workspace has them (0.15 m, 0.03 m, 0.4 m), smaller
+        # with a smaller height: fixed, they framed sockets 50 mm apart so wide that their points were not to be seen
+        scale = np.column_stack([np.full(21, high[0] + min(0.15, 0.3 * height)), np.full(21, 0.5 * (low[1] + high[1])),
                                  bottom + steps * height])
         labels = [f"{s * top:.2f} mm" if k % 5 == 0 else "" for k, s in enumerate(steps)]
         labels[-1] = f">= {top:.2f} mm"
         self.stream.log(
             f"errors/{key}/colour_scale",
-            rr.Points3D(scale, radii=min(0.03, 0.4 * height / 20), colors=colour_ramp(steps), labels=labels,
+            rr.Points3D(scale, radii=min(0.03, 0.02 * height), colors=colour_ramp(steps), labels=labels,
                         show_labels=True),
             static=True,
         )
         counts, left, width = histogram(mm)
         self.stream.log(f"errors/{key}/histogram", rr.BarChart(counts, abscissa=left, widths=width), static=True)
-        label_room = scale[-1] + 0.4 * np.array([1.3, 1.0, 0.0]) / np.hypot(1.3, 1.0)  # the labels, to the right
+        label_room = scale[-1] + min(0.4, 0.25 * height) * np.array([1.3, 1.0, 0.0]) / np.hypot(1.3, 1.0)  # labels
         self.extend_bounds(f"errors/{key}", np.vstack([points, scale, label_room]))
         self._note("errors", key, f"{key.capitalize()}: error, mean {mm.mean():.3f} mm over {mm.size} points")
         self.errors_against = against
