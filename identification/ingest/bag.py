@@ -11,6 +11,8 @@ message that names joints but carries no positions (its velocities or efforts al
 from __future__ import annotations
 
 import os
+from dataclasses import replace
+from itertools import compress
 
 import numpy as np
 
@@ -26,6 +28,7 @@ from .importers import (
     joint_name_candidates,
     match_joints,
     missing_joints,
+    repeated_stamps,
 )
 
 #: Default topic.
@@ -150,11 +153,12 @@ def read_bag(path: str | os.PathLike, model: RobotModel, topic: str = TOPIC) -> 
                                       f"only some of the arm's joints ({some})",) if partial else ())
     t = np.array(stamps)
     order = np.argsort(t, kind="stable")
-    q, t = np.array(values)[order], t[order]
-    recording = Recording(q, t, None, str(path), tuple(rows[i] for i in order), notes)
+    q, t, rows = np.array(values)[order], t[order], [rows[i] for i in order]
+    recording = Recording(q, t, None, str(path), tuple(rows), notes)
     recording.check_limits(model)  # first: degrees in a radians field jump too, and this says which it is
-    _refuse_interleaved(q, t, list(recording.rows), stamps)
-    return recording
+    _refuse_interleaved(q, t, rows, stamps)  # before the stamps alike: two streams' clash is named as theirs
+    keep, repeats = repeated_stamps(q, t, rows, "header.stamp", "message")
+    return replace(recording, q=q[keep], t=t[keep], rows=tuple(compress(rows, keep)), notes=notes + repeats)
 
 
 def _refuse_interleaved(q: np.ndarray, t: np.ndarray, rows: list[str], stamps: list[float]) -> None:

@@ -12,7 +12,7 @@ from __future__ import annotations
 import os
 import re
 import warnings
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 
 import numpy as np
@@ -72,6 +72,38 @@ def first_jump(q: np.ndarray, t: np.ndarray) -> tuple[int, float, float] | None:
 
 class RecordingError(DatasetError):
     """A recording that cannot be imported; one line naming the file, row and field."""
+
+
+def repeated_stamps(q: np.ndarray, t: np.ndarray, rows, field: str, noun: str) -> tuple[np.ndarray, tuple[str, ...]]:
+    """Samples of a stream stamped as the one before: the same joints are a logger's repeat (dropped, one note
+    saying how many), other joints cannot be ordered (refused), for CSV rows and bag messages alike.
+
+    Args:
+        q: (T, n) joint angles [rad] and ``t`` (T,) stamps [s], in time order (repeats next to each other).
+        rows: (T,) where each sample came from, for the refusal.
+        field: the time field named by the refusal (``time``, ``header.stamp``).
+        noun: what a sample is in the source (``row``, ``message``).
+
+    Returns:
+        ``(keep, notes)``: (T,) bool, False for a repeat; one note when any was dropped.
+
+    Raises:
+        RecordingError: two samples with one stamp and other joint angles, naming the second.
+    """
+    same = np.diff(t) == 0
+    if not same.any():
+        return np.ones(len(t), dtype=bool), ()
+    differ = same & np.any(q[1:] != q[:-1], axis=1)
+    if differ.any():
+        k = int(np.flatnonzero(differ)[0]) + 1
+        step = float(np.abs(q[k] - q[k - 1]).max())
+        raise RecordingError(
+            f"{rows[k]}, field {field!r}: the same time as the one before ({t[k]:.6f} s) with other joint angles "
+            f"(up to {step:.3g} rad apart): which came first cannot be told; give each {noun} its own time"
+        )
+    keep = np.concatenate([[True], ~same])
+    return keep, (f"dropped {int(same.sum())} {noun}s repeating the one before (the same time and joint angles: a "
+                  "logger's repeat)",)
 
 
 def check_source(path: str | os.PathLike) -> Path:
@@ -496,14 +528,15 @@ def read_joint_csv(path: str | os.PathLike, model: RobotModel) -> Recording:
         t = t * _UNITS[unit.lower()]
     elif t is not None and np.nanmax(np.abs(t)) > NANOSECONDS_ABOVE:
         t = t * 1e-9
+    lines = np.concatenate(lines)
     if t is not None and label_values is None:  # the stamps will segment the recording: they must be seconds
-        _check_step(t, path, header[time_col], RowNames(path, np.concatenate(lines)))
-    recording = Recording(
-        np.ascontiguousarray(values), t, label_values, str(path), RowNames(path, np.concatenate(lines))
-    )
+        _check_step(t, path, header[time_col], RowNames(path, lines))
+    recording = Recording(np.ascontiguousarray(values), t, label_values, str(path), RowNames(path, lines))
     recording.check_limits(model, names)
-    if t is not None and label_values is None and np.all(np.diff(t) >= 0):  # a stream to segment: no jumps in it
-        _refuse_jump(recording, header[time_col])
+    if t is not None and label_values is None and np.all(np.diff(t) >= 0):  # a stream to segment: no jumps in it,
+        _refuse_jump(recording, header[time_col])  # and a row stamped as the one before is a repeat or refused
+        keep, notes = repeated_stamps(recording.q, t, recording.rows, header[time_col], "row")
+        recording = replace(recording, q=recording.q[keep], t=t[keep], rows=RowNames(path, lines[keep]), notes=notes)
     return recording
 
 

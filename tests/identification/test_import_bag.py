@@ -324,3 +324,44 @@ def test_a_joint_reading_that_jumps_is_refused_in_a_csv_as_in_a_bag(recording, t
     bag = write_bag(tmp_path / "rec", "sqlite3", t, glitch, NAMES)
     error = _refused(["import", str(bag), "--format", "bag", *argv[4:]], tmp_path, capsys)
     assert "one joint reading that jumped (an encoder glitch)" in error
+
+
+def _stream_csv(path, t, q) -> None:
+    rows = "\n".join(f"{float(t[k])!r}," + ",".join(repr(float(v)) for v in q[k]) for k in range(len(t)))
+    path.write_text("time," + ",".join(NAMES) + "\n" + rows + "\n")
+
+
+@pytest.mark.parametrize("kind", ["csv", "bag"])
+def test_a_repeated_stamp_is_dropped_when_its_joints_repeat_and_refused_when_they_differ(recording, kind, tmp_path,
+                                                                                          capsys) -> None:
+    """Two rows with one stamp passed silently (a review): the same joints (a logger writing a row twice) went to the
+    deduplication unnamed; other joints (which came first cannot be told) were segmented in either order. A CSV and
+    a bag now both drop the repeats, saying how many, and refuse the clash naming its row and the time field."""
+    _, t, q, _ = recording
+
+    def write(name, t, q):
+        if kind == "bag":
+            return write_bag(tmp_path / name, "sqlite3", t, q, NAMES)
+        _stream_csv(tmp_path / f"{name}.csv", t, q)
+        return tmp_path / f"{name}.csv"
+
+    argv = ["import", "--format", kind, "--robot", str(PANDA), "--max-per-fixture", "100000"]
+    assert main([*argv, str(write("clean", t, q)), "--out", str(tmp_path / "clean_out")]) == 0
+    twice = np.sort(np.r_[np.arange(len(t)), np.arange(700, 710)])  # rows 700-709 written twice each
+    capsys.readouterr()
+    assert main([*argv, str(write("repeat", t[twice], q[twice])), "--out", str(tmp_path / "repeat_out")]) == 0
+    noun = "rows" if kind == "csv" else "messages"
+    lines = [line for line in capsys.readouterr().out.splitlines() if "repeating" in line]
+    assert lines == [f"dropped 10 {noun} repeating the one before (the same time and joint angles: a logger's "
+                     "repeat)"], lines
+    clean, repeat = (read_samples(tmp_path / f"{name}_out/samples.csv", load_robot(PANDA)) for name in ("clean",
+                                                                                                        "repeat"))
+    np.testing.assert_array_equal(repeat.q, clean.q)
+    np.testing.assert_array_equal(repeat.t, clean.t)
+    clash = t.copy()
+    clash[701] = clash[700]  # row 701 stamped as row 700, its joints 5 ms on
+    source = write("clash", clash, q)
+    error = _refused([*argv, str(source), "--out", str(tmp_path / "clash_out")], tmp_path, capsys)
+    where = f"{source}: row 703, field 'time'" if kind == "csv" else f"{source}: /joint_states message 702, field " \
+        "'header.stamp'"
+    assert f"{where}: the same time as the one before" in error and "which came first cannot be told" in error
