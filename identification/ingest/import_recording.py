@@ -167,6 +167,7 @@ def import_recording(
         recorded: the inputs of the provenance block written under ``import: provenance:``
             (:func:`correction.files.provenance.provenance`), built once the source is read: a folder's digest
             reads every file below it, never for a source the importer refuses (``/`` typed for a placement).
+            What timed and split the recording is added to them (:func:`_timed_and_split`).
 
     Raises:
         RecordingError, SegmentationError, DatasetError: bad input (one line); nothing is written.
@@ -191,7 +192,7 @@ def import_recording(
         raise DatasetError(f"{source}: field 'fixture': {missing[0]!r} has no samples left")
     block = dict(extras or {})
     if recorded is not None:
-        block["provenance"] = provenance(options.seed, recorded)
+        block["provenance"] = provenance(options.seed, recorded | _timed_and_split(recording, options))
     if segments:
         block["segments"] = {
             s.name: {"from_s": s.start, "to_s": s.end, "samples": int(len(s.rows)), "spread_max_m": s.spread_max}
@@ -226,6 +227,20 @@ def _warn_description(dataset: Dataset, model: RobotModel, source: str | os.Path
                    "point for them (a ball held in a socket: within a few mm): the robot file does not describe this "
                    "arm (another arm's file, its DH convention, its units?); calibrate will refuse it")
     warnings.warn(f"{source}: {message}", DescriptionWarning, stacklevel=3)
+
+
+def _timed_and_split(recording: Recording, options: ImportOptions) -> dict:
+    """What timed and split an unlabelled recording, for its provenance: the field its stamps came from
+    (``time: column 'time'``, ``time: header.stamp``) or, without stamps, the ``rate`` [Hz] that timed it, and the
+    segmentation thresholds. Nothing for a labelled one (MUKCa, a CSV with a fixture column): no clock and no
+    threshold shaped it."""
+    if recording.labels is not None:
+        return {}
+    if recording.t is not None:
+        clock = {"time": recording.clock}
+    else:
+        clock = {"rate": DEFAULT_RATE if options.rate is None else options.rate}
+    return clock | vars(options.segmentation)
 
 
 def _warn_unused_rate(recording: Recording, fmt: str, rate: float | None) -> None:
@@ -266,18 +281,17 @@ def import_files(source: str | os.PathLike, fmt: str, robot: str, out: str | os.
             ``inertials``, ``report``).
     """
     model = load_robot(robot, **(robot_options or {}))
-    chosen = _relevant(fmt, {f.name: getattr(options, f.name) for f in fields(options) if f.name != "segmentation"})
-    if "rate" in chosen and chosen["rate"] is None:
-        chosen["rate"] = DEFAULT_RATE
-    chosen |= vars(options.segmentation) if fmt != "mukca" else {}
+    chosen = _relevant(fmt, {f.name: getattr(options, f.name) for f in fields(options)
+                             if f.name not in ("rate", "segmentation")})  # recorded where they were used
     recorded = {"source": Path(source), "robot": Path(robot), **chosen}
     inputs = [robot] if robot != "panda" else []
     return import_recording(source, fmt, model, out, options, inputs, {"format": fmt}, recorded)
 
 
 def _relevant(fmt: str, options: dict) -> dict:
-    """The options that shaped an import of ``fmt`` (for the provenance block)."""
-    drop = {"mukca": ("topic", "rate"), "bag": ("distance", "rate"), "csv": ("distance", "topic")}[fmt]
+    """The options that shaped an import of ``fmt`` (for the provenance block; the clock and the segmentation:
+    :func:`_timed_and_split`)."""
+    drop = {"mukca": ("topic",), "bag": ("distance",), "csv": ("distance", "topic")}[fmt]
     return {k: v for k, v in options.items() if k not in drop}
 
 

@@ -365,3 +365,37 @@ def test_a_repeated_stamp_is_dropped_when_its_joints_repeat_and_refused_when_the
     where = f"{source}: row 703, field 'time'" if kind == "csv" else f"{source}: /joint_states message 702, field " \
         "'header.stamp'"
     assert f"{where}: the same time as the one before" in error and "which came first cannot be told" in error
+
+
+def _import_inputs(out) -> dict:
+    """The options an import recorded in its provenance (fixtures.yaml, ``import: provenance: inputs``)."""
+    return read_fixtures(out / "fixtures.yaml").extras["import"]["provenance"]["inputs"]
+
+
+def test_the_provenance_records_the_clock_that_timed_the_samples(recording, tmp_path, capsys) -> None:
+    """A CSV imported by its time column recorded 'rate: 1000.0', a rate nothing used (a review); a labelled CSV
+    recorded a rate and segmentation thresholds though nothing was timed or segmented. The provenance now records the
+    time field, or the rate where it timed the samples, and thresholds only where they split the recording."""
+    _, t, q, truth = recording
+    _stream_csv(tmp_path / "rec.csv", t, q)
+    argv = ["import", "--robot", str(PANDA), "--max-per-fixture", "9999"]
+    assert main([*argv, str(tmp_path / "rec.csv"), "--format", "csv", "--out", str(tmp_path / "a"), "--rate",
+                 "1000"]) == 0
+    used = _import_inputs(tmp_path / "a")
+    assert used["time"] == "column 'time'" and "rate" not in used and used["still_radius"] == 0.003
+    bare = tmp_path / "bare.csv"
+    bare.write_text("\n".join(line.split(",", 1)[1] for line in (tmp_path / "rec.csv").read_text().splitlines())
+                    + "\n")
+    assert main([*argv, str(bare), "--format", "csv", "--out", str(tmp_path / "b"), "--rate", "200"]) == 0
+    used = _import_inputs(tmp_path / "b")
+    assert used["rate"] == 200.0 and "time" not in used
+    labels = np.where(truth < 0, "air", np.where(truth == 0, "A", "B"))
+    (tmp_path / "lab.csv").write_text("fixture," + ",".join(NAMES) + "\n" + "\n".join(
+        f"{labels[k]}," + ",".join(repr(float(v)) for v in q[k]) for k in range(len(t))) + "\n")
+    assert main([*argv, str(tmp_path / "lab.csv"), "--format", "csv", "--out", str(tmp_path / "c")]) == 0
+    used = _import_inputs(tmp_path / "c")
+    assert not {"rate", "time", "window", "still_radius", "min_separation"} & set(used), used
+    bag = write_bag(tmp_path / "rec", "sqlite3", t, q, NAMES)
+    assert main([*argv, str(bag), "--format", "bag", "--out", str(tmp_path / "d")]) == 0
+    used = _import_inputs(tmp_path / "d")
+    assert used["time"] == "header.stamp" and used["topic"] == "/joint_states" and "rate" not in used
