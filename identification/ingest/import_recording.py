@@ -78,6 +78,7 @@ class ImportResult:
     dropped_motion: int
     dropped_duplicates: int
     notes: tuple[str, ...] = ()
+    remarks: tuple[str, ...] = ()
 
     def format(self) -> str:
         """The printed report."""
@@ -92,7 +93,7 @@ class ImportResult:
         lines.append(f"dropped {self.dropped_duplicates} duplicates; kept {self.dataset.n_samples} samples")
         for a, b, value in self.fixtures.distances:
             lines.append(f"known distance {a} - {b}: {value * 1e3:.3f} mm")
-        return "\n".join(lines)
+        return "\n".join(lines + list(self.remarks))
 
 
 def check_out_dir(out: str | os.PathLike, inputs: list[str | os.PathLike]) -> None:
@@ -203,8 +204,28 @@ def import_recording(
     _write_together(_outputs(Path(out), source, inputs), kept, spec)
     return ImportResult(
         kept, spec, read, segments, read - dataset.n_samples, dataset.n_samples - deduplicated.n_samples,
-        recording.notes,
+        recording.notes, _one_fixture(fmt, spec.names, bool(segments)),
     )
+
+
+def _one_fixture(fmt: str, names: tuple[str, ...], segmented: bool) -> tuple[str, ...]:
+    """One line when the import holds one fixture: what calibrate can fit from it and what it takes from the nominal
+    model (the absolute scale: one socket has no known distance, and one known position fixes none,
+    :func:`..build.build_problem`), and how to add the second socket that gives the scale."""
+    if len(names) != 1:
+        return ()
+    if fmt == "mukca":
+        how = ("record the plate's other socket as well (hole_0.csv and hole_1.csv in one placement folder, --distance "
+               "apart) and import the placement again")
+    elif segmented:
+        how = (f"carry the ball to a second socket in the recording (at least --min-separation away), import it again "
+               f"and give the two sockets' distance in fixtures.yaml (distances: [[{names[0]}, S2, metres]])")
+    else:
+        how = ("record a second socket under a fixture label of its own and give the two sockets' distance in "
+               f"fixtures.yaml (distances: [[{names[0]}, OTHER, metres]])")
+    return (f"one fixture ({names[0]}): calibrate can fit the arm's errors about this one socket, for use near the "
+            "recorded postures, but not its absolute scale: one socket gives no known distance (and one known "
+            f"position fixes none), so the scale comes from the nominal model; for the scale, {how}",)
 
 
 def _warn_description(dataset: Dataset, model: RobotModel, source: str | os.PathLike) -> None:

@@ -429,3 +429,21 @@ def test_import_warns_when_the_robot_file_does_not_describe_the_recording(tmp_pa
     other_arm = warned(urdf / "iiwa14.urdf", "ball_link", "iiwa")
     assert "mm per axis from their fixture's point with the best tool point" in other_arm
     assert "the robot file does not describe this arm" in other_arm
+
+
+def _one_fixture_lines(printed: str) -> list[str]:
+    return [line for line in printed.splitlines() if line.startswith("one fixture")]
+
+
+def test_an_import_of_one_socket_says_what_it_leaves_to_the_nominal_model(tmp_path, capsys) -> None:
+    """A placement with one socket imported without a word; calibrate said later that the absolute scale comes from
+    the nominal model (a review). The import now says it in one line, with how to add a second socket."""
+    argv = ["import", "--format", "mukca", "--robot", str(KINOVA)]
+    assert main([*argv, str(DATA / "dinova_2" / "gen3lite_left"), "--out", str(tmp_path / "one")]) == 0
+    lines = _one_fixture_lines(capsys.readouterr().out)
+    assert len(lines) == 1, lines
+    assert lines[0].startswith("one fixture (gen3lite_left_h0): calibrate can fit the arm's errors about this one "
+                               "socket") and "scale comes from the nominal model" in lines[0]
+    assert "hole_0.csv and hole_1.csv in one placement folder, --distance apart" in lines[0]
+    assert main([*argv, str(DATA / "dinova_2" / "front_rotated"), "--out", str(tmp_path / "two")]) == 0
+    assert _one_fixture_lines(capsys.readouterr().out) == []
