@@ -29,6 +29,10 @@ from .importers import MUKCA_DISTANCE, Recording, RecordingError, read_joint_csv
 from .segment import Segment, SegmentSettings, format_segments, labels_of, segment
 
 FORMATS = ("mukca", "bag", "csv")
+#: Options of :class:`ImportOptions` used by some formats only -> those formats (the others are shaped by all).
+FORMAT_OPTIONS: dict[str, tuple[str, ...]] = {
+    "topic": ("bag",), "distance": ("mukca",), "rate": ("csv",), "segmentation": ("bag", "csv"),
+}
 #: Sampling rate of a CSV without time stamps when none is given [Hz].
 DEFAULT_RATE = 1000.0
 
@@ -312,8 +316,7 @@ def import_files(source: str | os.PathLike, fmt: str, robot: str, out: str | os.
 def _relevant(fmt: str, options: dict) -> dict:
     """The options that shaped an import of ``fmt`` (for the provenance block; the clock and the segmentation:
     :func:`_timed_and_split`)."""
-    drop = {"mukca": ("topic",), "bag": ("distance",), "csv": ("distance", "topic")}[fmt]
-    return {k: v for k, v in options.items() if k not in drop}
+    return {k: v for k, v in options.items() if fmt in FORMAT_OPTIONS.get(k, (fmt,))}
 
 
 def _outputs(out: Path, source, inputs) -> OutputSet:

@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import argparse
 
+from spherecal.options import fail, urdf_links
+
 HELP = "Turn a real recording (MUKCa folder, ROS bag, joint CSV) into samples.csv and fixtures.yaml."
 
 FORMATS = ("mukca", "bag", "csv")
@@ -22,9 +24,10 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--format", required=True, choices=FORMATS, help="what SOURCE is")
     add_robot(parser, default=None)
     parser.add_argument("--out", required=True, help="folder to create with samples.csv and fixtures.yaml")
-    parser.add_argument("--topic", default="/joint_states", help="bag: sensor_msgs/JointState topic (/joint_states)")
+    # the format-specific options default to None: given for another format, they are refused (see run)
+    parser.add_argument("--topic", default=None, help="bag: sensor_msgs/JointState topic (/joint_states)")
     parser.add_argument(
-        "--distance", type=at_most(10.0, "m"), default=0.050,
+        "--distance", type=at_most(10.0, "m"), default=None,
         help="mukca: socket centre distance per placement [m] (default 0.050)",
     )
     parser.add_argument("--max-per-fixture", type=count(1), default=500, metavar="N",
@@ -43,42 +46,39 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         "segmentation (bag, csv without a 'fixture' column): a fixture is where the NOMINAL tool point stays "
         "still; defaults measured on MUKCa's real Panda (nominal spread in a socket: 8 mm mean, 19 mm max)"
     )
-    group.add_argument("--window", type=duration, default=0.5, help="stillness window [s] (default 0.5)")
-    group.add_argument("--still-radius", type=segment_mm, default=3.0,
+    group.add_argument("--window", type=duration, default=None, help="stillness window [s] (default 0.5)")
+    group.add_argument("--still-radius", type=segment_mm, default=None,
                        help="tool point within this of itself over a window [mm] (default 3)")
-    group.add_argument("--min-duration", type=duration, default=2.0, help="shortest fixture [s] (default 2)")
-    group.add_argument("--min-configurations", type=count(1), default=20,
+    group.add_argument("--min-duration", type=duration, default=None, help="shortest fixture [s] (default 2)")
+    group.add_argument("--min-configurations", type=count(1), default=None,
                        help="fewest distinct configurations of a fixture (default 20)")
-    group.add_argument("--max-spread", type=segment_mm, default=20.0,
+    group.add_argument("--max-spread", type=segment_mm, default=None,
                        help="refuse a fixture drifting further from its mean [mm] (default 20)")
-    group.add_argument("--min-separation", type=segment_mm, default=30.0,
+    group.add_argument("--min-separation", type=segment_mm, default=None,
                        help="refuse two fixtures closer than this [mm] (default 30)")
+
+
+#: Segmentation options given in millimetres (:class:`SegmentSettings` holds metres).
+MILLIMETRES = ("still_radius", "max_spread", "min_separation")
 
 
 def run(args: argparse.Namespace) -> int:
     """Import: read, label (or segment), deduplicate, subsample, then write both files together."""
     import time
+    from dataclasses import fields
 
     import numpy as np
 
     from spherecal.correction.files.samples import DEDUP_TOL
     from spherecal.identification.ingest.import_recording import ImportOptions, import_files
     from spherecal.identification.ingest.segment import SegmentSettings
-    from spherecal.options import urdf_links
 
     clock = time.perf_counter()
+    given = _format_options(args, [f.name for f in fields(SegmentSettings)])
+    segmentation = {k: v * 1e-3 if k in MILLIMETRES else v for k, v in given.pop("segmentation", {}).items()}
     options = ImportOptions(
-        topic=args.topic,
-        distance=args.distance,
-        rate=args.rate,
-        segmentation=SegmentSettings(
-            window=args.window,
-            still_radius=args.still_radius * 1e-3,
-            min_duration=args.min_duration,
-            min_configurations=args.min_configurations,
-            max_spread=args.max_spread * 1e-3,
-            min_separation=args.min_separation * 1e-3,
-        ),
+        **given,
+        segmentation=SegmentSettings(**segmentation),
         max_per_fixture=args.max_per_fixture,
         dedup_tol=DEDUP_TOL if args.dedup_deg is None else float(np.deg2rad(args.dedup_deg)),
         seed=args.seed,
@@ -87,3 +87,26 @@ def run(args: argparse.Namespace) -> int:
     print(result.format())
     print(f"wrote {args.out}/samples.csv and {args.out}/fixtures.yaml in {time.perf_counter() - clock:.2f} s")
     return 0
+
+
+def _format_options(args: argparse.Namespace, segmentation: list[str]) -> dict:
+    """The format-specific options given, as :class:`ImportOptions` takes them (``segmentation``: the thresholds
+    given, as typed); the others keep the library's defaults.
+
+    Raises:
+        OptionError: an option given that the chosen format does not use (``--topic`` with ``--format mukca``),
+            one line naming it and the formats it applies to.
+    """
+    from spherecal.identification.ingest.import_recording import FORMAT_OPTIONS  # numpy: not at --help
+
+    dests = {"topic": ["topic"], "distance": ["distance"], "rate": ["rate"], "segmentation": segmentation}
+    given: dict = {}
+    for name, formats in FORMAT_OPTIONS.items():
+        typed = {dest: getattr(args, dest) for dest in dests[name] if getattr(args, dest) is not None}
+        if typed and args.format not in formats:
+            option = "--" + next(iter(typed)).replace("_", "-")
+            raise fail(f"field '{option}': applies to --format {' or '.join(formats)} only, not {args.format}; "
+                       "leave it out")
+        if typed:
+            given[name] = typed if name == "segmentation" else typed[name]
+    return given

@@ -13,7 +13,7 @@ from spherecal.correction.files.samples_csv import read_samples
 from tests.refusal import refused
 
 from .recordings import Q0, stream, write_bag
-from .test_import_mukca import PANDA
+from .test_import_mukca import DATA, PANDA
 
 NAMES = [f"panda_joint{i + 1}" for i in range(7)]
 
@@ -413,3 +413,45 @@ def test_a_stream_with_one_socket_says_how_to_add_a_second(recording, tmp_path, 
     assert len(lines) == 1 and lines[0].startswith("one fixture (S1): "), lines
     assert "carry the ball to a second socket in the recording" in lines[0]
     assert "distances: [[S1, S2, metres]]" in lines[0]
+
+
+@pytest.fixture(scope="module")
+def sources(recording, tmp_path_factory) -> dict:
+    """A source of each format: a MUKCa placement, a bag and a CSV of the two-socket stream."""
+    folder = tmp_path_factory.mktemp("sources")
+    _, t, q, _ = recording
+    _stream_csv(folder / "rec.csv", t, q)
+    return {"mukca": DATA / "panda_2_clean" / "front_center", "csv": folder / "rec.csv",
+            "bag": write_bag(folder / "rec", "sqlite3", t, q, NAMES)}
+
+
+SEGMENTATION = [("--window", "0.5"), ("--still-radius", "3"), ("--min-duration", "2"), ("--min-configurations", "20"),
+                ("--max-spread", "20"), ("--min-separation", "30")]
+
+
+@pytest.mark.parametrize(("fmt", "option", "value", "applies"), [
+    ("mukca", "--topic", "/joint_states", "bag"), ("csv", "--topic", "/arm/joint_states", "bag"),
+    ("bag", "--distance", "0.05", "mukca"), ("csv", "--distance", "0.05", "mukca"),
+    ("mukca", "--rate", "1000", "csv"), ("bag", "--rate", "500", "csv"),
+    *[("mukca", option, value, "bag or csv") for option, value in SEGMENTATION],
+])
+def test_an_option_of_another_format_is_refused(sources, fmt, option, value, applies, tmp_path, capsys) -> None:
+    """`import --topic` with --format mukca or csv was accepted and ignored (a review), as were --distance with a bag
+    or a CSV and the segmentation thresholds with a MUKCa folder (labelled: nothing is segmented); --rate with MUKCa or
+    a bag only warned. Each is refused in one line naming the option and the formats it applies to, even when typed
+    at its default value."""
+    argv = ["import", sources[fmt], "--format", fmt, "--robot", PANDA, "--out", tmp_path / "out", option, value]
+    refused(argv, tmp_path, capsys, f"field '{option}': applies to --format {applies} only, not {fmt}")
+    assert main([str(a) for a in argv[:-2]] + ["--max-per-fixture", "50"]) == 0  # the same import without it
+
+
+@pytest.mark.parametrize("fmt", ["bag", "csv"])
+def test_the_options_of_a_format_are_used(sources, fmt, tmp_path, capsys) -> None:
+    """Refusing other formats' options keeps each format's own, defaults included: a still radius of 1 mm splits
+    the same stream into fewer samples than the default 3 mm."""
+    argv = ["import", str(sources[fmt]), "--format", fmt, "--robot", str(PANDA), "--max-per-fixture", "100000"]
+    assert main([*argv, "--out", str(tmp_path / "default")]) == 0
+    assert main([*argv, "--out", str(tmp_path / "tight"), "--still-radius", "1"]) == 0
+    default, tight = (read_samples(tmp_path / name / "samples.csv", load_robot(PANDA)) for name in ("default", "tight"))
+    assert 0 < tight.n_samples < default.n_samples
+    assert _import_inputs(tmp_path / "tight")["still_radius"] == 0.001
