@@ -1,20 +1,23 @@
-"""Campaigns: task seeding, aggregation into Table 2, files, determinism over workers."""
+"""Campaigns: task seeding, aggregation into Table 2, files, determinism over workers, refused sets."""
 
 from __future__ import annotations
 
 import numpy as np
 import pytest
 
+from spherecal.cli import main
 from spherecal.validation.experiments.campaign import (
     CampaignConfig,
     TaskResult,
     format_table,
     run_campaign,
+    run_task,
     table,
     table_csv,
     tasks,
     write_tables,
 )
+from tests.refusal import refused
 
 
 def fake_runner(task) -> TaskResult:
@@ -79,10 +82,32 @@ def test_no_progress_bar_on_a_stderr_that_is_not_a_terminal(capsys) -> None:
     assert capsys.readouterr().err == ""
 
 
+#: The smallest campaign whose calibrations are refused: an elastic model of 37 unknowns on 10 samples of one
+#: fixture (31 equations); with Pall (three fixtures, distances known) the same samples calibrate.
+REFUSED = ["campaign", "--sets", "1", "--per-fixture", "10", "--configurations", "50", "--noise", "0", "--model",
+           "elastic", "--workers", "1"]
+
+
+def test_a_campaign_whose_every_set_is_refused_exits_1_in_one_line_and_writes_nothing(tmp_path, capsys) -> None:
+    # a review: when every calibration was refused the command printed a table of nan, wrote it and exited 0
+    reason = run_task(tasks(CampaignConfig(sets=1, samples=10, configurations=50, noise_levels=(0.0,),
+                                           fixture_sets=("P1",), model="elastic"))[0]).refused
+    assert reason  # the case is one the calibration refuses
+    refused([*REFUSED, "--rows", "P1", "--out", tmp_path / "c"], tmp_path, capsys,
+            "no set could be calibrated (1 refused); the first, P1/elastic set 0: " + reason)
+
+
+def test_a_campaign_with_some_sets_refused_writes_the_others_and_reports_the_refused(tmp_path, capsys) -> None:
+    assert main([*REFUSED, "--rows", "P1,Pall", "--out", str(tmp_path / "c")]) == 0
+    out = capsys.readouterr().out
+    assert "refused: P1/elastic set 0: " in out
+    rows = {line.split(",")[0]: line.split(",")[1:3] for line in (tmp_path / "c" / "table2.csv").read_text()
+            .splitlines() if not line.startswith("#")}
+    assert rows["P1/elastic"] == ["0", "1"] and rows["Pall/elastic"] == ["1", "0"]  # sets, refused
+
+
 @pytest.mark.slow
 def test_small_real_campaign_is_reproducible(tmp_path) -> None:
-    from spherecal.validation.experiments.campaign import run_task
-
     config = CampaignConfig(sets=2, samples=150, configurations=500, fixture_sets=("P1", "Pall"))
     first = run_campaign(config, workers=2, progress=False).results
     again = [run_task(t) for t in tasks(config)[:2]]

@@ -44,7 +44,7 @@ from .. import parallel
 from ..parallel import Failure, run_tasks
 from ..pipeline import RANDOM_SET, validate_models
 from ..progress import progress_bar
-from .experiment import default_fixtures, motion_set, nominal_robot, true_robot
+from .experiment import ExperimentError, default_fixtures, motion_set, nominal_robot, true_robot
 
 #: The paper's simulated Table 2 (mm): row -> (mean of average error, mean of maximal error).
 PAPER_TABLE2 = {
@@ -370,6 +370,19 @@ def write_tables(rows: list[TableRow], folder: str | os.PathLike, comment: str =
     return csv_path, md_path
 
 
+def refuse_if_none_calibrated(results: list[TaskResult]) -> None:
+    """Refuse a campaign whose every finished set the calibration refused: its table would hold no error at all (a
+    review: such a campaign wrote a table of nan and exited 0).
+
+    Raises:
+        ExperimentError: one line with the number refused and the first one's reason.
+    """
+    if results and all(result.refused for result in results):
+        first = results[0]
+        raise ExperimentError(f"no set could be calibrated ({len(results)} refused); the first, {first.row} set "
+                              f"{first.index}: {first.refused}")
+
+
 @dataclass(frozen=True)
 class CampaignOutcome:
     """What :func:`run_and_write` did.
@@ -401,10 +414,15 @@ def run_and_write(config: CampaignConfig, folder: str | os.PathLike, inputs: dic
         scheduler: a dask.distributed scheduler's address, or ``"local"``; None: the built-in pool.
         show: called with the results and the table before the files are written (a write that fails after a
             long run still shows them).
+
+    Raises:
+        ExperimentError: every set's calibration was refused (:func:`refuse_if_none_calibrated`); nothing is shown
+            or written.
     """
     start = time.perf_counter()
     run = run_campaign(config, workers=workers, scheduler=scheduler)
     wall = time.perf_counter() - start
+    refuse_if_none_calibrated(run.results)
     rows = table(run.results)
     if show is not None:
         show(run.results, rows)
