@@ -41,7 +41,6 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 def run(args: argparse.Namespace) -> int:
     """Check the options, simulate and write the three files (nothing is written unless everything succeeded)."""
-    import sys
     from pathlib import Path
 
     from spherecal.options import check_folder, planned_outputs
@@ -66,6 +65,6 @@ def run(args: argparse.Namespace) -> int:
     )
     result = simulate_to_folder(config, outputs, report=links["report"])
     samples, fixtures, truth = result.files
-    print(result.run.coverage_table(), file=sys.stderr)
+    print(result.run.coverage_table())  # a table: stdout (stderr holds warnings and errors)
     print(f"wrote {samples} ({result.run.q.shape[0]} samples), {fixtures}, {truth}")
     return 0

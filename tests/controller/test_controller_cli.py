@@ -39,6 +39,17 @@ def test_simulate_writes_three_readable_files(tmp_path, capsys):
     assert not truth.same_as(load_robot("panda"), atol=1e-6)  # the true robot is perturbed
 
 
+def test_simulate_prints_its_coverage_table_on_stdout_and_nothing_on_stderr(tmp_path, capsys):
+    # a review: the table went to stderr, where warnings and errors go
+    out = tmp_path / "out"
+    assert main(["simulate", "--out", str(out), "--seconds", "0.01", "--per-fixture", "5"]) == 0
+    printed, err = capsys.readouterr()
+    recorded = load_robot(out / "truth.yaml").extras["simulation"]["coverage"]  # fixture -> per-joint share
+    head, *rows = printed.splitlines()[:1 + len(recorded)]
+    assert head.split()[:2] == ["fixture", "q1%"] and err == ""
+    assert [row.split()[0] for row in rows] == list(recorded)
+
+
 def test_simulate_is_reproducible(tmp_path):
     _, out1 = _simulate(tmp_path / "a", "--noise", "0")
     _, out2 = _simulate(tmp_path / "b", "--noise", "0")
