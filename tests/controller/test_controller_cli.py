@@ -8,7 +8,9 @@ import pytest
 from spherecal.cli import main
 from spherecal.correction import load_robot
 from spherecal.correction.files.fixtures import read_fixtures
+from spherecal.correction.files.robot_file import EMBEDDED_ROBOTS
 from spherecal.correction.files.samples_csv import read_samples
+from tests.refusal import refused
 
 
 def _simulate(tmp_path, *extra):
@@ -95,6 +97,13 @@ def test_bad_options_exit_nonzero_and_write_nothing(tmp_path, capsys, args):
     code, out = _simulate(tmp_path, *args)
     assert code == 1 and len(capsys.readouterr().err.strip().splitlines()) == 1
     assert not out.exists()
+
+
+def test_an_unknown_robot_name_is_refused_with_the_embedded_names(tmp_path, capsys, monkeypatch):
+    # a review: 'simulate --robot ur5x' said 'ur5x: cannot read: No such file or directory', not which names are known
+    monkeypatch.chdir(tmp_path)
+    refused(["simulate", "--robot", "ur5x", "--out", "out", "--seconds", "0.01", "--per-fixture", "5"], tmp_path,
+            capsys, "ur5x: field '--robot': no such file, nor an embedded robot (" + ", ".join(EMBEDDED_ROBOTS) + ")")
 
 
 def test_out_below_a_file_fails_before_simulating(tmp_path, capsys):
