@@ -2,9 +2,22 @@
 
 from __future__ import annotations
 
-import numpy as np
+import importlib.util
+import re
 
-from spherecal.validation.planning.analysis import P3_LIKE, Analysis, AnalysisConfig, Cell, cells, markdown, run_cells
+import numpy as np
+import pytest
+
+from spherecal.validation.planning.analysis import (
+    P3_LIKE,
+    Analysis,
+    AnalysisConfig,
+    Cell,
+    cells,
+    main,
+    markdown,
+    run_cells,
+)
 
 
 def test_cells_cover_every_axis():
@@ -32,3 +45,16 @@ def test_one_small_cell_runs_and_renders():
     empty = Plan([], None, "none", "kinematic", 3e-4, 500)
     text = markdown(Analysis([result], empty, config, {"cells": 1.0}), "provenance")
     assert "## Fixture noise" in text and "| tiny |" in text and "<!--\nprovenance\n-->" in text
+
+
+def test_the_page_and_the_usage_name_a_module_that_python_m_can_run(capsys):
+    # docs/experiment_design.md, regenerated, said "or `python -m validation.analysis`": no such module installed
+    from spherecal.validation.planning.plan import Plan
+
+    empty = Plan([], None, "none", "kinematic", 3e-4, 500)
+    page = markdown(Analysis([], empty, AnalysisConfig(), {}), "provenance")
+    with pytest.raises(SystemExit):
+        main(["--help"])
+    usage = capsys.readouterr().out
+    named = re.findall(r"python -m ([\w.]+)", page) + re.findall(r"python -m ([\w.]+)", usage)
+    assert len(named) == 2 and all(importlib.util.find_spec(name) is not None for name in named), named
