@@ -51,6 +51,14 @@ def test_table_aggregates_mean_std_max_over_sets() -> None:
     assert "0.00 / 0.01" in format_table([row])  # the paper's row beside ours
 
 
+def test_the_printed_table_keeps_its_columns_for_long_row_names() -> None:
+    # 'campaign --model elastic' printed 'P1/elastic   0   1 |' past the 6-character set column: every bar shifted
+    results = [TaskResult(name, 0, 1e-4, 2e-4, 0.0, 0.0, 0.0) for name in ("P1", "P1/elastic", "PallNE/auto")]
+    lines = format_table(table(results)).splitlines()
+    bars = {tuple(i for i, char in enumerate(line) if char == "|") for line in lines}
+    assert len(bars) == 1 and len(next(iter(bars))) == 4, lines
+
+
 def test_refused_sets_are_counted_not_averaged() -> None:
     nan = float("nan")
     results = [

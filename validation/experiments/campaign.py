@@ -304,11 +304,13 @@ def _cells(row: TableRow) -> list[str]:
 
 
 def format_table(rows: list[TableRow]) -> str:
-    """The printed table (mm), the paper's simulated means beside ours."""
+    """The printed table (mm), the paper's simulated means beside ours; the set column as wide as its longest name
+    (``P1/elastic``, ``PallNE/auto``)."""
+    w = max([6, *(len(row.name) for row in rows)])
     head = (
-        f"{'set':<6} {'n':>3} {'ref':>3} | {'average error [mm]':^26} | {'maximal error [mm]':^26} | "
+        f"{'set':<{w}} {'n':>3} {'ref':>3} | {'average error [mm]':^26} | {'maximal error [mm]':^26} | "
         f"{'vs mocap':>8} {'nominal':>8} | {'paper avg/max':>13}\n"
-        f"{'':<6} {'':>3} {'':>3} | {'mean':>8} {'std':>8} {'max':>8} | {'mean':>8} {'std':>8} {'max':>8} | "
+        f"{'':<{w}} {'':>3} {'':>3} | {'mean':>8} {'std':>8} {'max':>8} | {'mean':>8} {'std':>8} {'max':>8} | "
         f"{'avg':>8} {'avg':>8} | {'mean':>13}"
     )
     lines = [head]
@@ -316,7 +318,7 @@ def format_table(rows: list[TableRow]) -> str:
         c = _cells(row)
         paper = f"{c[11]} / {c[12]}" if c[11] else "-"
         lines.append(
-            f"{c[0]:<6} {c[1]:>3} {c[2]:>3} | {c[3]:>8} {c[4]:>8} {c[5]:>8} | {c[6]:>8} {c[7]:>8} {c[8]:>8} | "
+            f"{c[0]:<{w}} {c[1]:>3} {c[2]:>3} | {c[3]:>8} {c[4]:>8} {c[5]:>8} | {c[6]:>8} {c[7]:>8} {c[8]:>8} | "
             f"{c[9]:>8} {c[10]:>8} | {paper:>13}"
         )
     return "\n".join(lines)
