@@ -98,6 +98,9 @@ def _load(path_or_name: str | os.PathLike, tip_link: str | None, base_link: str 
     if key in EMBEDDED_ROBOTS and not Path(key).exists():
         return _embedded(EMBEDDED_ROBOTS[key], key)
     path = Path(path_or_name)
+    if not os.path.lexists(path) and not path.suffix and len(path.parts) == 1:  # a name, not a path: say which exist
+        raise RobotFileError(f"{key}: cannot read: no such file, nor an embedded robot "
+                             f"({', '.join(EMBEDDED_ROBOTS)})")
     text = read_text(path, RobotFileError, limit=MAX_FILE_BYTES)
     _refuse_xml(text, key)
     data, root = load_yaml(text, str(path), RobotFileError)  # bounded: size, depth, aliases; no duplicate keys

@@ -99,11 +99,20 @@ def test_bad_options_exit_nonzero_and_write_nothing(tmp_path, capsys, args):
     assert not out.exists()
 
 
-def test_an_unknown_robot_name_is_refused_with_the_embedded_names(tmp_path, capsys, monkeypatch):
-    # a review: 'simulate --robot ur5x' said 'ur5x: cannot read: No such file or directory', not which names are known
+@pytest.mark.parametrize("command", [
+    ["simulate", "--out", "out", "--seconds", "0.01", "--per-fixture", "5"],
+    ["calibrate", "--samples", "s.csv", "--out", "cal.yaml"],
+    ["plan", "--grid", "0.3,0.5,2;-0.1,0.1,2;0.2,0.4,2"],
+    ["validate", "--calibrated", "panda", "--samples", "s.csv"],
+])
+def test_an_unknown_robot_name_is_refused_with_the_embedded_names(tmp_path, capsys, monkeypatch, command):
+    # a review: 'simulate --robot ur5x' said 'ur5x: cannot read: No such file or directory', not which names are
+    # known; the loader says it, for every command
     monkeypatch.chdir(tmp_path)
-    refused(["simulate", "--robot", "ur5x", "--out", "out", "--seconds", "0.01", "--per-fixture", "5"], tmp_path,
-            capsys, "ur5x: field '--robot': no such file, nor an embedded robot (" + ", ".join(EMBEDDED_ROBOTS) + ")")
+    (tmp_path / "s.csv").write_text("fixture,q1,q2,q3,q4,q5,q6,q7\n")
+    option = "--nominal" if command[0] == "validate" else "--robot"
+    refused([*command, option, "ur5x"], tmp_path, capsys,
+            "ur5x: cannot read: no such file, nor an embedded robot (" + ", ".join(EMBEDDED_ROBOTS) + ")")
 
 
 def test_out_below_a_file_fails_before_simulating(tmp_path, capsys):

@@ -15,7 +15,6 @@ from spherecal.correction.files.earlier_run import refuse_foreign_files
 from spherecal.correction.files.fixtures import format_fixtures, read_fixtures
 from spherecal.correction.files.outputs import OutputSet
 from spherecal.correction.files.provenance import comment_block, provenance
-from spherecal.correction.files.robot_file import EMBEDDED_ROBOTS
 from spherecal.correction.files.samples_csv import format_samples
 
 from .experiment import ExperimentError, default_fixtures, fixture_spec, joint_stiffness
@@ -114,7 +113,8 @@ def simulate_to_folder(config: SimulationConfig, outputs: OutputSet | None = Non
     if config.solver not in qpsolvers.available_solvers:
         raise ExperimentError(
             f"--solver {config.solver!r} is not installed; have {', '.join(qpsolvers.available_solvers)}")
-    nominal = load_nominal(config, report)
+    nominal = load_robot(config.robot, tip_link=config.tip_link, base_link=config.base_link,
+                         inertials=config.inertials, report=report)
     if nominal.n_joints < 4:  # the tool point pinned leaves n - 3 degrees of freedom
         raise ExperimentError(f"--robot {config.robot}: {nominal.n_joints} joints have no self-motion at a "
                               "spherical joint (needs at least 4)")
@@ -147,21 +147,6 @@ def simulate_to_folder(config: SimulationConfig, outputs: OutputSet | None = Non
         for path, text in zip(files, texts, strict=True):
             outputs.write_text(path, text)
     return SimulationResult(result, tuple(files))
-
-
-def load_nominal(config: SimulationConfig, report=None) -> RobotModel:
-    """The nominal robot of ``config.robot`` (:func:`correction.load_robot`); a name that is neither a file nor an
-    embedded robot is refused with the embedded names (a review: ``--robot ur5x`` said only 'cannot read: No such
-    file or directory').
-
-    Raises:
-        ExperimentError: one line naming ``--robot`` and the embedded robots (:data:`EMBEDDED_ROBOTS`).
-    """
-    if config.robot not in EMBEDDED_ROBOTS and not os.path.lexists(config.robot):
-        raise ExperimentError(f"{config.robot}: field '--robot': no such file, nor an embedded robot "
-                              f"({', '.join(EMBEDDED_ROBOTS)})")
-    return load_robot(config.robot, tip_link=config.tip_link, base_link=config.base_link,
-                      inertials=config.inertials, report=report)
 
 
 def true_centres(path: str | None) -> dict[str, np.ndarray]:
