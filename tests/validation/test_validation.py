@@ -274,6 +274,58 @@ def test_a_colour_scale_beside_flat_points_is_tall_enough_to_read(tmp_path, rng)
     assert abs(np.mean(scale[:, 2]) - 0.1) < 1e-3  # centred on the points' height
 
 
+def _pinhole(eye: np.ndarray, target: np.ndarray, points: np.ndarray) -> np.ndarray:
+    """(N, 2) image-plane coordinates (right, up) / depth of points seen from eye towards target, z up."""
+    forward = (target - eye) / np.linalg.norm(target - eye)
+    right = np.cross(forward, [0.0, 0.0, 1.0])
+    right /= np.linalg.norm(right)
+    up = np.cross(right, forward)
+    relative = points - eye
+    return np.column_stack([relative @ right, relative @ up]) / (relative @ forward)[:, None]
+
+
+def test_the_error_views_show_both_models_socket_clusters_clear_of_the_colour_scale(tmp_path, rng) -> None:
+    """A socket validation on a real arm (MUKCa panda_4_clean front -> right): two held-out sockets 50 mm apart, the
+    nominal model's predictions spread over several mm, the calibrated one's over 0.2 mm. The calibrated view's
+    default camera framed one cluster out of the picture and put the other behind the scale's labels (the scale
+    stood between the sockets, in front of them). Seen from each Errors view's default camera (read back from the
+    blueprint; a pinhole of Rerun's 55 deg vertical field of view in a pane 0.45 as wide as tall, as the default
+    window gives the two views side by side), every point is in the picture and left of the colour scale, clear of
+    its labels (centred on its spheres, a fifth of the half-width wide); both views share one camera, so a
+    millimetre on the screen is the same in both."""
+    from rerun.chunk import RrdReader
+
+    from spherecal.validation.viewer.recording import Recording, read_eyes
+
+    sockets = np.array([[0.3984, -0.2293, 0.0177], [0.3987, -0.1794, 0.0179]])
+    which = np.repeat([0, 1], 35)
+    sets = {"nominal": sockets[which] + rng.normal(0, 4e-3, (70, 3)) * [1.0, 1.0, 0.4],
+            "calibrated": sockets[which] + rng.normal(0, 1.5e-4, (70, 3))}
+    errors = {k: np.linalg.norm(p - np.array([p[which == s].mean(0) for s in (0, 1)])[which], axis=1)
+              for k, p in sets.items()}
+    top = max(np.quantile(e, 0.99) for e in errors.values()) * 1e3
+    recording = Recording(tmp_path / "sockets.rrd")
+    for key, points in sets.items():
+        recording.workspace_errors(key, points, errors[key], "its socket's mean point", top)
+    recording.close()
+    logged = {}
+    for chunk in RrdReader(str(tmp_path / "sockets.rrd")).stream().to_chunks():
+        if chunk.entity_path.startswith("/errors/") and not chunk.entity_path.endswith("histogram"):
+            logged[chunk.entity_path.strip("/")] = np.array(chunk.to_record_batch().column("Points3D:positions")
+                                                            .to_pylist()[0])
+    eyes = read_eyes(tmp_path / "sockets.rrd")
+    np.testing.assert_allclose(np.concatenate(eyes["errors/nominal"]), np.concatenate(eyes["errors/calibrated"]))
+    half_height = np.tan(np.radians(55.0) / 2)
+    half_width = 0.45 * half_height
+    for key in sets:
+        np.testing.assert_allclose(logged[f"errors/{key}/points"], sets[key])
+        eye = eyes[f"errors/{key}"]
+        points, scale = (_pinhole(*eye, logged[f"errors/{key}/{e}"]) for e in ("points", "colour_scale"))
+        for seen in (points, scale):
+            assert np.all(np.abs(seen) < [half_width, half_height]), key  # in the picture
+        assert points[:, 0].max() < scale[:, 0].min() - 0.2 * half_width, key  # clear of the labels' left half
+
+
 def test_a_viewer_that_cannot_start_is_one_line_and_leaves_nothing(tmp_path, monkeypatch) -> None:
     """--spawn without a Rerun viewer on PATH (or a display) ended in a traceback of 30 lines (a review: a message
     naming 'None'); it is one line naming --spawn, and a staged .rrd is removed."""

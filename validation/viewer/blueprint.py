@@ -4,7 +4,8 @@ A large 3D view of the robot and the fixtures on the left (the self-motion plays
 the right one tab per kind of result that was logged, each view named in plain words:
 
 * **Errors**: each model's workspace tool points coloured by their error (a labelled colour scale in
-  mm beside them), nominal and calibrated side by side, their histograms below;
+  mm right of them), nominal and calibrated side by side from one camera (a millimetre on the screen is
+  the same in both), their histograms below;
 * **Residuals**: histograms of the calibration residuals before and after;
 * **Parameter changes**: bars with +-1 std whiskers, lengths [mm] and angles [deg];
 * **Joint coverage**: per fixture, the share of each joint's range visited [%];
@@ -15,6 +16,8 @@ Histograms and bars are static, so they show whatever the timeline selector is o
 """
 
 from __future__ import annotations
+
+from itertools import product
 
 import numpy as np
 
@@ -29,15 +32,50 @@ TABS = {
 }
 
 
-def camera(box, least: float = 0.05, distance: float = 1.2):
-    """``rerun.blueprint.EyeControls3D`` looking at a (2, 3) bounding box [m] from the front right, above,
-    from ``distance`` times as far as the box is wide (at least ``least`` [m])."""
+#: Where the default cameras look from: the unit direction from what they look at to the eye (front right, above).
+EYE_DIRECTION = np.array([1.0, -1.3, 0.8]) / np.linalg.norm([1.0, -1.3, 0.8])
+#: Vertical field of view of Rerun's 3D views [rad]: the viewer's default, 55 deg (a screenshot's scale confirms it).
+FIELD_OF_VIEW = np.radians(55.0)
+#: Width over height of an Errors view in the default window (1600 x 1000 points: the result panel's two views side
+#: by side, a fifth of the width each, above their histograms), a little less for the headers.
+ERRORS_ASPECT = 0.45
+
+
+def view_axes() -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Unit vectors of the default cameras' picture: right and up on the screen, and back towards the eye
+    (:data:`EYE_DIRECTION`); right is horizontal, as the cameras keep z up."""
+    right = np.cross(-EYE_DIRECTION, (0.0, 0.0, 1.0))
+    right /= np.linalg.norm(right)
+    return right, np.cross(right, -EYE_DIRECTION), EYE_DIRECTION
+
+
+def union_box(boxes) -> np.ndarray:
+    """The (2, 3) bounding box of (2, 3) bounding boxes [m]."""
+    boxes = np.asarray(boxes, dtype=float).reshape(-1, 2, 3)
+    return np.array([boxes[:, 0].min(axis=0), boxes[:, 1].max(axis=0)])
+
+
+def fit_distance(box, aspect: float, margin: float = 0.9) -> float:
+    """Least distance [m] from a (2, 3) box's centre along :data:`EYE_DIRECTION` at which every corner of the box
+    lies within ``margin`` of the picture of a view ``aspect`` as wide as tall (a pinhole of :data:`FIELD_OF_VIEW`)."""
+    box = np.asarray(box, dtype=float)
+    corners = np.array(list(product(*box.T))) - box.mean(axis=0)
+    right, up, back = view_axes()
+    tall = margin * np.tan(FIELD_OF_VIEW / 2)
+    across = np.maximum(np.abs(corners @ right) / (aspect * tall), np.abs(corners @ up) / tall)
+    return float(np.max(corners @ back + across))
+
+
+def camera(box, least: float = 0.05, distance: float = 1.2, aspect: float | None = None):
+    """``rerun.blueprint.EyeControls3D`` looking at a (2, 3) bounding box [m] from the front right, above
+    (:data:`EYE_DIRECTION`), from ``distance`` times as far as the box is wide (at least ``least`` [m]), and with
+    ``aspect`` (a view's width over height) at least as far as the whole box fits in the view (:func:`fit_distance`)."""
     import rerun.blueprint as rrb  # Rerun: heavy, only when a recording is written
 
     box = np.asarray(box, dtype=float)
     centre, size = box.mean(axis=0), max(float(np.linalg.norm(box[1] - box[0])), least)
-    direction = np.array([1.0, -1.3, 0.8]) / np.linalg.norm([1.0, -1.3, 0.8])
-    return rrb.EyeControls3D(position=centre + distance * size * direction, look_target=centre, eye_up=(0, 0, 1))
+    far = max(distance * size, 0.0 if aspect is None else fit_distance(box, aspect))
+    return rrb.EyeControls3D(position=centre + far * EYE_DIRECTION, look_target=centre, eye_up=(0, 0, 1))
 
 
 def build_blueprint(
@@ -73,10 +111,12 @@ def build_blueprint(
         if not views:
             continue
         if section == "errors":
-            top = [
-                rrb.Spatial3DView(origin=f"errors/{k}", contents="$origin/**", name=n, eye_controls=eye(f"errors/{k}"))
-                for k, n in views.items()
-            ]
+            # one camera for every model, far enough for the narrow views: the same millimetre on the screen in each
+            # (framed on its own box as for a square view, a socket's 0.2 mm cluster fell outside the picture)
+            boxes = [bounds[f"errors/{k}"] for k in views if f"errors/{k}" in bounds]
+            shared = camera(union_box(boxes), aspect=ERRORS_ASPECT) if boxes else None
+            top = [rrb.Spatial3DView(origin=f"errors/{k}", contents="$origin/**", name=n, eye_controls=shared)
+                   for k, n in views.items()]
             bottom = [rrb.BarChartView(origin=f"errors/{k}/histogram", name=f"{k.capitalize()}: error histogram [mm]")
                       for k in views]
             tabs.append(rrb.Vertical(rrb.Horizontal(*top), rrb.Horizontal(*bottom), row_shares=[3, 1], name=tab))

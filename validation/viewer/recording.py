@@ -45,7 +45,7 @@ from spherecal.correction.files.atomic import OutputError
 from spherecal.correction.files.provenance import comment_block
 from spherecal.correction.layout import ParamKind
 
-from .blueprint import build_blueprint
+from .blueprint import build_blueprint, union_box, view_axes
 from .recording_shapes import BAR_HEIGHT, capsules, colour_ramp, histogram, parameter_bars
 
 COLOURS = {
@@ -123,9 +123,7 @@ class Recording:
         """Grow the (2, 3) bounding box of a 3D view's contents (its camera is aimed at it) [m]."""
         points = np.asarray(points, dtype=float).reshape(-1, 3)
         box = np.array([points.min(axis=0), points.max(axis=0)])
-        if origin in self.bounds:
-            box = np.array([np.minimum(box[0], self.bounds[origin][0]), np.maximum(box[1], self.bounds[origin][1])])
-        self.bounds[origin] = box
+        self.bounds[origin] = union_box([box, self.bounds[origin]]) if origin in self.bounds else box
 
     # --------------------------------------------------------------------- scene
     def fixtures(self, names: list[str], positions: np.ndarray) -> None:
@@ -199,16 +197,8 @@ class Recording:
         rr = self.rr
         dots = rr.Points3D(points, radii=rr.Radius.ui_points(2.5), colors=colour_ramp(mm / top))
         self.stream.log(f"errors/{key}/points", dots, static=True)
-        low, high = points.min(axis=0), points.max(axis=0)
         steps = np.linspace(0.0, 1.0, 21)
-        # as tall as the points' largest extent: sockets on a flat plate span millimetres in z, and a scale that
-        # tall stacked its 21 spheres into one ball with every label on top of the others (a review)
-        height = max(float(np.max(high - low)), SCALE_HEIGHT)
-        bottom = 0.5 * (low[2] + high[2]) - 0.5 * height if high[2] - low[2] < height else low[2]
-        # beside the points, its spheres and its labels' room as a workspace has them (0.15 m, 0.03 m, 0.4 m), smaller
-        # with a smaller height: fixed, they framed sockets 50 mm apart so wide that their points were not to be seen
-        scale = np.column_stack([np.full(21, high[0] + min(0.15, 0.3 * height)), np.full(21, 0.5 * (low[1] + high[1])),
-                                 bottom + steps * height])
+        scale, height = _scale_beside(points, steps)
         labels = [f"{s * top:.2f} mm" if k % 5 == 0 else "" for k, s in enumerate(steps)]
         labels[-1] = f">= {top:.2f} mm"
         self.stream.log(
@@ -219,7 +209,7 @@ class Recording:
         )
         counts, left, width = histogram(mm)
         self.stream.log(f"errors/{key}/histogram", rr.BarChart(counts, abscissa=left, widths=width), static=True)
-        label_room = scale[-1] + min(0.4, 0.25 * height) * np.array([1.3, 1.0, 0.0]) / np.hypot(1.3, 1.0)  # labels
+        label_room = scale[-1] + 0.25 * height * view_axes()[0]  # the labels, centred on the spheres
         self.extend_bounds(f"errors/{key}", np.vstack([points, scale, label_room]))
         self._note("errors", key, f"{key.capitalize()}: error, mean {mm.mean():.3f} mm over {mm.size} points")
         self.errors_against = against
@@ -375,6 +365,26 @@ def _first_line(error: BaseException) -> str:
     return text.splitlines()[0] if text else type(error).__name__
 
 
+def _scale_beside(points: np.ndarray, steps: np.ndarray) -> tuple[np.ndarray, float]:
+    """(S, 3) places of a colour scale's spheres at ``steps`` (S,) of its height, and that height [m], beside
+    points (N, 3) [m] as the default camera sees them (:func:`validation.blueprint.view_axes`).
+
+    The scale is as tall as the points' largest extent (at least :data:`SCALE_HEIGHT`): sockets on a flat plate span
+    millimetres in z, and a scale that tall stacked its spheres into one ball with every label on top of the others.
+    It stands right of the points on the screen, 0.4 of its height beyond them (room for its labels, centred
+    on its spheres), as near the eye as the nearest point (perspective moves it out, not in), and centred on their
+    height when they are flatter than it. Placed beyond the points' largest x at their mean y, it stood between two
+    sockets and in front of them: the calibrated model's clusters hid behind its labels or fell out of the picture.
+    """
+    low, high = points.min(axis=0), points.max(axis=0)
+    height = max(float(np.max(high - low)), SCALE_HEIGHT)
+    bottom = 0.5 * (low[2] + high[2]) - 0.5 * height if high[2] - low[2] < height else low[2]
+    right = view_axes()[0]
+    near = np.cross((0.0, 0.0, 1.0), right)  # horizontal, towards the eye
+    place = (np.max(points @ right) + 0.4 * height) * right + np.max(points @ near) * near
+    return np.column_stack([np.full((len(steps), 2), place[:2]), bottom + steps * height]), height
+
+
 def _colour(key: str) -> tuple[int, int, int]:
     return COLOURS.get(key, (120, 120, 120))
 
@@ -417,17 +427,37 @@ def read_provenance(path: str | os.PathLike) -> dict:
     return _read_property(path, "spherecal_provenance", "provenance")
 
 
-def read_view_names(path: str | os.PathLike) -> list[str]:
-    """Display names of the views in a saved recording's blueprint (empty when it has none)."""
+def _blueprint_batches(path: str | os.PathLike):
+    """The record batches of a saved recording's blueprint chunks, with their entity paths."""
     from rerun.chunk import RrdReader  # Rerun: heavy, only when a recording is written
 
     _rerun()
     reader = RrdReader(str(path))
-    names = []
     for store in reader.blueprints():
         for chunk in reader.stream(store=store).to_chunks():
-            batch = chunk.to_record_batch()
-            column = "ViewBlueprint:display_name"
-            if column in batch.schema.names:
-                names += [str(v[0]) for v in batch.column(column).to_pylist() if v]
+            yield chunk.entity_path, chunk.to_record_batch()
+
+
+def read_view_names(path: str | os.PathLike) -> list[str]:
+    """Display names of the views in a saved recording's blueprint (empty when it has none)."""
+    names = []
+    for _, batch in _blueprint_batches(path):
+        column = "ViewBlueprint:display_name"
+        if column in batch.schema.names:
+            names += [str(v[0]) for v in batch.column(column).to_pylist() if v]
     return names
+
+
+def read_eyes(path: str | os.PathLike) -> dict[str, tuple[np.ndarray, np.ndarray]]:
+    """View origin -> (eye position, look target) [m] of each 3D view's default camera in a saved recording's
+    blueprint (:func:`validation.blueprint.camera`), for tests and checks."""
+    origins, eyes = {}, {}
+    for entity, batch in _blueprint_batches(path):
+        names = batch.schema.names
+        if "ViewBlueprint:space_origin" in names:
+            origins[entity] = str(batch.column("ViewBlueprint:space_origin").to_pylist()[0][0])
+        if "EyeControls3D:position" in names:
+            position, target = (np.array(batch.column(f"EyeControls3D:{n}").to_pylist()[0][0], dtype=float)
+                                for n in ("position", "look_target"))
+            eyes[entity.rsplit("/", 1)[0]] = (position, target)
+    return {origins[view]: eye for view, eye in eyes.items() if view in origins}
