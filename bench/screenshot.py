@@ -4,8 +4,8 @@
 
 Needs a display stack: ``apt-get install xvfb mesa-vulkan-drivers`` (Mesa's software Vulkan under
 a virtual X server); it runs ``xvfb-run rerun FILE.rrd --screenshot-to shot.png``. With ``--tab K``
-a blueprint file with tab ``K`` of the result panel in front (0: the first) is opened with the
-recording, so every tab can be checked without clicking. Exits 1 with one line when the stack is
+a copy of the recording whose blueprint has tab ``K`` of the result panel in front (0: the first)
+is opened instead, so every tab can be checked without clicking. Exits 1 with one line when the stack is
 missing.
 """
 
@@ -38,17 +38,27 @@ def display_stack_missing() -> str | None:
     return None
 
 
-def tab_blueprint(rrd: str | os.PathLike, tab: int, folder: Path) -> Path:
-    """A blueprint file (``.rbl``) of the recording's layout with tab ``tab`` of the result panel in front."""
+def with_tab(rrd: str | os.PathLike, tab: int, folder: Path) -> Path:
+    """A copy of the recording in ``folder`` whose one blueprint, its layout's, has tab ``tab`` of the result panel in
+    front. Opened beside the recording, a blueprint file (``.rbl``) raced the recording's own blueprint: the viewer
+    showed whichever loaded last (2 of 6 renders of a socket validation with ``--tab 0`` showed Socket spread)."""
+    import rerun as rr
+    from rerun.chunk import RrdReader
+
     from spherecal.validation.viewer.blueprint import build_blueprint
     from spherecal.validation.viewer.recording import read_layout
 
     layout = read_layout(rrd)
     if not layout:
         raise RuntimeError(f"{rrd}: no spherecal layout in this recording")
-    path = folder / f"tab{tab}.rbl"
+    path = folder / f"tab{tab}.rrd"
+    copy = rr.RecordingStream(layout["application_id"])
+    copy.save(path)
+    copy.send_chunks(RrdReader(str(rrd)).stream())
     blueprint = build_blueprint(layout["contents"], layout["title"], layout["bounds"], active_tab=tab)
-    blueprint.save(layout["application_id"], path)
+    copy.send_blueprint(blueprint, make_active=True, make_default=True)
+    copy.flush()
+    copy.disconnect()
     return path
 
 
@@ -61,16 +71,14 @@ def screenshot(
 ) -> Path:
     """Open ``rrd`` in the viewer under Xvfb and save what it shows to ``out`` (PNG); returns ``out``.
 
-    With ``tab``, the layout is opened with that tab of the result panel in front."""
+    With ``tab``, a copy of it with that tab of the result panel in front (:func:`with_tab`)."""
     out = Path(out).resolve()
     out.unlink(missing_ok=True)
     width, height = (int(v) for v in size.split("x"))
     env = {**os.environ, "CI": "1", "RUST_LOG": "error"}  # no analytics notice, no log toasts over the views
     with tempfile.TemporaryDirectory() as home:  # the viewer's own settings and caches stay out of $HOME
-        files = [str(Path(rrd).resolve())]
-        if tab is not None:
-            files.append(str(tab_blueprint(rrd, tab, Path(home))))
-        command = ["xvfb-run", "-a", "-s", f"-screen 0 {width + 64}x{height + 64}x24", viewer(), *files,
+        shown = Path(rrd).resolve() if tab is None else with_tab(rrd, tab, Path(home))
+        command = ["xvfb-run", "-a", "-s", f"-screen 0 {width + 64}x{height + 64}x24", viewer(), str(shown),
                    "--window-size", size, "--hide-welcome-screen", "--screenshot-to", str(out)]
         done = subprocess.run(command, env={**env, "HOME": home}, capture_output=True, text=True, timeout=timeout,
                               cwd=home)

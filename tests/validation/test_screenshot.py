@@ -52,3 +52,33 @@ def test_the_viewer_renders_the_demo_recording(tmp_path) -> None:
         width, height, pixels = _png_pixels(png)
         assert width >= 1200 and height >= 800  # at least the window (the viewer may render at 2x)
         assert len(set(pixels[:: max(1, len(pixels) // 200000)])) > 30  # a picture, not a blank window
+
+
+def test_a_tab_is_put_in_front_in_a_copy_with_one_blueprint(tmp_path) -> None:
+    """--tab K opened a blueprint file beside the recording and the two blueprints raced: 2 of 6 renders of a socket
+    validation with --tab 0 showed the recording's own front tab. The copy holds the recording's data and only the
+    blueprint with tab K in front."""
+    import numpy as np
+    from rerun.chunk import RrdReader
+
+    from spherecal.validation.viewer.recording import Recording, read_entity_rows, read_layout
+
+    recording = Recording(tmp_path / "r.rrd", application_id="spherecal_check")
+    recording.fixtures(["P1", "P2"], np.array([[0.4, 0.0, 0.1], [0.4, 0.05, 0.1]]))
+    recording.workspace_errors("nominal", np.random.default_rng(0).normal(0.4, 0.01, (30, 3)), np.full(30, 1e-3), "x")
+    recording.coverage({"P1": np.zeros((3, 2)), "P2": np.ones((3, 2))}, np.full(2, -2.0), np.full(2, 2.0))
+    recording.text("table", "a table", "A table")
+    recording.close()
+    copy = _screenshot_module().with_tab(tmp_path / "r.rrd", 1, tmp_path)
+    assert read_entity_rows(copy) == read_entity_rows(tmp_path / "r.rrd")
+    assert read_layout(copy) == read_layout(tmp_path / "r.rrd")
+    reader = RrdReader(str(copy))
+    assert len(reader.blueprints()) == 1
+    names, active = {}, []
+    for chunk in reader.stream(store=reader.blueprints()[0]).to_chunks():
+        batch = chunk.to_record_batch()
+        if "ContainerBlueprint:display_name" in batch.schema.names:
+            names[chunk.entity_path.strip("/")] = batch.column("ContainerBlueprint:display_name").to_pylist()[0][0]
+        if "ContainerBlueprint:active_tab" in batch.schema.names:
+            active += batch.column("ContainerBlueprint:active_tab").to_pylist()[0]
+    assert [names[tab] for tab in active] == ["Joint coverage"]  # tabs: Errors, Joint coverage, Tables
