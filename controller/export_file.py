@@ -13,7 +13,7 @@ from spherecal.correction import RobotModel, load_robot
 from spherecal.correction.files.outputs import OutputSet, check_suffix
 from spherecal.correction.files.robot_file import forced_calibration
 from spherecal.correction.files.text_input import read_xml_text
-from spherecal.correction.files.urdf_write import ExportError
+from spherecal.correction.files.urdf_write import LIMITS, ExportError
 
 from .export import calibration_samples, export_model, fit_seed, provenance_header
 
@@ -100,25 +100,27 @@ def export_file(config: ExportConfig, outputs: OutputSet, report: Callable[[str]
         read |= {} if samples is None else {"samples": samples}
     header = provenance_header(config.robot, config.output_format, seed, read)
     exported = export_model(model, config.output_format, header,
-                            config.prefix, _limits(config.effort, "--effort"), _limits(config.velocity, "--velocity"),
+                            config.prefix, _limits(config.effort, "effort"), _limits(config.velocity, "velocity"),
                             into, config.samples, config.seed, Path(config.robot).parent)
     with outputs:
         path = outputs.write_bytes(config.out, exported.data)
     return ExportedFile(path, model, exported.notes)
 
 
-def _limits(text: str | None, option: str) -> list[float] | None:
-    """Comma-separated limits as floats (None when not given).
+def _limits(text: str | None, field: str) -> list[float] | None:
+    """Comma-separated ``effort`` or ``velocity`` limits (``field``) as floats (None when not given); their range is
+    checked with the joint count (:func:`spherecal.correction.files.urdf_write.names_and_limits`).
 
     Raises:
-        ExportError: a value that is not a number.
+        ExportError: a value that is not a number (one line naming the option and its unit).
     """
     if text is None:
         return None
     try:
         return [float(v) for v in text.split(",")]
     except ValueError:
-        raise ExportError(f"{option}: expected comma-separated numbers, got {text!r}") from None
+        option, unit = LIMITS[field][:2]
+        raise ExportError(f"field '{option}': expected comma-separated numbers [{unit}], got {text!r}") from None
 
 
 def _into(into: str, out: str) -> tuple[str, str]:

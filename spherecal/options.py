@@ -70,13 +70,15 @@ _GIVEN = "_given_once"
 class Parser(argparse.ArgumentParser):
     """An ArgumentParser whose errors are one line (``spherecal CMD: error: ...``) and exit status 1,
     like every other refusal of spherecal. A negative number in exponent notation (``--offset -1e-2 0 0.2``) is
-    a value, as ``-0.01`` is (argparse took it for an option: 'expected 3 arguments'). An option that takes one
-    value given twice is refused (:class:`StoreOnce`); a repeatable one says so in its help."""
+    a value, as ``-0.01`` is (argparse took it for an option: 'expected 3 arguments'), and so is a comma-separated
+    list starting with a negative number (``--effort -5,87,...`` was 'expected one argument', not the check of its
+    values). An option that takes one value given twice is refused (:class:`StoreOnce`); a repeatable one says so
+    in its help."""
 
     def __init__(self, *args, **kwargs):
         super().__init__(*args, **kwargs)
-        self._negative_number_matcher = re.compile(r"^-((\d+\.?\d*|\.\d+)([eE][-+]?\d+)?|inf|infinity|nan)$",
-                                                   re.IGNORECASE)
+        self._negative_number_matcher = re.compile(
+            r"^-((\d+\.?\d*|\.\d+)([eE][-+]?\d+)?|inf|infinity|nan)(,.*)?$", re.IGNORECASE)
         self.register("action", None, StoreOnce)
         self.register("action", "store", StoreOnce)
 

@@ -54,6 +54,15 @@ from ..model import RobotModel, matrix_rpy
 #: when none are given (URDF requires both on a revolute joint); another arm's must be given.
 PANDA_EFFORT: tuple[float, ...] = (87.0, 87.0, 87.0, 87.0, 12.0, 12.0, 12.0)
 PANDA_VELOCITY: tuple[float, ...] = (2.175, 2.175, 2.175, 2.175, 2.61, 2.61, 2.61)
+#: Largest joint torque limit [N m] taken: ten times what gravity alone asks of the strongest industrial arm's
+#: shoulder (FANUC M-2000iA/2300: 2.3 t at 3.7 m, about 85 kN m); beyond it a slip (a review wrote 1e9 N m).
+MAX_EFFORT = 1e6
+#: Largest joint velocity limit [rad/s] taken: the fastest robot joints (a delta picker's or a SCARA's wrist, about
+#: 3600 deg/s = 63 rad/s) stay under it, while limits typed in deg/s mostly do not (Franka's 2.175 rad/s is 125 deg/s).
+MAX_VELOCITY = 100.0
+#: Per URDF limit: the option giving it, its unit on the command line, its largest value and the hint beyond it.
+LIMITS = {"effort": ("--effort", "Nm", MAX_EFFORT, "the limit is in Nm"),
+          "velocity": ("--velocity", "rad/s", MAX_VELOCITY, "deg/s? the limit is in rad/s")}
 #: Joint position limits [rad] (lower, upper) of the Franka arms (Panda, FR3) as their descriptions give them.
 FRANKA_LIMITS: tuple[tuple[tuple[float, ...], tuple[float, ...]], ...] = (
     ((-2.8973, -1.7628, -2.8973, -3.0718, -2.8973, -0.0175, -2.8973),
@@ -170,14 +179,28 @@ def _origin(pose: np.ndarray) -> str:
 
 
 def _per_joint(values: Sequence[float] | None, default: Sequence[float], n: int, field: str) -> list[float]:
+    """The ``n`` joint limits of ``field`` (``effort`` or ``velocity``, :data:`LIMITS`), ``default`` when None.
+
+    Raises:
+        ExportError: no default for ``n`` joints, or not ``n`` values each > 0 and at most the real arms' bound
+            (one line naming the option and its unit).
+    """
+    option, unit, most, hint = LIMITS[field]
     if values is None:
         if len(default) != n:
-            raise ExportError(f"{field}: no default for a {n}-joint robot, pass {n} values (or export --into the "
-                              "robot's own URDF, which keeps its limits, meshes and inertials)")
+            raise ExportError(f"field '{option}': no default for a {n}-joint robot, pass {n} values [{unit}] (or "
+                              "export --into the robot's own URDF, which keeps its limits, meshes and inertials)")
         values = default
     values = [float(v) for v in values]
-    if len(values) != n or not all(np.isfinite(values)) or min(values) < 0.0:
-        raise ExportError(f"{field}: expected {n} finite non-negative numbers, got {values!r}")
+    if len(values) != n:
+        raise ExportError(f"field '{option}': expected {n} limits [{unit}], one per joint, got {len(values)}")
+    for joint, value in enumerate(values, 1):
+        if not value > 0:  # nan too; a URDF limit of 0 is a joint that may not move
+            raise ExportError(f"field '{option}': joint {joint}: {value:g} {unit}, expected a finite limit > 0 "
+                              f"[{unit}]")
+        if value > most:
+            raise ExportError(f"field '{option}': joint {joint}: {value:g} {unit} is beyond any real arm (at most "
+                              f"{most:g} {unit}) ({hint})")
     return values
 
 

@@ -35,11 +35,13 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         "the joints keep the names its description gave them); the MJCF keeps the plant's names",
     )
     parser.add_argument("--effort", default=None, metavar="E1,...,En",
-                        help="URDF joint torque limits [Nm], comma-separated (default: Franka's for a Franka arm; "
-                        "required for another arm)")
+                        help="URDF joint torque limits [Nm], comma-separated, each > 0 and at most 1e6 (ten times "
+                        "the strongest industrial arm's shoulder) (default: Franka's for a Franka arm; required for "
+                        "another arm)")
     parser.add_argument("--velocity", default=None, metavar="V1,...,Vn",
-                        help="URDF joint velocity limits [rad/s], comma-separated (default: Franka's for a Franka "
-                        "arm; required for another arm)")
+                        help="URDF joint velocity limits [rad/s], comma-separated, each > 0 and at most 100 (the "
+                        "fastest robot joints turn about 63 rad/s) (default: Franka's for a Franka arm; required for "
+                        "another arm)")
     parser.add_argument("--samples", default=None,
                         help="urdf only: samples.csv of recorded joint angles the rigid fit must match "
                         "(default: the samples file the calibration names, if unchanged)")

@@ -107,3 +107,32 @@ def test_another_arm_keeps_its_joint_names_and_must_give_its_limits(tmp_path, ca
     back = load_robot(out)
     q = iiwa.random_configurations(20, np.random.default_rng(0))
     np.testing.assert_allclose(tool_point(back, q), tool_point(iiwa, q), atol=1e-9)
+
+
+@pytest.mark.parametrize(("option", "values", "said"), [
+    ("--effort", "0,87,87,87,12,12,12", "joint 1: 0 Nm"),
+    ("--effort", "-5,87,87,87,12,12,12", "joint 1: -5 Nm"),  # a negative number reaches the check
+    ("--effort", "-5", "expected 7 limits [Nm]"),
+    ("--effort", "87,87,87,87,12,12,1e9", "joint 7: 1e+09 Nm is beyond any real arm"),
+    ("--velocity", "2.175,2.175,2.175,2.175,2.61,2.61,1e6", "joint 7: 1e+06 rad/s is beyond any real arm"),
+    ("--velocity", "125,125,125,125,150,150,150", "(deg/s? the limit is in rad/s)"),  # Franka's in deg/s
+    ("--velocity", "2.175,x", "expected comma-separated numbers [rad/s]"),
+])
+def test_implausible_joint_limits_are_refused_naming_the_option_and_its_unit(option, values, said, tmp_path,
+                                                                                capsys) -> None:
+    # a review: --effort 0 and --effort 1e9 were written into the URDF; '--effort -5,87,...' was 'expected one argument'
+    from tests.refusal import refused
+
+    refused(["export", "panda", "--format", "urdf", "--out", tmp_path / "a.urdf", option, values], tmp_path, capsys,
+            f"field '{option}': ", said)
+
+
+def test_joint_limit_bounds_leave_real_arms_their_limits(panda) -> None:
+    from spherecal.correction.files.urdf_write import MAX_EFFORT, MAX_VELOCITY, PANDA_EFFORT, PANDA_VELOCITY
+
+    assert 'effort="87.0" velocity="2.175"' in robot_to_urdf(panda, effort=PANDA_EFFORT, velocity=PANDA_VELOCITY)
+    # a heavy industrial arm's shoulder (tens of kN m) and a fast SCARA's wrist (about 60 rad/s) stay under the bounds
+    text = robot_to_urdf(panda, effort=[MAX_EFFORT] + [85e3] * 6, velocity=[MAX_VELOCITY] + [63.0] * 6)
+    assert f'effort="{MAX_EFFORT!r}" velocity="{MAX_VELOCITY!r}"' in text
+    with pytest.raises(ExportError, match=r"field '--velocity': joint 2: .* beyond any real arm"):
+        robot_to_urdf(panda, velocity=[1.0, MAX_VELOCITY * 1.01, 1, 1, 1, 1, 1])
