@@ -64,7 +64,7 @@ class ToolSwap:
 
 
 def with_tool(model: RobotModel, tool: np.ndarray, payload: dict | None = None,
-              angle: float = ANGLE.prior_std, nominal_tool: np.ndarray | None = None) -> ToolSwap:
+              angle: float = ANGLE.prior_std, nominal_tool: np.ndarray | None = None, field: str = "tool") -> ToolSwap:
     """Put another tool point on a (calibrated) model.
 
     The calibrated tool point carries more than the ball's mounting: the last joint's ``d`` and ``theta``
@@ -83,21 +83,24 @@ def with_tool(model: RobotModel, tool: np.ndarray, payload: dict | None = None,
         angle: unidentified rotation of the last frame to translate into millimetres [rad].
         nominal_tool: (3,) the calibrated tool's nominal position in the last frame [m]
             (``calibration.nominal_tool`` of a calibrated file), or None to put ``tool`` as given.
+        field: what the caller calls ``tool`` in a refusal (``--offset`` on the command line).
 
     Raises:
         ToolError: a tool that is not 3 finite numbers, or farther from the last frame than the arm is long
-            (:attr:`RobotModel.chain_length`: millimetres typed for metres).
+            (:attr:`RobotModel.chain_length`: millimetres typed for metres; no real tool outreaches the arm carrying
+            it, and on a small arm this bound is tighter than any fixed one of a few metres).
     """
     tool = np.asarray(tool, dtype=float)
     if tool.shape != (3,) or not np.all(np.isfinite(tool)):
-        raise ToolError(f"tool: expected 3 finite coordinates [m] in the last frame, got {np.ravel(tool).tolist()!r}")
+        raise ToolError(f"field '{field}': expected 3 finite coordinates [m] in the last frame, got "
+                        f"{np.ravel(tool).tolist()!r}")
     largest = float(np.abs(tool).max())
     distance = largest * float(np.linalg.norm(tool / largest)) if largest > 0 else 0.0  # 1e300 squared is inf
     if distance > model.chain_length:
         raise ToolError(
-            f"the new tool point {np.array2string(tool, precision=4)} m is {distance:.4g} m from the "
-            f"last frame, more than the arm itself ({model.chain_length:.3g} m, sum of |a| and |d|): the offset is in "
-            "metres")
+            f"field '{field}': the new tool point {np.array2string(tool, precision=4)} m is {distance:.4g} m from the "
+            f"last frame, more than the arm itself ({model.chain_length:.3g} m, sum of |a| and |d|) (millimetres? the "
+            "offset is in m)")
     calibrated = np.asarray(model.tool, dtype=float)
     carried = np.zeros(3)
     if nominal_tool is not None:

@@ -46,7 +46,7 @@ def put_tool(model: RobotModel, offset: np.ndarray | None = None, urdf: str | os
     nominal = block.get("nominal_tool") if isinstance(block, dict) else None
     # a file whose tool an earlier `tool` replaced: the new tool goes on the calibrated one (its correction once)
     model = replace(model, tool=calibrated_tool(model))
-    swap = with_tool(model, offset, payload, nominal_tool=nominal)
+    swap = with_tool(model, offset, payload, nominal_tool=nominal, field="--offset" if urdf is None else "--tip-link")
     swap = replace(swap, model=_retipped(swap.model, description.extras.get("urdf") if urdf is not None else None))
     if payload is not None:
         line = f"payload from {urdf}: {payload['mass']:.3f} kg (what its last link carries)"

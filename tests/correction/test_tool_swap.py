@@ -195,3 +195,20 @@ def test_the_guides_tool_swap_snippet_prints_a_few_short_lines(panda, tmp_path, 
     exec(snippet, {})  # noqa: S102 - our own documentation
     printed = capsys.readouterr().out
     assert "0.2104" in printed and "from the calibrated tool point" in printed and len(printed) < 1000
+
+
+def test_an_offset_typed_in_millimetres_is_refused_naming_the_option(tmp_path, capsys) -> None:
+    """A review: '--offset 0 0 103.4' (a 103.4 mm tool typed in millimetres) was refused without naming the option
+    or saying why the value looks wrong. The bound is the arm's own length (a tool beyond it is no real tool, and
+    stricter than a fixed few metres on a small arm); within it a tool is put as given."""
+    from tests.refusal import refused
+
+    cal = spherecal.correction.save_robot(load_robot("panda"), tmp_path / "cal.yaml")
+    length = load_robot("panda").chain_length
+    refused(["tool", cal, "--offset", "0", "0", "103.4", "--out", tmp_path / "new.yaml"], tmp_path, capsys,
+            "field '--offset': ", "103.4 m from the last frame", "(millimetres? the offset is in m)")
+    refused(["tool", cal, "--offset", 0, length * 0.8, length * 0.8, "--out", tmp_path / "new.yaml"], tmp_path,
+            capsys, "field '--offset': ", f"{np.hypot(length * 0.8, length * 0.8):.4g} m from the last frame")
+    assert main(["tool", str(cal), "--offset", "0", "0", str(length * 0.99), "--out", str(tmp_path / "new.yaml")]) == 0
+    with pytest.raises(ToolError, match=r"^field 'tool': .* more than the arm itself"):
+        with_tool(load_robot("panda"), [0.0, 0.0, 103.4])
