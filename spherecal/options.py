@@ -58,13 +58,39 @@ class StoreOnce(argparse._StoreAction):
             shown = " ".join(map(str, values)) if isinstance(values, list) else values
             parser.error(f"field {given[self.dest][0]!r}: given twice ({given[self.dest][1]!r}, then {shown!r}); it "
                          "takes one value, and the second would silently replace the first")
-        shown = " ".join(map(str, values)) if isinstance(values, list) else values
-        given[self.dest] = (option_string, shown)
+        mark_given(namespace, self.dest, option_string, values)
         setattr(namespace, self.dest, values)
 
 
 #: Where :class:`StoreOnce` keeps the options given so far during one parse (removed after it).
 _GIVEN = "_given_once"
+#: Where the parsed options keep what was typed: destination -> option (:func:`given`).
+_TYPED = "_typed"
+
+
+def mark_given(namespace: argparse.Namespace, dest: str, option_string: str | None, values) -> None:
+    """Record that ``option_string`` gave ``dest`` (an action's hook; the first spelling given is kept)."""
+    shown = " ".join(map(str, values)) if isinstance(values, list) else values
+    namespace.__dict__.setdefault(_GIVEN, {}).setdefault(dest, (option_string, shown))
+
+
+def given(args: argparse.Namespace) -> dict[str, str]:
+    """The options typed on the command line: destination -> the option's name (its full spelling, or the old one
+    that gave it); an option argparse filled in with its default is not among them."""
+    return dict(getattr(args, _TYPED, {}))
+
+
+def refuse_given(args: argparse.Namespace, dests, why: str) -> None:
+    """Refuse the first of ``dests`` (destinations) that was typed: the run would not use it (``why``: 'only with
+    --truth', one line as ``field '--seed': only with --truth``).
+
+    Raises:
+        OptionError: such an option was given.
+    """
+    typed = given(args)
+    for dest in dests:
+        if dest in typed:
+            raise fail(f"field '{typed[dest]}': {why}")
 
 
 class Parser(argparse.ArgumentParser):
@@ -84,7 +110,8 @@ class Parser(argparse.ArgumentParser):
 
     def parse_known_args(self, args=None, namespace=None):  # noqa: D102 - argparse's entry
         namespace, extras = super().parse_known_args(args, namespace)
-        namespace.__dict__.pop(_GIVEN, None)
+        typed = {dest: option for dest, (option, _) in namespace.__dict__.pop(_GIVEN, {}).items() if option}
+        setattr(namespace, _TYPED, {**given(namespace), **typed})  # a subcommand's parse ran inside this one
         return namespace, extras
 
     def error(self, message: str):  # noqa: D102 - argparse's hook
@@ -247,6 +274,7 @@ class Deprecated(argparse.Action):
 
     def __call__(self, parser, namespace, values, option_string=None):
         warn(f"{option_string} is deprecated, use {self.new} ({option_string} will be removed)")
+        mark_given(namespace, self.dest, option_string, values)
         setattr(namespace, self.dest, self.convert(values) if self.convert else values)
 
 

@@ -121,7 +121,7 @@ def test_a_candidate_socket_named_like_a_recorded_fixture_names_the_file(tmp_pat
     path = tmp_path / "candidates.yaml"
     path.write_text("candidates:\n  left:\n    sockets: {front_center_h0: [0.42, 0.21, 0.02], x: [0.42, 0.26, 0.02]}\n")
     refused(["plan", "--robot", PANDA, "--samples", out / "samples.csv", "--fixtures", out / "fixtures.yaml",
-             "--candidates", path, "--workers", "1"], tmp_path, capsys,
+             "--candidates", path], tmp_path, capsys,
             "candidates.yaml: field 'candidates.left.sockets.front_center_h0': socket 'front_center_h0' is a "
             "recorded fixture's name")
 
@@ -208,7 +208,7 @@ def test_guidance_on_a_recording_no_model_describes_is_refused(tmp_path, capsys)
     candidates = tmp_path / "candidates.yaml"
     candidates.write_text("candidates:\n  left:\n    sockets: {a: [0.42, 0.21, 0.02], b: [0.42, 0.26, 0.02]}\n")
     refused(["plan", "--robot", PANDA, "--samples", tmp_path / "slipped.csv", "--fixtures", out / "fixtures.yaml",
-             "--candidates", candidates, "--workers", "1"], tmp_path, capsys,
+             "--candidates", candidates], tmp_path, capsys,
             "slipped.csv: rows 2-186: the recording so far leaves ", "mm per axis after calibration (a ball held in a "
             "socket stays within 10 mm): no candidate can be judged on it")
 

@@ -154,3 +154,59 @@ def test_segmentation_lengths_typed_in_metres_or_zero_are_refused(option, tmp_pa
                      "--out", str(out)]) == 1
         err = capsys.readouterr().err
         assert err.count("\n") == 1 and option in err and said in err and not out.exists()
+
+
+#: validate's models (the files need not exist: an option the run would ignore is refused before any is read)
+_MODELS = ["--nominal", "panda", "--calibrated", "c.yaml"]
+_GRID = ["--grid", "0.5,0.5,1;0,0,1;0.4,0.4,1"]
+
+
+@pytest.mark.parametrize(("argv", "field", "said"), [
+    (["validate", *_MODELS, "--samples", "s.csv", "--configurations", "300"], "--configurations",
+     "only with --truth and no --mocap"),
+    (["validate", *_MODELS, "--truth", "t.yaml", "--mocap", "m.csv", "--mocap-noise", "0.5"], "--mocap-noise",
+     "only with --truth and no --mocap"),
+    (["validate", *_MODELS, "--mocap", "m.csv", "--seed", "3"], "--seed", "only with --truth and no --mocap"),
+    (["validate", *_MODELS, "--mocap", "m.csv", "--samples", "s.csv"], "--samples", "not with --mocap"),
+    (["plan", *_GRID, "--out", "plan.json"], "--out", "only with --samples, not in a plan from scratch"),
+    (["plan", "--samples", "s.csv", "--plate-orientations", "4"], "--plate-orientations", "only with --plate-grid"),
+    (["plan", *_GRID, "--seconds", "5"], "--seconds", "only with --motion controller"),
+    (["plan", "--predict", "s.csv", "--fixture-count", "2"], "--fixture-count", "not with --predict"),
+    (["plan", *_GRID, "--min-gain", "0.1"], "--min-gain", "only with --samples"),
+    (["plan", "--predict", "s.csv", "--samples", "r.csv"], "--samples", "not with --predict"),
+    (["plan", "--analysis", "a.md", "--robot", "fr3"], "--robot", "not with --analysis"),
+    (["plan", "--predict", "s.csv", "--rrd", "p.rrd"], "--rrd", "not with --predict"),
+    (["plan", "--samples", "s.csv", "--workers", "1"], "--workers", "not with --samples"),
+    (["plan", *_GRID, "--fixtures", "f.yaml"], "--fixtures", "not in a plan from scratch"),
+    (["plan", "--analysis", "a.md", "--scheduler", "local"], "--scheduler", "not with --analysis"),
+])
+def test_an_option_the_run_would_ignore_is_refused(argv, field, said, tmp_path, capsys, monkeypatch) -> None:
+    """A review: 'validate --configurations' without --truth and 'plan --out' without --samples were accepted and
+    silently unused; every such combination is refused in one line naming the option, before any file is read."""
+    from tests.refusal import refused
+
+    monkeypatch.chdir(tmp_path)
+    refused(argv, tmp_path, capsys, f"field '{field}': ", said)
+
+
+@pytest.mark.parametrize(("argv", "field", "said"), [
+    (["validate", *_MODELS, "--samples", "s.csv", "--noise", "0.5"], "--noise", "only with --truth and no --mocap"),
+    (["plan", "--predict", "s.csv", "--samples", "120"], "--samples", "not with --predict"),  # the old count
+])
+def test_an_old_spelling_the_run_would_ignore_is_refused(argv, field, said, tmp_path, capsys, monkeypatch) -> None:
+    monkeypatch.chdir(tmp_path)
+    assert main(argv) == 1
+    warning, refusal = capsys.readouterr().err.splitlines()  # the deprecation's warning, then the refusal
+    assert "is deprecated" in warning and f"error: field '{field}': " in refusal and said in refusal
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_the_options_a_run_uses_are_not_refused() -> None:
+    """The record of given options behind those refusals: what was typed, by destination (abbreviations and old
+    spellings under the option's own destination), and nothing argparse filled in by default."""
+    from spherecal.options import given
+
+    args = build_parser().parse_args(["plan", "--sam", "120", "--see", "4", "--motion", "controller"])
+    assert given(args) == {"per_fixture": "--samples", "seed": "--seed", "motion": "--motion"}
+    args = build_parser().parse_args(["validate", *_MODELS, "--noise", "0.5"])
+    assert given(args) == {"nominal": "--nominal", "calibrated": "--calibrated", "mocap_noise": "--noise"}

@@ -78,7 +78,7 @@ def test_output_set_refuses_an_input_however_named(tmp_path, monkeypatch, link) 
 @pytest.mark.parametrize("command", [
     ["simulate", "--seconds", "0.1", "--per-fixture", "5"],
     ["calibrate", "--robot", "panda", "--samples", "SAMPLES"],
-    ["plan", "--predict", "SAMPLES", "--rrd"],
+    ["plan", "--samples", "SAMPLES", "--rrd"],  # (--predict writes nothing: its --rrd is refused as unused)
 ])
 def test_a_folder_given_for_fixtures_is_named_as_such(tmp_path, capsys, command) -> None:
     """--fixtures naming a folder that the output lies in was refused as 'the output is inside the --fixtures
@@ -215,7 +215,7 @@ def test_simulate_replaces_its_own_earlier_outputs(tmp_path, capsys) -> None:
         (["validate", "--nominal", "robot.yaml", "--calibrated", "calibrated.yaml", "--samples", "samples.csv",
           "--rrd", "calibrated.yaml"], "is the --calibrated file"),
         (["plan", "--candidates", "candidates.yaml", "--rrd", "candidates.yaml"], "is the --candidates file"),
-        (["plan", "--predict", "samples.csv", "--rrd", "samples.csv"], "is the --predict file"),
+        (["plan", "--samples", "samples.csv", "--rrd", "samples.csv"], "is the --samples file"),
         (["import", "samples.csv", "--format", "csv", "--robot", "robot.yaml", "--out", "."],
          "holds the input"),
     ],

@@ -362,9 +362,9 @@ def test_an_endless_input_is_refused_not_read_forever(tmp_path, panda, option, d
     save_robot(panda, tmp_path / "robot.yaml")
     path = write_samples(tmp_path / "samples.csv", Dataset(labels=np.array(["P1"] * 3),
                                                            q=panda.random_configurations(3, np.random.default_rng(0))))
-    inputs = {"--nominal": tmp_path / "robot.yaml", "--calibrated": tmp_path / "robot.yaml", "--samples": path}
-    if option != "--mocap":
-        inputs[option] = device
+    inputs = {"--nominal": tmp_path / "robot.yaml", "--calibrated": tmp_path / "robot.yaml"}
+    if option != "--mocap":  # (--samples with --mocap is refused as unused: the measurement is compared alone)
+        inputs |= {"--samples": path, option: device}
     argv = [a for pair in inputs.items() for a in pair] + (["--mocap", device] if option == "--mocap" else [])
     run = subprocess.run([sys.executable, "-c", "import sys; from spherecal.cli import main; sys.exit(main())",
                           "validate", *map(str, argv)], capture_output=True, text=True, timeout=60)

@@ -77,13 +77,18 @@ class ValidateConfig:
         """Refuse a comparison without a reference, and known distances outside the socket-only check.
 
         Raises:
-            ValidationInputError: none of ``truth``, ``mocap`` and ``samples``, or ``fixtures`` given with
-                ``truth`` or ``mocap`` or without ``samples``.
+            ValidationInputError: none of ``truth``, ``mocap`` and ``samples``, ``fixtures`` given with
+                ``truth`` or ``mocap`` or without ``samples``, or ``samples`` with ``mocap`` (the recorded
+                measurement is compared alone: the self-motion sets would be read and left out).
         """
         if self.truth is None and self.mocap is None and self.samples is None:
-            raise ValidationInputError("give --truth (simulation), --mocap (recorded data) or --samples (socket-only)")
+            raise ValidationInputError("field '--truth': give --truth (simulation), --mocap (recorded data) or "
+                                       "--samples (socket-only)")
         if self.fixtures is not None and (self.truth is not None or self.mocap is not None or self.samples is None):
-            raise ValidationInputError("--fixtures goes with --samples alone (socket-only check)")
+            raise ValidationInputError("field '--fixtures': goes with --samples alone (socket-only check)")
+        if self.samples is not None and self.mocap is not None:
+            raise ValidationInputError("field '--samples': not with --mocap (the recorded measurement is compared "
+                                       "alone; the self-motion sets go with --truth, socket samples with no --truth)")
 
 
 def validate_files(config: ValidateConfig, outputs: OutputSet,

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import argparse
 
-from spherecal.options import fail, recorded_options, urdf_links
+from spherecal.options import fail, given, mark_given, recorded_options, refuse_given, urdf_links
 
 HELP = ("Rank candidate fixture positions by the calibration accuracy they predict; with --samples, what to record "
         "next on a real arm")
@@ -79,8 +79,10 @@ class _SamplesOption(argparse.Action):
                 namespace.per_fixture = count(1, MAX_PER_FIXTURE)(values)
             except argparse.ArgumentTypeError as error:
                 parser.error(f"argument --samples: {error}")
+            mark_given(namespace, "per_fixture", option_string, values)
         else:
             namespace.samples = values
+            mark_given(namespace, "samples", option_string, values)
 
 
 class _FixturesOption(argparse.Action):
@@ -93,8 +95,55 @@ class _FixturesOption(argparse.Action):
 
             warn("--fixtures N (a count) is deprecated in plan, use --fixture-count N; --fixtures names a file")
             namespace.fixture_count = int(values)
+            mark_given(namespace, "fixture_count", option_string, values)
         else:
             namespace.fixtures = values
+            mark_given(namespace, "fixtures", option_string, values)
+
+
+#: The robot and its URDF chain and inertials (argparse destinations).
+_ROBOT = ("robot", "tip_link", "base_link", "inertials")
+#: Per kind of run (:func:`_kind`): the options it uses (argparse destinations); any other given is refused.
+USES = {
+    "--analysis": ("analysis", "seed", "workers"),  # its own arms and settings; the built-in pool only
+    "--predict": ("predict", *_ROBOT, "fixtures", "noise"),
+    "--samples": ("samples", *_ROBOT, "fixtures", "candidates", "grid", "plate_grid", "plate_orientations",
+                  "per_socket", "min_gain", "noise", "seed", "out", "rrd"),
+    "a plan from scratch": (*_ROBOT, "candidates", "grid", "fixture_count", "noise", "per_fixture", "motion",
+                            "seconds", "seed", "workers", "scheduler", "rrd"),
+}
+
+
+def _kind(args: argparse.Namespace) -> str:
+    """Which run the options ask for: a key of :data:`USES`."""
+    for option in ("--analysis", "--predict", "--samples"):
+        if getattr(args, option[2:]) is not None:
+            return option
+    return "a plan from scratch"
+
+
+def refuse_unused(args: argparse.Namespace) -> None:
+    """Refuse a given option the run would not use, in one line naming it and the runs that use it ('field
+    '--out': only with --samples, not in a plan from scratch'): a review found 'plan --out' without --samples
+    accepted and nothing written.
+
+    Raises:
+        OptionError: such an option.
+    """
+    kind = _kind(args)
+    for dest, option in given(args).items():
+        if dest not in USES[kind]:
+            users = [name for name, uses in USES.items() if dest in uses]
+            where = f"with {kind}" if kind.startswith("--") else f"in {kind}"
+            raise fail(f"field '{option}': only {' or '.join(_phrase(u) for u in users)}, not {where}")
+    if kind == "a plan from scratch" and args.motion != "controller":
+        refuse_given(args, ("seconds",), "only with --motion controller (the kinematic survey runs no controller)")
+    if kind == "--samples" and args.plate_grid is None:
+        refuse_given(args, ("plate_orientations",), "only with --plate-grid (the turns of the plate over its grid)")
+
+
+def _phrase(kind: str) -> str:
+    return f"with {kind}" if kind.startswith("--") else f"in {kind} (no --analysis, --predict or --samples)"
 
 
 def run(args: argparse.Namespace) -> int:
@@ -104,13 +153,12 @@ def run(args: argparse.Namespace) -> int:
     from spherecal.options import planned_outputs
     from spherecal.validation.planning import plan_files
 
+    refuse_unused(args)
     if args.per_fixture < 10:
-        raise fail(f"--per-fixture must be >= 10, got {args.per_fixture}")
+        raise fail(f"field '--per-fixture': must be >= 10, got {args.per_fixture}")
     outputs = planned_outputs(args, {"--rrd": args.rrd, "--analysis": args.analysis, "--out": args.out})
     plan_files.refuse_foreign_outputs({"--out": args.out, "--analysis": args.analysis, "--rrd": args.rrd})
     if args.analysis is not None:
-        if args.scheduler is not None:
-            raise fail("--scheduler: the --analysis runs on the built-in process pool (--workers) only")
         from spherecal.validation.planning.analysis import AnalysisConfig, write_analysis
 
         with outputs:

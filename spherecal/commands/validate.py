@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import argparse
 
-from spherecal.options import recorded_options, urdf_links
+from spherecal.options import recorded_options, refuse_given, urdf_links
 
 HELP = "Compare nominal and calibrated models against the truth, motion-capture data or socket samples alone."
 
@@ -44,6 +44,9 @@ def run(args: argparse.Namespace) -> int:
     from spherecal.options import planned_outputs
     from spherecal.validation.validate_files import ValidateConfig, validate_files
 
+    if args.truth is None or args.mocap is not None:  # a review: '--configurations' without --truth did nothing
+        refuse_given(args, ("configurations", "mocap_noise", "seed"),
+                     "only with --truth and no --mocap (it sets the simulated motion capture)")
     links = urdf_links(args)
     config = ValidateConfig(
         nominal=args.nominal, calibrated=args.calibrated, truth=args.truth, mocap=args.mocap, samples=args.samples,

@@ -79,9 +79,10 @@ def test_socket_only_spreads_are_those_of_the_tool_points(files, tmp_path):
 
 
 @pytest.mark.parametrize("given, message", [
-    ({}, "give --truth"),
-    ({"mocap": "m.csv", "fixtures": "f.yaml"}, "--fixtures goes with --samples alone"),
-    ({"truth": "t.yaml", "samples": "s.csv", "fixtures": "f.yaml"}, "--fixtures goes with --samples alone"),
+    ({}, "^field '--truth': give --truth"),
+    ({"mocap": "m.csv", "fixtures": "f.yaml"}, "^field '--fixtures': goes with --samples alone"),
+    ({"truth": "t.yaml", "samples": "s.csv", "fixtures": "f.yaml"}, "^field '--fixtures': goes with --samples alone"),
+    ({"truth": "t.yaml", "mocap": "m.csv", "samples": "s.csv"}, "^field '--samples': not with --mocap"),
 ])
 def test_a_config_without_a_reference_is_refused(given, message):
     with pytest.raises(ValidationInputError, match=message):
