@@ -31,7 +31,7 @@ def test_the_written_file_loads_as_the_same_arm(calibrated, tmp_path, panda, out
 
 @pytest.mark.parametrize("config, error, message", [
     ({"output_format": "urdf", "out": "x.yaml"}, OutputError, "would be read as YAML"),
-    ({"output_format": "urdf", "out": "x.urdf", "effort": "1,x"}, ExportError, "--effort: expected"),
+    ({"output_format": "urdf", "out": "x.urdf", "effort": "1,x"}, ExportError, "field '--effort': expected"),
     ({"output_format": "yaml", "out": "x.yaml", "velocity": "1,2,3,4,5,6,7"}, ExportError, "only the urdf format"),
 ])
 def test_refusals_write_nothing(calibrated, tmp_path, monkeypatch, config, error, message):
