@@ -175,12 +175,12 @@ def export_model(model: RobotModel, output_format: str, header: str = "", prefix
         ExportError: an invalid format, prefix, limits, or an option the format does not take.
     """
     if output_format not in FORMATS:
-        raise ExportError(f"--format: unknown format {output_format!r}, expected one of {FORMATS}")
+        raise ExportError(f"field '--format': unknown format {output_format!r}, expected one of {FORMATS}")
     if output_format != "urdf":
         for option, value in (("--prefix", prefix), ("--effort", effort), ("--velocity", velocity),
                               ("--into", into), ("--samples", samples)):
             if value is not None:
-                raise ExportError(f"{option}: only the urdf format takes it, not {output_format}")
+                raise ExportError(f"field '{option}': only the urdf format takes it, not {output_format}")
         if output_format == "yaml":
             return Export(dump_robot(model, header=header))
         from spherecal.controller.plant import build_mjcf  # mujoco: the plant module imports it
@@ -200,7 +200,7 @@ def export_model(model: RobotModel, output_format: str, header: str = "", prefix
     if into is not None:
         for option, value in (("--prefix", prefix), ("--effort", effort), ("--velocity", velocity)):
             if value is not None:
-                raise ExportError(f"{option}: not with --into (the URDF keeps its own names and limits)")
+                raise ExportError(f"field '{option}': not with --into (the URDF keeps its own names and limits)")
     else:
         names_and_limits(model, prefix, effort, velocity)  # refused before the rigid fit, not after it
     recorded, where = (None, "") if not joint_side_terms(model) else recorded_configurations(model, samples, folder)

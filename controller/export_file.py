@@ -132,5 +132,5 @@ def _into(into: str, out: str) -> tuple[str, str]:
     source = Path(into)
     text = read_xml_text(source, ExportError)  # in the encoding it declares, written back in it
     if Path(out).resolve() == source.resolve() or (Path(out).exists() and os.path.samefile(out, source)):
-        raise ExportError(f"--out: {out} is the --into file; write the calibrated URDF to another file")
+        raise ExportError(f"{out}: field '--out': is the --into file; write the calibrated URDF to another file")
     return text, str(source)

@@ -77,8 +77,8 @@ class WorkflowOptions:
     def __post_init__(self) -> None:
         # pso fits least squares: a robust loss would be ignored and recorded as used (auto resolves to linear)
         if self.method == "pso" and self.loss not in ("linear", "auto"):
-            raise SpherecalError(f"--loss {self.loss}: the pso method fits plain least squares; a robust loss needs "
-                                 "--method lm or pso+lm (its lm stage)")
+            raise SpherecalError(f"field '--loss': {self.loss}: the pso method fits plain least squares; a robust "
+                                 "loss needs --method lm or pso+lm (its lm stage)")
 
     @property
     def fit_noise(self) -> float:

@@ -231,7 +231,7 @@ def test_a_robust_loss_with_the_pso_method_is_refused(tmp_path, capsys) -> None:
     out = _imported(tmp_path)
     refused(["calibrate", "--robot", PANDA, "--samples", out / "samples.csv", "--method", "pso", "--loss", "huber",
              "--out", tmp_path / "cal.yaml"], tmp_path, capsys,
-            "--loss huber: the pso method fits plain least squares; a robust loss needs --method lm or pso+lm")
+            "field '--loss': huber: the pso method fits plain least squares; a robust loss needs --method lm or pso+lm")
 
 
 def test_a_known_distance_below_the_socket_separation_is_refused_before_the_fit(tmp_path, capsys) -> None:

@@ -210,3 +210,33 @@ def test_the_options_a_run_uses_are_not_refused() -> None:
     assert given(args) == {"per_fixture": "--samples", "seed": "--seed", "motion": "--motion"}
     args = build_parser().parse_args(["validate", *_MODELS, "--noise", "0.5"])
     assert given(args) == {"nominal": "--nominal", "calibrated": "--calibrated", "mocap_noise": "--noise"}
+
+
+@pytest.mark.parametrize(("argv", "field"), [
+    (["export", "panda", "--format", "urdf", "--out", "a.urdf", "--prefix", "a b"], "--prefix"),
+    (["export", "panda", "--format", "yaml", "--out", "a.yaml", "--prefix", "arm_"], "--prefix"),
+    (["export", "panda", "--format", "mjcf", "--out", "a.xml", "--velocity", "1,1,1,1,1,1,1"], "--velocity"),
+    (["export", "iiwa14", "--format", "urdf", "--out", "a.urdf"], "--effort"),
+    (["export", "panda", "--format", "yaml", "--out", "a.yaml", "--tip-link", "x"], "--tip-link"),
+    (["tool", "panda", "--offset", "0", "0", "0.2", "--base-link", "x", "--out", "t.yaml"], "--base-link"),
+    (["calibrate", "--robot", "panda", "--samples", "s.csv", "--method", "pso", "--loss", "huber", "--out",
+      "c.yaml"], "--loss"),
+    (["validate", "--nominal", "panda", "--calibrated", "panda", "--base-link", "x", "--samples", "s.csv"],
+     "--base-link"),
+])
+def test_a_refused_option_is_named_as_field(argv, field, tmp_path, capsys, monkeypatch) -> None:
+    """A review: refusals said 'prefix: ...', '--prefix: only the urdf format takes it', '--tip-link and --base-link:
+    only with --urdf', '--loss huber: ...'; each names its option as every other refusal does, field '--name'."""
+    from tests.refusal import refused
+
+    monkeypatch.chdir(tmp_path)
+    refused(argv, tmp_path, capsys, f"field '{field}': ")
+
+
+def test_an_overlong_line_names_its_row_not_an_empty_field(tmp_path, capsys) -> None:
+    from tests.refusal import refused
+
+    (tmp_path / "s.csv").write_text("x" * 1_000_001 + "\n")
+    err = refused(["validate", "--nominal", "panda", "--calibrated", "panda", "--samples", tmp_path / "s.csv"],
+                  tmp_path, capsys, "s.csv: row 1: a line longer than")
+    assert "field ''" not in err

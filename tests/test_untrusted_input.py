@@ -347,11 +347,11 @@ def test_joint_csv_fast_and_careful_readers_agree(tmp_path, panda) -> None:
 
 # ------------------------------------------------------------------------------ endless inputs
 @pytest.mark.parametrize(("option", "device", "message"), [
-    ("--samples", "/dev/zero", "/dev/zero: row 1, field '': a line longer than"),
+    ("--samples", "/dev/zero", "/dev/zero: row 1: a line longer than"),
     ("--fixtures", "/dev/zero", "/dev/zero: cannot read: larger than"),
     ("--calibrated", "/dev/zero", "/dev/zero: cannot read: larger than"),
     ("--nominal", "/dev/urandom", "/dev/urandom: cannot read: larger than"),
-    ("--mocap", "/dev/zero", "/dev/zero: row 1, field '': a line longer than"),
+    ("--mocap", "/dev/zero", "/dev/zero: row 1: a line longer than"),
 ])
 def test_an_endless_input_is_refused_not_read_forever(tmp_path, panda, option, device, message) -> None:
     # `--fixtures /dev/zero` grew until the kernel killed the process (a minute, no message); `--samples

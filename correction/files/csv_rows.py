@@ -115,7 +115,7 @@ def _bounded_lines(handle, path: Path, error: type[SpherecalError]) -> Iterator[
             return
         row += 1
         if len(line) > MAX_LINE:
-            raise error(f"{path}: row {row}, field '': a line longer than {MAX_LINE} characters (not a text "
+            raise error(f"{path}: row {row}: a line longer than {MAX_LINE} characters (not a text "
                         "file of rows?)")
         yield line
 

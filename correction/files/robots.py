@@ -92,9 +92,9 @@ def _load(path_or_name: str | os.PathLike, tip_link: str | None, base_link: str 
         return load_urdf(path_or_name, tip_link=tip_link, base_link=base_link)
     if Path(key).is_dir():  # before the link options: a folder is no robot description of any kind
         raise RobotFileError(f"{key}: cannot read: Is a directory (expected a robot file or a .urdf)")
-    for option, value in (("tip link", tip_link), ("base link", base_link)):
+    for option, value in (("--tip-link", tip_link), ("--base-link", base_link)):
         if value is not None:
-            raise RobotFileError(f"{key}: a {option} ({value!r}) is only for a URDF robot description (.urdf)")
+            raise RobotFileError(f"{key}: field '{option}': {value!r} is only for a URDF robot description (.urdf)")
     if key in EMBEDDED_ROBOTS and not Path(key).exists():
         return _embedded(EMBEDDED_ROBOTS[key], key)
     path = Path(path_or_name)

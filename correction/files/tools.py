@@ -35,7 +35,8 @@ def put_tool(model: RobotModel, offset: np.ndarray | None = None, urdf: str | os
         RobotFileError: an unreadable URDF or an unknown link (one line).
     """
     if (offset is None) == (urdf is None):
-        raise ToolError("the new tool: give either an offset [m] in the last frame or a URDF with its tip link")
+        raise ToolError("field '--offset': give either an offset [m] in the last frame or (--urdf) a URDF with its tip "
+                        "link")
     payload = None
     if urdf is not None:
         description = load_urdf(urdf, tip_link=tip_link, base_link=base_link)

@@ -289,12 +289,12 @@ def names_and_limits(model: RobotModel, prefix: str | None = None, effort: Seque
                    and all(_NAME.match(str(k)) for k in named) else None)
     prefix = default_prefix(model) if prefix is None else prefix
     if not _NAME.match(prefix):
-        raise ExportError(f"prefix: {prefix!r} may contain only letters, digits and _ . / : -")
+        raise ExportError(f"field '--prefix': {prefix!r} may contain only letters, digits and _ . / : -")
     missing = [field for field, given in (("--effort", effort), ("--velocity", velocity)) if given is None]
     if missing and not is_franka(model):
-        raise ExportError(f"{', '.join(missing)}: no default for {model.name!r} (Franka's are for a Franka arm, whose "
-                          f"joint limits these are not): give {n} comma-separated values each, or export --into the "
-                          "robot's own URDF, which keeps its limits, meshes and inertials")
+        raise ExportError(f"field '{missing[0]}': no default for {model.name!r} (Franka's are for a Franka arm, whose "
+                          f"joint limits these are not): give {n} comma-separated values to {' and '.join(missing)}, "
+                          "or export --into the robot's own URDF, which keeps its limits, meshes and inertials")
     return (prefix, joint_names, _per_joint(effort, PANDA_EFFORT, n, "effort"),
             _per_joint(velocity, PANDA_VELOCITY, n, "velocity"))
 

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import argparse
 
-from spherecal.options import finite
+from spherecal.options import finite, refuse_given
 
 HELP = "Put another tool on a calibrated arm: a new robot file with the tool point replaced."
 
@@ -30,10 +30,10 @@ def run(args: argparse.Namespace) -> int:
     """Load, put the tool on, write; nothing is written on an error."""
     from spherecal.correction import dump_robot, load_robot
     from spherecal.correction.files.tools import put_tool
-    from spherecal.options import fail, planned_outputs
+    from spherecal.options import planned_outputs
 
-    if args.urdf is None and (args.tip_link or args.base_link):
-        raise fail("--tip-link and --base-link: only with --urdf")
+    if args.urdf is None:
+        refuse_given(args, ("tip_link", "base_link"), "only with --urdf (the link of the new tool in its URDF)")
     outputs = planned_outputs(args, {"--out": args.out})
     from spherecal.correction.files.outputs import check_suffix
 

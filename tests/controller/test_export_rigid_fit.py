@@ -81,7 +81,7 @@ def test_rigid_model_is_exported_unchanged_and_other_formats_keep_every_term(pan
     elastic = with_compliance(model, COMPLIANCE)
     assert "compliance" in export_model(elastic, "yaml").text
     assert "flex2" in export_model(elastic, "mjcf").text  # the plant's flexible hinge behind the motor
-    with pytest.raises(Exception, match="--samples: only the urdf format"):
+    with pytest.raises(Exception, match="field '--samples': only the urdf format"):
         export_model(elastic, "yaml", samples="x.csv")
 
 

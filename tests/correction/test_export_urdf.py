@@ -92,12 +92,12 @@ def test_another_arm_keeps_its_joint_names_and_must_give_its_limits(tmp_path, ca
 
     iiwa = load_robot("iiwa14")
     assert not is_franka(iiwa) and is_franka(load_robot("panda")) and is_franka(load_robot("fr3"))
-    with pytest.raises(ExportError, match=r"--effort, --velocity: no default for 'kuka_iiwa14'"):
+    with pytest.raises(ExportError, match=r"field '--effort': no default for 'kuka_iiwa14'"):
         robot_to_urdf(iiwa)
     cal = save_robot(iiwa, tmp_path / "iiwa.yaml")
     out = tmp_path / "iiwa.urdf"
     assert main(["export", str(cal), "--format", "urdf", "--out", str(out)]) == 1 and not out.exists()
-    assert "--effort, --velocity: no default" in capsys.readouterr().err
+    assert "field '--effort': no default" in capsys.readouterr().err
     effort, velocity = "320,320,176,176,110,40,40", "1.48,1.48,1.75,1.31,2.27,2.36,2.36"
     assert main(["export", str(cal), "--format", "urdf", "--out", str(out), "--effort", effort,
                  "--velocity", velocity]) == 0
