@@ -63,6 +63,27 @@ class ToolSwap:
     note: str
 
 
+#: Where a calibrated file records the nominal point of the tool it was calibrated with.
+NOMINAL_TOOL = "calibration.nominal_tool"
+
+
+def point_of(value, where: str) -> np.ndarray:
+    """(3,) the finite coordinates [m] of a point in the last frame, as given in ``value``.
+
+    Raises:
+        ToolError: anything else (text, two numbers, a nan), one line starting with ``where`` (``"field '--offset'"``,
+            ``"cal.yaml: field 'calibration.nominal_tool'"``).
+    """
+    try:
+        point = np.asarray(value, dtype=float)
+    except (TypeError, ValueError):
+        point = np.full(0, np.nan)
+    if point.shape != (3,) or not np.all(np.isfinite(point)):
+        shown = np.ravel(point).tolist() if point.size else value
+        raise ToolError(f"{where}: expected 3 finite coordinates [m] in the last frame, got {shown!r}")
+    return point
+
+
 def with_tool(model: RobotModel, tool: np.ndarray, payload: dict | None = None,
               angle: float = ANGLE.prior_std, nominal_tool: np.ndarray | None = None, field: str = "tool") -> ToolSwap:
     """Put another tool point on a (calibrated) model.
@@ -90,10 +111,7 @@ def with_tool(model: RobotModel, tool: np.ndarray, payload: dict | None = None,
             (:attr:`RobotModel.chain_length`: millimetres typed for metres; no real tool outreaches the arm carrying
             it, and on a small arm this bound is tighter than any fixed one of a few metres).
     """
-    tool = np.asarray(tool, dtype=float)
-    if tool.shape != (3,) or not np.all(np.isfinite(tool)):
-        raise ToolError(f"field '{field}': expected 3 finite coordinates [m] in the last frame, got "
-                        f"{np.ravel(tool).tolist()!r}")
+    tool = point_of(tool, f"field '{field}'")
     largest = float(np.abs(tool).max())
     distance = largest * float(np.linalg.norm(tool / largest)) if largest > 0 else 0.0  # 1e300 squared is inf
     if distance > model.chain_length:
@@ -104,9 +122,7 @@ def with_tool(model: RobotModel, tool: np.ndarray, payload: dict | None = None,
     calibrated = np.asarray(model.tool, dtype=float)
     carried = np.zeros(3)
     if nominal_tool is not None:
-        nominal_tool = np.asarray(nominal_tool, dtype=float)
-        if nominal_tool.shape != (3,) or not np.all(np.isfinite(nominal_tool)):
-            raise ToolError(f"nominal_tool: expected 3 finite coordinates [m], got {np.ravel(nominal_tool).tolist()!r}")
+        nominal_tool = point_of(nominal_tool, f"field '{NOMINAL_TOOL}'")
         carried = calibrated - nominal_tool
         tool = tool + carried
     distance = float(np.linalg.norm(tool - calibrated))

@@ -9,12 +9,13 @@ import numpy as np
 
 from ..gravity import has_inertials
 from ..model import RobotModel
-from ..tool import ToolError, ToolSwap, calibrated_tool, tool_in_frame, with_tool
+from ..tool import NOMINAL_TOOL, ToolError, ToolSwap, calibrated_tool, point_of, tool_in_frame, with_tool
 from .urdf_to_dh import load_urdf
 
 
 def put_tool(model: RobotModel, offset: np.ndarray | None = None, urdf: str | os.PathLike | None = None,
-             tip_link: str | None = None, base_link: str | None = None) -> tuple[ToolSwap, str]:
+             tip_link: str | None = None, base_link: str | None = None,
+             source: str | os.PathLike | None = None) -> tuple[ToolSwap, str]:
     """``model`` with the tool at ``offset`` (in the last DH frame [m]) or at ``tip_link`` of ``urdf``.
 
     Args:
@@ -25,6 +26,7 @@ def put_tool(model: RobotModel, offset: np.ndarray | None = None, urdf: str | os
         urdf, tip_link, base_link: a URDF of the same arm with the new tool, its link at the tool point (the
             chain's last frame must be the model's: :func:`correction.tool.tool_in_frame`). When the URDF has
             masses, what its last link carries (gripper, fingers) becomes the payload.
+        source: the calibrated file, named in a refusal of its ``calibration.nominal_tool``.
 
     Returns:
         ``(swap, one line on the payload)``.
@@ -45,6 +47,8 @@ def put_tool(model: RobotModel, offset: np.ndarray | None = None, urdf: str | os
             payload = description.extras["payload"]
     block = model.extras.get("calibration")
     nominal = block.get("nominal_tool") if isinstance(block, dict) else None
+    if nominal is not None:  # a hand-edited file: its name and field, not a traceback ('nominal_tool: abc')
+        nominal = point_of(nominal, f"{source or model.name}: field '{NOMINAL_TOOL}'")
     # a file whose tool an earlier `tool` replaced: the new tool goes on the calibrated one (its correction once)
     model = replace(model, tool=calibrated_tool(model))
     swap = with_tool(model, offset, payload, nominal_tool=nominal, field="--offset" if urdf is None else "--tip-link")

@@ -47,7 +47,7 @@ def run(args: argparse.Namespace) -> int:
         import warnings
 
         warnings.warn(forced, stacklevel=1)
-    swap, payload = put_tool(model, args.offset, args.urdf, args.tip_link, args.base_link)
+    swap, payload = put_tool(model, args.offset, args.urdf, args.tip_link, args.base_link, source=args.robot)
     header = f"spherecal tool: {args.robot} with the tool at {[round(v, 6) for v in swap.model.tool]} m (frame n)"
     with outputs:
         path = outputs.write_text(args.out, dump_robot(swap.model, header=header))

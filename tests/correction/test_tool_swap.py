@@ -212,3 +212,17 @@ def test_an_offset_typed_in_millimetres_is_refused_naming_the_option(tmp_path, c
     assert main(["tool", str(cal), "--offset", "0", "0", str(length * 0.99), "--out", str(tmp_path / "new.yaml")]) == 0
     with pytest.raises(ToolError, match=r"^field 'tool': .* more than the arm itself"):
         with_tool(load_robot("panda"), [0.0, 0.0, 103.4])
+
+
+@pytest.mark.parametrize("recorded", ["abc", [0.0, 0.0], [0.0, 0.0, float("nan")]])
+def test_a_calibrated_file_with_a_bad_nominal_tool_names_the_file_and_field(recorded, tmp_path, capsys) -> None:
+    # a hand-edited 'nominal_tool: abc' was a ValueError traceback; '[0, 0]' said 'nominal_tool: expected ...'
+    from dataclasses import replace
+
+    from tests.refusal import refused
+
+    panda = load_robot("panda")
+    cal = spherecal.correction.save_robot(
+        replace(panda, extras={**panda.extras, "calibration": {"nominal_tool": recorded}}), tmp_path / "cal.yaml")
+    refused(["tool", cal, "--offset", "0", "0", "0.2", "--out", tmp_path / "new.yaml"], tmp_path, capsys,
+            f"{cal}: field 'calibration.nominal_tool': expected 3 finite coordinates [m]")
