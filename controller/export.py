@@ -172,7 +172,8 @@ def export_model(model: RobotModel, output_format: str, header: str = "", prefix
             looked for after the working folder).
 
     Raises:
-        ExportError: an invalid format, prefix, limits, or an option the format does not take.
+        ExportError: an invalid format, prefix, limits, an option the format does not take, or ``samples`` for a model
+            without joint-side terms (nothing reads them).
     """
     if output_format not in FORMATS:
         raise ExportError(f"field '--format': unknown format {output_format!r}, expected one of {FORMATS}")
@@ -203,6 +204,9 @@ def export_model(model: RobotModel, output_format: str, header: str = "", prefix
                 raise ExportError(f"field '{option}': not with --into (the URDF keeps its own names and limits)")
     else:
         names_and_limits(model, prefix, effort, velocity)  # refused before the rigid fit, not after it
+    if samples is not None and not joint_side_terms(model):  # was written, exit 0, the file not even looked for
+        raise ExportError(f"{samples}: field '--samples': {model.name!r} has no joint-side terms (compliance, "
+                          "joint-angle scale): its URDF is exact and no rigid fit reads recorded configurations")
     recorded, where = (None, "") if not joint_side_terms(model) else recorded_configurations(model, samples, folder)
     fit = rigid_approximation(model, recorded, seed=seed)
     notes = (fit.summary(), f"rigid fit: {where}") if fit.terms else ()

@@ -196,3 +196,19 @@ def test_the_rigid_fit_says_how_far_it_turns_the_tool_frame(rng) -> None:
     some = _largest_turn(tool_pose(fit.model, q)[:, :3, :3], tool_pose(model, q)[:, :3, :3])
     assert 0.0 < fit.workspace_turn_max and 0.2 < some / fit.workspace_turn_max < 5.0  # the same size, another draw
     assert f"ones, where its tool frame turns by up to {np.rad2deg(fit.workspace_turn_max):.3g} deg (" in fit.summary()
+
+
+def test_samples_for_a_model_no_rigid_fit_reads_them_for_are_refused(tmp_path, capsys) -> None:
+    """A review: 'export panda --format urdf --samples nothere.csv' wrote the URDF, exit 0: a rigid model's URDF is
+    exact and nothing reads the samples (the file was not even looked for)."""
+    from tests.refusal import refused
+
+    refused(["export", "panda", "--format", "urdf", "--out", tmp_path / "a.urdf", "--samples", tmp_path / "s.csv"],
+            tmp_path, capsys, "s.csv: field '--samples': ", "no joint-side terms")
+    model = with_compliance(load_robot("panda"), COMPLIANCE)  # an elastic model's rigid fit reads them
+    samples = write_samples(tmp_path / "s.csv", Dataset(np.repeat(["a", "b", "c"], 20),
+                                                        model.random_configurations(60, np.random.default_rng(0))))
+    cal = save_robot(model, tmp_path / "elastic.yaml")
+    assert main(["export", str(cal), "--format", "urdf", "--out", str(tmp_path / "a.urdf"), "--samples",
+                 str(samples)]) == 0
+    assert f"60 recorded configurations from {samples}" in capsys.readouterr().out
