@@ -47,7 +47,7 @@ def test_errors_are_one_line_and_write_nothing(tmp_path, calibrated_file, capsys
     out = tmp_path / "robot.urdf"
     assert main(["export", str(path), "--format", "urdf", "--out", str(out), "--prefix", "bad prefix"]) == 1
     err = capsys.readouterr().err.strip()
-    assert err.startswith("spherecal export: error: prefix") and "\n" not in err
+    assert err.startswith("spherecal export: error: field '--prefix'") and "\n" not in err
     assert main(["export", str(tmp_path / "missing.yaml"), "--format", "urdf", "--out", str(out)]) == 1
     assert "missing.yaml" in capsys.readouterr().err
     assert not out.exists() and list(tmp_path.iterdir()) == [path]
