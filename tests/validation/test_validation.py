@@ -200,9 +200,20 @@ def test_recording_holds_the_documented_entities_and_its_blueprint(tmp_path, pan
     assert sorted(p.name for p in tmp_path.iterdir()) == ["r.rrd"]
 
 
-def test_socket_spread_is_drawn_in_mm_around_the_calibrated_mean(tmp_path, rng) -> None:
+def _scene(path, prefix: str) -> dict[str, dict[str, list]]:
+    """Entity (without the leading /) -> {component: its first row} of a recording's entities under prefix."""
     from rerun.chunk import RrdReader
 
+    scene = {}
+    for chunk in RrdReader(str(path)).stream().to_chunks():
+        entity = chunk.entity_path.strip("/")
+        if entity.startswith(prefix):
+            batch = chunk.to_record_batch()
+            scene[entity] = {n.split(":")[1]: batch.column(n).to_pylist()[0] for n in batch.schema.names if ":" in n}
+    return scene
+
+
+def test_socket_spread_is_drawn_in_mm_around_the_calibrated_mean(tmp_path, rng) -> None:
     from spherecal.validation.viewer.recording import Recording, read_entity_rows, read_view_names
 
     centre = np.array([0.5, 0.1, 0.4])
@@ -215,23 +226,21 @@ def test_socket_spread_is_drawn_in_mm_around_the_calibrated_mean(tmp_path, rng) 
     recording.close()
     rows = read_entity_rows(tmp_path / "s.rrd")
     assert {k: v for k, v in rows.items() if k.startswith("sockets/")} == {
-        f"sockets/S1/{key}{end}": 1 for key in ("nominal", "calibrated") for end in ("", "_mean")
+        "sockets/S1/legend": 1,
+        **{f"sockets/S1/{key}{end}": 1 for key in ("nominal", "calibrated") for end in ("", "_mean")},
     }
     spread = [np.mean(np.linalg.norm(p - p.mean(0), axis=1)) * 1e3 for p in (nominal, calibrated)]  # the table's
     assert "Socket S1 [mm]" in read_view_names(tmp_path / "s.rrd")
-    reader = RrdReader(str(tmp_path / "s.rrd"))
-    logged, labels = {}, {}
-    for chunk in reader.stream().to_chunks():
-        batch = chunk.to_record_batch()
-        if chunk.entity_path.endswith("_mean"):
-            logged[chunk.entity_path] = np.array(batch.column("Points3D:positions").to_pylist()[0][0])
-            labels[chunk.entity_path] = batch.column("Points3D:labels").to_pylist()[0][0]
-    assert labels["/sockets/S1/nominal_mean"] == f"nominal mean point, spread {spread[0]:.3f} mm"
-    assert labels["/sockets/S1/calibrated_mean"] == f"calibrated mean point, spread {spread[1]:.3f} mm"
-    # means in mm from the calibrated mean: the calibrated one at 0, the nominal one about 2 mm along x
-    assert np.allclose(logged["/sockets/S1/calibrated_mean"], 0.0, atol=1e-9)
+    scene = _scene(tmp_path / "s.rrd", "sockets/S1/")
+    assert scene["sockets/S1/legend"]["labels"] == [f"calibrated: spread {spread[1]:.3f} mm",
+                                                    f"nominal: spread {spread[0]:.3f} mm"]
+    # each mean a wire sphere as wide as its spread, in mm from the calibrated mean: the calibrated one at 0, the
+    # nominal one about 2 mm along x
+    for key, value in zip(("nominal", "calibrated"), spread, strict=True):
+        assert scene[f"sockets/S1/{key}_mean"]["half_sizes"] == [pytest.approx([value] * 3, rel=1e-6)]
+    assert np.allclose(scene["sockets/S1/calibrated_mean"]["centers"], 0.0, atol=1e-9)
     expected = (nominal.mean(0) - calibrated.mean(0)) * 1e3
-    assert np.allclose(logged["/sockets/S1/nominal_mean"], expected, atol=1e-4)
+    assert np.allclose(scene["sockets/S1/nominal_mean"]["centers"], expected, atol=1e-4)
     assert 1.0 < expected[0] < 3.0
 
 
@@ -324,6 +333,65 @@ def test_the_error_views_show_both_models_socket_clusters_clear_of_the_colour_sc
         for seen in (points, scale):
             assert np.all(np.abs(seen) < [half_width, half_height]), key  # in the picture
         assert points[:, 0].max() < scale[:, 0].min() - 0.2 * half_width, key  # clear of the labels' left half
+
+
+#: A socket view as the default window shows two sockets stacked in its right panel (about 555 x 390 points), and a
+#: label as Rerun draws it there (the picture check): 20 points high, 6.5 points per character wide, centred under
+#: its point.
+SOCKET_PANE, LABEL_HEIGHT, LABEL_CHARACTER = np.array([555.0, 390.0]), 20.0, 6.5
+
+
+def test_the_socket_views_show_the_calibrated_cluster_and_every_label_apart(tmp_path, rng) -> None:
+    """A held-out socket of a real arm (MUKCa panda_4_clean right_h0): the nominal model's predictions spread about
+    10 mm, their mean 1 mm beside the calibrated one; the calibrated model's spread 0.24 mm. The calibrated points lay
+    under its mean marker (a filled point three times as wide as the dots) and the two means' labels were drawn one
+    over the other (a render). Seen from the socket view's default camera (read back from the blueprint; a pinhole of
+    Rerun's 55 deg field of view in a pane of the default window), nothing wider than the dots is drawn over the
+    calibrated cluster, every point, wire sphere (each model's spread around its mean) and label is in the picture,
+    and no label covers a point, a sphere's outline or another label."""
+    from spherecal.validation.viewer.recording import Recording, read_eyes
+
+    centre = np.array([0.3984, -0.2293, 0.0177])
+    nominal = centre + np.array([1e-3, 0.5e-3, 0.0]) + rng.normal(0, 7e-3, (37, 3)) * [1.0, 1.0, 0.3]
+    calibrated = centre + rng.normal(0, 1.5e-4, (37, 3))
+    recording = Recording(tmp_path / "s.rrd")
+    recording.socket_spread("right_h0", nominal, calibrated)
+    recording.close()
+    scene = _scene(tmp_path / "s.rrd", "sockets/right_h0/")
+    eye = read_eyes(tmp_path / "s.rrd")["sockets/right_h0"]
+    unit = 2 * np.tan(np.radians(55.0) / 2) / SOCKET_PANE[1]  # picture per point of the screen
+    half = 0.5 * SOCKET_PANE * unit
+    dots = {k: _pinhole(*eye, np.array(scene[f"sockets/right_h0/{k}"]["positions"])) for k in ("nominal", "calibrated")}
+    dot = abs(scene["sockets/right_h0/calibrated"]["radii"][0]) * unit
+    low, high = dots["calibrated"].min(axis=0) - dot, dots["calibrated"].max(axis=0) + dot
+    boxes, outlines = [], []  # (left, bottom, right, top) of each label; the wire spheres' outlines
+    forward = (eye[1] - eye[0]) / np.linalg.norm(eye[1] - eye[0])
+    across = np.cross(forward, [0.0, 0.0, 1.0]) / np.linalg.norm(np.cross(forward, [0.0, 0.0, 1.0]))
+    rim = np.array([across, -across, np.cross(across, forward), -np.cross(across, forward)])
+    for entity, row in scene.items():
+        assert row.get("fill_mode", [None])[0] != 3, entity  # no solid ellipsoid (FillMode.Solid)
+        for centre_mm, size in zip(row.get("centers", []), row.get("half_sizes", []), strict=True):
+            outlines.append(_pinhole(*eye, np.array(centre_mm) + size[0] * rim))
+        if "positions" not in row or entity.rsplit("/", 1)[1] in dots:
+            continue
+        seen = _pinhole(*eye, np.array(row["positions"]))
+        radius = abs(row["radii"][0]) * unit
+        if radius > dot:  # a marker wider than the dots, not over the calibrated cluster
+            gap = np.linalg.norm(np.maximum(0.0, np.maximum(low - seen, seen - high)), axis=1)
+            assert np.all(gap > radius), entity
+        for (x, y), label in zip(seen, row.get("labels") or [], strict=False):
+            width = len(label) * LABEL_CHARACTER * unit
+            boxes.append((x - width / 2, y - radius - LABEL_HEIGHT * unit, x + width / 2, y - radius))
+    assert len(boxes) == 2  # one per model
+    assert len(outlines) == 2  # one per model
+    every = np.vstack([*dots.values(), *outlines])
+    for left, bottom, right, top in boxes:
+        assert -half[0] < left and right < half[0] and -half[1] < bottom and top < half[1]  # in the picture
+        inside = (every[:, 0] > left) & (every[:, 0] < right) & (every[:, 1] > bottom) & (every[:, 1] < top)
+        assert not inside.any(), (left, bottom, right, top)  # no point under a label
+    assert np.all(np.abs(every) < half)
+    (l0, b0, r0, t0), (l1, b1, r1, t1) = boxes
+    assert r0 < l1 or r1 < l0 or t0 < b1 or t1 < b0  # the labels apart
 
 
 def test_a_viewer_that_cannot_start_is_one_line_and_leaves_nothing(tmp_path, monkeypatch) -> None:

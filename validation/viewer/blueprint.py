@@ -9,7 +9,8 @@ the right one tab per kind of result that was logged, each view named in plain w
 * **Residuals**: histograms of the calibration residuals before and after;
 * **Parameter changes**: bars with +-1 std whiskers, lengths [mm] and angles [deg];
 * **Joint coverage**: per fixture, the share of each joint's range visited [%];
-* **Socket spread**: per held-out socket, the predicted tool points of both models [mm];
+* **Socket spread**: per held-out socket, the predicted tool points of both models [mm], each model's spread a wire
+  sphere around its mean point and named in a legend above and below them;
 * **Tables**: the printed tables.
 
 Histograms and bars are static, so they show whatever the timeline selector is on.
@@ -131,7 +132,10 @@ def build_blueprint(
             tabs.append(rrb.Grid(*[rrb.BarChartView(origin=f"coverage/{k}", name=n) for k, n in views.items()],
                                  name=tab))
         elif section == "sockets":
-            tabs.append(rrb.Grid(*[rrb.Spatial3DView(origin=f"sockets/{k}", name=n, eye_controls=eye(f"sockets/{k}"))
+            # nearer than a workspace's camera: the points, spheres and legend fill the view, and a calibrated cluster
+            # of a few tenths of a mm beside several of nominal spread shows as a cluster (six sockets in a grid too)
+            near = {k: eye(f"sockets/{k}", distance=0.8) for k in views}
+            tabs.append(rrb.Grid(*[rrb.Spatial3DView(origin=f"sockets/{k}", name=n, eye_controls=near[k])
                                    for k, n in views.items()], name=tab))
         else:
             tabs.append(rrb.Tabs(*[rrb.TextDocumentView(origin=f"tables/{k}", name=n) for k, n in views.items()],

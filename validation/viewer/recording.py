@@ -17,7 +17,9 @@ path                                 archetype      timeline    what
 ``residuals/<before|after>``         BarChart       static      calibration residual histogram [mm]
 ``parameters/<lengths|angles>/*``    2D shapes      static      change per parameter, +-1 std, truth
 ``coverage/<fixture>``               BarChart       static      share of each joint's range [%]
-``sockets/<fixture>/*``              Points3D       static      predicted tool points at a socket [mm]
+``sockets/<fixture>/<model>``        Points3D       static      predicted tool points at a socket [mm]
+``sockets/<fixture>/<model>_mean``   Ellipsoids3D   static      wire sphere: the mean point, spread [mm]
+``sockets/<fixture>/legend``         Points3D       static      each model's spread, labelled
 ``tables/<name>``                    TextDocument   static      the printed tables
 ``tables/provenance``                TextDocument   static      command, versions, seed, inputs (SHA-256)
 ===================================  =============  ==========  ======================================
@@ -285,8 +287,11 @@ class Recording:
 
         A socket-only validation has no measured position: a good model puts every configuration's
         tool point at one point, so the spread of the predictions is its error. The points are drawn
-        in a view of their own, in millimetres from the calibrated points' mean, with each model's mean
-        as a larger labelled point (the label gives its spread: the mean distance from it, the table's figure).
+        in a view of their own, in millimetres from the calibrated points' mean, all of one size; each model's mean
+        point is the centre of a wire sphere as wide as its spread (the mean distance from it, the socket table's
+        figure), and a legend names each model's spread in its colour, the calibrated one above the points and the
+        nominal one below them as the default camera sees them (:func:`_legend_places`). A filled marker at each mean
+        hid the calibrated points (a few tenths of a mm beside several mm) and put the two labels one over the other.
 
         Args:
             fixture: the socket's name (entity ``sockets/<fixture>``).
@@ -297,19 +302,29 @@ class Recording:
             if points.ndim != 2 or points.shape[1] != 3 or len(points) == 0:
                 raise ValueError(f"socket {fixture}: {key} points must have shape (N, 3), got {points.shape}")
         centre = sets["calibrated"].mean(axis=0)
+        rr, labels, drawn = self.rr, {}, []
+        right, up, _ = view_axes()
         for key, points in sets.items():
             mm = (points - centre) * 1e3
             mean = mm.mean(axis=0)
             spread = float(np.mean(np.linalg.norm(mm - mean, axis=1)))  # the socket table's figure
-            dots = self.rr.Points3D(mm, radii=self.rr.Radius.ui_points(2.0), colors=_colour(key))
-            self.stream.log(f"sockets/{fixture}/{key}", dots, static=True)
-            self.extend_bounds(f"sockets/{fixture}", mm)
-            self.stream.log(
-                f"sockets/{fixture}/{key}_mean",
-                self.rr.Points3D(mean[None], radii=self.rr.Radius.ui_points(6.0), colors=_colour(key),
-                                 labels=[f"{key} mean point, spread {spread:.3f} mm"], show_labels=True),
-                static=True,
-            )
+            self.stream.log(f"sockets/{fixture}/{key}", rr.Points3D(mm, radii=rr.Radius.ui_points(2.0),
+                                                                     colors=_colour(key)), static=True)
+            self.stream.log(f"sockets/{fixture}/{key}_mean",
+                            rr.Ellipsoids3D(centers=mean[None], radii=[spread], colors=_colour(key),
+                                            line_radii=rr.Radius.ui_points(0.75), fill_mode="majorwireframe"),
+                            static=True)
+            drawn += [mm, mean + spread * np.array([right, -right, up, -up])]  # the sphere's outline on the screen
+            labels[key] = f"{key}: spread {spread:.3f} mm"
+        drawn = np.vstack(drawn)
+        places, room = _legend_places(drawn)
+        self.stream.log(
+            f"sockets/{fixture}/legend",
+            rr.Points3D(places, radii=rr.Radius.ui_points(3.0), colors=[_colour("calibrated"), _colour("nominal")],
+                        labels=[labels["calibrated"], labels["nominal"]], show_labels=True),
+            static=True,
+        )
+        self.extend_bounds(f"sockets/{fixture}", np.vstack([drawn, places, room]))
         self._note("sockets", fixture, f"Socket {fixture} [mm]")
 
     def provenance(self, block: dict) -> None:
@@ -383,6 +398,24 @@ def _scale_beside(points: np.ndarray, steps: np.ndarray) -> tuple[np.ndarray, fl
     near = np.cross((0.0, 0.0, 1.0), right)  # horizontal, towards the eye
     place = (np.max(points @ right) + 0.4 * height) * right + np.max(points @ near) * near
     return np.column_stack([np.full((len(steps), 2), place[:2]), bottom + steps * height]), height
+
+
+def _legend_places(points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(2, 3) places of two labelled points, above and below points (N, 3) as the default camera sees them
+    (:func:`validation.blueprint.view_axes`), centred across them, and (2, 3) corners of the room their labels take
+    (which Rerun centres under each point), in the points' unit.
+
+    The upper stands 0.3 of the points' largest extent on the screen above them (its label, a line high, hangs
+    between it and the points), the lower just below them; labels at two nearby means were drawn one over the other.
+    """
+    right, up, _ = view_axes()
+    size = max(float(np.ptp(points @ right)), float(np.ptp(points @ up)), 1e-9)
+    middle = points.mean(axis=0)
+    middle += (0.5 * (np.max(points @ right) + np.min(points @ right)) - middle @ right) * right
+    places = np.array([middle + (np.max(points @ up) - middle @ up + 0.3 * size) * up,
+                       middle + (np.min(points @ up) - middle @ up - 0.05 * size) * up])
+    room = places[1] - 0.2 * size * up + np.outer([-0.6, 0.6], size * right)
+    return places, room
 
 
 def _colour(key: str) -> tuple[int, int, int]:
