@@ -335,6 +335,37 @@ def test_the_error_views_show_both_models_socket_clusters_clear_of_the_colour_sc
         assert points[:, 0].max() < scale[:, 0].min() - 0.2 * half_width, key  # clear of the labels' left half
 
 
+def test_the_error_views_show_one_colour_scale_in_one_place(tmp_path, rng) -> None:
+    """The Errors views share one camera; each drew its colour scale as tall as its own model's points (67 mm beside
+    the nominal predictions of a socket validation, 50 mm beside the calibrated ones) and beside them, so the same
+    labels stood at different heights on the screen, as if a millimetre of the scale differed between the views.
+    Both models' scales are one: the same spheres in the same place, colours and labels, and a point's colour is the
+    scale's at its error in either view."""
+    from spherecal.validation.viewer.recording import Recording
+    from spherecal.validation.viewer.recording_shapes import colour_ramp
+
+    sockets = np.array([[0.3984, -0.2293, 0.0177], [0.3987, -0.1794, 0.0179]])
+    which = np.repeat([0, 1], 30)
+    sets = {"nominal": sockets[which] + rng.normal(0, 6e-3, (60, 3)), "calibrated": sockets[which]
+            + rng.normal(0, 1.5e-4, (60, 3))}
+    errors = {"nominal": rng.uniform(0, 15e-3, 60), "calibrated": rng.uniform(0, 5e-4, 60)}
+    recording = Recording(tmp_path / "e.rrd")
+    for key, points in sets.items():
+        recording.workspace_errors(key, points, errors[key], "its socket's mean point", 14.0)
+    recording.close()
+    scene = _scene(tmp_path / "e.rrd", "errors/")
+    nominal, calibrated = scene["errors/nominal/colour_scale"], scene["errors/calibrated/colour_scale"]
+    assert nominal["labels"][0] == "0.00 mm" and nominal["labels"][-1] == ">= 14.00 mm"
+    for component in ("positions", "radii", "colors", "labels"):
+        assert nominal[component] == calibrated[component], component
+    scale = {label: colour for label, colour in zip(nominal["labels"], nominal["colors"], strict=True) if label}
+    ramp = colour_ramp(np.array([0.0, 0.25, 0.5, 0.75, 1.0]))
+    assert list(scale.values()) == [int.from_bytes(bytes([*c, 255]), "big") for c in ramp]  # RGBA as Rerun packs it
+    for key in sets:
+        expected = [int.from_bytes(bytes([*c, 255]), "big") for c in colour_ramp(errors[key] * 1e3 / 14.0)]
+        assert scene[f"errors/{key}/points"]["colors"] == expected, key
+
+
 #: A socket view as the default window shows two sockets stacked in its right panel (about 555 x 390 points), and a
 #: label as Rerun draws it there (the picture check): 20 points high, 6.5 points per character wide, centred under
 #: its point.

@@ -3,9 +3,9 @@
 A large 3D view of the robot and the fixtures on the left (the self-motion plays on ``time``); on
 the right one tab per kind of result that was logged, each view named in plain words:
 
-* **Errors**: each model's workspace tool points coloured by their error (a labelled colour scale in
-  mm right of them), nominal and calibrated side by side from one camera (a millimetre on the screen is
-  the same in both), their histograms below;
+* **Errors**: each model's workspace tool points coloured by their error (a colour scale labelled in
+  mm right of them, the same in every view), nominal and calibrated side by side from one camera (a
+  millimetre on the screen is the same in both), their histograms below;
 * **Residuals**: histograms of the calibration residuals before and after;
 * **Parameter changes**: bars with +-1 std whiskers, lengths [mm] and angles [deg];
 * **Joint coverage**: per fixture, the share of each joint's range visited [%];

@@ -101,6 +101,7 @@ class Recording:
         self.contents: dict[str, dict[str, str]] = {"world": {}}
         self.title = title
         self.bounds: dict[str, np.ndarray] = {}
+        self._scales: dict[str, tuple[np.ndarray, float]] = {}  # model -> its Errors points [m], scale top [mm]
         self._tmp = None
         if self.path is not None:
             self._tmp = self.path.with_name(f".{self.path.name}.tmp")
@@ -183,7 +184,8 @@ class Recording:
     def workspace_errors(
         self, key: str, points: np.ndarray, errors: np.ndarray, against: str, top: float | None = None
     ) -> None:
-        """One model's tool points coloured by their error, a labelled colour scale and a histogram.
+        """One model's tool points coloured by their error, a histogram, and on closing a labelled colour scale
+        (:meth:`_colour_scales`: one place and size for every model's).
 
         Args:
             key: model name (``"nominal"``, ``"calibrated"``).
@@ -199,22 +201,33 @@ class Recording:
         rr = self.rr
         dots = rr.Points3D(points, radii=rr.Radius.ui_points(2.5), colors=colour_ramp(mm / top))
         self.stream.log(f"errors/{key}/points", dots, static=True)
-        steps = np.linspace(0.0, 1.0, 21)
-        scale, height = _scale_beside(points, steps)
-        labels = [f"{s * top:.2f} mm" if k % 5 == 0 else "" for k, s in enumerate(steps)]
-        labels[-1] = f">= {top:.2f} mm"
-        self.stream.log(
-            f"errors/{key}/colour_scale",
-            rr.Points3D(scale, radii=min(0.03, 0.02 * height), colors=colour_ramp(steps), labels=labels,
-                        show_labels=True),
-            static=True,
-        )
         counts, left, width = histogram(mm)
         self.stream.log(f"errors/{key}/histogram", rr.BarChart(counts, abscissa=left, widths=width), static=True)
-        label_room = scale[-1] + 0.25 * height * view_axes()[0]  # the labels, centred on the spheres
-        self.extend_bounds(f"errors/{key}", np.vstack([points, scale, label_room]))
+        self.extend_bounds(f"errors/{key}", points)
+        self._scales[key] = (points, top)  # the colour scales, on closing: one beside every model's points
         self._note("errors", key, f"{key.capitalize()}: error, mean {mm.mean():.3f} mm over {mm.size} points")
         self.errors_against = against
+
+    def _colour_scales(self) -> None:
+        """Each Errors view's colour scale, labelled in mm up to its model's ``top``, all of them in one place and of
+        one size: beside the union of the models' points (:func:`_scale_beside`). The views share one camera; a scale
+        as tall as its own model's points stood elsewhere and taller in one view than in the other with the same
+        labels, as if a millimetre of it differed between the views."""
+        if not self._scales:
+            return
+        steps = np.linspace(0.0, 1.0, 21)
+        scale, height = _scale_beside(np.vstack([points for points, _ in self._scales.values()]), steps)
+        label_room = scale[-1] + 0.25 * height * view_axes()[0]  # the labels, centred on the spheres
+        for key, (_, top) in self._scales.items():
+            labels = [f"{s * top:.2f} mm" if k % 5 == 0 else "" for k, s in enumerate(steps)]
+            labels[-1] = f">= {top:.2f} mm"
+            self.stream.log(
+                f"errors/{key}/colour_scale",
+                self.rr.Points3D(scale, radii=min(0.03, 0.02 * height), colors=colour_ramp(steps), labels=labels,
+                                 show_labels=True),
+                static=True,
+            )
+            self.extend_bounds(f"errors/{key}", np.vstack([scale, label_room]))
 
     def residuals(self, before: np.ndarray, after: np.ndarray) -> None:
         """Histograms of the calibration residuals (N,) [m] before and after calibration."""
@@ -342,12 +355,14 @@ class Recording:
 
     # -------------------------------------------------------------------- close
     def close(self) -> Path | None:
-        """Send the blueprint, flush, close the sink and move the ``.rrd`` into place; returns its path.
+        """Log the Errors views' colour scales, send the blueprint, flush, close the sink and move the ``.rrd`` into
+        place; returns its path.
 
         Raises:
             OutputError: Rerun could not write the file (one line); nothing is left behind.
         """
         try:
+            self._colour_scales()
             blueprint = build_blueprint(self.contents, self.title, self.bounds)
             self.stream.send_blueprint(blueprint, make_active=True, make_default=True)
             bounds = {k: v.tolist() for k, v in self.bounds.items()}
