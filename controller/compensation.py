@@ -36,6 +36,7 @@ from spherecal.correction import RobotModel, tool_point, tool_pose
 from spherecal.correction.errors import SpherecalError
 from spherecal.correction.files.samples import HARD_MARGIN
 from spherecal.correction.rigid import rotation_angle
+from spherecal.correction.tool import TOOL_MATCH_TOL, nominal_tool_of, tools_apart
 
 from .ik import UnreachableError, ik
 
@@ -148,24 +149,37 @@ def check_models(nominal: RobotModel, calibrated: RobotModel, source: str = "cal
 
 
 def _check_difference(nominal: RobotModel, calibrated: RobotModel, q: np.ndarray, source: str) -> None:
+    """Refuse a calibrated model that does not end at the controller model's tool: its tool point more than
+    :data:`MAX_MODEL_DIFFERENCE` from the nominal one's at the seed, or a calibration of another tool (its recorded
+    nominal tool, :func:`correction.tool.nominal_tool_of`, further than :data:`~correction.tool.TOOL_MATCH_TOL` from
+    the nominal's: a ball 40 mm beyond the flange is within the first check and 40 mm off every target)."""
     gap = float(np.linalg.norm(tool_point(nominal, q) - tool_point(calibrated, q)))
-    if gap > MAX_MODEL_DIFFERENCE:
-        tools = float(np.linalg.norm(nominal.tool - calibrated.tool))
-        swapped = replace(calibrated, tool=nominal.tool)  # the same arm with the controller's tool?
-        same_tool = float(np.linalg.norm(tool_point(nominal, q) - tool_point(swapped, q)))
-        record = calibrated.extras.get("calibration")
-        # the command carries the calibration's tool correction over (its nominal_tool); the call must be told it
-        carried = (", nominal_tool=calibrated.extras['calibration']['nominal_tool']"
-                   if isinstance(record, dict) and "nominal_tool" in record else "")
-        why = (f"its tool point is {tools * 1e3:.0f} mm from the controller model's in the last frame: a calibration "
-               f"ends at its own tool (the ball); put the controller's tool on it first: "
-               f"correction.with_tool(calibrated, {np.round(nominal.tool, 6).tolist()}{carried}).model or `spherecal "
-               f"tool CAL.yaml --offset {' '.join(f'{v:g}' for v in nominal.tool)} --out NEW.yaml`"
-               if same_tool <= MAX_MODEL_DIFFERENCE else "not a calibration of this robot")
+    apart = tools_apart(calibrated, nominal)
+    if gap <= MAX_MODEL_DIFFERENCE and apart <= TOOL_MATCH_TOL:
+        return
+    swapped = replace(calibrated, tool=nominal.tool)  # the same arm with the controller's tool?
+    same_tool = float(np.linalg.norm(tool_point(nominal, q) - tool_point(swapped, q)))
+    if same_tool > MAX_MODEL_DIFFERENCE:
         raise ModelMismatchError(
             f"{source}: tool point differs from the controller's model by {gap * 1e3:.0f} mm at the seed "
-            f"(more than {MAX_MODEL_DIFFERENCE * 1e3:.0f} mm): {why}"
-        )
+            f"(more than {MAX_MODEL_DIFFERENCE * 1e3:.0f} mm): not a calibration of this robot")
+    record = calibrated.extras.get("calibration")
+    # the command carries the calibration's tool correction over (its nominal_tool); the call must be told it
+    carried = (", nominal_tool=calibrated.extras['calibration']['nominal_tool']"
+               if isinstance(record, dict) and "nominal_tool" in record else "")
+    remedy = (f"put the controller's tool on it first: correction.with_tool(calibrated, "
+              f"{np.round(nominal.tool, 6).tolist()}{carried}).model or `spherecal tool CAL.yaml --offset "
+              f"{' '.join(f'{v:g}' for v in nominal.tool)} --out NEW.yaml`")
+    if gap > MAX_MODEL_DIFFERENCE:
+        tools = float(np.linalg.norm(nominal.tool - calibrated.tool))
+        raise ModelMismatchError(
+            f"{source}: tool point differs from the controller's model by {gap * 1e3:.0f} mm at the seed (more than "
+            f"{MAX_MODEL_DIFFERENCE * 1e3:.0f} mm): its tool point is {tools * 1e3:.0f} mm from the controller "
+            f"model's in the last frame: a calibration ends at its own tool (the ball); {remedy}")
+    raise ModelMismatchError(
+        f"{source}: its tool point calibrates the tool at {np.round(nominal_tool_of(calibrated), 6).tolist()} m in "
+        f"the last frame, {apart * 1e3:.1f} mm from the controller model's {np.round(nominal.tool, 6).tolist()} m "
+        f"(the targets would be missed by about that): a calibration ends at its own tool (the ball); {remedy}")
 
 
 def _seed(q: np.ndarray, model: RobotModel, field: str) -> np.ndarray:

@@ -21,6 +21,7 @@ accuracy; the farther it is, the more its accuracy rests on the nominal orientat
 
 from __future__ import annotations
 
+import warnings
 from dataclasses import dataclass, replace
 
 import numpy as np
@@ -39,10 +40,16 @@ FRAME_ANGLE_TOL = np.deg2rad(5.0)
 #: A calibrated tool point further than this from the robot file's tool [m] is where the samples put the ball (an
 #: adapter or sensor the description lacks: identification.tool_fit), not a correction of the file's tool link.
 TIP_MOVED = 0.010
+#: Two nominal tool points further apart than this [m] are different tools (a URDF saved again rounds to a micrometre).
+TOOL_MATCH_TOL = 1e-4
 
 
 class ToolError(SpherecalError):
     """A tool that cannot be put on the model; the message names the field."""
+
+
+class CarriedTipWarning(UserWarning):
+    """The correction :func:`with_tool` carries to the new tool is beyond :data:`TIP_MOVED`: not a calibration's."""
 
 
 @dataclass(frozen=True)
@@ -125,6 +132,13 @@ def with_tool(model: RobotModel, tool: np.ndarray, payload: dict | None = None,
         nominal_tool = point_of(nominal_tool, f"field '{NOMINAL_TOOL}'")
         carried = calibrated - nominal_tool
         tool = tool + carried
+        if np.linalg.norm(carried) > TIP_MOVED:
+            warnings.warn(
+                f"the calibration's tool point is {np.linalg.norm(carried) * 1e3:.1f} mm from the robot file's tool it "
+                f"started from ({NOMINAL_TOOL}), more than a calibration corrects ({TIP_MOVED * 1e3:.0f} mm): the ball "
+                "sat on an adapter or sensor the robot file lacks, or the calibration's --tip-link named another link; "
+                "that offset is carried to the new tool as it is: right only if the new tool sits on the same adapter "
+                "and its point is given from the robot file's tool link", CarriedTipWarning, stacklevel=2)
     distance = float(np.linalg.norm(tool - calibrated))
     extras = dict(model.extras)
     if payload is not None:
@@ -205,9 +219,40 @@ def calibrated_from(model: RobotModel, reference: RobotModel) -> bool:
     recorded = block.get("nominal_tool") if isinstance(block, dict) else None
     try:
         return (not isinstance(model.extras.get("tool_swap"), dict) and recorded is not None
-                and bool(np.allclose(np.asarray(recorded, dtype=float), reference.tool, rtol=0.0, atol=1e-9)))
+                and bool(np.allclose(np.asarray(recorded, dtype=float), reference.tool, rtol=0.0, atol=TOOL_MATCH_TOL)))
     except (TypeError, ValueError):  # a hand-edited record: compared as it is
         return False
+
+
+def nominal_tool_of(model: RobotModel) -> np.ndarray | None:
+    """(3,) the nominal position [m] in the last frame of the tool whose calibrated point ``model`` carries: the new
+    tool as :func:`with_tool` was given it (its ``tool_swap`` block's tool less the correction it carried), else the
+    robot file's tool the calibration started from (``calibration.nominal_tool``). None for a model that records
+    neither (a nominal model) or a record that is not 3 finite numbers (:func:`point_of` refuses it where it is
+    used)."""
+    swap = model.extras.get("tool_swap")
+    block = model.extras.get("calibration")
+    try:
+        current = isinstance(swap, dict) and np.allclose(np.asarray(swap.get("tool"), dtype=float), model.tool,
+                                                         rtol=0.0, atol=1e-12)  # not stale (:func:`calibrated_tool`)
+        if current:
+            point = np.asarray(swap["tool"], dtype=float) - np.asarray(swap.get("carried_correction", 0.0), dtype=float)
+        elif isinstance(block, dict) and block.get("nominal_tool") is not None:
+            point = np.asarray(block["nominal_tool"], dtype=float)
+        else:
+            return None
+    except (TypeError, ValueError, KeyError):
+        return None
+    return point if point.shape == (3,) and np.all(np.isfinite(point)) else None
+
+
+def tools_apart(model: RobotModel, reference: RobotModel) -> float:
+    """How far [m] the nominal point of ``model``'s tool (:func:`nominal_tool_of`) is from ``reference``'s tool point,
+    in the last frame; 0 when ``model`` records none. Beyond :data:`TOOL_MATCH_TOL` the two end at different tools
+    (a calibration with the ball against a controller's flange or gripper), however close the points look: a ball
+    40 mm beyond an iiwa's flange passed a 50 mm check of the tool points."""
+    point = nominal_tool_of(model)
+    return 0.0 if point is None else float(np.linalg.norm(point - np.asarray(reference.tool, dtype=float)))
 
 
 def with_tool_of(model: RobotModel, reference: RobotModel) -> RobotModel:

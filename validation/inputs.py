@@ -8,7 +8,7 @@ from __future__ import annotations
 import numpy as np
 
 from spherecal.correction import RobotModel, SpherecalError, tool_point
-from spherecal.correction.tool import arm_of
+from spherecal.correction.tool import TOOL_MATCH_TOL, arm_of, nominal_tool_of, tools_apart
 
 #: A model whose tool point lies further than this from the nominal one's on some configuration is
 #: not a description of the same arm [m] (as :data:`controller.compensation.MAX_MODEL_DIFFERENCE`).
@@ -51,4 +51,12 @@ def check_models(models: dict[str, RobotModel], files: dict[str, str]) -> None:
             raise ValidationInputError(
                 f"{files[role]}: field '{field}': tool point up to {worst * 1e3:.0f} mm from the nominal "
                 f"{files['nominal']}'s (more than {MAX_MODEL_DIFFERENCE * 1e3:.0f} mm: {why})"
+            )
+        apart = tools_apart(model, reference)
+        if not swapped and apart > TOOL_MATCH_TOL:  # a calibration with the ball against a nominal at the flange: the
+            raise ValidationInputError(  # two figures would be of different points, the nominal's inflated by the gap
+                f"{files[role]}: field 'calibration.nominal_tool': its tool point calibrates the tool at "
+                f"{np.round(nominal_tool_of(model), 6).tolist()} m in the last frame, {apart * 1e3:.1f} mm from the "
+                f"nominal {files['nominal']}'s {np.round(reference.tool, 6).tolist()} m (give --nominal the robot file "
+                "and --tip-link it was calibrated with)"
             )

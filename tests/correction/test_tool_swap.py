@@ -3,6 +3,8 @@ compiler; the README's controller example on a real (MUKCa) calibration; the `to
 
 from __future__ import annotations
 
+import warnings
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -14,7 +16,7 @@ from spherecal.controller.compensation import ModelMismatchError, compensate, co
 from spherecal.correction import load_robot, load_urdf, perturb, tool_point
 from spherecal.correction.elastic import link_angles, with_compliance
 from spherecal.correction.files.tools import put_tool
-from spherecal.correction.tool import ToolError, with_tool
+from spherecal.correction.tool import CarriedTipWarning, ToolError, with_tool
 from tests.correction.urdf_helpers import DATA, MujocoUrdf
 
 MUKCA = Path(__file__).resolve().parents[1] / "data" / "mukca"
@@ -159,6 +161,40 @@ def test_a_second_tool_swap_starts_from_the_calibrated_tool(panda, tmp_path) -> 
     np.testing.assert_allclose(again.model.tool, direct.model.tool, atol=1e-12)
     np.testing.assert_allclose(direct.model.tool, panda.tool + [2e-4, -2e-4, 0.09 + 1.6e-3], atol=1e-12)
     assert again.distance == pytest.approx(direct.distance) and again.note == direct.note
+
+
+def test_a_ball_calibration_within_the_seed_check_is_refused_by_its_recorded_tool(panda, rng) -> None:
+    # a review: an iiwa14 calibrated with its ball 40 mm beyond the flange passed corrected_ik and compensate against
+    # the flange (the tool points within the 50 mm check at the seed) and missed every target by 40 mm
+    ball = panda.tool + [0.0, 0.0, 0.04]
+    cal = perturb(replace(panda, tool=ball), rng)
+    cal = replace(cal, extras={**cal.extras, "calibration": {"nominal_tool": ball.tolist()}})
+    q_now = np.array([0.0, -0.3, 0.0, -2.2, 0.0, 2.0, 0.8])
+    target = tool_point(panda, q_now) + [0.02, 0.0, -0.01]
+    assert np.linalg.norm(tool_point(cal, q_now) - tool_point(panda, q_now)) < 0.05  # the old check let it through
+    calls = (lambda: corrected_ik(cal, target, q_now, nominal=panda), lambda: compensate(target, panda, cal, q_now))
+    for call in calls:
+        with pytest.raises(ModelMismatchError, match=r"calibrates the tool at .* 40\.0 mm from the controller"):
+            call()
+    flange = with_tool(cal, panda.tool, nominal_tool=ball).model  # the remedy: the flange on the calibrated arm
+    q = corrected_ik(flange, target, q_now, nominal=panda)
+    np.testing.assert_allclose(_hand_chain(cal, q, cal.tool - [0.0, 0.0, 0.04]), target, atol=1e-9)
+    moved = replace(panda, tool=panda.tool + [0.0, 0.0, 5e-5])  # the same tool, saved again with rounding
+    assert corrected_ik(replace(cal, extras={**cal.extras, "calibration": {"nominal_tool": moved.tool.tolist()}}),
+                        tool_point(cal, q_now), q_now, nominal=panda) is not None
+
+
+def test_a_correction_beyond_a_calibrations_is_carried_with_a_warning(panda) -> None:
+    # a review: a calibration whose --tip-link named the flange (the ball 40 mm further) gave the "flange" the ball's
+    # point through `spherecal tool --tip-link tool0`, exit 0 and no word
+    cal = replace(panda, tool=panda.tool + [0.0, 0.0, 0.0406],
+                  extras={**panda.extras, "calibration": {"nominal_tool": panda.tool.tolist()}})
+    with pytest.warns(CarriedTipWarning, match="40.6 mm from the robot file's tool"):
+        with_tool(cal, panda.tool, nominal_tool=panda.tool)
+    near = replace(cal, tool=panda.tool + [0.0, 0.0, 0.002])
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        with_tool(near, panda.tool, nominal_tool=panda.tool)  # a calibration's 2 mm: no word
 
 
 def test_tool_command_says_where_the_nominal_tool_is_and_prints_both_points(panda, tmp_path, capsys) -> None:

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import re
 
@@ -95,7 +96,20 @@ def _tool_swapped(files, tmp_path):
     return ["--mocap", str(files["mocap"])], {"calibrated": path}, "its tool was replaced by `spherecal tool`"
 
 
-@pytest.mark.parametrize("case", [_bad_joint_count, _other_convention, _missing_mocap_value, _tool_swapped])
+def _calibrated_with_another_tool(files, tmp_path):
+    # a review: an iiwa14 calibrated with its ball (40 mm beyond the flange; here 30 mm) validated against the
+    # embedded arm (the flange): 'nominal test MAE 17.341 mm' against the 0.804 mm of the ball's robot file, no word
+    model = load_robot(files["calibrated"])
+    block = {**model.extras.get("calibration", {}), "nominal_tool": (model.tool + [0.0, 0.0, 0.03]).tolist()}
+    path = tmp_path / "ball.yaml"
+    save_robot(dataclasses.replace(model, tool=model.tool + [0.0, 0.0, 0.03],
+                                   extras={**model.extras, "calibration": block}), path)
+    return ["--mocap", str(files["mocap"])], {"calibrated": path}, (
+        "field 'calibration.nominal_tool': its tool point calibrates the tool at ")
+
+
+@pytest.mark.parametrize("case", [_bad_joint_count, _other_convention, _missing_mocap_value, _tool_swapped,
+                                  _calibrated_with_another_tool])
 def test_bad_inputs_exit_nonzero_with_one_line_and_write_nothing(files, tmp_path, capsys, case) -> None:
     extra, replace, message = case(files, tmp_path)
     files = {**files, **replace}
