@@ -80,6 +80,11 @@ def given(args: argparse.Namespace) -> dict[str, str]:
     return dict(getattr(args, _TYPED, {}))
 
 
+def named(args: argparse.Namespace, dest: str) -> str:
+    """The option a refusal of ``dest`` names: as typed (an old spelling too), else its own spelling."""
+    return given(args).get(dest, "--" + dest.replace("_", "-"))
+
+
 def refuse_given(args: argparse.Namespace, dests, why: str) -> None:
     """Refuse the first of ``dests`` (destinations) that was typed: the run would not use it (``why``: 'only with
     --truth', one line as ``field '--seed': only with --truth``).
@@ -336,6 +341,31 @@ def add_per_fixture(parser: argparse.ArgumentParser, default: int, what: str = "
         help=f"{what} (default {default})",
     )
     add_deprecated(parser, "--samples", "--per-fixture", count(1, MAX_PER_FIXTURE))
+
+
+#: Rate of the simulated joint readings [Hz]: a self-motion of s seconds holds s * 1000 samples.
+READINGS_HZ = 1000
+
+
+def check_per_fixture(args: argparse.Namespace, least: int, simulated: bool = True) -> None:
+    """Refuse ``--per-fixture`` below ``least`` or, for samples drawn from a ``simulated`` self-motion of
+    ``--seconds`` at :data:`READINGS_HZ`, more than that motion holds (and a motion shorter than one reading).
+
+    Raises:
+        OptionError: one line naming the option, as ``field '--per-fixture': ...``.
+    """
+    option = named(args, "per_fixture")
+    if args.per_fixture < least:
+        raise fail(f"field '{option}': expected at least {least} samples per fixture, got {args.per_fixture}")
+    if not simulated:
+        return
+    held = round(args.seconds * READINGS_HZ)
+    if held < 1:
+        raise fail(f"field '{named(args, 'seconds')}': expected at least {1 / READINGS_HZ:g} s (one reading at "
+                   f"{READINGS_HZ} Hz), got {args.seconds:g}")
+    if args.per_fixture > held:
+        raise fail(f"field '{option}': {args.per_fixture} samples per fixture are more than {args.seconds:g} s of "
+                   f"{READINGS_HZ} Hz readings hold ({held})")
 
 
 def add_seconds(parser: argparse.ArgumentParser, default: float, what: str) -> None:

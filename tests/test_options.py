@@ -240,3 +240,42 @@ def test_an_overlong_line_names_its_row_not_an_empty_field(tmp_path, capsys) -> 
     err = refused(["validate", "--nominal", "panda", "--calibrated", "panda", "--samples", tmp_path / "s.csv"],
                   tmp_path, capsys, "s.csv: row 1: a line longer than")
     assert "field ''" not in err
+
+
+@pytest.mark.parametrize(("argv", "field", "said"), [
+    (["demo", "--per-fixture", "5", "--out", "d"], "--per-fixture", "expected at least 10 samples per fixture, got 5"),
+    (["campaign", "--per-fixture", "5", "--out", "c"], "--per-fixture", "at least 10"),
+    (["campaign", "--source", "mujoco", "--seconds", "0.01", "--per-fixture", "100", "--out", "c"], "--per-fixture",
+     "100 samples per fixture are more than 0.01 s of 1000 Hz readings hold (10)"),
+    (["demo", "--seconds", "0.01", "--per-fixture", "100", "--out", "d"], "--per-fixture", "more than 0.01 s"),
+    (["simulate", "--out", "s", "--seconds", "0.1"], "--per-fixture", "500 samples per fixture are more than 0.1 s"),
+    (["simulate", "--out", "s", "--seconds", "0.0001"], "--seconds", "expected at least 0.001 s"),
+    (["campaign", "--rows", "P9", "--out", "c"], "--rows", "unknown ['P9']"),
+    (["campaign", "--rows", "P1,P1", "--out", "c"], "--rows", "P1 is given twice"),
+    (["campaign", "--stiffness", "x", "--out", "c"], "--stiffness", "'x': expected numbers [Nm/rad]"),
+    (["simulate", "--out", "s", "--stiffness", "1,2"], "--stiffness", "expected 1 or 7 finite values"),
+    (["simulate", "--out", "s", "--solver", "nope"], "--solver", "'nope' is not installed"),
+    (["plan", "--grid", "x"], "--grid", "'x': expected 'xmin,xmax,nx;ymin,ymax,ny;zmin,zmax,nz'"),
+    (["plan", "--grid", "0,1,2;0,1,x;0,1,2"], "--grid", "y: expected 'min,max,count'"),
+    (["plan", *_GRID, "--fixture-count", "9"], "--fixture-count", "expected an integer in 1..4, got 9"),
+    (["plan"], "--candidates", "give --candidates C.yaml or --grid"),
+])
+def test_every_command_names_a_refused_option_as_field(argv, field, said, tmp_path, capsys, monkeypatch) -> None:
+    """A review: demo, campaign and simulate said '--per-fixture must be >= 10', '--rows: ...', '--seconds must be';
+    plan '--grid 'x': ...' (and '--grid' for a bad --plate-grid), '--fixture-count must be', 'give --candidates';
+    '--stiffness '-5': ...', '--solver 'nope' ...'. Each names its option, as typed, as field '--name'."""
+    from tests.refusal import refused
+
+    monkeypatch.chdir(tmp_path)
+    refused(argv, tmp_path, capsys, f"error: field '{field}': ", said)
+
+
+def test_a_bad_plate_grid_is_named_as_plate_grid() -> None:
+    """The grid's refusals named '--grid' for a bad --plate-grid too."""
+    import numpy as np
+
+    from spherecal.validation.planning.candidates import CandidateError
+    from spherecal.validation.planning.placements import plate_placements
+
+    with pytest.raises(CandidateError, match=r"^field '--plate-grid': '0,1,2;0,1,x;0,1,2': y: expected"):
+        plate_placements({"h0": np.zeros(3)}, "0,1,2;0,1,x;0,1,2")

@@ -224,7 +224,7 @@ def test_robot_file_refuses_non_physical_numbers(tmp_path, panda, edit, field) -
     (["validate", "--nominal", "panda", "--calibrated", "panda", "--configurations", str(10**9)], "3..200000"),
     (["campaign", "--per-fixture", str(10**9)], "an integer in 1..100000"),
     # a row twice: the table said 'sets 2' for one seeded set counted twice (std 0.000), exit 0
-    (["campaign", "--sets", "1", "--rows", "P1,P2,P1", "--out", "c"], "--rows: P1 is given twice"),
+    (["campaign", "--sets", "1", "--rows", "P1,P2,P1", "--out", "c"], "field '--rows': P1 is given twice"),
     (["calibrate", "--robot", "panda", "--samples", "s.csv", "--out", "c.yaml", "--noise", "1e308"], "plausible"),
 ])
 def test_out_of_range_options_are_one_line(tmp_path, capsys, monkeypatch, argv, message) -> None:

@@ -169,7 +169,7 @@ def _dask(scheduler: str, workers: int) -> Iterator[Executor]:
         from distributed import Client, LocalCluster  # dask: the optional extra spherecal[dask], only when asked for
     except ImportError:
         raise SchedulerError(
-            f"--scheduler {scheduler}: dask.distributed is not installed (pip install 'spherecal[dask]')"
+            f"field '--scheduler': {scheduler}: dask.distributed is not installed (pip install 'spherecal[dask]')"
         ) from None
     cluster = None
     if scheduler == "local":  # processes (one thread each), on this machine only, no dashboard
@@ -188,7 +188,7 @@ def _dask(scheduler: str, workers: int) -> Iterator[Executor]:
         try:
             client = Client(cluster if cluster is not None else scheduler, timeout=CONNECT_TIMEOUT)
         except (OSError, ValueError) as error:  # OSError: no answer; ValueError: not an address
-            raise SchedulerError(f"--scheduler {scheduler}: {' '.join(str(error).split())}") from None
+            raise SchedulerError(f"field '--scheduler': {scheduler}: {' '.join(str(error).split())}") from None
         try:
             yield client.get_executor(pure=False)  # pure=False: every task runs, none is taken from a cache
         finally:

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import argparse
 
-from spherecal.options import fail, recorded_options
+from spherecal.options import check_per_fixture, fail, recorded_options
 
 HELP = "Run the paper's simulated protocol (fixture sets x noise levels) and print its error table."
 
@@ -71,14 +71,12 @@ def run(args: argparse.Namespace) -> int:
     rows = tuple(r.strip() for r in args.rows.split(",") if r.strip())
     unknown = [r for r in rows if r not in FIXTURE_SETS]
     if unknown or not rows:
-        raise fail(f"--rows: unknown {unknown}, choose from {list(FIXTURE_SETS)}")
+        raise fail(f"field '--rows': unknown {unknown}, choose from {list(FIXTURE_SETS)}")
     if len(set(rows)) < len(rows):  # the same seeded sets twice: the table counted them as independent
         twice = next(r for r in rows if rows.count(r) > 1)
-        raise fail(f"--rows: {twice} is given twice (its sets would be counted twice, the same seeds each time)")
-    if args.per_fixture < 10:
-        raise fail(f"--per-fixture must be >= 10, got {args.per_fixture}")
-    if args.source == "mujoco" and args.per_fixture > round(args.seconds * 1000):
-        raise fail(f"--per-fixture {args.per_fixture} > {args.seconds:g} s of 1 kHz readings")
+        raise fail(f"field '--rows': {twice} is given twice (its sets would be counted twice, the same seeds each "
+                   "time)")
+    check_per_fixture(args, 10, simulated=args.source == "mujoco")
     check_folder(args.out)
     outputs = planned_outputs(args, {"--out": [Path(args.out) / name for name in TABLE_FILES]})
     refuse_foreign_tables(args.out)

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import argparse
 
-from spherecal.options import fail
+from spherecal.options import check_per_fixture
 
 HELP = "End-to-end demo on the embedded Panda: simulate, calibrate, validate, record."
 
@@ -42,10 +42,7 @@ def run(args: argparse.Namespace) -> int:
 
     from spherecal.validation.experiments.demo import DemoConfig, run_demo
 
-    if args.per_fixture < 10:
-        raise fail(f"--per-fixture must be >= 10, got {args.per_fixture}")
-    if args.per_fixture > round(args.seconds * 1000) and args.source == "mujoco":
-        raise fail(f"--per-fixture {args.per_fixture} > {args.seconds:g} s of 1 kHz readings")
+    check_per_fixture(args, 10, simulated=args.source == "mujoco")
     start = time.perf_counter()
     config = DemoConfig(
         seed=args.seed,

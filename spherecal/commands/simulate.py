@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import argparse
 
-from spherecal.options import fail, urdf_links
+from spherecal.options import check_per_fixture, urdf_links
 
 HELP = "Simulate self-motion at spherical-joint fixtures on a perturbed (true) robot and write samples."
 
@@ -46,12 +46,7 @@ def run(args: argparse.Namespace) -> int:
     from spherecal.options import check_folder, planned_outputs
     from spherecal.validation.experiments.simulation import SimulationConfig, simulate_to_folder, simulation_outputs
 
-    if not args.seconds >= 0.001:
-        raise fail(f"--seconds must be >= 0.001 (one 1 kHz step), got {args.seconds}")
-    if not 1 <= args.per_fixture <= int(round(args.seconds * 1000)):
-        raise fail(
-            f"--per-fixture must be in 1..{int(round(args.seconds * 1000))} (1 kHz x seconds), got {args.per_fixture}"
-        )
+    check_per_fixture(args, 1)
     check_folder(args.out)
     # found before the simulation runs, not when the files are written; --fixtures may be out/fixtures.yaml
     outputs = planned_outputs(args, {"--out": simulation_outputs(args.out)})

@@ -61,7 +61,7 @@ def test_simulate_stiffness_writes_the_compliance_and_refuses_bad_values(tmp_pat
     assert main(["simulate", "--out", str(bad), "--stiffness", "3e4,1"]) == 1
     assert main(["simulate", "--out", str(bad), "--stiffness", "-5"]) == 1
     err = capsys.readouterr().err.strip().splitlines()
-    assert err[-1].startswith("spherecal simulate: error: --stiffness '-5'") and not bad.exists()
+    assert err[-1].startswith("spherecal simulate: error: field '--stiffness': '-5'") and not bad.exists()
 
 
 def test_export_urdf_says_it_drops_the_compliance_mjcf_keeps_it(tmp_path, capsys):

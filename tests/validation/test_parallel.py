@@ -141,7 +141,7 @@ def test_campaign_command_without_dask_says_so_in_one_line_and_writes_nothing(tm
     out = tmp_path / "campaign"
     assert main(["campaign", "--sets", "1", "--rows", "P1", "--scheduler", "local", "--out", str(out)]) == 1
     err = capsys.readouterr().err.strip().splitlines()
-    assert err[-1] == ("spherecal campaign: error: --scheduler local: dask.distributed is not installed "
+    assert err[-1] == ("spherecal campaign: error: field '--scheduler': local: dask.distributed is not installed "
                        "(pip install 'spherecal[dask]')")
     assert not out.exists()
 

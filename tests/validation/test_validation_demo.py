@@ -107,7 +107,7 @@ def test_demo_keeps_a_recording_in_its_out_folder(tmp_path, capsys) -> None:
 def test_demo_refuses_bad_options_and_writes_nothing(tmp_path, capsys) -> None:
     assert main(["demo", "--out", str(tmp_path / "x"), "--per-fixture", "5"]) == 1
     err = capsys.readouterr().err
-    assert err == "spherecal demo: error: --per-fixture must be >= 10, got 5\n"
+    assert err == "spherecal demo: error: field '--per-fixture': expected at least 10 samples per fixture, got 5\n"
     assert not (tmp_path / "x").exists()
 
 
@@ -152,7 +152,8 @@ def test_campaign_refuses_more_samples_than_readings(tmp_path, capsys) -> None:
     # more samples than 1 kHz readings ran on silently (as the demo refuses)
     args = ["campaign", "--source", "mujoco", "--seconds", "0.01", "--per-fixture", "100", "--out", str(tmp_path / "c")]
     assert main(args) == 1
-    assert "--per-fixture 100 > 0.01 s of 1 kHz readings" in capsys.readouterr().err
+    err = capsys.readouterr().err
+    assert "field '--per-fixture': 100 samples per fixture are more than 0.01 s of 1000 Hz readings hold (10)" in err
     assert not (tmp_path / "c").exists()
 
 

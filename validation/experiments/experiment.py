@@ -33,11 +33,12 @@ def joint_stiffness(text: str | None, n: int) -> list[float] | None:
     try:
         values = [float(v) for v in text.split(",")]
     except ValueError:
-        raise ExperimentError(f"--stiffness {text!r}: expected numbers [Nm/rad] separated by commas") from None
+        raise ExperimentError(f"field '--stiffness': {text!r}: expected numbers [Nm/rad] separated by commas") from None
     if len(values) == 1:
         values = values * n
     if len(values) != n or not all(math.isfinite(v) and v >= 0 for v in values):
-        raise ExperimentError(f"--stiffness {text!r}: expected 1 or {n} finite values >= 0 [Nm/rad] (0 = rigid)")
+        raise ExperimentError(f"field '--stiffness': {text!r}: expected 1 or {n} finite values >= 0 [Nm/rad] "
+                              "(0 = rigid)")
     return values
 
 

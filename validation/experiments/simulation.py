@@ -112,11 +112,11 @@ def simulate_to_folder(config: SimulationConfig, outputs: OutputSet | None = Non
     refuse_foreign_files(files, "--out", "simulation", "spherecal simulate")
     if config.solver not in qpsolvers.available_solvers:
         raise ExperimentError(
-            f"--solver {config.solver!r} is not installed; have {', '.join(qpsolvers.available_solvers)}")
+            f"field '--solver': {config.solver!r} is not installed; have {', '.join(qpsolvers.available_solvers)}")
     nominal = load_robot(config.robot, tip_link=config.tip_link, base_link=config.base_link,
                          inertials=config.inertials, report=report)
     if nominal.n_joints < 4:  # the tool point pinned leaves n - 3 degrees of freedom
-        raise ExperimentError(f"--robot {config.robot}: {nominal.n_joints} joints have no self-motion at a "
+        raise ExperimentError(f"field '--robot': {config.robot}: {nominal.n_joints} joints have no self-motion at a "
                               "spherical joint (needs at least 4)")
     fixtures = true_centres(config.fixtures)
     rng = np.random.default_rng(config.seed)
@@ -131,7 +131,7 @@ def simulate_to_folder(config: SimulationConfig, outputs: OutputSet | None = Non
         result = collect_self_motion(true, nominal, fixtures, rng, settings)
     except UnreachableFixtureError as error:  # name the file and field that put the fixture there
         source = f"{config.fixtures}: field 'fixtures.{error.fixture}.position'" if config.fixtures else \
-            f"--fixtures (default fixture {error.fixture})"
+            f"field '--fixtures': default fixture {error.fixture}"
         raise ExperimentError(f"{source}: {error}") from None
 
     names = result.fixture_names

@@ -37,29 +37,31 @@ class Candidate:
     joint_range: np.ndarray | None = None
 
 
-def grid_candidates(text: str) -> list[Candidate]:
+def grid_candidates(text: str, option: str = "--grid") -> list[Candidate]:
     """Candidates on a box grid ``"xmin,xmax,nx;ymin,ymax,ny;zmin,zmax,nz"`` [m], named ``C1`` ...
 
     Raises:
-        CandidateError: not three ``min,max,count`` triples, a count < 1, more than :data:`MAX_GRID` points.
+        CandidateError: not three ``min,max,count`` triples, a count < 1, more than :data:`MAX_GRID` points (one
+            line naming ``option``, the command-line option that gave ``text``).
     """
     axes = []
     parts = text.split(";")
     if len(parts) != 3:
-        raise CandidateError(f"--grid {text!r}: expected 'xmin,xmax,nx;ymin,ymax,ny;zmin,zmax,nz'")
+        raise CandidateError(f"field '{option}': {text!r}: expected 'xmin,xmax,nx;ymin,ymax,ny;zmin,zmax,nz'")
     for axis, part in zip("xyz", parts, strict=True):
         fields = part.split(",")
         try:
             lo, hi, count = float(fields[0]), float(fields[1]), int(fields[2])
         except (ValueError, IndexError):
-            raise CandidateError(f"--grid {text!r}: field '{axis}': expected 'min,max,count', got {part!r}") from None
+            raise CandidateError(
+                f"field '{option}': {text!r}: {axis}: expected 'min,max,count', got {part!r}") from None
         if len(fields) != 3 or count < 1 or not (abs(lo) <= 10.0 and abs(hi) <= 10.0):  # finite, metres
-            raise CandidateError(f"--grid {text!r}: field '{axis}': expected 'min,max,count', count >= 1, |min|, "
+            raise CandidateError(f"field '{option}': {text!r}: {axis}: expected 'min,max,count', count >= 1, |min|, "
                                  "|max| <= 10 m")
         axes.append(np.linspace(lo, hi, count) if count > 1 else np.array([(lo + hi) / 2]))
     total = math.prod(a.size for a in axes)
     if total > MAX_GRID:
-        raise CandidateError(f"--grid {text!r}: field 'count': {total} points, at most {MAX_GRID}")
+        raise CandidateError(f"field '{option}': {text!r}: {total} points, at most {MAX_GRID}")
     points = np.stack(np.meshgrid(*axes, indexing="ij"), axis=-1).reshape(-1, 3)
     return [Candidate(f"C{k + 1}", p) for k, p in enumerate(points)]
 

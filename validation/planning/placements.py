@@ -169,7 +169,8 @@ def reachable_grid(model: RobotModel, height: float, rng: np.random.Generator, c
     points = tool_point(model, model.random_configurations(20_000, rng))
     near = points[np.abs(points[:, 2] - height) < 0.03]
     if len(near) < 50:
-        raise CandidateError(f"--plate-grid auto: the tool point rarely reaches the plate's height {height:.3f} m")
+        raise CandidateError(
+            f"field '--plate-grid': auto: the tool point rarely reaches the plate's height {height:.3f} m")
     (x0, y0), (x1, y1) = np.percentile(near[:, :2], [10, 90], axis=0)
     return f"{x0:.4f},{x1:.4f},{count};{y0:.4f},{y1:.4f},{count};{height:.4f},{height:.4f},1"
 
@@ -190,14 +191,14 @@ def plate_placements(layout: dict[str, np.ndarray], grid: str, orientations: int
         CandidateError: a bad grid or ``orientations`` < 1.
     """
     if orientations < 1:
-        raise CandidateError(f"--plate-orientations must be >= 1, got {orientations}")
+        raise CandidateError(f"field '--plate-orientations': expected an integer >= 1, got {orientations}")
     suffixes = list(layout)
     offsets = np.array([layout[s] for s in suffixes])
     distances = [(i, j, float(np.linalg.norm(offsets[i] - offsets[j])))
                  for i in range(len(suffixes)) for j in range(i + 1, len(suffixes))]
-    points = grid_candidates(grid)
+    points = grid_candidates(grid, "--plate-grid")
     if len(points) * orientations > MAX_CANDIDATES:
-        raise CandidateError(f"--plate-grid {grid!r}: field 'count': {len(points)} points x {orientations} "
+        raise CandidateError(f"field '--plate-grid': {grid!r}: {len(points)} points x {orientations} "
                              f"orientations make {len(points) * orientations} placements, at most {MAX_CANDIDATES}")
     out = []
     for point in points:

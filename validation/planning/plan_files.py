@@ -98,9 +98,10 @@ def guide_files(robot: str, samples: str, fixtures: str | None, candidates: str 
     """
     model = load_robot(robot, **links)
     if grid is not None:
-        raise CandidateError("--grid places single fixtures for a plan from scratch; with --samples give --plate-grid")
+        raise CandidateError("field '--grid': places single fixtures for a plan from scratch; with --samples give "
+                             "--plate-grid")
     if candidates is None and plate_grid is None:
-        raise CandidateError(f"with --samples give --candidates C.yaml or --plate-grid {GRID}")
+        raise CandidateError(f"field '--candidates': with --samples give --candidates C.yaml or --plate-grid {GRID}")
     dataset = read_samples(samples, model)
     spec = read_fixtures(fixtures) if fixtures else None
     placements = read_placements(candidates) if candidates else []
@@ -146,10 +147,10 @@ def plan_files(robot: str, candidates: str | None, grid: str | None, fixture_cou
     """
     model = load_robot(robot, **links)
     if candidates is None and grid is None:
-        raise CandidateError(f"give --candidates C.yaml or --grid {GRID}")
+        raise CandidateError(f"field '--candidates': give --candidates C.yaml or --grid {GRID}")
     found = read_candidates(candidates, model.n_joints) if candidates else grid_candidates(grid)
     if not 1 <= fixture_count <= 4:
-        raise CandidateError(f"--fixture-count must be in 1..4, got {fixture_count}")
+        raise CandidateError(f"field '--fixture-count': expected an integer in 1..4, got {fixture_count}")
     with executor(workers, scheduler) as pool:  # each candidate's survey a task, seeded by its name
         result = plan(model, found, fixture_count, seed, noise, per_fixture, motion, seconds, executor=pool)
     if show is not None:
