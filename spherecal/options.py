@@ -98,13 +98,28 @@ def refuse_given(args: argparse.Namespace, dests, why: str) -> None:
             raise fail(f"field '{typed[dest]}': {why}")
 
 
+#: argparse's own refusal of an option's value ('argument --noise: expected a finite number'; several spellings
+#: joined by '/'), renamed as every other refusal names an option: field '--noise'.
+_ARGPARSE_OPTION = re.compile(r"^argument (-[^\s:/]*(?:/-[^\s:/]*)*): ")
+
+
+def _as_field(message: str) -> str:
+    """argparse's ``argument --name: ...`` as ``field '--name': ...`` (the long spelling of several)."""
+    def field(match: re.Match) -> str:
+        spellings = match.group(1).split("/")
+        return f"field '{next((s for s in spellings if s.startswith('--')), spellings[0])}': "
+
+    return _ARGPARSE_OPTION.sub(field, message, count=1)
+
+
 class Parser(argparse.ArgumentParser):
     """An ArgumentParser whose errors are one line (``spherecal CMD: error: ...``) and exit status 1,
     like every other refusal of spherecal. A negative number in exponent notation (``--offset -1e-2 0 0.2``) is
     a value, as ``-0.01`` is (argparse took it for an option: 'expected 3 arguments'), and so is a comma-separated
     list starting with a negative number (``--effort -5,87,...`` was 'expected one argument', not the check of its
     values). An option that takes one value given twice is refused (:class:`StoreOnce`); a repeatable one says so
-    in its help."""
+    in its help. argparse's refusal of a value names its option as every other refusal does (``field '--noise':
+    expected a finite number, got 'nan'``)."""
 
     def __init__(self, *args, **kwargs):
         super().__init__(*args, **kwargs)
@@ -120,7 +135,7 @@ class Parser(argparse.ArgumentParser):
         return namespace, extras
 
     def error(self, message: str):  # noqa: D102 - argparse's hook
-        self.exit(1, f"{self.prog}: error: {message} (see {self.prog} --help)\n")
+        self.exit(1, f"{self.prog}: error: {_as_field(message)} (see {self.prog} --help)\n")
 
 
 # --------------------------------------------------------------------------------------- types

@@ -60,7 +60,7 @@ def test_a_negative_number_in_exponent_notation_is_a_value(tmp_path, capsys) -> 
     assert main(["tool", "panda", "--offset", "-1e-2", "0", "0.2", "--out", str(out)]) == 0
     assert load_robot(out).tool.tolist() == [-0.01, 0.0, 0.2]
     refused(["tool", "panda", "--offset", "-inf", "0", "0.2", "--out", tmp_path / "other.yaml"], tmp_path, capsys,
-            "argument --offset: expected a finite number, got '-inf'")
+            "field '--offset': expected a finite number, got '-inf'")
 
 
 def test_a_tool_swap_of_a_forced_calibration_says_so(tmp_path, capsys) -> None:

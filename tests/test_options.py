@@ -279,3 +279,20 @@ def test_a_bad_plate_grid_is_named_as_plate_grid() -> None:
 
     with pytest.raises(CandidateError, match=r"^field '--plate-grid': '0,1,2;0,1,x;0,1,2': y: expected"):
         plate_placements({"h0": np.zeros(3)}, "0,1,2;0,1,x;0,1,2")
+
+
+@pytest.mark.parametrize(("argv", "field", "said"), [
+    (["demo", "--noise", "nan", "--out", "d"], "--noise", "expected a finite number, got 'nan'"),
+    (["campaign", "--per-fixture", "0", "--out", "c"], "--per-fixture", "expected an integer in 1..100000"),
+    (["calibrate", "--robot", "panda", "--samples", "s.csv", "--out", "c.yaml", "--method", "x"], "--method",
+     "invalid choice: 'x'"),
+    (["tool", "panda", "--offset", "0", "0", "--out", "t.yaml"], "--offset", "expected 3 arguments"),
+    (["plan", "--grid", "0,1,1;0,1,1;0,1,1", "--samples", "0"], "--samples", "expected an integer in 1..100000"),
+])
+def test_a_value_argparse_refuses_names_its_option_as_field(argv, field, said, tmp_path, capsys, monkeypatch) -> None:
+    """argparse's own refusals said 'argument --noise: expected a finite number', unlike every other refusal."""
+    monkeypatch.chdir(tmp_path)
+    assert main(argv) == 1
+    err = capsys.readouterr().err.splitlines()[-1]  # plan's old --samples count warns first
+    assert err.startswith(f"spherecal {argv[0]}: error: field '{field}': {said}"), err
+    assert list(tmp_path.iterdir()) == []

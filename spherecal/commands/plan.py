@@ -78,7 +78,7 @@ class _SamplesOption(argparse.Action):
             try:
                 namespace.per_fixture = count(1, MAX_PER_FIXTURE)(values)
             except argparse.ArgumentTypeError as error:
-                parser.error(f"argument --samples: {error}")
+                parser.error(f"argument {option_string}: {error}")
             mark_given(namespace, "per_fixture", option_string, values)
         else:
             namespace.samples = values

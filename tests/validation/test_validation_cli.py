@@ -143,7 +143,7 @@ def test_output_under_a_file_is_refused_before_anything_is_written(files, tmp_pa
 def test_negative_seed_is_a_usage_error(command, capsys) -> None:
     # numpy refuses negative seeds: every one of these died with "ValueError: expected non-negative integer"
     assert main([command, "--seed", "-1"]) == 1
-    assert "--seed: expected an integer >= 0, got '-1'" in capsys.readouterr().err
+    assert "field '--seed': expected an integer >= 0, got '-1'" in capsys.readouterr().err
 
 
 

@@ -131,7 +131,7 @@ def test_non_finite_or_negative_amounts_are_usage_errors(tmp_path, capsys, comma
     # --noise inf said "the fixture centres are not determined"; campaign/plan --seconds -1 were tracebacks
     assert main([command, option, value, "--out", str(tmp_path / "x")]) == 1
     err = capsys.readouterr().err
-    assert f"argument {option}: expected a " in err and len(err.strip().splitlines()) == 1
+    assert f"field '{option}': expected a " in err and len(err.strip().splitlines()) == 1
     assert not (tmp_path / "x").exists()
 
 
