@@ -17,9 +17,12 @@ from spherecal.correction.files.urdf_write import LIMITS, ExportError
 
 from .export import calibration_samples, export_model, fit_seed, provenance_header
 
-#: Per format: what the file holds and the name endings that fit it (the first is suggested).
-SUFFIXES = {"urdf": ("a URDF", (".urdf", ".xml")), "mjcf": ("an MJCF model", (".xml", ".mjcf")),
-            "yaml": ("a robot file (YAML)", (".yaml", ".yml"))}
+#: Per format: what the file holds, the name endings that fit it (the first is suggested) and, for a format read
+#: by its ending, why another is refused (check_suffix; MuJoCo reads an MJCF, spherecal a robot file, by content).
+SUFFIXES = {"urdf": ("a URDF", (".urdf", ".xml"), "spherecal and Rerun read a URDF only as .urdf, ROS tools also as "
+                     ".xml"),
+            "mjcf": ("an MJCF model", (".xml", ".mjcf"), ""),
+            "yaml": ("a robot file (YAML)", (".yaml", ".yml"), "")}
 
 
 @dataclass(frozen=True)
@@ -85,8 +88,9 @@ def export_file(config: ExportConfig, outputs: OutputSet, report: Callable[[str]
         spherecal.correction.errors.SpherecalError: an output named for another format, an input that cannot be
             read, limits that are not numbers, an option the format does not take (one line); nothing is written.
     """
-    written, accepted = SUFFIXES[config.output_format]
-    check_suffix(config.out, "--out", f"{written} (--format {config.output_format})", accepted)
+    written, accepted, read_by_ending = SUFFIXES[config.output_format]
+    check_suffix(config.out, "--out", f"{written} (--format {config.output_format})", accepted,
+                 read_by_ending=read_by_ending)
     model = load_robot(config.robot, tip_link=config.tip_link, base_link=config.base_link,
                        inertials=config.inertials, report=report)
     forced = forced_calibration(model)

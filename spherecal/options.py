@@ -419,11 +419,20 @@ def recorded_options(args: argparse.Namespace) -> dict:
             for k, v in vars(args).items() if not k.startswith("_") and k != "command"}
 
 
-#: Output options whose file holds one format: what it is and the endings that fit (a name ending for another
-#: format is refused, :func:`spherecal.correction.files.outputs.check_suffix`).
-NAMED_OUTPUTS = {"--rrd": ("a Rerun recording", (".rrd",)), "--analysis": ("a Markdown document", (".md",))}
-#: Commands whose ``--out`` is a JSON report.
-JSON_OUT = ("validate", "plan")
+#: Output options whose file holds one format: what it is, the endings that fit (a name ending for another format
+#: is refused), a hint, and why any other ending is refused when its readers open it only by its ending (""
+#: for a format read by its content: another name is the user's choice), as
+#: :func:`spherecal.correction.files.outputs.check_suffix` takes them.
+NAMED_OUTPUTS = {"--rrd": ("a Rerun recording", (".rrd",), "",
+                           "the Rerun viewer opens a recording only by that ending"),
+                 "--analysis": ("a Markdown document", (".md",), "", "")}
+#: A robot file is read by its content (correction.load_robot: every name but .urdf as YAML).
+_ROBOT_OUT = ((".yaml", ".yml"), "; for a URDF or MJCF of it: spherecal export", "")
+#: Per command, what its ``--out`` file holds (as :data:`NAMED_OUTPUTS`); export's depends on its --format
+#: (controller.export_file), the other commands' --out is a folder.
+OUT_FORMATS = {"validate": ("a JSON report", (".json",), "", ""), "plan": ("a JSON report", (".json",), "", ""),
+               "calibrate": ("a calibrated robot file (YAML)", *_ROBOT_OUT),
+               "tool": ("a robot file (YAML)", *_ROBOT_OUT)}
 
 
 def planned_outputs(args: argparse.Namespace, outputs: dict):
@@ -436,7 +445,7 @@ def planned_outputs(args: argparse.Namespace, outputs: dict):
     Raises:
         spherecal.correction.files.outputs.OutputError: an output that is an input, is planned twice, is a
             folder, lies where nothing can be written, or is named for another format (one line naming the option
-            and the file).
+            and the file; :data:`NAMED_OUTPUTS`, :data:`OUT_FORMATS`).
     """
     from spherecal.correction.files.outputs import OutputSet, check_suffix  # numpy: not at --help (start-up)
 
@@ -448,11 +457,11 @@ def planned_outputs(args: argparse.Namespace, outputs: dict):
                         {k: v for k, v in inputs.items() if isinstance(v, str)},
                         file_inputs=[k for k in inputs if k != "SOURCE"])  # only SOURCE may name a folder
     formats = dict(NAMED_OUTPUTS)
-    if getattr(args, "command", None) in JSON_OUT:
-        formats["--out"] = ("a JSON report", (".json",))
-    for option, (written, accepted) in formats.items():  # plan --rrd plan.json wrote a recording named as JSON
+    if getattr(args, "command", None) in OUT_FORMATS:
+        formats["--out"] = OUT_FORMATS[args.command]
+    for option, (written, accepted, hint, read_by_ending) in formats.items():  # plan --rrd plan.json: a recording
         if isinstance(outputs.get(option), str):
-            check_suffix(outputs[option], option, written, accepted)
+            check_suffix(outputs[option], option, written, accepted, hint, read_by_ending)
     return planned
 
 

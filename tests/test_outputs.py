@@ -174,6 +174,33 @@ def test_an_output_named_for_another_format_is_refused(files, capsys, monkeypatc
     refused(argv, files, capsys, expected)
 
 
+@pytest.mark.parametrize(("argv", "expected"), [
+    # the Rerun viewer opens a recording only by its ending (re_data_loader's RrdLoader: .rrd, .rbl)
+    (["validate", "--nominal", "robot.yaml", "--calibrated", "calibrated.yaml", "--samples", "samples.csv",
+      "--rrd", "spread.txt"], "spread.txt: field '--rrd': a Rerun recording must be named .rrd (the Rerun viewer "
+     "opens a recording only by that ending)"),
+    (["plan", "--candidates", "candidates.yaml", "--fixture-count", "1", "--rrd", "plan"],
+     "plan: field '--rrd': a Rerun recording must be named .rrd"),
+    # spherecal (and Rerun) read a URDF only by its ending: 'export arm.txt' then said 'a URDF not named .urdf'
+    (["export", "calibrated.yaml", "--format", "urdf", "--out", "arm.txt", "--effort", "1,1,1,1,1,1,1"],
+     "arm.txt: field '--out': a URDF (--format urdf) must be named .urdf or .xml"),
+])
+def test_an_output_read_by_its_ending_is_refused_under_another(files, capsys, monkeypatch, argv, expected) -> None:
+    monkeypatch.chdir(files)
+    refused(argv, files, capsys, expected)
+
+
+def test_a_robot_file_under_any_other_ending_is_written_and_read_back(files, capsys, monkeypatch) -> None:
+    """A robot file is read by its content (every name but .urdf as YAML): 'tool --out t.txt' is the user's choice,
+    and the next command reads it."""
+    from spherecal.cli import main
+    from spherecal.correction import load_robot
+
+    monkeypatch.chdir(files)
+    assert main(["tool", "calibrated.yaml", "--offset", "0", "0", "0.1", "--out", "tcp.txt"]) == 0
+    assert load_robot("tcp.txt").tool.tolist() == [0.0, 0.0, 0.1]
+
+
 def test_simulate_keeps_a_recording_in_its_out_folder(files, capsys) -> None:
     # `simulate --out DIR` into a folder holding a real recording (samples.csv, fixtures.yaml) replaced both with
     # simulated data, exit 0

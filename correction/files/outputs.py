@@ -279,10 +279,12 @@ FORMAT_SUFFIXES = {".urdf": "URDF", ".yaml": "YAML", ".yml": "YAML", ".xml": "XM
                    ".json": "JSON", ".csv": "CSV"}
 
 
-def check_suffix(path: PathLike, option: str, written: str, accepted: tuple[str, ...], hint: str = "") -> None:
+def check_suffix(path: PathLike, option: str, written: str, accepted: tuple[str, ...], hint: str = "",
+                 read_by_ending: str = "") -> None:
     """Refuse an output whose name says it holds another format than the one written (``calibrate --out
     cal.urdf`` wrote YAML that every later command then read as URDF: 'invalid XML'). Names without a known
-    ending (:data:`FORMAT_SUFFIXES`) are the user's choice.
+    ending (:data:`FORMAT_SUFFIXES`) are the user's choice for a file its readers take by its content; a format
+    they open only by its ending (``read_by_ending`` says who) must carry one of ``accepted``.
 
     Args:
         path: the output file.
@@ -290,6 +292,8 @@ def check_suffix(path: PathLike, option: str, written: str, accepted: tuple[str,
         written: what is written (``"a YAML robot file"``).
         accepted: the endings that fit, first the one suggested (``(".yaml", ".yml")``).
         hint: said after the suggestion (``"; for a URDF: spherecal export --format urdf"``).
+        read_by_ending: why the ending is needed (``"the Rerun viewer opens a recording only by that ending"``);
+            "": the format is read by its content.
 
     Raises:
         OutputError: one line naming the option, the file and the ending to use.
@@ -298,3 +302,6 @@ def check_suffix(path: PathLike, option: str, written: str, accepted: tuple[str,
     if suffix in FORMAT_SUFFIXES and suffix not in accepted:
         raise OutputError(f"{path}: field '{option}': {written} named {suffix} would be read as "
                           f"{FORMAT_SUFFIXES[suffix]}; name it {accepted[0]}{hint}")
+    if read_by_ending and suffix not in accepted:  # 'validate --rrd spread.txt': the viewer would not open it
+        raise OutputError(f"{path}: field '{option}': {written} must be named {' or '.join(accepted)} "
+                          f"({read_by_ending}){hint}")

@@ -83,11 +83,7 @@ def run(args: argparse.Namespace) -> int:
     from spherecal.identification.workflow import WorkflowOptions, calibrate_files
     from spherecal.options import planned_outputs
 
-    outputs = planned_outputs(args, {"--out": args.out})  # before any work: never over an input
-    from spherecal.correction.files.outputs import check_suffix
-
-    check_suffix(args.out, "--out", "a calibrated robot file (YAML)", (".yaml", ".yml"),
-                 "; for a URDF or MJCF of it: spherecal export")
+    outputs = planned_outputs(args, {"--out": args.out})  # before any work: never over an input, named as YAML
     clock = time.perf_counter()
     options = WorkflowOptions(
         method=args.method,

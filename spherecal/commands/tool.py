@@ -34,11 +34,7 @@ def run(args: argparse.Namespace) -> int:
 
     if args.urdf is None:
         refuse_given(args, ("tip_link", "base_link"), "only with --urdf (the link of the new tool in its URDF)")
-    outputs = planned_outputs(args, {"--out": args.out})
-    from spherecal.correction.files.outputs import check_suffix
-
-    check_suffix(args.out, "--out", "a robot file (YAML)", (".yaml", ".yml"),
-                 "; for a URDF or MJCF of it: spherecal export")
+    outputs = planned_outputs(args, {"--out": args.out})  # never over an input, named as YAML
     model = load_robot(args.robot)
     from spherecal.correction.files.robot_file import forced_calibration
 
