@@ -154,7 +154,8 @@ def read_bag(path: str | os.PathLike, model: RobotModel, topic: str = TOPIC) -> 
     t = np.array(stamps)
     order = np.argsort(t, kind="stable")
     q, t, rows = np.array(values)[order], t[order], [rows[i] for i in order]
-    recording = Recording(q, t, None, str(path), tuple(rows), notes, clock="header.stamp")
+    recording = Recording(q, t, None, str(path), tuple(rows), notes, clock="header.stamp",
+                          time_field="header.stamp")
     recording.check_limits(model)  # first: degrees in a radians field jump too, and this says which it is
     _refuse_interleaved(q, t, rows, stamps)  # before the stamps alike: two streams' clash is named as theirs
     keep, repeats = repeated_stamps(q, t, rows, "header.stamp", "message")

@@ -141,7 +141,8 @@ def label(recording: Recording, model: RobotModel, options: ImportOptions) -> tu
         t = np.arange(recording.q.shape[0]) / (DEFAULT_RATE if options.rate is None else options.rate)
     elif np.any(np.diff(t) < 0):
         k = int(np.flatnonzero(np.diff(t) < 0)[0]) + 1
-        raise RecordingError(f"{recording.rows[k]}, field 't': time goes back ({t[k]:.6f} s after {t[k - 1]:.6f} s)")
+        raise RecordingError(f"{recording.rows[k]}, field {recording.time_field!r}: time goes back ({t[k]:.6f} s "
+                             f"after {t[k - 1]:.6f} s)")
     segments = segment(model, recording.q, t, options.segmentation, recording.source)
     labels = labels_of(segments, recording.q.shape[0])
     keep = labels != ""

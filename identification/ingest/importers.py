@@ -131,6 +131,7 @@ class Recording:
         notes: what the reader skipped and why (printed by the import report).
         clock: the field ``t`` was read from (``column 'time'``, ``header.stamp``), for the provenance; ``""``
             without time stamps.
+        time_field: that field as a refusal names it (``time``, ``header.stamp``); ``""`` without time stamps.
     """
 
     q: np.ndarray
@@ -140,6 +141,7 @@ class Recording:
     rows: tuple[str, ...]
     notes: tuple[str, ...] = ()
     clock: str = ""
+    time_field: str = ""
 
     def check_limits(self, model: RobotModel, names: list[str] | None = None, tol: float = LIMIT_TOL) -> None:
         """Refuse an angle that cannot be of its joint; warn ONCE, naming every joint, of angles past the
@@ -535,7 +537,8 @@ def read_joint_csv(path: str | os.PathLike, model: RobotModel) -> Recording:
     if t is not None and label_values is None:  # the stamps will segment the recording: they must be seconds
         _check_step(t, path, header[time_col], RowNames(path, lines))
     recording = Recording(np.ascontiguousarray(values), t, label_values, str(path), RowNames(path, lines),
-                          clock=f"column {header[time_col]!r}" if time_col is not None else "")
+                          clock=f"column {header[time_col]!r}" if time_col is not None else "",
+                          time_field=header[time_col] if time_col is not None else "")
     recording.check_limits(model, names)
     if t is not None and label_values is None and np.all(np.diff(t) >= 0):  # a stream to segment: no jumps in it,
         _refuse_jump(recording, header[time_col])  # and a row stamped as the one before is a repeat or refused

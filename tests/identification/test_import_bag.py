@@ -123,6 +123,18 @@ def test_ambiguous_drifting_or_incomplete_recordings_are_refused(recording, tmp_
     )
 
 
+
+@pytest.mark.parametrize("column", ["time", "stamp"])
+def test_time_going_back_names_the_time_column_as_named(column, tmp_path, capsys) -> None:
+    # a review: the refusal said field 't' whatever the CSV's time column was called
+    row = ",0.1" * 3 + ",-1" + ",0.1" * 3
+    csv = tmp_path / "back.csv"
+    csv.write_text(f"{column},{','.join(NAMES)}\n1.0{row}\n0.5{row}\n")
+    err = refused(["import", csv, "--format", "csv", "--robot", PANDA, "--out", tmp_path / "out"], tmp_path, capsys,
+                  f"back.csv: row 3, field '{column}': time goes back (0.500000 s after 1.000000 s)")
+    assert "field 't'" not in err
+
+
 @pytest.mark.parametrize("kind", ["sqlite3", "ros1"])
 def test_a_bag_whose_clock_goes_back_is_refused_not_interleaved(recording, kind, tmp_path, capsys) -> None:
     # the stamps jump back 3 s after 8 s (a clock reset, two recordings in one bag): the reader sorted the
