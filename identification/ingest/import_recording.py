@@ -209,28 +209,38 @@ def import_recording(
     _write_together(_outputs(Path(out), source, inputs), kept, spec)
     return ImportResult(
         kept, spec, read, segments, read - dataset.n_samples, dataset.n_samples - deduplicated.n_samples,
-        recording.notes, _one_fixture(fmt, spec.names, bool(segments)),
+        recording.notes, _scale_note(fmt, spec, bool(segments)),
     )
 
 
-def _one_fixture(fmt: str, names: tuple[str, ...], segmented: bool) -> tuple[str, ...]:
-    """One line when the import holds one fixture: what calibrate can fit from it and what it takes from the nominal
-    model (the absolute scale: one socket has no known distance, and one known position fixes none,
-    :func:`..build.build_problem`), and how to add the second socket that gives the scale."""
-    if len(names) != 1:
+def _scale_note(fmt: str, spec: FixtureSpec, segmented: bool) -> tuple[str, ...]:
+    """One line when nothing imported fixes the absolute scale: one fixture, or several and no known distance
+    (nor two known positions; one alone fixes nothing): calibrate then takes the scale from the
+    nominal model (:func:`..build.build_problem` holds one fixture's distance from the joint-1 axis at the nominal
+    model's and says so). The line says what calibrate can fit and how to add the distance that gives the scale."""
+    names = spec.names
+    if spec.distances or len(spec.positions) > 1 or not names:
         return ()
     if fmt == "mukca":
-        how = ("record the plate's other socket as well (hole_0.csv and hole_1.csv in one placement folder, --distance "
-               "apart) and import the placement again")
+        how = ("record the plate's other socket as well (hole_0.csv and hole_1.csv in one placement folder, "
+               "--distance apart) and import again")
+    elif len(names) > 1:
+        how = (f"measure two sockets' centre distance and give it in fixtures.yaml (distances: [[{names[0]}, "
+               f"{names[1]}, metres]])")
     elif segmented:
         how = (f"carry the ball to a second socket in the recording (at least --min-separation away), import it again "
                f"and give the two sockets' distance in fixtures.yaml (distances: [[{names[0]}, S2, metres]])")
     else:
         how = ("record a second socket under a fixture label of its own and give the two sockets' distance in "
                f"fixtures.yaml (distances: [[{names[0]}, OTHER, metres]])")
-    return (f"one fixture ({names[0]}): calibrate can fit the arm's errors about this one socket, for use near the "
-            "recorded postures, but not its absolute scale: one socket gives no known distance (and one known "
-            f"position fixes none), so the scale comes from the nominal model; for the scale, {how}",)
+    if len(names) == 1:
+        return (f"one fixture ({names[0]}): calibrate can fit the arm's errors about this one socket, for use near "
+                "the recorded postures, but not its absolute scale: one socket gives no known distance (and one "
+                f"known position fixes none), so the scale comes from the nominal model; for the scale, {how}",)
+    return (f"no known distance ({len(names)} fixtures): calibrate can fit the arm's errors but not its absolute "
+            "scale: without a known distance (and with at most one known position) it holds one fixture's distance "
+            "from the joint-1 axis at the nominal model's, so the scale comes from the nominal model; for the "
+            f"scale, {how}",)
 
 
 def _warn_description(dataset: Dataset, model: RobotModel, source: str | os.PathLike) -> None:

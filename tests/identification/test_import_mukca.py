@@ -447,3 +447,23 @@ def test_an_import_of_one_socket_says_what_it_leaves_to_the_nominal_model(tmp_pa
     assert "hole_0.csv and hole_1.csv in one placement folder, --distance apart" in lines[0]
     assert main([*argv, str(DATA / "dinova_2" / "front_rotated"), "--out", str(tmp_path / "two")]) == 0
     assert _one_fixture_lines(capsys.readouterr().out) == []
+
+
+def test_an_import_without_a_known_distance_says_the_scale_is_the_nominal_models(tmp_path, capsys) -> None:
+    """A review: two placements of one socket each imported together gave two fixtures and no known distance without a
+    word; calibrate then said 'absolute scale comes from the nominal model'. The import says it in one line, and how
+    to give the scale; an import with a known distance says nothing of it."""
+    both = tmp_path / "robot"
+    for placement in ("gen3lite_left", "gen3lite_raised_frontright"):  # one hole_0.csv each
+        shutil.copytree(DATA / "dinova_2" / placement, both / placement)
+    argv = ["import", "--format", "mukca", "--robot", str(KINOVA)]
+    assert main([*argv, str(both), "--out", str(tmp_path / "two")]) == 0
+    lines = [line for line in capsys.readouterr().out.splitlines() if "scale" in line]
+    assert len(lines) == 1, lines
+    assert lines[0].startswith("no known distance (2 fixtures): calibrate can fit the arm's errors but not its "
+                               "absolute scale"), lines[0]
+    assert "the scale comes from the nominal model" in lines[0]
+    assert "hole_0.csv and hole_1.csv in one placement folder, --distance apart" in lines[0]
+    assert read_fixtures(tmp_path / "two" / "fixtures.yaml").distances == []
+    assert main([*argv, str(DATA / "dinova_2" / "front_rotated"), "--out", str(tmp_path / "known")]) == 0
+    assert not [line for line in capsys.readouterr().out.splitlines() if "scale" in line]
