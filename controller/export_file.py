@@ -38,7 +38,8 @@ class ExportConfig:
         effort: URDF joint torque limits as given, ``"E1,...,En"`` [N m] (None: Franka's, 7-joint arms).
         velocity: URDF joint velocity limits as given, ``"V1,...,Vn"`` [rad/s] (None: Franka's, 7-joint arms).
         samples: urdf only: samples.csv the rigid fit must match (None: the calibration's own, if unchanged).
-        seed: seed of the rigid fit's workspace sample.
+        seed: seed of the rigid fit's workspace sample (None: not given, 0; given for an export that draws nothing,
+            it is refused).
         tip_link, base_link, inertials: a URDF ``robot``: its chain and inertials (:func:`correction.load_robot`).
     """
 
@@ -50,7 +51,7 @@ class ExportConfig:
     effort: str | None = None
     velocity: str | None = None
     samples: str | None = None
-    seed: int = 0
+    seed: int | None = None
     tip_link: str | None = None
     base_link: str | None = None
     inertials: str | None = None
@@ -97,7 +98,12 @@ def export_file(config: ExportConfig, outputs: OutputSet, report: Callable[[str]
     if forced:
         warnings.warn(forced, stacklevel=1)
     into = None if config.into is None else _into(config.into, config.out)
-    seed = fit_seed(model, config.output_format, config.seed)
+    seed = fit_seed(model, config.output_format, 0 if config.seed is None else config.seed)
+    if seed is None and config.seed is not None:  # accepted and unused: the document is the same for every seed
+        raise ExportError(f"field '--seed': the {config.output_format} export of {model.name!r} draws nothing random "
+                          "(only a rigid fit does: a URDF of a model with joint-side terms, compliance or a "
+                          "joint-angle scale, or an MJCF of one whose scale or negative compliance a hinge cannot "
+                          "carry)")
     read: dict[str, str | Path] = {} if config.into is None else {"into": config.into}
     if seed is not None:  # the rigid fit reads the recorded configurations: --samples, or the calibration's own file
         samples = config.samples or calibration_samples(model, Path(config.robot).parent)[0]
@@ -105,7 +111,7 @@ def export_file(config: ExportConfig, outputs: OutputSet, report: Callable[[str]
     header = provenance_header(config.robot, config.output_format, seed, read)
     exported = export_model(model, config.output_format, header,
                             config.prefix, _limits(config.effort, "effort"), _limits(config.velocity, "velocity"),
-                            into, config.samples, config.seed, Path(config.robot).parent)
+                            into, config.samples, seed or 0, Path(config.robot).parent)
     with outputs:
         path = outputs.write_bytes(config.out, exported.data)
     return ExportedFile(path, model, exported.notes)

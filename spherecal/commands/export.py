@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import argparse
 
-from spherecal.options import add_seed, add_urdf_links, urdf_links
+from spherecal.options import add_seed, add_urdf_links, given, urdf_links
 
 HELP = "Export a calibrated robot file as URDF, MJCF or YAML."
 FORMATS = ("urdf", "mjcf", "yaml")
@@ -45,7 +45,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--samples", default=None,
                         help="urdf only: samples.csv of recorded joint angles the rigid fit must match "
                         "(default: the samples file the calibration names, if unchanged)")
-    add_seed(parser, "the rigid fit's workspace sample")
+    add_seed(parser, "the rigid fit's workspace sample (a URDF of a model with joint-side terms, an MJCF of one a "
+             "hinge cannot carry; refused for the others, which draw nothing)")
 
 
 def run(args: argparse.Namespace) -> int:
@@ -57,7 +58,8 @@ def run(args: argparse.Namespace) -> int:
     links = urdf_links(args)
     config = ExportConfig(
         robot=args.robot, output_format=args.format, out=args.out, into=args.into, prefix=args.prefix,
-        effort=args.effort, velocity=args.velocity, samples=args.samples, seed=args.seed,
+        effort=args.effort, velocity=args.velocity, samples=args.samples,
+        seed=args.seed if "seed" in given(args) else None,  # refused where nothing random is drawn
         tip_link=links["tip_link"], base_link=links["base_link"], inertials=links["inertials"],
     )
     result = export_file(config, outputs, report=links["report"])

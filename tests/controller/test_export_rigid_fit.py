@@ -163,9 +163,11 @@ def test_the_urdf_header_records_the_seed_the_rigid_fit_drew_with(tmp_path, caps
     made = {"provenance": {"inputs": {"samples": input_record(samples)}}}
     cal = save_robot(replace(model, extras={**model.extras, "calibration": made}), tmp_path / "cal.yaml")
     rigid = save_robot(geometric_part(model), tmp_path / "rigid.yaml")
-    for source, seed, recorded in ((cal, "5", "seed: 5"), (rigid, "5", "seed: None")):
+    # a rigid model draws nothing: --seed is refused there (test_a_seed_nothing_random_uses_is_refused), and its
+    # header records no seed
+    for source, seed, recorded in ((cal, ["--seed", "5"], "seed: 5"), (rigid, [], "seed: None")):
         out = tmp_path / f"{source.stem}.urdf"
-        assert main(["export", str(source), "--format", "urdf", "--out", str(out), "--seed", seed]) == 0
+        assert main(["export", str(source), "--format", "urdf", "--out", str(out), *seed]) == 0
         text = out.read_text()
         assert recorded in text.splitlines() and text.count("a double hyphen written '- -'") == 1
         # the rigid fit's recorded configurations are an input: named with their SHA-256 (found through the
@@ -212,3 +214,23 @@ def test_samples_for_a_model_no_rigid_fit_reads_them_for_are_refused(tmp_path, c
     assert main(["export", str(cal), "--format", "urdf", "--out", str(tmp_path / "a.urdf"), "--samples",
                  str(samples)]) == 0
     assert f"60 recorded configurations from {samples}" in capsys.readouterr().out
+
+
+def test_a_seed_nothing_random_uses_is_refused(tmp_path, capsys, rng) -> None:
+    """A review: 'export --seed' was accepted for a YAML export and for a model with nothing to fit, the value
+    unused. The evidence: those documents are the same whatever the seed, while an elastic arm's URDF (a rigid fit
+    drawn with it) is not; the seed is refused where it changes nothing, in one line naming it."""
+    from tests.refusal import refused
+
+    elastic = with_compliance(perturb(load_robot("panda"), rng), COMPLIANCE)  # an MJCF carries its springs
+    rigid = geometric_part(elastic)
+    for model, output_format in ((rigid, "urdf"), (rigid, "mjcf"), (elastic, "yaml"), (elastic, "mjcf")):
+        assert export_model(model, output_format, "", seed=0).data == export_model(model, output_format, "",
+                                                                                   seed=5).data, output_format
+    assert export_model(elastic, "urdf", "", seed=0).data != export_model(elastic, "urdf", "", seed=5).data
+    cal, plain = save_robot(elastic, tmp_path / "cal.yaml"), save_robot(rigid, tmp_path / "rigid.yaml")
+    for source, output_format, out in ((cal, "yaml", "a.yaml"), (cal, "mjcf", "a.xml"), (plain, "urdf", "r.urdf"),
+                                       (plain, "mjcf", "r.xml")):
+        refused(["export", source, "--format", output_format, "--out", tmp_path / out, "--seed", "5"], tmp_path,
+                capsys, "error: field '--seed': ", "draws nothing random")
+    assert main(["export", str(cal), "--format", "urdf", "--out", str(tmp_path / "c.urdf"), "--seed", "5"]) == 0
