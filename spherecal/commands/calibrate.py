@@ -5,7 +5,7 @@ from __future__ import annotations
 import argparse
 import math
 
-from spherecal.options import urdf_links
+from spherecal.options import refuse_given, urdf_links
 
 HELP = "Identify DH parameters from spherical-joint samples and write a calibrated robot file."
 
@@ -21,7 +21,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--max-per-fixture", type=count(1), default=None, metavar="N",
                         help="keep at most N samples per fixture (random; default all)")
     add_deprecated(parser, "--max-samples", "--max-per-fixture", count(1))
-    add_seed(parser, "subsampling and PSO")
+    add_seed(parser, "--max-per-fixture's subsampling, --model auto's cross-validation folds and PSO")
     parser.add_argument(
         "--loss", choices=("auto", "linear", "soft_l1", "huber"), default="auto",
         help="lm loss (default auto: least squares, then each fixture weighed by the noise its residuals show and "
@@ -83,6 +83,9 @@ def run(args: argparse.Namespace) -> int:
     from spherecal.identification.workflow import WorkflowOptions, calibrate_files
     from spherecal.options import planned_outputs
 
+    if args.method == "lm" and args.model != "auto" and args.max_per_fixture is None:  # nothing random is drawn
+        refuse_given(args, ("seed",), f"with --method lm, --model {args.model} and every sample kept nothing random "
+                     "is drawn (it seeds --max-per-fixture's subsampling, --model auto's cross-validation and PSO)")
     outputs = planned_outputs(args, {"--out": args.out})  # before any work: never over an input, named as YAML
     clock = time.perf_counter()
     options = WorkflowOptions(
