@@ -103,12 +103,28 @@ def refuse_given(args: argparse.Namespace, dests, why: str) -> None:
 _ARGPARSE_OPTION = re.compile(r"^argument (-[^\s:/]*(?:/-[^\s:/]*)*): ")
 
 
+#: argparse's refusals of a missing option: 'the following arguments are required: --robot, --out' and 'one of the
+#: arguments --offset --urdf is required' (a required group).
+_ARGPARSE_MISSING = re.compile(r"^the following arguments are required: (.+)$")
+_ARGPARSE_ONE_OF = re.compile(r"^one of the arguments (.+) is required$")
+
+
 def _as_field(message: str) -> str:
-    """argparse's ``argument --name: ...`` as ``field '--name': ...`` (the long spelling of several)."""
+    """argparse's ``argument --name: ...`` as ``field '--name': ...`` (the long spelling of several), and its
+    missing options as ``field '--robot': required (also missing: --out)`` (a positional argument missing first:
+    argparse's own words)."""
     def field(match: re.Match) -> str:
         spellings = match.group(1).split("/")
         return f"field '{next((s for s in spellings if s.startswith('--')), spellings[0])}': "
 
+    missing = _ARGPARSE_MISSING.match(message)
+    if missing and missing.group(1).startswith("-"):
+        first, *rest = missing.group(1).split(", ")
+        return f"field '{first}': required" + (f" (also missing: {', '.join(rest)})" if rest else "")
+    one_of = _ARGPARSE_ONE_OF.match(message)
+    if one_of:
+        options = one_of.group(1).split()
+        return f"field '{options[0]}': give {' or '.join(options)} (one of them is required)"
     return _ARGPARSE_OPTION.sub(field, message, count=1)
 
 

@@ -296,3 +296,17 @@ def test_a_value_argparse_refuses_names_its_option_as_field(argv, field, said, t
     err = capsys.readouterr().err.splitlines()[-1]  # plan's old --samples count warns first
     assert err.startswith(f"spherecal {argv[0]}: error: field '{field}': {said}"), err
     assert list(tmp_path.iterdir()) == []
+
+
+@pytest.mark.parametrize(("argv", "said"), [
+    (["calibrate", "--samples", "s.csv"], "field '--robot': required (also missing: --out)"),
+    (["simulate"], "field '--out': required"),
+    (["tool", "panda", "--out", "t.yaml"], "field '--offset': give --offset or --urdf (one of them is required)"),
+])
+def test_a_missing_option_is_named_as_field(argv, said, tmp_path, capsys, monkeypatch) -> None:
+    """argparse said 'the following arguments are required: --robot, --out' and 'one of the arguments --offset --urdf
+    is required'; the line names the (first) missing option as every other refusal does."""
+    monkeypatch.chdir(tmp_path)
+    assert main(argv) == 1
+    err = capsys.readouterr().err
+    assert err.startswith(f"spherecal {argv[0]}: error: {said}") and err.count("\n") == 1, err
