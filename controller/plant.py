@@ -35,6 +35,10 @@ ROTOR_MASS = 0.05  # [kg] motor-side body of an elastic joint (its inertia is mo
 ROTOR_INERTIA = 1e-4  # [kg m^2] diagonal
 FLEX_ARMATURE = 0.01  # [kg m^2] of the link-side hinge of an elastic joint
 FLEX_DAMPING_RATIO = 1.0  # of the link-side hinge against a 1 kg m^2 link (no ringing at 1 kHz)
+#: [N m] bound of a ``flex`` hinge's actuator force, which its gravity compensation is sent to (``actuatorgravcomp``):
+#: the springs carry gravity in MuJoCo alone. MuJoCo refuses an empty range ("0 0"); what this one lets through bends
+#: a 1e3 Nm/rad spring by 1e-15 rad.
+FLEX_GRAVCOMP_LIMIT = 1e-12
 
 
 def _num(value: float) -> str:
@@ -86,6 +90,11 @@ def joint_offsets(model: RobotModel) -> list[tuple[np.ndarray, np.ndarray, np.nd
     return out
 
 
+#: The attributes of a ``flex`` hinge that keep the bodies' ``gravcomp`` off it (MuJoCo >= 3.1.4).
+_FLEX_GRAVITY = (f'actuatorgravcomp="true" actuatorfrclimited="true" '
+                 f'actuatorfrcrange="{_num(-FLEX_GRAVCOMP_LIMIT)} {_num(FLEX_GRAVCOMP_LIMIT)}"')
+
+
 def _rotor_masses(masses: np.ndarray, stiffness: np.ndarray) -> np.ndarray:
     """(n,) mass of each elastic joint's motor-side body [kg]: :data:`ROTOR_MASS`, at most half its link's; 0 for a
     rigid joint."""
@@ -122,9 +131,10 @@ def build_mjcf(
     becomes a motor-side hinge ``joint<i>`` (actuated, its angle is the recorded one) in a light body
     ``rotor<i>``, then the link body ``link<i>`` on a second hinge ``flex<i>`` about the same axis with
     stiffness ``1/c_i`` [Nm/rad]. Every body is gravity compensated (as a Panda's controller does at
-    the motors); :meth:`Plant.apply_joint_gravity` puts gravity back on the ``flex`` hinges only, so
-    the links sag by ``-c tau`` while the motors hold. The link masses are then the robot's
-    ``inertials`` (and ``payload``), the masses the deflection comes from.
+    the motors), but on a ``flex`` hinge the compensation goes to its actuator force (``actuatorgravcomp``),
+    bounded to :data:`FLEX_GRAVCOMP_LIMIT`: gravity acts on the springs only, and the links sag by ``-c tau``
+    while the motors hold, in plain ``mj_step`` (the plant and the exported file alike). The link masses are then
+    the robot's ``inertials`` (and ``payload``), the masses the deflection comes from.
 
     Args:
         model: the robot (nominal or a perturbed "true" robot), either convention.
@@ -195,7 +205,7 @@ def build_mjcf(
         if stiffness[i] > 0:
             damping = 2.0 * FLEX_DAMPING_RATIO * np.sqrt(stiffness[i])
             lines.append(f'{indent}<joint name="flex{i + 1}" {hinge} stiffness="{_num(stiffness[i])}" '
-                         f'damping="{_num(damping)}" armature="{_num(FLEX_ARMATURE)}"/>')
+                         f'damping="{_num(damping)}" armature="{_num(FLEX_ARMATURE)}" {_FLEX_GRAVITY}/>')
         else:
             lines.append(f"{indent}{motor}")
         lines.append(f'{indent}<geom type="sphere" size="0.03" pos="{_vec(joint_pos)}"/>')
@@ -291,20 +301,13 @@ class Plant:
         self.mj_data.ctrl[:n] = self.mj_data.qvel[self.motor_dofs]
         mujoco.mj_forward(self.mj_model, self.mj_data)
 
-    def apply_joint_gravity(self) -> None:
-        """Put gravity back on the link-side hinges of elastic joints (call after ``mj_step1``: it reads
-        the gravity compensation MuJoCo just computed). A rigid plant: nothing."""
-        if self.elastic:
-            self.mj_data.qfrc_applied[self.flex_dofs] = -self.mj_data.qfrc_gravcomp[self.flex_dofs]
-
     def advance(self, start: int, q_log: np.ndarray, tool_log: np.ndarray, ctrl: np.ndarray,
                 anchor: np.ndarray | None = None, fixture: int = 0) -> None:
         """Physics steps ``start .. start + len(ctrl) - 1``, one actuator command each, logged at every step.
 
         ``q_log[s]`` gets the joint readings at the start of step ``s`` and ``tool_log[s]`` the tool
-        site at the same state (MuJoCo computes positions before integrating). A rigid plant runs
-        ``mj_step`` with no numpy between steps but the copies; an elastic one splits it to apply
-        joint gravity (:meth:`apply_joint_gravity`).
+        site at the same state (MuJoCo computes positions before integrating): ``mj_step`` with no numpy
+        between steps but the copies (an elastic plant's gravity is in its MJCF, :func:`build_mjcf`).
 
         Args:
             start: index of the first step (into the logs).
@@ -326,14 +329,8 @@ class Plant:
             command[:] = u
             if site is not None:
                 site[:] = anchor[s]
-            if rigid:
-                q_log[s] = qpos
-                mujoco.mj_step(m, d)
-            else:
-                mujoco.mj_step1(m, d)
-                self.apply_joint_gravity()
-                q_log[s] = d.qpos[self.motor_qpos]
-                mujoco.mj_step2(m, d)
+            q_log[s] = qpos if rigid else d.qpos[self.motor_qpos]
+            mujoco.mj_step(m, d)
             tool_log[s] = tool
 
     # -------------------------------------------------------------------- fixtures

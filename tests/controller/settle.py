@@ -1,4 +1,5 @@
-"""Let an elastic plant settle with its motors held (zero velocity commands), gravity on its link-side hinges."""
+"""Let an elastic plant settle with its motors held (zero velocity commands): plain ``mj_step``, its MJCF puts
+gravity on the link-side hinges."""
 
 from __future__ import annotations
 
@@ -8,8 +9,6 @@ import mujoco
 def settle(plant, steps: int = 3000) -> None:
     """``steps`` MuJoCo steps of ``plant`` (a :class:`spherecal.controller.plant.Plant`) with zero commands."""
     m, d = plant.mj_model, plant.mj_data
+    d.ctrl[:] = 0.0
     for _ in range(steps):
-        mujoco.mj_step1(m, d)
-        plant.apply_joint_gravity()
-        d.ctrl[:] = 0.0
-        mujoco.mj_step2(m, d)
+        mujoco.mj_step(m, d)
