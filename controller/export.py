@@ -139,6 +139,17 @@ def calibration_samples(model: RobotModel, folder: str | os.PathLike | None = No
     return found[0], ""
 
 
+def _refuse_unread(samples: str | os.PathLike | None, model: RobotModel, why: str) -> None:
+    """Refuse a ``samples`` file no rigid fit will read (``why``: the export is the whole model).
+
+    Raises:
+        ExportError: one line naming the file and ``--samples``.
+    """
+    if samples is not None:
+        raise ExportError(f"{samples}: field '--samples': {model.name!r}: {why}; no rigid fit reads recorded "
+                          "configurations")
+
+
 def mjcf_lost_terms(model: RobotModel) -> tuple[str, ...]:
     """Names of the joint-side parameters an MJCF hinge cannot carry: a non-zero joint-angle scale ``s{i}`` (the
     hinge's angle is the recorded one, not ``(1 + s) q``) and a negative compliance ``c{i}`` (a spring of negative
@@ -179,7 +190,7 @@ def export_model(model: RobotModel, output_format: str, header: str = "", prefix
         raise ExportError(f"field '--format': unknown format {output_format!r}, expected one of {FORMATS}")
     if output_format != "urdf":
         for option, value in (("--prefix", prefix), ("--effort", effort), ("--velocity", velocity),
-                              ("--into", into), ("--samples", samples)):
+                              ("--into", into), ("--samples", None if output_format == "mjcf" else samples)):
             if value is not None:
                 raise ExportError(f"field '{option}': only the urdf format takes it, not {output_format}")
         if output_format == "yaml":
@@ -190,9 +201,10 @@ def export_model(model: RobotModel, output_format: str, header: str = "", prefix
         lost = mjcf_lost_terms(model)
         dynamics = _dynamics(model, output_format)
         if not lost:
+            _refuse_unread(samples, model, "its MJCF carries every term")
             return Export("\n".join(comments + [provenance_comment(model), build_mjcf(model, inertials=True)]),
                           dynamics)
-        recorded, where = recorded_configurations(model, None, folder)
+        recorded, where = recorded_configurations(model, samples, folder)  # a scale: the rigid fit of the hinges
         fit = rigid_approximation(model, recorded, seed=seed)
         notes = (fit.summary("MJCF") + f" (a hinge turns by the recorded angle and its spring cannot push: "
                  f"{', '.join(lost)})", f"rigid fit: {where}", *dynamics)
@@ -204,9 +216,8 @@ def export_model(model: RobotModel, output_format: str, header: str = "", prefix
                 raise ExportError(f"field '{option}': not with --into (the URDF keeps its own names and limits)")
     else:
         names_and_limits(model, prefix, effort, velocity)  # refused before the rigid fit, not after it
-    if samples is not None and not joint_side_terms(model):  # was written, exit 0, the file not even looked for
-        raise ExportError(f"{samples}: field '--samples': {model.name!r} has no joint-side terms (compliance, "
-                          "joint-angle scale): its URDF is exact and no rigid fit reads recorded configurations")
+    if not joint_side_terms(model):  # --samples was written, exit 0, the file not even looked for
+        _refuse_unread(samples, model, "it has no joint-side terms (compliance, joint-angle scale): its URDF is exact")
     recorded, where = (None, "") if not joint_side_terms(model) else recorded_configurations(model, samples, folder)
     fit = rigid_approximation(model, recorded, seed=seed)
     notes = (fit.summary(), f"rigid fit: {where}") if fit.terms else ()

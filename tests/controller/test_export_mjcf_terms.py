@@ -11,7 +11,7 @@ import pytest
 
 from spherecal.cli import main
 from spherecal.controller.rigid_fit import rigid_approximation
-from spherecal.correction import load_robot, perturb, save_robot, tool_point
+from spherecal.correction import Dataset, load_robot, perturb, save_robot, tool_point, write_samples
 from spherecal.correction.elastic import with_compliance
 from spherecal.correction.scale import with_scale
 from tests.correction.urdf_helpers import mujoco_ready
@@ -83,3 +83,26 @@ def test_a_joint_of_a_whole_turn_is_exported_without_limits(tmp_path, capsys) ->
     np.testing.assert_allclose(tool_point(back, q), tool_point(turning, q), atol=1e-9)
     mj_urdf = mujoco.MjModel.from_xml_string(mujoco_ready(text))
     assert [bool(v) for v in mj_urdf.jnt_limited] == [True] * 6 + [False]
+
+
+def test_an_mjcf_rigid_fit_reads_the_samples_given_and_a_whole_mjcf_refuses_them(tmp_path, capsys) -> None:
+    # a review: 'export --format mjcf --samples' was refused ('only the urdf format takes it') although the MJCF of a
+    # scale model is a rigid fit over the recorded configurations: a calibration's samples file that moved could not
+    # be given
+    from tests.refusal import refused
+
+    rng = np.random.default_rng(5)
+    nominal = load_robot("panda")
+    scaled = with_scale(perturb(nominal, rng), np.r_[rng.choice([-1, 1], 6) * 1e-3, 0.0])
+    q = scaled.random_configurations(60, np.random.default_rng(0))
+    samples = write_samples(tmp_path / "s.csv", Dataset(np.repeat(["a", "b", "c"], 20), q))
+    cal = save_robot(scaled, tmp_path / "cal.yaml")
+    assert main(["export", str(cal), "--format", "mjcf", "--out", str(tmp_path / "cal.xml"), "--samples",
+                 str(samples)]) == 0
+    assert f"60 recorded configurations from {samples}" in capsys.readouterr().out
+    written, _ = _mjcf_tool(tmp_path / "cal.xml", q[:10])
+    fit = rigid_approximation(scaled, q, seed=0)  # the fit over those configurations, refitted here
+    np.testing.assert_allclose(written, tool_point(fit.model, q[:10]), atol=1e-9)
+    elastic = save_robot(with_compliance(nominal, np.r_[0.0, 3e-5, 3e-5, 3e-5, 0.0, 0.0, 0.0]), tmp_path / "el.yaml")
+    refused(["export", elastic, "--format", "mjcf", "--out", tmp_path / "el.xml", "--samples", samples], tmp_path,
+            capsys, "s.csv: field '--samples': ", "its MJCF carries every term")
