@@ -167,6 +167,25 @@ def test_a_calibration_block_that_is_not_a_mapping_is_named(tmp_path, panda, blo
         load_robot(tmp_path / "bad.yaml")
 
 
+@pytest.mark.parametrize("key, terms", [("compliance", ["c2", "c3"]), ("scale", ["s1"])])
+def test_a_calibrated_file_whose_identified_terms_were_removed_is_refused(tmp_path, panda, key, terms) -> None:
+    # a review: an iiwa14 elastic calibration with its 'compliance:' list deleted by hand loaded as the rigid
+    # geometry (0.363 against 0.315 mm held out), its calibration block still listing c1..c6 as identified
+    data = yaml.safe_load(Path(save_robot(panda, tmp_path / "cal.yaml")).read_text())
+    data["calibration"] = {"identified": ["a2", "theta2", *terms, "tool_z"]}
+    (tmp_path / "bad.yaml").write_text(yaml.safe_dump(data))
+    with pytest.raises(RobotFileError, match=rf"bad.yaml: row \d+, field '{key}': missing, while calibration"
+                                             rf"\.identified lists {', '.join(terms)}: "):
+        load_robot(tmp_path / "bad.yaml")
+    data[key] = [0.0] * 7  # with its list, or without such terms, it loads
+    (tmp_path / "good.yaml").write_text(yaml.safe_dump(data))
+    assert load_robot(tmp_path / "good.yaml").extras[key] == [0.0] * 7
+    data.pop(key)
+    data["calibration"]["identified"] = ["a2", "theta2", "tool_z"]
+    (tmp_path / "dh.yaml").write_text(yaml.safe_dump(data))
+    assert key not in load_robot(tmp_path / "dh.yaml").extras
+
+
 #: A hand-written two-joint robot file: comments, a flow joint and a block joint (the line numbers are the point).
 HAND_WRITTEN = """\
 # two joints, written by hand
