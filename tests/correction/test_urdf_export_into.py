@@ -133,6 +133,25 @@ def test_export_cli_into(tmp_path, rng, capsys):
     assert error.count("\n") == 1 and "spherecal export: error:" in error and not other.exists()
 
 
+def test_export_into_says_the_other_tool_links_keep_their_nominal_offsets(tmp_path, rng, capsys):
+    # a review: the TCP of `spherecal tool --urdf ... --tip-link tool0` and tool0 of the `export --into` URDF were
+    # 0.75 mm apart on an iiwa14 (1.6 mm on a Gen3 lite), neither output saying so: tool carries the calibration's
+    # tool correction to the new tool, --into writes it on the ball's joint alone
+    nominal, calibrated = _calibrated("gen3lite", "standard", rng)
+    block = {"nominal_tool": nominal.tool.tolist()}
+    cal, into, out = tmp_path / "cal.yaml", tmp_path / "kinova.urdf", tmp_path / "calibrated.urdf"
+    save_robot(replace(calibrated, extras={**calibrated.extras, "calibration": block}), cal)
+    into.write_text(_text("gen3lite"))
+    assert main(["export", str(cal), "--format", "urdf", "--into", str(into), "--out", str(out)]) == 0
+    shift = ", ".join(f"{v * 1e3:+.3f}" for v in calibrated.tool - nominal.tool)
+    printed = " ".join(capsys.readouterr().out.split())
+    assert f"the calibrated tool point moved ({shift}) mm in the last frame" in printed, printed
+    assert "keep their nominal offsets" in printed
+    save_robot(calibrated, cal)  # no record of the tool it started from: nothing to say
+    assert main(["export", str(cal), "--format", "urdf", "--into", str(into), "--out", str(tmp_path / "b.urdf")]) == 0
+    assert "tool point moved" not in capsys.readouterr().out
+
+
 def test_model_in_other_convention_of_same_arm(rng):
     nominal, calibrated = _calibrated("ur5e", "modified", rng)
     standard = convert(calibrated, "standard")
