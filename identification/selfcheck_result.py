@@ -103,12 +103,12 @@ class SelfCheck:
             alien = figures[0].figures.get("not_a_socket", False)
             trends = [] if alien else sorted((f for f in self.findings if f.figures.get("trend")),
                                              key=lambda f: -f.figures.get("change_mm", 0.0))  # strongest first
-            moved = tuple(_fixture_of(f) for f in trends)
+            moved = () if self._one_fixture else tuple(_fixture_of(f) for f in trends)
             standing = None if alien else self._standing_out()
             if standing is not None and standing not in moved:  # tried first: the level names it as the worst
                 moved = (standing, *moved)
-            return ("; ".join([figures[0].message, *(_without_location(trend_text(f, False)) for f in trends)]),
-                    moved)
+            return ("; ".join([figures[0].message, *(_without_location(trend_text(f, False, self._one_fixture))
+                                                     for f in trends)]), moved)
         worst = max(failed, key=lambda f: f.figures.get("statistic", 0.0) - f.figures.get("dof", 0))
         others = len(failed) - 1
         text, moved = self._with_trend(worst)
@@ -136,8 +136,14 @@ class SelfCheck:
             " " + _fixture_of(f))), None)
         if trend is None:
             return finding.message, ()
-        return (f"{finding.message}; {_without_location(trend_text(trend, False))}",
-                (_fixture_of(trend),))
+        return (f"{finding.message}; {_without_location(trend_text(trend, False, self._one_fixture))}",
+                () if self._one_fixture else (_fixture_of(trend),))
+
+    @property
+    def _one_fixture(self) -> bool:
+        """The recording has one fixture (the residual level's per-fixture figures): nothing to leave out."""
+        level = next((f for f in self.findings if f.check == "residual level"), None)
+        return level is not None and len(level.figures.get("per_fixture_std_mm", {})) == 1
 
     def raise_if_inconsistent(self) -> None:
         """Raises :class:`InconsistentDataError` with :attr:`refusal` (and the fixtures it advises leaving out)
@@ -191,10 +197,11 @@ class SelfCheck:
         return lines
 
 
-def trend_text(finding: Finding, kept: bool) -> str:
+def trend_text(finding: Finding, kept: bool, only: bool = False) -> str:
     """A trend finding's message (a fixture whose residual trends with recording order) with what it means and what
     to do: in a refusal, leave the fixture out or record it again; in a written calibration (``kept``), the checks
-    found the fixture consistent with the others and it was kept, and how to leave it out. A written file's warning
+    found the fixture consistent with the others and it was kept, and how to leave it out (``only``: the recording's
+    one fixture, to record again, not to leave out). A written file's warning
     does not advise leaving it out: on every real Gen3 lite recording written with a trending socket, the
     calibration with the socket beat the one without it at sockets it never saw (stop 10), and leaving out MUKCa's
     dinova_2 ``front_rotated_h1`` leaves one socket, which is refused."""
@@ -203,6 +210,9 @@ def trend_text(finding: Finding, kept: bool) -> str:
         return (f"{finding.message}: the socket or the ball moved while it was recorded, or the arm's own error "
                 f"changes along the self-motion; the checks find it consistent with the other fixtures, so it is kept "
                 f"(calibrate --exclude-fixture {name} leaves it out)")
+    if only:  # a review: a one-socket refusal advised leaving out the only socket
+        return (f"{finding.message}: the socket or the ball moved while it was recorded; record it again (it is the "
+                "only fixture)")
     return (f"{finding.message}: the socket or the ball moved while it was recorded; leave it out "
             f"(calibrate --exclude-fixture {name}) or record it again")
 

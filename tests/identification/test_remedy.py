@@ -113,6 +113,18 @@ def test_a_refusal_names_the_drifting_fixtures_it_advises_leaving_out(alien) -> 
                                            "--exclude-fixture P2) or record it again")
 
 
+def test_a_refusal_of_the_only_fixture_advises_recording_it_again_not_leaving_it_out() -> None:
+    # a review: a one-socket Gen3 lite placement (MUKCa dinova_2 gen3lite) was refused advising
+    # 'calibrate --exclude-fixture gen3lite_h0', which leaves nothing to calibrate
+    level = Finding("residual level", False, "samples.csv: rows 1-20: residual noise 2 mm per axis",
+                    {"per_fixture_std_mm": {"P2": 2.0}})
+    check = SelfCheck((level, _trend("P2")), 3e-4, 2e-3)
+    with pytest.raises(InconsistentDataError) as refused:
+        check.raise_if_inconsistent()
+    assert refused.value.moved == () and "exclude-fixture" not in str(refused.value)
+    assert str(refused.value).endswith("moved while it was recorded; record it again (it is the only fixture)")
+
+
 def test_a_written_calibration_keeps_its_drifting_fixture_and_advises_no_exclusion() -> None:
     check = SelfCheck((Finding("residual level", True, "residual 0.3 mm per axis"), _trend("P2")), 3e-4, 3e-4)
     check.raise_if_inconsistent()  # consistent: nothing raised
