@@ -440,6 +440,7 @@ def test_a_viewer_that_cannot_start_is_one_line_and_leaves_nothing(tmp_path, mon
     for path in (None, tmp_path / "v.rrd"):
         with pytest.raises(OutputError) as refused:
             Recording(path, spawn=True)
-        assert str(refused.value).startswith("--spawn: cannot start a Rerun viewer: Failed to find Rerun Viewer")
+        assert str(refused.value).startswith("field '--spawn': cannot start a Rerun viewer: Failed to find Rerun "
+                                             "Viewer")
         assert "\n" not in str(refused.value)
     assert list(tmp_path.iterdir()) == []

@@ -116,7 +116,7 @@ class Recording:
                 self.stream.spawn(connect=self.path is None)
             except Exception as error:  # no viewer on PATH, no display: one line, nothing left behind
                 self.abort()
-                raise OutputError(f"--spawn: cannot start a Rerun viewer: {_first_line(error)} (or write the "
+                raise OutputError(f"field '--spawn': cannot start a Rerun viewer: {_first_line(error)} (or write the "
                                   "recording with --rrd FILE and open it elsewhere)") from None
 
     def _note(self, section: str, key: str, name: str) -> None:
