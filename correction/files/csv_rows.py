@@ -52,11 +52,11 @@ def parse_line(line: str, where: str, error: type[SpherecalError] = SpherecalErr
     except csv.Error as problem:
         text = str(problem)
         if "field larger than field limit" in text:
-            raise error(f"{where}, field '': a field longer than the CSV limit of {field_limit()} characters") \
+            raise error(f"{where}: a field longer than the CSV limit of {field_limit()} characters") \
                 from None
         if line.count('"') % 2 == 1 or "end of data" in text or "EOF" in text:
-            raise error(f"{where}, field '': unterminated quote (a quoted field must end on its own line)") from None
-        raise error(f"{where}, field '': CSV syntax: {text}") from None
+            raise error(f"{where}: unterminated quote (a quoted field must end on its own line)") from None
+        raise error(f"{where}: CSV syntax: {text}") from None
 
 
 def check_separator(header: list[str], where: str, error: type[SpherecalError] = SpherecalError) -> None:
@@ -147,9 +147,9 @@ def block_rows(block: list[str], first: int, path: str | os.PathLike, error: typ
             return
         except csv.Error:
             parse_line(block[done], f"{path}: row {first + done}", error)  # raises, naming the problem
-            raise error(f"{path}: row {first + done}, field '': unterminated quote") from None
+            raise error(f"{path}: row {first + done}: unterminated quote") from None
         if reader.line_num - done > 1:  # a quote opened on this line and closed on a later one
-            raise error(f"{path}: row {first + done}, field '': unterminated quote (a quoted field must end "
+            raise error(f"{path}: row {first + done}: unterminated quote (a quoted field must end "
                         "on its own line)")
         number, done = first + done, reader.line_num
         if not fields or not "".join(fields).strip() or (comments and fields[0].lstrip().startswith("#")):

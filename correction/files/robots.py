@@ -129,7 +129,7 @@ def _refuse_xml(text: str, source: str) -> None:
         why = "an MJCF model (<mujoco>): give the robot file (YAML) it was exported from, or the arm's URDF (.urdf)"
     else:
         why = f"an XML document (<{root}>), not a robot file (YAML) or a URDF (.urdf)"
-    raise RobotFileError(f"{source}: row 1, field '': {why}")
+    raise RobotFileError(f"{source}: row 1: {why}")
 
 
 def load_robot(

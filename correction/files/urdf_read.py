@@ -206,7 +206,7 @@ def _xml_tree(text: str, source: str) -> tuple[ET.Element, dict[ET.Element, int]
     try:
         parser.Parse(text, True)
     except expat.ExpatError as error:
-        raise RobotFileError(f"{source}: row {error.lineno}, field '': invalid XML: {error}") from None
+        raise RobotFileError(f"{source}: row {error.lineno}: invalid XML: {error}") from None
     return builder.close(), lines
 
 

@@ -55,7 +55,7 @@ class _Loader(yaml.SafeLoader):
         try:
             if self._depth > MAX_DEPTH:
                 mark = self.peek_event().start_mark
-                raise YamlError(f"{self._source}: row {mark.line + 1}, field '': nested more than {MAX_DEPTH} levels")
+                raise YamlError(f"{self._source}: row {mark.line + 1}: nested more than {MAX_DEPTH} levels")
             return super().compose_node(parent, index)
         finally:
             self._depth -= 1
@@ -88,7 +88,7 @@ def _expanded_size(root: yaml.Node, source: str) -> None:
                     break
         if total > MAX_NODES:
             raise YamlError(
-                f"{source}: row {node.start_mark.line + 1}, field '': expands to more than {MAX_NODES} values "
+                f"{source}: row {node.start_mark.line + 1}: expands to more than {MAX_NODES} values "
                 "(anchors and aliases)"
             )
         sizes[id(node)] = total
@@ -134,7 +134,7 @@ def load_yaml(text: str, source: str, error: type[SpherecalError] = YamlError) -
     """
     try:
         if len(text) > MAX_BYTES:
-            raise YamlError(f"{source}: row 1, field '': {len(text)} characters, a YAML file here is at most "
+            raise YamlError(f"{source}: row 1: {len(text)} characters, a YAML file here is at most "
                             f"{MAX_BYTES}")
         loader = _Loader(text, source)
         try:
@@ -152,9 +152,9 @@ def load_yaml(text: str, source: str, error: type[SpherecalError] = YamlError) -
         mark = getattr(invalid, "problem_mark", None)
         row = f"row {mark.line + 1}" if mark is not None else "row ?"
         problem = str(getattr(invalid, "problem", None) or invalid).splitlines()[0]
-        raise error(f"{source}: {row}, field '': invalid YAML: {problem}") from None
+        raise error(f"{source}: {row}: invalid YAML: {problem}") from None
     except RecursionError:  # a deep flow scalar the composer's guard did not see
-        raise error(f"{source}: row ?, field '': nested too deeply") from None
+        raise error(f"{source}: row ?: nested too deeply") from None
 
 
 def node_line(node: Any, *path: Any, key_line: bool = False) -> int:

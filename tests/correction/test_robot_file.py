@@ -145,7 +145,7 @@ def test_atomic_files_follow_the_umask(panda, tmp_path) -> None:
 @pytest.mark.parametrize(("name", "text", "expected"), [
     # each was 'expected a mapping at the top level, got str' (or 'invalid YAML' for a commented MJCF)
     ("robot_description.xml", '<?xml version="1.0"?>\n<!-- xacro -->\n<robot name="arm"><link name="a"/></robot>\n',
-     "robot_description.xml: row 1, field '': a URDF (<robot>) not named .urdf; name it robot_description.urdf"),
+     "robot_description.xml: row 1: a URDF (<robot>) not named .urdf; name it robot_description.urdf"),
     ("arm", '\ufeff<robot name="arm"><link name="a"/></robot>', "a URDF (<robot>) not named .urdf"),
     ("cal.xml", '<!-- spherecal export\n-->\n<mujoco model="arm"><worldbody/></mujoco>\n', "an MJCF model (<mujoco>)"),
     ("launch.xml", "<launch><node/></launch>", "an XML document (<launch>), not a robot file"),

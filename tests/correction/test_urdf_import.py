@@ -309,7 +309,7 @@ def test_a_urdf_refusal_names_the_row_of_the_element(tmp_path, old, new, row, fi
     path.write_text(HAND_WRITTEN.replace(old, new))
     with pytest.raises(RobotFileError) as error:
         load_urdf(path)
-    assert str(error.value).startswith(f"{path}: row {row}, field '{field}': ")
+    assert str(error.value).startswith(f"{path}: row {row}, field '{field}': " if field else f"{path}: row {row}: ")
     assert parse_urdf(HAND_WRITTEN).joints["l2"].row == 14  # the file unedited is read, each joint at its line
 
 
@@ -321,5 +321,5 @@ def test_an_entity_bomb_in_a_urdf_is_refused_at_once(tmp_path) -> None:
     path.write_text(text)
     from spherecal.correction import RobotFileError
 
-    with pytest.raises(RobotFileError, match=r"bomb.urdf: row 1, field '': invalid XML: "):
+    with pytest.raises(RobotFileError, match=r"bomb.urdf: row 1: invalid XML: "):
         load_urdf(path)
