@@ -140,15 +140,13 @@ def calibration_samples(model: RobotModel, folder: str | os.PathLike | None = No
     return found[0], ""
 
 
-def _refuse_unread(samples: str | os.PathLike | None, model: RobotModel, why: str) -> None:
-    """Refuse a ``samples`` file no rigid fit will read (``why``: the export is the whole model).
-
-    Raises:
-        ExportError: one line naming the file and ``--samples``.
-    """
-    if samples is not None:
-        raise ExportError(f"{samples}: field '--samples': {model.name!r}: {why}; no rigid fit reads recorded "
-                          "configurations")
+def _unread(samples: str | os.PathLike | None, model: RobotModel, why: str) -> tuple[str, ...]:
+    """One note when a ``samples`` file is given that no rigid fit reads (``why``: the export is the whole model). A
+    note, not a refusal: whether a fit runs depends on the calibrated file's terms, not on the command (a script
+    exporting every model with its samples, as bench/mukca.py does, stays valid)."""
+    if samples is None:
+        return ()
+    return (f"--samples {samples} not read: {model.name!r}: {why}; no rigid fit reads recorded configurations",)
 
 
 def _other_tools(model: RobotModel) -> tuple[str, ...]:
@@ -202,8 +200,8 @@ def export_model(model: RobotModel, output_format: str, header: str = "", prefix
             looked for after the working folder).
 
     Raises:
-        ExportError: an invalid format, prefix, limits, an option the format does not take, or ``samples`` for a model
-            without joint-side terms (nothing reads them).
+        ExportError: an invalid format, prefix, limits, or an option the format does not take (``samples`` that no
+            rigid fit reads get a note, :func:`_unread`).
     """
     if output_format not in FORMATS:
         raise ExportError(f"field '--format': unknown format {output_format!r}, expected one of {FORMATS}")
@@ -220,9 +218,8 @@ def export_model(model: RobotModel, output_format: str, header: str = "", prefix
         lost = mjcf_lost_terms(model)
         dynamics = _dynamics(model, output_format)
         if not lost:
-            _refuse_unread(samples, model, "its MJCF carries every term")
             return Export("\n".join(comments + [provenance_comment(model), build_mjcf(model, inertials=True)]),
-                          dynamics)
+                          (*dynamics, *_unread(samples, model, "its MJCF carries every term")))
         recorded, where = recorded_configurations(model, samples, folder)  # a scale: the rigid fit of the hinges
         fit = rigid_approximation(model, recorded, seed=seed)
         notes = (fit.summary("MJCF") + f" (a hinge turns by the recorded angle and its spring cannot push: "
@@ -235,11 +232,10 @@ def export_model(model: RobotModel, output_format: str, header: str = "", prefix
                 raise ExportError(f"field '{option}': not with --into (the URDF keeps its own names and limits)")
     else:
         names_and_limits(model, prefix, effort, velocity)  # refused before the rigid fit, not after it
-    if not joint_side_terms(model):  # --samples was written, exit 0, the file not even looked for
-        _refuse_unread(samples, model, "it has no joint-side terms (compliance, joint-angle scale): its URDF is exact")
     recorded, where = (None, "") if not joint_side_terms(model) else recorded_configurations(model, samples, folder)
     fit = rigid_approximation(model, recorded, seed=seed)
-    notes = (fit.summary(), f"rigid fit: {where}") if fit.terms else ()
+    notes = (fit.summary(), f"rigid fit: {where}") if fit.terms else _unread(
+        samples, model, "it has no joint-side terms (compliance, joint-angle scale): its URDF is exact")
     rigid = fit.model
     if into is not None:
         text = urdf_into(rigid, into[0], into[1], header)

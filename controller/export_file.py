@@ -99,11 +99,14 @@ def export_file(config: ExportConfig, outputs: OutputSet, report: Callable[[str]
         warnings.warn(forced, stacklevel=1)
     into = None if config.into is None else _into(config.into, config.out)
     seed = fit_seed(model, config.output_format, 0 if config.seed is None else config.seed)
-    if seed is None and config.seed is not None:  # accepted and unused: the document is the same for every seed
-        raise ExportError(f"field '--seed': the {config.output_format} export of {model.name!r} draws nothing random "
-                          "(only a rigid fit does: a URDF of a model with joint-side terms, compliance or a "
-                          "joint-angle scale, or an MJCF of one whose scale or negative compliance a hinge cannot "
-                          "carry)")
+    unused = ()
+    if seed is None and config.seed is not None:  # the document is the same for every seed
+        why = (f"the {config.output_format} export of {model.name!r} draws nothing random (only a rigid fit does: "
+               "a URDF of a model with joint-side terms, compliance or a joint-angle scale, or an MJCF of one whose "
+               "scale or negative compliance a hinge cannot carry)")
+        if config.output_format == "yaml":  # the format itself: a mistake in the command
+            raise ExportError(f"field '--seed': {why}")
+        unused = (f"--seed {config.seed} not used: {why}",)  # the file's content decides: a script's option, said
     read: dict[str, str | Path] = {} if config.into is None else {"into": config.into}
     if seed is not None:  # the rigid fit reads the recorded configurations: --samples, or the calibration's own file
         samples = config.samples or calibration_samples(model, Path(config.robot).parent)[0]
@@ -114,7 +117,7 @@ def export_file(config: ExportConfig, outputs: OutputSet, report: Callable[[str]
                             into, config.samples, seed or 0, Path(config.robot).parent)
     with outputs:
         path = outputs.write_bytes(config.out, exported.data)
-    return ExportedFile(path, model, exported.notes)
+    return ExportedFile(path, model, exported.notes + unused)
 
 
 def _limits(text: str | None, field: str) -> list[float] | None:
