@@ -55,7 +55,15 @@ import numpy as np
 
 from spherecal.correction import RobotModel, param_jacobian, tool_point
 
-from .consistency import augmented, group_finding, log10_chi2_sf, name_culprit, sets_scale_alone
+from .consistency import (
+    augmented,
+    group_finding,
+    log10_chi2_sf,
+    name_culprit,
+    scale_shrink,
+    sets_scale_alone,
+    unchecked_scale,
+)
 from .identifiability import normal_inverse
 from .joint_error import LENGTH, split, tool_fields
 from .leave_out import LeftOut, leave_out
@@ -167,7 +175,8 @@ def self_check(
     findings.append(replace(level, message=level.message + outliers) if excluded else level)
     jac, res, groups, kinds, spread = augmented(problem, x, r)
     _, _, left = leave_out(jac, res, groups, spread=spread)
-    checkable = sum(1 for k, g in left.items() if g.dof > 0 and not sets_scale_alone(problem, kinds[k]))
+    checkable = sum(1 for k, g in left.items() if g.dof > 0 and not unchecked_scale(problem, kinds[k]))
+    shrink = _scale_shrink(problem, x, kinds)
     trends = _trends(problem, x)
     # the largest joint-angle error the nominal's spread at the sockets holds: bounds the leave-one-out allowance
     # and the recorded error alike (computed once)
@@ -176,8 +185,8 @@ def self_check(
     # a fixture whose residual trends with recording order keeps the allowance: the recording order follows the
     # self-motion's sweep, and the arm's error over its configurations trends with it as a moved socket does
     # (``_trends``); a socket that moved further than that error reaches is refused by its disagreement
-    groups = [group_finding(problem, name, kinds[name], group, checkable, unmodelled.get(name, 0.0))
-              for name, group in left.items()]
+    groups = [group_finding(problem, name, kinds[name], group, checkable, unmodelled.get(name, 0.0),
+                            shrink.get(name, 0.0)) for name, group in left.items()]
     findings += name_culprit(groups, problem.noise, LEVEL_FACTOR)
     findings += trends
     # where a ball sits in a socket, as the residuals show it: the data rows alone (``sigma`` above also holds the
@@ -210,6 +219,21 @@ def self_check(
 
 
 # ------------------------------------------------------------------------------------ geometry
+def _scale_shrink(problem: CalibrationProblem, x: np.ndarray, kinds: dict[str, tuple]) -> dict[str, float]:
+    """group name -> what its leave-one-out residual gets back [residual units]: for the one known distance of a fit
+    with a prior, the refit's shrink of the arm for the samples' noise alone (:func:`.consistency.scale_shrink`:
+    ``t`` of the distance at ``x``); nothing for the other groups."""
+    out = {}
+    for name, kind in kinds.items():
+        if kind[0] == "distance" and sets_scale_alone(problem, kind) and not unchecked_scale(problem, kind):
+            a, b, _ = problem.spec.distances[kind[1]]
+            _, centres = problem.unpack(x)
+            names = problem.dataset.fixture_names
+            apart = float(np.linalg.norm(centres[names.index(a)] - centres[names.index(b)]))
+            out[name] = problem.distance_weight * scale_shrink(problem, x) * apart
+    return out
+
+
 def _geometry(problem: CalibrationProblem, x: np.ndarray) -> list[Finding]:
     spec, dataset = problem.spec, problem.dataset
     where = spec.source or "fixtures"
