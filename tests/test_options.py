@@ -310,3 +310,23 @@ def test_a_missing_option_is_named_as_field(argv, said, tmp_path, capsys, monkey
     assert main(argv) == 1
     err = capsys.readouterr().err
     assert err.startswith(f"spherecal {argv[0]}: error: {said}") and err.count("\n") == 1, err
+
+
+@pytest.mark.parametrize(("argv", "work"), [
+    (["demo", "--spawn", "--out", "d"], "spherecal.validation.experiments.demo.run_demo"),
+    (["validate", *_MODELS, "--truth", "panda", "--spawn"], "spherecal.validation.validate_files.validate_files"),
+])
+def test_spawn_without_a_viewer_is_refused_before_any_work(argv, work, tmp_path, capsys, monkeypatch) -> None:
+    """A review: 'demo --spawn' with no Rerun viewer on PATH ran the whole demo (9 s) and only then refused
+    ('field '--spawn': cannot start a Rerun viewer'). rerun's own spawn (the 'rerun' executable on PATH) now runs
+    first: with an empty PATH the command is refused in one line before its work starts, writing nothing."""
+    from tests.refusal import refused
+
+    def no_work(*args, **kwargs):
+        raise AssertionError("the work started before --spawn was checked")
+
+    monkeypatch.chdir(tmp_path)
+    monkeypatch.setenv("PATH", str(tmp_path / "empty"))  # no 'rerun' anywhere on it
+    monkeypatch.delenv("_RERUN_TEST_FORCE_SAVE", raising=False)  # rerun skips spawning under it
+    monkeypatch.setattr(work, no_work)
+    refused(argv, tmp_path, capsys, "error: field '--spawn': cannot start a Rerun viewer: Failed to find Rerun Viewer")

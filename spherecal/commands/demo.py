@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import argparse
 
-from spherecal.options import check_per_fixture
+from spherecal.options import check_per_fixture, start_viewer
 
 HELP = "End-to-end demo on the embedded Panda: simulate, calibrate, validate, record."
 
@@ -43,6 +43,8 @@ def run(args: argparse.Namespace) -> int:
     from spherecal.validation.experiments.demo import DemoConfig, run_demo
 
     check_per_fixture(args, 10, simulated=args.source == "mujoco")
+    start_viewer(args, "or drop --spawn" + (" and --no-rrd" if args.no_rrd else "") + " and open the demo.rrd it "
+                 "writes elsewhere")
     start = time.perf_counter()
     config = DemoConfig(
         seed=args.seed,

@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import argparse
 
-from spherecal.options import recorded_options, refuse_given, urdf_links
+from spherecal.options import recorded_options, refuse_given, start_viewer, urdf_links
 
 HELP = "Compare nominal and calibrated models against the truth, motion-capture data or socket samples alone."
 
@@ -55,6 +55,7 @@ def run(args: argparse.Namespace) -> int:
         inertials=links["inertials"], options=recorded_options(args),
     )
     outputs = planned_outputs(args, {"--out": args.out, "--rrd": args.rrd})
+    start_viewer(args, "or write the recording with --rrd FILE and open it elsewhere")
     validate_files(config, outputs, show=_show, report=links["report"])
     if args.out:
         print(f"report: {args.out}")
