@@ -105,6 +105,19 @@ def test_a_campaign_whose_every_set_is_refused_exits_1_in_one_line_and_writes_no
             "no set could be calibrated (1 refused); the first, P1/elastic set 0: " + reason)
 
 
+def test_a_campaign_whose_every_set_fails_exits_1_and_writes_nothing(tmp_path, capsys, monkeypatch) -> None:
+    """A review: when every set raised (as opposed to being refused by the self-check) the command wrote an empty
+    table2.csv and table2.md and exited 1; it refuses in one line naming the first failure, nothing written."""
+    import spherecal.validation.experiments.campaign as campaign
+
+    def explode(*args, **kwargs):
+        raise RuntimeError("solver exploded")
+
+    monkeypatch.setattr(campaign, "motion_set", explode)  # --workers 1: the sets run in this process
+    refused([*REFUSED, "--rows", "P1,Pall", "--out", tmp_path / "c"], tmp_path, capsys,
+            "error: no set could be run (2 failed); the first, P1/elastic set 0: RuntimeError: solver exploded")
+
+
 def test_a_campaign_with_some_sets_refused_writes_the_others_and_reports_the_refused(tmp_path, capsys) -> None:
     assert main([*REFUSED, "--rows", "P1,Pall", "--out", str(tmp_path / "c")]) == 0
     out = capsys.readouterr().out

@@ -372,6 +372,19 @@ def write_tables(rows: list[TableRow], folder: str | os.PathLike, comment: str =
     return csv_path, md_path
 
 
+def refuse_if_none_finished(run: CampaignRun) -> None:
+    """Refuse a campaign whose every set failed (raised, each warned as it happened): its table would hold no row
+    at all (a review: such a campaign wrote an empty table2.csv and table2.md and exited 1).
+
+    Raises:
+        ExperimentError: one line with the number failed and the first failure.
+    """
+    if run.failures and not run.results:
+        first = run.failures[0]
+        raise ExperimentError(f"no set could be run ({len(run.failures)} failed); the first, {first.name}: "
+                              f"{first.error}")
+
+
 def refuse_if_none_calibrated(results: list[TaskResult]) -> None:
     """Refuse a campaign whose every finished set the calibration refused: its table would hold no error at all (a
     review: such a campaign wrote a table of nan and exited 0).
@@ -418,12 +431,13 @@ def run_and_write(config: CampaignConfig, folder: str | os.PathLike, inputs: dic
             long run still shows them).
 
     Raises:
-        ExperimentError: every set's calibration was refused (:func:`refuse_if_none_calibrated`); nothing is shown
-            or written.
+        ExperimentError: every set failed (:func:`refuse_if_none_finished`) or its calibration was refused
+            (:func:`refuse_if_none_calibrated`); nothing is shown or written.
     """
     start = time.perf_counter()
     run = run_campaign(config, workers=workers, scheduler=scheduler)
     wall = time.perf_counter() - start
+    refuse_if_none_finished(run)
     refuse_if_none_calibrated(run.results)
     rows = table(run.results)
     if show is not None:
