@@ -195,3 +195,13 @@ def test_binary_candidates_file_is_one_line(tmp_path, panda):
     with pytest.raises(CandidateError, match="c.yaml: cannot read: not UTF-8"):
         read_candidates(path, panda.n_joints)
 
+
+
+@pytest.mark.parametrize("fixtures", [0, 5])
+def test_a_fixture_count_outside_1_to_4_is_refused_as_the_cli_names_it(panda, fixtures):
+    """plan() said '--fixtures must be in 1..4' after the option became --fixture-count (--fixtures names a file);
+    the command refuses it first (plan_files), a caller of the library gets the same line."""
+    candidates = [Candidate(name, np.array(p)) for name, p in REACHABLE.items()]
+    with pytest.raises(CandidateError) as refused:
+        plan(panda, candidates, fixtures, seed=0)
+    assert str(refused.value) == f"field '--fixture-count': expected an integer in 1..4, got {fixtures}"

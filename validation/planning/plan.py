@@ -331,7 +331,7 @@ def plan(
     if not candidates:
         raise CandidateError("no candidate fixture positions given")
     if not 1 <= fixtures <= 4:
-        raise CandidateError(f"--fixtures must be in 1..4, got {fixtures}")
+        raise CandidateError(f"field '--fixture-count': expected an integer in 1..4, got {fixtures}")
     clock = time.perf_counter()
     seed = plan_seed(seed)
     surveys, outcome = _surveyed(model, candidates, seed, motion, seconds, PLAN_SAMPLES, executor)
