@@ -461,7 +461,7 @@ def recorded_options(args: argparse.Namespace) -> dict:
 NAMED_OUTPUTS = {"--rrd": ("a Rerun recording", (".rrd",), "",
                            "the Rerun viewer opens a recording only by that ending"),
                  "--analysis": ("a Markdown document", (".md",), "", "")}
-#: A robot file is read by its content (correction.load_robot: every name but .urdf as YAML).
+#: A robot file is read by its content (correction.load_robot: a .urdf or an XML <robot> as URDF, any other as YAML).
 _ROBOT_OUT = ((".yaml", ".yml"), "; for a URDF or MJCF of it: spherecal export", "")
 #: Per command, what its ``--out`` file holds (as :data:`NAMED_OUTPUTS`); export's depends on its --format
 #: (controller.export_file), the other commands' --out is a folder.

@@ -3,13 +3,14 @@
 
 from __future__ import annotations
 
+import re
 import warnings
 
 import numpy as np
 import pytest
 
 from spherecal.cli import main
-from spherecal.correction import load_robot, perturb, registered_errors, tool_point
+from spherecal.correction import load_robot, perturb, registered_errors, save_robot, tool_point
 from spherecal.correction.files.fixtures import write_fixtures
 from spherecal.correction.files.samples_csv import write_samples
 from spherecal.correction.files.urdf_to_dh import NearlyParallelAxesWarning
@@ -84,3 +85,24 @@ def test_validate_a_calibration_of_a_urdf_arm_against_that_urdf(tmp_path, ur5e_f
             "--truth", str(cal), "--configurations", "50", "--out", str(out)]
     assert main(args) == 0, capsys.readouterr().err
     assert out.exists()
+
+
+def test_a_urdf_exported_under_xml_is_read_back_as_a_urdf(tmp_path, panda, capsys):
+    """A review: 'export --format urdf --out arm.xml' (the ending ROS tools use) was accepted, but spherecal refused
+    to read what it wrote ('arm.xml: row 1: a URDF (<robot>) not named .urdf'). A file whose XML root is <robot> is
+    read as a URDF whatever its ending, its link options with it; a robot file still refuses them."""
+    cal = save_robot(perturb(panda, np.random.default_rng(2)), tmp_path / "cal.yaml")
+    xml = tmp_path / "arm.xml"
+    assert main(["export", str(cal), "--format", "urdf", "--out", str(xml)]) == 0
+    tip = re.findall(r'<link name="([^"]+)"', xml.read_text())[-1]  # the exported chain's end
+    back = load_robot(xml, tip_link=tip)
+    q = panda.random_configurations(200, np.random.default_rng(5))
+    assert np.abs(tool_point(back, q) - tool_point(load_robot(cal), q)).max() < 1e-12
+    assert back.extras["urdf"]["tip_link"] == tip
+    for argv, said in ((["export", str(xml), "--tip-link", "nope"], "tip link 'nope' is not a link"),
+                       (["export", str(cal), "--tip-link", tip], "only for a URDF")):
+        assert main([*argv, "--format", "yaml", "--out", str(tmp_path / "x.yaml")]) == 1
+        error = capsys.readouterr().err
+        assert said in error and error.count("\n") == 1, error
+    assert main(["export", str(xml), "--tip-link", tip, "--format", "yaml", "--out", str(tmp_path / "x.yaml")]) == 0
+    assert load_robot(tmp_path / "x.yaml").extras["urdf"]["tip_link"] == tip

@@ -181,7 +181,7 @@ def test_an_output_named_for_another_format_is_refused(files, capsys, monkeypatc
      "opens a recording only by that ending)"),
     (["plan", "--candidates", "candidates.yaml", "--fixture-count", "1", "--rrd", "plan"],
      "plan: field '--rrd': a Rerun recording must be named .rrd"),
-    # spherecal (and Rerun) read a URDF only by its ending: 'export arm.txt' then said 'a URDF not named .urdf'
+    # Rerun (and ROS tools) read a URDF by its ending: spherecal reads an XML <robot> as one, they do not
     (["export", "calibrated.yaml", "--format", "urdf", "--out", "arm.txt", "--effort", "1,1,1,1,1,1,1"],
      "arm.txt: field '--out': a URDF (--format urdf) must be named .urdf or .xml"),
 ])
@@ -191,8 +191,8 @@ def test_an_output_read_by_its_ending_is_refused_under_another(files, capsys, mo
 
 
 def test_a_robot_file_under_any_other_ending_is_written_and_read_back(files, capsys, monkeypatch) -> None:
-    """A robot file is read by its content (every name but .urdf as YAML): 'tool --out t.txt' is the user's choice,
-    and the next command reads it."""
+    """A robot file is read by its content (every name but .urdf as YAML, unless it is an XML <robot>): 'tool --out
+    t.txt' is the user's choice, and the next command reads it."""
     from spherecal.cli import main
     from spherecal.correction import load_robot
 

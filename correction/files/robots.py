@@ -92,40 +92,52 @@ def _load(path_or_name: str | os.PathLike, tip_link: str | None, base_link: str 
         return load_urdf(path_or_name, tip_link=tip_link, base_link=base_link)
     if Path(key).is_dir():  # before the link options: a folder is no robot description of any kind
         raise RobotFileError(f"{key}: cannot read: Is a directory (expected a robot file or a .urdf)")
-    for option, value in (("--tip-link", tip_link), ("--base-link", base_link)):
-        if value is not None:
-            raise RobotFileError(f"{key}: field '{option}': {value!r} is only for a URDF robot description (.urdf)")
     if key in EMBEDDED_ROBOTS and not Path(key).exists():
+        _refuse_links(key, tip_link, base_link)
         return _embedded(EMBEDDED_ROBOTS[key], key)
     path = Path(path_or_name)
     if not os.path.lexists(path) and not path.suffix and len(path.parts) == 1:  # a name, not a path: say which exist
         raise RobotFileError(f"{key}: cannot read: no such file, nor an embedded robot "
                              f"({', '.join(EMBEDDED_ROBOTS)})")
     text = read_text(path, RobotFileError, limit=MAX_FILE_BYTES)
+    if _xml_root(text) == "robot":  # a URDF whatever its ending: 'export --format urdf --out arm.xml' (ROS's)
+        return load_urdf(path_or_name, tip_link=tip_link, base_link=base_link)
+    _refuse_links(key, tip_link, base_link)
     _refuse_xml(text, key)
     data, root = load_yaml(text, str(path), RobotFileError)  # bounded: size, depth, aliases; no duplicate keys
     return robot_from_dict(data, source=str(path), root=root)
+
+
+def _refuse_links(source: str, tip_link: str | None, base_link: str | None) -> None:
+    """Refuse a URDF's link options for a description that is no URDF (a robot file, an embedded name)."""
+    for option, value in (("--tip-link", tip_link), ("--base-link", base_link)):
+        if value is not None:
+            raise RobotFileError(f"{source}: field '{option}': {value!r} is only for a URDF robot description "
+                                 "(<robot>)")
 
 
 #: The first element of an XML document (after the declaration, comments and a DOCTYPE).
 _XML_ROOT = re.compile(r"\A\ufeff?\s*(?:<\?.*?\?>\s*|<!--.*?-->\s*|<!DOCTYPE[^>]*>\s*)*<([A-Za-z_][\w:.-]*)", re.S)
 
 
+def _xml_root(text: str) -> str | None:
+    """The name of the root element of an XML document (``robot``: a URDF), None for text that is not XML."""
+    match = _XML_ROOT.match(text[:100_000])
+    return None if match is None else match.group(1)
+
+
 def _refuse_xml(text: str, source: str) -> None:
-    """Refuse an XML document in a file read as a robot file (YAML) because it is not named ``.urdf``: a URDF
-    saved as ``robot_description.xml`` or without an ending, an exported MJCF (was: 'expected a mapping at the
-    top level, got str').
+    """Refuse an XML document other than a URDF in a file read as a robot file (YAML): an exported MJCF, any other
+    XML (was: 'expected a mapping at the top level, got str'). A URDF (``<robot>``) is read as one whatever its
+    name (:func:`_load`).
 
     Raises:
         RobotFileError: one line naming the file and what it holds.
     """
-    match = _XML_ROOT.match(text[:100_000])
-    if match is None:
+    root = _xml_root(text)
+    if root is None:
         return
-    root = match.group(1)
-    if root == "robot":
-        why = f"a URDF (<robot>) not named .urdf; name it {Path(source).stem}.urdf (a URDF is read by its ending)"
-    elif root == "mujoco":
+    if root == "mujoco":
         why = "an MJCF model (<mujoco>): give the robot file (YAML) it was exported from, or the arm's URDF (.urdf)"
     else:
         why = f"an XML document (<{root}>), not a robot file (YAML) or a URDF (.urdf)"

@@ -143,10 +143,11 @@ def test_atomic_files_follow_the_umask(panda, tmp_path) -> None:
 
 
 @pytest.mark.parametrize(("name", "text", "expected"), [
-    # each was 'expected a mapping at the top level, got str' (or 'invalid YAML' for a commented MJCF)
+    # each was 'expected a mapping at the top level, got str' (or 'invalid YAML' for a commented MJCF); a URDF not
+    # named .urdf was then refused ('name it arm.urdf'): it is read as the URDF it is, here one without a joint
     ("robot_description.xml", '<?xml version="1.0"?>\n<!-- xacro -->\n<robot name="arm"><link name="a"/></robot>\n',
-     "robot_description.xml: row 1: a URDF (<robot>) not named .urdf; name it robot_description.urdf"),
-    ("arm", '\ufeff<robot name="arm"><link name="a"/></robot>', "a URDF (<robot>) not named .urdf"),
+     "robot_description.xml: no revolute joint between 'a' and 'a'"),
+    ("arm", '\ufeff<robot name="arm"><link name="a"/></robot>', "arm: no revolute joint between 'a' and 'a'"),
     ("cal.xml", '<!-- spherecal export\n-->\n<mujoco model="arm"><worldbody/></mujoco>\n', "an MJCF model (<mujoco>)"),
     ("launch.xml", "<launch><node/></launch>", "an XML document (<launch>), not a robot file"),
 ])
