@@ -111,14 +111,14 @@ _ARGPARSE_ONE_OF = re.compile(r"^one of the arguments (.+) is required$")
 
 def _as_field(message: str) -> str:
     """argparse's ``argument --name: ...`` as ``field '--name': ...`` (the long spelling of several), and its
-    missing options as ``field '--robot': required (also missing: --out)`` (a positional argument missing first:
-    argparse's own words)."""
+    missing arguments as ``field '--robot': required (also missing: --out)``, a positional one by its name as
+    ``field 'CAL.yaml': required (also missing: --format, --out)``."""
     def field(match: re.Match) -> str:
         spellings = match.group(1).split("/")
         return f"field '{next((s for s in spellings if s.startswith('--')), spellings[0])}': "
 
     missing = _ARGPARSE_MISSING.match(message)
-    if missing and missing.group(1).startswith("-"):
+    if missing:
         first, *rest = missing.group(1).split(", ")
         return f"field '{first}': required" + (f" (also missing: {', '.join(rest)})" if rest else "")
     one_of = _ARGPARSE_ONE_OF.match(message)

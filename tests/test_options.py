@@ -302,6 +302,10 @@ def test_a_value_argparse_refuses_names_its_option_as_field(argv, field, said, t
     (["calibrate", "--samples", "s.csv"], "field '--robot': required (also missing: --out)"),
     (["simulate"], "field '--out': required"),
     (["tool", "panda", "--out", "t.yaml"], "field '--offset': give --offset or --urdf (one of them is required)"),
+    # a positional argument kept argparse's words: 'the following arguments are required: CAL.yaml, --format, --out'
+    (["export"], "field 'CAL.yaml': required (also missing: --format, --out) (see spherecal export --help)"),
+    (["tool", "--out", "t.yaml"], "field 'CAL.yaml': required (see spherecal tool --help)"),
+    (["import"], "field 'SOURCE': required (also missing: --format, --robot, --out)"),
 ])
 def test_a_missing_option_is_named_as_field(argv, said, tmp_path, capsys, monkeypatch) -> None:
     """argparse said 'the following arguments are required: --robot, --out' and 'one of the arguments --offset --urdf
