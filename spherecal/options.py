@@ -418,22 +418,17 @@ def add_workers(parser: argparse.ArgumentParser, what: str = "tasks", also: str 
 
 
 def start_viewer(args: argparse.Namespace, instead: str) -> None:
-    """With ``--spawn``, start the Rerun viewer before any work, by rerun's own spawn (the ``rerun`` executable found
-    on PATH, unless a viewer already listens on its port): the recording connects to it at the end. A run that
-    could not stream was refused only then (a review: ``demo --spawn`` worked 9 s first). ``instead``: the remedy
-    the refusal offers, as ``write it with --rrd FILE and open it elsewhere``.
+    """With ``--spawn``, start the Rerun viewer before any work (:func:`spherecal.validation.viewer.recording.
+    spawn_viewer`: a review found ``demo --spawn`` refused only after 9 s of work). ``instead``: the remedy the
+    refusal offers, as ``write it with --rrd FILE and open it elsewhere``.
 
     Raises:
-        OptionError: no viewer could be started, one line as ``field '--spawn': cannot start a Rerun viewer: ...``.
+        OutputError: no viewer could be started (one line naming ``--spawn``).
     """
-    if not getattr(args, "spawn", False):
-        return
-    from spherecal.validation.viewer.recording import _first_line, _rerun  # rerun: heavy, only with --spawn
+    if getattr(args, "spawn", False):
+        from spherecal.validation.viewer.recording import spawn_viewer  # rerun: heavy, only with --spawn
 
-    try:
-        _rerun().RecordingStream("spherecal").spawn(connect=False)
-    except Exception as error:  # Rerun raises its own types; the user sees one line
-        raise fail(f"field '--spawn': cannot start a Rerun viewer: {_first_line(error)} ({instead})") from None
+        spawn_viewer(instead)
 
 
 # ------------------------------------------------------------------------------------ outputs

@@ -72,6 +72,20 @@ def _rerun():
     return rerun
 
 
+def spawn_viewer(instead: str) -> None:
+    """Start the Rerun viewer now, by rerun's own spawn (the ``rerun`` executable on PATH, unless a viewer already
+    listens on its port), so that a run with ``--spawn`` is refused before its work, not after it; a recording that
+    spawns later connects to it. ``instead``: the remedy the refusal offers.
+
+    Raises:
+        OutputError: no viewer could be started, one line as ``field '--spawn': cannot start a Rerun viewer: ...``.
+    """
+    try:
+        _rerun().RecordingStream("spherecal").spawn(connect=False)
+    except Exception as error:  # Rerun raises its own types; the user sees one line
+        raise OutputError(f"field '--spawn': cannot start a Rerun viewer: {_first_line(error)} ({instead})") from None
+
+
 class Recording:
     """A Rerun recording stream that writes an ``.rrd`` file (atomically, on close) or feeds a viewer.
 
