@@ -103,7 +103,10 @@ def with_tool(model: RobotModel, tool: np.ndarray, payload: dict | None = None,
     description gives it (right when both tools hang from the same flange, e.g. a ball held by the gripper).
 
     Args:
-        model: the calibrated model (its tool point is the one it was calibrated with, e.g. the ball).
+        model: the calibrated model: its tool point is the one it was calibrated with (e.g. the ball), or, on a
+            model an earlier swap gave another tool, the one that swap recorded (:func:`calibrated_tool`): the new
+            tool goes on the calibrated one, its correction carried once (a review: a second ``with_tool`` with
+            ``nominal_tool`` on a swapped file carried it twice, 30 mm off, and the controller took it).
         tool: (3,) the new tool point in the last DH frame [m] (its nominal position when ``nominal_tool``
             is given, else the point itself).
         payload: the new ``payload`` block (``{mass: kg, com: [x, y, z] m}`` in the last frame) for gravity
@@ -126,7 +129,8 @@ def with_tool(model: RobotModel, tool: np.ndarray, payload: dict | None = None,
             f"field '{field}': the new tool point {np.array2string(tool, precision=4)} m is {distance:.4g} m from the "
             f"last frame, more than the arm itself ({model.chain_length:.3g} m, sum of |a| and |d|) (millimetres? the "
             "offset is in m)")
-    calibrated = np.asarray(model.tool, dtype=float)
+    calibrated = calibrated_tool(model)
+    model = replace(model, tool=calibrated)
     carried = np.zeros(3)
     if nominal_tool is not None:
         nominal_tool = point_of(nominal_tool, f"field '{NOMINAL_TOOL}'")

@@ -9,7 +9,7 @@ import numpy as np
 
 from ..gravity import has_inertials
 from ..model import RobotModel
-from ..tool import NOMINAL_TOOL, ToolError, ToolSwap, calibrated_tool, point_of, tool_in_frame, with_tool
+from ..tool import NOMINAL_TOOL, ToolError, ToolSwap, point_of, tool_in_frame, with_tool
 from .urdf_to_dh import load_urdf
 
 
@@ -49,8 +49,6 @@ def put_tool(model: RobotModel, offset: np.ndarray | None = None, urdf: str | os
     nominal = block.get("nominal_tool") if isinstance(block, dict) else None
     if nominal is not None:  # a hand-edited file: its name and field, not a traceback ('nominal_tool: abc')
         nominal = point_of(nominal, f"{source or model.name}: field '{NOMINAL_TOOL}'")
-    # a file whose tool an earlier `tool` replaced: the new tool goes on the calibrated one (its correction once)
-    model = replace(model, tool=calibrated_tool(model))
     swap = with_tool(model, offset, payload, nominal_tool=nominal, field="--offset" if urdf is None else "--tip-link")
     swap = replace(swap, model=_retipped(swap.model, description.extras.get("urdf") if urdf is not None else None))
     if payload is not None:

@@ -130,9 +130,9 @@ def test_tool_swap_carries_the_flange_error_the_tool_point_absorbed(panda, rng) 
     from spherecal.identification.synthetic import make_dataset
 
     ball, grip = np.array([0.0, 0.0, 0.107 + 0.05]), np.array([0.0, 0.0, 0.107 + 0.1034])
-    nominal = with_tool(panda, ball).model
+    nominal = replace(panda, tool=ball)
     true = perturb(nominal, rng)
-    true = with_tool(true, true.tool + [0.0, 0.0, 0.0015]).model  # 1.5 mm more along the flange axis
+    true = replace(true, tool=true.tool + [0.0, 0.0, 0.0015])  # 1.5 mm more along the flange axis
     dataset, spec = make_dataset(true, per_fixture=300, rng=rng)
     cal = calibrate(nominal, dataset, spec).model
     q = panda.random_configurations(500, rng)
@@ -182,6 +182,26 @@ def test_a_ball_calibration_within_the_seed_check_is_refused_by_its_recorded_too
     moved = replace(panda, tool=panda.tool + [0.0, 0.0, 5e-5])  # the same tool, saved again with rounding
     assert corrected_ik(replace(cal, extras={**cal.extras, "calibration": {"nominal_tool": moved.tool.tolist()}}),
                         tool_point(cal, q_now), q_now, nominal=panda) is not None
+
+
+def test_the_remedy_for_a_swapped_file_puts_the_new_tool_on_the_calibrated_one(panda, rng) -> None:
+    # a review: a file swapped to the hand TCP, refused against the flange, printed a Python remedy that carried the
+    # correction a second time from the TCP (30.13 mm off), and corrected_ik took the result
+    ball = panda.tool + [0.0, 0.0, 0.05]
+    cal = perturb(replace(panda, tool=ball), rng)
+    cal = replace(cal, extras={**cal.extras, "calibration": {"nominal_tool": ball.tolist()}})
+    tcp = with_tool(cal, panda.tool + [0.0, 0.0, 0.1034], nominal_tool=ball).model
+    q_now = np.array([0.0, -0.3, 0.0, -2.2, 0.0, 2.0, 0.8])
+    target = tool_point(panda, q_now) + [0.02, 0.0, -0.01]
+    with pytest.raises(ModelMismatchError) as error:
+        corrected_ik(tcp, target, q_now, nominal=panda)
+    call = str(error.value).split("first: ", 1)[1].split(" or `spherecal tool")[0]
+    flange = eval(call, {"correction": spherecal.correction, "calibrated": tcp})  # noqa: S307 - our message (.model)
+    direct = with_tool(cal, panda.tool, nominal_tool=ball).model
+    np.testing.assert_allclose(flange.tool, direct.tool, atol=1e-15)
+    q = corrected_ik(flange, target, q_now, nominal=panda)
+    carried = cal.tool - ball  # the flange's own error that the ball's point absorbed, on the flange
+    np.testing.assert_allclose(_hand_chain(cal, q, panda.tool + carried), target, atol=1e-9)
 
 
 def test_a_correction_beyond_a_calibrations_is_carried_with_a_warning(panda) -> None:
