@@ -36,7 +36,7 @@ from spherecal.correction import RobotModel, tool_point, tool_pose
 from spherecal.correction.errors import SpherecalError
 from spherecal.correction.files.samples import HARD_MARGIN
 from spherecal.correction.rigid import rotation_angle
-from spherecal.correction.tool import TOOL_MATCH_TOL, nominal_tool_of, tools_apart
+from spherecal.correction.tool import TIP_MOVED, TOOL_MATCH_TOL, nominal_tool_of, tools_apart
 
 from .ik import UnreachableError, ik
 
@@ -154,7 +154,7 @@ def _check_difference(nominal: RobotModel, calibrated: RobotModel, q: np.ndarray
     nominal tool, :func:`correction.tool.nominal_tool_of`, further than :data:`~correction.tool.TOOL_MATCH_TOL` from
     the nominal's: a ball 40 mm beyond the flange is within the first check and 40 mm off every target)."""
     gap = float(np.linalg.norm(tool_point(nominal, q) - tool_point(calibrated, q)))
-    apart = tools_apart(calibrated, nominal)
+    apart = max(tools_apart(calibrated, nominal), _other_tip(calibrated, nominal))
     if gap <= MAX_MODEL_DIFFERENCE and apart <= TOOL_MATCH_TOL:
         return
     swapped = replace(calibrated, tool=nominal.tool)  # the same arm with the controller's tool?
@@ -167,19 +167,39 @@ def _check_difference(nominal: RobotModel, calibrated: RobotModel, q: np.ndarray
     # the command carries the calibration's tool correction over (its nominal_tool); the call must be told it
     carried = (", nominal_tool=calibrated.extras['calibration']['nominal_tool']"
                if isinstance(record, dict) and "nominal_tool" in record else "")
+    shown = np.round(nominal.tool, 9) + 0.0  # no float noise printed (-4.8e-33) and no -0
     remedy = (f"put the controller's tool on it first: correction.with_tool(calibrated, "
-              f"{np.round(nominal.tool, 6).tolist()}{carried}).model or `spherecal tool CAL.yaml --offset "
-              f"{' '.join(f'{v:g}' for v in nominal.tool)} --out NEW.yaml`")
+              f"{shown.tolist()}{carried}).model or `spherecal tool CAL.yaml --offset "
+              f"{' '.join(f'{v:g}' for v in shown)} --out NEW.yaml`")
     if gap > MAX_MODEL_DIFFERENCE:
         tools = float(np.linalg.norm(nominal.tool - calibrated.tool))
         raise ModelMismatchError(
             f"{source}: tool point differs from the controller's model by {gap * 1e3:.0f} mm at the seed (more than "
             f"{MAX_MODEL_DIFFERENCE * 1e3:.0f} mm): its tool point is {tools * 1e3:.0f} mm from the controller "
             f"model's in the last frame: a calibration ends at its own tool (the ball); {remedy}")
+    if nominal_tool_of(calibrated) is None:  # two URDFs to different tip links (a calibrated URDF keeps no record)
+        tips = (calibrated.extras["urdf"]["tip_link"], nominal.extras["urdf"]["tip_link"])
+        raise ModelMismatchError(
+            f"{source}: its tool is URDF link {tips[0]!r}, the controller model's {tips[1]!r}, {apart * 1e3:.1f} mm "
+            f"apart in the last frame (the targets would be missed by about that): load both to the same link, or "
+            f"{remedy}")
     raise ModelMismatchError(
         f"{source}: its tool point calibrates the tool at {np.round(nominal_tool_of(calibrated), 6).tolist()} m in "
         f"the last frame, {apart * 1e3:.1f} mm from the controller model's {np.round(nominal.tool, 6).tolist()} m "
         f"(the targets would be missed by about that): a calibration ends at its own tool (the ball); {remedy}")
+
+
+def _other_tip(calibrated: RobotModel, nominal: RobotModel) -> float:
+    """How far apart [m] the tools of two models loaded from URDFs to different tip links are, in the last frame, when
+    that is beyond a calibration's correction (:data:`~correction.tool.TIP_MOVED`); else 0. A calibrated URDF
+    (``export --into``) keeps no ``calibration.nominal_tool``: loaded to its ball against a controller's URDF to
+    ``tool0`` it passed the 50 mm seed check 40 mm off (a review, iiwa14). Links of one point under two names pass."""
+    tips = [(m.extras.get("urdf") or {}).get("tip_link") if isinstance(m.extras.get("urdf"), dict) else None
+            for m in (calibrated, nominal)]
+    if None in tips or tips[0] == tips[1] or nominal_tool_of(calibrated) is not None:
+        return 0.0
+    apart = float(np.linalg.norm(np.asarray(calibrated.tool, dtype=float) - nominal.tool))
+    return apart if apart > TIP_MOVED else 0.0
 
 
 def _seed(q: np.ndarray, model: RobotModel, field: str) -> np.ndarray:

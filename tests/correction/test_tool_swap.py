@@ -204,6 +204,24 @@ def test_the_remedy_for_a_swapped_file_puts_the_new_tool_on_the_calibrated_one(p
     np.testing.assert_allclose(_hand_chain(cal, q, panda.tool + carried), target, atol=1e-9)
 
 
+def test_two_urdfs_to_different_tip_links_are_refused_as_different_tools(rng) -> None:
+    # a review: an iiwa14 calibration exported --into its URDF and loaded to ball_link (no calibration record left)
+    # passed corrected_ik against the URDF loaded to tool0, 40 mm off: the 50 mm seed check only
+    ball = load_urdf(DATA / "panda.urdf", tip_link="ball_link")
+    cal = replace(perturb(ball, rng), extras=ball.extras)  # as a calibrated URDF loads: the urdf block, no record
+    tcp = load_urdf(DATA / "panda.urdf", tip_link="panda_hand_tcp")
+    q_now = np.array([0.0, -0.3, 0.0, -2.2, 0.0, 2.0, 0.8])
+    points, _ = MujocoUrdf((DATA / "panda.urdf").read_text()).body_pose("panda_hand_tcp", ball.extras["joint_names"],
+                                                                        q_now[None])
+    target = points[0] + [0.02, 0.0, -0.01]  # MuJoCo's TCP, moved
+    assert np.linalg.norm(tool_point(cal, q_now) - points[0]) < 0.05  # within the seed check
+    with pytest.raises(ModelMismatchError, match=r"its tool is URDF link 'ball_link', the controller model's "
+                                                 r"'panda_hand_tcp', 3\d\.\d mm apart"):
+        corrected_ik(cal, target, q_now, nominal=tcp)
+    q = corrected_ik(cal, tool_point(ball, q_now), q_now, nominal=ball)  # the same link: taken
+    assert np.linalg.norm(tool_point(cal, q) - tool_point(ball, q_now)) < 1e-9
+
+
 def test_a_correction_beyond_a_calibrations_is_carried_with_a_warning(panda) -> None:
     # a review: a calibration whose --tip-link named the flange (the ball 40 mm further) gave the "flange" the ball's
     # point through `spherecal tool --tip-link tool0`, exit 0 and no word
