@@ -29,6 +29,7 @@ from spherecal.validation.planning import guidance as guidance_module
 from spherecal.validation.planning.candidates import CandidateError
 from spherecal.validation.planning.guidance import (
     calibrate_recording,
+    mm_text,
     rank_placements,
     unexplained_variance,
     workspace_of,
@@ -325,6 +326,19 @@ def test_a_gain_that_rounds_to_zero_is_printed_without_a_sign(simulated):
     assert "gains 0 mm" in text.splitlines()[-1]
     lost = format_guidance(replace(guidance, ranking=[replace(tiny, gain=-4e-7)]))
     assert "-0.0004" in lost
+
+
+def test_the_stop_lines_gain_is_a_column_of_the_table(simulated):
+    """A review: 'record G6_90 next: it gains 0.0366 mm' while the table's gain column said 0.0038 mm: the line
+    weighs the calibration's own error (the sockets' noise left out), which the table did not show."""
+    guidance = rank_placements(simulated[3], simulated[4][:2], np.random.default_rng(0), min_gain=0.0)
+    text = format_guidance(guidance)
+    best = guidance.ranking[0]
+    row = next(line for line in text.splitlines() if line.split()[:2] == ["1", best.placement.name])
+    own = row.split("|")[1].split()[2]
+    assert own == mm_text(best.own_gain, "7.4f").strip()
+    assert f"gains {mm_text(best.own_gain, '.3g')} mm" in text.splitlines()[-1]
+    assert "(column 'own')" in text.splitlines()[-1] and "own:" in text
 
 
 # ----------------------------------------------------------------------------------- command line

@@ -220,9 +220,12 @@ class Guidance:
             return "no candidate can be recorded: nothing to add"
         best = self.ranking[0]
         if self.worth_it:
-            return f"record {best.placement.name} next: it gains {mm_text(best.own_gain, '.3g')} mm, more than {limit}"
+            gain = mm_text(best.own_gain, ".3g")
+            return (f"record {best.placement.name} next: its calibration's own error gains {gain} mm (column 'own'), "
+                    f"more than {limit}")
         return (f"more recording is not worth it: the best candidate {best.placement.name} gains "
-                f"{mm_text(best.own_gain, '.3g')} mm, not more than {limit}")
+                f"{mm_text(best.own_gain, '.3g')} mm of the calibration's own error (column 'own'), not more than "
+                f"{limit}")
 
 
 def mm_text(value: float, spec: str) -> str:

@@ -36,13 +36,14 @@ def format_guidance(guidance) -> str:
         f"{what} [mm] now: {now.error * 1e3:.4f} "
         f"(parameters {now.parameters * 1e3:.4f}, unexplained {now.unexplained * 1e3:.4f}); each candidate's error "
         f"and gain over {where}",
-        f"{'rank':>4} {'candidate':<16} {'x [m]':>7} {'y [m]':>7} {'z [m]':>7} | {'error':>7} {'gain':>7} | pins down "
-        "(std ratio to now)",
+        f"{'rank':>4} {'candidate':<16} {'x [m]':>7} {'y [m]':>7} {'z [m]':>7} | {'error':>7} {'gain':>7} "
+        f"{'own':>7} | pins down (std ratio to now)   [own: the gain of the calibration's own error, the sockets' "
+        "noise left out: what the last line weighs]",
     ]
     for k, j in enumerate(guidance.ranking):
         x, y, z = j.placement.centre
         lines.append(f"{k + 1:>4} {j.placement.name:<16} {x:7.3f} {y:7.3f} {z:7.3f} | {j.error * 1e3:7.4f} "
-                     f"{mm_text(j.gain, '7.4f')} | {_pinned(j)}")
+                     f"{mm_text(j.gain, '7.4f')} {mm_text(j.own_gain, '7.4f')} | {_pinned(j)}")
     lines.extend(f"refused: {j.reason}" for j in guidance.refused)
     lines.append(guidance.stop_line())
     return "\n".join(lines)
