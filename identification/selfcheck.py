@@ -270,7 +270,9 @@ def _geometry(problem: CalibrationProblem, x: np.ndarray) -> list[Finding]:
                 passed,
                 f"{samples_location(dataset.select(np.flatnonzero(dataset.labels == name)))}, field 'q*': the samples "
                 f"at fixture {name} hardly move the arm (largest joint range {np.rad2deg(motion):.2g} deg, at least "
-                f"{np.rad2deg(MIN_MOTION):.0f} deg needed): record self-motion there",
+                f"{np.rad2deg(MIN_MOTION):.0f} deg needed): record self-motion there"
+                + ("" if len(names) < 2 else f", or, if it is no socket (a pause with the ball in the air, taken for "
+                   f"one by the segmentation), leave it out (calibrate --exclude-fixture {name})"),
                 {"largest_joint_range_deg": float(np.rad2deg(motion))},
                 culprit=not passed,
             )

@@ -222,8 +222,13 @@ def test_a_fixture_whose_samples_hardly_move_the_arm_is_refused(arm, noisy) -> N
     q = dataset.q.copy()
     still = dataset.labels == "P2"
     q[still] = q[still][0] + np.random.default_rng(0).normal(0, 1e-3, (still.sum(), 7))
-    with pytest.raises(InconsistentDataError, match=r"the samples at fixture P2 hardly move the arm"):
+    with pytest.raises(InconsistentDataError, match=r"the samples at fixture P2 hardly move the arm") as refused:
         calibrate(panda, Dataset(dataset.labels, q), FixtureSpec(spec.names))
+    # a review: a pause in transit with hand tremor segmented into a fixture was told to record self-motion there;
+    # it is no socket, and leaving it out is the remedy too
+    assert str(refused.value).endswith("record self-motion there, or, if it is no socket (a pause with the ball in "
+                                       "the air, taken for one by the segmentation), leave it out (calibrate "
+                                       "--exclude-fixture P2)")
 
 
 # ------------------------------------------------------------------------------ command line
