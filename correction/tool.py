@@ -157,7 +157,9 @@ def with_tool(model: RobotModel, tool: np.ndarray, payload: dict | None = None,
     if nominal_tool is not None:
         shift = ", ".join(f"{v * 1e3:+.3f}" for v in carried)
         note += (f"; the calibration's correction of the old tool point, ({shift}) mm in the last frame (the "
-                 f"flange's own error is in it), is carried to the new tool")
+                 f"flange's own error is in it), is carried to the new tool: one ball cannot tell the flange's error "
+                 f"(the new tool shares it) from the ball's own mount (it does not), so the new tool may be off by up "
+                 f"to {np.linalg.norm(carried) * 1e3:.2f} mm more")
     return ToolSwap(replace(model, tool=tool, extras=extras), distance, unidentified, note)
 
 
