@@ -143,7 +143,7 @@ def label(recording: Recording, model: RobotModel, options: ImportOptions) -> tu
         k = int(np.flatnonzero(np.diff(t) < 0)[0]) + 1
         raise RecordingError(f"{recording.rows[k]}, field {recording.time_field!r}: time goes back ({t[k]:.6f} s "
                              f"after {t[k - 1]:.6f} s)")
-    segments = segment(model, recording.q, t, options.segmentation, recording.source)
+    segments = segment(model, recording.q, t, options.segmentation, recording.source, sources=recording.rows)
     labels = labels_of(segments, recording.q.shape[0])
     keep = labels != ""
     dataset = Dataset(labels=labels[keep], q=recording.q[keep], t=t[keep], source=recording.source)

@@ -95,7 +95,8 @@ def _still_bins(points: np.ndarray, half: int, radius: float) -> np.ndarray:
 
 
 def segment(
-    model: RobotModel, q: np.ndarray, t: np.ndarray, settings: SegmentSettings = SegmentSettings(), where: str = ""
+    model: RobotModel, q: np.ndarray, t: np.ndarray, settings: SegmentSettings = SegmentSettings(), where: str = "",
+    sources=None,
 ) -> list[Segment]:
     """Find the fixtures of a continuous recording.
 
@@ -105,6 +106,8 @@ def segment(
         t: (T,) time stamps [s], non-decreasing.
         settings: thresholds.
         where: the source, for messages.
+        sources: (T,) where each sample came from (``"file: row N"``, a bag's message), for messages: a refused
+            stretch names its rows beside its seconds (a review: seconds alone named no row of the file).
 
     Returns:
         The fixtures in time order, named ``S1, S2, ...``.
@@ -159,7 +162,8 @@ def segment(
     for seg in found:
         if seg.spread_max > s.max_spread:
             raise SegmentationError(
-                f"{where}field 'q': ambiguous: the still stretch {seg.start:.2f}-{seg.end:.2f} s drifts "
+                f"{where}field 'q': ambiguous: the still stretch {seg.start:.2f}-{seg.end:.2f} s{_span(sources, seg)} "
+                f"drifts "
                 f"{seg.spread_max * 1e3:.1f} mm from its mean (max spread {s.max_spread * 1e3:g} mm); "
                 "label the fixtures (a 'fixture' column)"
             )
@@ -168,14 +172,24 @@ def segment(
             gap = float(np.linalg.norm(first.centre - second.centre))
             if gap < s.min_separation:
                 raise SegmentationError(
-                    f"{where}field 'q': ambiguous: still stretches {first.start:.2f}-{first.end:.2f} s and "
-                    f"{second.start:.2f}-{second.end:.2f} s are {gap * 1e3:.1f} mm apart (less than "
+                    f"{where}field 'q': ambiguous: still stretches {first.start:.2f}-{first.end:.2f} s"
+                    f"{_span(sources, first)} and {second.start:.2f}-{second.end:.2f} s{_span(sources, second)} are "
+                    f"{gap * 1e3:.1f} mm apart (less than "
                     f"{s.min_separation * 1e3:g} mm): one socket twice or two sockets too close; label the "
                     "fixtures (a 'fixture' column), or, where the arm moved on in one socket without leaving it, let "
                     f"the stillness take the nominal model's own error (a real arm's several mm over a self-motion): "
                     f"--still-radius above {s.still_radius * 1e3:g} mm"
                 )
     return found
+
+
+def _span(sources, seg: Segment) -> str:
+    """`` (data.csv: row 4301-63721)``: where a stretch's first and last samples came from; "" without ``sources``."""
+    if sources is None or not len(seg.rows):
+        return ""
+    first, last = sources[int(seg.rows[0])], sources[int(seg.rows[-1])]
+    head, _, number = last.rpartition(" ")
+    return f" ({first}-{number})" if first.rpartition(" ")[0] == head else f" ({first} to {last})"
 
 
 def labels_of(segments: list[Segment], count: int) -> np.ndarray:

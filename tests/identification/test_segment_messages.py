@@ -27,3 +27,25 @@ def test_one_socket_seen_twice_names_the_still_radius_beside_labelling() -> None
         segment(panda, q, np.arange(len(q)) / rate, where="rec.csv: ")
     assert "label the fixtures (a 'fixture' column)" in str(refused.value)
     assert "--still-radius above 3 mm" in str(refused.value)
+
+
+def test_a_refused_stretch_names_its_rows_beside_its_seconds() -> None:
+    """A review (a ROS bag visiting one socket twice): the refusal gave the stretches in seconds from the start,
+    no row or message of the file."""
+    from spherecal.correction.files.csv_rows import RowNames
+
+    panda = load_robot("panda")
+    rng = np.random.default_rng(0)
+    rate, q_a = 200.0, np.array([0.0, -0.3, 0.0, -2.2, 0.0, 2.0, 0.8])
+    away = q_a + np.array([0.6, 0.3, 0, 0.3, 0, 0, 0])
+    still = lambda q: q + rng.normal(0.0, 1e-5, (int(3 * rate), 7))  # noqa: E731 - 3 s held, jitter
+    move = lambda a, b: a + np.linspace(0.0, 1.0, int(rate))[:, None] * (b - a)  # noqa: E731 - 1 s transit
+    q = np.vstack([still(q_a), move(q_a, away), move(away, q_a), still(q_a)])  # one socket, twice
+    rows = RowNames("rec.csv", np.arange(len(q)) + 2)  # the header is row 1
+    with pytest.raises(SegmentationError) as refused:
+        segment(panda, q, np.arange(len(q)) / rate, where="rec.csv", sources=rows)
+    text = str(refused.value)
+    found = [tuple(int(v) for v in m) for m in __import__("re").findall(r"\(rec\.csv: row (\d+)-(\d+)\)", text)]
+    assert len(found) == 2, text
+    (a0, a1), (b0, b1) = found
+    assert 2 <= a0 < a1 < 2 + 600 and 2 + 1000 <= b0 < b1 <= 2 + len(q) - 1, found  # within each held stretch
