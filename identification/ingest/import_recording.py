@@ -26,7 +26,7 @@ from ..selfcheck import MAX_SOCKET_NOISE
 from ..tool_fit import pivot_tool, recentred_tool
 from .bag import read_bag
 from .importers import MUKCA_DISTANCE, Recording, RecordingError, read_joint_csv, read_mukca
-from .segment import Segment, SegmentSettings, format_segments, labels_of, segment
+from .segment import Segment, SegmentSettings, format_segments, labels_of, revisit_notes, segment
 
 FORMATS = ("mukca", "bag", "csv")
 #: Options of :class:`ImportOptions` used by some formats only -> those formats (the others are shaped by all).
@@ -88,10 +88,10 @@ class ImportResult:
         """The printed report."""
         lines = [f"read {self.read} samples"] + list(self.notes)
         if self.segments:
-            lines.append(
-                f"segmented into {len(self.segments)} fixtures ({self.dropped_motion} samples in motion dropped):"
-            )
+            lines.append(f"segmented into {len(self.dataset.fixture_names)} fixtures ({self.dropped_motion} samples in "
+                         "motion dropped):")
             lines.append(format_segments(self.segments, self.dataset.counts()))
+            lines += revisit_notes(self.segments)
         else:
             lines += [f"{name:<24} {count:>6} samples" for name, count in self.dataset.counts().items()]
         lines.append(f"dropped {self.dropped_duplicates} duplicates; kept {self.dataset.n_samples} samples")
@@ -201,7 +201,7 @@ def import_recording(
         block["provenance"] = provenance(options.seed, recorded | _timed_and_split(recording, options))
     if segments:
         block["segments"] = {
-            s.name: {"from_s": s.start, "to_s": s.end, "samples": int(len(s.rows)), "spread_max_m": s.spread_max}
+            s.label: {"from_s": s.start, "to_s": s.end, "samples": int(len(s.rows)), "spread_max_m": s.spread_max}
             for s in segments
         }
     spec = FixtureSpec(spec.names, spec.positions, spec.distances, {"import": block} if block else {})

@@ -20,7 +20,7 @@ nominal tool point lies on average 8 mm and at most 19 mm from its mean; the soc
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -67,6 +67,8 @@ class Segment:
         start, end: time span [s] since the first sample of the recording.
         centre: (3,) mean nominal tool point [m].
         spread_mean, spread_max: mean and largest distance of the nominal tool points from ``centre`` [m].
+        visit: 1, or the how-manyth visit of a socket the recording came back to (:func:`_revisits`): its samples
+            are that socket's fixture too.
     """
 
     name: str
@@ -76,6 +78,12 @@ class Segment:
     centre: np.ndarray
     spread_mean: float
     spread_max: float
+    visit: int = 1
+
+    @property
+    def label(self) -> str:
+        """``S1``, or ``S1 visit 2`` for a later visit of the same socket (tables, the provenance block)."""
+        return self.name if self.visit == 1 else f"{self.name} visit {self.visit}"
 
 
 def _distinct(q: np.ndarray, tol: float = 1e-3) -> int:
@@ -159,6 +167,7 @@ def segment(
             f"configurations where the nominal tool point stays within {s.still_radius * 1e3:g} mm over "
             f"{s.window:g} s)"
         )
+    found = _revisits(found, s)
     for seg in found:
         if seg.spread_max > s.max_spread:
             raise SegmentationError(
@@ -170,7 +179,7 @@ def segment(
     for i, first in enumerate(found):
         for second in found[i + 1 :]:
             gap = float(np.linalg.norm(first.centre - second.centre))
-            if gap < s.min_separation:
+            if gap < s.min_separation and first.name != second.name:
                 raise SegmentationError(
                     f"{where}field 'q': ambiguous: still stretches {first.start:.2f}-{first.end:.2f} s"
                     f"{_span(sources, first)} and {second.start:.2f}-{second.end:.2f} s{_span(sources, second)} are "
@@ -181,6 +190,35 @@ def segment(
                     f"--still-radius above {s.still_radius * 1e3:g} mm"
                 )
     return found
+
+
+def _revisits(found: list[Segment], s: SegmentSettings) -> list[Segment]:
+    """The stretches, each later visit of a socket named as its first: a stretch whose mean tool point lies within
+    the larger of ``still_radius`` and the two visits' own spread (the nominal model's error moves the point that
+    much within one visit) of an earlier socket's is the same socket again (the ball re-seated, the socket visited
+    twice; a review: a ROS bag that came back to a socket was refused, 'one socket twice', with no remedy a bag
+    allows). Farther than that and nearer than ``min_separation`` stays ambiguous (refused by :func:`segment`)."""
+    out: list[Segment] = []
+    for seg in found:
+        same = next((o for o in out if o.visit == 1 and np.linalg.norm(o.centre - seg.centre)
+                     <= max(s.still_radius, min(o.spread_mean, seg.spread_mean))), None)
+        if same is None:
+            out.append(replace(seg, name=f"S{sum(o.visit == 1 for o in out) + 1}"))
+        else:
+            out.append(replace(seg, name=same.name, visit=1 + sum(o.name == same.name for o in out)))
+    return out
+
+
+def revisit_notes(segments: list[Segment]) -> tuple[str, ...]:
+    """One line per socket the recording visited more than once: its visits are one fixture."""
+    notes = []
+    for first in (seg for seg in segments if seg.visit == 1):
+        later = [seg for seg in segments if seg.name == first.name and seg.visit > 1]
+        if later:
+            gaps = ", ".join(f"{np.linalg.norm(seg.centre - first.centre) * 1e3:.1f}" for seg in later)
+            notes.append(f"{first.name} visited {len(later) + 1} times (later visits' mean tool points {gaps} mm from "
+                         f"the first, within the visits' own spread): one fixture")
+    return tuple(notes)
 
 
 def _span(sources, seg: Segment) -> str:
@@ -201,15 +239,17 @@ def labels_of(segments: list[Segment], count: int) -> np.ndarray:
 
 
 def format_segments(segments: list[Segment], kept: dict[str, int] | None = None) -> str:
-    """One line per fixture: samples, kept samples, time span [s], spread [mm]."""
+    """One line per fixture (per visit of a socket visited again; its kept samples on its first line): samples, kept
+    samples, time span [s], spread [mm]."""
+    width = max([8, *(len(seg.label) for seg in segments)])
     lines = [
-        f"{'fixture':<8} {'samples':>8} {'kept':>6} {'from [s]':>9} {'to [s]':>9} "
+        f"{'fixture':<{width}} {'samples':>8} {'kept':>6} {'from [s]':>9} {'to [s]':>9} "
         f"{'spread mean [mm]':>17} {'max [mm]':>9}"
     ]
     for seg in segments:
-        k = "-" if kept is None else str(kept.get(seg.name, 0))
+        k = "-" if kept is None else str(kept.get(seg.name, 0)) if seg.visit == 1 else "\""
         lines.append(
-            f"{seg.name:<8} {len(seg.rows):>8} {k:>6} {seg.start:>9.2f} {seg.end:>9.2f} "
+            f"{seg.label:<{width}} {len(seg.rows):>8} {k:>6} {seg.start:>9.2f} {seg.end:>9.2f} "
             f"{seg.spread_mean * 1e3:>17.2f} {seg.spread_max * 1e3:>9.2f}"
         )
     return "\n".join(lines)

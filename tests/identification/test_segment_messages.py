@@ -40,7 +40,8 @@ def test_a_refused_stretch_names_its_rows_beside_its_seconds() -> None:
     away = q_a + np.array([0.6, 0.3, 0, 0.3, 0, 0, 0])
     still = lambda q: q + rng.normal(0.0, 1e-5, (int(3 * rate), 7))  # noqa: E731 - 3 s held, jitter
     move = lambda a, b: a + np.linspace(0.0, 1.0, int(rate))[:, None] * (b - a)  # noqa: E731 - 1 s transit
-    q = np.vstack([still(q_a), move(q_a, away), move(away, q_a), still(q_a)])  # one socket, twice
+    q_b = q_a + np.array([0.02, 0, 0, 0, 0, 0, 0])  # 10 mm on: one socket twice or two too close, ambiguous
+    q = np.vstack([still(q_a), move(q_a, away), move(away, q_b), still(q_b)])
     rows = RowNames("rec.csv", np.arange(len(q)) + 2)  # the header is row 1
     with pytest.raises(SegmentationError) as refused:
         segment(panda, q, np.arange(len(q)) / rate, where="rec.csv", sources=rows)
@@ -49,3 +50,26 @@ def test_a_refused_stretch_names_its_rows_beside_its_seconds() -> None:
     assert len(found) == 2, text
     (a0, a1), (b0, b1) = found
     assert 2 <= a0 < a1 < 2 + 600 and 2 + 1000 <= b0 < b1 <= 2 + len(q) - 1, found  # within each held stretch
+
+
+def test_a_socket_visited_again_is_one_fixture() -> None:
+    """A review: a ROS bag that came back to a socket (the ball re-seated) was refused as 'one socket twice', with
+    remedies a bag cannot take (a 'fixture' column) or that cannot help (--still-radius). A later stretch whose mean
+    tool point is within the visits' own spread of an earlier socket's is that socket again: one fixture."""
+    from spherecal.identification.ingest.segment import format_segments, labels_of, revisit_notes
+
+    panda = load_robot("panda")
+    rng = np.random.default_rng(0)
+    rate, q_a = 200.0, np.array([0.0, -0.3, 0.0, -2.2, 0.0, 2.0, 0.8])
+    other = q_a + np.array([0.3, 0.2, 0, 0.2, 0, 0, 0])  # another socket, decimetres away
+    still = lambda q: q + rng.normal(0.0, 1e-5, (int(3 * rate), 7))  # noqa: E731 - 3 s held, jitter
+    move = lambda a, b: a + np.linspace(0.0, 1.0, int(rate))[:, None] * (b - a)  # noqa: E731 - 1 s transit
+    q = np.vstack([still(q_a), move(q_a, other), still(other), move(other, q_a), still(q_a)])
+    found = segment(panda, q, np.arange(len(q)) / rate)
+    assert [(seg.name, seg.visit) for seg in found] == [("S1", 1), ("S2", 1), ("S1", 2)]
+    labels = labels_of(found, len(q))
+    assert set(labels[:600]) <= {"S1", ""} and set(labels[-600:]) <= {"S1", ""} and "S2" in set(labels[800:1400])
+    assert np.sum(labels == "S1") == len(found[0].rows) + len(found[2].rows)
+    (note,) = revisit_notes(found)
+    assert note.startswith("S1 visited 2 times") and note.endswith("one fixture")
+    assert "S1 visit 2" in format_segments(found)
