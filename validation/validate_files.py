@@ -20,7 +20,7 @@ from spherecal.correction.files.fixtures import read_fixtures
 from spherecal.correction.files.outputs import OutputSet
 from spherecal.correction.files.provenance import provenance
 from spherecal.correction.files.robot_file import forced_calibration
-from spherecal.correction.files.robots import load_robot
+from spherecal.correction.files.robots import is_urdf, load_robot
 from spherecal.correction.files.samples_csv import read_samples
 
 from .inputs import ValidationInputError, check_models
@@ -119,7 +119,7 @@ def validate_files(config: ValidateConfig, outputs: OutputSet,
     if config.truth is not None:
         files["truth"] = config.truth
     # tip_link/base_link describe the URDF among the models (a calibrated file is a robot file)
-    urdf = [role for role, path in files.items() if str(path).lower().endswith(".urdf")] or ["nominal"]
+    urdf = [role for role, path in files.items() if is_urdf(path)] or ["nominal"]  # .urdf, or a <robot> file
     links = {"tip_link": config.tip_link, "base_link": config.base_link, "inertials": config.inertials,
              "report": report}
     models = {role: load_robot(path, **(links if role in urdf else {})) for role, path in files.items()}

@@ -108,6 +108,20 @@ def _load(path_or_name: str | os.PathLike, tip_link: str | None, base_link: str 
     return robot_from_dict(data, source=str(path), root=root)
 
 
+def is_urdf(path_or_name: str | os.PathLike) -> bool:
+    """Whether ``path_or_name`` is read as a URDF (its link options apply): named ``.urdf``, or a file whose XML root
+    is ``<robot>`` whatever its ending (an embedded name, a robot file or an unreadable path: False)."""
+    key = str(path_or_name)
+    if key.lower().endswith(".urdf"):
+        return True
+    try:
+        with open(key, "rb") as handle:
+            head = handle.read(100_000).decode("utf-8", "replace")
+    except OSError:
+        return False
+    return _xml_root(head) == "robot"
+
+
 def _refuse_links(source: str, tip_link: str | None, base_link: str | None) -> None:
     """Refuse a URDF's link options for a description that is no URDF (a robot file, an embedded name)."""
     for option, value in (("--tip-link", tip_link), ("--base-link", base_link)):

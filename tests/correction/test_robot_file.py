@@ -229,3 +229,16 @@ def _written(tmp_path: Path, text: str) -> Path:
     path = tmp_path / "good.yaml"
     path.write_text(text)
     return path
+
+
+def test_is_urdf_reads_the_root_not_the_ending(tmp_path, panda) -> None:
+    # validate gave --tip-link to the model named .urdf only: a calibrated URDF saved as arm.xml (ROS's ending), which
+    # load_robot reads as a URDF, was refused as 'only for a URDF robot description'
+    from spherecal.correction.files.robots import is_urdf
+    from spherecal.correction.files.urdf_write import robot_to_urdf
+
+    (tmp_path / "arm.xml").write_text(robot_to_urdf(panda))
+    (tmp_path / "arm.URDF").write_text("")
+    assert is_urdf(tmp_path / "arm.xml") and is_urdf(tmp_path / "arm.URDF")
+    assert not is_urdf(save_robot(panda, tmp_path / "cal.yaml")) and not is_urdf("panda")
+    assert not is_urdf(tmp_path / "missing.xml")
