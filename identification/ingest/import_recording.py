@@ -26,7 +26,15 @@ from ..selfcheck import MAX_SOCKET_NOISE
 from ..tool_fit import pivot_tool, recentred_tool
 from .bag import read_bag
 from .importers import MUKCA_DISTANCE, Recording, RecordingError, read_joint_csv, read_mukca
-from .segment import Segment, SegmentSettings, format_segments, labels_of, revisit_notes, segment
+from .segment import (
+    Segment,
+    SegmentationError,
+    SegmentSettings,
+    format_segments,
+    labels_of,
+    revisit_notes,
+    segment,
+)
 
 FORMATS = ("mukca", "bag", "csv")
 #: Options of :class:`ImportOptions` used by some formats only -> those formats (the others are shaped by all).
@@ -137,13 +145,21 @@ def label(recording: Recording, model: RobotModel, options: ImportOptions) -> tu
     if recording.labels is not None:
         return recording.dataset(), []
     t = recording.t
-    if t is None:
+    rated = t is None
+    if rated:
         t = np.arange(recording.q.shape[0]) / (DEFAULT_RATE if options.rate is None else options.rate)
     elif np.any(np.diff(t) < 0):
         k = int(np.flatnonzero(np.diff(t) < 0)[0]) + 1
         raise RecordingError(f"{recording.rows[k]}, field {recording.time_field!r}: time goes back ({t[k]:.6f} s "
                              f"after {t[k - 1]:.6f} s)")
-    segments = segment(model, recording.q, t, options.segmentation, recording.source, sources=recording.rows)
+    try:
+        segments = segment(model, recording.q, t, options.segmentation, recording.source, sources=recording.rows)
+    except SegmentationError as error:
+        if not rated:
+            raise
+        rate = DEFAULT_RATE if options.rate is None else options.rate  # a review: --rate 100 on a 1 kHz CSV
+        raise SegmentationError(f"{error}; the rows are timed by --rate {rate:g} Hz (no time column): check it, a "
+                                "wrong rate stretches or shrinks every window and duration") from None
     labels = labels_of(segments, recording.q.shape[0])
     keep = labels != ""
     dataset = Dataset(labels=labels[keep], q=recording.q[keep], t=t[keep], source=recording.source)

@@ -73,3 +73,17 @@ def test_a_socket_visited_again_is_one_fixture() -> None:
     (note,) = revisit_notes(found)
     assert note.startswith("S1 visited 2 times") and note.endswith("one fixture")
     assert "S1 visit 2" in format_segments(found)
+
+
+def test_a_csv_timed_by_rate_says_so_when_segmentation_fails(tmp_path, capsys) -> None:
+    """A review: '--rate 100' on a 1 kHz CSV without a time column was refused as a drifting stretch, with no word of
+    the rate that timed the rows."""
+    from tests.refusal import refused
+
+    rng = np.random.default_rng(0)
+    q_a = np.array([0.0, -0.3, 0.0, -2.2, 0.0, 2.0, 0.8])
+    q = q_a + rng.normal(0.0, 1e-5, (600, 7))  # 3 s held at 200 Hz: 0.3 s at 2 kHz, shorter than --min-duration
+    lines = [",".join(f"panda_joint{i}" for i in range(1, 8))] + [",".join(f"{v:.9f}" for v in row) for row in q]
+    (tmp_path / "rec.csv").write_text("\n".join(lines) + "\n")
+    refused(["import", tmp_path / "rec.csv", "--format", "csv", "--robot", "panda", "--rate", "2000", "--out",
+             tmp_path / "out"], tmp_path, capsys, "no fixture found", "timed by --rate 2000 Hz (no time column)")
