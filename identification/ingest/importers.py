@@ -544,7 +544,23 @@ def read_joint_csv(path: str | os.PathLike, model: RobotModel) -> Recording:
         _refuse_jump(recording, header[time_col])  # and a row stamped as the one before is a repeat or refused
         keep, notes = repeated_stamps(recording.q, t, recording.rows, header[time_col], "row")
         recording = replace(recording, q=recording.q[keep], t=t[keep], rows=RowNames(path, lines[keep]), notes=notes)
-    return recording
+    return replace(recording, notes=recording.notes + _more_joints(header, names, path))
+
+
+def _more_joints(header: list[str], names: list[str], path) -> tuple[str, ...]:
+    """One note when the header goes on numbering the arm's joints past the last one (``q8, q9`` beside ``q1..q7``):
+    those columns are not read, and a file of an arm with more joints would be read wrong (a review: a ``q1..q9``
+    CSV read for a 7-joint arm dropped two columns without a word)."""
+    match = re.fullmatch(r"(.*?)(\d+)", names[-1]) if names else None
+    if match is None:
+        return ()
+    stem, last = match.group(1).lower(), int(match.group(2))
+    more = [f for f in header if (m := re.fullmatch(r"(.*?)(\d+)", f.strip())) and m.group(1).lower() == stem
+            and int(m.group(2)) > last]
+    if not more:
+        return ()
+    return (f"{path}: columns {', '.join(more)} go on after the arm's {names[0]}..{names[-1]} and are not read "
+            f"(a gripper's or a rail's? a file of an arm with more joints would be read wrong: check the robot file)",)
 
 
 def _refuse_jump(recording: Recording, field: str) -> None:

@@ -467,3 +467,17 @@ def test_the_options_of_a_format_are_used(sources, fmt, tmp_path, capsys) -> Non
     default, tight = (read_samples(tmp_path / name / "samples.csv", load_robot(PANDA)) for name in ("default", "tight"))
     assert 0 < tight.n_samples < default.n_samples
     assert _import_inputs(tmp_path / "tight")["still_radius"] == 0.001
+
+
+def test_columns_numbered_past_the_arms_joints_are_named_in_a_note(tmp_path) -> None:
+    """A review: a q1..q9 CSV read for a 7-joint arm dropped q8 and q9 without a word (a 9-joint file read wrong)."""
+    from spherecal.correction import load_robot
+    from spherecal.identification.ingest.importers import read_joint_csv
+
+    q0 = np.array([0.0, -0.3, 0.0, -2.2, 0.0, 2.0, 0.8])
+    rows = [",".join(f"q{i}" for i in range(1, 10))] + [",".join(f"{v:.6f}" for v in [*q0, 0.01, 0.02])] * 3
+    (tmp_path / "q9.csv").write_text("\n".join(rows) + "\n")
+    notes = read_joint_csv(tmp_path / "q9.csv", load_robot("panda")).notes
+    assert any("columns q8, q9 go on after the arm's q1..q7 and are not read" in n for n in notes), notes
+    (tmp_path / "q7.csv").write_text("\n".join(r.rsplit(",", 2)[0] for r in rows) + "\n")
+    assert not read_joint_csv(tmp_path / "q7.csv", load_robot("panda")).notes
