@@ -391,7 +391,8 @@ class Recording:
         except Exception as error:  # Rerun raises its own types; the user sees one line
             self.abort()
             where = (f"{self.path}: cannot write the recording" if self.path is not None else
-                     "field '--spawn': cannot stream the recording to a Rerun viewer (no display? write it with --rrd FILE)")
+                     "field '--spawn': cannot stream the recording to a Rerun viewer (no display? write it with --rrd "
+                     "FILE)")
             raise OutputError(f"{where}: {_first_line(error)}") from None
         return self.path
 
