@@ -167,7 +167,7 @@ def segment(
             f"configurations where the nominal tool point stays within {s.still_radius * 1e3:g} mm over "
             f"{s.window:g} s)"
         )
-    found = _revisits(found, s)
+    found = _revisits(found)
     for seg in found:
         if seg.spread_max > s.max_spread:
             raise SegmentationError(
@@ -192,16 +192,22 @@ def segment(
     return found
 
 
-def _revisits(found: list[Segment], s: SegmentSettings) -> list[Segment]:
+#: Two visits whose mean nominal tool points are this close [m] are one socket whatever their spread (a socket is
+#: wider than a ball's play; the default ``still_radius``).
+SAME_SOCKET = 0.003
+
+
+def _revisits(found: list[Segment]) -> list[Segment]:
     """The stretches, each later visit of a socket named as its first: a stretch whose mean tool point lies within
-    the larger of ``still_radius`` and the two visits' own spread (the nominal model's error moves the point that
+    the larger of :data:`SAME_SOCKET` and the two visits' own spread (the nominal model's error moves the point that
     much within one visit) of an earlier socket's is the same socket again (the ball re-seated, the socket visited
     twice; a review: a ROS bag that came back to a socket was refused, 'one socket twice', with no remedy a bag
-    allows). Farther than that and nearer than ``min_separation`` stays ambiguous (refused by :func:`segment`)."""
+    allows). Not ``--still-radius``: raised as a refusal advises, it merged two sockets 20 mm apart (a review).
+    Farther and nearer than ``min_separation`` stays ambiguous (refused by :func:`segment`)."""
     out: list[Segment] = []
     for seg in found:
         same = next((o for o in out if o.visit == 1 and np.linalg.norm(o.centre - seg.centre)
-                     <= max(s.still_radius, min(o.spread_mean, seg.spread_mean))), None)
+                     <= max(SAME_SOCKET, min(o.spread_mean, seg.spread_mean))), None)
         if same is None:
             out.append(replace(seg, name=f"S{sum(o.visit == 1 for o in out) + 1}"))
         else:
@@ -217,7 +223,7 @@ def revisit_notes(segments: list[Segment]) -> tuple[str, ...]:
         if later:
             gaps = ", ".join(f"{np.linalg.norm(seg.centre - first.centre) * 1e3:.1f}" for seg in later)
             notes.append(f"{first.name} visited {len(later) + 1} times (later visits' mean tool points {gaps} mm from "
-                         f"the first, within the visits' own spread): one fixture")
+                         f"the first, within {SAME_SOCKET * 1e3:g} mm or the visits' own spread): one fixture")
     return tuple(notes)
 
 

@@ -87,3 +87,22 @@ def test_a_csv_timed_by_rate_says_so_when_segmentation_fails(tmp_path, capsys) -
     (tmp_path / "rec.csv").write_text("\n".join(lines) + "\n")
     refused(["import", tmp_path / "rec.csv", "--format", "csv", "--robot", "panda", "--rate", "2000", "--out",
              tmp_path / "out"], tmp_path, capsys, "no fixture found", "timed by --rate 2000 Hz (no time column)")
+
+
+def test_a_raised_still_radius_does_not_merge_two_sockets() -> None:
+    """A review: following a refusal's '--still-radius above 6 mm' with 21 mm merged two sockets 20 mm apart into one
+    fixture ('S1 visit 2'); a revisit is judged by the visits' own spread, not by the stillness radius."""
+    from spherecal.identification.ingest.segment import SegmentSettings
+
+    panda = load_robot("panda")
+    rng = np.random.default_rng(0)
+    rate, q_a = 200.0, np.array([0.0, -0.3, 0.0, -2.2, 0.0, 2.0, 0.8])
+    q_b = q_a + np.array([0.04, 0, 0, 0, 0, 0, 0])
+    away = q_a + np.array([0.6, 0.3, 0, 0.3, 0, 0, 0])
+    still = lambda q: q + rng.normal(0.0, 1e-5, (int(3 * rate), 7))  # noqa: E731 - 3 s held, jitter
+    move = lambda a, b: a + np.linspace(0.0, 1.0, int(rate))[:, None] * (b - a)  # noqa: E731 - 1 s transit
+    q = np.vstack([still(q_a), move(q_a, away), move(away, q_b), still(q_b)])
+    gap = np.linalg.norm(tool_point(panda, q_a) - tool_point(panda, q_b))
+    assert 0.01 < gap < 0.025
+    with pytest.raises(SegmentationError, match="one socket twice or two sockets too close"):
+        segment(panda, q, np.arange(len(q)) / rate, SegmentSettings(still_radius=0.025))
