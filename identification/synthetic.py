@@ -50,14 +50,17 @@ def project_to_point(
     """
     q = np.array(q, dtype=float)
     targets = np.broadcast_to(np.asarray(targets, float), (q.shape[0], 3))
-    for _ in range(iterations):
-        error = targets - tool_point(model, q)
-        if np.all(np.einsum("ij,ij->i", error, error) < tol**2):
+    active = np.arange(q.shape[0])  # a converged configuration takes no more steps (a review: one unreachable
+    for _ in range(iterations):     # target kept 50 000 rows of plan --plate-grid auto iterating, 28 s)
+        error = targets[active] - tool_point(model, q[active])
+        moving = np.einsum("ij,ij->i", error, error) >= tol**2
+        active, error = active[moving], error[moving]
+        if not active.size:
             break
-        jac = joint_jacobian(model, q)
+        jac = joint_jacobian(model, q[active])
         gram = jac @ jac.transpose(0, 2, 1) + damping**2 * np.eye(3)
         step = np.einsum("nij,ni->nj", jac, np.linalg.solve(gram, error[..., None])[..., 0])
-        q = np.clip(q + step, model.lower, model.upper)
+        q[active] = np.clip(q[active] + step, model.lower, model.upper)
     converged = np.linalg.norm(targets - tool_point(model, q), axis=1) < max(tol, 1e-10)
     return q, converged
 
