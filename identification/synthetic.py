@@ -31,6 +31,7 @@ def project_to_point(
     iterations: int = 60,
     damping: float = 1e-4,
     tol: float = 1e-12,
+    freeze: bool = False,
 ) -> tuple[np.ndarray, np.ndarray]:
     """Move every configuration so that its tool point reaches its target.
 
@@ -44,19 +45,23 @@ def project_to_point(
         iterations: maximum number of steps.
         damping: damping [m].
         tol: a configuration has converged when its tool point is this close [m].
+        freeze: a configuration that has converged takes no more steps, and only the others iterate (a batch with an
+            unreachable target otherwise steps every row to the last iteration: plan --plate-grid auto, 28 -> 15 s).
+            False: every row steps until all have converged, as the seeded simulations' samples were drawn.
 
     Returns:
         (N, n) configurations [rad] and (N,) bool: converged inside the joint limits.
     """
     q = np.array(q, dtype=float)
     targets = np.broadcast_to(np.asarray(targets, float), (q.shape[0], 3))
-    active = np.arange(q.shape[0])  # a converged configuration takes no more steps (a review: one unreachable
-    for _ in range(iterations):     # target kept 50 000 rows of plan --plate-grid auto iterating, 28 s)
+    active = np.arange(q.shape[0])
+    for _ in range(iterations):
         error = targets[active] - tool_point(model, q[active])
         moving = np.einsum("ij,ij->i", error, error) >= tol**2
-        active, error = active[moving], error[moving]
-        if not active.size:
+        if not moving.any():
             break
+        if freeze:
+            active, error = active[moving], error[moving]
         jac = joint_jacobian(model, q[active])
         gram = jac @ jac.transpose(0, 2, 1) + damping**2 * np.eye(3)
         step = np.einsum("nij,ni->nj", jac, np.linalg.solve(gram, error[..., None])[..., 0])

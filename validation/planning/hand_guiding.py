@@ -57,7 +57,7 @@ def hand_guided(
     centres = np.atleast_2d(np.asarray(centres, float))
     s, n = centres.shape[0], model.n_joints
     targets = np.repeat(centres, seeds, axis=0)
-    q, ok = project_to_point(model, model.random_configurations(s * seeds, rng), targets)
+    q, ok = project_to_point(model, model.random_configurations(s * seeds, rng), targets, freeze=True)
     share = np.minimum(q - model.lower, model.upper - q) / (model.upper - model.lower)
     margin = np.where(ok, share.min(axis=1), -np.inf).reshape(s, seeds)
     reachable = np.isfinite(margin).any(axis=1)
@@ -73,7 +73,7 @@ def hand_guided(
         null = identity - np.linalg.pinv(jac) @ jac
         move = np.einsum("wij,wj->wi", null, rng.normal(0.0, step, current.shape))
         target = goal + rng.normal(0.0, noise, goal.shape) if noise > 0 else goal
-        trial, done = project_to_point(model, current + move, target)
+        trial, done = project_to_point(model, current + move, target, freeze=True)
         current = np.where(done[:, None], trial, current)
         out[k] = current
     samples = out.reshape(steps, s, walkers, n).transpose(1, 0, 2, 3).reshape(s, steps * walkers, n)[:, :count]
@@ -108,7 +108,7 @@ def carried_over(
     walked, reachable = hand_guided(model, centres, count, rng)
     chosen = recorded[rng.permutation(len(recorded))[: 2 * count]]
     s, k = centres.shape[0], len(chosen)
-    q, ok = project_to_point(model, np.tile(chosen, (s, 1)), np.repeat(centres, k, axis=0))
+    q, ok = project_to_point(model, np.tile(chosen, (s, 1)), np.repeat(centres, k, axis=0), freeze=True)
     q, ok = q.reshape(s, k, -1), ok.reshape(s, k)
     out = walked.copy()
     for i in np.flatnonzero(reachable):
