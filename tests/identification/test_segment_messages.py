@@ -9,17 +9,28 @@ from spherecal.correction import load_robot, tool_point
 from spherecal.identification.ingest.segment import SegmentationError, segment
 
 
+def _stream_parts():
+    """The embedded Panda, a 200 Hz rate, a start posture, and two pieces of a recording: ``still(q)`` 3 s held at
+    ``q`` with 1e-5 rad jitter (seeded), ``move(a, b)`` a 1 s straight transit [rad]."""
+    panda, rng, rate = load_robot("panda"), np.random.default_rng(0), 200.0
+    q_a = np.array([0.0, -0.3, 0.0, -2.2, 0.0, 2.0, 0.8])
+
+    def still(q):
+        return q + rng.normal(0.0, 1e-5, (int(3 * rate), 7))
+
+    def move(a, b):
+        return a + np.linspace(0.0, 1.0, int(rate))[:, None] * (b - a)
+
+    return panda, rate, q_a, still, move
+
+
 def test_one_socket_seen_twice_names_the_still_radius_beside_labelling() -> None:
     """Two still stretches 10 mm apart: one socket twice (the ball re-seated, or a self-motion whose nominal tool
     point wanders by the arm's own error) or two sockets too close. The refusal named only labelling; a user of a
     real Panda needed --still-radius (a review: 5 mm for its 8 mm nominal spread)."""
-    panda = load_robot("panda")
-    rng = np.random.default_rng(0)
-    rate, q_a = 200.0, np.array([0.0, -0.3, 0.0, -2.2, 0.0, 2.0, 0.8])
+    panda, rate, q_a, still, move = _stream_parts()
     q_b = q_a + np.array([0.02, 0, 0, 0, 0, 0, 0])
     away = q_a + np.array([0.6, 0.3, 0, 0.3, 0, 0, 0])
-    still = lambda q: q + rng.normal(0.0, 1e-5, (int(3 * rate), 7))  # noqa: E731 - 3 s held, jitter
-    move = lambda a, b: a + np.linspace(0.0, 1.0, int(rate))[:, None] * (b - a)  # noqa: E731 - 1 s transit
     q = np.vstack([still(q_a), move(q_a, away), move(away, q_b), still(q_b)])
     gap = np.linalg.norm(tool_point(panda, q_a) - tool_point(panda, q_b))
     assert 5e-3 < gap < 30e-3
@@ -34,12 +45,8 @@ def test_a_refused_stretch_names_its_rows_beside_its_seconds() -> None:
     no row or message of the file."""
     from spherecal.correction.files.csv_rows import RowNames
 
-    panda = load_robot("panda")
-    rng = np.random.default_rng(0)
-    rate, q_a = 200.0, np.array([0.0, -0.3, 0.0, -2.2, 0.0, 2.0, 0.8])
+    panda, rate, q_a, still, move = _stream_parts()
     away = q_a + np.array([0.6, 0.3, 0, 0.3, 0, 0, 0])
-    still = lambda q: q + rng.normal(0.0, 1e-5, (int(3 * rate), 7))  # noqa: E731 - 3 s held, jitter
-    move = lambda a, b: a + np.linspace(0.0, 1.0, int(rate))[:, None] * (b - a)  # noqa: E731 - 1 s transit
     q_b = q_a + np.array([0.02, 0, 0, 0, 0, 0, 0])  # 10 mm on: one socket twice or two too close, ambiguous
     q = np.vstack([still(q_a), move(q_a, away), move(away, q_b), still(q_b)])
     rows = RowNames("rec.csv", np.arange(len(q)) + 2)  # the header is row 1
@@ -58,12 +65,8 @@ def test_a_socket_visited_again_is_one_fixture() -> None:
     tool point is within the visits' own spread of an earlier socket's is that socket again: one fixture."""
     from spherecal.identification.ingest.segment import format_segments, labels_of, revisit_notes
 
-    panda = load_robot("panda")
-    rng = np.random.default_rng(0)
-    rate, q_a = 200.0, np.array([0.0, -0.3, 0.0, -2.2, 0.0, 2.0, 0.8])
+    panda, rate, q_a, still, move = _stream_parts()
     other = q_a + np.array([0.3, 0.2, 0, 0.2, 0, 0, 0])  # another socket, decimetres away
-    still = lambda q: q + rng.normal(0.0, 1e-5, (int(3 * rate), 7))  # noqa: E731 - 3 s held, jitter
-    move = lambda a, b: a + np.linspace(0.0, 1.0, int(rate))[:, None] * (b - a)  # noqa: E731 - 1 s transit
     q = np.vstack([still(q_a), move(q_a, other), still(other), move(other, q_a), still(q_a)])
     found = segment(panda, q, np.arange(len(q)) / rate)
     assert [(seg.name, seg.visit) for seg in found] == [("S1", 1), ("S2", 1), ("S1", 2)]
@@ -94,13 +97,9 @@ def test_a_raised_still_radius_does_not_merge_two_sockets() -> None:
     fixture ('S1 visit 2'); a revisit is judged by the visits' own spread, not by the stillness radius."""
     from spherecal.identification.ingest.segment import SegmentSettings
 
-    panda = load_robot("panda")
-    rng = np.random.default_rng(0)
-    rate, q_a = 200.0, np.array([0.0, -0.3, 0.0, -2.2, 0.0, 2.0, 0.8])
+    panda, rate, q_a, still, move = _stream_parts()
     q_b = q_a + np.array([0.04, 0, 0, 0, 0, 0, 0])
     away = q_a + np.array([0.6, 0.3, 0, 0.3, 0, 0, 0])
-    still = lambda q: q + rng.normal(0.0, 1e-5, (int(3 * rate), 7))  # noqa: E731 - 3 s held, jitter
-    move = lambda a, b: a + np.linspace(0.0, 1.0, int(rate))[:, None] * (b - a)  # noqa: E731 - 1 s transit
     q = np.vstack([still(q_a), move(q_a, away), move(away, q_b), still(q_b)])
     gap = np.linalg.norm(tool_point(panda, q_a) - tool_point(panda, q_b))
     assert 0.01 < gap < 0.025
