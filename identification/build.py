@@ -67,7 +67,7 @@ def _check_reach(model: RobotModel, spec: FixtureSpec) -> None:
             )
         if value < MIN_SEPARATION:  # the self-check's refusal, before a fit that pulls two sockets together
             raise DatasetError(
-                f"{where}: {spec.distance_field(k)}: distance {a}-{b} is {value * 1e3:.3g} mm: fixtures closer than "
+                f"{where}: {spec.distance_field(k)}: distance {a}-{b} is {value * 1e3:.4g} mm: fixtures closer than "
                 f"{MIN_SEPARATION * 1e3:.0f} mm check nothing (the same socket under two names, or a typo)"
             )
 

@@ -256,7 +256,7 @@ def _geometry(problem: CalibrationProblem, x: np.ndarray) -> list[Finding]:
                     Finding(
                         f"separation {a}-{b}",
                         False,
-                        f"{place}field '{field_name}': fixtures {a} and {b} are {apart * 1e3:.3g} mm apart: "
+                        f"{place}field '{field_name}': fixtures {a} and {b} are {apart * 1e3:.4g} mm apart: "
                         f"fixtures closer than {MIN_SEPARATION * 1e3:.0f} mm check nothing (the same socket under "
                         f"two names, or a typo)",
                         {"apart_mm": apart * 1e3},
