@@ -86,8 +86,12 @@ def known_positions(problem: CalibrationProblem) -> list[str]:
     return [n for n in problem.dataset.fixture_names if n not in problem.free_centres and n not in problem.pinned]
 
 
-def augmented(problem: CalibrationProblem, x: np.ndarray, r: np.ndarray):
+def augmented(problem: CalibrationProblem, x: np.ndarray, r: np.ndarray, jac: np.ndarray):
     """Jacobian and residuals with every known position freed (3 unknowns, a prior row each), and the groups.
+
+    Args:
+        problem, x: the solved problem and its solution (F,).
+        r, jac: (M,) residuals and (M, F) Jacobian of ``problem`` at ``x``.
 
     Returns:
         (M', F') Jacobian, (M',) residuals, group name -> rows, group name -> kind, and (F',) the
@@ -96,7 +100,6 @@ def augmented(problem: CalibrationProblem, x: np.ndarray, r: np.ndarray):
     dataset, spec = problem.dataset, problem.spec
     names = dataset.fixture_names
     known = known_positions(problem)
-    jac = problem.jacobian(x)
     m, f = jac.shape
     count = dataset.n_samples
     weight = problem.noise / POSITION_STD
@@ -156,8 +159,9 @@ def unchecked_scale(problem: CalibrationProblem, kind: tuple) -> bool:
     return kind[0] != "distance" or not problem.n_prior or bool(known_positions(problem))
 
 
-def scale_shrink(problem: CalibrationProblem, x: np.ndarray) -> float:
-    """The share ``t`` by which a refit without the one known distance shrinks the arm for the samples' noise alone.
+def scale_shrink(problem: CalibrationProblem, x: np.ndarray, jac: np.ndarray, r: np.ndarray) -> float:
+    """The share ``t`` by which a refit without the one known distance shrinks the arm for the samples' noise alone
+    (``jac`` (M, F) and ``r`` (M,): the problem's Jacobian and residuals at ``x``).
 
     Spherical-joint data carry no scale: every length and centre scaled about the joint-1 axis point
     (:func:`.gauge.scale_centre`) by ``1 + e`` scales every sample residual by ``1 + e`` (``J_s v = r_s`` along that
@@ -172,7 +176,6 @@ def scale_shrink(problem: CalibrationProblem, x: np.ndarray) -> float:
     lengths = np.array([kind.name == "length" for kind in problem.model.layout.kinds])
     lengths[problem.model.layout.base_xyz] = False  # the base stays: the scale acts about the joint-1 axis point
     v = problem.pack(np.where(lengths, params, 0.0), centres - scale_centre(problem.model))
-    jac, r = problem.jacobian(x), problem.residuals(x)
     count = 3 * problem.dataset.n_samples
     along, prior = jac[:count] @ v, jac[problem.prior_rows()] @ v
     return float(r[:count] @ along / max(along @ along + prior @ prior, 1e-300))

@@ -173,12 +173,14 @@ def self_check(
     relaxed = _zeros_at_tolerance(problem, r)
     level = _level(problem, relaxed, float(np.sqrt(relaxed @ relaxed / dof)), dof, excluded, declared)
     findings.append(replace(level, message=level.message + outliers) if excluded else level)
-    jac, res, groups, kinds, spread = augmented(problem, x, r)
-    _, _, left = leave_out(jac, res, groups, spread=spread)
-    shrink = _scale_shrink(problem, x, kinds)
+    full = problem.jacobian(x)  # one Jacobian: the leave-one-out, the scale's shrink and the split below
+    jac, res, groups, kinds, spread = augmented(problem, x, r, full)
+    shrink = _scale_shrink(problem, x, kinds, full, r)
     # the one distance of a fit with a prior: its refit is never held (the prior bounds it; a step of 20 spreads is a
     # distance far off the nominal lengths, not a gauge of the rest: a review, 53 mm typed for 50 was 'unchecked')
-    left |= {name: leave_out(jac, res, {name: groups[name]})[2][name] for name in shrink}
+    held = leave_out(jac, res, {k: v for k, v in groups.items() if k not in shrink}, spread=spread)[2]
+    free = leave_out(jac, res, {k: groups[k] for k in shrink})[2] if shrink else {}
+    left = {k: held[k] if k in held else free[k] for k in groups}
     checkable = sum(1 for k, g in left.items() if g.dof > 0 and not unchecked_scale(problem, kinds[k]))
     trends = _trends(problem, x)
     # the largest joint-angle error the nominal's spread at the sockets holds: bounds the leave-one-out allowance
@@ -194,7 +196,6 @@ def self_check(
     findings += trends
     # where a ball sits in a socket, as the residuals show it: the data rows alone (``sigma`` above also holds the
     # prior rows, whose penalty is no noise and dominates it for a few dozen samples of a well-made arm)
-    full = problem.jacobian(x)
     inverse = normal_inverse(full)  # one SVD: the effective unknowns and the split of the residual
     if unknowns is None:
         unknowns = problem.effective_unknowns(full, inverse)
@@ -222,10 +223,12 @@ def self_check(
 
 
 # ------------------------------------------------------------------------------------ geometry
-def _scale_shrink(problem: CalibrationProblem, x: np.ndarray, kinds: dict[str, tuple]) -> dict[str, float]:
+def _scale_shrink(problem: CalibrationProblem, x: np.ndarray, kinds: dict[str, tuple], jac: np.ndarray,
+                  r: np.ndarray) -> dict[str, float]:
     """group name -> what its leave-one-out residual gets back [residual units]: for the one known distance of a fit
     with a prior, the refit's shrink of the arm for the samples' noise alone (:func:`.consistency.scale_shrink`:
-    ``t`` of the distance at ``x``); nothing for the other groups."""
+    ``t`` of the distance at ``x``; ``jac`` (M, F), ``r`` (M,): the problem's at ``x``); nothing for the other
+    groups."""
     out = {}
     for name, kind in kinds.items():
         if kind[0] == "distance" and sets_scale_alone(problem, kind) and not unchecked_scale(problem, kind):
@@ -233,7 +236,7 @@ def _scale_shrink(problem: CalibrationProblem, x: np.ndarray, kinds: dict[str, t
             _, centres = problem.unpack(x)
             names = problem.dataset.fixture_names
             apart = float(np.linalg.norm(centres[names.index(a)] - centres[names.index(b)]))
-            out[name] = problem.distance_weight * scale_shrink(problem, x) * apart
+            out[name] = problem.distance_weight * scale_shrink(problem, x, jac, r) * apart
     return out
 
 
