@@ -80,8 +80,18 @@ def spawn_viewer(instead: str) -> None:
     Raises:
         OutputError: no viewer could be started, one line as ``field '--spawn': cannot start a Rerun viewer: ...``.
     """
+    _spawn(_rerun().RecordingStream("spherecal"), False, instead)
+
+
+def _spawn(stream, connect: bool, instead: str) -> None:
+    """``stream.spawn(connect=connect)``; a viewer that cannot start (none on PATH, no display) is one line naming
+    ``--spawn`` and ``instead``, the remedy.
+
+    Raises:
+        OutputError: the viewer could not be started.
+    """
     try:
-        _rerun().RecordingStream("spherecal").spawn(connect=False)
+        stream.spawn(connect=connect)
     except Exception as error:  # Rerun raises its own types; the user sees one line
         raise OutputError(f"field '--spawn': cannot start a Rerun viewer: {_first_line(error)} ({instead})") from None
 
@@ -127,11 +137,10 @@ class Recording:
                 raise OutputError(f"{self.path}: cannot write the recording: {_first_line(error)}") from None
         if spawn:
             try:
-                self.stream.spawn(connect=self.path is None)
-            except Exception as error:  # no viewer on PATH, no display: one line, nothing left behind
+                _spawn(self.stream, self.path is None, "or write the recording with --rrd FILE and open it elsewhere")
+            except OutputError:  # nothing left behind
                 self.abort()
-                raise OutputError(f"field '--spawn': cannot start a Rerun viewer: {_first_line(error)} (or write the "
-                                  "recording with --rrd FILE and open it elsewhere)") from None
+                raise
 
     def _note(self, section: str, key: str, name: str) -> None:
         self.contents.setdefault(section, {})[key] = name
