@@ -78,6 +78,11 @@ class ImportOptions:
     dedup_tol: float = 1e-4
     seed: int = 0
 
+    @property
+    def row_rate(self) -> float:
+        """The rate [Hz] that times the rows of a CSV without time stamps: ``rate``, or :data:`DEFAULT_RATE`."""
+        return DEFAULT_RATE if self.rate is None else self.rate
+
 
 @dataclass(frozen=True)
 class ImportResult:
@@ -147,7 +152,7 @@ def label(recording: Recording, model: RobotModel, options: ImportOptions) -> tu
     t = recording.t
     rated = t is None
     if rated:
-        t = np.arange(recording.q.shape[0]) / (DEFAULT_RATE if options.rate is None else options.rate)
+        t = np.arange(recording.q.shape[0]) / options.row_rate
     elif np.any(np.diff(t) < 0):
         k = int(np.flatnonzero(np.diff(t) < 0)[0]) + 1
         raise RecordingError(f"{recording.rows[k]}, field {recording.time_field!r}: time goes back ({t[k]:.6f} s "
@@ -157,9 +162,8 @@ def label(recording: Recording, model: RobotModel, options: ImportOptions) -> tu
     except SegmentationError as error:
         if not rated:
             raise
-        rate = DEFAULT_RATE if options.rate is None else options.rate  # a review: --rate 100 on a 1 kHz CSV
-        raise SegmentationError(f"{error}; the rows are timed by --rate {rate:g} Hz (no time column): check it, a "
-                                "wrong rate stretches or shrinks every window and duration") from None
+        raise SegmentationError(f"{error}; the rows are timed by --rate {options.row_rate:g} Hz (no time column): "
+                                "check it, a wrong rate stretches or shrinks every window and duration") from None
     labels = labels_of(segments, recording.q.shape[0])
     keep = labels != ""
     dataset = Dataset(labels=labels[keep], q=recording.q[keep], t=t[keep], source=recording.source)
@@ -291,7 +295,7 @@ def _timed_and_split(recording: Recording, options: ImportOptions) -> dict:
     if recording.t is not None:
         clock = {"time": recording.clock}
     else:
-        clock = {"rate": DEFAULT_RATE if options.rate is None else options.rate}
+        clock = {"rate": options.row_rate}
     return clock | vars(options.segmentation)
 
 

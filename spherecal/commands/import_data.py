@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import argparse
 
-from spherecal.options import fail, urdf_links
+from spherecal.options import fail, named, urdf_links
 
 HELP = "Turn a real recording (MUKCa folder, ROS bag, joint CSV) into samples.csv and fixtures.yaml."
 
@@ -104,9 +104,8 @@ def _format_options(args: argparse.Namespace, segmentation: list[str]) -> dict:
     for name, formats in FORMAT_OPTIONS.items():
         typed = {dest: getattr(args, dest) for dest in dests[name] if getattr(args, dest) is not None}
         if typed and args.format not in formats:
-            option = "--" + next(iter(typed)).replace("_", "-")
-            raise fail(f"field '{option}': applies to --format {' or '.join(formats)} only, not {args.format}; "
-                       "leave it out")
+            raise fail(f"field '{named(args, next(iter(typed)))}': applies to --format {' or '.join(formats)} only, "
+                       f"not {args.format}; leave it out")
         if typed:
             given[name] = typed if name == "segmentation" else typed[name]
     return given

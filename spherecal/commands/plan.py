@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import argparse
 
-from spherecal.options import fail, given, mark_given, recorded_options, refuse_given, urdf_links
+from spherecal.options import check_per_fixture, fail, given, mark_given, recorded_options, refuse_given, urdf_links
 
 HELP = ("Rank candidate fixture positions by the calibration accuracy they predict; with --samples, what to record "
         "next on a real arm")
@@ -154,8 +154,7 @@ def run(args: argparse.Namespace) -> int:
     from spherecal.validation.planning import plan_files
 
     refuse_unused(args)
-    if args.per_fixture < 10:
-        raise fail(f"field '--per-fixture': must be >= 10, got {args.per_fixture}")
+    check_per_fixture(args, 10, simulated=False)
     outputs = planned_outputs(args, {"--rrd": args.rrd, "--analysis": args.analysis, "--out": args.out})
     plan_files.refuse_foreign_outputs({"--out": args.out, "--analysis": args.analysis, "--rrd": args.rrd})
     if args.analysis is not None:
