@@ -194,7 +194,7 @@ def _other_tip(calibrated: RobotModel, nominal: RobotModel) -> float:
     that is beyond a calibration's correction (:data:`~correction.tool.TIP_MOVED`); else 0. A calibrated URDF
     (``export --into``) keeps no ``calibration.nominal_tool``: loaded to its ball against a controller's URDF to
     ``tool0`` it passed the 50 mm seed check 40 mm off (a review, iiwa14). Links of one point under two names pass."""
-    tips = [(m.extras.get("urdf") or {}).get("tip_link") if isinstance(m.extras.get("urdf"), dict) else None
+    tips = [m.extras["urdf"].get("tip_link") if isinstance(m.extras.get("urdf"), dict) else None
             for m in (calibrated, nominal)]
     if None in tips or tips[0] == tips[1] or nominal_tool_of(calibrated) is not None:
         return 0.0

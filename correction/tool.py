@@ -221,13 +221,10 @@ def calibrated_from(model: RobotModel, reference: RobotModel) -> bool:
     nominal_tool``; not a tool ``spherecal tool`` replaced): its own tool is then the one its samples showed,
     which may be centimetres away (a ball on a sensor or adapter the description lacks:
     :mod:`spherecal.identification.tool_fit`), and the arms are compared alone (:func:`with_tool_of`)."""
-    block = model.extras.get("calibration")
-    recorded = block.get("nominal_tool") if isinstance(block, dict) else None
-    try:
-        return (not isinstance(model.extras.get("tool_swap"), dict) and recorded is not None
-                and bool(np.allclose(np.asarray(recorded, dtype=float), reference.tool, rtol=0.0, atol=TOOL_MATCH_TOL)))
-    except (TypeError, ValueError):  # a hand-edited record: compared as it is
+    if isinstance(model.extras.get("tool_swap"), dict):
         return False
+    recorded = nominal_tool_of(model)  # the calibration's record; None when absent or hand-edited out of shape
+    return recorded is not None and bool(np.allclose(recorded, reference.tool, rtol=0.0, atol=TOOL_MATCH_TOL))
 
 
 def nominal_tool_of(model: RobotModel) -> np.ndarray | None:
