@@ -54,7 +54,7 @@ def _add_guidance(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--plate-grid", default=None, metavar="GRID",
                         help="with --samples: the recorded plate (its sockets' layout) centred at the points of the "
                              "box grid 'xmin,xmax,nx;ymin,ymax,ny;zmin,zmax,nz' [m], or 'auto' (5 x 5 over the reach "
-                             "at the recorded plate's height)")
+                             "at the recorded plate's height, on its side of the base)")
     parser.add_argument("--plate-orientations", type=count(1, 12), default=2, metavar="N",
                         help="with --plate-grid: turns of the plate about the vertical per grid point (default 2)")
     parser.add_argument("--per-socket", type=count(1, 5000), default=None, metavar="N",

@@ -395,3 +395,22 @@ def test_the_automatic_plate_grid_lies_where_the_arm_reaches(panda):
     assert len(placements) == 25 and np.allclose(centres[:, 2], 0.1)
     q, ok = hand_guided(panda, centres, 4, np.random.default_rng(1))
     assert ok.mean() > 0.8  # the box spans the reach at that height; its corners may fall outside
+
+
+@pytest.mark.parametrize("toward", [[0.5, 0.0, 0.1], [0.0, -0.4, 0.1], [-0.3, 0.3, 0.1]])
+def test_the_automatic_plate_grid_stays_on_the_recorded_plate_s_side_of_the_base(panda, toward):
+    """Over the whole reach, half the grid lay behind the base (a review: the plate is on the table the arm works
+    over); with the recorded plate's centre, every grid point is on its side and the side is still covered."""
+    from spherecal.validation.planning.placements import reachable_grid
+
+    direction = np.array(toward[:2]) / np.linalg.norm(toward[:2])
+    whole = np.array([p.centre for p in plate_placements(
+        {"h0": np.zeros(3)}, reachable_grid(panda, 0.1, np.random.default_rng(0)), 1)])
+    assert (whole[:, :2] @ direction < -0.1).sum() >= 5  # the whole reach: points well behind
+    text = reachable_grid(panda, 0.1, np.random.default_rng(0), toward=np.array(toward))
+    centres = np.array([p.centre for p in plate_placements({"h0": np.zeros(3)}, text, 1)])
+    along = centres[:, :2] @ direction
+    # a box around a half-annulus: its corners may reach a little behind the base's axis, never far
+    assert along.min() > -0.15 and along.max() > 0.5, along
+    q, ok = hand_guided(panda, centres, 4, np.random.default_rng(1))
+    assert ok.mean() > 0.6

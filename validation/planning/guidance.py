@@ -566,7 +566,8 @@ def recording_guidance(
         rng: seeds everything random (model selection folds, hand-guided configurations, workspace subset).
         candidates: candidate placements.
         plate_grid: ``"xmin,xmax,nx;ymin,ymax,ny;zmin,zmax,nz"`` [m] of plate centres, ``"auto"`` (5 x 5 over
-            the reach at the recorded plate's height, :func:`.placements.reachable_grid`), or None.
+            the reach at the recorded plate's height on its side of the base, :func:`.placements.reachable_grid`),
+            or None.
         orientations: turns of the plate per grid point.
         per_socket: configurations per candidate socket (default: as recorded).
         min_gain: smallest gain worth another placement [m].
@@ -584,8 +585,8 @@ def recording_guidance(
     if plate_grid is not None:
         layout = plate_layout(recorded.spec, recorded.centres)
         if plate_grid == "auto":
-            height = float(np.mean([recorded.centres[n] for n in recorded.dataset.fixture_names], axis=0)[2])
-            plate_grid = reachable_grid(recorded.model, height, rng)
+            centre = np.mean([recorded.centres[n] for n in recorded.dataset.fixture_names], axis=0)
+            plate_grid = reachable_grid(recorded.model, float(centre[2]), rng, toward=centre)
         placements += plate_placements(layout, plate_grid, orientations)
     guidance = rank_placements(recorded, placements, rng, per_socket, min_gain)
     return replace(guidance, seconds={"calibration": calibrated, **guidance.seconds})

@@ -157,30 +157,45 @@ def plate_layout(spec: FixtureSpec, centres: dict[str, np.ndarray]) -> dict[str,
     return {f"h{k}": p - points.mean(axis=0) for k, p in enumerate(points)}
 
 
-def reachable_grid(model: RobotModel, height: float, rng: np.random.Generator, count: int = 5) -> str:
-    """A ``count`` x ``count`` box grid at ``height`` [m] over where the tool point reaches at that height
-    (the 10th to 90th percentile of x and y of random configurations' tool points within 3 cm of it), as
-    the text :func:`plate_placements` takes. No collision check: points inside the robot's own column
-    are refused later only if out of reach.
+def reachable_grid(model: RobotModel, height: float, rng: np.random.Generator, count: int = 5,
+                   toward: np.ndarray | None = None) -> list[Candidate]:
+    """A ``count`` x ``count`` grid of plate centres at ``height`` [m] over where the tool point reaches at that
+    height: the 10th to 90th percentile of random configurations' tool points within 3 cm of it, along x and y.
+    With ``toward`` (the recorded plate's centre, (2,) or (3,) [m]), only the reach on its side of the base (the
+    half-plane through the base's vertical axis facing it; the plate lies on the table the arm works over, not
+    behind its base), the grid's axes along and across that direction. No collision check: points inside the
+    robot's own column are refused later only if out of reach.
+
+    Returns:
+        Candidates ``C1`` ... (the along-axis outer, as :func:`.candidates.grid_candidates` orders x and y).
 
     Raises:
-        CandidateError: the tool point rarely reaches that height.
+        CandidateError: the tool point rarely reaches that height (on that side).
     """
     points = tool_point(model, model.random_configurations(20_000, rng))
-    near = points[np.abs(points[:, 2] - height) < 0.03]
+    near = points[np.abs(points[:, 2] - height) < 0.03, :2]
+    axes, side = np.eye(2), ""
+    if toward is not None and np.linalg.norm(np.asarray(toward, dtype=float)[:2]) > 1e-9:
+        along = np.asarray(toward, dtype=float)[:2] / np.linalg.norm(np.asarray(toward, dtype=float)[:2])
+        axes, side = np.array([along, [-along[1], along[0]]]), " on the recorded plate's side of the base"
+        near = near[near @ along >= 0.0]
     if len(near) < 50:
         raise CandidateError(
-            f"field '--plate-grid': auto: the tool point rarely reaches the plate's height {height:.3f} m")
-    (x0, y0), (x1, y1) = np.percentile(near[:, :2], [10, 90], axis=0)
-    return f"{x0:.4f},{x1:.4f},{count};{y0:.4f},{y1:.4f},{count};{height:.4f},{height:.4f},1"
+            f"field '--plate-grid': auto: the tool point rarely reaches the plate's height {height:.3f} m{side}")
+    low, high = np.percentile(near @ axes.T, [10, 90], axis=0)
+    ticks = [np.linspace(low[k], high[k], count) for k in range(2)]
+    grid = np.stack(np.meshgrid(*ticks, indexing="ij"), axis=-1).reshape(-1, 2) @ axes
+    return [Candidate(f"C{k + 1}", np.array([x, y, height])) for k, (x, y) in enumerate(np.round(grid, 4))]
 
 
-def plate_placements(layout: dict[str, np.ndarray], grid: str, orientations: int = 2) -> list[Placement]:
+def plate_placements(layout: dict[str, np.ndarray], grid: str | list[Candidate],
+                     orientations: int = 2) -> list[Placement]:
     """The plate at every point of a box grid, turned about the vertical (z) axis.
 
     Args:
         layout: socket suffix -> (3,) offset from the plate's centre [m] (:func:`plate_layout`).
-        grid: ``"xmin,xmax,nx;ymin,ymax,ny;zmin,zmax,nz"`` [m], the plate centres.
+        grid: ``"xmin,xmax,nx;ymin,ymax,ny;zmin,zmax,nz"`` [m], the plate centres, or the centres themselves
+            (:func:`reachable_grid`).
         orientations: turns per point, evenly over half a turn (a plate's socket pattern is usually
             symmetric under a half turn), >= 1.
 
@@ -196,7 +211,7 @@ def plate_placements(layout: dict[str, np.ndarray], grid: str, orientations: int
     offsets = np.array([layout[s] for s in suffixes])
     distances = [(i, j, float(np.linalg.norm(offsets[i] - offsets[j])))
                  for i in range(len(suffixes)) for j in range(i + 1, len(suffixes))]
-    points = grid_candidates(grid, "--plate-grid")
+    points = grid_candidates(grid, "--plate-grid") if isinstance(grid, str) else list(grid)
     if len(points) * orientations > MAX_CANDIDATES:
         raise CandidateError(f"field '--plate-grid': {grid!r}: {len(points)} points x {orientations} "
                              f"orientations make {len(points) * orientations} placements, at most {MAX_CANDIDATES}")
