@@ -94,11 +94,25 @@ def greedy_rank(jac: np.ndarray, order: np.ndarray, rel_tol: float = 1e-7) -> tu
     return np.array(sorted(accepted), dtype=int), rejected
 
 
-def normal_inverse(jac: np.ndarray) -> np.ndarray:
+def triangular(jac: np.ndarray) -> np.ndarray:
+    """(F, F) upper-triangular ``R`` of ``jac = Q R`` for a tall (M, F) ``jac`` (M > F); ``jac`` itself otherwise.
+
+    ``R^T R = J^T J``: every column subset ``R[:, cols]`` (scaled or not) has the singular values and right
+    singular vectors of ``J[:, cols]``, so the tall matrix is factored once (Householder, LAPACK ``geqrf``, no
+    ``Q`` formed) and an SVD after it works on F rows. A thin SVD of the tall matrix does the same QR inside and
+    then also forms its (M, F) ``U``, which none of ours reads: twice the time.
+    """
+    return np.linalg.qr(jac, mode="r") if jac.shape[0] > jac.shape[1] else jac
+
+
+def normal_inverse(jac: np.ndarray, norms: np.ndarray | None = None) -> np.ndarray:
     """(F, F) ``(J^T J)^-1`` of a (M, F) Jacobian, through the SVD of the column-scaled Jacobian
-    (never the squared normal matrix; a null direction gets a huge, not infinite, variance)."""
-    norms = column_norms(jac)
-    _, s, vt = np.linalg.svd(jac / norms, full_matrices=False)
+    (never the squared normal matrix; a null direction gets a huge, not infinite, variance).
+
+    ``jac`` may be the :func:`triangular` factor of the Jacobian (or columns of it) with ``norms``, the (F,)
+    :func:`column_norms` of the Jacobian's matching columns (default: those of ``jac``)."""
+    norms = column_norms(jac) if norms is None else norms
+    _, s, vt = np.linalg.svd(triangular(jac / norms), full_matrices=False)
     inv = 1.0 / np.maximum(s, s[0] * 1e-14)
     return (vt.T * inv**2) @ vt / np.outer(norms, norms)
 
