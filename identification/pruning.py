@@ -6,7 +6,7 @@ from dataclasses import replace
 
 import numpy as np
 
-from .identifiability import predicted_std
+from .identifiability import column_norms, normal_inverse, predicted_std, triangular
 from .problem import CalibrationProblem, tolerance, zero_indices
 
 
@@ -32,12 +32,14 @@ def prune(
     names = problem.model.param_names
     params, centres = problem.unpack(x)
     jac = problem.jacobian(x) if jac is None else jac
+    # the tall Jacobian factored once: each column subset below is an SVD of R's columns (F rows)
+    norms, tri = column_norms(jac), triangular(jac)
     fp = problem.n_free_params
     keep = np.arange(fp)
     fixed = dict(problem.fixed)
     while keep.size > 1:
         cols = np.concatenate([keep, np.arange(fp, jac.shape[1])])
-        std = predicted_std(jac[:, cols], sigma)[: keep.size]
+        std = predicted_std(tri[:, cols], sigma, normal_inverse(tri[:, cols], norms[cols]))[: keep.size]
         ratio = std / prior[problem.free[keep]]
         worst = int(np.argmax(ratio))
         if ratio[worst] <= 1.0:
