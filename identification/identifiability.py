@@ -68,6 +68,7 @@ def greedy_rank(jac: np.ndarray, order: np.ndarray, rel_tol: float = 1e-7) -> tu
     """
     norms = np.linalg.norm(jac, axis=0)
     negligible = norms <= 1e-10 * (np.median(norms) if norms.size else 0.0)
+    jac = triangular(jac)  # the same inner products of the columns on F rows: what follows reads no others
     basis = np.empty((len(order), jac.shape[0]))  # rows 0..k-1: orthonormal basis of the accepted columns
     accepted: list[int] = []
     rejected: dict[int, np.ndarray] = {}
