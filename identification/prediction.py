@@ -312,7 +312,8 @@ def seen_part(model: RobotModel, root: np.ndarray, count: int = 300) -> np.ndarr
     """
     q = model.random_configurations(count, np.random.default_rng(0))
     jac = param_jacobian(model, q).reshape(3 * count, -1)
-    _, values, rows = np.linalg.svd(jac, full_matrices=True)
+    # the (P, P) right vectors; a full U (3 count, 3 count) is formed only when it is needed to have P of them
+    _, values, rows = np.linalg.svd(jac, full_matrices=jac.shape[0] < jac.shape[1])
     unseen = rows[np.concatenate([values, np.zeros(rows.shape[0] - len(values))]) <= 1e-10 * values[0]]
     return root - unseen.T @ (unseen @ root)
 
