@@ -272,22 +272,27 @@ def _first_of_clusters(q: np.ndarray, tol: float) -> np.ndarray:
         keep[:] = True
         return keep
     cells = np.floor(q / tol) if tol > 0 else q  # floats: a tiny tol overflows int64 and merges distinct cells
-    _, first = np.unique(cells, axis=0, return_index=True)
-    first = np.sort(first)
+    first = _first_of_rows(cells)
     keep[first] = True
     if tol == 0.0 or first.size < 2:
         return keep
     sub = q[first]
-    col = int(np.argmax(np.ptp(sub, axis=0)))
+    spread = np.ptp(sub, axis=0)
+    col = int(np.argmax(spread))
     order = np.argsort(sub[:, col], kind="stable")
-    ordered = sub[order]
+    joints = [col] + [int(j) for j in np.argsort(-spread, kind="stable") if j != col]
+    key, *others = (np.ascontiguousarray(sub[order, j]) for j in joints)
     pairs = []
-    for offset in range(1, ordered.shape[0]):
-        near = ordered[offset:, col] - ordered[:-offset, col] <= tol
-        if not near.any():
+    near = np.arange(key.size - 1)  # samples whose neighbour ``offset`` places on may be within tol
+    for offset in range(1, key.size):
+        # sorted on the joint: a sample not within tol of the one offset places on is not of any further one
+        near = near[near + offset < key.size]
+        near = near[key[near + offset] - key[near] <= tol]
+        if not near.size:
             break
-        i = np.flatnonzero(near)
-        i = i[np.abs(ordered[i + offset] - ordered[i]).max(axis=1) <= tol]
+        i = near
+        for values in others:  # within tol on every joint, the most spread first (it rules out the most)
+            i = i[np.abs(values[i + offset] - values[i]) <= tol]
         pairs.append(np.stack([first[order[i]], first[order[i + offset]]], axis=1))
     if not pairs:
         return keep
@@ -298,3 +303,29 @@ def _first_of_clusters(q: np.ndarray, tol: float) -> np.ndarray:
         if keep[k]:
             keep[pairs[starts[k] : starts[k + 1], 1]] = False
     return keep
+
+
+def _first_of_rows(cells: np.ndarray) -> np.ndarray:
+    """Sorted indices of the first of every distinct row of ``cells`` (K, n) (rows equal as floats: 0.0 is -0.0):
+    ``np.unique(cells, axis=0, return_index=True)[1]``, sorted, in one sort of a 64-bit hash of each row instead
+    of a sort of the rows (a tenth of the time on a million rows); rows of equal hash that differ, or values that
+    are not finite, take ``np.unique``."""
+    if not np.isfinite(cells).all():
+        return np.sort(np.unique(cells, axis=0, return_index=True)[1])
+    bits = np.ascontiguousarray(cells + 0.0).view(np.uint64)  # + 0.0: -0.0 is 0.0, as float comparison has it
+    hashes = np.zeros(len(cells), dtype=np.uint64)
+    for j in range(cells.shape[1]):  # splitmix64's mixing of each value's bits (a grid cell's have few set)
+        x = bits[:, j] ^ (bits[:, j] >> np.uint64(30))
+        x *= np.uint64(0xBF58476D1CE4E5B9)  # wraps around, as a hash does
+        x ^= x >> np.uint64(27)
+        x *= np.uint64(0x94D049BB133111EB)
+        x ^= x >> np.uint64(31)
+        hashes *= np.uint64(0x9E3779B97F4A7C15)
+        hashes ^= x
+    order = np.argsort(hashes, kind="stable")  # stable: the first of equal rows comes first
+    ordered = cells[order]
+    same_hash = hashes[order][1:] == hashes[order][:-1]
+    differ = (ordered[1:] != ordered[:-1]).any(axis=1)
+    if np.any(same_hash & differ):  # two distinct rows of one hash (never seen): sort the rows themselves
+        return np.sort(np.unique(cells, axis=0, return_index=True)[1])
+    return np.sort(order[np.concatenate([[True], differ])])

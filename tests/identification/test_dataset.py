@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from spherecal.correction.files.fixtures import FixtureSpec, read_fixtures, write_fixtures
-from spherecal.correction.files.samples import Dataset, DatasetError
+from spherecal.correction.files.samples import Dataset, DatasetError, _first_of_clusters, _first_of_rows
 from spherecal.correction.files.samples_csv import read_samples, write_samples
 
 HEADER = "fixture,q1,q2,q3,q4,q5,q6,q7\n"
@@ -68,6 +68,43 @@ def test_tiny_or_nan_dedup_tolerance(panda, rng) -> None:
     assert ds.deduplicated(1e-20).n_samples == 300
     with pytest.raises(ValueError, match="tol must be >= 0"):
         ds.deduplicated(float("nan"))
+
+
+def _first_of_clusters_by_hand(q: np.ndarray, tol: float) -> np.ndarray:
+    """The rule of Dataset.deduplicated, one sample at a time: the first sample of each tol grid cell, kept unless an
+    earlier kept one lies within tol on every joint."""
+    cells = np.floor(q / tol) if tol > 0 else q
+    seen, keep = set(), np.zeros(len(q), dtype=bool)
+    for k, cell in enumerate(cells):
+        key = tuple(float(c) + 0.0 for c in cell)
+        if key in seen:
+            continue
+        seen.add(key)
+        kept = np.flatnonzero(keep)
+        keep[k] = tol == 0 or not np.any(np.abs(q[kept] - q[k]).max(axis=1) <= tol)
+    return keep
+
+
+def test_deduplicate_follows_its_rule_on_dense_repeats() -> None:
+    # a still arm at 1 kHz: bursts of encoder noise about a few configurations, and slow motion between them
+    rng = np.random.default_rng(7)
+    for trial in range(40):
+        centres = rng.normal(0, 3e-4, (rng.integers(1, 6), rng.integers(1, 8)))
+        q = centres[rng.integers(0, len(centres), 300)] + rng.normal(0, [0, 2e-6, 5e-5, 2e-4][trial % 4], (300, 1))
+        q[rng.random(q.shape) < 0.05] = -0.0 if trial % 2 else 0.0  # -0.0 and 0.0 are one value
+        for tol in (0.0, 1e-4, 3e-4):
+            np.testing.assert_array_equal(_first_of_clusters(q, tol), _first_of_clusters_by_hand(q, tol))
+
+
+def test_first_of_rows_is_numpy_unique_s() -> None:
+    rng = np.random.default_rng(8)
+    cells = np.floor(rng.normal(0, 2, (2000, 7)))
+    cells[rng.random(cells.shape) < 0.2] = -0.0
+    expected = np.sort(np.unique(cells, axis=0, return_index=True)[1])
+    np.testing.assert_array_equal(_first_of_rows(cells), expected)
+    cells[5, 3] = np.nan  # not finite: np.unique itself
+    np.testing.assert_array_equal(_first_of_rows(cells), np.sort(np.unique(cells, axis=0,
+                                                                                   return_index=True)[1]))
 
 
 def test_subsample_is_seeded_and_per_fixture(panda, rng) -> None:
