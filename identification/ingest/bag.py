@@ -11,8 +11,10 @@ message that names joints but carries no positions (its velocities or efforts al
 from __future__ import annotations
 
 import os
-from dataclasses import replace
-from itertools import compress
+import struct
+from array import array
+from collections.abc import Sequence
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
@@ -62,9 +64,6 @@ def read_bag(path: str | os.PathLike, model: RobotModel, topic: str = TOPIC) -> 
         raise RecordingError(
             f"{path}: cannot read the bag: a ROS 2 bag folder holds a metadata.yaml, this one has none{hint}"
         )
-    stamps: list[float] = []
-    rows: list[str] = []
-    values: list[np.ndarray] = []
     try:
         with AnyReader([path], default_typestore=get_typestore(Stores.ROS2_HUMBLE)) as reader:
             connections = [c for c in reader.connections if c.topic == topic]
@@ -82,37 +81,13 @@ def read_bag(path: str | os.PathLike, model: RobotModel, topic: str = TOPIC) -> 
                         f"{path}: field '--topic': {topic!r} carries {connection.msgtype}, "
                         "expected sensor_msgs/JointState"
                     )
-            cache: dict[tuple[str, ...], np.ndarray] = {}
-            arm = arm_joint_names(model)
-            skipped: dict[tuple[str, ...], int] = {}  # names of messages without any arm joint -> count
-            unpositioned = 0  # messages with names but no positions (a driver publishing velocities or efforts)
-            partial: dict[tuple[str, ...], list] = {}  # names of some of the arm's joints -> [count, first message]
-            for k, (connection, timestamp, raw) in enumerate(reader.messages(connections=connections)):
-                message = reader.deserialize(raw, connection.msgtype)
-                where = f"{path}: {topic} message {k + 1}"
-                names = tuple(message.name)
-                position = np.asarray(message.position, dtype=float)
-                if not position.size and names:  # JointState's arrays are optional: velocities or efforts alone
-                    unpositioned += 1
-                    continue
-                if position.shape != (len(names),):
-                    raise RecordingError(f"{where}, field 'position': {position.size} positions for {len(names)} names")
-                if names not in cache and arm.isdisjoint(names):  # another device's joints (a gripper)
-                    skipped[names] = skipped.get(names, 0) + 1
-                    continue
-                if names not in cache and missing_joints(names, model):  # the arm's state split over messages
-                    partial.setdefault(names, [0, k + 1])[0] += 1
-                    continue
-                if names not in cache:
-                    cache[names] = match_joints(list(names), model, where)[0]
-                q = position[cache[names]]
-                if not np.all(np.isfinite(q)):
-                    raise RecordingError(f"{where}, field 'position': not finite")
-                stamp = message.header.stamp
-                seconds = stamp.sec + stamp.nanosec * 1e-9
-                stamps.append(seconds if seconds > 0 else timestamp * 1e-9)
-                values.append(q)
-                rows.append(where)
+            messages = _Messages(model, f"{path}: {topic} message ")
+            try:
+                messages.read(reader, connections)
+            except Exception:  # an earlier message's angle that is not finite is refused first, as it was read first
+                messages.check_finite()
+                raise
+            messages.check_finite()
     except RecordingError:
         raise
     except (AnyReaderError, OSError) as error:
@@ -121,11 +96,12 @@ def read_bag(path: str | os.PathLike, model: RobotModel, topic: str = TOPIC) -> 
         if not type(error).__module__.startswith("rosbags"):
             raise
         raise RecordingError(f"{path}: cannot read the bag: {error}") from None
+    skipped, partial, unpositioned = messages.skipped, messages.partial, messages.unpositioned
     others = "; ".join(f"{count} naming {', '.join(names[:4]) or 'no joint'}{', ...' if len(names) > 4 else ''}"
                        for names, count in skipped.items())
     some = "; ".join(f"{count} naming {', '.join(names[:4])}{', ...' if len(names) > 4 else ''} (not "
                      f"{', '.join(missing_joints(names, model)[:3])})" for names, (count, _) in partial.items())
-    if not values and partial:
+    if not messages.count and partial:
         first = min(k for _, k in partial.values())
         if len(partial) == 1 or missing_joints(set().union(*partial), model):  # a joint missing from the topic
             names = next(names for names, (_, k) in partial.items() if k == first)
@@ -134,7 +110,7 @@ def read_bag(path: str | os.PathLike, model: RobotModel, topic: str = TOPIC) -> 
             f"{path}: {topic} message {first}, field 'name': no message names all of the arm's joints ({some}): "
             "joint angles split over messages are not of one instant; record all of the arm's joints in one message"
         )
-    if not values:
+    if not messages.count:
         if unpositioned and not skipped:
             raise RecordingError(f"{path}: {topic} message 1, field 'position': none of the {unpositioned} messages "
                                  "carries joint positions (velocities or efforts only)")
@@ -151,15 +127,238 @@ def read_bag(path: str | os.PathLike, model: RobotModel, topic: str = TOPIC) -> 
     ) + ((f"skipped {unpositioned} messages on {topic} without positions (velocities or efforts only)",)
          if unpositioned else ()) + ((f"skipped {sum(c for c, _ in partial.values())} messages on {topic} naming "
                                       f"only some of the arm's joints ({some})",) if partial else ())
-    t = np.array(stamps)
-    order = np.argsort(t, kind="stable")
-    q, t, rows = np.array(values)[order], t[order], [rows[i] for i in order]
-    recording = Recording(q, t, None, str(path), tuple(rows), notes, clock="header.stamp",
-                          time_field="header.stamp")
+    numbers, stamps, q = messages.arrays()
+    order = np.argsort(stamps, kind="stable")
+    q, t, rows = q[order], stamps[order], MessageNames(messages.where, numbers[order])
+    recording = Recording(q, t, None, str(path), rows, notes, clock="header.stamp", time_field="header.stamp")
     recording.check_limits(model)  # first: degrees in a radians field jump too, and this says which it is
     _refuse_interleaved(q, t, rows, stamps)  # before the stamps alike: two streams' clash is named as theirs
     keep, repeats = repeated_stamps(q, t, rows, "header.stamp", "message")
-    return replace(recording, q=q[keep], t=t[keep], rows=tuple(compress(rows, keep)), notes=notes + repeats)
+    return replace(recording, q=q[keep], t=t[keep], rows=rows.select(keep), notes=notes + repeats)
+
+
+class MessageNames(Sequence):
+    """``"bag: /topic message N"`` of every sample, made when asked (1.8 M strings would take 200 MB)."""
+
+    def __init__(self, prefix: str, numbers: np.ndarray):
+        self.prefix, self.numbers = prefix, np.asarray(numbers)
+
+    def __len__(self) -> int:
+        return int(self.numbers.size)
+
+    def __getitem__(self, k):
+        if isinstance(k, slice):
+            return [self[i] for i in range(*k.indices(len(self)))]
+        return f"{self.prefix}{int(self.numbers[k])}"
+
+    def select(self, keep: np.ndarray) -> MessageNames:
+        """The names of the samples ``keep`` (a boolean mask or indices) selects."""
+        return MessageNames(self.prefix, self.numbers[keep])
+
+
+@dataclass
+class _Group:
+    """The messages read with one list of joint names: their numbers, stamps and ``position`` arrays."""
+
+    index: np.ndarray  # the arm's joints' places in the names
+    size: int  # names (= positions) per message
+    numbers: array = field(default_factory=lambda: array("q"))  # 1-based message number on the topic
+    sec: array = field(default_factory=lambda: array("q"))  # header.stamp
+    nanosec: array = field(default_factory=lambda: array("q"))
+    received: array = field(default_factory=lambda: array("q"))  # the bag's receive time [ns]
+    positions: bytearray = field(default_factory=bytearray)  # little-endian float64, ``size`` per message
+
+    def q(self) -> np.ndarray:
+        """(K, n) the arm's joint angles [rad]."""
+        positions = np.frombuffer(self.positions, dtype="<f8").reshape(-1, self.size)
+        return positions[:, self.index].astype(float, copy=False)
+
+
+@dataclass(frozen=True)
+class _Layout:
+    """The fixed bytes of CDR ``JointState`` messages alike but for their stamps and arrays' values: a message whose
+    bytes match them everywhere else has the same names and array lengths, and needs no deserialising (its stamp
+    and positions are read at fixed offsets)."""
+
+    head: bytes  # the encapsulation (little-endian CDR)
+    middle: bytes  # from the frame_id's length to the positions' count
+    velocity: bytes  # velocity's count, at ``at_velocity``
+    effort: bytes  # effort's count, at ``at_effort``
+    at_velocity: int
+    at_effort: int
+    at_position: int  # where the positions start
+    length: int  # of the whole message
+    names: tuple[str, ...]
+
+    def matches(self, raw: bytes) -> bool:
+        return (len(raw) == self.length and raw.startswith(self.middle, 12) and raw.startswith(self.head)
+                and raw.startswith(self.velocity, self.at_velocity) and raw.startswith(self.effort, self.at_effort))
+
+
+_HEADER = struct.Struct("<iI")  # header.stamp's sec and nanosec, after the 4-byte encapsulation
+_COUNT = struct.Struct("<I")
+
+
+def _cdr_layout(raw: bytes, message) -> _Layout | None:
+    """The :class:`_Layout` of a little-endian CDR ``JointState`` message, when parsing its bytes by hand gives
+    exactly what ``message`` (rosbags' deserialisation of them) holds; None otherwise (then every message of its
+    kind is deserialised)."""
+    try:
+        if raw[:2] != b"\x00\x01":
+            return None
+
+        def align(at: int, size: int) -> int:  # CDR aligns from the end of the encapsulation
+            return 4 + ((at - 4 + size - 1) // size) * size
+
+        def count(at: int) -> tuple[int, int]:
+            at = align(at, 4)
+            return _COUNT.unpack_from(raw, at)[0], at
+
+        def doubles(at: int) -> tuple[int, int, int]:  # (count's offset, values' offset, end)
+            n, at = count(at)
+            values = align(at + 4, 8) if n else at + 4
+            return at, values, values + 8 * n
+
+        size, at = count(12)
+        at += 4 + size
+        n, at = count(at)
+        at += 4
+        names = []
+        for _ in range(n):
+            size, at = count(at)
+            names.append(raw[at + 4 : at + 3 + size].decode())
+            at += 4 + size
+        at_count, at_position, at = doubles(at)
+        at_velocity, velocity, at = doubles(at)
+        at_effort, effort, end = doubles(at)
+        sec, nanosec = _HEADER.unpack_from(raw, 4)
+        stamp = message.header.stamp
+        same = (tuple(names) == tuple(message.name) and (sec, nanosec) == (stamp.sec, stamp.nanosec)
+                and raw[at_position:at_velocity] == np.asarray(message.position, dtype="<f8").tobytes()
+                and raw[velocity:at_effort] == np.asarray(message.velocity, dtype="<f8").tobytes()
+                and raw[effort:end] == np.asarray(message.effort, dtype="<f8").tobytes()
+                and end <= len(raw) <= end + 3)
+    except (struct.error, UnicodeDecodeError, AttributeError, TypeError, ValueError):
+        return None
+    if not same:
+        return None
+    return _Layout(raw[:4], raw[12:at_count + 4], raw[at_velocity:at_velocity + 4], raw[at_effort:at_effort + 4],
+                   at_velocity, at_effort, at_position, len(raw), tuple(names))
+
+
+class _Messages:
+    """The ``JointState`` messages of a topic, read into arrays (never a Python object per message): those naming
+    the arm's joints grouped by their names, the others counted (skipped: another device's; partial: some of the
+    arm's joints; unpositioned: no positions). Deserialises one message of each :class:`_Layout` only (the first,
+    to check it) and reads the others' stamps and positions at their offsets; a ROS 1 bag's messages, or ones
+    of no layout, are deserialised."""
+
+    def __init__(self, model: RobotModel, where: str):
+        self.model, self.where = model, where
+        self.arm = arm_joint_names(model)
+        self.groups: dict[tuple[str, ...], _Group] = {}
+        self.skipped: dict[tuple[str, ...], int] = {}  # names of messages without any arm joint -> count
+        self.unpositioned = 0  # messages with names but no positions (a driver publishing velocities or efforts)
+        self.partial: dict[tuple[str, ...], list] = {}  # names of some of the arm's joints -> [count, first message]
+        self.count = 0  # messages of the arm read
+
+    def read(self, reader, connections) -> None:
+        """Read every message of ``connections``, in the bag's order.
+
+        Raises:
+            RecordingError: a message whose ``position`` does not match its ``name``, a joint named twice, ...
+                (as :func:`read_bag` says), naming the message.
+        """
+        layouts: list[_Layout] = []
+        last: _Layout | None = None
+        unpack = _HEADER.unpack_from
+        for k, (connection, timestamp, raw) in enumerate(reader.messages(connections=connections)):
+            if last is not None:  # the bytes of the last message's layout: read at its offsets
+                if type(raw) is not bytes:
+                    raw = bytes(raw)
+                if last.matches(raw) or any((last := other).matches(raw) for other in layouts):
+                    positioned = last.at_velocity > last.at_position
+                    group = self.groups.get(last.names) if positioned else None
+                    if group is None:
+                        self._other(last.names, positioned, k)
+                        continue
+                    sec, nanosec = unpack(raw, 4)
+                    group.numbers.append(k + 1)
+                    group.sec.append(sec)
+                    group.nanosec.append(nanosec)
+                    group.received.append(timestamp)
+                    group.positions += raw[last.at_position:last.at_velocity]
+                    self.count += 1
+                    continue
+            message = reader.deserialize(raw, connection.msgtype)
+            if reader.is2 and len(layouts) < 16:
+                layout = _cdr_layout(bytes(raw), message)
+                if layout is not None:
+                    layouts.append(layout)
+                    last = layout
+            self._add(message, k, timestamp)
+
+    def _other(self, names: tuple[str, ...], positioned: bool, k: int) -> None:
+        """Count a message of ``names`` that is not the arm's (no group), as :meth:`_add` would."""
+        if not positioned and names:
+            self.unpositioned += 1
+        elif self.arm.isdisjoint(names):
+            self.skipped[names] = self.skipped.get(names, 0) + 1
+        else:
+            self.partial.setdefault(names, [0, k + 1])[0] += 1
+
+    def _add(self, message, k: int, timestamp: int) -> None:
+        """Sort a deserialised message (the checks of every message: see :meth:`read`)."""
+        where = f"{self.where}{k + 1}"
+        names = tuple(message.name)
+        position = np.asarray(message.position, dtype=float)
+        if not position.size and names:  # JointState's arrays are optional: velocities or efforts alone
+            self.unpositioned += 1
+            return
+        if position.shape != (len(names),):
+            raise RecordingError(f"{where}, field 'position': {position.size} positions for {len(names)} names")
+        group = self.groups.get(names)
+        if group is None:
+            if self.arm.isdisjoint(names):  # another device's joints (a gripper)
+                self.skipped[names] = self.skipped.get(names, 0) + 1
+                return
+            if missing_joints(names, self.model):  # the arm's state split over messages
+                self.partial.setdefault(names, [0, k + 1])[0] += 1
+                return
+            group = self.groups[names] = _Group(match_joints(list(names), self.model, where)[0], len(names))
+        stamp = message.header.stamp
+        group.numbers.append(k + 1)
+        group.sec.append(stamp.sec)
+        group.nanosec.append(stamp.nanosec)
+        group.received.append(timestamp)
+        group.positions += position.astype("<f8").tobytes()
+        self.count += 1
+
+    def arrays(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """``(numbers, stamps, q)`` of the arm's messages in the bag's order: (K,) message numbers, (K,) stamps [s]
+        (``header.stamp``, or the bag's receive time where it is zero) and (K, n) joint angles [rad]."""
+        groups = list(self.groups.values())
+        numbers = np.concatenate([np.frombuffer(g.numbers, dtype=np.int64) for g in groups])
+        order = np.argsort(numbers, kind="stable")
+        sec, nanosec, received = (np.concatenate([np.frombuffer(getattr(g, name), dtype=np.int64) for g in groups])
+                                  [order] for name in ("sec", "nanosec", "received"))
+        seconds = sec + nanosec * 1e-9
+        stamps = np.where(seconds > 0, seconds, received * 1e-9)
+        q = np.concatenate([g.q() for g in groups])[order] if len(groups) > 1 else groups[0].q()
+        return numbers[order], stamps, q
+
+    def check_finite(self) -> None:
+        """Refuse the first message read whose arm's angles are not all finite.
+
+        Raises:
+            RecordingError: naming the message.
+        """
+        if not self.count:
+            return
+        bad = [np.frombuffer(g.numbers, dtype=np.int64)[~np.isfinite(g.q()).all(axis=1)] for g in self.groups.values()]
+        bad = np.concatenate(bad)
+        if bad.size:
+            raise RecordingError(f"{self.where}{int(bad.min())}, field 'position': not finite")
 
 
 def _refuse_interleaved(q: np.ndarray, t: np.ndarray, rows: list[str], stamps: list[float]) -> None:

@@ -10,6 +10,9 @@ from spherecal.cli import main
 from spherecal.correction import load_robot, perturb, tool_point
 from spherecal.correction.files.fixtures import read_fixtures
 from spherecal.correction.files.samples_csv import read_samples
+from spherecal.identification.ingest import bag as bag_module
+from spherecal.identification.ingest.bag import read_bag
+from spherecal.identification.ingest.importers import RecordingError
 from tests.refusal import refused
 
 from .recordings import Q0, stream, write_bag
@@ -481,3 +484,66 @@ def test_columns_numbered_past_the_arms_joints_are_named_in_a_note(tmp_path) -> 
     assert any("columns q8, q9 go on after the arm's q1..q7 and are not read" in n for n in notes), notes
     (tmp_path / "q7.csv").write_text("\n".join(r.rsplit(",", 2)[0] for r in rows) + "\n")
     assert not read_joint_csv(tmp_path / "q7.csv", load_robot("panda")).notes
+
+
+def _raw_joint_states(path, messages, edit=None) -> None:
+    """A ROS 2 bag of ``sensor_msgs/JointState``: ``messages`` of (time [s], names, positions, frame_id, stamped), the
+    time in ``header.stamp`` when ``stamped`` (else zero) and as the bag's receive time, each message's bytes passed
+    through ``edit(k, data)`` when given (a corrupt message)."""
+    from rosbags.rosbag2 import Writer
+    from rosbags.typesys import Stores, get_typestore
+
+    store = get_typestore(Stores.ROS2_HUMBLE)
+    state, header, time = (store.types[k] for k in ("sensor_msgs/msg/JointState", "std_msgs/msg/Header",
+                                                    "builtin_interfaces/msg/Time"))
+    with Writer(path, version=9) as writer:
+        connection = writer.add_connection("/joint_states", state.__msgtype__, typestore=store)
+        for k, (stamp, names, position, frame, stamped) in enumerate(messages):
+            sec = int(stamp) if stamped else 0
+            nanosec = int(round((stamp - sec) * 1e9)) if stamped else 0
+            head = header(stamp=time(sec=sec, nanosec=nanosec), frame_id=frame)
+            data = bytes(store.serialize_cdr(state(header=head, name=list(names), position=np.asarray(position, float),
+                                                   velocity=np.zeros(len(position)), effort=np.zeros(0)),
+                                             state.__msgtype__))
+            writer.write(connection, int(stamp * 1e9), edit(k, data) if edit else data)
+
+
+def test_a_bag_read_at_its_messages_offsets_is_read_as_deserialised(recording, tmp_path, monkeypatch) -> None:
+    # the reader deserialises one message of each layout and reads the others' stamps and positions at their offsets:
+    # the same samples, rows and notes as deserialising every message, gripper messages, messages without
+    # positions, zero stamps and frame_ids of several lengths interleaved
+    _, t, q, _ = recording
+    fingers = ["panda_finger_joint1", "panda_finger_joint2"]
+    messages = []
+    for k in range(0, len(t), 3):
+        messages.append((t[k], NAMES[::-1] + fingers, list(q[k, ::-1]) + [0.04, 0.04], "base" * (k % 3), k % 7 > 0))
+        messages += [(t[k], fingers, [0.04, 0.04], "", True)] if k % 5 == 0 else []
+        messages += [(t[k], NAMES, [], "", True)] if k % 11 == 0 else []
+    bag = tmp_path / "mixed"
+    _raw_joint_states(bag, messages)
+    model = load_robot(PANDA)
+    fast = read_bag(bag, model)
+    monkeypatch.setattr(bag_module, "_cdr_layout", lambda raw, message: None)  # every message deserialised
+    slow = read_bag(bag, model)
+    np.testing.assert_array_equal(fast.q, slow.q)
+    np.testing.assert_array_equal(fast.t, slow.t)
+    assert list(fast.rows) == list(slow.rows) and fast.notes == slow.notes and len(fast.notes) == 2
+    assert fast.rows[0] == f"{bag}: /joint_states message 1" and fast.rows[-1].endswith(f" {len(messages)}")
+
+
+def test_a_bag_refuses_its_first_bad_message_first(recording, tmp_path) -> None:
+    # the angles are checked once read, in arrays: a message whose angle is not finite is still refused before a
+    # later message that cannot be read, and a message that cannot be read before a later angle that is not finite
+    _, t, q, _ = recording
+    model = load_robot(PANDA)
+    messages = [(t[k], NAMES, list(q[k]), "", True) for k in range(200)]
+    messages[40] = (t[40], NAMES, [np.nan] + list(q[40, 1:]), "", True)
+    _raw_joint_states(tmp_path / "a", messages, lambda k, data: data[:-9] if k == 77 else data)
+    with pytest.raises(RecordingError, match=r"a: /joint_states message 41, field 'position': not finite"):
+        read_bag(tmp_path / "a", model)
+    _raw_joint_states(tmp_path / "b", messages, lambda k, data: data[:-9] if k == 17 else data)
+    with pytest.raises(RecordingError, match=r"b: cannot read the bag: "):
+        read_bag(tmp_path / "b", model)
+    _raw_joint_states(tmp_path / "c", messages, lambda k, data: data + bytes(8) if k == 17 else data)
+    with pytest.raises(RecordingError, match=r"c: cannot read the bag: CDR message size mismatch"):
+        read_bag(tmp_path / "c", model)
