@@ -272,7 +272,7 @@ def _first_of_clusters(q: np.ndarray, tol: float) -> np.ndarray:
         keep[:] = True
         return keep
     cells = np.floor(q / tol) if tol > 0 else q  # floats: a tiny tol overflows int64 and merges distinct cells
-    first = _first_of_rows(cells)
+    first = first_of_rows(cells)
     keep[first] = True
     if tol == 0.0 or first.size < 2:
         return keep
@@ -305,7 +305,7 @@ def _first_of_clusters(q: np.ndarray, tol: float) -> np.ndarray:
     return keep
 
 
-def _first_of_rows(cells: np.ndarray) -> np.ndarray:
+def first_of_rows(cells: np.ndarray) -> np.ndarray:
     """Sorted indices of the first of every distinct row of ``cells`` (K, n) (rows equal as floats: 0.0 is -0.0):
     ``np.unique(cells, axis=0, return_index=True)[1]``, sorted, in one sort of a 64-bit hash of each row instead
     of a sort of the rows (a tenth of the time on a million rows); rows of equal hash that differ, or values that

@@ -24,7 +24,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from spherecal.correction.files.samples import DatasetError
+from spherecal.correction.files.samples import DatasetError, first_of_rows
 from spherecal.correction.kinematics import tool_point
 from spherecal.correction.model import RobotModel
 
@@ -87,7 +87,7 @@ class Segment:
 
 
 def _distinct(q: np.ndarray, tol: float = 1e-3) -> int:
-    return int(np.unique(np.floor(q / tol), axis=0).shape[0])
+    return int(first_of_rows(np.floor(q / tol)).size)  # np.unique(axis=0)'s count, a tenth of its time
 
 
 def _still_bins(points: np.ndarray, half: int, radius: float) -> np.ndarray:

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from spherecal.correction.files.fixtures import FixtureSpec, read_fixtures, write_fixtures
-from spherecal.correction.files.samples import Dataset, DatasetError, _first_of_clusters, _first_of_rows
+from spherecal.correction.files.samples import Dataset, DatasetError, _first_of_clusters, first_of_rows
 from spherecal.correction.files.samples_csv import read_samples, write_samples
 
 HEADER = "fixture,q1,q2,q3,q4,q5,q6,q7\n"
@@ -96,14 +96,14 @@ def test_deduplicate_follows_its_rule_on_dense_repeats() -> None:
             np.testing.assert_array_equal(_first_of_clusters(q, tol), _first_of_clusters_by_hand(q, tol))
 
 
-def test_first_of_rows_is_numpy_unique_s() -> None:
+def testfirst_of_rows_is_numpy_unique_s() -> None:
     rng = np.random.default_rng(8)
     cells = np.floor(rng.normal(0, 2, (2000, 7)))
     cells[rng.random(cells.shape) < 0.2] = -0.0
     expected = np.sort(np.unique(cells, axis=0, return_index=True)[1])
-    np.testing.assert_array_equal(_first_of_rows(cells), expected)
+    np.testing.assert_array_equal(first_of_rows(cells), expected)
     cells[5, 3] = np.nan  # not finite: np.unique itself
-    np.testing.assert_array_equal(_first_of_rows(cells), np.sort(np.unique(cells, axis=0,
+    np.testing.assert_array_equal(first_of_rows(cells), np.sort(np.unique(cells, axis=0,
                                                                                    return_index=True)[1]))
 
 
