@@ -167,14 +167,24 @@ class _Group:
     nanosec: array = field(default_factory=lambda: array("q"))
     received: array = field(default_factory=lambda: array("q"))  # the bag's receive time [ns]
     positions: bytearray = field(default_factory=bytearray)  # little-endian float64, ``size`` per message
+    blocks: list = field(default_factory=list)  # (numbers, sec, nanosec, received, positions): read in arrays
 
-    def q(self) -> np.ndarray:
-        """(K, n) the arm's joint angles [rad]."""
-        positions = np.frombuffer(self.positions, dtype="<f8").reshape(-1, self.size)
-        return positions[:, self.index].astype(float, copy=False)
+    def parts(self):
+        """``(numbers, sec, nanosec, received, positions)`` of the group's messages, a block at a time (in no particular
+        order): the ones deserialised, then each block read in arrays."""
+        one = [np.frombuffer(getattr(self, name), dtype=np.int64) for name in ("numbers", "sec", "nanosec", "received")]
+        yield (*one, np.frombuffer(self.positions, dtype="<f8").reshape(-1, self.size))
+        yield from self.blocks
+
+    def columns(self) -> tuple[np.ndarray, ...]:
+        """``(numbers, sec, nanosec, received, q)`` of every message of the group (in no particular order), ``q``
+        (K, n) the arm's joint angles [rad]."""
+        parts = [(*part[:4], part[4][:, self.index]) for part in self.parts()]
+        return tuple(np.concatenate([p[i] for p in parts]).astype(float if i == 4 else np.int64, copy=False)
+                     for i in range(5))
 
 
-@dataclass(frozen=True)
+@dataclass
 class _Layout:
     """The fixed bytes of CDR ``JointState`` messages alike but for their stamps and arrays' values: a message whose
     bytes match them everywhere else has the same names and array lengths, and needs no deserialising (its stamp
@@ -189,12 +199,31 @@ class _Layout:
     at_position: int  # where the positions start
     length: int  # of the whole message
     names: tuple[str, ...]
+    group: _Group | None = None  # the arm's messages of these names (None: another device's, no positions, ...)
+    raw: list = field(default_factory=list)  # messages matched and not yet read into ``group``
+    numbers: array = field(default_factory=lambda: array("q"))  # theirs
+    received: array = field(default_factory=lambda: array("q"))
 
     def matches(self, raw: bytes) -> bool:
         return (len(raw) == self.length and raw.startswith(self.middle, 12) and raw.startswith(self.head)
                 and raw.startswith(self.velocity, self.at_velocity) and raw.startswith(self.effort, self.at_effort))
 
+    def flush(self) -> None:
+        """Read the stamps and positions of the messages matched into the group's arrays, all at once."""
+        if not self.raw:
+            return
+        data = np.frombuffer(b"".join(self.raw), dtype=np.uint8).reshape(-1, self.length)
+        stamps = np.ascontiguousarray(data[:, 4:12]).view(np.dtype([("sec", "<i4"), ("nanosec", "<u4")]))[:, 0]
+        positions = np.ascontiguousarray(data[:, self.at_position:self.at_velocity]).view("<f8")
+        numbers, received = (np.frombuffer(self.numbers, dtype=np.int64).copy(),
+                             np.frombuffer(self.received, dtype=np.int64).copy())
+        self.group.blocks.append((numbers, stamps["sec"].astype(np.int64), stamps["nanosec"].astype(np.int64),
+                                  received, positions.astype(float, copy=False)))
+        self.raw, self.numbers, self.received = [], array("q"), array("q")
 
+
+#: Messages of one layout kept as bytes before their stamps and positions are read into arrays, all at once.
+_BLOCK = 20_000
 _HEADER = struct.Struct("<iI")  # header.stamp's sec and nanosec, after the 4-byte encapsulation
 _COUNT = struct.Struct("<I")
 
@@ -261,6 +290,7 @@ class _Messages:
         self.unpositioned = 0  # messages with names but no positions (a driver publishing velocities or efforts)
         self.partial: dict[tuple[str, ...], list] = {}  # names of some of the arm's joints -> [count, first message]
         self.count = 0  # messages of the arm read
+        self.layouts: list[_Layout] = []
 
     def read(self, reader, connections) -> None:
         """Read every message of ``connections``, in the bag's order.
@@ -269,34 +299,38 @@ class _Messages:
             RecordingError: a message whose ``position`` does not match its ``name``, a joint named twice, ...
                 (as :func:`read_bag` says), naming the message.
         """
-        layouts: list[_Layout] = []
+        layouts = self.layouts
         last: _Layout | None = None
-        unpack = _HEADER.unpack_from
         for k, (connection, timestamp, raw) in enumerate(reader.messages(connections=connections)):
-            if last is not None:  # the bytes of the last message's layout: read at its offsets
+            if last is not None:  # the bytes of the last message's layout: kept, read at its offsets in arrays
                 if type(raw) is not bytes:
                     raw = bytes(raw)
-                if last.matches(raw) or any((last := other).matches(raw) for other in layouts):
-                    positioned = last.at_velocity > last.at_position
-                    group = self.groups.get(last.names) if positioned else None
-                    if group is None:
-                        self._other(last.names, positioned, k)
+                if not (len(raw) == last.length and raw.startswith(last.middle, 12) and raw.startswith(last.head)
+                        and raw.startswith(last.velocity, last.at_velocity)
+                        and raw.startswith(last.effort, last.at_effort)):
+                    last = next((other for other in layouts if other.matches(raw)), last)
+                    matched = last.matches(raw)
+                else:
+                    matched = True
+                if matched:
+                    if last.group is None:
+                        self._other(last.names, last.at_velocity > last.at_position, k)
                         continue
-                    sec, nanosec = unpack(raw, 4)
-                    group.numbers.append(k + 1)
-                    group.sec.append(sec)
-                    group.nanosec.append(nanosec)
-                    group.received.append(timestamp)
-                    group.positions += raw[last.at_position:last.at_velocity]
+                    last.raw.append(raw)
+                    last.numbers.append(k + 1)
+                    last.received.append(timestamp)
                     self.count += 1
+                    if len(last.raw) >= _BLOCK:
+                        last.flush()
                     continue
             message = reader.deserialize(raw, connection.msgtype)
-            if reader.is2 and len(layouts) < 16:
-                layout = _cdr_layout(bytes(raw), message)
-                if layout is not None:
-                    layouts.append(layout)
-                    last = layout
+            layout = _cdr_layout(bytes(raw), message) if reader.is2 and len(layouts) < 16 else None
             self._add(message, k, timestamp)
+            if layout is not None:
+                positioned = layout.at_velocity > layout.at_position
+                layout.group = self.groups.get(layout.names) if positioned else None
+                layouts.append(layout)
+                last = layout
 
     def _other(self, names: tuple[str, ...], positioned: bool, k: int) -> None:
         """Count a message of ``names`` that is not the arm's (no group), as :meth:`_add` would."""
@@ -337,15 +371,21 @@ class _Messages:
     def arrays(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """``(numbers, stamps, q)`` of the arm's messages in the bag's order: (K,) message numbers, (K,) stamps [s]
         (``header.stamp``, or the bag's receive time where it is zero) and (K, n) joint angles [rad]."""
-        groups = list(self.groups.values())
-        numbers = np.concatenate([np.frombuffer(g.numbers, dtype=np.int64) for g in groups])
+        for layout in self.layouts:
+            layout.flush()
+        self.layouts = []  # they hold their groups
+        groups = []
+        for names in list(self.groups):  # each group's blocks let go once read
+            groups.append(self.groups.pop(names).columns())
+        numbers, sec, nanosec, received, q = groups[0] if len(groups) == 1 else (
+            np.concatenate([g[i] for g in groups]) for i in range(5))
+        del groups
         order = np.argsort(numbers, kind="stable")
-        sec, nanosec, received = (np.concatenate([np.frombuffer(getattr(g, name), dtype=np.int64) for g in groups])
-                                  [order] for name in ("sec", "nanosec", "received"))
+        if np.any(order != np.arange(order.size)):
+            numbers, sec, nanosec, received, q = numbers[order], sec[order], nanosec[order], received[order], q[order]
         seconds = sec + nanosec * 1e-9
         stamps = np.where(seconds > 0, seconds, received * 1e-9)
-        q = np.concatenate([g.q() for g in groups])[order] if len(groups) > 1 else groups[0].q()
-        return numbers[order], stamps, q
+        return numbers, stamps, q
 
     def check_finite(self) -> None:
         """Refuse the first message read whose arm's angles are not all finite.
@@ -355,8 +395,10 @@ class _Messages:
         """
         if not self.count:
             return
-        bad = [np.frombuffer(g.numbers, dtype=np.int64)[~np.isfinite(g.q()).all(axis=1)] for g in self.groups.values()]
-        bad = np.concatenate(bad)
+        for layout in self.layouts:
+            layout.flush()
+        bad = np.concatenate([numbers[~np.isfinite(positions[:, g.index]).all(axis=1)]
+                              for g in self.groups.values() for numbers, *_, positions in g.parts()])
         if bad.size:
             raise RecordingError(f"{self.where}{int(bad.min())}, field 'position': not finite")
 
