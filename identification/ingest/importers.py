@@ -61,7 +61,8 @@ def first_jump(q: np.ndarray, t: np.ndarray) -> tuple[int, float, float] | None:
     ``t`` (T,) [s] in time order."""
     if len(t) < 2:
         return None
-    step = np.abs(np.diff(q, axis=0)).max(axis=1)
+    step = np.concatenate([np.abs(np.diff(q[k : k + 100_001], axis=0)).max(axis=1)  # in blocks: 2 of (T, n) were
+                           for k in range(0, len(q) - 1, 100_000)])  # 200 MB of a 1.8 M-sample recording
     dt = np.diff(t)
     jumps = np.flatnonzero((step > MIN_JUMP) & (step > MAX_JOINT_SPEED * dt))
     if not len(jumps):

@@ -5,6 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from spherecal.correction.files import samples
 from spherecal.correction.files.fixtures import FixtureSpec, read_fixtures, write_fixtures
 from spherecal.correction.files.samples import Dataset, DatasetError, _first_of_clusters, first_of_rows
 from spherecal.correction.files.samples_csv import read_samples, write_samples
@@ -230,3 +231,22 @@ def test_numbered_fixtures_match_numbered_samples(tmp_path, panda) -> None:
     samples = tmp_path / "s.csv"
     samples.write_text(HEADER + GOOD.replace("P1", "1") + GOOD.replace("P1", "2"))
     spec.check_against(read_samples(samples, panda))
+
+
+def test_limit_excess_in_blocks_is_the_same_as_at_once(panda, monkeypatch) -> None:
+    # LimitExcess.add checks a long recording a block at a time: the worst excess of each joint, where it was, and
+    # the first row refused are the ones found at once
+    rng = np.random.default_rng(9)
+    q = rng.uniform(panda.lower - 0.3, panda.upper + 0.3, (50, 7))
+    q[[7, 31], 2] = panda.upper[2] + 0.25  # a tie: the first is named
+    found = {}
+    for block in (100_000, 4, 1):
+        monkeypatch.setattr(samples, "LIMIT_BLOCK", block)
+        excess = samples.LimitExcess.of(panda)
+        excess.add(q, lambda k: f"row {k + 2}", DatasetError)
+        hard = q.copy()
+        hard[[12, 40], [3, 1]] = panda.upper[[3, 1]] + 2.0
+        with pytest.raises(DatasetError) as error:
+            samples.LimitExcess.of(panda).add(hard, lambda k: f"row {k + 2}", DatasetError)
+        found[block] = (excess.worst, str(error.value))
+    assert found[100_000] == found[4] == found[1] and "row 14" in found[1][1]
