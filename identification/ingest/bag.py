@@ -132,7 +132,7 @@ def read_bag(path: str | os.PathLike, model: RobotModel, topic: str = TOPIC) -> 
     q, t, rows = q[order], stamps[order], MessageNames(messages.where, numbers[order])
     recording = Recording(q, t, None, str(path), rows, notes, clock="header.stamp", time_field="header.stamp")
     recording.check_limits(model)  # first: degrees in a radians field jump too, and this says which it is
-    _refuse_interleaved(q, t, rows, stamps)  # before the stamps alike: two streams' clash is named as theirs
+    _refuse_interleaved(q, t, rows, stamps, numbers)  # before the stamps alike: two streams' clash is named as theirs
     keep, repeats = repeated_stamps(q, t, rows, "header.stamp", "message")
     return replace(recording, q=q[keep], t=t[keep], rows=rows.select(keep), notes=notes + repeats)
 
@@ -403,7 +403,8 @@ class _Messages:
             raise RecordingError(f"{self.where}{int(bad.min())}, field 'position': not finite")
 
 
-def _refuse_interleaved(q: np.ndarray, t: np.ndarray, rows: list[str], stamps: list[float]) -> None:
+def _refuse_interleaved(q: np.ndarray, t: np.ndarray, rows: Sequence[str], stamps: np.ndarray,
+                        numbers: np.ndarray) -> None:
     """Refuse joint angles that jump faster than :data:`MAX_JOINT_SPEED` between stamp-ordered messages.
 
     Args:
@@ -411,6 +412,7 @@ def _refuse_interleaved(q: np.ndarray, t: np.ndarray, rows: list[str], stamps: l
         t: (T,) sorted stamps [s].
         rows: (T,) the message each sample came from, in stamp order.
         stamps: (T,) the stamps in the bag's own order [s] (to name where time went back).
+        numbers: (T,) their messages' numbers on the topic (a gripper's messages between them count too).
 
     Raises:
         RecordingError: one line naming the message, the jump and, when the stamps went back in the bag's
@@ -421,8 +423,8 @@ def _refuse_interleaved(q: np.ndarray, t: np.ndarray, rows: list[str], stamps: l
         return
     k, step, dt = found
     back = np.flatnonzero(np.diff(stamps) < 0)
-    why = (f"its stamps go back {stamps[back[0]] - stamps[back[0] + 1]:.3f} s at message {back[0] + 2} (a clock "
-           "reset or two recordings in one bag?)" if len(back) else
+    why = (f"its stamps go back {stamps[back[0]] - stamps[back[0] + 1]:.3f} s at message {numbers[back[0] + 1]} "
+           "(a clock reset or two recordings in one bag?)" if len(back) else
            "a clock reset, two recordings in one bag or two publishers on one topic? Or, back where it was a few "
            "messages on, one joint reading that jumped (an encoder glitch)")
     raise RecordingError(

@@ -155,7 +155,8 @@ def test_a_bag_whose_clock_goes_back_is_refused_not_interleaved(recording, kind,
 
 
 def _joint_states(path, messages) -> None:
-    """A ROS 2 bag of ``sensor_msgs/JointState`` on /joint_states: ``messages`` of (stamp [s], names, positions)."""
+    """A ROS 2 bag of ``sensor_msgs/JointState`` on /joint_states: ``messages`` of (stamp [s], names, positions) and
+    optionally the bag's receive time [s] (default: the stamp)."""
     from rosbags.rosbag2 import Writer
     from rosbags.typesys import Stores, get_typestore
 
@@ -164,12 +165,27 @@ def _joint_states(path, messages) -> None:
                                                     "builtin_interfaces/msg/Time"))
     with Writer(path, version=9) as writer:
         connection = writer.add_connection("/joint_states", state.__msgtype__, typestore=store)
-        for stamp, names, position in messages:
+        for stamp, names, position, *received in messages:
             sec = int(stamp)
             head = header(stamp=time(sec=sec, nanosec=int(round((stamp - sec) * 1e9))), frame_id="")
             data = state(header=head, name=list(names), position=np.asarray(position, float),
                          velocity=np.zeros(len(names)), effort=np.zeros(0))
-            writer.write(connection, int(stamp * 1e9), store.serialize_cdr(data, state.__msgtype__))
+            writer.write(connection, int((received[0] if received else stamp) * 1e9),
+                         store.serialize_cdr(data, state.__msgtype__))
+
+
+def test_where_the_clock_goes_back_counts_a_gripper_s_messages_between(recording, tmp_path, capsys) -> None:
+    # the refusal said "at message {k + 2}" counting the arm's messages alone: with a gripper's message after each
+    # of the arm's on the topic, the message it named was half the one where the stamps went back
+    true, t, q, _ = recording
+    back = np.where(np.arange(len(t)) < 1600, t, t - 3.0)
+    gripper = ("panda_finger_joint1", "panda_finger_joint2")
+    _joint_states(tmp_path / "back", [m for k in range(len(t)) for m in (
+        (back[k], NAMES, q[k], t[k]), (back[k] + 1e-4, gripper, [0.04, 0.04], t[k] + 1e-4))])
+    error = _refused(["import", str(tmp_path / "back"), "--format", "bag", "--robot", str(PANDA), "--out",
+                      str(tmp_path / "out")], tmp_path, capsys)
+    # the arm's message 1601 is the topic's 3201st: 1600 arm and 1600 gripper messages before it
+    assert "its stamps go back " in error and " s at message 3201 (a clock reset" in error, error
 
 
 def test_messages_without_positions_are_skipped_and_counted(recording, tmp_path, capsys) -> None:
