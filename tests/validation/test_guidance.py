@@ -35,7 +35,7 @@ from spherecal.validation.planning.guidance import (
     workspace_of,
 )
 from spherecal.validation.planning.guidance_report import format_guidance
-from spherecal.validation.planning.hand_guiding import carried_over, hand_guided
+from spherecal.validation.planning.hand_guiding import SEEDS, STEP, WALKERS, _Walk, carried_over, hand_guided
 from spherecal.validation.planning.placements import (
     Placement,
     plate_layout,
@@ -143,6 +143,27 @@ def test_the_recorded_postures_are_carried_over_to_a_new_socket(panda, rng):
 
     assert nearest(q[0]) < 0.5 * nearest(walked[0]), (nearest(q[0]), nearest(walked[0]))
     assert len(np.unique(np.round(q[0], 6), axis=0)) == 20  # distinct postures, not one repeated
+
+
+def test_carried_over_walks_only_where_the_recording_falls_short_and_as_the_walk_would(panda):
+    """Sockets the recorded postures fill are not walked, yet the generator is drawn as the walk draws it: the rows a
+    short recording leaves are those :func:`hand_guided` gives from the same generator state; and a socket's walk is
+    the same whichever other sockets are walked beside it."""
+    rng = np.random.default_rng(3)
+    first = np.concatenate([fixture_samples(panda, np.array(c), 20, rng) for c in FIRST.values()])
+    target = np.array([[0.5, -0.1, 0.2], [0.45, 0.2, 0.1], [reach_beyond(panda), 0.0, 0.3]])
+    walked, reached = hand_guided(panda, target, 30, np.random.default_rng(5))
+    short, ok = carried_over(panda, target, first[:10], 30, np.random.default_rng(5))  # 10 postures for 30 samples
+    assert ok.tolist() == reached.tolist() == [True, True, False]
+    assert not short[2].any() and not walked[2].any()
+    for i in (0, 1):
+        same = np.all(short[i] == walked[i], axis=1)
+        carried = int((~same).sum())
+        assert 0 < carried <= 10 and same[carried:].all()  # the carried-over rows first, then the walk's
+    assert np.abs(tool_point(panda, short[:2].reshape(-1, panda.n_joints)) - np.repeat(target[:2], 30, 0)).max() < 1e-9
+    walk = _Walk.drawn(panda, target, 30, np.random.default_rng(5), WALKERS, STEP, SEEDS, 0.0)
+    alone, beside = walk.samples(np.array([False, True, False])), walk.samples(np.array([True, True, True]))
+    assert np.array_equal(alone[1], beside[1]) and np.array_equal(beside[1], walked[1]) and not alone[0].any()
 
 
 def reach_beyond(model) -> float:

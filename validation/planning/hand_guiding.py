@@ -13,6 +13,7 @@ walked in one batch.
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -54,31 +55,63 @@ def hand_guided(
         (S, count, n) configurations [rad] inside the joint limits, and (S,) bool: the socket is
         reachable (the rows of an unreachable socket are zeros).
     """
-    centres = np.atleast_2d(np.asarray(centres, float))
-    s, n = centres.shape[0], model.n_joints
-    targets = np.repeat(centres, seeds, axis=0)
-    q, ok = project_to_point(model, model.random_configurations(s * seeds, rng), targets, freeze=True)
-    share = np.minimum(q - model.lower, model.upper - q) / (model.upper - model.lower)
-    margin = np.where(ok, share.min(axis=1), -np.inf).reshape(s, seeds)
-    reachable = np.isfinite(margin).any(axis=1)
-    best = np.argsort(-margin, axis=1)[:, :walkers]  # the most comfortable postures (an unreached one repeats)
-    best = np.where(np.isfinite(np.take_along_axis(margin, best, axis=1)), best, best[:, :1])
-    current = q.reshape(s, seeds, n)[np.arange(s)[:, None], best].reshape(s * walkers, n)
-    goal = np.repeat(centres, walkers, axis=0)
-    steps = math.ceil(count / walkers)
-    out = np.empty((steps, s * walkers, n))
-    identity = np.eye(n)
-    for k in range(steps):
-        jac = joint_jacobian(model, current)
-        null = identity - np.linalg.pinv(jac) @ jac
-        move = np.einsum("wij,wj->wi", null, rng.normal(0.0, step, current.shape))
-        target = goal + rng.normal(0.0, noise, goal.shape) if noise > 0 else goal
-        trial, done = project_to_point(model, current + move, target, freeze=True)
-        current = np.where(done[:, None], trial, current)
-        out[k] = current
-    samples = out.reshape(steps, s, walkers, n).transpose(1, 0, 2, 3).reshape(s, steps * walkers, n)[:, :count]
-    samples[~reachable] = 0.0
-    return samples, reachable
+    walk = _Walk.drawn(model, centres, count, rng, walkers, step, seeds, noise)
+    return walk.samples(walk.reachable), walk.reachable
+
+
+@dataclass(frozen=True)
+class _Walk:
+    """A hand-guided walk with every random number drawn (from the generator, in the order the walk takes them) but
+    not yet walked: :meth:`samples` walks only the sockets asked for, and each walker's steps depend on its own
+    draws alone, so a socket's samples are the same whichever others are walked beside it."""
+
+    model: RobotModel
+    start: np.ndarray  # (S * walkers, n) the most comfortable reach configurations
+    reachable: np.ndarray  # (S,) bool
+    moves: list[np.ndarray]  # per step: (S * walkers, n) random joint step before the null-space projection
+    targets: list[np.ndarray]  # per step: (S * walkers, 3) where the step projects to (the socket, plus noise)
+    count: int
+    walkers: int
+
+    @classmethod
+    def drawn(cls, model, centres, count, rng, walkers, step, seeds, noise) -> _Walk:
+        centres = np.atleast_2d(np.asarray(centres, float))
+        s, n = centres.shape[0], model.n_joints
+        targets = np.repeat(centres, seeds, axis=0)
+        q, ok = project_to_point(model, model.random_configurations(s * seeds, rng), targets, freeze=True)
+        share = np.minimum(q - model.lower, model.upper - q) / (model.upper - model.lower)
+        margin = np.where(ok, share.min(axis=1), -np.inf).reshape(s, seeds)
+        reachable = np.isfinite(margin).any(axis=1)
+        best = np.argsort(-margin, axis=1)[:, :walkers]  # the most comfortable postures (an unreached one repeats)
+        best = np.where(np.isfinite(np.take_along_axis(margin, best, axis=1)), best, best[:, :1])
+        start = q.reshape(s, seeds, n)[np.arange(s)[:, None], best].reshape(s * walkers, n)
+        goal = np.repeat(centres, walkers, axis=0)
+        moves, goals = [], []
+        for _ in range(math.ceil(count / walkers)):
+            moves.append(rng.normal(0.0, step, start.shape))
+            goals.append(goal + rng.normal(0.0, noise, goal.shape) if noise > 0 else goal)
+        return cls(model, start, reachable, moves, goals, count, walkers)
+
+    def samples(self, sockets: np.ndarray) -> np.ndarray:
+        """(S, count, n) the walk's configurations at ``sockets`` (S,) bool; zeros at the others."""
+        s, n = len(self.reachable), self.model.n_joints
+        rows = np.flatnonzero(np.repeat(sockets, self.walkers))
+        out = np.zeros((len(self.moves), s * self.walkers, n))
+        current = self.start[rows]
+        identity = np.eye(n)
+        for k, (moves, targets) in enumerate(zip(self.moves, self.targets, strict=True)):
+            if not len(rows):
+                break
+            jac = joint_jacobian(self.model, current)
+            null = identity - np.linalg.pinv(jac) @ jac
+            move = np.einsum("wij,wj->wi", null, moves[rows])
+            trial, done = project_to_point(self.model, current + move, targets[rows], freeze=True)
+            current = np.where(done[:, None], trial, current)
+            out[k, rows] = current
+        steps = len(self.moves)
+        return out.reshape(steps, s, self.walkers, n).transpose(1, 0, 2, 3).reshape(s, steps * self.walkers, n)[
+            :, : self.count
+        ]
 
 
 def carried_over(
@@ -93,6 +126,11 @@ def carried_over(
     by damped Newton steps (the nearest configuration there, inside the joint limits); a socket where fewer than
     ``count`` of them converge is filled up from :func:`hand_guided`'s walk.
 
+    Only those sockets are walked, and only the reachable ones are carried over to: the walk at a socket that is
+    filled from the recording was overwritten (50 plate placements on a 3 x 500 sample recording walked 432 walkers
+    through 167 steps of 60 Newton iterations each, all of it thrown away), and an unreachable socket's rows are
+    zeros. The generator is drawn as before (the walk's draws, then the subset), so the samples are the same.
+
     Args:
         model: the robot (its current model).
         centres: (S, 3) socket centres in the base frame [m].
@@ -105,12 +143,16 @@ def carried_over(
         (as :func:`hand_guided`; the rows of an unreachable socket are zeros).
     """
     centres = np.atleast_2d(np.asarray(centres, float))
-    walked, reachable = hand_guided(model, centres, count, rng)
+    walk = _Walk.drawn(model, centres, count, rng, WALKERS, STEP, SEEDS, 0.0)
+    reachable = walk.reachable
     chosen = recorded[rng.permutation(len(recorded))[: 2 * count]]
-    s, k = centres.shape[0], len(chosen)
-    q, ok = project_to_point(model, np.tile(chosen, (s, 1)), np.repeat(centres, k, axis=0), freeze=True)
-    q, ok = q.reshape(s, k, -1), ok.reshape(s, k)
-    out = walked.copy()
+    s, k, n = centres.shape[0], len(chosen), model.n_joints
+    q, ok = np.zeros((s, k, n)), np.zeros((s, k), bool)
+    if reachable.any():
+        tried, fine = project_to_point(model, np.tile(chosen, (int(reachable.sum()), 1)),
+                                       np.repeat(centres[reachable], k, axis=0), freeze=True)
+        q[reachable], ok[reachable] = tried.reshape(-1, k, n), fine.reshape(-1, k)
+    out = walk.samples(reachable & (ok.sum(axis=1) < count))
     for i in np.flatnonzero(reachable):
         mine = q[i][ok[i]][:count]
         out[i, : len(mine)] = mine
