@@ -24,7 +24,7 @@ from spherecal.correction.perturb import perturb
 from spherecal.identification.build import build_problem
 from spherecal.identification.calibrate import calibrate
 from spherecal.identification.prediction import Workspace, held_out_joint_error, predict_accuracy
-from spherecal.identification.synthetic import fixture_samples
+from spherecal.identification.synthetic import fixture_samples, project_to_point
 from spherecal.validation.planning import guidance as guidance_module
 from spherecal.validation.planning.candidates import CandidateError
 from spherecal.validation.planning.guidance import (
@@ -164,6 +164,19 @@ def test_carried_over_walks_only_where_the_recording_falls_short_and_as_the_walk
     walk = _Walk.drawn(panda, target, 30, np.random.default_rng(5), WALKERS, STEP, SEEDS, 0.0)
     alone, beside = walk.samples(np.array([False, True, False])), walk.samples(np.array([True, True, True]))
     assert np.array_equal(alone[1], beside[1]) and np.array_equal(beside[1], walked[1]) and not alone[0].any()
+    # a long recording, postures taken a share at a time: each socket's first 20 that converge (13 of the first 20
+    # at one socket, 17 of all 40 at the other, which the walk then fills), as all 40 moved at once give them
+    far = np.array([[0.0, -0.6, 0.3], [0.3, 0.6, -0.1]])
+    rng = np.random.default_rng(3)
+    _Walk.drawn(panda, far, 20, rng, WALKERS, STEP, SEEDS, 0.0)
+    chosen = first[rng.permutation(len(first))[:40]]
+    every, fine = project_to_point(panda, np.tile(chosen, (2, 1)), np.repeat(far, 40, axis=0), freeze=True)
+    q, ok = carried_over(panda, far, first, 20, np.random.default_rng(3))
+    assert ok.all()
+    for i in (0, 1):
+        mine = every.reshape(2, 40, -1)[i][fine.reshape(2, 40)[i]][:20]
+        assert 13 <= len(mine) and np.array_equal(q[i, : len(mine)], mine)
+    assert np.abs(tool_point(panda, q[1]) - far[1]).max() < 1e-9  # filled up by the walk
 
 
 def reach_beyond(model) -> float:

@@ -126,10 +126,13 @@ def carried_over(
     by damped Newton steps (the nearest configuration there, inside the joint limits); a socket where fewer than
     ``count`` of them converge is filled up from :func:`hand_guided`'s walk.
 
-    Only those sockets are walked, and only the reachable ones are carried over to: the walk at a socket that is
-    filled from the recording was overwritten (50 plate placements on a 3 x 500 sample recording walked 432 walkers
-    through 167 steps of 60 Newton iterations each, all of it thrown away), and an unreachable socket's rows are
-    zeros. The generator is drawn as before (the walk's draws, then the subset), so the samples are the same.
+    Only those sockets are walked, only the reachable ones are carried over to, and a socket takes recorded postures
+    (the first ``count``, then a quarter of that at a time) only until ``count`` of them have converged: the walk at
+    a socket that is filled from the recording was overwritten (50 plate placements on a 3 x 500 sample recording
+    walked 432 walkers through 167 steps of 60 Newton iterations each, all of it thrown away), an unreachable
+    socket's rows are zeros, and postures past the first ``count`` that converge are not used (a posture's steps do
+    not depend on the others moved with it). The generator is drawn as before (the walk's draws, then the subset),
+    so the samples are the same.
 
     Args:
         model: the robot (its current model).
@@ -146,14 +149,19 @@ def carried_over(
     walk = _Walk.drawn(model, centres, count, rng, WALKERS, STEP, SEEDS, 0.0)
     reachable = walk.reachable
     chosen = recorded[rng.permutation(len(recorded))[: 2 * count]]
-    s, k, n = centres.shape[0], len(chosen), model.n_joints
-    q, ok = np.zeros((s, k, n)), np.zeros((s, k), bool)
-    if reachable.any():
-        tried, fine = project_to_point(model, np.tile(chosen, (int(reachable.sum()), 1)),
-                                       np.repeat(centres[reachable], k, axis=0), freeze=True)
-        q[reachable], ok[reachable] = tried.reshape(-1, k, n), fine.reshape(-1, k)
-    out = walk.samples(reachable & (ok.sum(axis=1) < count))
+    found: list[list[np.ndarray]] = [[] for _ in centres]  # per socket: the converged postures, in chosen order
+    short, start, size = reachable.copy(), 0, count
+    while short.any() and start < len(chosen):  # the first ``count`` rows, then quarters, to the sockets still short
+        rows, sockets = chosen[start : start + size], np.flatnonzero(short)
+        targets = np.repeat(centres[sockets], len(rows), axis=0)
+        q, ok = project_to_point(model, np.tile(rows, (len(sockets), 1)), targets, freeze=True)
+        q, ok = q.reshape(len(sockets), len(rows), -1), ok.reshape(len(sockets), len(rows))
+        for j, i in enumerate(sockets):
+            found[i].append(q[j][ok[j]])
+        short[sockets] = [sum(map(len, found[i])) < count for i in sockets]
+        start, size = start + size, max(count // 4, 1)
+    out = walk.samples(short)
     for i in np.flatnonzero(reachable):
-        mine = q[i][ok[i]][:count]
+        mine = np.concatenate([np.zeros((0, model.n_joints)), *found[i]])[:count]
         out[i, : len(mine)] = mine
     return out, reachable
