@@ -32,10 +32,11 @@ _EXPORTS: dict[str, str] = {
     "damped_pinv_velocity": "qp_ik",
     "solve_step": "qp_ik",
     "velocity_bounds": "qp_ik",
-    "FixtureInsideRobotError": "self_motion",
+    "FixtureInsideRobotError": "reach",
     "SelfMotionRun": "self_motion",
     "SelfMotionSettings": "self_motion",
-    "UnreachableFixtureError": "self_motion",
+    "UnreachableFixtureError": "reach",
+    "check_fixture": "reach",
     "collect_self_motion": "self_motion",
     "reach_fixture": "self_motion",
 }

@@ -23,7 +23,7 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
-from spherecal.correction import RobotModel, frames
+from spherecal.correction import RobotModel
 from spherecal.correction.errors import SpherecalError
 from spherecal.correction.files.samples import Dataset
 
@@ -32,6 +32,7 @@ from .ik import ik
 from .nullspace import NullSpaceController
 from .plant import TIMESTEP, build_plant
 from .qp_ik import LIMIT_MARGIN
+from .reach import UnreachableFixtureError, check_fixture
 
 #: Default fixtures [m], base frame: over the front of the Panda's workspace, chosen by the
 #: coverage table (every joint >= 30% of its range in 20 s with coverage exploration).
@@ -51,9 +52,6 @@ def home(model: RobotModel) -> np.ndarray:
     start = HOME if model.n_joints == HOME.size else 0.5 * (model.lower + model.upper)
     return np.clip(start, model.lower, model.upper)
 REACH_RESTARTS = 20
-#: A fixture closer than this to the base column (base to the first joint's frame) is inside
-#: the robot [m].
-BASE_RADIUS = 0.12
 #: Correlation time of the fixture compliance [s]: a new offset every this often, blended.
 NOISE_PERIOD = 0.05
 #: How often the exploration is asked whether its goal is reached [s].
@@ -62,22 +60,6 @@ CHECK_PERIOD = 0.05
 PROGRESS_PERIOD = 0.1
 #: Default rate of the controller (QP and exploration) [Hz]; the physics runs at ``1 / TIMESTEP``.
 CONTROL_RATE = 250.0
-
-
-class UnreachableFixtureError(SpherecalError):
-    """The tool point of the true robot cannot reach a fixture inside the joint limits.
-
-    Attributes:
-        fixture: the fixture's name (for the caller to name the file and field that placed it).
-    """
-
-    def __init__(self, message: str, fixture: str | None = None):
-        super().__init__(message)
-        self.fixture = fixture
-
-
-class FixtureInsideRobotError(UnreachableFixtureError):
-    """A fixture lies inside the robot's base column."""
 
 
 class InvalidSettingsError(SpherecalError):
@@ -186,25 +168,6 @@ class SelfMotionRun:
             rows.append(f"{name:<7} " + " ".join(f"{c:5.1f}" for c in cov)
                         + f"  {cov.min():5.1f}  {self.max_violation[k] * 1e3:7.4f}  {self.limit_excess[k]:9.2e}")
         return "\n".join(rows)
-
-
-def check_fixture(model: RobotModel, name: str, centre: np.ndarray) -> None:
-    """Raise :class:`FixtureInsideRobotError` if ``centre`` lies in the base column of ``model``.
-
-    The base column is the segment from the base origin to the first joint's fixed point
-    (modified DH: the origin of frame 1; standard DH: ``d1`` along the first axis, since
-    frame 1 turns with joint 1 and carries ``a1``), thickened by :data:`BASE_RADIUS`.
-    """
-    f = frames(model, np.zeros((1, model.n_joints)))
-    a = f.origin[0, :, 0]
-    b = f.origin[1, :, 0] if model.convention == "modified" else a + model.d[0] * f.z[0, :, 0]
-    axis = b - a
-    s = np.clip(np.dot(centre - a, axis) / max(np.dot(axis, axis), 1e-12), 0.0, 1.0)
-    distance = np.linalg.norm(centre - (a + s * axis))
-    if distance < BASE_RADIUS:
-        raise FixtureInsideRobotError(
-            f"fixture {name} at {np.round(centre, 4).tolist()} m is inside the robot "
-            f"({distance * 1e3:.0f} mm from the base column, need >= {BASE_RADIUS * 1e3:.0f} mm)", name)
 
 
 def reach_fixture(model: RobotModel, name: str, centre: np.ndarray, rng: np.random.Generator,

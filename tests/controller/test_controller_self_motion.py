@@ -6,12 +6,11 @@ import numpy as np
 import pytest
 
 from spherecal.controller.exploration import Ramp, joint_coverage
+from spherecal.controller.reach import FixtureInsideRobotError, UnreachableFixtureError
 from spherecal.controller.self_motion import (
     DEFAULT_FIXTURES,
-    FixtureInsideRobotError,
     SelfMotionRun,
     SelfMotionSettings,
-    UnreachableFixtureError,
     collect_self_motion,
     reach_fixture,
 )

@@ -56,7 +56,7 @@ def test_base_column_of_a_standard_arm_with_a_shoulder_offset_is_vertical() -> N
 
     import pytest
 
-    from spherecal.controller.self_motion import FixtureInsideRobotError, check_fixture
+    from spherecal.controller.reach import FixtureInsideRobotError, check_fixture
 
     arm = replace(UR5, a=[0.3, -0.425, -0.39225, 0.0, 0.0, 0.0])  # an industrial arm's shoulder offset
     check_fixture(arm, "P1", np.array([0.3, 0.0, 0.2]))  # 0.3 m from the column: was refused

@@ -9,6 +9,7 @@ from pathlib import Path
 
 import numpy as np
 
+from spherecal.controller.reach import UnreachableFixtureError
 from spherecal.correction import RobotModel, dump_robot, load_robot, perturb
 from spherecal.correction.elastic import compliance_of, with_stiffness
 from spherecal.correction.files.earlier_run import refuse_foreign_files
@@ -102,7 +103,6 @@ def simulate_to_folder(config: SimulationConfig, outputs: OutputSet | None = Non
     from spherecal.controller.plant import TIMESTEP  # MuJoCo: only a simulation needs it (start-up)
     from spherecal.controller.self_motion import (  # MuJoCo: only a simulation needs it (start-up)
         SelfMotionSettings,
-        UnreachableFixtureError,
         collect_self_motion,
     )
 

@@ -64,6 +64,7 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
+from spherecal.controller.reach import check_fixture
 from spherecal.correction import RobotModel, geometric_part, param_jacobian, tool_point
 from spherecal.correction.errors import SpherecalError
 from spherecal.correction.files.fixtures import FixtureSpec
@@ -459,9 +460,6 @@ def rank_placements(
             name = sorted(clash)[0]
             where = f"{p.source}: field 'candidates.{p.name}.sockets.{name}': " if p.source else f"candidate {p.name}: "
             raise CandidateError(f"{where}socket {name!r} is a recorded fixture's name (name it differently)")
-    # MuJoCo: controller.self_motion imports it at its top (start-up); its base-column check is the one we use
-    from spherecal.controller.self_motion import check_fixture
-
     per_socket = recorded.per_socket if per_socket is None else per_socket
     clock = time.perf_counter()
     inside, kept = [], []

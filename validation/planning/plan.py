@@ -31,6 +31,7 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 
 from spherecal.controller.exploration import joint_coverage
+from spherecal.controller.reach import UnreachableFixtureError, check_fixture
 from spherecal.correction import RobotModel
 from spherecal.correction.errors import SpherecalError
 from spherecal.correction.files.fixtures import FixtureSpec
@@ -127,9 +128,6 @@ def reach_configuration(
     Raises:
         UnreachableFixtureError (from the controller package's family): no seed reaches it.
     """
-    # MuJoCo: only a simulation needs it (start-up)
-    from spherecal.controller.self_motion import UnreachableFixtureError
-
     q, ok = project_to_point(model, model.random_configurations(seeds, rng), centre)
     if not ok.any():
         where = np.round(centre, 4).tolist()
@@ -171,14 +169,6 @@ def motion_samples(
     Raises:
         FixtureInsideRobotError, UnreachableFixtureError: the candidate cannot be used.
     """
-    # MuJoCo: only a simulation needs it (start-up)
-    from spherecal.controller.self_motion import (
-        SelfMotionSettings,
-        UnreachableFixtureError,
-        check_fixture,
-        collect_self_motion,
-    )
-
     truth = model if truth is None else truth
     centre = candidate.position
     check_fixture(model, candidate.name, centre)
@@ -187,6 +177,9 @@ def motion_samples(
         truth = restricted(truth, reach_configuration(truth, centre, rng), window)
         model = replace(model, lower=truth.lower, upper=truth.upper)
     if motion == "controller":
+        # MuJoCo: only the controller's self-motion needs it (start-up)
+        from spherecal.controller.self_motion import SelfMotionSettings, collect_self_motion
+
         settings = SelfMotionSettings(seconds=seconds, samples=count, noise=noise)
         return collect_self_motion(truth, model, {candidate.name: centre}, rng, settings).q
     if motion != "kinematic":

@@ -1,0 +1,48 @@
+"""Where a fixture cannot be: inside the robot's base column, or out of reach. Kinematics alone (no MuJoCo):
+planning checks its candidates with it without loading the plant."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from spherecal.correction import RobotModel, frames
+from spherecal.correction.errors import SpherecalError
+
+#: A fixture closer than this to the base column (base to the first joint's frame) is inside
+#: the robot [m].
+BASE_RADIUS = 0.12
+
+
+class UnreachableFixtureError(SpherecalError):
+    """The tool point of the true robot cannot reach a fixture inside the joint limits.
+
+    Attributes:
+        fixture: the fixture's name (for the caller to name the file and field that placed it).
+    """
+
+    def __init__(self, message: str, fixture: str | None = None):
+        super().__init__(message)
+        self.fixture = fixture
+
+
+class FixtureInsideRobotError(UnreachableFixtureError):
+    """A fixture lies inside the robot's base column."""
+
+
+def check_fixture(model: RobotModel, name: str, centre: np.ndarray) -> None:
+    """Raise :class:`FixtureInsideRobotError` if ``centre`` (3,) [m] lies in the base column of ``model``.
+
+    The base column is the segment from the base origin to the first joint's fixed point
+    (modified DH: the origin of frame 1; standard DH: ``d1`` along the first axis, since
+    frame 1 turns with joint 1 and carries ``a1``), thickened by :data:`BASE_RADIUS`.
+    """
+    f = frames(model, np.zeros((1, model.n_joints)))
+    a = f.origin[0, :, 0]
+    b = f.origin[1, :, 0] if model.convention == "modified" else a + model.d[0] * f.z[0, :, 0]
+    axis = b - a
+    s = np.clip(np.dot(centre - a, axis) / max(np.dot(axis, axis), 1e-12), 0.0, 1.0)
+    distance = np.linalg.norm(centre - (a + s * axis))
+    if distance < BASE_RADIUS:
+        raise FixtureInsideRobotError(
+            f"fixture {name} at {np.round(centre, 4).tolist()} m is inside the robot "
+            f"({distance * 1e3:.0f} mm from the base column, need >= {BASE_RADIUS * 1e3:.0f} mm)", name)
