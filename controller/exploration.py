@@ -40,8 +40,46 @@ def joint_coverage(q: np.ndarray, lower: np.ndarray, upper: np.ndarray) -> np.nd
     Returns:
         (n,) shares in [0, 1].
     """
+    return range_share(q.min(axis=0), q.max(axis=0), lower, upper)
+
+
+def range_share(low: np.ndarray, high: np.ndarray, lower: np.ndarray, upper: np.ndarray) -> np.ndarray:
+    """(n,) ``(high - low) / (upper - lower)``, 0 for a joint without range: :func:`joint_coverage` of a
+    trajectory with extremes ``low``, ``high`` (n,) [rad] between the limits ``lower``, ``upper`` (n,) [rad]."""
     span = upper - lower
-    return np.divide(q.max(axis=0) - q.min(axis=0), span, out=np.zeros(span.shape), where=span > 0)
+    return np.divide(high - low, span, out=np.zeros(span.shape), where=span > 0)
+
+
+class RunningExtent:
+    """Smallest and largest value of each joint over a history that only grows, kept as it grows.
+
+    :meth:`update` reads only the rows appended since its last call: the time of a decision does not grow
+    with the length of the recording. The last row of each call is read again at the next (the caller
+    may still overwrite the row it is filling); the extremes are those of the whole history, exactly.
+    """
+
+    def __init__(self, n: int):
+        self._restart(n)
+
+    def _restart(self, n: int) -> None:
+        self.lower, self.upper = np.full(n, np.inf), np.full(n, -np.inf)  # of the rows before ``count``
+        self.count = 0
+
+    def update(self, history: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """(n,) smallest and (n,) largest value of each column of ``history`` (K, n), K >= 1.
+
+        ``history`` is the one of the last call with rows appended; a shorter one starts over.
+        """
+        if history.shape[0] <= self.count:
+            self._restart(history.shape[1])
+        done = history.shape[0] - 1
+        if done > self.count:
+            settled = history[self.count:done]
+            self.lower = np.minimum(self.lower, settled.min(axis=0))
+            self.upper = np.maximum(self.upper, settled.max(axis=0))
+            self.count = done
+        last = history[done]
+        return np.minimum(self.lower, last), np.maximum(self.upper, last)
 
 
 @dataclass
@@ -127,6 +165,7 @@ class CoverageExploration:
         self.goal: np.ndarray | None = None
         self._tabu = np.zeros(self.n)
         self._joint = -1
+        self._extent = RunningExtent(self.n)
 
     def _find_goal(self, q: np.ndarray, j: int, value: float) -> np.ndarray | None:
         """(n,) a configuration on the self-motion manifold with ``q_j = value``, near ``q``, or None."""
@@ -144,14 +183,15 @@ class CoverageExploration:
 
         Args:
             t: time [s].
-            q_history: (K, n) every joint reading of this fixture so far (K >= 1).
+            q_history: (K, n) every joint reading of this fixture so far (K >= 1): the history of the last
+                call with rows appended (only the new rows and the last one are read; see :class:`RunningExtent`).
             jac: (3, n) the controller's Jacobian at the current configuration (unused).
         """
         q = q_history[-1]
         if self.goal is not None and np.linalg.norm(self.goal - q) > 0.1:
             self._tabu[self._joint] = 2  # not reached in time: try others first
-        lo, hi = q_history.min(axis=0), q_history.max(axis=0)
-        coverage = joint_coverage(q_history, self.lower, self.upper)
+        lo, hi = self._extent.update(q_history)
+        coverage = range_share(lo, hi, self.lower, self.upper)
         self.goal = None
         for j in np.argsort(coverage + 10.0 * (self._tabu > 0)):
             below, above = lo[j] - self.lower[j], self.upper[j] - hi[j]

@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from spherecal.controller.exploration import Ramp, joint_coverage
+from spherecal.controller.exploration import Ramp, RunningExtent, joint_coverage
 from spherecal.controller.reach import FixtureInsideRobotError, UnreachableFixtureError
 from spherecal.controller.self_motion import (
     DEFAULT_FIXTURES,
@@ -93,6 +93,24 @@ def test_ramp_is_smooth():
 def test_joint_coverage():
     q = np.array([[0.0, 0.0], [1.0, -0.5], [0.5, 0.5]])
     assert np.allclose(joint_coverage(q, np.array([-1.0, -1.0]), np.array([1.0, 1.0])), [0.5, 0.5])
+
+
+def test_running_extent_reads_only_new_rows_and_equals_a_full_scan():
+    # the coverage exploration rescanned the whole history at every decision: quadratic in --seconds
+    rng = np.random.default_rng(3)
+    history = np.cumsum(rng.normal(size=(400, 3)), axis=0)
+    extent = RunningExtent(3)
+    for end in (1, 2, 2, 57, 58, 300, 400):
+        lo, hi = extent.update(history[:end])
+        assert np.array_equal(lo, history[:end].min(axis=0)) and np.array_equal(hi, history[:end].max(axis=0))
+    assert extent.count == 399  # the last row is read again next time (its caller may still be writing it)
+    live = history[:10].copy()
+    extent = RunningExtent(3)
+    extent.update(live)
+    live[9] = 1e3  # the row being filled changes before the next call: not kept from the first
+    assert np.array_equal(extent.update(live)[1], live.max(axis=0))
+    lo, hi = extent.update(history[:5])  # a shorter history: starts over
+    assert np.array_equal(lo, history[:5].min(axis=0)) and np.array_equal(hi, history[:5].max(axis=0))
 
 
 def test_coverage_table_labels_every_column_with_its_unit():
