@@ -25,6 +25,8 @@ RAMP_TIME = 0.3
 GOAL_STEP = 0.6  # [rad]
 GOAL_MARGIN = 0.03  # [rad] goals stay this far inside the limits
 GOAL_RESTARTS = 4  # random IK starts when the goal is not found from the current configuration
+GOAL_SAME_START = 0.01  # [rad] a goal not found at GOAL_MISSES decisions from within this of one configuration
+GOAL_MISSES = 3  # is not sought again from there (a saturated fixture)
 
 
 def joint_coverage(q: np.ndarray, lower: np.ndarray, upper: np.ndarray) -> np.ndarray:
@@ -132,6 +134,15 @@ class RandomExploration:
         return self._q_r
 
 
+@dataclass(frozen=True)
+class _Miss:
+    """A goal not found: where it was last sought (n,) [rad], at which decision, at how many decisions near there."""
+
+    q: np.ndarray
+    decision: int
+    misses: int
+
+
 class CoverageExploration:
     """Steer toward the least-visited part of the least-covered joint's range.
 
@@ -166,17 +177,40 @@ class CoverageExploration:
         self._tabu = np.zeros(self.n)
         self._joint = -1
         self._extent = RunningExtent(self.n)
+        self._missed: dict[tuple[int, float], _Miss] = {}  # (j, value) not found
+        self._decisions = 0
 
     def _find_goal(self, q: np.ndarray, j: int, value: float) -> np.ndarray | None:
-        """(n,) a configuration on the self-motion manifold with ``q_j = value``, near ``q``, or None."""
+        """(n,) a configuration on the self-motion manifold with ``q_j = value``, near ``q``, or None.
+
+        A goal not found at :data:`GOAL_MISSES` decisions from within :data:`GOAL_SAME_START` of one
+        configuration is not sought again from there: None at once, with the restarts the search would have
+        drawn drawn from ``rng`` all the same (the random stream, hence the samples kept and the next fixture,
+        stay those of a failed search). At a saturated fixture no goal is found, the arm stands still and the
+        same searches failed at every check (every 50 ms): most of a long simulation's time. A judgement, not a
+        proof: the search's random restarts might still find the goal (none did in the runs checked: their
+        samples are those of the searches made). Within one decision a goal is sought again (a goal at the limit
+        is the same for every step): a restart found one there.
+        """
         lower, upper = self.lower.copy(), self.upper.copy()
         lower[j] = upper[j] = value
+        pinned = replace(self.model, lower=lower, upper=upper)
+        key = (int(j), float(value))
+        missed = self._missed.get(key)
+        near = missed is not None and float(np.max(np.abs(q - missed.q))) < GOAL_SAME_START
+        if near and missed.misses >= GOAL_MISSES and missed.decision < self._decisions:
+            pinned.random_configurations(GOAL_RESTARTS, self.rng)  # what the failed search drew
+            return None
         start = q.copy()
         start[j] = value
-        result = ik(replace(self.model, lower=lower, upper=upper), self.target, start, max_iter=50,
-                    restarts=GOAL_RESTARTS, rng=self.rng, kinematics=self.kinematics,
-                    lockstep=self.kinematics is not None)
-        return result.q if result.converged else None
+        result = ik(pinned, self.target, start, max_iter=50, restarts=GOAL_RESTARTS, rng=self.rng,
+                    kinematics=self.kinematics, lockstep=self.kinematics is not None)
+        if result.converged:
+            self._missed.pop(key, None)
+            return result.q
+        misses = missed.misses + int(missed.decision < self._decisions) if near else 1
+        self._missed[key] = _Miss(q.copy(), self._decisions, misses)
+        return None
 
     def decide(self, t: float, q_history: np.ndarray, jac: np.ndarray) -> None:
         """Choose the next goal.
@@ -187,6 +221,7 @@ class CoverageExploration:
                 call with rows appended (only the new rows and the last one are read; see :class:`RunningExtent`).
             jac: (3, n) the controller's Jacobian at the current configuration (unused).
         """
+        self._decisions += 1
         q = q_history[-1]
         if self.goal is not None and np.linalg.norm(self.goal - q) > 0.1:
             self._tabu[self._joint] = 2  # not reached in time: try others first

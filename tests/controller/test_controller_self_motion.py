@@ -5,13 +5,16 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from spherecal.controller.exploration import Ramp, RunningExtent, joint_coverage
+from spherecal.controller import exploration
+from spherecal.controller.exploration import CoverageExploration, Ramp, RunningExtent, joint_coverage
+from spherecal.controller.nullspace import NullSpaceController
 from spherecal.controller.reach import FixtureInsideRobotError, UnreachableFixtureError
 from spherecal.controller.self_motion import (
     DEFAULT_FIXTURES,
     SelfMotionRun,
     SelfMotionSettings,
     collect_self_motion,
+    home,
     reach_fixture,
 )
 from spherecal.correction import perturb, tool_point
@@ -111,6 +114,41 @@ def test_running_extent_reads_only_new_rows_and_equals_a_full_scan():
     assert np.array_equal(extent.update(live)[1], live.max(axis=0))
     lo, hi = extent.update(history[:5])  # a shorter history: starts over
     assert np.array_equal(lo, history[:5].min(axis=0)) and np.array_equal(hi, history[:5].max(axis=0))
+
+
+def test_a_goal_not_found_is_not_sought_again_from_the_same_place(panda, monkeypatch):
+    # at a saturated fixture the same goals were sought (and missed) at every check, 50 ms apart: most of a
+    # long simulation's time; now a goal missed at GOAL_MISSES decisions from one place is not sought from there
+    kinematics = NullSpaceController(panda).kinematics  # MuJoCo's: 42 searches a decision
+    misses_default = exploration.GOAL_MISSES
+    searches: list[int] = []
+    real_ik = exploration.ik
+    monkeypatch.setattr(exploration, "ik", lambda *a, **k: searches.append(1) or real_ik(*a, **k))
+    q = home(panda)
+    far = np.array([2.0, 0.0, 0.5])  # out of reach: no goal is ever found
+
+    def decisions(misses: int, count: int, moved: float = 0.0):
+        monkeypatch.setattr(exploration, "GOAL_MISSES", misses)
+        searches.clear()
+        rng = np.random.default_rng(4)
+        explore = CoverageExploration(panda, far, rng, kinematics=kinematics)
+        history = np.vstack([q - 0.1, q + 0.1])  # the visited range: the goals stay where they are
+        per_decision = []
+        for k in range(count):
+            start = len(searches)
+            here = q + (moved if k == count - 1 else 0.0)
+            explore.decide(0.05 * k, np.vstack([history, here]), None)
+            assert explore.goal is None
+            per_decision.append(len(searches) - start)
+        return per_decision, rng.random()
+
+    every, after_every = decisions(10**9, 4)  # sought at every decision, as before
+    assert every[0] > 0 and every == [every[0]] * 4
+    kept, after_kept = decisions(misses_default, 4)
+    assert kept == every[:3] + [0]  # missed at 3 decisions from here: not sought again from here
+    assert after_kept == after_every  # the restarts are drawn all the same: the random stream is unchanged
+    moved, _ = decisions(misses_default, 4, moved=2 * exploration.GOAL_SAME_START)
+    assert moved == every  # the arm moved (inside the visited range: the same goals): sought again
 
 
 def test_coverage_table_labels_every_column_with_its_unit():
