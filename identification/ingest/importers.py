@@ -12,6 +12,7 @@ from __future__ import annotations
 import os
 import re
 import warnings
+from collections.abc import Sequence
 from dataclasses import dataclass, replace
 from pathlib import Path
 
@@ -128,7 +129,8 @@ class Recording:
         t: (T,) time stamps [s], or None.
         labels: (T,) fixture label of every sample, or None (to be segmented).
         source: the file or folder read.
-        rows: (T,) where each sample came from, for messages (``"file: row N"``).
+        rows: (T,) where each sample came from, for messages (``"file: row N"``; a sequence that makes each
+            string when asked, for a long recording).
         notes: what the reader skipped and why (printed by the import report).
         clock: the field ``t`` was read from (``column 'time'``, ``header.stamp``), for the provenance; ``""``
             without time stamps.
@@ -139,7 +141,7 @@ class Recording:
     t: np.ndarray | None
     labels: np.ndarray | None
     source: str
-    rows: tuple[str, ...]
+    rows: Sequence[str]
     notes: tuple[str, ...] = ()
     clock: str = ""
     time_field: str = ""
