@@ -23,6 +23,7 @@ import json
 import os
 import platform
 import resource
+import statistics
 import subprocess
 import sys
 import tempfile
@@ -90,12 +91,6 @@ def run_motion(checkout: Path, seconds: float, seed: int) -> dict:
     return json.loads(done.stdout.strip().splitlines()[-1])
 
 
-def median(values: list[float]) -> float:
-    ordered = sorted(values)
-    middle = len(ordered) // 2
-    return ordered[middle] if len(ordered) % 2 else 0.5 * (ordered[middle - 1] + ordered[middle])
-
-
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--base", type=Path, required=True,
@@ -132,7 +127,7 @@ def main() -> None:
     print(f"{'checkout':<9} {'wall_s':>8} {'cpu_s':>8} {'motion_s':>9} {'sim_wall_s':>11} {'sim_cpu_s':>10} "
           f"{'sim/wall':>9} {'sim/cpu':>8}")
     for name in ("base", "this"):
-        values = {key: median([r[key] for r in runs[name]]) for key in keys}
+        values = {key: statistics.median([r[key] for r in runs[name]]) for key in keys}
         summary[name] = {**values, "simulated_to_wall": simulated / values["sim_wall_s"],
                          "simulated_to_cpu": simulated / values["sim_cpu_s"],
                          "headline": runs[name][0]["headline"], "runs": runs[name]}

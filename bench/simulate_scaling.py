@@ -20,6 +20,7 @@ import json
 import os
 import platform
 import resource
+import statistics
 import subprocess
 import sys
 import tempfile
@@ -57,12 +58,6 @@ def run_simulate(checkout: Path, out: Path, seconds: float, extra: list[str]) ->
 def samples_rows(out: Path) -> list[str]:
     """The lines of ``out``/samples.csv but its comments (the provenance: command line, time)."""
     return [line for line in (out / "samples.csv").read_text().splitlines() if not line.startswith("#")]
-
-
-def median(values: list[float]) -> float:
-    ordered = sorted(values)
-    middle = len(ordered) // 2
-    return ordered[middle] if len(ordered) % 2 else 0.5 * (ordered[middle - 1] + ordered[middle])
 
 
 def main() -> None:
@@ -107,7 +102,7 @@ def main() -> None:
     for seconds in args.seconds:
         simulated = FIXTURES * seconds
         for name in checkouts:
-            values = {key: median([r[key] for r in runs[name][seconds]]) for key in ("wall_s", "cpu_s")}
+            values = {key: statistics.median([r[key] for r in runs[name][seconds]]) for key in ("wall_s", "cpu_s")}
             summary[name][f"{seconds:g}"] = {**values, "wall_per_simulated_s": values["wall_s"] / simulated,
                                               "cpu_per_simulated_s": values["cpu_s"] / simulated,
                                               "runs": runs[name][seconds]}

@@ -178,10 +178,11 @@ def plain_values(block: list[str], width: int, columns: Sequence[int]) -> np.nda
 
 
 class RowNames(Sequence):
-    """``"file: row N"`` of every record, made when asked (2 M strings would take 200 MB)."""
+    """``"file: row N"`` of every record (``"bag: /topic message N"`` with ``what="/topic message"``), made when
+    asked (2 M strings would take 200 MB)."""
 
-    def __init__(self, path: str | os.PathLike, lines: np.ndarray):
-        self.path, self.lines = str(path), np.asarray(lines)
+    def __init__(self, path: str | os.PathLike, lines: np.ndarray, what: str = "row"):
+        self.path, self.lines, self.what = str(path), np.asarray(lines), what
 
     def __len__(self) -> int:
         return int(self.lines.size)
@@ -189,4 +190,8 @@ class RowNames(Sequence):
     def __getitem__(self, k):
         if isinstance(k, slice):
             return [self[i] for i in range(*k.indices(len(self)))]
-        return f"{self.path}: row {int(self.lines[k])}"
+        return f"{self.path}: {self.what} {int(self.lines[k])}"
+
+    def select(self, keep: np.ndarray) -> RowNames:
+        """The names of the records ``keep`` (a boolean mask or indices) selects."""
+        return RowNames(self.path, self.lines[keep], self.what)

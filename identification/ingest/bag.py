@@ -18,6 +18,7 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
+from spherecal.correction.files.csv_rows import RowNames
 from spherecal.correction.model import RobotModel
 
 from .importers import (
@@ -81,7 +82,7 @@ def read_bag(path: str | os.PathLike, model: RobotModel, topic: str = TOPIC) -> 
                         f"{path}: field '--topic': {topic!r} carries {connection.msgtype}, "
                         "expected sensor_msgs/JointState"
                     )
-            messages = _Messages(model, f"{path}: {topic} message ")
+            messages = _Messages(model, f"{path}: {topic} message ")  # as RowNames names them
             try:
                 messages.read(reader, connections)
             except Exception:  # an earlier message's angle that is not finite is refused first, as it was read first
@@ -129,31 +130,12 @@ def read_bag(path: str | os.PathLike, model: RobotModel, topic: str = TOPIC) -> 
                                       f"only some of the arm's joints ({some})",) if partial else ())
     numbers, stamps, q = messages.arrays()
     order = np.argsort(stamps, kind="stable")
-    q, t, rows = q[order], stamps[order], MessageNames(messages.where, numbers[order])
+    q, t, rows = q[order], stamps[order], RowNames(path, numbers[order], f"{topic} message")
     recording = Recording(q, t, None, str(path), rows, notes, clock="header.stamp", time_field="header.stamp")
     recording.check_limits(model)  # first: degrees in a radians field jump too, and this says which it is
     _refuse_interleaved(q, t, rows, stamps, numbers)  # before the stamps alike: two streams' clash is named as theirs
     keep, repeats = repeated_stamps(q, t, rows, "header.stamp", "message")
     return replace(recording, q=q[keep], t=t[keep], rows=rows.select(keep), notes=notes + repeats)
-
-
-class MessageNames(Sequence):
-    """``"bag: /topic message N"`` of every sample, made when asked (1.8 M strings would take 200 MB)."""
-
-    def __init__(self, prefix: str, numbers: np.ndarray):
-        self.prefix, self.numbers = prefix, np.asarray(numbers)
-
-    def __len__(self) -> int:
-        return int(self.numbers.size)
-
-    def __getitem__(self, k):
-        if isinstance(k, slice):
-            return [self[i] for i in range(*k.indices(len(self)))]
-        return f"{self.prefix}{int(self.numbers[k])}"
-
-    def select(self, keep: np.ndarray) -> MessageNames:
-        """The names of the samples ``keep`` (a boolean mask or indices) selects."""
-        return MessageNames(self.prefix, self.numbers[keep])
 
 
 @dataclass
