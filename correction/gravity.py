@@ -83,13 +83,47 @@ def inertials_of(model: RobotModel, source: str | None = None,
     Raises:
         InertialsError: no ``inertials`` block, wrong length, or a malformed entry.
     """
+    block, payload = model.extras.get("inertials"), model.extras.get("payload")
+    parsed = _PARSED.get(id(block))
+    if parsed is not None and parsed[0] is block and parsed[1] is payload and len(parsed[2]) == model.n_joints + 1:
+        masses, coms = parsed[2].copy(), parsed[3].copy()  # read before: the same objects, for as many joints
+    else:
+        masses, coms = _parse(model, block, payload, source, rows)
+        if len(_PARSED) >= PARSED_KEPT:
+            _PARSED.clear()
+        _PARSED[id(block)] = (block, payload, masses.copy(), coms.copy())  # held: their ids stay theirs
+    size = model.chain_length  # 0: a check of the entries alone (a robot file's block before its geometry is read)
+    if size > 0 and masses.sum() > MAX_MASS_DENSITY * size**3:  # grams for kilograms, or a payload of another scale
+        k = int(np.argmax(masses))
+        name = "payload" if k == model.n_joints else f"inertials[{k}]"
+        raise InertialsError(f"{_field(model, source, rows, name)}.mass': {masses.sum():.6g} kg in all for an arm "
+                             f"of {size:.3g} m of links, not physical (at most {MAX_MASS_DENSITY * size**3:.3g} kg; "
+                             f"the file is in kilograms)")
+    return masses, coms
+
+
+#: Inertials blocks read (:func:`inertials_of`): id -> (block, payload, masses, coms). A fit reads a model's masses
+#: at every step (gravity torques, a compliance's check), and every model of one fit holds the same block: checking
+#: it once saves a seventh of a default calibration. The objects are held, so an id is not taken by another block;
+#: extras are not changed in place (every ``with_*`` makes a copy).
+_PARSED: dict[int, tuple] = {}
+#: Blocks kept before the memory of them is cleared.
+PARSED_KEPT = 64
+
+
+def _field(model: RobotModel, source: str | None, rows: dict[str, int] | None, key: str) -> str:
     where = source or model.extras.get("source") or model.name
     rows = rows or {}
+    return f"{where}: {f'row {rows[key]}, ' if key in rows else ''}field '{key}"
+
+
+def _parse(model: RobotModel, block: Any, payload: Any, source: str | None,
+           rows: dict[str, int] | None) -> tuple[np.ndarray, np.ndarray]:
+    """Masses (n+1,) and centres of mass (n+1, 3) of the checked entries (:func:`inertials_of`)."""
 
     def at(key: str) -> str:
-        return f"{where}: {f'row {rows[key]}, ' if key in rows else ''}field '{key}"
+        return _field(model, source, rows, key)
 
-    block = model.extras.get("inertials")
     n = model.n_joints
     if not isinstance(block, list) or len(block) != n:
         got = "none" if block is None else (f"{len(block)} entries" if isinstance(block, list) else repr(block))
@@ -97,17 +131,8 @@ def inertials_of(model: RobotModel, source: str | None = None,
         raise InertialsError(f"{at('inertials')}': expected a list of {n} {{mass, com}} entries, got "
                              f"{got}{hint}")
     entries = [_entry(v, at(f"inertials[{i}]")) for i, v in enumerate(block)]
-    payload = model.extras.get("payload")
     entries.append((0.0, np.zeros(3)) if payload is None else _entry(payload, at("payload")))
-    masses = np.array([m for m, _ in entries])
-    size = model.chain_length  # 0: a check of the entries alone (a robot file's block before its geometry is read)
-    if size > 0 and masses.sum() > MAX_MASS_DENSITY * size**3:  # grams for kilograms, or a payload of another scale
-        k = int(np.argmax(masses))
-        name = "payload" if k == n else f"inertials[{k}]"
-        raise InertialsError(f"{at(name)}.mass': {masses.sum():.6g} kg in all for an arm of "
-                             f"{size:.3g} m of links, not physical (at most {MAX_MASS_DENSITY * size**3:.3g} kg; "
-                             f"the file is in kilograms)")
-    return masses, np.stack([c for _, c in entries])
+    return np.array([m for m, _ in entries]), np.stack([c for _, c in entries])
 
 
 def has_inertials(model: RobotModel) -> bool:

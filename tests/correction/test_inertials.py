@@ -140,3 +140,32 @@ def test_gen3_lite_urdf_without_masses_gets_kinovas(tmp_path, rng) -> None:
     assert "kinova_gen3_lite" in model.extras["inertials_source"]
     q = model.random_configurations(20, rng)
     np.testing.assert_allclose(gravity_torques(model, q), gravity_torques(reference, q), atol=1e-9)
+
+
+def test_inertials_read_once_per_block_stay_those_of_each_model() -> None:
+    """inertials_of remembers a block it checked (a fit reads it at every step): a model with another block, a
+    payload added, another joint count or grams for kilograms still gets its own answer, and the arrays it
+    returns are the caller's to change."""
+    from spherecal.correction.gravity import inertials_of
+
+    panda = load_robot("panda")
+    masses, coms = inertials_of(panda)
+    masses[:] = 0.0  # the caller's copy
+    again, _ = inertials_of(panda.with_params(panda.params + 1e-4))  # another geometry, the same block
+    assert again[0] > 0 and np.array_equal(again, inertials_of(panda)[0])
+    heavier = [dict(e) for e in panda.extras["inertials"]]
+    heavier[2] = {**heavier[2], "mass": heavier[2]["mass"] + 1.0}
+    other = replace(panda, extras={**panda.extras, "inertials": heavier})
+    assert inertials_of(other)[0][2] == pytest.approx(inertials_of(panda)[0][2] + 1.0)
+    own = inertials_of(panda)[0][-1]  # the embedded Panda's hand
+    loaded = replace(panda, extras={**panda.extras, "payload": {"mass": own + 2.0, "com": [0.0, 0.0, 0.05]}})
+    assert inertials_of(loaded)[0][-1] == own + 2.0 and inertials_of(panda)[0][-1] == own
+    grams = replace(panda, extras={**panda.extras, "inertials": [{**e, "mass": e["mass"] * 1e3}
+                                                                 for e in panda.extras["inertials"]]})
+    for _ in range(2):  # refused every time, not remembered
+        with pytest.raises(InertialsError, match="not physical"):
+            inertials_of(grams)
+    short = replace(panda, a=panda.a[:6], alpha=panda.alpha[:6], d=panda.d[:6], theta=panda.theta[:6],
+                    lower=panda.lower[:6], upper=panda.upper[:6])
+    with pytest.raises(InertialsError, match="expected a list of 6"):
+        inertials_of(short)
