@@ -62,7 +62,8 @@ def configuration_hashes(q: np.ndarray) -> np.ndarray:
                     dtype=np.uint64)
 
 
-#: Rows :meth:`LimitExcess.add` checks at a time.
+#: Rows checked at a time on a long recording (:meth:`LimitExcess.add`, the importers' jump check): their
+#: temporaries stay small.
 LIMIT_BLOCK = 100_000
 
 

@@ -186,6 +186,11 @@ class _Layout:
     numbers: array = field(default_factory=lambda: array("q"))  # theirs
     received: array = field(default_factory=lambda: array("q"))
 
+    @property
+    def positioned(self) -> bool:
+        """Its messages carry positions."""
+        return self.at_velocity > self.at_position
+
     def matches(self, raw: bytes) -> bool:
         return (len(raw) == self.length and raw.startswith(self.middle, 12) and raw.startswith(self.head)
                 and raw.startswith(self.velocity, self.at_velocity) and raw.startswith(self.effort, self.at_effort))
@@ -287,16 +292,13 @@ class _Messages:
             if last is not None:  # the bytes of the last message's layout: kept, read at its offsets in arrays
                 if type(raw) is not bytes:
                     raw = bytes(raw)
-                if not (len(raw) == last.length and raw.startswith(last.middle, 12) and raw.startswith(last.head)
-                        and raw.startswith(last.velocity, last.at_velocity)
-                        and raw.startswith(last.effort, last.at_effort)):
-                    last = next((other for other in layouts if other.matches(raw)), last)
-                    matched = last.matches(raw)
-                else:
-                    matched = True
+                matched = last.matches(raw)
+                if not matched:  # another layout seen before, or none (deserialised below)
+                    found = next((other for other in layouts if other is not last and other.matches(raw)), None)
+                    last, matched = (last, False) if found is None else (found, True)
                 if matched:
                     if last.group is None:
-                        self._other(last.names, last.at_velocity > last.at_position, k)
+                        self._other(last.names, last.positioned, k)
                         continue
                     last.raw.append(raw)
                     last.numbers.append(k + 1)
@@ -309,13 +311,13 @@ class _Messages:
             layout = _cdr_layout(bytes(raw), message) if reader.is2 and len(layouts) < 16 else None
             self._add(message, k, timestamp)
             if layout is not None:
-                positioned = layout.at_velocity > layout.at_position
-                layout.group = self.groups.get(layout.names) if positioned else None
+                layout.group = self.groups.get(layout.names) if layout.positioned else None
                 layouts.append(layout)
                 last = layout
 
     def _other(self, names: tuple[str, ...], positioned: bool, k: int) -> None:
-        """Count a message of ``names`` that is not the arm's (no group), as :meth:`_add` would."""
+        """Count a message of ``names`` that is not the arm's: without positions, another device's, or some of the
+        arm's joints only (``positioned`` and not disjoint from the arm: :meth:`_add` judged its names so)."""
         if not positioned and names:
             self.unpositioned += 1
         elif self.arm.isdisjoint(names):
@@ -329,17 +331,15 @@ class _Messages:
         names = tuple(message.name)
         position = np.asarray(message.position, dtype=float)
         if not position.size and names:  # JointState's arrays are optional: velocities or efforts alone
-            self.unpositioned += 1
+            self._other(names, False, k)
             return
         if position.shape != (len(names),):
             raise RecordingError(f"{where}, field 'position': {position.size} positions for {len(names)} names")
         group = self.groups.get(names)
         if group is None:
-            if self.arm.isdisjoint(names):  # another device's joints (a gripper)
-                self.skipped[names] = self.skipped.get(names, 0) + 1
-                return
-            if missing_joints(names, self.model):  # the arm's state split over messages
-                self.partial.setdefault(names, [0, k + 1])[0] += 1
+            # another device's joints (a gripper), or the arm's state split over messages
+            if self.arm.isdisjoint(names) or missing_joints(names, self.model):
+                self._other(names, True, k)
                 return
             group = self.groups[names] = _Group(match_joints(list(names), self.model, where)[0], len(names))
         stamp = message.header.stamp

@@ -29,7 +29,14 @@ from spherecal.correction.files.csv_rows import (
     read_rows,
 )
 from spherecal.correction.files.fixtures import FixtureSpec
-from spherecal.correction.files.samples import LIMIT_TOL, Dataset, DatasetError, LimitExcess, configurations_digest
+from spherecal.correction.files.samples import (
+    LIMIT_BLOCK,
+    LIMIT_TOL,
+    Dataset,
+    DatasetError,
+    LimitExcess,
+    configurations_digest,
+)
 from spherecal.correction.files.text_input import finite_number, plain_float
 from spherecal.correction.model import RobotModel
 
@@ -62,8 +69,8 @@ def first_jump(q: np.ndarray, t: np.ndarray) -> tuple[int, float, float] | None:
     ``t`` (T,) [s] in time order."""
     if len(t) < 2:
         return None
-    step = np.concatenate([np.abs(np.diff(q[k : k + 100_001], axis=0)).max(axis=1)  # in blocks: 2 of (T, n) were
-                           for k in range(0, len(q) - 1, 100_000)])  # 200 MB of a 1.8 M-sample recording
+    step = np.concatenate([np.abs(np.diff(q[k : k + LIMIT_BLOCK + 1], axis=0)).max(axis=1)  # in blocks: 2 of (T, n)
+                           for k in range(0, len(q) - 1, LIMIT_BLOCK)])  # were 200 MB of a 1.8 M-sample recording
     dt = np.diff(t)
     jumps = np.flatnonzero((step > MIN_JUMP) & (step > MAX_JOINT_SPEED * dt))
     if not len(jumps):
@@ -537,16 +544,17 @@ def read_joint_csv(path: str | os.PathLike, model: RobotModel) -> Recording:
     elif t is not None and np.nanmax(np.abs(t)) > NANOSECONDS_ABOVE:
         t = t * 1e-9
     lines = np.concatenate(lines)
+    rows = RowNames(path, lines)
     if t is not None and label_values is None:  # the stamps will segment the recording: they must be seconds
-        _check_step(t, path, header[time_col], RowNames(path, lines))
-    recording = Recording(np.ascontiguousarray(values), t, label_values, str(path), RowNames(path, lines),
+        _check_step(t, path, header[time_col], rows)
+    recording = Recording(np.ascontiguousarray(values), t, label_values, str(path), rows,
                           clock=f"column {header[time_col]!r}" if time_col is not None else "",
                           time_field=header[time_col] if time_col is not None else "")
     recording.check_limits(model, names)
     if t is not None and label_values is None and np.all(np.diff(t) >= 0):  # a stream to segment: no jumps in it,
         _refuse_jump(recording, header[time_col])  # and a row stamped as the one before is a repeat or refused
         keep, notes = repeated_stamps(recording.q, t, recording.rows, header[time_col], "row")
-        recording = replace(recording, q=recording.q[keep], t=t[keep], rows=RowNames(path, lines[keep]), notes=notes)
+        recording = replace(recording, q=recording.q[keep], t=t[keep], rows=rows.select(keep), notes=notes)
     return replace(recording, notes=recording.notes + _more_joints(header, names, path))
 
 
