@@ -167,7 +167,7 @@ def _check_difference(nominal: RobotModel, calibrated: RobotModel, q: np.ndarray
     # the command carries the calibration's tool correction over (its nominal_tool); the call must be told it
     carried = (", nominal_tool=calibrated.extras['calibration']['nominal_tool']"
                if isinstance(record, dict) and "nominal_tool" in record else "")
-    shown = np.round(nominal.tool, 9) + 0.0  # no float noise printed (-4.8e-33) and no -0
+    shown = _printed(nominal.tool)
     remedy = (f"put the controller's tool on it first: correction.with_tool(calibrated, "
               f"{shown.tolist()}{carried}).model or `spherecal tool CAL.yaml --offset "
               f"{' '.join(f'{v:g}' for v in shown)} --out NEW.yaml`")
@@ -177,16 +177,22 @@ def _check_difference(nominal: RobotModel, calibrated: RobotModel, q: np.ndarray
             f"{source}: tool point differs from the controller's model by {gap * 1e3:.0f} mm at the seed (more than "
             f"{MAX_MODEL_DIFFERENCE * 1e3:.0f} mm): its tool point is {tools * 1e3:.0f} mm from the controller "
             f"model's in the last frame: a calibration ends at its own tool (the ball); {remedy}")
-    if nominal_tool_of(calibrated) is None:  # two URDFs to different tip links (a calibrated URDF keeps no record)
+    recorded = nominal_tool_of(calibrated)
+    if recorded is None:  # two URDFs to different tip links (a calibrated URDF keeps no record)
         tips = (calibrated.extras["urdf"]["tip_link"], nominal.extras["urdf"]["tip_link"])
         raise ModelMismatchError(
             f"{source}: its tool is URDF link {tips[0]!r}, the controller model's {tips[1]!r}, {apart * 1e3:.1f} mm "
             f"apart in the last frame (the targets would be missed by about that): load both to the same link, or "
             f"{remedy}")
     raise ModelMismatchError(
-        f"{source}: its tool point calibrates the tool at {np.round(nominal_tool_of(calibrated), 6).tolist()} m in "
-        f"the last frame, {apart * 1e3:.1f} mm from the controller model's {np.round(nominal.tool, 6).tolist()} m "
+        f"{source}: its tool point calibrates the tool at {_printed(recorded).tolist()} m in the last frame, "
+        f"{apart * 1e3:.1f} mm from the controller model's {shown.tolist()} m "
         f"(the targets would be missed by about that): a calibration ends at its own tool (the ball); {remedy}")
+
+
+def _printed(point: np.ndarray) -> np.ndarray:
+    """A tool point (3,) [m] as a message prints it: to the nm, no float noise (-4.8e-33) and no -0."""
+    return np.round(np.asarray(point, dtype=float), 9) + 0.0
 
 
 def _other_tip(calibrated: RobotModel, nominal: RobotModel) -> float:

@@ -302,3 +302,18 @@ def test_a_calibrated_file_with_a_bad_nominal_tool_names_the_file_and_field(reco
         replace(panda, extras={**panda.extras, "calibration": {"nominal_tool": recorded}}), tmp_path / "cal.yaml")
     refused(["tool", cal, "--offset", "0", "0", "0.2", "--out", tmp_path / "new.yaml"], tmp_path, capsys,
             f"{cal}: field 'calibration.nominal_tool': expected 3 finite coordinates [m]")
+
+
+def test_the_refusal_of_another_tool_prints_both_tools_without_float_noise(panda, rng) -> None:
+    # the message printed the tools rounded to 6 digits (a -0.0 from a component of -1e-13) beside a remedy at 9
+    noisy = panda.tool + [-1e-13, 0.0, 0.0]
+    ball = noisy + [0.0, 0.0, 0.04]
+    cal = perturb(replace(panda, tool=ball), rng)
+    cal = replace(cal, extras={**cal.extras, "calibration": {"nominal_tool": ball.tolist()}})
+    q_now = np.array([0.0, -0.3, 0.0, -2.2, 0.0, 2.0, 0.8])
+    with pytest.raises(ModelMismatchError) as error:
+        corrected_ik(cal, tool_point(panda, q_now), q_now, nominal=replace(panda, tool=noisy))
+    text = str(error.value)
+    assert "-0.0" not in text and "e-1" not in text
+    assert f"calibrates the tool at {(np.round(ball, 9) + 0.0).tolist()} m" in text
+    assert f"the controller model's {(np.round(noisy, 9) + 0.0).tolist()} m" in text
