@@ -16,7 +16,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
     add_robot(parser, default=None)
     parser.add_argument("--samples", required=True, help="samples.csv: fixture[,t],q1..qn [rad]")
-    parser.add_argument("--fixtures", help="fixtures.yaml: known positions and distances [m]")
+    parser.add_argument("--fixtures", help="fixtures.yaml: known positions and distances [m] (import writes it; "
+                        "without one, no distance is known and the scale comes from the nominal model, with a warning)")
     parser.add_argument("--method", choices=("lm", "pso", "pso+lm"), default="lm", help="solver (default lm)")
     parser.add_argument("--max-per-fixture", type=count(1), default=None, metavar="N",
                         help="keep at most N samples per fixture (random; default all)")
@@ -43,7 +44,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         type=at_most(1000.0, "(a factor)"),
         default=4.0,
         help="refuse a fit that moves the tool point more than this many times what a real arm's errors "
-        "(1 mm, 0.2 deg, a joint's zero 1 deg) typically do (a factor; 4: about 62 mm on the Panda)",
+        "(1 mm, 0.2 deg, a joint's zero 1 deg) typically do (a factor; default 4: about 62 mm on the Panda)",
     )
     parser.add_argument(
         "--force",

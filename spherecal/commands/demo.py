@@ -25,7 +25,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--configurations", type=configurations, default=5000,
                         help="random validation configurations (default 5000)")
     parser.add_argument(
-        "--source", choices=("mujoco", "synthetic"), default="mujoco", help="motion: MuJoCo self-motion (default)"
+        "--source", choices=("mujoco", "synthetic"), default="mujoco",
+        help="motion: MuJoCo self-motion through the QP controller (default) or kinematic self-motion samples "
+        "(synthetic)",
     )
     parser.add_argument("--out", default="spherecal-demo", help="output folder (spherecal-demo)")
     parser.add_argument("--no-rrd", action="store_true", help="do not write demo.rrd")

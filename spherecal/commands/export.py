@@ -12,7 +12,9 @@ FORMATS = ("urdf", "mjcf", "yaml")
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     """Register the options of `spherecal export`."""
-    parser.add_argument("robot", metavar="CAL.yaml", help="robot file to export (calibrated or nominal), or 'panda'")
+    parser.add_argument("robot", metavar="CAL.yaml",
+                        help="robot file to export (calibrated or nominal), a URDF (with --tip-link) or an embedded "
+                        "arm: panda, fr3, iiwa14, gen3lite")
     add_urdf_links(parser)
     parser.add_argument("--format", choices=FORMATS, required=True,
                         help="output format; urdf (kinematics and the robot file's link inertials) holds the best "

@@ -18,8 +18,12 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     from spherecal.options import add_deprecated, add_seed, add_urdf_links, configurations, noise_mm
 
     parser.add_argument("--truth", help="robot file of the true robot (simulation)")
-    parser.add_argument("--nominal", required=True, help="robot file of the nominal model ('panda': embedded)")
-    parser.add_argument("--calibrated", required=True, help="robot file of the calibrated model")
+    parser.add_argument("--nominal", required=True,
+                        help="nominal model, as calibrate's --robot: a robot file (YAML), a URDF (.urdf, with "
+                        "--tip-link) or an embedded arm: panda, fr3, iiwa14, gen3lite")
+    parser.add_argument("--calibrated", required=True,
+                        help="calibrated model: calibrate's --out (a URDF export of it records no training "
+                        "samples: every socket then counts as held out)")
     add_urdf_links(parser)
     parser.add_argument("--mocap", help="recorded mocap CSV: [t,] q1..qn, x, y, z (tool point in the mocap frame, m)")
     parser.add_argument(
