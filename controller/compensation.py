@@ -36,7 +36,16 @@ from spherecal.correction import RobotModel, tool_point, tool_pose
 from spherecal.correction.errors import SpherecalError
 from spherecal.correction.files.samples import HARD_MARGIN
 from spherecal.correction.rigid import rotation_angle
-from spherecal.correction.tool import TIP_MOVED, TOOL_MATCH_TOL, nominal_tool_of, tools_apart
+from spherecal.correction.tool import (
+    TIP_MOVED,
+    TOOL_MATCH_TOL,
+    ToolError,
+    adapter_question,
+    nominal_tool_of,
+    samples_shift,
+    swapped_tool,
+    tools_apart,
+)
 
 from .ik import UnreachableError, ik
 
@@ -155,7 +164,8 @@ def _check_difference(nominal: RobotModel, calibrated: RobotModel, q: np.ndarray
     the nominal's: a ball 40 mm beyond the flange is within the first check and 40 mm off every target)."""
     gap = float(np.linalg.norm(tool_point(nominal, q) - tool_point(calibrated, q)))
     apart = max(tools_apart(calibrated, nominal), _other_tip(calibrated, nominal))
-    if gap <= MAX_MODEL_DIFFERENCE and apart <= TOOL_MATCH_TOL:
+    shift = _unstated_shift(calibrated)
+    if gap <= MAX_MODEL_DIFFERENCE and apart <= TOOL_MATCH_TOL and shift is None:
         return
     swapped = replace(calibrated, tool=nominal.tool)  # the same arm with the controller's tool?
     same_tool = float(np.linalg.norm(tool_point(nominal, q) - tool_point(swapped, q)))
@@ -167,10 +177,18 @@ def _check_difference(nominal: RobotModel, calibrated: RobotModel, q: np.ndarray
     # the command carries the calibration's tool correction over (its nominal_tool); the call must be told it
     carried = (", nominal_tool=calibrated.extras['calibration']['nominal_tool']"
                if isinstance(record, dict) and "nominal_tool" in record else "")
+    if shift is not None:  # and whether the offset at which the samples put the ball is an adapter
+        carried += ", samples_tool=calibrated.extras['calibration']['samples_tool'], adapter=True or False"
     shown = _printed(nominal.tool)
     remedy = (f"put the controller's tool on it first: correction.with_tool(calibrated, "
               f"{shown.tolist()}{carried}).model or `spherecal tool CAL.yaml --offset "
-              f"{' '.join(f'{v:g}' for v in shown)} --out NEW.yaml`")
+              f"{' '.join(f'{v:g}' for v in shown)}{' --adapter or --no-adapter' if shift is not None else ''} "
+              "--out NEW.yaml`")
+    if shift is not None and apart <= TOOL_MATCH_TOL:
+        raise ModelMismatchError(
+            f"{source}: {adapter_question(shift, 'adapter').split(': ', 1)[1]}: the controller's "
+            f"tool is that robot file's, so its targets would be missed by up to {np.linalg.norm(shift) * 1e3:.1f} "
+            f"mm one way or the other; {remedy}")
     if gap > MAX_MODEL_DIFFERENCE:
         tools = float(np.linalg.norm(nominal.tool - calibrated.tool))
         raise ModelMismatchError(
@@ -188,6 +206,20 @@ def _check_difference(nominal: RobotModel, calibrated: RobotModel, q: np.ndarray
         f"{source}: its tool point calibrates the tool at {_printed(recorded).tolist()} m in the last frame, "
         f"{apart * 1e3:.1f} mm from the controller model's {shown.tolist()} m "
         f"(the targets would be missed by about that): a calibration ends at its own tool (the ball); {remedy}")
+
+
+def _unstated_shift(calibrated: RobotModel) -> np.ndarray | None:
+    """(3,) [m] the offset at which a calibrated file's samples put the ball from its robot file's tool
+    (``calibration.samples_tool``, beyond :data:`~correction.tool.TIP_MOVED`) when no tool swap has said whether it
+    is an adapter (:func:`correction.tool.with_tool`); else None. A MUKCa Panda calibrated with ``--tip-link
+    panda_hand_tcp`` (the ball 41 mm beyond it) passed the 50 mm seed check and aimed its TCP 30 mm off."""
+    block = calibrated.extras.get("calibration")
+    if not isinstance(block, dict) or "samples_tool" not in block or swapped_tool(calibrated):
+        return None
+    try:
+        return samples_shift(nominal_tool_of(calibrated), block.get("samples_tool"))
+    except ToolError as error:
+        raise ModelMismatchError(f"calibrated model: {error}") from None
 
 
 def _printed(point: np.ndarray) -> np.ndarray:

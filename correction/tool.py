@@ -72,6 +72,9 @@ class ToolSwap:
 
 #: Where a calibrated file records the nominal point of the tool it was calibrated with.
 NOMINAL_TOOL = "calibration.nominal_tool"
+#: Where a calibrated file records the tool point its samples showed, when that was beyond a calibration's
+#: correction from the robot file's (the fit started there: :mod:`spherecal.identification.tool_fit`).
+SAMPLES_TOOL = "calibration.samples_tool"
 
 
 def point_of(value, where: str) -> np.ndarray:
@@ -92,7 +95,8 @@ def point_of(value, where: str) -> np.ndarray:
 
 
 def with_tool(model: RobotModel, tool: np.ndarray, payload: dict | None = None,
-              angle: float = ANGLE.prior_std, nominal_tool: np.ndarray | None = None, field: str = "tool") -> ToolSwap:
+              angle: float = ANGLE.prior_std, nominal_tool: np.ndarray | None = None, field: str = "tool",
+              samples_tool: np.ndarray | None = None, adapter: bool | None = None) -> ToolSwap:
     """Put another tool point on a (calibrated) model.
 
     The calibrated tool point carries more than the ball's mounting: the last joint's ``d`` and ``theta``
@@ -115,9 +119,19 @@ def with_tool(model: RobotModel, tool: np.ndarray, payload: dict | None = None,
         nominal_tool: (3,) the calibrated tool's nominal position in the last frame [m]
             (``calibration.nominal_tool`` of a calibrated file), or None to put ``tool`` as given.
         field: what the caller calls ``tool`` in a refusal (``--offset`` on the command line).
+        samples_tool: (3,) where the calibration's samples put the ball in the last frame [m]
+            (``calibration.samples_tool``, recorded when that is beyond :data:`TIP_MOVED` from ``nominal_tool``), or
+            None. One ball cannot tell an adapter or sensor between the flange and every tool from the ball's own
+            mount or a ``--tip-link`` that named another link, so ``adapter`` must say which:
+        adapter: True: that offset is an adapter every tool sits on, carried to the new tool (``model.tool -
+            nominal_tool``); False: the ball's own, not carried (only ``model.tool - samples_tool``, the
+            calibration's correction). Needed, and recorded in ``tool_swap``, only when ``samples_tool`` is given
+            and beyond :data:`TIP_MOVED` from ``nominal_tool``.
 
     Raises:
-        ToolError: a tool that is not 3 finite numbers, or farther from the last frame than the arm is long
+        ToolError: ``adapter`` not given where it is needed (the controller would aim the offset off, one way or
+            the other: a MUKCa Panda calibrated with ``--tip-link panda_hand_tcp`` aimed 30 mm off), a tool that is
+            not 3 finite numbers, or farther from the last frame than the arm is long
             (:attr:`RobotModel.chain_length`: millimetres typed for metres; no real tool outreaches the arm carrying
             it, and on a small arm this bound is tighter than any fixed one of a few metres).
     """
@@ -132,11 +146,19 @@ def with_tool(model: RobotModel, tool: np.ndarray, payload: dict | None = None,
     calibrated = calibrated_tool(model)
     model = replace(model, tool=calibrated)
     carried = np.zeros(3)
+    stated = {}
     if nominal_tool is not None:
         nominal_tool = point_of(nominal_tool, f"field '{NOMINAL_TOOL}'")
         carried = calibrated - nominal_tool
+        shift = samples_shift(nominal_tool, samples_tool)
+        if shift is not None:
+            if adapter is None:
+                raise ToolError(f"{adapter_question(shift, '--adapter')}: say which")
+            stated = {"adapter": bool(adapter), "samples_shift": [float(v) for v in shift]}
+            if not adapter:
+                carried = carried - shift
         tool = tool + carried
-        if np.linalg.norm(carried) > TIP_MOVED:
+        if np.linalg.norm(carried) > TIP_MOVED and not stated:
             warnings.warn(
                 f"the calibration's tool point is {np.linalg.norm(carried) * 1e3:.1f} mm from the robot file's tool it "
                 f"started from ({NOMINAL_TOOL}), more than a calibration corrects ({TIP_MOVED * 1e3:.0f} mm): the ball "
@@ -148,19 +170,48 @@ def with_tool(model: RobotModel, tool: np.ndarray, payload: dict | None = None,
     if payload is not None:
         extras["payload"] = payload
     extras["tool_swap"] = {"calibrated_tool": [float(v) for v in calibrated], "tool": [float(v) for v in tool],
-                           "carried_correction": [float(v) for v in carried]}
+                           "carried_correction": [float(v) for v in carried], **stated}
     unidentified = float(np.sin(angle) * distance)
     note = (f"new tool {distance * 1e3:.1f} mm from the calibrated tool point: a single-point tool does not "
             f"(fully) identify the rotation of the last frame about that point, so at the new tool each "
             f"{np.rad2deg(angle):.1f} deg of it (the prior's spread) is {unidentified * 1e3:.2f} mm the calibration "
             f"cannot vouch for")
     if nominal_tool is not None:
-        shift = ", ".join(f"{v * 1e3:+.3f}" for v in carried)
-        note += (f"; the calibration's correction of the old tool point, ({shift}) mm in the last frame (the "
+        own = carried - np.asarray(stated["samples_shift"]) if stated.get("adapter") else carried  # the adapter: said
+        shown = ", ".join(f"{v * 1e3:+.3f}" for v in own)
+        note += (f"; the calibration's correction of the old tool point, ({shown}) mm in the last frame (the "
                  f"flange's own error is in it), is carried to the new tool: one ball cannot tell the flange's error "
                  f"(the new tool shares it) from the ball's own mount (it does not), so the new tool may be off by up "
-                 f"to {np.linalg.norm(carried) * 1e3:.2f} mm more")
+                 f"to {np.linalg.norm(own) * 1e3:.2f} mm more")
+    if stated:
+        how = "carried: an adapter every tool sits on" if stated["adapter"] else "not carried: the ball's own mount"
+        note += (f"; the {np.linalg.norm(stated['samples_shift']) * 1e3:.1f} mm at which the samples put the ball from "
+                 f"the robot file's tool is {how}")
     return ToolSwap(replace(model, tool=tool, extras=extras), distance, unidentified, note)
+
+
+def samples_shift(nominal_tool: np.ndarray, samples_tool: np.ndarray | None) -> np.ndarray | None:
+    """(3,) how far the samples put the ball from the robot file's tool, ``samples_tool - nominal_tool`` [m] in the
+    last frame, when beyond :data:`TIP_MOVED`; None otherwise (nothing recorded, or a calibration's correction).
+
+    Raises:
+        ToolError: a ``samples_tool`` that is not 3 finite numbers.
+    """
+    if samples_tool is None:
+        return None
+    shift = point_of(samples_tool, f"field '{SAMPLES_TOOL}'") - np.asarray(nominal_tool, dtype=float)
+    return shift if float(np.linalg.norm(shift)) > TIP_MOVED else None
+
+
+def adapter_question(shift: np.ndarray, field: str) -> str:
+    """The refusal of a tool swap (or a controller) that was not told what ``shift`` (3,) [m] is: an adapter every tool
+    sits on, or the ball's own mount; ``field`` names the answer (``--adapter`` on the command line)."""
+    shown = ", ".join(f"{v * 1e3:.1f}" for v in shift)
+    return (f"field '{field}': the calibration's samples put the ball {np.linalg.norm(shift) * 1e3:.1f} mm from the "
+            f"robot file's tool ([{shown}] mm in the last frame, {SAMPLES_TOOL}), more than a calibration corrects "
+            f"({TIP_MOVED * 1e3:.0f} mm); one ball cannot tell whether an adapter or sensor between the flange and "
+            "every tool put it there (carried to the new tool: --adapter, adapter=True) or the ball's own mount or a "
+            "--tip-link that named another link (not carried: --no-adapter, adapter=False)")
 
 
 def calibrated_tool(model: RobotModel) -> np.ndarray:
@@ -227,6 +278,16 @@ def calibrated_from(model: RobotModel, reference: RobotModel) -> bool:
     return recorded is not None and bool(np.allclose(recorded, reference.tool, rtol=0.0, atol=TOOL_MATCH_TOL))
 
 
+def swapped_tool(model: RobotModel) -> bool:
+    """``model``'s tool is one :func:`with_tool` put on it (its ``tool_swap`` block is current, not stale)."""
+    swap = model.extras.get("tool_swap")
+    try:
+        return isinstance(swap, dict) and bool(np.allclose(np.asarray(swap.get("tool"), dtype=float), model.tool,
+                                                           rtol=0.0, atol=1e-12))
+    except (TypeError, ValueError):
+        return False
+
+
 def nominal_tool_of(model: RobotModel) -> np.ndarray | None:
     """(3,) the nominal position [m] in the last frame of the tool whose calibrated point ``model`` carries: the new
     tool as :func:`with_tool` was given it (its ``tool_swap`` block's tool less the correction it carried), else the
@@ -236,9 +297,7 @@ def nominal_tool_of(model: RobotModel) -> np.ndarray | None:
     swap = model.extras.get("tool_swap")
     block = model.extras.get("calibration")
     try:
-        current = isinstance(swap, dict) and np.allclose(np.asarray(swap.get("tool"), dtype=float), model.tool,
-                                                         rtol=0.0, atol=1e-12)  # not stale (:func:`calibrated_tool`)
-        if current:
+        if swapped_tool(model):  # not stale (:func:`calibrated_tool`)
             point = np.asarray(swap["tool"], dtype=float) - np.asarray(swap.get("carried_correction", 0.0), dtype=float)
         elif isinstance(block, dict) and block.get("nominal_tool") is not None:
             point = np.asarray(block["nominal_tool"], dtype=float)

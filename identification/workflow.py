@@ -29,6 +29,7 @@ from spherecal.correction.files.outputs import OutputSet
 from spherecal.correction.files.provenance import provenance
 from spherecal.correction.files.samples import DEDUP_TOL, Dataset
 from spherecal.correction.files.samples_csv import read_samples
+from spherecal.correction.tool import TIP_MOVED
 
 from .build import build_problem
 from .calibrate import MAX_CHANGE, CalibrationResult, calibrate
@@ -208,6 +209,11 @@ def run_workflow(nominal: RobotModel, dataset: Dataset, spec: FixtureSpec | None
         block["timings_s"]["model_selection"] = selection.seconds
     block["duplicates_dropped"] = dropped
     block["nominal_tool"] = [float(v) for v in given.tool]  # a tool swap carries the tool's correction over
+    # where the samples put the ball, when beyond a calibration's correction of the file's tool: a tool swap and a
+    # controller must be told whether that offset is an adapter every tool sits on (correction.tool.with_tool)
+    shown = nominal.tool if tool_note is not None else result.model.tool
+    if np.linalg.norm(shown - given.tool) > TIP_MOVED:
+        block["samples_tool"] = [float(v) for v in shown]
     block["trained_on"] = training_record(as_read, dataset)  # validate recognises these samples by content
     block["options"] = options.record()
     block["provenance"] = provenance(options.seed, {**(inputs or {}), **options.record()})

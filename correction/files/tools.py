@@ -9,13 +9,13 @@ import numpy as np
 
 from ..gravity import has_inertials
 from ..model import RobotModel
-from ..tool import NOMINAL_TOOL, ToolError, ToolSwap, point_of, tool_in_frame, with_tool
+from ..tool import NOMINAL_TOOL, SAMPLES_TOOL, ToolError, ToolSwap, point_of, tool_in_frame, with_tool
 from .urdf_to_dh import load_urdf
 
 
 def put_tool(model: RobotModel, offset: np.ndarray | None = None, urdf: str | os.PathLike | None = None,
              tip_link: str | None = None, base_link: str | None = None,
-             source: str | os.PathLike | None = None) -> tuple[ToolSwap, str]:
+             source: str | os.PathLike | None = None, adapter: bool | None = None) -> tuple[ToolSwap, str]:
     """``model`` with the tool at ``offset`` (in the last DH frame [m]) or at ``tip_link`` of ``urdf``.
 
     Args:
@@ -27,6 +27,10 @@ def put_tool(model: RobotModel, offset: np.ndarray | None = None, urdf: str | os
             chain's last frame must be the model's: :func:`correction.tool.tool_in_frame`). When the URDF has
             masses, what its last link carries (gripper, fingers) becomes the payload.
         source: the calibrated file, named in a refusal of its ``calibration.nominal_tool``.
+        adapter: whether the offset at which the samples put the ball (``calibration.samples_tool``, recorded when
+            it is beyond a calibration's correction from the robot file's tool) is an adapter every tool sits on
+            (True: carried to the new tool) or the ball's own (False); needed only then
+            (:func:`correction.tool.with_tool`).
 
     Returns:
         ``(swap, one line on the payload)``.
@@ -47,9 +51,12 @@ def put_tool(model: RobotModel, offset: np.ndarray | None = None, urdf: str | os
             payload = description.extras["payload"]
     block = model.extras.get("calibration")
     nominal = block.get("nominal_tool") if isinstance(block, dict) else None
+    samples = block.get("samples_tool") if isinstance(block, dict) else None
     if nominal is not None:  # a hand-edited file: its name and field, not a traceback ('nominal_tool: abc')
         nominal = point_of(nominal, f"{source or model.name}: field '{NOMINAL_TOOL}'")
-    swap = with_tool(model, offset, payload, nominal_tool=nominal, field="--offset" if urdf is None else "--tip-link")
+        samples = None if samples is None else point_of(samples, f"{source or model.name}: field '{SAMPLES_TOOL}'")
+    swap = with_tool(model, offset, payload, nominal_tool=nominal, field="--offset" if urdf is None else "--tip-link",
+                     samples_tool=samples, adapter=adapter)
     swap = replace(swap, model=_retipped(swap.model, description.extras.get("urdf") if urdf is not None else None))
     if payload is not None:
         line = f"payload from {urdf}: {payload['mass']:.3f} kg (what its last link carries)"

@@ -25,6 +25,12 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                       "file's); --tip-link names the tool link")
     parser.add_argument("--tip-link", default=None, metavar="NAME", help="with --urdf: the link at the new tool point")
     parser.add_argument("--base-link", default=None, metavar="NAME", help="with --urdf: the arm's base link")
+    parser.add_argument("--adapter", action=argparse.BooleanOptionalAction, default=None,
+                        help="needed only when the calibration's samples put the ball more than 10 mm from its robot "
+                        "file's tool (calibration.samples_tool; calibrate warned): --adapter if an adapter or sensor "
+                        "between the flange and every tool put it there (the offset is carried to the new tool), "
+                        "--no-adapter if it is the ball's own mount or the calibration's --tip-link named another "
+                        "link (not carried)")
     parser.add_argument("--out", required=True, metavar="FILE", help="the new robot file (written atomically)")
 
 
@@ -45,7 +51,8 @@ def run(args: argparse.Namespace) -> int:
         import warnings
 
         warnings.warn(forced, stacklevel=1)
-    swap, payload = put_tool(model, args.offset, args.urdf, args.tip_link, args.base_link, source=args.robot)
+    swap, payload = put_tool(model, args.offset, args.urdf, args.tip_link, args.base_link, source=args.robot,
+                            adapter=args.adapter)
     header = f"spherecal tool: {args.robot} with the tool at {[round(v, 6) for v in swap.model.tool]} m (frame n)"
     with outputs:
         path = outputs.write_text(args.out, dump_robot(swap.model, header=header))

@@ -5,11 +5,17 @@ The truth is known (simulation); the pivot fit is checked against the true tool.
 
 from __future__ import annotations
 
+from dataclasses import replace
+
 import numpy as np
 import pytest
 
-from spherecal.correction import load_robot, perturb, tool_point
+from spherecal.cli import main
+from spherecal.controller.compensation import ModelMismatchError, corrected_ik
+from spherecal.correction import load_robot, perturb, save_robot, tool_point
 from spherecal.correction.files.fixtures import FixtureSpec
+from spherecal.correction.files.tools import put_tool
+from spherecal.correction.tool import ToolError
 from spherecal.identification.calibrate import calibrate
 from spherecal.identification.synthetic import make_dataset
 from spherecal.identification.tool_fit import pivot_tool, recentred_tool
@@ -101,3 +107,47 @@ def test_a_tool_the_file_describes_is_left_alone() -> None:
     assert model is nominal and note is None
     out = run_workflow(nominal, train, SPEC, WorkflowOptions(model="dh"))
     assert not any(w.startswith("tool point:") for w in out.result.warnings)
+    assert "samples_tool" not in out.block  # nothing to ask a tool swap
+
+
+def test_a_tool_swap_and_a_controller_must_be_told_whether_the_balls_offset_is_an_adapter(tmp_path) -> None:
+    # a user trial: MUKCa's panda_2_clean calibrated with --tip-link panda_hand_tcp (the ball 41 mm beyond it) was
+    # only warned about; `tool` to that link changed nothing, and corrected_ik took the file, its TCP 30 mm off.
+    # One ball cannot tell an adapter under every tool (a force sensor) from the ball's own mount: the two truths
+    # below, each checked against the simulated arm it was recorded on.
+    nominal, true, train, data = _arm(0)
+    out = run_workflow(nominal, train, SPEC, WorkflowOptions(model="dh"))
+    block = out.block
+    assert np.linalg.norm(np.array(block["samples_tool"]) - true.tool) < 2e-3  # where the samples put the ball
+    tcp = nominal.tool + [0.0, 0.0, 0.1]  # a gripper's TCP 0.1 m beyond the file's tool
+    q = data.q[::7]
+    with pytest.raises(ToolError, match=r"field '--adapter': the calibration's samples put the ball 3\d\.\d mm from"):
+        put_tool(out.model, offset=tcp)
+    own_tcp = true.tool - SENSOR + [0.0, 0.0, 0.1]  # the true arm's flange error is every tool's; the mount is not
+    for adapter, truth in ((False, own_tcp), (True, own_tcp + SENSOR)):
+        swap, _ = put_tool(out.model, offset=tcp, adapter=adapter)
+        assert swap.model.extras["tool_swap"]["adapter"] is adapter
+        error = np.linalg.norm(tool_point(swap.model, q) - tool_point(_with_tool(true, truth), q), axis=1)
+        assert error.max() < 3e-3, (adapter, error.max())  # the other answer is 38 mm off
+        wrong, _ = put_tool(out.model, offset=tcp, adapter=not adapter)
+        assert np.linalg.norm(tool_point(wrong.model, q) - tool_point(_with_tool(true, truth), q), axis=1).min() > 0.03
+    # the controller: at the file's tool it refuses the calibration until a swap has said which
+    controller = _with_tool(nominal, tcp)
+    q0 = np.array([0.0, -0.3, 0.0, -2.2, 0.0, 2.0, 0.8])
+    target = tool_point(controller, q0) + [0.02, 0.0, -0.01]
+    swapped = put_tool(out.model, offset=tcp, adapter=False)[0].model
+    calibrated = _with_tool(out.model, out.model.tool)  # as calibrate wrote it, its tool the ball
+    ball = replace(controller, tool=nominal.tool)
+    for reference, said in ((ball, r"samples put the ball 3\d\.\d mm .* missed by up to 3\d\.\d mm"),
+                            (controller, r"tool point is \d+ mm from the controller model's")):
+        with pytest.raises(ModelMismatchError, match=said + r".* --offset [\d. ]+ --adapter or --no-adapter --out"):
+            corrected_ik(calibrated, tool_point(reference, q0) + [0.02, 0.0, -0.01], q0, nominal=reference)
+    solved = corrected_ik(swapped, target, q0, nominal=controller)
+    assert np.linalg.norm(tool_point(swapped, solved) - target) < 1e-6
+    # the command: one line naming the option, nothing written; then written
+    cal = tmp_path / "cal.yaml"
+    save_robot(out.model, cal)
+    argv = ["tool", str(cal), "--offset", *map(str, tcp), "--out", str(tmp_path / "tcp.yaml")]
+    assert main(argv) == 1 and not (tmp_path / "tcp.yaml").exists()
+    assert main([*argv, "--no-adapter"]) == 0
+    np.testing.assert_allclose(load_robot(tmp_path / "tcp.yaml").tool, swapped.tool, atol=1e-12)
