@@ -429,7 +429,8 @@ def _level(problem: CalibrationProblem, r: np.ndarray, sigma: float, dof: int, e
         "outliers_excluded": excluded,
     }
     worst = max(per_fixture, key=per_fixture.get)
-    stated = "the declared noise" if declared else "the fit's noise (none declared)"
+    # 'the fit's noise (none declared) 0.3 mm' read as a contradiction (a user trial)
+    stated, unstated = ("the declared noise", "") if declared else ("the fit's default noise", " (no --noise)")
     alone = None
     if problem.n_prior:  # the prior's rows are in sigma: the samples' own figure beside it (a reader compares it with
         data = r[~problem.prior_rows()]  # the summary's residual, which holds the samples alone)
@@ -437,8 +438,8 @@ def _level(problem: CalibrationProblem, r: np.ndarray, sigma: float, dof: int, e
         figures["data_rows_std_mm"] = alone * 1e3
     with_prior = "" if alone is None else f" with the prior's rows (the samples alone {alone * 1e3:.3g} mm)"
     text = (
-        f"residual {sigma * 1e3:.3g} mm per axis{with_prior} ({sigma / noise:.2g}x {stated} {noise * 1e3:.3g} mm; "
-        f"chi2 {statistic:.4g} on {dof} dof); worst fixture {worst} {per_fixture[worst] * 1e3:.3g} mm"
+        f"residual {sigma * 1e3:.3g} mm per axis{with_prior} ({sigma / noise:.2g}x {stated} {noise * 1e3:.3g} "
+        f"mm{unstated}; chi2 {statistic:.4g} on {dof} dof); worst fixture {worst} {per_fixture[worst] * 1e3:.3g} mm"
     )
     if sigma <= LEVEL_FACTOR * noise:
         if sigma < noise / LEVEL_FACTOR:
@@ -447,8 +448,8 @@ def _level(problem: CalibrationProblem, r: np.ndarray, sigma: float, dof: int, e
         return Finding("residual level", True, text, figures)
     against = "the declared" if declared else stated
     where = (f"{samples_location(dataset)}: residual noise {sigma * 1e3:.3g} mm per axis{with_prior} is "
-             f"{sigma / noise:.3g}x {against} {noise * 1e3:.3g} mm (limit {LEVEL_FACTOR:g}x; worst fixture {worst} "
-             f"{per_fixture[worst] * 1e3:.3g} mm)")
+             f"{sigma / noise:.3g}x {against} {noise * 1e3:.3g} mm{unstated} (limit {LEVEL_FACTOR:g}x; worst fixture "
+             f"{worst} {per_fixture[worst] * 1e3:.3g} mm)")
     weight = problem.prior_weight
     if alone is not None:  # the prior's rows are in sigma: is it the samples, or a prior holding the arm at nominal?
         if alone <= LEVEL_FACTOR * noise and weight > PRIOR:
