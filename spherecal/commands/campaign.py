@@ -49,11 +49,15 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--model", choices=("dh", "elastic", "auto"), default="dh",
                         help="model calibrated (dh: default, the paper's; elastic; auto: cross-validated choice)")
     add_workers(parser, "motion sets")
-    parser.add_argument("--out", default="spherecal-campaign", help="folder for table2.csv and table2.md")
+    parser.add_argument("--out", default="spherecal-campaign",
+                        help="folder for table2.csv and table2.md (default spherecal-campaign). A set that fails "
+                        "(raises) is left out of the statistics and counted in its row's 'failed' column, named in "
+                        "a 'failed:' comment line of both files; the other sets are written and the exit status is 1")
 
 
 def run(args: argparse.Namespace) -> int:
     """Check the options, run the campaign, print Table 2 and where it was written (CSV and Markdown)."""
+    import re
     import sys
     from pathlib import Path
 
@@ -109,7 +113,9 @@ def run(args: argparse.Namespace) -> int:
     print(f"wall time {done.wall:.1f} s ({len(results)} sets, {len(done.run.workers)} worker processes, {where})")
     failures = done.run.failures
     if failures:  # each also reported as it happened (TaskFailedWarning); the table holds the others
-        print(f"failed: {len(failures)} sets ({', '.join(f.name for f in failures)}), not in the table",
-              file=sys.stderr)
+        rerun = ",".join(dict.fromkeys(re.match(r"P(all|\d)", name).group(0) for name in done.run.failed_rows))
+        print(f"spherecal campaign: error: {len(failures)} of {len(failures) + len(results)} sets failed "
+              f"({', '.join(f.name for f in failures)}): written as incomplete rows (the 'failed' column of "
+              f"{done.files[0].name} and {done.files[1].name}); --rows {rerun} runs them again", file=sys.stderr)
         return 1
     return 0

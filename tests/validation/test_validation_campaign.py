@@ -47,7 +47,7 @@ def test_table_aggregates_mean_std_max_over_sets() -> None:
     np.testing.assert_allclose(row.maximal, [4e-4, 2 * np.std([1e-4, 2e-4, 3e-4]), 6e-4])
     csv_text = table_csv([row], comment="seed 0")
     assert csv_text.splitlines()[0] == "# seed 0"
-    assert csv_text.splitlines()[2].startswith("P1,3,0,0.200,0.082,0.300,0.400,0.163,0.600")
+    assert csv_text.splitlines()[2].startswith("P1,3,0,0,0.200,0.082,0.300,0.400,0.163,0.600")
     assert "0.00 / 0.01" in format_table([row])  # the paper's row beside ours
 
 
@@ -69,7 +69,7 @@ def test_refused_sets_are_counted_not_averaged() -> None:
     p1, p2 = table(results)
     assert (p1.sets, p1.refused) == (1, 1) and p1.average[0] == pytest.approx(1e-4)
     assert (p2.sets, p2.refused) == (0, 1) and np.isnan(p2.average[0])
-    assert table_csv([p1]).splitlines()[1].startswith("P1,1,1,0.100")
+    assert table_csv([p1]).splitlines()[1].startswith("P1,1,1,0,0.100")
 
 
 def test_campaign_is_the_same_on_one_or_two_workers(tmp_path) -> None:
@@ -137,3 +137,43 @@ def test_small_real_campaign_is_reproducible(tmp_path) -> None:
     # noise-free with three fixtures and known distances: micrometres; nominal: millimetres
     assert rows["Pall"].average[0] < 1e-5 < 1e-3 < rows["Pall"].nominal_average
     assert rows["PallN"].average[0] < min(0.25e-3, rows["PallN"].nominal_average / 10)  # 150 noisy samples each
+
+
+def test_a_campaign_with_some_sets_failing_writes_them_as_incomplete_rows_and_exits_1(tmp_path, capsys,
+                                                                                        monkeypatch) -> None:
+    """A review: with P1's set raising, `campaign --rows P1,P3` wrote a table of P3 alone, nothing in either file
+    saying P1 was asked for, and exited 1. The table keeps the sets that finished (hours of a long campaign) and
+    says what is missing: P1 listed with no set and one failed, a 'failed:' comment line naming the set and its
+    error in both files, one line on stderr naming the set and the --rows that runs it again."""
+    import spherecal.validation.experiments.campaign as campaign
+
+    real = campaign.motion_set
+
+    def p1_explodes(truth, start, fixtures, *args, **kwargs):
+        if list(fixtures) == ["P1"]:
+            raise RuntimeError("solver exploded")
+        return real(truth, start, fixtures, *args, **kwargs)
+
+    monkeypatch.setattr(campaign, "motion_set", p1_explodes)  # --workers 1: the sets run in this process
+    out = tmp_path / "c"
+    assert main(["campaign", "--sets", "1", "--per-fixture", "20", "--configurations", "50", "--noise", "0",
+                 "--workers", "1", "--rows", "P1,P3", "--out", str(out)]) == 1
+    err = capsys.readouterr().err.splitlines()
+    assert err[0] == ("spherecal campaign: error: 1 of 2 sets failed (P1 set 0): written as incomplete rows (the "
+                      "'failed' column of table2.csv and table2.md); --rows P1 runs them again")
+    text = (out / "table2.csv").read_text()
+    comments = [line for line in text.splitlines() if line.startswith("#")]
+    assert "# failed: 1 of 2 sets, not in the statistics: P1 set 0 (RuntimeError: solver exploded)" in comments
+    header, *rows = [line.split(",") for line in text.splitlines() if not line.startswith("#")]
+    assert header[:4] == ["set", "sets", "refused", "failed"]
+    assert [row[:4] for row in rows] == [["P1", "0", "0", "1"], ["P3", "1", "0", "0"]]  # the campaign's row order
+    assert "failed: 1 of 2 sets, not in the statistics: P1 set 0" in (out / "table2.md").read_text()
+
+
+def test_failed_sets_are_counted_in_their_rows_in_the_campaigns_order() -> None:
+    results = [TaskResult("P2", 0, 1e-4, 2e-4, 1e-4, 1e-3, 0.0), TaskResult("P2", 1, 3e-4, 4e-4, 1e-4, 1e-3, 0.0)]
+    rows = table(results, failed=["P1", "P2", "P1"], order=["P1", "P2", "P3"])
+    assert [(r.name, r.sets, r.failed) for r in rows] == [("P1", 0, 2), ("P2", 2, 1)]  # P3 never ran: not listed
+    assert rows[1].average[0] == pytest.approx(2e-4) and np.isnan(rows[0].average[0])  # failed sets not averaged
+    assert table(results) == table(results, (), ())  # without failures: as before
+    assert "err" in format_table(rows).splitlines()[0]

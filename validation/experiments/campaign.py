@@ -26,7 +26,7 @@ import csv
 import io
 import os
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Iterable
 from concurrent.futures import Executor
 from dataclasses import dataclass
 from pathlib import Path
@@ -197,11 +197,19 @@ class CampaignRun:
         results: the finished tasks' results, in (row order, set index): independent of scheduling.
         failures: the tasks that raised (each also reported by a TaskFailedWarning), not in ``results``.
         workers: worker -> its package versions (for the provenance of the files written).
+        failed_rows: the row of each task in ``failures``, in the same order.
+        rows: every row of the campaign, in table order (a row whose every set failed is one of them).
     """
 
     results: list[TaskResult]
     failures: list[Failure]
     workers: dict[str, dict[str, str]]
+    failed_rows: tuple[str, ...] = ()
+    rows: tuple[str, ...] = ()
+
+    def table(self) -> list[TableRow]:
+        """Table 2 of this run: every row of the campaign in its order, the failed sets counted in their rows."""
+        return table(self.results, self.failed_rows, self.rows)
 
 
 def run_campaign(
@@ -234,7 +242,9 @@ def run_campaign(
             with parallel.executor(workers, scheduler) as own:
                 outcome = run_tasks(runner, todo, own, names, update)
     results = [result for result in outcome.results if result is not None]
-    return CampaignRun(results, outcome.failures, outcome.workers)
+    failed_rows = tuple(task.row for task, result in zip(todo, outcome.results, strict=True) if result is None)
+    return CampaignRun(results, outcome.failures, outcome.workers, failed_rows,
+                       tuple(dict.fromkeys(task.row for task in todo)))
 
 
 @dataclass(frozen=True)
@@ -248,12 +258,22 @@ class TableRow:
     mocap_average: float  # mean of the sets' average error against a 0.3 mm mocap
     nominal_average: float  # mean of the nominal model's average error
     refused: int = 0  # sets whose data the calibration refused (not in the statistics)
+    failed: int = 0  # sets that raised (not in the statistics): the row is incomplete
 
 
-def table(results: list[TaskResult]) -> list[TableRow]:
-    """Aggregate task results into Table 2 rows, in the order the rows first appear."""
+def table(results: list[TaskResult], failed: Iterable[str] = (), order: Iterable[str] = ()) -> list[TableRow]:
+    """Aggregate task results into Table 2 rows.
+
+    Args:
+        results: the finished sets.
+        failed: the row of each set that raised: counted in its row's ``failed``, a row whose every set raised kept
+            (no statistics), so that the table says it is incomplete.
+        order: rows in the order to list them (a campaign's, :attr:`CampaignRun.rows`); any other row follows in the
+            order it first appears in ``results``, then in ``failed``.
+    """
+    failed = list(failed)
     rows = []
-    for name in dict.fromkeys(r.row for r in results):
+    for name in dict.fromkeys([*order, *(r.row for r in results), *failed]):
         mine = [r for r in results if r.row == name and not r.refused]
         means, maxes = np.array([r.mean for r in mine]), np.array([r.max for r in mine])
 
@@ -271,15 +291,17 @@ def table(results: list[TaskResult]) -> list[TableRow]:
                 mocap_average=float(np.mean([r.mocap_mean for r in mine])) if mine else float("nan"),
                 nominal_average=float(np.mean([r.nominal_mean for r in mine])) if mine else float("nan"),
                 refused=sum(1 for r in results if r.row == name and r.refused),
+                failed=failed.count(name),
             )
         )
-    return rows
+    return [row for row in rows if row.sets or row.refused or row.failed]  # an ``order`` row that did not run
 
 
 COLUMNS = (
     "set",
     "sets",
     "refused",
+    "failed",
     "average_mean_mm",
     "average_std_mm",
     "average_max_mm",
@@ -297,7 +319,7 @@ def _cells(row: TableRow) -> list[str]:
     paper = PAPER_TABLE2.get(row.name)
     values = [*row.average, *row.maximal, row.mocap_average, row.nominal_average]
     return (
-        [row.name, str(row.sets), str(row.refused)]
+        [row.name, str(row.sets), str(row.refused), str(row.failed)]
         + [f"{v * 1e3:.3f}" for v in values]
         + (["", ""] if paper is None else [f"{paper[0]:.2f}", f"{paper[1]:.2f}"])
     )
@@ -308,18 +330,18 @@ def format_table(rows: list[TableRow]) -> str:
     (``P1/elastic``, ``PallNE/auto``)."""
     w = max([6, *(len(row.name) for row in rows)])
     head = (
-        f"{'set':<{w}} {'n':>3} {'ref':>3} | {'average error [mm]':^26} | {'maximal error [mm]':^26} | "
+        f"{'set':<{w}} {'n':>3} {'ref':>3} {'err':>3} | {'average error [mm]':^26} | {'maximal error [mm]':^26} | "
         f"{'vs mocap':>8} {'nominal':>8} | {'paper avg/max':>13}\n"
-        f"{'':<{w}} {'':>3} {'':>3} | {'mean':>8} {'std':>8} {'max':>8} | {'mean':>8} {'std':>8} {'max':>8} | "
+        f"{'':<{w}} {'':>3} {'':>3} {'':>3} | {'mean':>8} {'std':>8} {'max':>8} | {'mean':>8} {'std':>8} {'max':>8} | "
         f"{'avg':>8} {'avg':>8} | {'mean':>13}"
     )
     lines = [head]
     for row in rows:
         c = _cells(row)
-        paper = f"{c[11]} / {c[12]}" if c[11] else "-"
+        paper = f"{c[12]} / {c[13]}" if c[12] else "-"
         lines.append(
-            f"{c[0]:<{w}} {c[1]:>3} {c[2]:>3} | {c[3]:>8} {c[4]:>8} {c[5]:>8} | {c[6]:>8} {c[7]:>8} {c[8]:>8} | "
-            f"{c[9]:>8} {c[10]:>8} | {paper:>13}"
+            f"{c[0]:<{w}} {c[1]:>3} {c[2]:>3} {c[3]:>3} | {c[4]:>8} {c[5]:>8} {c[6]:>8} | {c[7]:>8} {c[8]:>8} "
+            f"{c[9]:>8} | {c[10]:>8} {c[11]:>8} | {paper:>13}"
         )
     return "\n".join(lines)
 
@@ -398,6 +420,15 @@ def refuse_if_none_calibrated(results: list[TaskResult]) -> None:
                               f"{first.index}: {first.refused}")
 
 
+def failed_comment(run: CampaignRun) -> str:
+    """The comment line naming the sets that raised (``""`` when none did), for the provenance of the tables: a
+    table with a failed set is incomplete, and its file says so (the ``failed`` column counts them per row)."""
+    if not run.failures:
+        return ""
+    return (f"\nfailed: {len(run.failures)} of {len(run.failures) + len(run.results)} sets, not in the statistics: "
+            + "; ".join(f"{f.name} ({f.error})" for f in run.failures))
+
+
 @dataclass(frozen=True)
 class CampaignOutcome:
     """What :func:`run_and_write` did.
@@ -430,6 +461,11 @@ def run_and_write(config: CampaignConfig, folder: str | os.PathLike, inputs: dic
         show: called with the results and the table before the files are written (a write that fails after a
             long run still shows them).
 
+    Sets that raised while others finished are kept out of the statistics and named: counted in their rows'
+    ``failed`` column (a row whose every set raised is listed with none), and listed in a ``failed:`` comment line
+    of both files. The files are written all the same (a long campaign keeps the hours of sets it computed; a rerun
+    of the failed rows gives the same sets, each seeded by itself); the caller reports the failures and exits 1.
+
     Raises:
         ExperimentError: every set failed (:func:`refuse_if_none_finished`) or its calibration was refused
             (:func:`refuse_if_none_calibrated`); nothing is shown or written.
@@ -439,9 +475,9 @@ def run_and_write(config: CampaignConfig, folder: str | os.PathLike, inputs: dic
     wall = time.perf_counter() - start
     refuse_if_none_finished(run)
     refuse_if_none_calibrated(run.results)
-    rows = table(run.results)
+    rows = run.table()
     if show is not None:
         show(run.results, rows)
     info = provenance(config.seed, {**inputs, "wall_time_s": round(wall, 1)}, workers=run.workers)
-    files = write_tables(rows, folder, comment_block(info), outputs)
+    files = write_tables(rows, folder, comment_block(info) + failed_comment(run), outputs)
     return CampaignOutcome(run, rows, files, wall)
