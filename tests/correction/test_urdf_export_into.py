@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import difflib
 import hashlib
+import re
 import warnings
 import xml.etree.ElementTree as ET
 from dataclasses import replace
@@ -327,3 +328,36 @@ def test_a_joint_zero_degrees_off_is_written_into_its_urdf_whatever_terms_the_fi
     carrying = replace(calibrated, extras={**calibrated.extras, extra: zeros})
     assert carrying.n_params == calibrated.n_params + calibrated.n_joints  # c1..cn or s1..sn beside the geometry
     assert urdf_into(carrying, original, "gen3lite") == plain
+
+
+@pytest.mark.parametrize("block", [None, {"method": "lm", "self_check": {"note": "x" * 20000}}])
+def test_exporting_into_an_exported_urdf_does_not_grow_it(block, tmp_path, rng, capsys):
+    """A review: each `export --into` of the last result added its two comments again (the calibration's provenance
+    block, tens of kB): an iiwa14 URDF of 5 kB became 55, 104, 153 kB. An export into a file an export wrote replaces
+    the earlier comments (and says so); the user's own comments stay."""
+    nominal, calibrated = _calibrated("iiwa14", "modified", rng)
+    held = [calibrated.param_names.index(name) for name in ("d7", "theta7")]  # as a calibration holds them (they
+    params = calibrated.params.copy()  # are redundant with the tool point); else each export moves link 7 further
+    params[held] = nominal.params[held]
+    calibrated = calibrated.with_params(params)
+    if block is not None:
+        calibrated = replace(calibrated, extras={**calibrated.extras, "calibration": block})
+    cal = tmp_path / "cal.yaml"
+    save_robot(calibrated, cal)
+    files = [tmp_path / "user.urdf", tmp_path / "a.urdf", tmp_path / "b.urdf", tmp_path / "c.urdf"]
+    files[0].write_text(_text("iiwa14"))
+    for into, out in zip(files, files[1:], strict=False):
+        assert main(["export", str(cal), "--format", "urdf", "--into", str(into), "--out", str(out)]) == 0
+    capsys.readouterr()
+    first, *again = [f.read_text() for f in files[1:]]
+    for text in again:
+        assert text.count("written by spherecal") == 1 and text.count("<!--") == first.count("<!--")
+        assert "the comments of the earlier spherecal export" in text
+        assert abs(len(text) - len(first)) < 200  # the file names and that line, not another block
+        assert text.startswith(_text("iiwa14")[:_text("iiwa14").find("-->")])  # the user's comment, first and kept
+    origins = [[line for line in text.splitlines() if "<origin" in line] for text in (first, again[-1])]
+    for before, after in zip(*origins, strict=True):  # the same origins, to rounding
+        numbers = [np.array(re.findall(r"-?[0-9.]+(?:e[-+]?[0-9]+)?", line), dtype=float) for line in (before, after)]
+        np.testing.assert_allclose(*numbers, atol=1e-12)
+    assert "the comments of the earlier" not in first  # a user's file: nothing replaced
+    assert first.count("<!--") == _text("iiwa14").count("<!--") + 2
