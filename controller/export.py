@@ -67,7 +67,7 @@ class Export:
 
 
 def provenance_header(source: str, output_format: str, seed: int | None = None,
-                      inputs: dict[str, str | os.PathLike] | None = None) -> str:
+                      inputs: dict[str, str | os.PathLike | dict] | None = None) -> str:
     """Comment lines naming the input files (and their SHA-256), the seed and the versions that wrote the export.
 
     Args:
@@ -76,10 +76,11 @@ def provenance_header(source: str, output_format: str, seed: int | None = None,
             hyphens are written (:func:`correction.files.urdf_write.xml_comment`).
         seed: the seed of the rigid fit's workspace samples (:func:`fit_seed`); None when nothing was drawn.
         inputs: the other files the export read, by role (``into``: the URDF written into; ``samples``: the
-            rigid fit's recorded configurations).
+            rigid fit's recorded configurations): a file name (hashed here), or its ``{"path", "sha256"}`` record
+            when the digest is known already (:func:`correction.files.provenance.input_record`).
     """
-    block = comment_block(provenance(seed, {"robot": Path(source),
-                                            **{k: Path(v) for k, v in (inputs or {}).items()}}))
+    block = comment_block(provenance(seed, {"robot": Path(source), **{
+        k: v if isinstance(v, dict) else Path(v) for k, v in (inputs or {}).items()}}))
     xml = "" if output_format == "yaml" else " (a double hyphen written '- -': an XML comment cannot hold two in a row)"
     return f"spherecal export to {output_format} of {source}{xml}\n{block}"
 
@@ -93,13 +94,16 @@ def fit_seed(model: RobotModel, output_format: str, seed: int) -> int | None:
 
 
 def recorded_configurations(model: RobotModel, samples: str | os.PathLike | None = None,
-                            folder: str | os.PathLike | None = None) -> tuple[np.ndarray | None, str]:
+                            folder: str | os.PathLike | None = None,
+                            found: tuple[Path | None, str] | None = None) -> tuple[np.ndarray | None, str]:
     """The joint angles the model was calibrated on, for the rigid fit.
 
     Args:
         samples: a samples file; None: the one the calibrated file's ``calibration.provenance.inputs.samples`` names,
             if it still exists with the recorded SHA-256 (tried as written, then beside ``folder``, the
             calibrated file's folder, and relative to it and to its parent; the digest must match).
+        found: what :func:`calibration_samples` gave for ``model`` and ``folder`` when the caller asked already (it
+            hashes the file: not again); None: asked here.
 
     Returns:
         ``(q (K, n) [rad] or None, one line saying where they came from)``.
@@ -110,7 +114,7 @@ def recorded_configurations(model: RobotModel, samples: str | os.PathLike | None
     if samples is not None:
         q = read_samples(samples, model).q
         return q, f"{len(q)} recorded configurations from {samples}"
-    path, why = calibration_samples(model, folder)
+    path, why = calibration_samples(model, folder) if found is None else found
     if path is None:
         return None, why
     try:
@@ -124,9 +128,8 @@ def calibration_samples(model: RobotModel, folder: str | os.PathLike | None = No
     """The samples file the calibrated ``model`` was made from, when it is still there unchanged: the one its
     ``calibration.provenance.inputs.samples`` names, tried as written, then beside ``folder`` (the calibrated file's),
     relative to it and to its parent, each accepted only with the recorded SHA-256. ``(None, why not)`` otherwise."""
-    made = (model.extras.get("calibration") or {}).get("provenance") or {}
-    record = (made.get("inputs") or {}).get("samples") or {}
-    path = record.get("path") if isinstance(record, dict) else None
+    record = samples_record(model)
+    path = record.get("path")
     if not path:
         return None, "no recorded configurations (the file names no samples; --samples FILE to give them)"
     candidates = [Path(path)]
@@ -134,10 +137,22 @@ def calibration_samples(model: RobotModel, folder: str | os.PathLike | None = No
         candidates += [Path(folder) / Path(path).name]
         if not Path(path).is_absolute():
             candidates += [Path(folder) / path, Path(folder).parent / path]
-    found = [c for c in candidates if matches_record(c, record)]
-    if not found:
-        return None, f"no recorded configurations ({path} is gone or changed since the calibration)"
-    return found[0], ""
+    tried: set[Path] = set()
+    for candidate in candidates:  # the first that matches; each file hashed once ('.' as folder: one file thrice)
+        if candidate.resolve() in tried:
+            continue
+        tried.add(candidate.resolve())
+        if matches_record(candidate, record):
+            return candidate, ""
+    return None, f"no recorded configurations ({path} is gone or changed since the calibration)"
+
+
+def samples_record(model: RobotModel) -> dict:
+    """The calibrated file's record of its samples, ``{"path", "sha256"}`` (``calibration.provenance.inputs.samples``);
+    ``{}`` when it has none."""
+    made = (model.extras.get("calibration") or {}).get("provenance") or {}
+    record = (made.get("inputs") or {}).get("samples") or {}
+    return record if isinstance(record, dict) else {}
 
 
 def _unread(samples: str | os.PathLike | None, model: RobotModel, why: str) -> tuple[str, ...]:
@@ -182,7 +197,8 @@ def mjcf_lost_terms(model: RobotModel) -> tuple[str, ...]:
 def export_model(model: RobotModel, output_format: str, header: str = "", prefix: str | None = None,
                  effort: list[float] | None = None, velocity: list[float] | None = None,
                  into: tuple[str, str] | None = None, samples: str | os.PathLike | None = None,
-                 seed: int = 0, folder: str | os.PathLike | None = None) -> Export:
+                 seed: int = 0, folder: str | os.PathLike | None = None,
+                 found: tuple[Path | None, str] | None = None) -> Export:
     """The exported document of a model.
 
     Args:
@@ -198,6 +214,8 @@ def export_model(model: RobotModel, output_format: str, header: str = "", prefix
         seed: seed of the rigid fit's workspace samples.
         folder: the calibrated file's folder (where a relative samples path of its calibration block is
             looked for after the working folder).
+        found: :func:`calibration_samples` of ``model`` and ``folder`` when the caller has it (not looked for, and
+            hashed, again); None: looked for here when a rigid fit needs it.
 
     Raises:
         ExportError: an invalid format, prefix, limits, or an option the format does not take (``samples`` that no
@@ -220,7 +238,7 @@ def export_model(model: RobotModel, output_format: str, header: str = "", prefix
         if not lost:
             return Export("\n".join(comments + [provenance_comment(model), build_mjcf(model, inertials=True)]),
                           (*dynamics, *_unread(samples, model, "its MJCF carries every term")))
-        recorded, where = recorded_configurations(model, samples, folder)  # a scale: the rigid fit of the hinges
+        recorded, where = recorded_configurations(model, samples, folder, found)  # a scale: the hinges' rigid fit
         fit = rigid_approximation(model, recorded, seed=seed)
         notes = (fit.summary("MJCF") + f" (a hinge turns by the recorded angle and its spring cannot push: "
                  f"{', '.join(lost)})", f"rigid fit: {where}", *dynamics)
@@ -232,7 +250,8 @@ def export_model(model: RobotModel, output_format: str, header: str = "", prefix
                 raise ExportError(f"field '{option}': not with --into (the URDF keeps its own names and limits)")
     else:
         names_and_limits(model, prefix, effort, velocity)  # refused before the rigid fit, not after it
-    recorded, where = (None, "") if not joint_side_terms(model) else recorded_configurations(model, samples, folder)
+    recorded, where = (None, "") if not joint_side_terms(model) else recorded_configurations(model, samples, folder,
+                                                                                               found)
     fit = rigid_approximation(model, recorded, seed=seed)
     notes = (fit.summary(), f"rigid fit: {where}") if fit.terms else _unread(
         samples, model, "it has no joint-side terms (compliance, joint-angle scale): its URDF is exact")

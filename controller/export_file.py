@@ -15,7 +15,7 @@ from spherecal.correction.files.robot_file import forced_calibration
 from spherecal.correction.files.text_input import read_xml_text
 from spherecal.correction.files.urdf_write import LIMITS, ExportError
 
-from .export import calibration_samples, export_model, fit_seed, provenance_header
+from .export import calibration_samples, export_model, fit_seed, provenance_header, samples_record
 
 #: Per format: what the file holds, the name endings that fit it (the first is suggested) and, for a format read
 #: by its ending, why another is refused (check_suffix; MuJoCo reads an MJCF, spherecal a robot file, by content).
@@ -107,14 +107,19 @@ def export_file(config: ExportConfig, outputs: OutputSet, report: Callable[[str]
         if config.output_format == "yaml":  # the format itself: a mistake in the command
             raise ExportError(f"field '--seed': {why}")
         unused = (f"--seed {config.seed} not used: {why}",)  # the file's content decides: a script's option, said
-    read: dict[str, str | Path] = {} if config.into is None else {"into": config.into}
+    read: dict[str, str | Path | dict] = {} if config.into is None else {"into": config.into}
+    found = None
     if seed is not None:  # the rigid fit reads the recorded configurations: --samples, or the calibration's own file
-        samples = config.samples or calibration_samples(model, Path(config.robot).parent)[0]
-        read |= {} if samples is None else {"samples": samples}
+        if config.samples is not None:
+            read["samples"] = config.samples  # hashed by the provenance, read by the fit
+        else:  # found by its recorded digest (the one hash), then recorded and read without hashing it again
+            found = calibration_samples(model, Path(config.robot).parent)
+            if found[0] is not None:
+                read["samples"] = {"path": str(found[0]), "sha256": samples_record(model)["sha256"]}
     header = provenance_header(config.robot, config.output_format, seed, read)
     exported = export_model(model, config.output_format, header,
                             config.prefix, _limits(config.effort, "effort"), _limits(config.velocity, "velocity"),
-                            into, config.samples, seed or 0, Path(config.robot).parent)
+                            into, config.samples, seed or 0, Path(config.robot).parent, found)
     with outputs:
         path = outputs.write_bytes(config.out, exported.data)
     return ExportedFile(path, model, exported.notes + unused)

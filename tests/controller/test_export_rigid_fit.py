@@ -238,3 +238,29 @@ def test_a_seed_nothing_random_uses_is_refused(tmp_path, capsys, rng) -> None:
                      "5"]) == 0
         assert "--seed 5 not used: " in capsys.readouterr().out
     assert main(["export", str(cal), "--format", "urdf", "--out", str(tmp_path / "c.urdf"), "--seed", "5"]) == 0
+
+
+@pytest.mark.parametrize("given", [False, True])
+def test_export_hashes_the_samples_once(given, tmp_path, monkeypatch, capsys) -> None:
+    """A review: an export with a rigid fit hashed the calibration's samples file 7 times (each of the two look-ups
+    tried the same file under three names, then the provenance hashed it again). Once now, found by the calibration's
+    record or given with --samples, and the header records the same digest as before."""
+    import spherecal.correction.files.provenance as provenance
+
+    rng = np.random.default_rng(0)
+    model = with_compliance(perturb(load_robot("panda"), rng), COMPLIANCE)
+    recorded = model.random_configurations(90, rng)
+    samples = write_samples(tmp_path / "samples.csv", Dataset(np.repeat(["a", "b", "c"], 30), recorded))
+    record = {"path": "samples.csv", "sha256": input_record(samples)["sha256"]}  # relative: found beside cal.yaml
+    model = replace(model, extras={**model.extras, "calibration": {"provenance": {"inputs": {"samples": record}}}})
+    save_robot(model, tmp_path / "cal.yaml")
+    hashed: list[str] = []
+    real = provenance.file_digest
+    monkeypatch.setattr(provenance, "file_digest", lambda path: hashed.append(os.path.basename(path)) or real(path))
+    monkeypatch.chdir(tmp_path)
+    out = tmp_path / "cal.urdf"
+    assert main(["export", "cal.yaml", "--format", "urdf", "--out", str(out),
+                 *(["--samples", "samples.csv"] if given else [])]) == 0
+    assert sorted(hashed) == ["cal.yaml", "samples.csv"]
+    assert f"samples=samples.csv (sha256 {record['sha256']})" in out.read_text()
+    assert "90 recorded configurations from samples.csv" in capsys.readouterr().out
