@@ -71,7 +71,9 @@ def main(argv: list[str] | None = None) -> int:
 
     cap_environment()
     from spherecal.correction.errors import SpherecalError  # numpy: not at --help (start-up)
-    from spherecal.options import OptionError
+    from spherecal.options import OptionError, output_folders, say_created
+
+    missing = [folder for folder in output_folders(args) if not folder.exists()]
 
     held: list[str] = []  # warnings wait for the outcome: a refusal stays ONE line (it mentions them)
 
@@ -86,6 +88,7 @@ def main(argv: list[str] | None = None) -> int:
         with warnings.catch_warnings(), thread_cap():
             warnings.showwarning = one_line_warning  # a warning for the user, not a source location
             status = int(args._run(args) or 0)
+        say_created(args, missing)
         flush()
         return status
     except (SpherecalError, OptionError) as error:

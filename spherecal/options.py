@@ -26,6 +26,7 @@ import argparse
 import math
 import re
 import sys
+from pathlib import Path
 
 #: Below this a length in millimetres is taken for the old unit (metres): 10 micrometres (0 is allowed).
 MM_FLOOR = 1e-2
@@ -493,6 +494,33 @@ def planned_outputs(args: argparse.Namespace, outputs: dict):
         if isinstance(outputs.get(option), str):
             check_suffix(outputs[option], option, written, accepted, hint, read_by_ending)
     return planned
+
+
+#: Commands whose ``--out`` is a folder their files go into; every other output option names a file.
+FOLDER_OUT = ("simulate", "import", "demo", "campaign")
+#: The options that name outputs (a command has some of them).
+OUTPUT_OPTIONS = ("out", "rrd", "analysis")
+
+
+def output_folders(args: argparse.Namespace) -> list[Path]:
+    """The folders a command's outputs go into: ``--out`` itself for :data:`FOLDER_OUT`, else each output file's
+    folder. A missing one is created (with its missing parents) when the outputs are written
+    (``correction.files.outputs.OutputSet``), and :func:`say_created` names it."""
+    folders = []
+    for name in OUTPUT_OPTIONS:
+        value = getattr(args, name, None)
+        if isinstance(value, str) and value:
+            folders.append(Path(value) if name == "out" and args.command in FOLDER_OUT else Path(value).parent)
+    return folders
+
+
+def say_created(args: argparse.Namespace, missing: list[Path]) -> None:
+    """One line on stdout per output folder that did not exist before the command and does now (``missing``: those of
+    :func:`output_folders` absent before it ran): every command creates a missing folder, and says so, so that a
+    mistyped ``--out reslts/cal.yaml`` does not go unseen. A command that failed removed what it created: no line."""
+    for folder in dict.fromkeys(missing):
+        if folder.is_dir():
+            print(f"spherecal {args.command}: created the folder {folder} (it did not exist)")
 
 
 def check_folder(path: str, option: str = "--out") -> None:

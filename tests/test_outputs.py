@@ -390,3 +390,68 @@ def test_campaign_and_plan_keep_a_users_file_and_replace_their_own(tmp_path, cap
     report.write_text('{"a": 1}')
     refused(["plan", "--samples", tmp_path / "c" / "table2.csv", "--out", report], tmp_path, capsys,
             "report.json: field '--out': exists and was not written by an earlier `spherecal plan`")
+
+
+#: One run of each command kind, its output (``OUT``) in a missing folder: the file commands' --out (and --rrd), the
+#: folder commands' --out itself.
+MISSING = "new/deeper"
+CREATING = [
+    ([*WRITERS[1][:-1], f"{MISSING}/r.json"], MISSING),
+    ([*WRITERS[1][:-2], "--rrd", f"{MISSING}/r.rrd"], MISSING),
+    ([*WRITERS[2][:-1], f"{MISSING}/cal.urdf"], MISSING),
+    ([*WRITERS[3][:-1], f"{MISSING}/tool.yaml"], MISSING),
+    (["simulate", "--seconds", "1", "--per-fixture", "10", "--out", MISSING], MISSING),
+    (["import", "samples.csv", "--format", "csv", "--robot", "robot.yaml", "--out", MISSING], MISSING),
+    (["campaign", "--sets", "1", "--per-fixture", "20", "--configurations", "50", "--noise", "0", "--rows", "P1",
+      "--workers", "1", "--out", MISSING], MISSING),
+]
+
+
+@pytest.mark.parametrize(("argv", "folder"), CREATING, ids=lambda value: value[0] if isinstance(value, list) else "")
+def test_every_command_creates_a_missing_output_folder_and_says_so(files, capsys, monkeypatch, argv, folder) -> None:
+    """A review: calibrate, export, tool, simulate and import created a missing folder (and its parents) without a
+    word, so that a mistyped --out went unseen. Every command still creates it (as a folder command must), and says
+    so in one line; an existing folder gets no line."""
+    from spherecal.cli import main
+
+    monkeypatch.chdir(files)
+    monkeypatch.setattr("sys.argv", ["spherecal", *argv])  # the command line a campaign's tables record as theirs
+    assert main(argv) == 0, capsys.readouterr().err
+    out = capsys.readouterr().out.splitlines()
+    assert f"spherecal {argv[0]}: created the folder {folder} (it did not exist)" in out
+    assert (files / folder).is_dir()
+    if argv[0] in ("simulate", "import"):  # they refuse a folder that holds their files (nothing to say either way)
+        return
+    assert main(argv) == 0
+    assert "created the folder" not in capsys.readouterr().out
+
+
+def test_calibrate_creates_a_missing_output_folder_and_says_so(tmp_path, capsys, monkeypatch) -> None:
+    from spherecal.cli import main
+
+    monkeypatch.chdir(tmp_path)
+    assert main(["simulate", "--seconds", "2", "--per-fixture", "40", "--out", "sim"]) == 0
+    argv = ["calibrate", "--robot", "panda", "--samples", "sim/samples.csv", "--fixtures", "sim/fixtures.yaml",
+            "--force", "--out", f"{MISSING}/cal.yaml"]  # --force: 40 samples per fixture are too few to beat nominal
+    capsys.readouterr()
+    assert main(argv) == 0
+    assert f"spherecal calibrate: created the folder {MISSING} (it did not exist)" in capsys.readouterr().out
+    assert (tmp_path / MISSING / "cal.yaml").is_file()
+
+
+def test_a_refused_command_leaves_no_folder_and_says_none_was_created(files, capsys, monkeypatch) -> None:
+    monkeypatch.chdir(files)
+    refused(["tool", "calibrated.yaml", "--offset", "0", "0", "0.1", "--out", f"{MISSING}/tool.urdf"], files, capsys,
+            "named .urdf would be read as URDF")
+    assert not (files / "new").exists()
+
+
+def test_the_folder_commands_are_those_whose_out_is_a_folder() -> None:
+    from spherecal.cli import COMMANDS, build_parser
+    from spherecal.options import FOLDER_OUT
+
+    parser = build_parser()
+    sub = next(a for a in parser._actions if a.dest == "command").choices
+    folders = {name for name in COMMANDS for a in sub[name]._actions
+               if a.dest == "out" and "folder" in (a.help or "")}
+    assert folders == set(FOLDER_OUT)
