@@ -32,6 +32,9 @@ from .urdf_write import ExportError, _triple, provenance_comment, xml_comment
 #: Largest tool-point distance [m] (after the best rigid fit) between the calibrated model and the
 #: URDF's nominal arm: beyond it the URDF is another robot (a calibration moves millimetres).
 SAME_ROBOT_TOL = 0.05
+#: Another end of the chain nearer than the tip link to the calibrated tool point by more than this [m] is named
+#: in a warning (within :data:`correction.tool.TIP_MOVED` a tip's move is taken as the calibration's correction).
+CLOSER_END = 0.001
 
 _COMMENT = re.compile(r"<!--.*?-->", re.S)
 #: The two comments :func:`urdf_into` puts before ``<robot>`` (what it wrote, then the robot file's provenance), as
@@ -152,6 +155,7 @@ def _tip_at_the_ball(model: RobotModel, nominal: RobotModel, tree: UrdfTree, bas
     ``ball_link``), with one warning; else the tip link itself, with one warning that it now stands for the ball."""
     moved = tip_moved(model, nominal)
     if moved <= TIP_MOVED:
+        _warn_closer_end(model, nominal, tree, moved, source)
         return nominal
     tip = nominal.extras["urdf"]["tip_link"]
     ends = _ends_at(model, tree, base_link)
@@ -168,6 +172,33 @@ def _tip_at_the_ball(model: RobotModel, nominal: RobotModel, tree: UrdfTree, bas
         f"{tip!r} of the written file is the ball, not the link it was: give the ball its own link (a fixed joint) "
         f"and calibrate with it as --tip-link to keep {tip!r} where it is", stacklevel=3)
     return nominal
+
+
+def _warn_closer_end(model: RobotModel, nominal: RobotModel, tree: UrdfTree, moved: float, source: str) -> None:
+    """Warn when a calibration's tool point, within :data:`TIP_MOVED` of its tip link (taken as the calibration's
+    correction of it and written there), is nearer another end of the chain after the same joints by more than
+    :data:`CLOSER_END`: the ball sat there, and --tip-link named a link millimetres from it (a review: a ball link
+    6 mm from iiwa_link_ee, calibrated with the latter, moved it 7 mm onto the ball without a word; 10 mm further
+    away the same mistake is found and written at the ball)."""
+    links = nominal.extras["urdf"]
+    base, tip = links["base_link"], links["tip_link"]
+    movable = [j.name for j in tree.path(base, tip) if j.type in MOVABLE]
+    frame = link_frames(nominal, np.zeros(nominal.n_joints))[-1]  # the last DH frame at q = 0, in the base link's
+    poses = tree.world_poses(base)
+    nearer = []
+    for leaf, _ in tree.chain_ends(base):
+        if leaf == tip or [j.name for j in tree.path(base, leaf) if j.type in MOVABLE] != movable:
+            continue
+        gap = float(np.linalg.norm(np.asarray(model.tool) - np.linalg.solve(frame, poses[leaf])[:3, 3]))
+        if gap < moved - CLOSER_END:
+            nearer.append((gap, leaf))
+    if nearer:
+        gap, leaf = min(nearer)
+        warnings.warn(
+            f"{source}: field 'tip_link': the calibration's tool point is {moved * 1e3:.1f} mm from {tip!r}, the tip "
+            f"link it was calibrated with, and {gap * 1e3:.1f} mm from {leaf!r}, another end of this URDF: written at "
+            f"{tip!r} as the calibration's correction of it (up to {TIP_MOVED * 1e3:.0f} mm is taken as one); if the "
+            f"ball sat at {leaf!r}, calibrate again with --tip-link {leaf}", stacklevel=4)
 
 
 def _refuse_new_tool(model: RobotModel, source: str, why: str) -> None:

@@ -361,3 +361,29 @@ def test_exporting_into_an_exported_urdf_does_not_grow_it(block, tmp_path, rng, 
         np.testing.assert_allclose(*numbers, atol=1e-12)
     assert "the comments of the earlier" not in first  # a user's file: nothing replaced
     assert first.count("<!--") == _text("iiwa14").count("<!--") + 2
+
+
+def test_a_tip_link_millimetres_from_the_end_where_the_ball_sat_is_named_in_a_warning(rng):
+    """A review: tip links less than 10 mm apart were accepted without a word. Calibrated with --tip-link ball_link
+    while the ball sat on a probe link 6 mm from it, the export moved ball_link 6 mm onto the probe silently (the
+    same mistake 10 mm further away is found and written at the probe: test above). Now the probe is named, the
+    export written as before; a calibration whose ball was at its tip link gets no warning."""
+    probe = ('  <joint name="probe_joint" type="fixed">\n    <parent link="link_7"/>\n    <child link="probe"/>\n'
+             '    <origin xyz="0 0.006 0.166" rpy="0 0 0"/>\n  </joint>\n  <link name="probe"/>\n</robot>')
+    text = _text("iiwa14").replace("</robot>", probe)
+    nominal, calibrated = _calibrated("iiwa14", "modified", rng)
+    record = {"calibration": {"nominal_tool": nominal.tool.tolist()}}
+    correction = np.array([0.3, -0.2, 0.4]) * 1e-3  # what a calibration moves a tool point by
+    at_probe = replace(calibrated, tool=nominal.tool + [0.0, 0.006, 0.0] + correction,
+                       extras={**calibrated.extras, **record})
+    moved, gap = np.linalg.norm([0.0, 0.006, 0.0] + correction), np.linalg.norm(correction)  # 5.8 mm, 0.5 mm
+    expected = (rf"the calibration's tool point is {moved * 1e3:.1f} mm from 'ball_link', the tip link it was "
+                rf"calibrated with, and {gap * 1e3:.1f} mm from 'probe', another end of this URDF: written at "
+                r"'ball_link' .* calibrate again with --tip-link probe")
+    with pytest.warns(UserWarning, match=expected):
+        written = urdf_into(at_probe, text, "iiwa14.urdf")
+    assert _changed_joints(text, written) >= {"ball_joint"} and "probe_joint" not in _changed_joints(text, written)
+    at_ball = replace(at_probe, tool=nominal.tool + correction)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        urdf_into(at_ball, text, "iiwa14.urdf")
