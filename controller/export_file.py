@@ -11,6 +11,7 @@ from pathlib import Path
 
 from spherecal.correction import RobotModel, load_robot
 from spherecal.correction.files.outputs import OutputSet, check_suffix
+from spherecal.correction.files.provenance import matched_record
 from spherecal.correction.files.robot_file import forced_calibration
 from spherecal.correction.files.text_input import read_xml_text
 from spherecal.correction.files.urdf_write import LIMITS, ExportError
@@ -115,7 +116,7 @@ def export_file(config: ExportConfig, outputs: OutputSet, report: Callable[[str]
         else:  # found by its recorded digest (the one hash), then recorded and read without hashing it again
             found = calibration_samples(model, Path(config.robot).parent)
             if found[0] is not None:
-                read["samples"] = {"path": str(found[0]), "sha256": samples_record(model)["sha256"]}
+                read["samples"] = matched_record(found[0], samples_record(model))
     header = provenance_header(config.robot, config.output_format, seed, read)
     exported = export_model(model, config.output_format, header,
                             config.prefix, _limits(config.effort, "effort"), _limits(config.velocity, "velocity"),

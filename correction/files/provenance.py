@@ -176,3 +176,9 @@ def matches_record(path: str | os.PathLike, record: dict[str, Any]) -> bool:
     """True when ``path`` is a file whose SHA-256 is the one an input record (:func:`input_record`) holds:
     the same file a result was made from."""
     return Path(path).is_file() and file_digest(path) == record.get("sha256")
+
+
+def matched_record(path: str | os.PathLike, record: dict[str, Any]) -> dict[str, str]:
+    """The :func:`input_record` of ``path``, a file :func:`matches_record` found to be the one ``record`` names: its
+    SHA-256 is the record's, so the file is not read a second time (an export's samples were hashed 7 times)."""
+    return {"path": str(path), "sha256": str(record["sha256"])}
