@@ -220,7 +220,8 @@ def at_most(limit: float, unit: str, allow_zero: bool = False):
     def parse(text: str) -> float:
         value = non_negative(text) if allow_zero else positive(text)
         if value > limit:
-            raise argparse.ArgumentTypeError(f"expected at most {limit:g} {unit}, got {text!r}")
+            hint = " (millimetres? it is in metres)" if unit == "m" else ""  # a user trial typed 50 for 50 mm
+            raise argparse.ArgumentTypeError(f"expected at most {limit:g} {unit}, got {text!r}{hint}")
         if 0 < value < limit * 1e-12:  # subnormal-sized: converting it (deg to rad, 1/x) over- or underflows
             raise argparse.ArgumentTypeError(
                 f"expected 0{' or' if allow_zero else ' <'} at least {limit * 1e-12:g} {unit}, got {text!r}"

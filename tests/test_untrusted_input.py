@@ -315,7 +315,8 @@ def test_fixtures_refuse_a_misspelt_top_level_key(tmp_path, key, message) -> Non
 
 
 @pytest.mark.parametrize(("argv", "message"), [
-    (["import", "x", "--format", "mukca", "--robot", "panda", "--out", "o", "--distance", "50"], "at most 10 m"),
+    (["import", "x", "--format", "mukca", "--robot", "panda", "--out", "o", "--distance", "50"],
+     "at most 10 m, got '50' (millimetres? it is in metres)"),
     (["calibrate", "--robot", "panda", "--samples", "s.csv", "--out", "c.yaml", "--dedup-deg", "1e300"], "10 deg"),
     (["simulate", "--out", "o", "--angle-std-deg", "90"], "at most 10 deg"),
     (["plan", "--grid", "0,1e300,2;0,1,2;0,1,2"], "|max| <= 10 m"),
