@@ -7,6 +7,7 @@ Every pose is evaluated at the URDF's zero configuration (all joint values 0).
 
 from __future__ import annotations
 
+import difflib
 import math
 import os
 import xml.etree.ElementTree as ET
@@ -383,6 +384,17 @@ def _joint_at(source: str, joint: UrdfJoint, part: str = "") -> str:
     return f"{source}: {'' if joint.row is None else f'row {joint.row}, '}field 'joint {joint.name}{part}'"
 
 
+def _links_hint(tree: UrdfTree, link: str) -> str:
+    """What a user who mistyped ``link`` needs (a user trial had to open the URDF): the names closest to it, and the
+    ends of the tree (links no joint hangs from), a few of each."""
+    parents = {joint.parent for joint in tree.joints.values()}
+    ends = [name for name in tree.links if name not in parents]
+    close = difflib.get_close_matches(link, tree.links, n=3, cutoff=0.5)
+    said = f" (did you mean {', '.join(map(repr, close))}?" if close else " ("
+    shown = ", ".join(ends[:8]) + (f" and {len(ends) - 8} more" if len(ends) > 8 else "")
+    return f"{said}{' ' if close else ''}its ends: {shown})"
+
+
 def chain(
     tree: UrdfTree, base_link: str | None = None, tip_link: str | None = None
 ) -> tuple[str, str, list[UrdfJoint]]:
@@ -401,7 +413,8 @@ def chain(
     base = tree.root if base_link is None else base_link
     for option, link in (("base link", base), ("tip link", tip_link)):
         if link is not None and link not in tree.links:
-            raise RobotFileError(f"{source}: {option} {link!r} is not a link of robot {tree.name!r}")
+            raise RobotFileError(f"{source}: {option} {link!r} is not a link of robot {tree.name!r}"
+                                 f"{_links_hint(tree, link)}")
     tip = tree.default_tip(base) if tip_link is None else tip_link
     joints = tree.path(base, tip)
     if joints is None:
