@@ -244,7 +244,9 @@ def urdf_model(tree: UrdfTree, tip_link: str | None = None, base_link: str | Non
     skew = [names[k] for k in dh["parallel"] if max(abs(dh["beta"][k]), abs(np.sin(dh["alpha"][k]))) > 1e-12]
     if skew:
         warnings.warn(
-            f"{tree.source}: joints {', '.join(skew)} turn about axes nearly parallel to the previous joint's: "
+            f"{tree.source}: "
+            + (f"joints {', '.join(skew)} turn about axes" if len(skew) > 1 else f"joint {skew[0]} turns about an axis")
+            + " nearly parallel to the previous joint's: "
             "described with a Hayati beta (d of the joint before held at zero)",
             NearlyParallelAxesWarning, stacklevel=2,
         )
