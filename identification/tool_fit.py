@@ -71,5 +71,6 @@ def recentred_tool(nominal: RobotModel, dataset: Dataset, max_change: float = MA
     note = (f"tool point: the samples put it {np.linalg.norm(shift):.1f} mm from the robot file's "
             f"([{shift[0]:.1f}, {shift[1]:.1f}, {shift[2]:.1f}] mm in the last joint frame; a real arm's errors "
             f"move it about {typical * 1e3:.1f} mm): an adapter or sensor the description lacks? The calibration "
-            "starts from, and its prior pulls toward, the tool the samples show; check the tool before a tool swap")
+            "starts from, and its prior pulls toward, the tool the samples show; a tool swap (spherecal tool) and the "
+            "controller will ask whether it is an adapter every tool sits on")
     return nominal.with_params(params), note

@@ -201,6 +201,9 @@ def run_workflow(nominal: RobotModel, dataset: Dataset, spec: FixtureSpec | None
     except (InconsistentDataError, ImplausibleCalibrationError) as refused:
         raise refusal(refused) from None
     if tool_note is not None:  # 'before' is the robot file as given, not the tool the samples showed
+        shift = (result.model.tool - given.tool) * 1e3  # the table's tool rows count from the samples' tool
+        tool_note += (f"; calibrated, [{shift[0]:.1f}, {shift[1]:.1f}, {shift[2]:.1f}] mm from the robot file's (the "
+                      "tool rows of the table count from where the samples put it)")
         before = build_problem(given, dataset, spec, noise=options.fit_noise).start_distances()
         result = replace(result, residual_before=before, warnings=(tool_note, *result.warnings))
     block = result.block()

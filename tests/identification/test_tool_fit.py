@@ -75,6 +75,9 @@ def test_a_ball_further_out_than_the_file_says_is_calibrated_with_a_warning(seed
     assert np.linalg.norm(out.model.tool - true.tool) < np.linalg.norm(alone.model.tool - true.tool)
     note = next(w for w in out.result.warnings if w.startswith("tool point:"))
     assert "an adapter or sensor the description lacks" in note
+    shift = (out.model.tool - nominal.tool) * 1e3  # where the table's tool rows count from, said (a user trial)
+    assert note.endswith(f"; calibrated, [{shift[0]:.1f}, {shift[1]:.1f}, {shift[2]:.1f}] mm from the robot file's "
+                         "(the tool rows of the table count from where the samples put it)")
     assert np.linalg.norm(out.model.tool - true.tool) < 2e-3  # the arm's own errors share the last millimetres
     assert _held_out(out.model, data) < 0.05 * _held_out(nominal, data)  # sockets it never saw
     assert out.block["nominal_tool"] == pytest.approx(list(nominal.tool))  # the file's tool, for a tool swap
