@@ -272,6 +272,7 @@ def calibrate(
     prior: float = 0.0,
     noise_declared: bool = True,
     prior_tail: float | None = None,
+    report: bool = True,
 ) -> CalibrationResult:
     """Identify the parameters of ``nominal`` that put every sample's tool point on its fixture.
 
@@ -301,6 +302,11 @@ def calibrate(
             inf: a Gaussian prior).
         noise_declared: ``noise`` is what the user states of this data (a floor of the self-check's accuracy
             judgement); False: a default, and the accuracy is judged at the noise the residuals show.
+        report: False: only the model is wanted (a cross-validation fold, judged on held-out samples by its model
+            alone; ``check=False`` only): the stds, condition number, effective unknowns and data shares at the
+            solution, and the warnings that read them, are not computed (``condition_number`` NaN, ``std`` and
+            ``data_share`` empty, ``effective_unknowns`` None). The solve, the pruning and the plausibility check
+            are the same, so is the model.
 
     Returns:
         The :class:`CalibrationResult`.
@@ -314,6 +320,8 @@ def calibrate(
     """
     if method not in METHODS:
         raise ValueError(f"unknown method {method!r}, expected one of {METHODS}")
+    if check and not report:
+        raise ValueError("report=False needs check=False: the self-check reads the fit's figures")
     timings: dict[str, float] = {}
     clock = time.perf_counter()
     problem = build_problem(nominal, dataset, spec, noise=noise, prior_weight=prior, prior_tail=prior_tail)
@@ -351,12 +359,13 @@ def calibrate(
             x, timings["lm"] = solution.x, timings["lm"] + solution.seconds
     clock = time.perf_counter()
     problem = problem.reweighted(x)  # a heavy-tailed prior's rows at their curvature here (stds, self-check)
-    jac = problem.jacobian(x)
-    inverse = normal_inverse(jac)  # one SVD for both
-    edf = problem.effective_unknowns(jac, inverse)
-    sigma = _sigma(problem, x, edf, figures)
-    std_values = predicted_std(jac, sigma, inverse)
-    ident = Identifiability.of(jac)
+    if report:
+        jac = problem.jacobian(x)
+        inverse = normal_inverse(jac)  # one SVD for both
+        edf = problem.effective_unknowns(jac, inverse)
+        sigma = _sigma(problem, x, edf, figures)
+        std_values = predicted_std(jac, sigma, inverse)
+        ident = Identifiability.of(jac)
     params, centres = problem.unpack(x)
     timings["covariance"] = time.perf_counter() - clock
     clock = time.perf_counter()
@@ -388,18 +397,28 @@ def calibrate(
     after = np.linalg.norm(problem.sample_errors(x), axis=1)
     timings["plausibility"] = time.perf_counter() - clock
     warnings = list(problem.warnings)
-    if sigma > NOISE_RATIO * noise:
-        warnings.append(_noise_warning(problem, x, sigma, noise, noise_declared))
-    if ident.condition_number > 1e8:
-        warnings.append(f"ill-conditioned: condition number {ident.condition_number:.3g} at the solution")
-    warnings.extend(_negative_compliances(model, problem.free, std_values))
+    if report:  # what the figures at the solution say
+        if sigma > NOISE_RATIO * noise:
+            warnings.append(_noise_warning(problem, x, sigma, noise, noise_declared))
+        if ident.condition_number > 1e8:
+            warnings.append(f"ill-conditioned: condition number {ident.condition_number:.3g} at the solution")
+        warnings.extend(_negative_compliances(model, problem.free, std_values))
     warnings.extend(_far_zeros(problem, params))
     if figures != "linear":  # the user's robust loss (auto judges as least squares and refuses such a socket)
         warnings.extend(_discounted_socket(problem, x, figures))
     if hint:  # written with --force: the refusal's remedy stays with the file
         warnings.append(hint.removeprefix("; "))
-    if method == "pso":
+    if method == "pso" and report:
         warnings.extend(_short_of_minimum(problem, x, jac, inverse))
+    if not report:  # a fold's fit: its model alone is read
+        return CalibrationResult(
+            model=model, nominal=nominal, method=method, centres=problem.centre_dict(centres),
+            identified=problem.identified, fixed=problem.fixed, condition_number=float("nan"), std={},
+            residual_before=before, residual_after=after, samples_per_fixture=dataset.counts(),
+            warnings=tuple(warnings), timings=timings, problem=problem, x=x, loss=fit_loss,
+            loss_scale=None if fit_loss == "linear" else (scale or noise),
+            loss_noise=None if scale is None else scale / ROBUST_CUT, fixture_noise=shown,
+        )
     return CalibrationResult(
         model=model,
         nominal=nominal,

@@ -265,7 +265,8 @@ def cross_validate(fit, names: tuple[str, ...], nominal: RobotModel, dataset: Da
 
     Args:
         fit: ``fit(start_model, dataset, spec, warm) -> CalibrationResult`` (the calibration as the caller runs
-            it; ``warm``: the model to start the optimisation from, None here: a fold starts from nominal).
+            it; ``warm``: the model to start the optimisation from, None here: a fold starts from nominal); only
+            its result's ``model`` is read.
         samples: samples per fixture of the fold fits (drawn once, seeded); the held-out group is judged on
             all of its samples.
         robust: the fits use a robust loss: the held-out group is judged without its outliers (:func:`held_out_error`).
@@ -290,13 +291,15 @@ def cross_validate(fit, names: tuple[str, ...], nominal: RobotModel, dataset: Da
 
 
 def select_model(requested: str, fit, nominal: RobotModel, dataset: Dataset, spec: FixtureSpec | None,
-                 samples: int = CV_SAMPLES, seed: int = 0, robust: bool = False) -> ModelSelection:
+                 samples: int = CV_SAMPLES, seed: int = 0, robust: bool = False, fold_fit=None) -> ModelSelection:
     """Choose the model (see the module docstring).
 
     Args:
         fit: ``fit(start_model, dataset, spec, warm) -> CalibrationResult`` without the self-check (``warm``:
             None, or the model to start the optimisation from).
         robust: ``fit`` uses a robust loss (the held-out groups are judged without their outliers).
+        fold_fit: the cross-validation folds' ``fit`` (default ``fit``): only the model of its result is read, so it
+            may leave out the stds and figures (``calibrate(..., report=False)``); the same model as ``fit``'s.
 
     Returns:
         The :class:`ModelSelection`; with BIC its ``fits`` hold every candidate's fit on all samples (the
@@ -324,7 +327,8 @@ def select_model(requested: str, fit, nominal: RobotModel, dataset: Dataset, spe
     groups = set(groups_of(dataset.fixture_names).values())
     if len(groups) >= 3:  # the folds judge; no full fit needed beyond the chosen one (the caller's)
         try:
-            folds, errors, used = cross_validate(fit, names, nominal, dataset, spec, samples, seed, robust)
+            folds, errors, used = cross_validate(fold_fit or fit, names, nominal, dataset, spec, samples, seed,
+                                                 robust)
         except SpherecalError as error:  # a fold the data cannot calibrate: no evidence for a richer model
             return ModelSelection("auto", "dh", f"a cross-validation fold could not be calibrated ({error})",
                                   "cross-validation", seconds=time.perf_counter() - clock)

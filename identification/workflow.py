@@ -12,7 +12,8 @@ already hold (:func:`run_workflow`)::
 Cross-validation folds of the model selection are fitted with ``lm``, the user's loss and noise and
 *without* the self-check: the self-check judges the calibration that is written, not each fold's (a
 fold's refusal would only turn ``auto`` back to ``dh`` for a reason that says nothing about the models,
-and it costs a self-check per fold).
+and it costs a self-check per fold), and without the stds and figures at their solution (``report=False``:
+a fold is judged by its model alone).
 """
 
 from __future__ import annotations
@@ -170,9 +171,12 @@ def run_workflow(nominal: RobotModel, dataset: Dataset, spec: FixtureSpec | None
 
     candidate_loss = "linear" if options.loss == "auto" else options.loss  # auto's Huber: the final fit's
 
-    def fit(begin, data, fixtures, warm=None):  # a candidate's or a fold's fit: lm, no self-check
+    def fit(begin, data, fixtures, warm=None, report=True):  # a candidate's or a fold's fit: lm, no self-check
         return calibrate(begin, data, fixtures, start=warm, loss=candidate_loss, noise=options.fit_noise,
-                         max_change=options.max_change, check=False, prior=options.prior)
+                         max_change=options.max_change, check=False, prior=options.prior, report=report)
+
+    def fold_fit(begin, data, fixtures, warm=None):  # a fold's model alone is judged: no stds or figures
+        return fit(begin, data, fixtures, warm, report=False)
 
     def refusal(refused: SpherecalError) -> SpherecalError:  # its named cause, or the remedy's verdict
         named = _named_cause(refused, nominal, dataset, spec, options)
@@ -182,7 +186,7 @@ def run_workflow(nominal: RobotModel, dataset: Dataset, spec: FixtureSpec | None
 
     try:
         selection = select_model(options.model, fit, nominal, dataset, spec, seed=options.seed,
-                                 robust=candidate_loss != "linear")
+                                 robust=candidate_loss != "linear", fold_fit=fold_fit)
     except (InconsistentDataError, ImplausibleCalibrationError) as refused:
         raise refusal(refused) from None
     begin = start_for(selection.chosen, nominal)

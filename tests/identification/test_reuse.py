@@ -10,7 +10,7 @@ import pytest
 from spherecal.correction import perturb, tool_point
 from spherecal.correction.elastic import with_compliance
 from spherecal.identification.build import build_problem
-from spherecal.identification.calibrate import _plausibility_reference
+from spherecal.identification.calibrate import _plausibility_reference, calibrate
 from spherecal.identification.synthetic import make_dataset
 
 
@@ -84,3 +84,20 @@ def test_plausibility_references_of_many_models_from_threads_stay_their_own(pand
         found = list(pool.map(_plausibility_reference, models * 2))
     for model, (q, points, _) in zip(models * 2, found, strict=True):
         np.testing.assert_array_equal(points, tool_point(model, q))
+
+
+def test_a_fold_s_fit_without_its_figures_is_the_same_model(panda) -> None:
+    """``report=False`` (a cross-validation fold, judged by its model alone) skips the stds and figures, not the
+    solve: the same model, pruning and warnings of its own; and no self-check can be asked of it."""
+    true = with_compliance(perturb(panda, np.random.default_rng(1)), np.full(panda.n_joints, 2e-5))
+    dataset, spec = make_dataset(true, per_fixture=60, rng=np.random.default_rng(2), noise=2e-4)
+    start = with_compliance(panda, np.zeros(panda.n_joints))
+    for loss in ("linear", "auto"):
+        full = calibrate(start, dataset, spec, loss=loss, check=False, prior=0.5)
+        fold = calibrate(start, dataset, spec, loss=loss, check=False, prior=0.5, report=False)
+        np.testing.assert_array_equal(fold.model.params, full.model.params)
+        np.testing.assert_array_equal(fold.residual_after, full.residual_after)
+        assert fold.identified == full.identified and fold.fixed == full.fixed
+        assert fold.std == {} and fold.effective_unknowns is None and np.isnan(fold.condition_number)
+    with pytest.raises(ValueError, match="check=False"):
+        calibrate(start, dataset, spec, report=False)
