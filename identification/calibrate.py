@@ -369,8 +369,8 @@ def calibrate(
     params, centres = problem.unpack(x)
     timings["covariance"] = time.perf_counter() - clock
     clock = time.perf_counter()
-    checked = (self_check(problem, x, nominal, built, loss=figures, declared=noise_declared, unknowns=edf)
-               if check else None)
+    checked = (self_check(problem, x, nominal, built, loss=figures, declared=noise_declared, unknowns=edf,
+                          inverse=inverse) if check else None)
     hint, moved_by_hint = "", ()
     if checked is not None and not checked.consistent and scale is not None:
         # ``auto`` refused at least squares' figures. Where a few presses far off are all that is wrong (judged

@@ -131,6 +131,7 @@ def self_check(
     loss: str = "linear",
     declared: bool = True,
     unknowns: float | None = None,
+    inverse: np.ndarray | None = None,
 ) -> SelfCheck:
     """Check a solved calibration against its own data, its stated accuracies and the nominal model.
 
@@ -147,6 +148,8 @@ def self_check(
             this data): judged at the noise the residuals show; the residual-level check still uses it.
         unknowns: the fit's effective unknowns at ``x`` if already computed
             (:meth:`CalibrationProblem.effective_unknowns`; recomputed when None or when outliers are left out).
+        inverse: (F, F) ``(J^T J)^-1`` of ``problem.jacobian(x)`` if already computed
+            (:func:`.identifiability.normal_inverse`; recomputed when None or when outliers are left out).
 
     Returns:
         The :class:`SelfCheck` (call :meth:`SelfCheck.raise_if_inconsistent` to refuse).
@@ -162,7 +165,8 @@ def self_check(
                         f"{'lie' if excluded > 1 else 'lies'} over {OUTLIER:g}x the median distance from "
                         f"{'their' if excluded > 1 else 'its'} centre: discounted by the {loss} loss and left out of "
                         "these figures")
-            problem, built, unknowns = problem.with_samples(kept), (built or problem).with_samples(kept), None
+            problem, built = problem.with_samples(kept), (built or problem).with_samples(kept)
+            unknowns, inverse = None, None
     r = problem.residuals(x)
     dof = max(problem.n_residuals - problem.n_unknowns, 1)
     sigma = float(np.sqrt(r @ r / dof))
@@ -196,7 +200,8 @@ def self_check(
     findings += trends
     # where a ball sits in a socket, as the residuals show it: the data rows alone (``sigma`` above also holds the
     # prior rows, whose penalty is no noise and dominates it for a few dozen samples of a well-made arm)
-    inverse = normal_inverse(full)  # one SVD: the effective unknowns and the split of the residual
+    if inverse is None:  # one SVD: the effective unknowns and the split of the residual
+        inverse = normal_inverse(full)
     if unknowns is None:
         unknowns = problem.effective_unknowns(full, inverse)
     shown = problem.data_sigma(x, unknowns)

@@ -11,6 +11,8 @@ from spherecal.correction import perturb, tool_point
 from spherecal.correction.elastic import with_compliance
 from spherecal.identification.build import build_problem
 from spherecal.identification.calibrate import _plausibility_reference, calibrate
+from spherecal.identification.identifiability import normal_inverse
+from spherecal.identification.selfcheck import self_check
 from spherecal.identification.synthetic import make_dataset
 
 
@@ -101,3 +103,15 @@ def test_a_fold_s_fit_without_its_figures_is_the_same_model(panda) -> None:
         assert fold.std == {} and fold.effective_unknowns is None and np.isnan(fold.condition_number)
     with pytest.raises(ValueError, match="check=False"):
         calibrate(start, dataset, spec, report=False)
+
+
+def test_the_self_check_given_the_fit_s_normal_inverse_finds_what_it_finds_alone(panda) -> None:
+    """calibrate hands the self-check the ``(J^T J)^-1`` of the same Jacobian at the same solution."""
+    true = perturb(panda, np.random.default_rng(1))
+    dataset, spec = make_dataset(true, per_fixture=60, rng=np.random.default_rng(2), noise=2e-4)
+    result = calibrate(panda, dataset, spec, prior=0.5, check=False)
+    problem, x = result.problem, result.x
+    inverse = normal_inverse(problem.jacobian(x))
+    given = self_check(problem, x, panda, loss="linear", inverse=inverse)
+    alone = self_check(problem, x, panda, loss="linear")
+    assert given.block() == alone.block()
