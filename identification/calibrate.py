@@ -32,7 +32,7 @@ from .problem import (
     tolerance,
     zero_indices,
 )
-from .pruning import prune
+from .pruning import generic_excitation, prune
 from .selfcheck import MAX_SOCKET_NOISE, InconsistentDataError, SelfCheck, self_check
 from .solvers import solve_lm, solve_pso
 
@@ -350,7 +350,7 @@ def calibrate(
         # data set lets the first fit wander to a far, wrong basin); re-solve without what it cannot
         # see, from the start again rather than from where the first fit wandered.
         sigma = max(_sigma(problem, x, loss=figures), SIGMA_FLOOR)
-        pruned, _ = prune(problem, x, sigma, jac=problem.generic_jacobian())
+        pruned, _ = prune(problem, x, sigma, excitation=generic_excitation(problem))
         if pruned is not problem:
             x_restart = pruned.pack(*problem.unpack(x_start))
             problem = pruned

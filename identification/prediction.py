@@ -45,7 +45,7 @@ from .gauge import anchor_spread
 from .identifiability import Identifiability, normal_inverse, symmetric_root
 from .joint_error import LENGTH, draw, field_root, seen_fields, tool_fields
 from .problem import NOISE, SIGMA_FLOOR, CalibrationProblem, prior_std, tolerance
-from .pruning import prune
+from .pruning import generic_excitation, prune
 from .synthetic import project_to_point
 
 #: A parameter whose predicted std exceeds this share of its prior spread is "weakly determined".
@@ -207,8 +207,9 @@ def _linearised(problem: CalibrationProblem, noise: float, sample_weight: float 
 def _linearise(problem: CalibrationProblem, noise: float, sample_weight: float, free: np.ndarray | None):
     """:func:`_linearised`, computed."""
     lin, x_lin = problem.generic_point()
-    if free is None:
-        pruned, x = prune(lin, x_lin, max(noise, SIGMA_FLOOR) / np.sqrt(sample_weight))
+    if free is None:  # lin's Jacobian at x_lin is problem's generic one: factorised once (the calibration's pruning)
+        pruned, x = prune(lin, x_lin, max(noise, SIGMA_FLOOR) / np.sqrt(sample_weight),
+                          excitation=generic_excitation(problem))
     else:
         params, centres = lin.unpack(x_lin)
         dropped = np.setdiff1d(lin.free, free)

@@ -11,7 +11,8 @@ from spherecal.correction import perturb, tool_point
 from spherecal.correction.elastic import with_compliance
 from spherecal.identification.build import build_problem
 from spherecal.identification.calibrate import _plausibility_reference, calibrate
-from spherecal.identification.identifiability import normal_inverse
+from spherecal.identification.identifiability import column_norms, normal_inverse, triangular
+from spherecal.identification.pruning import generic_excitation, prune
 from spherecal.identification.selfcheck import self_check
 from spherecal.identification.synthetic import make_dataset
 
@@ -115,3 +116,26 @@ def test_the_self_check_given_the_fit_s_normal_inverse_finds_what_it_finds_alone
     given = self_check(problem, x, panda, loss="linear", inverse=inverse)
     alone = self_check(problem, x, panda, loss="linear")
     assert given.block() == alone.block()
+
+
+def test_the_generic_excitation_is_kept_for_its_own_problem_only(panda) -> None:
+    """The calibration's pruning and the self-check's prediction factorise the built problem's generic Jacobian
+    once; a problem sharing the cache with other unknowns, weights or prior gets its own."""
+    true = perturb(panda, np.random.default_rng(1))
+    dataset, spec = make_dataset(true, per_fixture=40, rng=np.random.default_rng(2))
+    problem = build_problem(panda, dataset, spec, prior_weight=0.5)
+    norms, tri = generic_excitation(problem)
+    assert generic_excitation(problem)[1] is tri  # kept
+    jac = problem.generic_jacobian()
+    np.testing.assert_array_equal(norms, column_norms(jac))
+    np.testing.assert_array_equal(tri, triangular(jac))
+    others = (replace(problem, free=problem.free[:-3]), problem.weighted({dataset.fixture_names[0]: 2.0}),
+              replace(problem, prior_weight=1.0))
+    for other in others:  # each shares the cache
+        fresh = replace(other, _cache={}).generic_jacobian()
+        np.testing.assert_array_equal(generic_excitation(other)[1], triangular(fresh))
+    x = problem.x0
+    by_jac, x_jac = prune(problem, x, 3e-3, jac=jac)
+    by_factor, x_factor = prune(problem, x, 3e-3, excitation=(norms, tri))
+    assert by_factor.fixed == by_jac.fixed and by_factor.fixed != problem.fixed  # something pruned, alike
+    np.testing.assert_array_equal(x_factor, x_jac)
