@@ -196,16 +196,18 @@ def _linearised(problem: CalibrationProblem, noise: float, sample_weight: float 
     one twice (:func:`joint_error_root`, :func:`deviation_root`); the arrays are shared, not to be written."""
     # problems made by dataclasses.replace share their cache (same model and samples): the key holds what else
     # the linearisation reads of ``problem``
+    read = (problem.free.tobytes(), problem.free_centres, problem.pinned, problem.noise, problem.prior_weight,
+            None if problem.prior_curvature is None else problem.prior_curvature.tobytes())
     key = ("linearised", float(noise), float(sample_weight), None if free is None else np.asarray(free).tobytes(),
-           problem.free.tobytes(), problem.free_centres, problem.pinned, problem.noise, problem.prior_weight,
-           None if problem.prior_curvature is None else problem.prior_curvature.tobytes())
+           *read)
     if key not in problem._cache:
-        problem._cache[key] = _linearise(problem, noise, sample_weight, free)
+        problem._cache[key] = _linearise(problem, noise, sample_weight, free, read)
     return problem._cache[key]
 
 
-def _linearise(problem: CalibrationProblem, noise: float, sample_weight: float, free: np.ndarray | None):
-    """:func:`_linearised`, computed."""
+def _linearise(problem: CalibrationProblem, noise: float, sample_weight: float, free: np.ndarray | None,
+               read: tuple):
+    """:func:`_linearised`, computed (``read``: what its cache key holds of ``problem``)."""
     lin, x_lin = problem.generic_point()
     if free is None:  # lin's Jacobian at x_lin is problem's generic one: factorised once (the calibration's pruning)
         pruned, x = prune(lin, x_lin, max(noise, SIGMA_FLOOR) / np.sqrt(sample_weight),
@@ -220,8 +222,14 @@ def _linearise(problem: CalibrationProblem, noise: float, sample_weight: float, 
         x = pruned.pack(params, centres)
     rows = np.ones((pruned.n_residuals, 1))
     rows[: 3 * problem.dataset.n_samples] = np.sqrt(sample_weight)
-    jac = pruned.jacobian(x) * rows
-    return lin, x_lin, pruned, x, rows, jac, normal_inverse(jac)
+    # the self-check asks for the calibration's own free parameters and for those pruned at its noise, most often the
+    # same: the same unknowns at the same point, one Jacobian and one factorisation (a tall QR and SVD) for both
+    key = ("linearised jacobian", float(sample_weight), pruned.free.tobytes(), x.tobytes(), *read)
+    if key not in problem._cache:
+        jac = pruned.jacobian(x) * rows
+        problem._cache[key] = jac, normal_inverse(jac)
+    jac, inverse = problem._cache[key]
+    return lin, x_lin, pruned, x, rows, jac, inverse
 
 
 def deviation_root(

@@ -12,6 +12,7 @@ from spherecal.correction.elastic import with_compliance
 from spherecal.identification.build import build_problem
 from spherecal.identification.calibrate import _plausibility_reference, calibrate
 from spherecal.identification.identifiability import column_norms, normal_inverse, triangular
+from spherecal.identification.prediction import _linearised
 from spherecal.identification.pruning import generic_excitation, prune
 from spherecal.identification.selfcheck import self_check
 from spherecal.identification.synthetic import make_dataset
@@ -139,3 +140,20 @@ def test_the_generic_excitation_is_kept_for_its_own_problem_only(panda) -> None:
     by_factor, x_factor = prune(problem, x, 3e-3, excitation=(norms, tri))
     assert by_factor.fixed == by_jac.fixed and by_factor.fixed != problem.fixed  # something pruned, alike
     np.testing.assert_array_equal(x_factor, x_jac)
+
+
+def test_two_linearisations_with_the_same_unknowns_share_one_jacobian(panda) -> None:
+    """The self-check linearises at the calibration's free parameters and at those pruned at its noise: where they
+    agree, one Jacobian and inverse serve both (the same unknowns at the same point); where not, each its own."""
+    true = perturb(panda, np.random.default_rng(1))
+    dataset, spec = make_dataset(true, per_fixture=40, rng=np.random.default_rng(2))
+    problem = build_problem(panda, dataset, spec, prior_weight=0.5)
+    *_, pruned, x, rows, jac, inverse = _linearised(problem, 3e-4)
+    again = _linearised(problem, 3e-4, free=pruned.free)
+    assert again[5] is jac and again[6] is inverse
+    np.testing.assert_array_equal(again[3], x)
+    fresh = replace(pruned, _cache={}).jacobian(x) * rows
+    np.testing.assert_array_equal(jac, fresh)
+    np.testing.assert_array_equal(inverse, normal_inverse(fresh))
+    fewer = _linearised(problem, 3e-4, free=pruned.free[:-2])
+    assert fewer[5].shape[1] == jac.shape[1] - 2
