@@ -158,7 +158,8 @@ def test_calibration_on_one_placement_holds_on_the_others(imported, capsys) -> N
     samples = len(read_samples(imported / "all/samples.csv", load_robot(PANDA)).labels)
     assert rows["world/robot/arm"] == samples + 1  # the calibrated arm through every recorded configuration
     views = read_view_names(imported / "v.rrd")
-    assert sum(v in (f"Socket {f} [mm]" for f in names) for v in views) == 6 and "Socket validation table (mm)" in views
+    assert sum(v in (f"{f}: socket spread [mm]" for f in names) for v in views) == 6
+    assert "Socket validation table (mm)" in views
     # the recording's provenance is the JSON report's: the calibrated file and the samples by their SHA-256
     made = read_provenance(imported / "v.rrd")
     assert made == json.loads((imported / "v.json").read_text())["provenance"] and rows["tables/provenance"] == 1

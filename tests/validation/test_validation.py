@@ -167,7 +167,13 @@ def test_marker_columns_need_a_cluster(tmp_path, truth, mocap, rng) -> None:
 
 
 def test_recording_holds_the_documented_entities_and_its_blueprint(tmp_path, panda, truth, rng) -> None:
-    from spherecal.validation.viewer.recording import Recording, read_entity_rows, read_view_names
+    from spherecal.validation.viewer.recording import (
+        COLOURS,
+        FIXTURE_COLOURS,
+        Recording,
+        read_entity_rows,
+        read_view_names,
+    )
 
     q = truth.random_configurations(40, rng)
     recording = Recording(tmp_path / "r.rrd", title="Robot")
@@ -193,11 +199,65 @@ def test_recording_holds_the_documented_entities_and_its_blueprint(tmp_path, pan
         assert rows[path] == 1, path
     views = read_view_names(tmp_path / "r.rrd")
     assert "Robot" in views and "Calibration table" in views
-    assert any(v.startswith("Nominal: error, mean 1.000 mm over ") for v in views)
-    assert "Residuals after calibration [mm]: rms 0.100 mm" in views
-    assert any(v.startswith("Joint coverage at P2") for v in views)
+    # short enough for the title bar of an Errors view (27 characters): 'Nominal: error, mean 4.798 mm over 5000
+    # points' showed as 'Nominal: error, mean 4.798 m'; what it is a distance to and over how many points is in the view
+    assert "Nominal: mean 1.000 mm" in views
+    scene = _scene(tmp_path / "r.rrd", "")
+    assert scene["errors/nominal/heading"]["labels"][0].replace("\n", " ") == (
+        "nominal: distance [mm] to the mocap, 40 points")
+    assert "Residuals after calibration [mm]: rms 0.100 mm, bars 0 to 0.1 mm" in views
+    assert any(v.startswith("P2: joint coverage") for v in views)  # the fixture first: a grid cuts the titles
     assert "Lengths [mm]: change, +-1 std, white dot = true change" in views
+    # each bar chart in the colour of what it shows (Rerun's own palette gave P1's bars P3's colour): the histograms
+    # the model's, as its points and socket spreads; the coverage the fixture's sphere's, as its samples
+    packed = {name: int.from_bytes(bytes([*rgb, 255]), "big") for name, rgb in
+              [*COLOURS.items(), ("P1", FIXTURE_COLOURS[0]), ("P2", FIXTURE_COLOURS[1])]}
+    assert scene["errors/nominal/histogram"]["color"] == [packed["nominal"]]
+    assert scene["residuals/before"]["color"] == [packed["nominal"]]
+    assert scene["residuals/after"]["color"] == [packed["calibrated"]]
+    assert [scene[f"coverage/{f}"]["color"] for f in ("P1", "P2")] == [[packed["P1"]], [packed["P2"]]]
+    assert scene["world/samples"]["colors"] == [packed["P1"]] * 20 + [packed["P2"]] * 20
     assert sorted(p.name for p in tmp_path.iterdir()) == ["r.rrd"]
+
+
+def test_samples_and_coverage_take_their_fixture_s_colour_whatever_the_order(tmp_path, truth, rng) -> None:
+    """The samples were coloured by their labels' sorted order and the coverage bars by Rerun's palette, the fixture
+    spheres by the order of the names given: with sockets named 'b', 'a' a socket's samples wore the other's colour."""
+    from spherecal.validation.viewer.recording import FIXTURE_COLOURS, Recording
+
+    q = truth.random_configurations(4, rng)
+    recording = Recording(tmp_path / "o.rrd")
+    recording.fixtures(["b (fit)", "a"], np.zeros((2, 3)))
+    recording.samples(tool_point(truth, q), ["a", "a", "b", "b"])
+    recording.coverage({"a": q[:2], "b": q[2:]}, truth.lower, truth.upper)
+    recording.close()
+    scene = _scene(tmp_path / "o.rrd", "")
+    b, a = (int.from_bytes(bytes([*c, 255]), "big") for c in FIXTURE_COLOURS[:2])
+    assert scene["world/samples"]["colors"] == [a, a, b, b]
+    assert scene["coverage/a"]["color"] == [a] and scene["coverage/b"]["color"] == [b]
+
+
+def test_the_tables_tab_opens_on_the_results_not_the_provenance(tmp_path) -> None:
+    """validate and demo log the provenance first: the Tables tab showed it and hid the table a reviewer opens it
+    for behind a second tab."""
+    from rerun.chunk import RrdReader
+
+    from spherecal.validation.viewer.recording import Recording
+
+    recording = Recording(tmp_path / "t.rrd")
+    recording.provenance({"command": "spherecal validate", "created": "now", "seed": 0, "versions": {}, "inputs": {}})
+    recording.text("sockets", "a table", "Socket validation table (mm)")
+    recording.close()
+    reader = RrdReader(str(tmp_path / "t.rrd"))
+    names = {}
+    for chunk in reader.stream(store=reader.blueprints()[0]).to_chunks():
+        batch = chunk.to_record_batch()
+        if "ViewBlueprint:display_name" in batch.schema.names:
+            names[chunk.entity_path.rsplit("/", 1)[-1]] = batch.column("ViewBlueprint:display_name").to_pylist()[0][0]
+        if "ContainerBlueprint:display_name" in batch.schema.names and "ContainerBlueprint:contents" in \
+                batch.schema.names and batch.column("ContainerBlueprint:display_name").to_pylist()[0] == ["Tables"]:
+            order = [c.rsplit("/", 1)[-1] for c in batch.column("ContainerBlueprint:contents").to_pylist()[0]]
+    assert [names[view] for view in order] == ["Socket validation table (mm)", "Provenance"]
 
 
 def _scene(path, prefix: str) -> dict[str, dict[str, list]]:
@@ -230,9 +290,10 @@ def test_socket_spread_is_drawn_in_mm_around_the_calibrated_mean(tmp_path, rng) 
         **{f"sockets/S1/{key}{end}": 1 for key in ("nominal", "calibrated") for end in ("", "_mean")},
     }
     spread = [np.mean(np.linalg.norm(p - p.mean(0), axis=1)) * 1e3 for p in (nominal, calibrated)]  # the table's
-    assert "Socket S1 [mm]" in read_view_names(tmp_path / "s.rrd")
+    assert "S1: socket spread [mm]" in read_view_names(tmp_path / "s.rrd")  # its name first: the title is cut
     scene = _scene(tmp_path / "s.rrd", "sockets/S1/")
-    assert scene["sockets/S1/legend"]["labels"] == [f"calibrated: spread {spread[1]:.3f} mm",
+    # the socket's name in the view as well: a grid of 14 sockets showed 'Socket bac' of every title
+    assert scene["sockets/S1/legend"]["labels"] == [f"S1\ncalibrated: spread {spread[1]:.3f} mm",
                                                     f"nominal: spread {spread[0]:.3f} mm"]
     # each mean a wire sphere as wide as its spread, in mm from the calibrated mean: the calibrated one at 0, the
     # nominal one about 2 mm along x
@@ -411,8 +472,9 @@ def test_the_socket_views_show_the_calibrated_cluster_and_every_label_apart(tmp_
             gap = np.linalg.norm(np.maximum(0.0, np.maximum(low - seen, seen - high)), axis=1)
             assert np.all(gap > radius), entity
         for (x, y), label in zip(seen, row.get("labels") or [], strict=False):
-            width = len(label) * LABEL_CHARACTER * unit
-            boxes.append((x - width / 2, y - radius - LABEL_HEIGHT * unit, x + width / 2, y - radius))
+            lines = label.split("\n")  # a line of 20 points each, as wide as the longest
+            width = max(map(len, lines)) * LABEL_CHARACTER * unit
+            boxes.append((x - width / 2, y - radius - len(lines) * LABEL_HEIGHT * unit, x + width / 2, y - radius))
     assert len(boxes) == 2  # one per model
     assert len(outlines) == 2  # one per model
     every = np.vstack([*dots.values(), *outlines])

@@ -53,7 +53,8 @@ def test_short_demo_writes_everything_and_its_recording_holds_the_documented_ent
         "world/samples": 1,
         "world/robot/arm": steps + 1,  # one row per step, and the static radii and colours
         "world/robot/tool": steps + 1,
-        **{f"errors/{m}/{p}": 1 for m in ("nominal", "calibrated") for p in ("points", "colour_scale", "histogram")},
+        **{f"errors/{m}/{p}": 1 for m in ("nominal", "calibrated")
+           for p in ("points", "colour_scale", "heading", "histogram")},
         "residuals/before": 1,
         "residuals/after": 1,
         **{f"parameters/{g}/{p}": 1 for g in ("lengths", "angles") for p in ("bars", "names", "std", "zero", "scale")},
@@ -74,10 +75,10 @@ def test_short_demo_writes_everything_and_its_recording_holds_the_documented_ent
     demo_outputs(DemoConfig(out=out))  # a demo run again into its folder replaces its own files
     views = read_view_names(out / "demo.rrd")
     assert any(v.startswith("True robot (simulated) and fixtures") for v in views)
-    for start in ("Nominal: error, mean", "Calibrated: error, mean", "Nominal: error histogram [mm]",
+    for start in ("Nominal: mean", "Calibrated: mean", "Nominal: error histogram [mm]",
                   "Residuals before calibration [mm]", "Residuals after calibration [mm]",
                   "Lengths [mm]: change, +-1 std, white dot = true change", "Angles [deg]: change, +-1 std",
-                  "Joint coverage at P1", "Calibration table (mm, deg)"):
+                  "P1: joint coverage", "Calibration table (mm, deg)"):
         assert any(v.startswith(start) for v in views), start
     guide = (ROOT / "docs" / "guide.md").read_text()
     section = guide.split("## Validation", 1)[1].split("\n## ", 1)[0]

@@ -4,14 +4,15 @@ A large 3D view of the robot and the fixtures on the left (the self-motion plays
 the right one tab per kind of result that was logged, each view named in plain words:
 
 * **Errors**: each model's workspace tool points coloured by their error (a colour scale labelled in
-  mm right of them, the same in every view), nominal and calibrated side by side from one camera (a
-  millimetre on the screen is the same in both), their histograms below;
+  mm right of them, the same in every view, and above them what the error is a distance to), nominal and
+  calibrated side by side from one camera (a millimetre on the screen is the same in both), their histograms
+  below in the models' colours;
 * **Residuals**: histograms of the calibration residuals before and after;
 * **Parameter changes**: bars with +-1 std whiskers, lengths [mm] and angles [deg];
 * **Joint coverage**: per fixture, the share of each joint's range visited [%];
 * **Socket spread**: per held-out socket, the predicted tool points of both models [mm], each model's spread a wire
   sphere around its mean point and named in a legend above and below them;
-* **Tables**: the printed tables.
+* **Tables**: the printed tables, the provenance last.
 
 Histograms and bars are static, so they show whatever the timeline selector is on.
 """
@@ -96,6 +97,7 @@ def build_blueprint(
     import rerun.blueprint as rrb  # Rerun: heavy, only when a recording is written
 
     bounds = bounds or {}
+    hidden = rrb.PlotLegend(visible=False)  # a bar chart's legend names its entity path; the view's name says more
 
     def eye(origin, least=0.05, distance=1.2):
         return camera(bounds[origin], least, distance) if origin in bounds else None
@@ -118,12 +120,12 @@ def build_blueprint(
             shared = camera(union_box(boxes), aspect=ERRORS_ASPECT) if boxes else None
             top = [rrb.Spatial3DView(origin=f"errors/{k}", contents="$origin/**", name=n, eye_controls=shared)
                    for k, n in views.items()]
-            bottom = [rrb.BarChartView(origin=f"errors/{k}/histogram", name=f"{k.capitalize()}: error histogram [mm]")
-                      for k in views]
+            bottom = [rrb.BarChartView(origin=f"errors/{k}/histogram", name=f"{k.capitalize()}: error histogram [mm]",
+                                       plot_legend=hidden) for k in views]
             tabs.append(rrb.Vertical(rrb.Horizontal(*top), rrb.Horizontal(*bottom), row_shares=[3, 1], name=tab))
         elif section == "residuals":
-            tabs.append(rrb.Vertical(*[rrb.BarChartView(origin=f"residuals/{k}", name=n) for k, n in views.items()],
-                                     name=tab))
+            tabs.append(rrb.Vertical(*[rrb.BarChartView(origin=f"residuals/{k}", name=n, plot_legend=hidden)
+                                       for k, n in views.items()], name=tab))
         elif section == "parameters":
             tabs.append(rrb.Vertical(*[rrb.Spatial2DView(origin=f"parameters/{k}", name=n,
                                                          visual_bounds=area(f"parameters/{k}"))
@@ -137,9 +139,9 @@ def build_blueprint(
             near = {k: eye(f"sockets/{k}", distance=0.8) for k in views}
             tabs.append(rrb.Grid(*[rrb.Spatial3DView(origin=f"sockets/{k}", name=n, eye_controls=near[k])
                                    for k, n in views.items()], name=tab))
-        else:
-            tabs.append(rrb.Tabs(*[rrb.TextDocumentView(origin=f"tables/{k}", name=n) for k, n in views.items()],
-                                 name=tab))
+        else:  # the results first, the provenance (behind them, it hid the table a reviewer opens the tab for) last
+            order = sorted(views, key=lambda k: k == "provenance")
+            tabs.append(rrb.Tabs(*[rrb.TextDocumentView(origin=f"tables/{k}", name=views[k]) for k in order], name=tab))
     world = rrb.Spatial3DView(origin="world", contents="$origin/**", name=title, eye_controls=eye("world", 1.0, 0.9))
     if active_tab is None:
         shown = [section for section in TABS if contents.get(section)]

@@ -13,6 +13,7 @@ path                                 archetype      timeline    what
 ``world/samples``                    Points3D       static      tool points of the calibration samples
 ``errors/<model>/points``            Points3D       static      workspace tool points coloured by error
 ``errors/<model>/colour_scale``      Points3D       static      the colour scale, labelled in mm
+``errors/<model>/heading``           Points3D       static      what the error is a distance to, labelled
 ``errors/<model>/histogram``         BarChart       static      error histogram [mm]
 ``residuals/<before|after>``         BarChart       static      calibration residual histogram [mm]
 ``parameters/<lengths|angles>/*``    2D shapes      static      change per parameter, +-1 std, truth
@@ -38,6 +39,7 @@ from __future__ import annotations
 
 import json
 import os
+import textwrap
 from pathlib import Path
 
 import numpy as np
@@ -126,6 +128,8 @@ class Recording:
         self.title = title
         self.bounds: dict[str, np.ndarray] = {}
         self._scales: dict[str, tuple[np.ndarray, float]] = {}  # model -> its Errors points [m], scale top [mm]
+        self._against: dict[str, str] = {}  # model -> what its Errors are distances to
+        self._fixture_colours: dict[str, tuple[int, int, int]] = {}  # fixture name -> its colour in every view
         self._tmp = None
         if self.path is not None:
             self._tmp = self.path.with_name(f".{self.path.name}.tmp")
@@ -156,6 +160,9 @@ class Recording:
         """The fixtures (ball centres) as labelled spheres, base frame [m]; positions (F, 3)."""
         positions = np.asarray(positions, dtype=float).reshape(-1, 3)
         colours = [FIXTURE_COLOURS[k % len(FIXTURE_COLOURS)] for k in range(len(positions))]
+        for name, colour in zip(names, colours, strict=True):
+            self._fixture_colours.setdefault(name, colour)
+            self._fixture_colours.setdefault(name.split(" (")[0], colour)  # 'P1 (fit)' is fixture P1
         self.extend_bounds("world", positions)
         self.stream.log(
             "world/fixtures",
@@ -197,10 +204,16 @@ class Recording:
         self.stream.log("world/robot/tool", rr.Points3D.from_fields(radii=0.008, colors=(250, 140, 30)), static=True)
         self.stream.send_columns("world/robot/tool", indexes=[times], columns=rr.Points3D.columns(positions=tips))
 
+    def fixture_colour(self, name: str, k: int) -> tuple[int, int, int]:
+        """The colour of fixture ``name`` in the 3D view (:meth:`fixtures`), else the ``k``-th of the palette: a
+        fixture's samples and coverage bars are drawn in its sphere's colour."""
+        return self._fixture_colours.get(name) or FIXTURE_COLOURS[k % len(FIXTURE_COLOURS)]
+
     def samples(self, points: np.ndarray, labels: list[str] | np.ndarray) -> None:
         """The recorded calibration samples' tool points (N, 3) [m], coloured by fixture."""
-        _, ids = np.unique(np.asarray(labels), return_inverse=True)
-        colours = np.array([FIXTURE_COLOURS[i % len(FIXTURE_COLOURS)] for i in ids], dtype=np.uint8).reshape(-1, 3)
+        names, ids = np.unique(np.asarray(labels), return_inverse=True)
+        palette = [self.fixture_colour(str(name), k) for k, name in enumerate(names)]
+        colours = np.array([palette[i] for i in np.ravel(ids)], dtype=np.uint8).reshape(-1, 3)
         self.stream.log("world/samples", self.rr.Points3D(np.asarray(points), radii=0.003, colors=colours), static=True)
 
     # ---------------------------------------------------------------- results
@@ -225,11 +238,15 @@ class Recording:
         dots = rr.Points3D(points, radii=rr.Radius.ui_points(2.5), colors=colour_ramp(mm / top))
         self.stream.log(f"errors/{key}/points", dots, static=True)
         counts, left, width = histogram(mm)
-        self.stream.log(f"errors/{key}/histogram", rr.BarChart(counts, abscissa=left, widths=width), static=True)
+        chart = rr.BarChart(counts, abscissa=left, widths=width, color=_colour(key))
+        self.stream.log(f"errors/{key}/histogram", chart, static=True)
         self.extend_bounds(f"errors/{key}", points)
         self._scales[key] = (points, top)  # the colour scales, on closing: one beside every model's points
-        self._note("errors", key, f"{key.capitalize()}: error, mean {mm.mean():.3f} mm over {mm.size} points")
-        self.errors_against = against
+        self._against[key] = against
+        # short enough for the view's title bar: 'Nominal: error, mean 4.798 mm over 5000 points' was cut to
+        # 'Nominal: error, mean 4.798 m' (metres?) and the calibrated one lost its unit; what the error is a
+        # distance to, and over how many points, is the heading in the view (_colour_scales)
+        self._note("errors", key, f"{key.capitalize()}: mean {mm.mean():.3f} mm")
 
     def _colour_scales(self) -> None:
         """Each Errors view's colour scale, labelled in mm up to its model's ``top``, all of them in one place and of
@@ -241,7 +258,8 @@ class Recording:
         steps = np.linspace(0.0, 1.0, 21)
         scale, height = _scale_beside(np.vstack([points for points, _ in self._scales.values()]), steps)
         label_room = scale[-1] + 0.25 * height * view_axes()[0]  # the labels, centred on the spheres
-        for key, (_, top) in self._scales.items():
+        heading = _heading_place(np.vstack([points for points, _ in self._scales.values()] + [scale]), height)
+        for key, (points, top) in self._scales.items():
             labels = [f"{s * top:.2f} mm" if k % 5 == 0 else "" for k, s in enumerate(steps)]
             labels[-1] = f">= {top:.2f} mm"
             self.stream.log(
@@ -250,16 +268,27 @@ class Recording:
                                  show_labels=True),
                 static=True,
             )
-            self.extend_bounds(f"errors/{key}", np.vstack([scale, label_room]))
+            # in lines that fit the narrow view (a label is one line unless broken)
+            text = "\n".join(textwrap.wrap(f"{key}: distance [mm] to {self._against[key]}, {len(points)} points", 32))
+            self.stream.log(
+                f"errors/{key}/heading",
+                self.rr.Points3D(heading, radii=self.rr.Radius.ui_points(0.5), colors=_colour(key), labels=[text],
+                                 show_labels=True),
+                static=True,
+            )
+            self.extend_bounds(f"errors/{key}", np.vstack([scale, label_room, heading]))
 
     def residuals(self, before: np.ndarray, after: np.ndarray) -> None:
         """Histograms of the calibration residuals (N,) [m] before and after calibration."""
-        for key, values in (("before", before), ("after", after)):
+        for key, values, model in (("before", before, "nominal"), ("after", after, "calibrated")):
             mm = np.asarray(values, dtype=float) * 1e3
             counts, left, width = histogram(mm)
-            self.stream.log(f"residuals/{key}", self.rr.BarChart(counts, abscissa=left, widths=width), static=True)
+            chart = self.rr.BarChart(counts, abscissa=left, widths=width, color=_colour(model))
+            self.stream.log(f"residuals/{key}", chart, static=True)
             rms = float(np.sqrt(np.mean(mm**2)))
-            self._note("residuals", key, f"Residuals {key} calibration [mm]: rms {rms:.3f} mm")
+            # the bars run from 0 to the largest residual: the axis may label 0 alone (before: 0 to 13 mm)
+            top = float(mm.max()) if mm.size else 0.0
+            self._note("residuals", key, f"Residuals {key} calibration [mm]: rms {rms:.3f} mm, bars 0 to {top:.3g} mm")
 
     def parameter_changes(
         self,
@@ -310,12 +339,14 @@ class Recording:
             lower, upper: (n,) joint limits [rad].
         """
         span = np.asarray(upper) - np.asarray(lower)
-        for name, q in per_fixture.items():
+        for k, (name, q) in enumerate(per_fixture.items()):
             q = np.atleast_2d(q)
             share = 100 * np.divide(np.ptp(q, axis=0), span, out=np.zeros(span.shape), where=span > 0)
-            chart = self.rr.BarChart(share, abscissa=np.arange(share.size) + 0.6, widths=np.full(share.size, 0.8))
+            chart = self.rr.BarChart(share, abscissa=np.arange(share.size) + 0.6, widths=np.full(share.size, 0.8),
+                                     color=self.fixture_colour(name, k))  # its sphere's colour in the 3D view
             self.stream.log(f"coverage/{name}", chart, static=True)
-            self._note("coverage", name, f"Joint coverage at {name}: % of each joint's range (q1..q{share.size}), "
+            # the fixture's name first: in a grid of 14 the title bar showed 'Joint cover' of every view
+            self._note("coverage", name, f"{name}: joint coverage, % of each joint's range (q1..q{share.size}), "
                                          f"lowest {share.min():.0f} %")
 
     def socket_spread(self, fixture: str, nominal: np.ndarray, calibrated: np.ndarray) -> None:
@@ -352,16 +383,17 @@ class Recording:
                             static=True)
             drawn += [mm, mean + spread * np.array([right, -right, up, -up])]  # the sphere's outline on the screen
             labels[key] = f"{key}: spread {spread:.3f} mm"
+        labels["calibrated"] = f"{fixture}\n{labels['calibrated']}"  # the title bar shows its first 10 characters
         drawn = np.vstack(drawn)
-        places, room = _legend_places(drawn)
+        places, room = _legend_places(drawn, lines=(2, 1))
         self.stream.log(
             f"sockets/{fixture}/legend",
-            rr.Points3D(places, radii=rr.Radius.ui_points(3.0), colors=[_colour("calibrated"), _colour("nominal")],
+            rr.Points3D(places, radii=rr.Radius.ui_points(0.5), colors=[_colour("calibrated"), _colour("nominal")],
                         labels=[labels["calibrated"], labels["nominal"]], show_labels=True),
             static=True,
         )
         self.extend_bounds(f"sockets/{fixture}", np.vstack([drawn, places, room]))
-        self._note("sockets", fixture, f"Socket {fixture} [mm]")
+        self._note("sockets", fixture, f"{fixture}: socket spread [mm]")  # its name first: the title bar is narrow
 
     def provenance(self, block: dict) -> None:
         """The provenance block (:func:`correction.files.provenance.provenance`: command, versions, seed, inputs with
@@ -439,21 +471,32 @@ def _scale_beside(points: np.ndarray, steps: np.ndarray) -> tuple[np.ndarray, fl
     return np.column_stack([np.full((len(steps), 2), place[:2]), bottom + steps * height]), height
 
 
-def _legend_places(points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+def _heading_place(points: np.ndarray, height: float) -> np.ndarray:
+    """(1, 3) place of a heading label above points (N, 3) [m] as the default camera sees them, centred across them:
+    0.4 of ``height`` above their top on the screen (its label, three lines high, is centred on it: at 0.15 it
+    covered the colour scale's top label and the highest points)."""
+    right, up, _ = view_axes()
+    middle = points.mean(axis=0)
+    middle += (0.5 * (np.max(points @ right) + np.min(points @ right)) - middle @ right) * right
+    return (middle + (np.max(points @ up) - middle @ up + 0.4 * height) * up)[None]
+
+
+def _legend_places(points: np.ndarray, lines: tuple[int, int] = (1, 1)) -> tuple[np.ndarray, np.ndarray]:
     """(2, 3) places of two labelled points, above and below points (N, 3) as the default camera sees them
     (:func:`validation.blueprint.view_axes`), centred across them, and (2, 3) corners of the room their labels take
-    (which Rerun centres under each point), in the points' unit.
+    (which Rerun centres under each point), in the points' unit; ``lines``: the lines of the upper and lower labels.
 
-    The upper stands 0.3 of the points' largest extent on the screen above them (its label, a line high, hangs
-    between it and the points), the lower just below them; labels at two nearby means were drawn one over the other.
+    The upper stands 0.3 of the points' largest extent on the screen per line of its label above them (its label
+    hangs between it and the points), the lower just below them; labels at two nearby means were drawn one over the
+    other.
     """
     right, up, _ = view_axes()
     size = max(float(np.ptp(points @ right)), float(np.ptp(points @ up)), 1e-9)
     middle = points.mean(axis=0)
     middle += (0.5 * (np.max(points @ right) + np.min(points @ right)) - middle @ right) * right
-    places = np.array([middle + (np.max(points @ up) - middle @ up + 0.3 * size) * up,
+    places = np.array([middle + (np.max(points @ up) - middle @ up + 0.3 * lines[0] * size) * up,
                        middle + (np.min(points @ up) - middle @ up - 0.05 * size) * up])
-    room = places[1] - 0.2 * size * up + np.outer([-0.6, 0.6], size * right)
+    room = places[1] - 0.2 * lines[1] * size * up + np.outer([-0.6, 0.6], size * right)
     return places, room
 
 
