@@ -18,7 +18,7 @@ path                                 archetype      timeline    what
 ``residuals/<before|after>``         BarChart       static      calibration residual histogram [mm]
 ``parameters/<lengths|angles>/*``    2D shapes      static      change per parameter, +-1 std, truth
 ``coverage/<fixture>``               BarChart       static      share of each joint's range [%]
-``sockets/<fixture>/<model>``        Points3D       static      predicted tool points at a socket [mm]
+``sockets/<fixture>/<model>``        Points3D       static      predicted tool points, mm from their mean
 ``sockets/<fixture>/<model>_mean``   Ellipsoids3D   static      wire sphere: the mean point, spread [mm]
 ``sockets/<fixture>/legend``         Points3D       static      each model's spread, labelled
 ``tables/<name>``                    TextDocument   static      the printed tables
@@ -350,15 +350,19 @@ class Recording:
                                          f"lowest {share.min():.0f} %")
 
     def socket_spread(self, fixture: str, nominal: np.ndarray, calibrated: np.ndarray) -> None:
-        """A held-out socket: the tool points each model predicts there, in mm around the calibrated mean.
+        """A held-out socket: the tool points each model predicts there, in mm around that model's own mean.
 
         A socket-only validation has no measured position: a good model puts every configuration's
         tool point at one point, so the spread of the predictions is its error. The points are drawn
-        in a view of their own, in millimetres from the calibrated points' mean, all of one size; each model's mean
-        point is the centre of a wire sphere as wide as its spread (the mean distance from it, the socket table's
-        figure), and a legend names each model's spread in its colour, the calibrated one above the points and the
-        nominal one below them as the default camera sees them (:func:`_legend_places`). A filled marker at each mean
-        hid the calibrated points (a few tenths of a mm beside several mm) and put the two labels one over the other.
+        in a view of their own, each model's in millimetres from its own mean point, all of one size, so the two
+        clouds share a centre: a wire sphere as wide as each model's spread (the mean distance from it, the socket
+        table's figure). A legend names the socket and each model's spread in its colour, the calibrated one above the
+        points and the nominal one below them as the default camera sees them (:func:`_legend_places`), with how far
+        apart the two models put the socket's mean point (no error of either: its true place is not known). A filled
+        marker at each mean hid the calibrated points (a few tenths of a mm beside several mm) and put the two labels
+        one over the other; drawn around the calibrated mean, the nominal cloud stood where the nominal model puts the
+        socket, 7 to 13 mm away on MUKCa panda_2_clean, and the calibrated cluster outside it, as if that distance
+        were the error compared.
 
         Args:
             fixture: the socket's name (entity ``sockets/<fixture>``).
@@ -368,12 +372,12 @@ class Recording:
         for key, points in sets.items():
             if points.ndim != 2 or points.shape[1] != 3 or len(points) == 0:
                 raise ValueError(f"socket {fixture}: {key} points must have shape (N, 3), got {points.shape}")
-        centre = sets["calibrated"].mean(axis=0)
+        apart = float(np.linalg.norm(sets["nominal"].mean(axis=0) - sets["calibrated"].mean(axis=0))) * 1e3
         rr, labels, drawn = self.rr, {}, []
         right, up, _ = view_axes()
         for key, points in sets.items():
-            mm = (points - centre) * 1e3
-            mean = mm.mean(axis=0)
+            mm = (points - points.mean(axis=0)) * 1e3
+            mean = np.zeros(3)
             spread = float(np.mean(np.linalg.norm(mm - mean, axis=1)))  # the socket table's figure
             self.stream.log(f"sockets/{fixture}/{key}", rr.Points3D(mm, radii=rr.Radius.ui_points(2.0),
                                                                      colors=_colour(key)), static=True)
@@ -384,8 +388,9 @@ class Recording:
             drawn += [mm, mean + spread * np.array([right, -right, up, -up])]  # the sphere's outline on the screen
             labels[key] = f"{key}: spread {spread:.3f} mm"
         labels["calibrated"] = f"{fixture}\n{labels['calibrated']}"  # the title bar shows its first 10 characters
+        labels["nominal"] += f"\nmeans {apart:.2f} mm apart"
         drawn = np.vstack(drawn)
-        places, room = _legend_places(drawn, lines=(2, 1))
+        places, room = _legend_places(drawn, lines=(2, 2))
         self.stream.log(
             f"sockets/{fixture}/legend",
             rr.Points3D(places, radii=rr.Radius.ui_points(0.5), colors=[_colour("calibrated"), _colour("nominal")],
