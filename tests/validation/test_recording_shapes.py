@@ -74,3 +74,14 @@ def test_parameter_bars_take_each_unit_from_the_layout_not_the_name() -> None:
     assert bars["lengths"]["scale_label"] == "1.000 mm" and bars["compliances"]["unit"] == "urad/Nm"
     with pytest.raises(ValueError, match="kinds"):
         parameter_bars(names, kinds[:2], change, np.zeros(3))
+
+
+def test_parameter_bars_wear_no_model_s_colour() -> None:
+    """Negative changes were red bars and positive ones blue: the colours of the nominal and the calibrated model in
+    the Errors, Residuals and Socket spread views of the same recording. The sign is the bar's direction."""
+    from spherecal.validation.viewer.recording import COLOURS
+
+    bars = parameter_bars(["a2", "d3"], [LENGTH, LENGTH], np.array([1e-3, -1e-3]), np.full(2, 1e-5))["lengths"]
+    assert np.all(bars["sizes"][:, 1] > 0) and bars["mins"][0, 1] < 0 <= bars["mins"][1, 1]  # up, down
+    used = {tuple(int(v) for v in c) for c in bars["colours"]}
+    assert used.isdisjoint({COLOURS["nominal"], COLOURS["calibrated"]})

@@ -10,6 +10,9 @@ from spherecal.correction.layout import ParamKind
 RAMP = np.array([(60, 110, 240), (30, 190, 210), (90, 205, 90), (245, 215, 40), (235, 60, 40)], dtype=float)
 #: Height of the tallest bar in the parameter panels (2D view units; the labels carry the values).
 BAR_HEIGHT = 4.0
+#: Outline of every parameter bar: a grey of no model's, the sign is the bar's direction. Negative bars were red and
+#: positive ones blue, the colours that mean nominal and calibrated in every other view of the recording.
+BAR_COLOUR = (165, 165, 180)
 
 
 def capsules(strips: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -92,7 +95,7 @@ def parameter_bars(
         shapes = {
             "mins": np.column_stack([x - 0.35, np.minimum(y, 0.0)]),
             "sizes": np.column_stack([np.full_like(x, 0.7), np.abs(y)]),
-            "colours": np.where((value >= 0)[:, None], [[40, 120, 220]], [[220, 60, 50]]).astype(np.uint8),
+            "colours": np.tile(np.array(BAR_COLOUR, dtype=np.uint8), (len(x), 1)),
             "names": np.column_stack([x, y + np.where(y < 0, -0.45, 0.45)]),
             "labels": list(np.asarray(names)[mask]),
             "scale": np.array([[-1.2, 0.0], [-1.2, -BAR_HEIGHT]]),
