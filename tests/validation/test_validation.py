@@ -217,6 +217,10 @@ def test_recording_holds_the_documented_entities_and_its_blueprint(tmp_path, pan
     assert scene["residuals/after"]["color"] == [packed["calibrated"]]
     assert [scene[f"coverage/{f}"]["color"] for f in ("P1", "P2")] == [[packed["P1"]], [packed["P2"]]]
     assert scene["world/samples"]["colors"] == [packed["P1"]] * 20 + [packed["P2"]] * 20
+    # the base frame: which way x, y, z point and how long 0.25 m is, at the origin of the fixture centres' frame
+    np.testing.assert_allclose(scene["world/base_frame"]["vectors"], np.eye(3) * 0.25)
+    np.testing.assert_allclose(scene["world/base_frame"]["origins"], np.zeros((3, 3)))
+    assert scene["world/base_frame"]["labels"] == ["x (250 mm)", "y", "z"]
     assert sorted(p.name for p in tmp_path.iterdir()) == ["r.rrd"]
 
 

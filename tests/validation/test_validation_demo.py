@@ -50,6 +50,7 @@ def test_short_demo_writes_everything_and_its_recording_holds_the_documented_ent
     steps = 3 * round(SECONDS / 0.01)  # the controller's decimated trajectory: every 10 ms, three fixtures
     expected_rows = {
         "world/fixtures": 1,
+        "world/base_frame": 1,
         "world/samples": 1,
         "world/robot/arm": steps + 1,  # one row per step, and the static radii and colours
         "world/robot/tool": steps + 1,

@@ -8,6 +8,7 @@ in the README, checked by the tests):
 path                                 archetype      timeline    what
 ===================================  =============  ==========  ======================================
 ``world/fixtures``                   Ellipsoids3D   static      one labelled sphere per fixture
+``world/base_frame``                 Arrows3D       static      the base frame's x, y, z, 0.25 m each
 ``world/robot/arm``                  Capsules3D     ``time``    one capsule per link, per logged step
 ``world/robot/tool``                 Points3D       ``time``    the tool point, per logged step
 ``world/samples``                    Points3D       static      tool points of the calibration samples
@@ -65,6 +66,8 @@ FIXTURE_COLOURS = [(250, 170, 20), (160, 80, 200), (20, 170, 170), (200, 90, 60)
 SCALE_HEIGHT = 0.01
 #: Capsule radius of the links and of the tool segment [m].
 LINK_RADIUS, TOOL_RADIUS = 0.04, 0.012
+#: Length of the base frame's arrows in the 3D view [m]: out of the base link's 40 mm capsule (0.1 m barely left it).
+AXIS_LENGTH = 0.25
 
 
 def _rerun():
@@ -278,6 +281,22 @@ class Recording:
             )
             self.extend_bounds(f"errors/{key}", np.vstack([scale, label_room, heading]))
 
+    def _base_frame(self) -> None:
+        """The robot's base frame in the 3D view (``world/base_frame``): arrows of :data:`AXIS_LENGTH` along x, y, z
+        (red, green, blue), labelled. Without them nothing in the view said which way x was or how long a metre was,
+        so a fixture centre printed by calibrate ('centre P1 [m]: [0.4998 -0.2504 0.4992]') could not be found."""
+        if "world" not in self.bounds:
+            return
+        axes = np.eye(3) * AXIS_LENGTH
+        self.stream.log(
+            "world/base_frame",
+            self.rr.Arrows3D(vectors=axes, origins=np.zeros((3, 3)), radii=0.004, show_labels=True,
+                             colors=[(230, 70, 70), (70, 200, 90), (80, 130, 240)],
+                             labels=[f"x ({AXIS_LENGTH * 1e3:.0f} mm)", "y", "z"]),
+            static=True,
+        )
+        self.extend_bounds("world", np.vstack([np.zeros(3), axes]))
+
     def residuals(self, before: np.ndarray, after: np.ndarray) -> None:
         """Histograms of the calibration residuals (N,) [m] before and after calibration."""
         for key, values, model in (("before", before, "nominal"), ("after", after, "calibrated")):
@@ -423,6 +442,7 @@ class Recording:
         """
         try:
             self._colour_scales()
+            self._base_frame()
             blueprint = build_blueprint(self.contents, self.title, self.bounds)
             self.stream.send_blueprint(blueprint, make_active=True, make_default=True)
             bounds = {k: v.tolist() for k, v in self.bounds.items()}
