@@ -513,3 +513,20 @@ def test_a_viewer_that_cannot_start_is_one_line_and_leaves_nothing(tmp_path, mon
                                              "Viewer")
         assert "\n" not in str(refused.value)
     assert list(tmp_path.iterdir()) == []
+
+
+def test_the_robot_view_frames_everything_in_it(tmp_path, rng) -> None:
+    """plan --samples on MUKCa panda_2_clean: 48 candidate sockets on a 0.5 x 0.9 m table beside the arm; the 3D
+    view's camera stood 0.9 of the box's diagonal away, and the nearest rows of candidates ran out of the bottom of
+    the picture. Seen from the view's default camera (a pinhole of Rerun's 55 deg vertical field of view in a pane
+    0.95 as wide as tall, the robot view beside the result tabs), every fixture is in the picture."""
+    from spherecal.validation.viewer.recording import Recording, read_eyes
+
+    grid = np.array([[x, y, 0.016] for x in np.linspace(0.06, 0.55, 5) for y in np.linspace(-0.42, 0.48, 5)])
+    recording = Recording(tmp_path / "w.rrd")
+    recording.fixtures([f"G{k}" for k in range(len(grid))], grid)
+    recording.text("plan", "a table", "Plan")
+    recording.close()
+    seen = _pinhole(*read_eyes(tmp_path / "w.rrd")["world"], np.vstack([grid, np.zeros((1, 3))]))
+    half_height = np.tan(np.radians(55.0) / 2)
+    assert np.all(np.abs(seen) < [0.95 * half_height, half_height])

@@ -41,6 +41,9 @@ FIELD_OF_VIEW = np.radians(55.0)
 #: Width over height of an Errors view in the default window (1600 x 1000 points: the result panel's two views side
 #: by side, a fifth of the width each, above their histograms), a little less for the headers.
 ERRORS_ASPECT = 0.45
+#: Width over height of the 3D view of the robot: three fifths of the default window beside the result tabs (960 x
+#: 920 points), the whole window (1.6) when there are no tabs; a little less for the headers.
+WORLD_ASPECT, WORLD_ALONE_ASPECT = 0.95, 1.5
 
 
 def view_axes() -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -99,8 +102,8 @@ def build_blueprint(
     bounds = bounds or {}
     hidden = rrb.PlotLegend(visible=False)  # a bar chart's legend names its entity path; the view's name says more
 
-    def eye(origin, least=0.05, distance=1.2):
-        return camera(bounds[origin], least, distance) if origin in bounds else None
+    def eye(origin, least=0.05, distance=1.2, aspect=None):
+        return camera(bounds[origin], least, distance, aspect) if origin in bounds else None
 
     def area(origin):
         if origin not in bounds:
@@ -142,7 +145,11 @@ def build_blueprint(
         else:  # the results first, the provenance (behind them, it hid the table a reviewer opens the tab for) last
             order = sorted(views, key=lambda k: k == "provenance")
             tabs.append(rrb.Tabs(*[rrb.TextDocumentView(origin=f"tables/{k}", name=views[k]) for k in order], name=tab))
-    world = rrb.Spatial3DView(origin="world", contents="$origin/**", name=title, eye_controls=eye("world", 1.0, 0.9))
+    # far enough that the whole box fits the view: at 0.9 of its diagonal alone, plan's rows of candidates on a
+    # 0.5 x 0.9 m table ran out of the bottom of the picture
+    aspect = WORLD_ASPECT if tabs else WORLD_ALONE_ASPECT
+    world = rrb.Spatial3DView(origin="world", contents="$origin/**", name=title,
+                              eye_controls=eye("world", 1.0, 0.9, aspect))
     if active_tab is None:
         shown = [section for section in TABS if contents.get(section)]
         active_tab = shown.index("sockets") if "sockets" in shown else 0
