@@ -165,7 +165,7 @@ class SelfCheck:
         """Plain data for the ``calibration:`` block of the written file."""
         return {
             "verdict": "consistent" if self.consistent else "inconsistent",
-            "noise_declared_mm": self.noise * 1e3,
+            "noise_assumed_mm": self.noise * 1e3,  # declared (--noise) or the default: options.noise_declared says
             "residual_std_mm": self.sigma * 1e3,
             "failed": [f.message for f in self.failed],
             "warnings": list(self.warnings),
