@@ -1,4 +1,4 @@
-"""`spherecal import` of a long recording: wall time and peak memory, as a joint CSV and as a ROS 2 bag.
+"""`spherecal import` of a long recording: wall time and peak memory, as a joint CSV, a ROS 2 bag and a ROS 1 bag.
 
 Builds (once; kept in ``--data``) a continuous hand-guiding recording of the embedded Panda at ``--rate`` Hz for
 ``--minutes`` minutes (default 30 min at 1 kHz: 1.8 M samples): ``--sockets`` sockets 60 mm apart, each visited
@@ -8,9 +8,11 @@ several times (self-motion about the held tool point, then the arm at rest in th
 - ``recording.csv``: ``time,panda_joint1..7,panda_finger_joint1,panda_finger_joint2`` (every digit of each float);
 - ``recording_bag/``: a ROS 2 bag (sqlite3, or ``--storage mcap``) of ``sensor_msgs/JointState`` on
   ``/joint_states``, the arm's seven joints and the gripper's two fingers in one message as a real Panda's
-  ``joint_states`` carry them (velocities and efforts too), stamped in ``header.stamp``.
+  ``joint_states`` carry them (velocities and efforts too), stamped in ``header.stamp``;
+- ``recording.bag``: the same messages in a ROS 1 bag (what franka_ros records on Noetic), ``header.seq`` counting.
 
-Then runs ``spherecal import SOURCE --format csv|bag --robot panda --out OUT`` ``--repeats`` times each in a fresh
+Then runs ``spherecal import SOURCE --format csv|bag --robot panda --out OUT`` ``--repeats`` times each (``--formats
+csv,bag,bag1``: the ROS 1 bag is imported with ``--format bag``) in a fresh
 process and reports the median wall time and the peak resident memory of the import process
 (``os.wait4``'s ``ru_maxrss``). The outputs of the last run of each (``samples.csv``, ``fixtures.yaml`` less
 the printed report) are kept in ``--keep`` when given, to ``cmp`` against
@@ -137,10 +139,7 @@ def write_bag(path: Path, t: np.ndarray, q: np.ndarray, storage: str = "sqlite3"
         base = np.frombuffer(bytes(template), dtype=np.uint8)
         for first in range(0, len(t), 50_000):
             tt, qq = t[first:first + 50_000], q[first:first + 50_000]
-            sec = np.floor(tt).astype(np.int64)
-            nanosec = np.round((tt - sec) * 1e9).astype(np.int64)
-            over = nanosec >= 1_000_000_000
-            sec, nanosec = sec + over, nanosec - over * 1_000_000_000
+            sec, nanosec = _stamps(tt)
             position = np.where(np.array(column) >= 0, qq[:, np.maximum(column, 0)], 0.04)
             block = np.tile(base, (len(tt), 1))
             block[:, 4:8] = np.ascontiguousarray(sec, dtype="<i4").view(np.uint8).reshape(-1, 4)
@@ -152,13 +151,60 @@ def write_bag(path: Path, t: np.ndarray, q: np.ndarray, storage: str = "sqlite3"
                 writer.write(connection, stamps[k], row.tobytes())
 
 
+def write_bag1(path: Path, t: np.ndarray, q: np.ndarray) -> None:
+    """A ROS 1 bag (``.bag``, what ``rosbag record`` writes on Noetic: uncompressed 1 MiB chunks) of
+    ``sensor_msgs/JointState`` on ``/joint_states`` (names in :data:`ORDER`), ``header.seq`` counting up as a
+    publisher's does. As :func:`write_bag`: one message serialised by rosbags, the others it with their seq, stamp
+    and positions written in (ROS 1 serialisation is packed: fixed offsets for a fixed set of names)."""
+    from rosbags.rosbag1 import Writer
+    from rosbags.typesys import Stores, get_typestore
+
+    store = get_typestore(Stores.ROS1_NOETIC)
+    JointState, Header, Time = (
+        store.types[k] for k in ("sensor_msgs/msg/JointState", "std_msgs/msg/Header", "builtin_interfaces/msg/Time")
+    )
+    marker = np.arange(1, len(ORDER) + 1) * 1.2345678901234567e3
+    template = bytes(store.serialize_ros1(
+        JointState(header=Header(seq=0, stamp=Time(sec=1, nanosec=2), frame_id=""), name=ORDER, position=marker,
+                   velocity=np.zeros(len(ORDER)), effort=np.zeros(len(ORDER))), JointState.__msgtype__))
+    at = template.find(marker.astype("<f8").tobytes())
+    assert at > 0 and template[:12] == np.array([0, 1, 2], "<u4").tobytes()
+    column = [JOINTS.index(name) if name in JOINTS else -1 for name in ORDER]
+    with Writer(path) as writer:
+        connection = writer.add_connection("/joint_states", JointState.__msgtype__, typestore=store)
+        base = np.frombuffer(template, dtype=np.uint8)
+        for first in range(0, len(t), 50_000):
+            tt, qq = t[first:first + 50_000], q[first:first + 50_000]
+            sec, nanosec = _stamps(tt)
+            position = np.where(np.array(column) >= 0, qq[:, np.maximum(column, 0)], 0.04)
+            block = np.tile(base, (len(tt), 1))
+            head = np.stack([first + np.arange(len(tt)), sec, nanosec], axis=1).astype("<u4")
+            block[:, :12] = head.view(np.uint8).reshape(-1, 12)
+            position = np.ascontiguousarray(position, dtype="<f8")
+            block[:, at:at + 8 * len(ORDER)] = position.view(np.uint8).reshape(len(tt), -1)
+            stamps = (sec * 1_000_000_000 + nanosec).tolist()
+            for k, row in enumerate(block):
+                writer.write(connection, stamps[k], row.tobytes())
+
+
+def _stamps(t: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """``(sec, nanosec)`` (int64) of stamps ``t`` [s]."""
+    sec = np.floor(t).astype(np.int64)
+    nanosec = np.round((t - sec) * 1e9).astype(np.int64)
+    over = nanosec >= 1_000_000_000
+    return sec + over, nanosec - over * 1_000_000_000
+
+
 def build(folder: Path, minutes: float, rate: float, sockets: int, storage: str) -> dict:
-    """The CSV and the bag in ``folder`` (kept when already there); what was built."""
+    """The CSV, the ROS 2 bag and the ROS 1 bag in ``folder`` (kept when already there); what was built."""
     csv, bag, made = folder / "recording.csv", folder / "recording_bag", folder / "recording.json"
+    bag1 = folder / "recording.bag"
     wanted = {"minutes": minutes, "rate": rate, "sockets": sockets, "storage": storage}
-    if made.is_file() and json.loads(made.read_text()).get("inputs") == wanted and csv.is_file() and bag.is_dir():
+    if (made.is_file() and json.loads(made.read_text()).get("inputs") == wanted and csv.is_file() and bag.is_dir()
+            and bag1.is_file()):
         return json.loads(made.read_text())
     shutil.rmtree(bag, ignore_errors=True)
+    bag1.unlink(missing_ok=True)
     folder.mkdir(parents=True, exist_ok=True)
     clock = time.perf_counter()
     t, q = recording(minutes, rate, sockets)
@@ -167,8 +213,12 @@ def build(folder: Path, minutes: float, rate: float, sockets: int, storage: str)
     made_csv = time.perf_counter() - clock - made_q
     write_bag(bag, t, q, storage)
     made_bag = time.perf_counter() - clock - made_q - made_csv
-    info = {"inputs": wanted, "samples": len(t), "seconds": {"stream": made_q, "csv": made_csv, "bag": made_bag},
-            "csv_mb": csv.stat().st_size / 1e6, "bag_mb": sum(p.stat().st_size for p in bag.rglob("*")) / 1e6}
+    write_bag1(bag1, t, q)
+    made_bag1 = time.perf_counter() - clock - made_q - made_csv - made_bag
+    info = {"inputs": wanted, "samples": len(t),
+            "seconds": {"stream": made_q, "csv": made_csv, "bag": made_bag, "bag1": made_bag1},
+            "csv_mb": csv.stat().st_size / 1e6, "bag_mb": sum(p.stat().st_size for p in bag.rglob("*")) / 1e6,
+            "bag1_mb": bag1.stat().st_size / 1e6}
     made.write_text(json.dumps(info, indent=2) + "\n")
     return info
 
@@ -208,7 +258,7 @@ def main() -> None:
     parser.add_argument("--sockets", type=int, default=4)
     parser.add_argument("--storage", choices=("sqlite3", "mcap"), default="sqlite3")
     parser.add_argument("--repeats", type=int, default=3, help="imports of each recording (the median is reported)")
-    parser.add_argument("--formats", default="csv,bag")
+    parser.add_argument("--formats", default="csv,bag,bag1", help="csv, bag (ROS 2), bag1 (ROS 1)")
     parser.add_argument("--data", help="folder of the recordings, kept (default: a temporary folder)")
     parser.add_argument("--keep", help="folder to copy the last run's outputs and printed report into")
     parser.add_argument("--out", default=str(HERE / "import_speed.json"))
@@ -218,15 +268,16 @@ def main() -> None:
         data = Path(args.data) if args.data else Path(scratch) / "data"
         info = build(data, args.minutes, args.rate, args.sockets, args.storage)
         print(f"recording: {info['samples']} samples ({args.minutes:g} min at {args.rate:g} Hz, {args.sockets} "
-              f"sockets); CSV {info['csv_mb']:.0f} MB, bag {info['bag_mb']:.0f} MB ({args.storage}); tree: {root}")
+              f"sockets); CSV {info['csv_mb']:.0f} MB, bag {info['bag_mb']:.0f} MB ({args.storage}), ROS 1 bag "
+              f"{info['bag1_mb']:.0f} MB; tree: {root}")
         results = {}
         for fmt in args.formats.split(","):
-            source = data / ("recording.csv" if fmt == "csv" else "recording_bag")
+            source = data / {"csv": "recording.csv", "bag": "recording_bag", "bag1": "recording.bag"}[fmt]
             runs = []
             for k in range(args.repeats):
                 out = data / "runs" / f"out_{fmt}"  # one path: the provenance's command line alike at every commit
                 shutil.rmtree(out, ignore_errors=True)
-                seconds, peak, code, printed, warned = run_import(source, fmt, out)
+                seconds, peak, code, printed, warned = run_import(source, "bag" if fmt == "bag1" else fmt, out)
                 if code != 0:
                     raise SystemExit(f"import --format {fmt} failed ({code}):\n{printed}\n{warned}")
                 runs.append({"seconds": seconds, "peak_mb": peak})

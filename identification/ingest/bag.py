@@ -15,6 +15,7 @@ import struct
 from array import array
 from collections.abc import Sequence
 from dataclasses import dataclass, field, replace
+from pathlib import Path
 
 import numpy as np
 
@@ -66,29 +67,14 @@ def read_bag(path: str | os.PathLike, model: RobotModel, topic: str = TOPIC) -> 
             f"{path}: cannot read the bag: a ROS 2 bag folder holds a metadata.yaml, this one has none{hint}"
         )
     try:
-        with AnyReader([path], default_typestore=get_typestore(Stores.ROS2_HUMBLE)) as reader:
-            connections = [c for c in reader.connections if c.topic == topic]
-            if not connections and not topic.startswith("/"):  # 'joint_states' typed for '/joint_states'
-                connections = [c for c in reader.connections if c.topic == "/" + topic]
-                topic = "/" + topic if connections else topic
-            if not connections:
-                topics = sorted({c.topic for c in reader.connections})
-                raise RecordingError(
-                    f"{path}: field '--topic': no topic {topic!r} in the bag (has {', '.join(topics)})"
-                )
-            for connection in connections:
-                if connection.msgtype.replace("/msg/", "/") != "sensor_msgs/JointState":
-                    raise RecordingError(
-                        f"{path}: field '--topic': {topic!r} carries {connection.msgtype}, "
-                        "expected sensor_msgs/JointState"
-                    )
-            messages = _Messages(model, f"{path}: {topic} message ")  # as RowNames names them
-            try:
-                messages.read(reader, connections)
-            except Exception:  # an earlier message's angle that is not finite is refused first, as it was read first
-                messages.check_finite()
-                raise
-            messages.check_finite()
+        found = _read_ros1(path, model, topic) if path.suffix == ".bag" and path.is_file() else None
+        if found is None:  # a ROS 2 bag, or a ROS 1 bag that rosbags' reader reads message by message
+            with AnyReader([path], default_typestore=get_typestore(Stores.ROS2_HUMBLE)) as reader:
+                connections, topic = _connections(reader.connections, topic, path)
+                messages = _Messages(model, f"{path}: {topic} message ")  # as RowNames names them
+                messages.read_checked(lambda: messages.read(reader, connections))
+        else:
+            messages, topic = found
     except RecordingError:
         raise
     except (AnyReaderError, OSError) as error:
@@ -138,6 +124,59 @@ def read_bag(path: str | os.PathLike, model: RobotModel, topic: str = TOPIC) -> 
     return replace(recording, q=q[keep], t=t[keep], rows=rows.select(keep), notes=notes + repeats)
 
 
+def _connections(connections: list, topic: str, path: Path) -> tuple[list, str]:
+    """The bag's connections of ``topic`` (``joint_states`` typed for ``/joint_states`` too) and the topic's name.
+
+    Raises:
+        RecordingError: no such topic, a topic of another message type.
+    """
+    chosen = [c for c in connections if c.topic == topic]
+    if not chosen and not topic.startswith("/"):  # 'joint_states' typed for '/joint_states'
+        chosen = [c for c in connections if c.topic == "/" + topic]
+        topic = "/" + topic if chosen else topic
+    if not chosen:
+        topics = sorted({c.topic for c in connections})
+        raise RecordingError(f"{path}: field '--topic': no topic {topic!r} in the bag (has {', '.join(topics)})")
+    for connection in chosen:
+        if connection.msgtype.replace("/msg/", "/") != "sensor_msgs/JointState":
+            raise RecordingError(
+                f"{path}: field '--topic': {topic!r} carries {connection.msgtype}, expected sensor_msgs/JointState"
+            )
+    return chosen, topic
+
+
+def _read_ros1(path: Path, model: RobotModel, topic: str) -> tuple[_Messages, str] | None:
+    """The messages of a ROS 1 bag read a chunk at a time (:mod:`.bag1`), and the topic's name; None when the bag
+    has anything that reader leaves to rosbags' (then read as before, message by message, its errors said as
+    rosbags says them).
+
+    Raises:
+        RecordingError: as :func:`read_bag`.
+    """
+    from .bag1 import IndexedReader, Unusual, blocks, typestore  # bag1 imports rosbags: only when a bag is read
+
+    try:
+        reader = IndexedReader(path)
+        reader.open()
+    except Exception:  # whatever it is, rosbags' AnyReader says it
+        return None
+    try:
+        store = typestore(reader)
+        connections, topic = _connections(reader.connections, topic, path)
+        messages = _Messages(model, f"{path}: {topic} message ")
+        msgtypes = {c.id: c.msgtype for c in connections}
+        if len(set(msgtypes.values())) != 1:
+            return None
+        msgtype = connections[0].msgtype
+        messages.read_checked(lambda: messages.read_blocks(
+            blocks(reader, connections), lambda raw: store.deserialize_ros1(raw, msgtype)))
+    except Unusual:
+        return None
+    finally:
+        reader.close()
+    return messages, topic
+
+
 @dataclass
 class _Group:
     """The messages read with one list of joint names: their numbers, stamps and ``position`` arrays."""
@@ -168,11 +207,14 @@ class _Group:
 
 @dataclass
 class _Layout:
-    """The fixed bytes of CDR ``JointState`` messages alike but for their stamps and arrays' values: a message whose
-    bytes match them everywhere else has the same names and array lengths, and needs no deserialising (its stamp
-    and positions are read at fixed offsets)."""
+    """The fixed bytes of serialised ``JointState`` messages alike but for their stamps and arrays' values (and a ROS 1
+    message's ``header.seq``): a message whose bytes match them everywhere else has the same names and array lengths,
+    and needs no deserialising (its stamp and positions are read at fixed offsets).
 
-    head: bytes  # the encapsulation (little-endian CDR)
+    Both serialisations put ``header.stamp``'s ``sec`` (int32) and ``nanosec`` (uint32) at bytes 4-12 and the
+    ``frame_id`` at 12: after CDR's 4-byte encapsulation, after ROS 1's ``header.seq`` (uint32, not read)."""
+
+    head: bytes  # the encapsulation (little-endian CDR); b"" in ROS 1 (the seq, that changes, is not compared)
     middle: bytes  # from the frame_id's length to the positions' count
     velocity: bytes  # velocity's count, at ``at_velocity``
     effort: bytes  # effort's count, at ``at_effort``
@@ -195,36 +237,51 @@ class _Layout:
         return (len(raw) == self.length and raw.startswith(self.middle, 12) and raw.startswith(self.head)
                 and raw.startswith(self.velocity, self.at_velocity) and raw.startswith(self.effort, self.at_effort))
 
+    def matching(self, data: np.ndarray) -> np.ndarray:
+        """(K,) bool: which of the messages ``data`` (K, length) bytes (uint8) :meth:`matches`."""
+        same = np.ones(len(data), dtype=bool)
+        for start, value in ((0, self.head), (12, self.middle), (self.at_velocity, self.velocity),
+                             (self.at_effort, self.effort)):
+            if value:
+                same &= (data[:, start : start + len(value)] == np.frombuffer(value, dtype=np.uint8)).all(axis=1)
+        return same
+
+    def read(self, data: np.ndarray, numbers: np.ndarray, received: np.ndarray) -> tuple[np.ndarray, ...]:
+        """``(numbers, sec, nanosec, received, positions)`` (a :class:`_Group` block) of messages of this layout:
+        ``data`` (K, length) their bytes (uint8), ``numbers`` and ``received`` (K,) theirs."""
+        stamps = np.ascontiguousarray(data[:, 4:12]).view(np.dtype([("sec", "<i4"), ("nanosec", "<u4")]))[:, 0]
+        positions = np.ascontiguousarray(data[:, self.at_position:self.at_velocity]).view("<f8")
+        return (np.asarray(numbers, dtype=np.int64), stamps["sec"].astype(np.int64),
+                stamps["nanosec"].astype(np.int64), np.asarray(received, dtype=np.int64),
+                positions.astype(float, copy=False))
+
     def flush(self) -> None:
         """Read the stamps and positions of the messages matched into the group's arrays, all at once."""
         if not self.raw:
             return
         data = np.frombuffer(b"".join(self.raw), dtype=np.uint8).reshape(-1, self.length)
-        stamps = np.ascontiguousarray(data[:, 4:12]).view(np.dtype([("sec", "<i4"), ("nanosec", "<u4")]))[:, 0]
-        positions = np.ascontiguousarray(data[:, self.at_position:self.at_velocity]).view("<f8")
-        numbers, received = (np.frombuffer(self.numbers, dtype=np.int64).copy(),
-                             np.frombuffer(self.received, dtype=np.int64).copy())
-        self.group.blocks.append((numbers, stamps["sec"].astype(np.int64), stamps["nanosec"].astype(np.int64),
-                                  received, positions.astype(float, copy=False)))
+        self.group.blocks.append(self.read(data, np.frombuffer(self.numbers, dtype=np.int64).copy(),
+                                           np.frombuffer(self.received, dtype=np.int64).copy()))
         self.raw, self.numbers, self.received = [], array("q"), array("q")
 
 
 #: Messages of one layout kept as bytes before their stamps and positions are read into arrays, all at once.
 _BLOCK = 20_000
-_HEADER = struct.Struct("<iI")  # header.stamp's sec and nanosec, after the 4-byte encapsulation
+_HEADER = struct.Struct("<iI")  # header.stamp's sec and nanosec, after the encapsulation (CDR) or the seq (ROS 1)
 _COUNT = struct.Struct("<I")
 
 
-def _cdr_layout(raw: bytes, message) -> _Layout | None:
-    """The :class:`_Layout` of a little-endian CDR ``JointState`` message, when parsing its bytes by hand gives
-    exactly what ``message`` (rosbags' deserialisation of them) holds; None otherwise (then every message of its
-    kind is deserialised)."""
+def _layout_of(raw: bytes, message, cdr: bool) -> _Layout | None:
+    """The :class:`_Layout` of a ``JointState`` message, little-endian CDR (``cdr``: ROS 2) or ROS 1 (packed, little
+    endian, no padding, strings without a terminating NUL), when parsing its bytes by hand gives exactly what
+    ``message`` (rosbags' deserialisation of them) holds; None otherwise (then every message of its kind is
+    deserialised)."""
     try:
-        if raw[:2] != b"\x00\x01":
+        if cdr and raw[:2] != b"\x00\x01":
             return None
 
-        def align(at: int, size: int) -> int:  # CDR aligns from the end of the encapsulation
-            return 4 + ((at - 4 + size - 1) // size) * size
+        def align(at: int, size: int) -> int:  # CDR aligns from the end of the encapsulation; ROS 1 does not align
+            return 4 + ((at - 4 + size - 1) // size) * size if cdr else at
 
         def count(at: int) -> tuple[int, int]:
             at = align(at, 4)
@@ -242,7 +299,7 @@ def _cdr_layout(raw: bytes, message) -> _Layout | None:
         names = []
         for _ in range(n):
             size, at = count(at)
-            names.append(raw[at + 4 : at + 3 + size].decode())
+            names.append(raw[at + 4 : at + 4 + size - (1 if cdr else 0)].decode())  # CDR counts a NUL
             at += 4 + size
         at_count, at_position, at = doubles(at)
         at_velocity, velocity, at = doubles(at)
@@ -253,21 +310,21 @@ def _cdr_layout(raw: bytes, message) -> _Layout | None:
                 and raw[at_position:at_velocity] == np.asarray(message.position, dtype="<f8").tobytes()
                 and raw[velocity:at_effort] == np.asarray(message.velocity, dtype="<f8").tobytes()
                 and raw[effort:end] == np.asarray(message.effort, dtype="<f8").tobytes()
-                and end <= len(raw) <= end + 3)
+                and (end <= len(raw) <= end + 3 if cdr else len(raw) == end))
     except (struct.error, UnicodeDecodeError, AttributeError, TypeError, ValueError):
         return None
     if not same:
         return None
-    return _Layout(raw[:4], raw[12:at_count + 4], raw[at_velocity:at_velocity + 4], raw[at_effort:at_effort + 4],
-                   at_velocity, at_effort, at_position, len(raw), tuple(names))
+    return _Layout(raw[:4] if cdr else b"", raw[12:at_count + 4], raw[at_velocity:at_velocity + 4],
+                   raw[at_effort:at_effort + 4], at_velocity, at_effort, at_position, len(raw), tuple(names))
 
 
 class _Messages:
     """The ``JointState`` messages of a topic, read into arrays (never a Python object per message): those naming
     the arm's joints grouped by their names, the others counted (skipped: another device's; partial: some of the
     arm's joints; unpositioned: no positions). Deserialises one message of each :class:`_Layout` only (the first,
-    to check it) and reads the others' stamps and positions at their offsets; a ROS 1 bag's messages, or ones
-    of no layout, are deserialised."""
+    to check it) and reads the others' stamps and positions at their offsets, in a ROS 2 or a ROS 1 bag alike;
+    messages of no layout are deserialised."""
 
     def __init__(self, model: RobotModel, where: str):
         self.model, self.where = model, where
@@ -308,22 +365,87 @@ class _Messages:
                         last.flush()
                     continue
             message = reader.deserialize(raw, connection.msgtype)
-            layout = _cdr_layout(bytes(raw), message) if reader.is2 and len(layouts) < 16 else None
-            self._add(message, k, timestamp)
-            if layout is not None:
-                layout.group = self.groups.get(layout.names) if layout.positioned else None
-                layouts.append(layout)
-                last = layout
+            last = self._deserialised(bytes(raw), message, k, timestamp, reader.is2) or last
 
-    def _other(self, names: tuple[str, ...], positioned: bool, k: int) -> None:
-        """Count a message of ``names`` that is not the arm's: without positions, another device's, or some of the
-        arm's joints only (``positioned`` and not disjoint from the arm: :meth:`_add` judged its names so)."""
+    def read_checked(self, read) -> None:
+        """``read()`` (:meth:`read`, :meth:`read_blocks`), then :meth:`check_finite`: an earlier message's angle that
+        is not finite is refused first, as it was read first, before what ``read`` raises too."""
+        try:
+            read()
+        except Exception:
+            self.check_finite()
+            raise
+        self.check_finite()
+
+    def _deserialised(self, raw: bytes, message, k: int, timestamp: int, cdr: bool) -> _Layout | None:
+        """Sort a message deserialised (:meth:`_add`) and keep its layout, the first ones' (None: no new layout)."""
+        layout = _layout_of(raw, message, cdr) if len(self.layouts) < 16 else None
+        self._add(message, k, timestamp)
+        if layout is None:
+            return None
+        layout.group = self.groups.get(layout.names) if layout.positioned else None
+        self.layouts.append(layout)
+        return layout
+
+    def read_blocks(self, blocks, deserialize) -> None:
+        """Read a ROS 1 bag's messages handed a run of one chunk's at a time (:func:`.bag1.blocks`), in the bag's
+        order, as :meth:`read` does: the messages of a known layout in arrays, every other one deserialised
+        (``deserialize(raw)``) and sorted on its own, in turn.
+
+        Raises:
+            RecordingError: as :meth:`read`.
+        """
+        for block in blocks:
+            which = np.full(len(block.numbers), -1)  # the layout each message has (its place in self.layouts)
+            for i in range(len(self.layouts)):
+                self._match(block, i, which, 0)
+            pending, done = np.flatnonzero(which < 0), 0
+            while True:
+                u = int(pending[0]) if pending.size else len(which)
+                if u > done:
+                    self._take(block, which, done, u)
+                if u == len(which):
+                    break
+                raw = block.chunk[block.start[u] : block.start[u] + block.size[u]].tobytes()
+                k = int(block.numbers[u]) - 1
+                if self._deserialised(raw, deserialize(raw), k, int(block.received[u]), False) is not None:
+                    self._match(block, len(self.layouts) - 1, which, u + 1)
+                    pending = u + 1 + np.flatnonzero(which[u + 1 :] < 0)
+                else:
+                    pending = pending[1:]
+                done = u + 1
+
+    def _match(self, block, i: int, which: np.ndarray, first: int) -> None:
+        """Mark the messages of ``block`` from ``first`` on that have no layout yet and layout ``i``'s bytes."""
+        layout = self.layouts[i]
+        candidates = first + np.flatnonzero((which[first:] < 0) & (block.size[first:] == layout.length))
+        if candidates.size:
+            which[candidates[layout.matching(_rows(block.chunk, block.start[candidates], layout.length))]] = i
+
+    def _take(self, block, which: np.ndarray, first: int, end: int) -> None:
+        """Read the messages ``first .. end - 1`` of ``block``, each of a known layout, in arrays: each layout's in
+        the order of their first message (the counts of another device's names kept in the order they came)."""
+        kinds, starts = np.unique(which[first:end], return_index=True)
+        for i in kinds[np.argsort(starts)]:
+            layout, mine = self.layouts[i], first + np.flatnonzero(which[first:end] == i)
+            numbers = block.numbers[mine]
+            if layout.group is None:
+                self._other(layout.names, layout.positioned, int(numbers[0]) - 1, len(mine))
+                continue
+            data = _rows(block.chunk, block.start[mine], layout.length)
+            layout.group.blocks.append(layout.read(data, numbers, block.received[mine]))
+            self.count += len(mine)
+
+    def _other(self, names: tuple[str, ...], positioned: bool, k: int, count: int = 1) -> None:
+        """Count ``count`` messages of ``names``, the first ``k``, that are not the arm's: without positions, another
+        device's, or some of the arm's joints only (``positioned`` and not disjoint from the arm: :meth:`_add`
+        judged its names so)."""
         if not positioned and names:
-            self.unpositioned += 1
+            self.unpositioned += count
         elif self.arm.isdisjoint(names):
-            self.skipped[names] = self.skipped.get(names, 0) + 1
+            self.skipped[names] = self.skipped.get(names, 0) + count
         else:
-            self.partial.setdefault(names, [0, k + 1])[0] += 1
+            self.partial.setdefault(names, [0, k + 1])[0] += count
 
     def _add(self, message, k: int, timestamp: int) -> None:
         """Sort a deserialised message (the checks of every message: see :meth:`read`)."""
@@ -383,6 +505,15 @@ class _Messages:
                               for g in self.groups.values() for numbers, *_, positions in g.parts()])
         if bad.size:
             raise RecordingError(f"{self.where}{int(bad.min())}, field 'position': not finite")
+
+
+def _rows(chunk: np.ndarray, start: np.ndarray, width: int) -> np.ndarray:
+    """(K, width) the bytes ``chunk[s : s + width]`` for each ``s`` of ``start`` (K,): a view when the rows lie evenly
+    spaced (a chunk's messages of one layout alone), gathered otherwise."""
+    if len(start) > 1 and np.all(np.diff(start) == start[1] - start[0]) and start[1] > start[0]:
+        return np.lib.stride_tricks.as_strided(chunk[start[0]:], (len(start), width), (int(start[1] - start[0]), 1),
+                                               writeable=False)
+    return chunk[start[:, None] + np.arange(width)]
 
 
 def _refuse_interleaved(q: np.ndarray, t: np.ndarray, rows: Sequence[str], stamps: np.ndarray,

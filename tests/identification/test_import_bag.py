@@ -502,65 +502,155 @@ def test_columns_numbered_past_the_arms_joints_are_named_in_a_note(tmp_path) -> 
     assert not read_joint_csv(tmp_path / "q7.csv", load_robot("panda")).notes
 
 
-def _raw_joint_states(path, messages, edit=None) -> None:
-    """A ROS 2 bag of ``sensor_msgs/JointState``: ``messages`` of (time [s], names, positions, frame_id, stamped), the
-    time in ``header.stamp`` when ``stamped`` (else zero) and as the bag's receive time, each message's bytes passed
-    through ``edit(k, data)`` when given (a corrupt message)."""
-    from rosbags.rosbag2 import Writer
+def _raw_joint_states(path, messages, edit=None, ros1=False, chunk=None) -> None:
+    """A ROS 2 bag (a ROS 1 bag when ``ros1``: ``header.seq`` counting, ``chunk`` bytes a chunk) of
+    ``sensor_msgs/JointState``: ``messages`` of (time [s], names, positions, frame_id, stamped[, received [s]
+    [, connection]]), the time in ``header.stamp`` when ``stamped`` (else zero) and as the bag's receive time unless
+    given, on /joint_states from ``connection`` (0 or 1: two publishers), each message's bytes passed through
+    ``edit(k, data)`` when given (a corrupt message)."""
     from rosbags.typesys import Stores, get_typestore
 
-    store = get_typestore(Stores.ROS2_HUMBLE)
+    if ros1:
+        from rosbags.rosbag1 import Writer
+
+        writer = Writer(path)
+        writer.chunk_threshold = chunk or writer.chunk_threshold
+    else:
+        from rosbags.rosbag2 import Writer
+
+        writer = Writer(path, version=9)
+    store = get_typestore(Stores.ROS1_NOETIC if ros1 else Stores.ROS2_HUMBLE)
     state, header, time = (store.types[k] for k in ("sensor_msgs/msg/JointState", "std_msgs/msg/Header",
                                                     "builtin_interfaces/msg/Time"))
-    with Writer(path, version=9) as writer:
-        connection = writer.add_connection("/joint_states", state.__msgtype__, typestore=store)
-        for k, (stamp, names, position, frame, stamped) in enumerate(messages):
+    serialize = store.serialize_ros1 if ros1 else store.serialize_cdr
+    with writer:
+        connections = [writer.add_connection("/joint_states", state.__msgtype__, typestore=store, **(
+            {"callerid": f"/publisher{k}"} if ros1 else {"serialization_format": "cdr", "offered_qos_profiles": (
+                [] if k == 0 else ["x"])})) for k in range(2)] if any(len(m) > 6 for m in messages) else (
+            [writer.add_connection("/joint_states", state.__msgtype__, typestore=store)])
+        for k, (stamp, names, position, frame, stamped, *more) in enumerate(messages):
             sec = int(stamp) if stamped else 0
             nanosec = int(round((stamp - sec) * 1e9)) if stamped else 0
-            head = header(stamp=time(sec=sec, nanosec=nanosec), frame_id=frame)
-            data = bytes(store.serialize_cdr(state(header=head, name=list(names), position=np.asarray(position, float),
-                                                   velocity=np.zeros(len(position)), effort=np.zeros(0)),
-                                             state.__msgtype__))
-            writer.write(connection, int(stamp * 1e9), edit(k, data) if edit else data)
+            head = header(seq=k, stamp=time(sec=sec, nanosec=nanosec), frame_id=frame) if ros1 else (
+                header(stamp=time(sec=sec, nanosec=nanosec), frame_id=frame))
+            data = bytes(serialize(state(header=head, name=list(names), position=np.asarray(position, float),
+                                         velocity=np.zeros(len(position)), effort=np.zeros(0)), state.__msgtype__))
+            received, connection = (more + [stamp, 0][len(more):])[:2]
+            writer.write(connections[connection], int(received * 1e9), edit(k, data) if edit else data)
 
 
-def test_a_bag_read_at_its_messages_offsets_is_read_as_deserialised(recording, tmp_path, monkeypatch) -> None:
-    # the reader deserialises one message of each layout and reads the others' stamps and positions at their offsets:
-    # the same samples, rows and notes as deserialising every message, gripper messages, messages without
-    # positions, zero stamps and frame_ids of several lengths interleaved
-    _, t, q, _ = recording
+def _mixed(t, q) -> list:
+    """Messages of the arm (its joints reversed, the fingers after them or around them) with gripper messages and
+    messages without positions between them, zero stamps and frame_ids of several lengths."""
     fingers = ["panda_finger_joint1", "panda_finger_joint2"]
     messages = []
     for k in range(0, len(t), 3):
-        messages.append((t[k], NAMES[::-1] + fingers, list(q[k, ::-1]) + [0.04, 0.04], "base" * (k % 3), k % 7 > 0))
+        names, position = NAMES[::-1] + fingers, list(q[k, ::-1]) + [0.04, 0.04]
+        if k % 2:  # a finger first: matched by name, not by place
+            names, position = names[-1:] + names[:-1], position[-1:] + position[:-1]
+        messages.append((t[k], names, position, "base" * (k % 3), k % 7 > 0))
         messages += [(t[k], fingers, [0.04, 0.04], "", True)] if k % 5 == 0 else []
         messages += [(t[k], NAMES, [], "", True)] if k % 11 == 0 else []
-    bag = tmp_path / "mixed"
-    _raw_joint_states(bag, messages)
+    return messages
+
+
+def _same_reading(fast, slow) -> None:
+    np.testing.assert_array_equal(fast.q, slow.q)
+    np.testing.assert_array_equal(fast.t, slow.t)
+    assert list(fast.rows) == list(slow.rows) and fast.notes == slow.notes
+
+
+@pytest.mark.parametrize("ros1", [False, True])
+def test_a_bag_read_at_its_messages_offsets_is_read_as_deserialised(recording, ros1, tmp_path, monkeypatch) -> None:
+    # the reader deserialises one message of each layout and reads the others' stamps and positions at their offsets:
+    # the same samples, rows and notes as deserialising every message, gripper messages, messages without
+    # positions, zero stamps and frame_ids of several lengths interleaved (a ROS 1 bag in chunks of 2 kB: the
+    # layouts read in arrays a chunk at a time)
+    _, t, q, _ = recording
+    messages = _mixed(t, q)
+    bag = tmp_path / ("mixed.bag" if ros1 else "mixed")
+    _raw_joint_states(bag, messages, ros1=ros1, chunk=2000)
     model = load_robot(PANDA)
     monkeypatch.setattr(bag_module, "_BLOCK", 5)  # messages read into arrays 5 at a time, between the others
     fast = read_bag(bag, model)
-    monkeypatch.setattr(bag_module, "_cdr_layout", lambda raw, message: None)  # every message deserialised
-    slow = read_bag(bag, model)
-    np.testing.assert_array_equal(fast.q, slow.q)
-    np.testing.assert_array_equal(fast.t, slow.t)
-    assert list(fast.rows) == list(slow.rows) and fast.notes == slow.notes and len(fast.notes) == 2
+    assert len(fast.notes) == 2
     assert fast.rows[0] == f"{bag}: /joint_states message 1" and fast.rows[-1].endswith(f" {len(messages)}")
+    nearest = np.abs(fast.t[:, None] - t[None, :]).argmin(axis=1)  # the sample each stamp is of (to 1 ns)
+    np.testing.assert_array_equal(fast.q, q[nearest])  # the arm's joints, by name
+    if ros1:  # rosbags' reader, message by message, the layouts matched one message at a time
+        monkeypatch.setattr(bag_module, "_read_ros1", lambda path, model, topic: None)
+        _same_reading(fast, read_bag(bag, model))
+    monkeypatch.setattr(bag_module, "_layout_of", lambda raw, message, cdr: None)  # every message deserialised
+    _same_reading(fast, read_bag(bag, model))
 
 
-def test_a_bag_refuses_its_first_bad_message_first(recording, tmp_path) -> None:
+def test_a_ros1_bag_is_read_in_rosbags_order_across_chunks_and_publishers(recording, tmp_path, monkeypatch) -> None:
+    # the messages come in the order of their receive times (rosbags' reader: a tie by the connection, then by the
+    # index), numbered so: two publishers on the topic, receive times that go back across chunks of 1 kB and ties
+    _, t, q, _ = recording
+    order = np.random.default_rng(0).permutation(len(t))[: len(t) // 2]
+    messages = [(t[k], NAMES, list(q[k]), "", True, t[k] + 0.05 * (k % 4 == 0) - 0.004 * (k % 9 == 0), k % 3 == 0)
+                for k in range(len(t))]
+    for k in order[:50]:  # receive times alike, of both publishers
+        messages[k] = (*messages[k][:5], t[order[0]], messages[k][6])
+    bag = tmp_path / "two.bag"
+    _raw_joint_states(bag, messages, ros1=True, chunk=1000)
+    model = load_robot(PANDA)
+    found = bag_module._read_ros1(bag, model, "/joint_states")
+    assert found is not None and found[0].count == len(t)  # read a chunk at a time
+    fast = read_bag(bag, model)
+    monkeypatch.setattr(bag_module, "_read_ros1", lambda path, model, topic: None)
+    _same_reading(fast, read_bag(bag, model))
+    numbers, stamps, _ = found[0].arrays()
+    assert list(numbers) == list(range(1, len(t) + 1))
+    received = np.array([int(m[5] * 1e9) for m in messages])  # ties by the connection, then as written
+    order = np.lexsort((np.arange(len(t)), [m[6] for m in messages], received))
+    np.testing.assert_array_equal(stamps, np.array([m[0] for m in messages])[order])
+    assert len(set(received[order[:-1]][np.diff(received[order]) == 0])) > 10
+
+
+def test_a_ros1_bag_the_chunk_reader_leaves_is_read_by_rosbags(recording, tmp_path) -> None:
+    # a message record whose header is not its connection's first one's (here: its fields in another order) is left
+    # to rosbags' reader, message by message, with the same result
+    _, t, q, _ = recording
+    messages = [(t[k], NAMES, list(q[k]), "", True) for k in range(300)]
+    bag = tmp_path / "odd.bag"
+    _raw_joint_states(bag, messages, ros1=True, chunk=4000)
+    model = load_robot(PANDA)
+    before = read_bag(bag, model)
+    data = bytearray(bag.read_bytes())
+    op = b"\x04\x00\x00\x00op=\x02"
+    at = data.index(op, data.index(op) + 1)  # the second message record's header: op, conn, time
+    assert data[at + 8 : at + 21].startswith(b"\x09\x00\x00\x00conn=")
+    data[at : at + 21] = data[at + 8 : at + 21] + data[at : at + 8]  # conn, op, time
+    bag.write_bytes(bytes(data))
+    assert bag_module._read_ros1(bag, model, "/joint_states") is None
+    after = read_bag(bag, model)
+    np.testing.assert_array_equal(after.q, before.q)
+    assert list(after.rows) == list(before.rows)
+
+
+@pytest.mark.parametrize("ros1", [False, True])
+def test_a_bag_refuses_its_first_bad_message_first(recording, ros1, tmp_path) -> None:
     # the angles are checked once read, in arrays: a message whose angle is not finite is still refused before a
     # later message that cannot be read, and a message that cannot be read before a later angle that is not finite
     _, t, q, _ = recording
     model = load_robot(PANDA)
     messages = [(t[k], NAMES, list(q[k]), "", True) for k in range(200)]
     messages[40] = (t[40], NAMES, [np.nan] + list(q[40, 1:]), "", True)
-    _raw_joint_states(tmp_path / "a", messages, lambda k, data: data[:-9] if k == 77 else data)
-    with pytest.raises(RecordingError, match=r"a: /joint_states message 41, field 'position': not finite"):
-        read_bag(tmp_path / "a", model)
-    _raw_joint_states(tmp_path / "b", messages, lambda k, data: data[:-9] if k == 17 else data)
-    with pytest.raises(RecordingError, match=r"b: cannot read the bag: "):
-        read_bag(tmp_path / "b", model)
-    _raw_joint_states(tmp_path / "c", messages, lambda k, data: data + bytes(8) if k == 17 else data)
-    with pytest.raises(RecordingError, match=r"c: cannot read the bag: CDR message size mismatch"):
-        read_bag(tmp_path / "c", model)
+    name = "{}.bag" if ros1 else "{}"
+    _raw_joint_states(tmp_path / name.format("a"), messages, lambda k, data: data[:-9] if k == 77 else data, ros1)
+    with pytest.raises(RecordingError, match=r"a(\.bag)?: /joint_states message 41, field 'position': not finite"):
+        read_bag(tmp_path / name.format("a"), model)
+    _raw_joint_states(tmp_path / name.format("b"), messages, lambda k, data: data[:-9] if k == 17 else data, ros1)
+    with pytest.raises(RecordingError, match=r"b(\.bag)?: cannot read the bag: "):
+        read_bag(tmp_path / name.format("b"), model)
+    _raw_joint_states(tmp_path / name.format("c"), messages, lambda k, data: data + bytes(8) if k == 17 else data,
+                      ros1)
+    with pytest.raises(RecordingError, match=r"c(\.bag)?: cannot read the bag: (CDR|ROS1) message size mismatch"):
+        read_bag(tmp_path / name.format("c"), model)
+    p = list(messages[20])
+    p[2] = p[2][:6]
+    _raw_joint_states(tmp_path / name.format("d"), messages[:20] + [tuple(p)] + messages[21:], ros1=ros1)
+    with pytest.raises(RecordingError, match=r"d(\.bag)?: /joint_states message 21, field 'position': 6 positions "):
+        read_bag(tmp_path / name.format("d"), model)
