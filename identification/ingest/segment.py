@@ -30,6 +30,9 @@ from spherecal.correction.model import RobotModel
 
 #: Bin of the stillness test [s].
 BIN = 0.01
+#: Samples whose tool points are computed at a time: the chain's temporaries of 1.8 M samples at once peaked at 410 MB
+#: (each sample's point is computed on its own, elementwise: the same numbers in blocks).
+POINT_BLOCK = 100_000
 
 
 class SegmentationError(DatasetError):
@@ -90,6 +93,16 @@ def _distinct(q: np.ndarray, tol: float = 1e-3) -> int:
     return int(first_of_rows(np.floor(q / tol)).size)  # np.unique(axis=0)'s count, a tenth of its time
 
 
+def _tool_points(model: RobotModel, q: np.ndarray) -> np.ndarray:
+    """(T, 3) nominal tool points [m] of ``q`` (T, n) [rad], :data:`POINT_BLOCK` samples at a time."""
+    if len(q) <= POINT_BLOCK:
+        return tool_point(model, q)
+    points = np.empty((len(q), 3))
+    for first in range(0, len(q), POINT_BLOCK):
+        points[first : first + POINT_BLOCK] = tool_point(model, q[first : first + POINT_BLOCK])
+    return points
+
+
 def _still_bins(points: np.ndarray, half: int, radius: float) -> np.ndarray:
     """(B,) bool: bin ``b`` is still when bins ``b-half .. b+half`` all lie within ``radius`` of it."""
     still = np.ones(points.shape[0], dtype=bool)
@@ -125,7 +138,7 @@ def segment(
     """
     where = f"{where}: " if where else ""
     s = settings
-    points = tool_point(model, q)
+    points = _tool_points(model, q)
     bins = np.floor((t - t[0]) / BIN).astype(np.int64)
     edges = np.flatnonzero(np.diff(bins)) + 1
     starts = np.concatenate([[0], edges])
