@@ -116,11 +116,15 @@ def read_bag(path: str | os.PathLike, model: RobotModel, topic: str = TOPIC) -> 
                                       f"only some of the arm's joints ({some})",) if partial else ())
     numbers, stamps, q = messages.arrays()
     order = np.argsort(stamps, kind="stable")
-    q, t, rows = q[order], stamps[order], RowNames(path, numbers[order], f"{topic} message")
+    if np.any(order != np.arange(order.size)):  # (a copy of q otherwise)
+        q = q[order]
+    t, rows = stamps[order], RowNames(path, numbers[order], f"{topic} message")
     recording = Recording(q, t, None, str(path), rows, notes, clock="header.stamp", time_field="header.stamp")
     recording.check_limits(model)  # first: degrees in a radians field jump too, and this says which it is
     _refuse_interleaved(q, t, rows, stamps, numbers)  # before the stamps alike: two streams' clash is named as theirs
     keep, repeats = repeated_stamps(q, t, rows, "header.stamp", "message")
+    if keep.all():
+        return replace(recording, notes=notes + repeats)
     return replace(recording, q=q[keep], t=t[keep], rows=rows.select(keep), notes=notes + repeats)
 
 
@@ -198,11 +202,20 @@ class _Group:
         yield from self.blocks
 
     def columns(self) -> tuple[np.ndarray, ...]:
-        """``(numbers, sec, nanosec, received, q)`` of every message of the group (in no particular order), ``q``
-        (K, n) the arm's joint angles [rad]."""
-        parts = [(*part[:4], part[4][:, self.index]) for part in self.parts()]
-        return tuple(np.concatenate([p[i] for p in parts]).astype(float if i == 4 else np.int64, copy=False)
-                     for i in range(5))
+        """``(numbers, sec, nanosec, received, q)`` of every message of the group (the deserialised ones, then the
+        blocks in the order read), ``q`` (K, n) the arm's joint angles [rad]. Each block is let go once copied (the
+        blocks and their copies side by side, then concatenated, were a read's memory peak)."""
+        parts, self.blocks = [*self.parts()][::-1], []
+        total = sum(len(part[0]) for part in parts)
+        out = [np.empty(total, dtype=np.int64) for _ in range(4)] + [np.empty((total, len(self.index)))]
+        at = 0
+        while parts:
+            part = parts.pop()
+            for column, values in zip(out[:4], part[:4], strict=True):
+                column[at : at + len(values)] = values
+            out[4][at : at + len(part[0])] = part[4][:, self.index]
+            at += len(part[0])
+        return tuple(out)
 
 
 @dataclass
