@@ -6,6 +6,9 @@ of the arm's joints (a gripper driver publishing its fingers alone on the same t
 the arm's messages) is skipped and counted: the import report says how many and what they named. So is a
 message that names joints but carries no positions (its velocities or efforts alone: every array of a
 ``JointState`` is optional).
+
+Messages alike but for their stamps and values are read at their byte offsets in arrays (:class:`_Layout`), one
+of each kind deserialised to check it; a ROS 1 bag's messages are handed a chunk at a time (:mod:`.bag1`).
 """
 
 from __future__ import annotations
@@ -168,8 +171,7 @@ def _read_ros1(path: Path, model: RobotModel, topic: str) -> tuple[_Messages, st
         store = typestore(reader)
         connections, topic = _connections(reader.connections, topic, path)
         messages = _Messages(model, f"{path}: {topic} message ")
-        msgtypes = {c.id: c.msgtype for c in connections}
-        if len(set(msgtypes.values())) != 1:
+        if len({c.msgtype for c in connections}) != 1:
             return None
         msgtype = connections[0].msgtype
         messages.read_checked(lambda: messages.read_blocks(
