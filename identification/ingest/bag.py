@@ -83,9 +83,10 @@ def read_bag(path: str | os.PathLike, model: RobotModel, topic: str = TOPIC) -> 
     except (AnyReaderError, OSError) as error:
         raise RecordingError(f"{path}: cannot read the bag: {error}") from None
     except Exception as error:  # rosbags' own reader and deserialisation errors have no common base
-        if not type(error).__module__.startswith("rosbags"):
+        if not _raised_by_rosbags(error):
             raise
-        raise RecordingError(f"{path}: cannot read the bag: {error}") from None
+        said = str(error) or f"{type(error).__name__} in {_raised_by_rosbags(error)}"
+        raise RecordingError(f"{path}: cannot read the bag: {said}") from None
     skipped, partial, unpositioned = messages.skipped, messages.partial, messages.unpositioned
     others = "; ".join(f"{count} naming {', '.join(names[:4]) or 'no joint'}{', ...' if len(names) > 4 else ''}"
                        for names, count in skipped.items())
@@ -150,6 +151,18 @@ def _connections(connections: list, topic: str, path: Path) -> tuple[list, str]:
                 f"{path}: field '--topic': {topic!r} carries {connection.msgtype}, expected sensor_msgs/JointState"
             )
     return chosen, topic
+
+
+def _raised_by_rosbags(error: Exception) -> str:
+    """The rosbags module ``error`` comes from (its type's, or the one whose code raised it: a ROS 1 bag whose record
+    time disagrees with its index stops in rosbags on a bare ``assert``), or "" for an error of ours or Python's."""
+    if type(error).__module__.startswith("rosbags"):
+        return type(error).__module__
+    frame = error.__traceback__
+    while frame is not None and frame.tb_next is not None:
+        frame = frame.tb_next
+    module = "" if frame is None else str(frame.tb_frame.f_globals.get("__name__", ""))
+    return module if module.startswith("rosbags") else ""
 
 
 def _read_ros1(path: Path, model: RobotModel, topic: str) -> tuple[_Messages, str] | None:

@@ -654,3 +654,20 @@ def test_a_bag_refuses_its_first_bad_message_first(recording, ros1, tmp_path) ->
     _raw_joint_states(tmp_path / name.format("d"), messages[:20] + [tuple(p)] + messages[21:], ros1=ros1)
     with pytest.raises(RecordingError, match=r"d(\.bag)?: /joint_states message 21, field 'position': 6 positions "):
         read_bag(tmp_path / name.format("d"), model)
+
+
+def test_a_ros1_bag_whose_record_time_is_not_its_index_time_is_refused_in_one_line(recording, tmp_path) -> None:
+    # a helper's note (stop 15): such a bag stopped inside rosbags on a bare assert, a traceback and no file named
+    _, t, q, _ = recording
+    messages = [(t[k], NAMES, list(q[k]), "", True) for k in range(300)]
+    bag = tmp_path / "late.bag"
+    _raw_joint_states(bag, messages, ros1=True, chunk=4000)
+    data = bytearray(bag.read_bytes())
+    op = b"\x04\x00\x00\x00op=\x02"
+    at = data.index(op, data.index(op) + 1)  # the second message record's header: op, conn, time
+    when = data.index(b"time=", at) + 5
+    data[when : when + 4] = (int.from_bytes(data[when : when + 4], "little") + 1000).to_bytes(4, "little")
+    bag.write_bytes(bytes(data))
+    with pytest.raises(RecordingError, match=r"late\.bag: cannot read the bag: \w") as error:
+        read_bag(bag, load_robot(PANDA))
+    assert "\n" not in str(error.value)
