@@ -392,8 +392,8 @@ def remarks(report: SocketReport, calibrated: RobotModel, nominal: RobotModel | 
 def record_sockets(recording, report: SocketReport, models: dict[str, RobotModel], dataset: Dataset) -> None:
     """Log a socket validation into a :class:`validation.recording.Recording`, in the layout of every
     recording: the calibrated robot through the recorded configurations on ``time`` and each socket
-    at its calibrated mean point (``world/*``); per socket, both models' predicted tool points in mm
-    around the calibrated mean (``sockets/<fixture>/*``, :meth:`Recording.socket_spread`); each model's
+    at its calibrated mean point (``world/*``); per socket, both models' predicted tool points in mm,
+    each around its own mean point (``sockets/<fixture>/*``, :meth:`Recording.socket_spread`); each model's
     predicted points coloured by their distance from their socket's mean (``errors/<model>/*``, one
     colour scale); the joint coverage per socket and the printed table.
     """
