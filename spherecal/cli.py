@@ -71,9 +71,10 @@ def main(argv: list[str] | None = None) -> int:
 
     cap_environment()
     from spherecal.correction.errors import SpherecalError  # numpy: not at --help (start-up)
-    from spherecal.options import OptionError, output_folders, say_created
+    from spherecal.options import OptionError, output_files, output_folders, say_created, say_replaced
 
     missing = [folder for folder in output_folders(args) if not folder.exists()]
+    existing = [path for path in output_files(args) if path.is_file()]
 
     held: list[str] = []  # warnings wait for the outcome: a refusal stays ONE line (it mentions them)
 
@@ -89,6 +90,7 @@ def main(argv: list[str] | None = None) -> int:
             warnings.showwarning = one_line_warning  # a warning for the user, not a source location
             status = int(args._run(args) or 0)
         say_created(args, missing)
+        say_replaced(args, existing)
         flush()
         return status
     except (SpherecalError, OptionError) as error:

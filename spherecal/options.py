@@ -515,6 +515,22 @@ def output_folders(args: argparse.Namespace) -> list[Path]:
     return folders
 
 
+def output_files(args: argparse.Namespace) -> list[Path]:
+    """The files a command names as its outputs (``--out`` of every command but :data:`FOLDER_OUT`, ``--rrd``,
+    ``--analysis``); one that exists is replaced (never an input: :func:`planned_outputs`), and
+    :func:`say_replaced` names it."""
+    return [Path(value) for name in OUTPUT_OPTIONS
+            if isinstance(value := getattr(args, name, None), str) and value
+            and not (name == "out" and args.command in FOLDER_OUT)]
+
+
+def say_replaced(args: argparse.Namespace, existing: list[Path]) -> None:
+    """One line on stdout per output file that existed before a command that succeeded (``existing``: those of
+    :func:`output_files`): a second ``calibrate --out cal.yaml`` replaced the first without a word (a user trial)."""
+    for path in dict.fromkeys(existing):
+        print(f"spherecal {args.command}: replaced {path} (it existed)")
+
+
 def say_created(args: argparse.Namespace, missing: list[Path]) -> None:
     """One line on stdout per output folder that did not exist before the command and does now (``missing``: those of
     :func:`output_folders` absent before it ran): every command creates a missing folder, and says so, so that a

@@ -423,7 +423,11 @@ def test_every_command_creates_a_missing_output_folder_and_says_so(files, capsys
     if argv[0] in ("simulate", "import"):  # they refuse a folder that holds their files (nothing to say either way)
         return
     assert main(argv) == 0
-    assert "created the folder" not in capsys.readouterr().out
+    out = capsys.readouterr().out
+    assert "created the folder" not in out
+    for option in ("--out", "--rrd", "--analysis"):  # each output file the second run replaced is named
+        if option in argv and argv[0] not in ("campaign", "demo"):
+            assert f"spherecal {argv[0]}: replaced {argv[argv.index(option) + 1]} (it existed)" in out.splitlines()
 
 
 def test_calibrate_creates_a_missing_output_folder_and_says_so(tmp_path, capsys, monkeypatch) -> None:
@@ -435,8 +439,11 @@ def test_calibrate_creates_a_missing_output_folder_and_says_so(tmp_path, capsys,
             "--force", "--out", f"{MISSING}/cal.yaml"]  # --force: 40 samples per fixture are too few to beat nominal
     capsys.readouterr()
     assert main(argv) == 0
-    assert f"spherecal calibrate: created the folder {MISSING} (it did not exist)" in capsys.readouterr().out
+    out = capsys.readouterr().out
+    assert f"spherecal calibrate: created the folder {MISSING} (it did not exist)" in out and "replaced" not in out
     assert (tmp_path / MISSING / "cal.yaml").is_file()
+    assert main(argv) == 0  # a user trial: the second run replaced the first without a word
+    assert f"spherecal calibrate: replaced {MISSING}/cal.yaml (it existed)" in capsys.readouterr().out.splitlines()
 
 
 def test_a_refused_command_leaves_no_folder_and_says_none_was_created(files, capsys, monkeypatch) -> None:
