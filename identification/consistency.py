@@ -219,7 +219,9 @@ def group_finding(problem: CalibrationProblem, name: str, kind: tuple, group: Le
         "log10_p": log10_p,
         "excess": excess,
         "sigma_rest_mm": group.sigma_rest * 1e3,
-        "explained": max(group.delta_ssr, 0.0) / judged - group.dof,  # residual removed beyond noise
+        # the chi-square leaving it out removes beyond its degrees of freedom: below 0, no more than noise (a reviewer
+        # trial could not read "explained: -74.9")
+        "chi2_beyond_dof": max(group.delta_ssr, 0.0) / judged - group.dof,
     }
     if unmodelled > 0:
         figures["unmodelled_mm"] = float(np.sqrt(unmodelled)) * 1e3
@@ -285,7 +287,7 @@ def name_culprit(groups: list[Finding], noise: float, level_factor: float) -> li
         return groups
 
     def excess(f: Finding) -> float:
-        return f.figures["explained"]
+        return f.figures["chi2_beyond_dof"]
 
     best = max(excess(f) for f in failed)
     contenders = [f for f in failed if excess(f) >= (1.0 - CONTENDERS) * best]
