@@ -392,9 +392,20 @@ def test_plan_command_ranks_refuses_out_of_reach_and_writes_json(tmp_path, panda
             "--candidates", str(tmp_path / "c.yaml"), "--noise", "0.2", "--out", str(out)]
     assert main([*argv, "--rrd", str(rrd)]) == 0
     rows = read_entity_rows(rrd)
-    assert {"world/candidates", "world/fixtures", "world/samples", "tables/plan"} <= set(rows)
+    assert {"world/candidates", "world/fixtures", "world/samples", "tables/plan", "world/next"} <= set(rows)
     assert rows["world/robot/arm"] > dataset.n_samples  # the arm through every recorded configuration
     text = capsys.readouterr().out
+    # the answer is marked where a reviewer sees it (a reviewer trial: no label among the candidates): its label is
+    # the printed verdict's
+    from rerun.chunk import RrdReader
+
+    batch = next(c for c in RrdReader(str(rrd)).stream().to_chunks() if c.entity_path.endswith("world/next"))
+    batch = batch.to_record_batch()
+    labels = batch.column(next(n for n in batch.schema.names if n.endswith("labels"))).to_pylist()[0]
+    worth = any(line.startswith("record front next:") for line in text.splitlines())
+    assert worth or any(line.startswith("more recording is not worth it") for line in text.splitlines())
+    said = "record next: front" if worth else "best, not worth recording: front"
+    assert labels[1:] == [""] and labels[0].startswith(said) and labels[0].endswith(" mm own)"), labels
     refused = [line for line in text.splitlines() if line.startswith("refused:")]
     assert refused == ["refused: candidate far: socket far_h0 at [1.6, 0.0, 0.2] m is out of reach inside the "
                        "joint limits"]

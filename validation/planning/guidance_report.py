@@ -92,7 +92,8 @@ def guidance_json(guidance, provenance: dict | None = None) -> dict:
 def write_guidance_recording(path: str, guidance, provenance: str = "") -> str:
     """The calibrated arm through the recorded configurations, the recorded sockets, and every candidate's
     sockets coloured by gain (:func:`validation.viewer.recording_shapes.colour_ramp`, 0 = the best gain;
-    grey: refused), with the table as a text panel."""
+    grey: refused), the best candidate's sockets marked and labelled (``world/next``: record it next, or not worth
+    it), with the table as a text panel."""
     from spherecal.validation.viewer.recording import Recording  # Rerun: only for --rrd
     from spherecal.validation.viewer.recording_shapes import colour_ramp
 
@@ -116,6 +117,15 @@ def write_guidance_recording(path: str, guidance, provenance: str = "") -> str:
             points, colors=np.repeat(np.array(colours), each, axis=0), labels=labels, radii=0.012), static=True)
         if guidance.ranking:  # the camera frames what can be recorded, not a refused far-away candidate
             recording.extend_bounds("world", points[: sum(each[: len(guidance.ranking)])])
+            # the answer, where a reviewer sees it: among dozens of candidates Rerun shows no label (a reviewer trial)
+            best = guidance.ranking[0]
+            verdict = "record next" if guidance.worth_it else "best, not worth recording"
+            at = np.array(list(best.placement.sockets.values()))
+            recording.stream.log("world/next", recording.rr.Points3D(
+                at, colors=[255, 255, 255], radii=0.02, show_labels=True,
+                labels=[f"{verdict}: {best.placement.name} ({mm_text(best.own_gain, '+.3f')} mm own)"]
+                + [""] * (len(at) - 1)),  # once: the plate's sockets are centimetres apart, their labels stacked
+                static=True)
         text = format_guidance(guidance)
         recording.text("plan", f"{provenance}\n\n{text}" if provenance else text,
                        "What to record next: candidates by predicted gain (mm)")
