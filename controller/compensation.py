@@ -164,7 +164,7 @@ def _check_difference(nominal: RobotModel, calibrated: RobotModel, q: np.ndarray
     the nominal's: a ball 40 mm beyond the flange is within the first check and 40 mm off every target)."""
     gap = float(np.linalg.norm(tool_point(nominal, q) - tool_point(calibrated, q)))
     apart = max(tools_apart(calibrated, nominal), _other_tip(calibrated, nominal))
-    shift = _unstated_shift(calibrated)
+    shift = _unstated_shift(calibrated, source)
     if gap <= MAX_MODEL_DIFFERENCE and apart <= TOOL_MATCH_TOL and shift is None:
         return
     swapped = replace(calibrated, tool=nominal.tool)  # the same arm with the controller's tool?
@@ -186,7 +186,7 @@ def _check_difference(nominal: RobotModel, calibrated: RobotModel, q: np.ndarray
               "--out NEW.yaml`")
     if shift is not None and apart <= TOOL_MATCH_TOL:
         raise ModelMismatchError(
-            f"{source}: {adapter_question(shift, 'adapter').split(': ', 1)[1]}: the controller's "
+            f"{source}: {adapter_question(shift)}: the controller's "
             f"tool is that robot file's, so its targets would be missed by up to {np.linalg.norm(shift) * 1e3:.1f} "
             f"mm one way or the other; {remedy}")
     if gap > MAX_MODEL_DIFFERENCE:
@@ -208,7 +208,7 @@ def _check_difference(nominal: RobotModel, calibrated: RobotModel, q: np.ndarray
         f"(the targets would be missed by about that): a calibration ends at its own tool (the ball); {remedy}")
 
 
-def _unstated_shift(calibrated: RobotModel) -> np.ndarray | None:
+def _unstated_shift(calibrated: RobotModel, source: str) -> np.ndarray | None:
     """(3,) [m] the offset at which a calibrated file's samples put the ball from its robot file's tool
     (``calibration.samples_tool``, beyond :data:`~correction.tool.TIP_MOVED`) when no tool swap has said whether it
     is an adapter (:func:`correction.tool.with_tool`); else None. A MUKCa Panda calibrated with ``--tip-link
@@ -219,7 +219,7 @@ def _unstated_shift(calibrated: RobotModel) -> np.ndarray | None:
     try:
         return samples_shift(nominal_tool_of(calibrated), block.get("samples_tool"))
     except ToolError as error:
-        raise ModelMismatchError(f"calibrated model: {error}") from None
+        raise ModelMismatchError(f"{source}: {error}") from None
 
 
 def _printed(point: np.ndarray) -> np.ndarray:

@@ -153,7 +153,7 @@ def with_tool(model: RobotModel, tool: np.ndarray, payload: dict | None = None,
         shift = samples_shift(nominal_tool, samples_tool)
         if shift is not None:
             if adapter is None:
-                raise ToolError(f"{adapter_question(shift, '--adapter')}: say which")
+                raise ToolError(f"field '--adapter': {adapter_question(shift)}: say which")
             stated = {"adapter": bool(adapter), "samples_shift": [float(v) for v in shift]}
             if not adapter:
                 carried = carried - shift
@@ -177,16 +177,16 @@ def with_tool(model: RobotModel, tool: np.ndarray, payload: dict | None = None,
             f"{np.rad2deg(angle):.1f} deg of it (the prior's spread) is {unidentified * 1e3:.2f} mm the calibration "
             f"cannot vouch for")
     if nominal_tool is not None:
-        own = carried - np.asarray(stated["samples_shift"]) if stated.get("adapter") else carried  # the adapter: said
+        own = carried - shift if stated.get("adapter") else carried  # the adapter's offset: said, not in doubt
         shown = ", ".join(f"{v * 1e3:+.3f}" for v in own)
         note += (f"; the calibration's correction of the old tool point, ({shown}) mm in the last frame (the "
                  f"flange's own error is in it), is carried to the new tool: one ball cannot tell the flange's error "
                  f"(the new tool shares it) from the ball's own mount (it does not), so the new tool may be off by up "
                  f"to {np.linalg.norm(own) * 1e3:.2f} mm more")
-    if stated:
-        how = "carried: an adapter every tool sits on" if stated["adapter"] else "not carried: the ball's own mount"
-        note += (f"; the {np.linalg.norm(stated['samples_shift']) * 1e3:.1f} mm at which the samples put the ball from "
-                 f"the robot file's tool is {how}")
+        if stated:
+            how = "carried: an adapter every tool sits on" if adapter else "not carried: the ball's own mount"
+            note += (f"; the {np.linalg.norm(shift) * 1e3:.1f} mm at which the samples put the ball from the robot "
+                     f"file's tool is {how}")
     return ToolSwap(replace(model, tool=tool, extras=extras), distance, unidentified, note)
 
 
@@ -203,11 +203,11 @@ def samples_shift(nominal_tool: np.ndarray, samples_tool: np.ndarray | None) -> 
     return shift if float(np.linalg.norm(shift)) > TIP_MOVED else None
 
 
-def adapter_question(shift: np.ndarray, field: str) -> str:
-    """The refusal of a tool swap (or a controller) that was not told what ``shift`` (3,) [m] is: an adapter every tool
-    sits on, or the ball's own mount; ``field`` names the answer (``--adapter`` on the command line)."""
+def adapter_question(shift: np.ndarray) -> str:
+    """Why a tool swap (or a controller) not told what ``shift`` (3,) [m] is refuses: an adapter every tool sits on, or
+    the ball's own mount (the caller names the field that answers)."""
     shown = ", ".join(f"{v * 1e3:.1f}" for v in shift)
-    return (f"field '{field}': the calibration's samples put the ball {np.linalg.norm(shift) * 1e3:.1f} mm from the "
+    return (f"the calibration's samples put the ball {np.linalg.norm(shift) * 1e3:.1f} mm from the "
             f"robot file's tool ([{shown}] mm in the last frame, {SAMPLES_TOOL}), more than a calibration corrects "
             f"({TIP_MOVED * 1e3:.0f} mm); one ball cannot tell whether an adapter or sensor between the flange and "
             "every tool put it there (carried to the new tool: --adapter, adapter=True) or the ball's own mount or a "

@@ -359,6 +359,7 @@ def calibrate(
             x, timings["lm"] = solution.x, timings["lm"] + solution.seconds
     clock = time.perf_counter()
     problem = problem.reweighted(x)  # a heavy-tailed prior's rows at their curvature here (stds, self-check)
+    jac = inverse = edf = None  # report=False: none of the figures at the solution
     if report:
         jac = problem.jacobian(x)
         inverse = normal_inverse(jac)  # one SVD for both
@@ -410,15 +411,6 @@ def calibrate(
         warnings.append(hint.removeprefix("; "))
     if method == "pso" and report:
         warnings.extend(_short_of_minimum(problem, x, jac, inverse))
-    if not report:  # a fold's fit: its model alone is read
-        return CalibrationResult(
-            model=model, nominal=nominal, method=method, centres=problem.centre_dict(centres),
-            identified=problem.identified, fixed=problem.fixed, condition_number=float("nan"), std={},
-            residual_before=before, residual_after=after, samples_per_fixture=dataset.counts(),
-            warnings=tuple(warnings), timings=timings, problem=problem, x=x, loss=fit_loss,
-            loss_scale=None if fit_loss == "linear" else (scale or noise),
-            loss_noise=None if scale is None else scale / ROBUST_CUT, fixture_noise=shown,
-        )
     return CalibrationResult(
         model=model,
         nominal=nominal,
@@ -426,8 +418,8 @@ def calibrate(
         centres=problem.centre_dict(centres),
         identified=problem.identified,
         fixed=problem.fixed,
-        condition_number=ident.condition_number,
-        std=dict(zip(problem.unknown_names, (float(s) for s in std_values), strict=True)),
+        condition_number=ident.condition_number if report else float("nan"),
+        std=dict(zip(problem.unknown_names, (float(s) for s in std_values), strict=True)) if report else {},
         residual_before=before,
         residual_after=after,
         samples_per_fixture=dataset.counts(),
@@ -437,7 +429,8 @@ def calibrate(
         x=x,
         selfcheck=checked,
         effective_unknowns=edf,
-        data_share=dict(zip(problem.identified, (float(v) for v in problem.data_share(jac, inverse)), strict=True)),
+        data_share=dict(zip(problem.identified, (float(v) for v in problem.data_share(jac, inverse)), strict=True))
+        if report else {},
         loss=fit_loss,
         loss_scale=None if fit_loss == "linear" else (scale or noise),
         loss_noise=None if scale is None else scale / ROBUST_CUT,

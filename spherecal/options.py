@@ -507,12 +507,9 @@ def output_folders(args: argparse.Namespace) -> list[Path]:
     """The folders a command's outputs go into: ``--out`` itself for :data:`FOLDER_OUT`, else each output file's
     folder. A missing one is created (with its missing parents) when the outputs are written
     (``correction.files.outputs.OutputSet``), and :func:`say_created` names it."""
-    folders = []
-    for name in OUTPUT_OPTIONS:
-        value = getattr(args, name, None)
-        if isinstance(value, str) and value:
-            folders.append(Path(value) if name == "out" and args.command in FOLDER_OUT else Path(value).parent)
-    return folders
+    out = getattr(args, "out", None)
+    itself = [Path(out)] if args.command in FOLDER_OUT and isinstance(out, str) and out else []
+    return itself + [path.parent for path in output_files(args)]
 
 
 def output_files(args: argparse.Namespace) -> list[Path]:

@@ -83,9 +83,10 @@ def read_bag(path: str | os.PathLike, model: RobotModel, topic: str = TOPIC) -> 
     except (AnyReaderError, OSError) as error:
         raise RecordingError(f"{path}: cannot read the bag: {error}") from None
     except Exception as error:  # rosbags' own reader and deserialisation errors have no common base
-        if not _raised_by_rosbags(error):
+        origin = _raised_by_rosbags(error)
+        if not origin:
             raise
-        said = str(error) or f"{type(error).__name__} in {_raised_by_rosbags(error)}"
+        said = str(error) or f"{type(error).__name__} in {origin}"
         raise RecordingError(f"{path}: cannot read the bag: {said}") from None
     skipped, partial, unpositioned = messages.skipped, messages.partial, messages.unpositioned
     others = "; ".join(f"{count} naming {', '.join(names[:4]) or 'no joint'}{', ...' if len(names) > 4 else ''}"
