@@ -147,7 +147,7 @@ def blocks(reader: IndexedReader, connections) -> Iterator[Block]:
     templates: dict[int, tuple[np.ndarray, int]] = {}  # connection rank -> (header bytes, where its time is)
     for a, b in zip(runs[:-1], runs[1:], strict=True):
         chunk = _chunk(reader, positions[chunk_of[a]])
-        start, size = _records(chunk, entries[a:b], conn_of[a:b], [c.id for c in connections], templates)
+        start, size = _records(chunk, entries[a:b], conn_of[a:b], ids, templates)
         yield Block(np.arange(a + 1, b + 1), received[a:b], chunk, start, size)
 
 
