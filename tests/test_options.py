@@ -4,7 +4,9 @@ work with a warning; a value in the old unit is refused in one line, never reint
 from __future__ import annotations
 
 import argparse
+import functools
 import re
+import socket
 
 import pytest
 
@@ -324,6 +326,8 @@ def test_spawn_without_a_viewer_is_refused_before_any_work(argv, work, tmp_path,
     """A review: 'demo --spawn' with no Rerun viewer on PATH ran the whole demo (9 s) and only then refused
     ('field '--spawn': cannot start a Rerun viewer'). rerun's own spawn (the 'rerun' executable on PATH) now runs
     first: with an empty PATH the command is refused in one line before its work starts, writing nothing."""
+    import rerun
+
     from tests.refusal import refused
 
     def no_work(*args, **kwargs):
@@ -332,5 +336,11 @@ def test_spawn_without_a_viewer_is_refused_before_any_work(argv, work, tmp_path,
     monkeypatch.chdir(tmp_path)
     monkeypatch.setenv("PATH", str(tmp_path / "empty"))  # no 'rerun' anywhere on it
     monkeypatch.delenv("_RERUN_TEST_FORCE_SAVE", raising=False)  # rerun skips spawning under it
+    # rerun's spawn starts nothing when a viewer already listens on its port (one a developer has open took the
+    # default port and this test failed once): spawn on a port nothing listens on
+    with socket.socket() as probe:
+        probe.bind(("127.0.0.1", 0))
+        free = probe.getsockname()[1]
+    monkeypatch.setattr(rerun.RecordingStream, "spawn", functools.partialmethod(rerun.RecordingStream.spawn, port=free))
     monkeypatch.setattr(work, no_work)
     refused(argv, tmp_path, capsys, "error: field '--spawn': cannot start a Rerun viewer: Failed to find Rerun Viewer")
