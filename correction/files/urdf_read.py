@@ -53,6 +53,8 @@ class UrdfJoint:
     upper: float | None = None
     mimic: str | None = None
     row: int | None = None  # the file line of the <joint> element (for messages)
+    effort: float | None = None  # <limit effort> [N m] of a revolute or continuous joint, None when absent or 0
+    velocity: float | None = None  # <limit velocity> [rad/s], likewise
 
 
 @dataclass(frozen=True)
@@ -270,13 +272,19 @@ def _joint(element: ET.Element, rows: _Rows) -> UrdfJoint:
         if lower == upper:  # URDF's defaults are 0: a <limit effort velocity/> gives a joint that cannot turn
             raise RobotFileError(f"{where}: <limit> lower and upper are both {lower:g} (missing from it?): a revolute "
                                  "joint needs its range [rad]")
+    effort = velocity = None
+    limit = element.find("limit")
+    if kind in ("revolute", "continuous") and limit is not None:  # kept for a standalone export of a non-Franka arm
+        effort, velocity = (_floats(limit.get(k), 1, [0.0], rows.at(limit, f"{field_name} <limit {k}>"))[0]
+                            for k in ("effort", "velocity"))
+        effort, velocity = (v if v > 0 else None for v in (effort, velocity))  # URDF's default is 0: none given
     mimic = element.find("mimic")
     if mimic is not None and not mimic.get("joint"):
         raise RobotFileError(f"{rows.at(mimic, f'{field_name} <mimic>')}: <mimic> without a joint=...")
     return UrdfJoint(name, kind, _link_ref(element, "parent", rows, f"{field_name} <parent>"),
                      _link_ref(element, "child", rows, f"{field_name} <child>"),
                      _origin(element.find("origin"), rows, field_name), axis, lower, upper,
-                     None if mimic is None else mimic.get("joint"), rows.lines.get(element))
+                     None if mimic is None else mimic.get("joint"), rows.lines.get(element), effort, velocity)
 
 
 def _inertial(link: ET.Element, name: str, rows: _Rows) -> Inertial | None:

@@ -205,7 +205,8 @@ def urdf_model(tree: UrdfTree, tip_link: str | None = None, base_link: str | Non
     """The revolute chain of a parsed URDF as a :class:`RobotModel` (see the module docstring).
 
     ``extras`` carries ``urdf`` (base and tip link, joint and child link names, the axes
-    found parallel), ``joint_names`` and, when the URDF has masses, ``inertials`` and ``payload``.
+    found parallel, and ``effort`` [N m] and ``velocity`` [rad/s] when every joint's ``<limit>`` gives them),
+    ``joint_names`` and, when the URDF has masses, ``inertials`` and ``payload``.
     ``parallel_tol`` [rad] and ``far_normal`` [m] decide which joints get a Hayati ``beta``
     (:data:`PARALLEL_TOL`, :data:`FAR_NORMAL`).
     """
@@ -231,6 +232,10 @@ def urdf_model(tree: UrdfTree, tip_link: str | None = None, base_link: str | Non
             "parallel_joints": [names[k] for k in dh["parallel"]],
         },
     }
+    for key in ("effort", "velocity"):  # every joint's, or none: the defaults of a standalone URDF export
+        values = [getattr(j, key) for j in movable]
+        if all(v is not None for v in values):
+            extras["urdf"][key] = values
     model = RobotModel(
         name=tree.name or os.path.basename(tree.source), convention="modified", a=dh["a"], alpha=dh["alpha"],
         d=dh["d"], theta=dh["theta"], beta=dh["beta"], hayati=tuple(dh["parallel"]), lower=lower, upper=upper,

@@ -272,16 +272,32 @@ def dynamics_note(model: RobotModel, without: str = "the file is kinematics only
             "accelerations approximate); give 'inertia: [ixx, ixy, ixz, iyy, iyz, izz]' [kg m^2] in the inertials")
 
 
+def _described(model: RobotModel, key: str) -> list[float] | None:
+    """The ``n`` joint limits ``key`` (``effort`` [N m] or ``velocity`` [rad/s]) of the URDF the model was read from
+    (``extras["urdf"]``, every joint's ``<limit>`` gave one), or None. A UR5e-like arm read from its own URDF, which
+    names them, was refused a standalone export for want of Franka's defaults."""
+    block = model.extras.get("urdf")
+    values = block.get(key) if isinstance(block, dict) else None
+    if not isinstance(values, list) or len(values) != model.n_joints:
+        return None
+    try:
+        values = [float(v) for v in values]
+    except (TypeError, ValueError):
+        return None
+    return values if all(np.isfinite(v) and v > 0 for v in values) else None
+
+
 def names_and_limits(model: RobotModel, prefix: str | None = None, effort: Sequence[float] | None = None,
                      velocity: Sequence[float] | None = None) -> tuple[str, list[str] | None, list[float], list[float]]:
     """The names and joint limits :func:`robot_to_urdf` writes (its arguments of the same names; see there), checked.
 
     Returns:
-        ``(prefix, joint names or None for <prefix>joint<i>, effort [N m], velocity [rad/s])``.
+        ``(prefix, joint names or None for <prefix>joint<i>, effort [N m], velocity [rad/s])``; a limit not given
+        is the one the model's URDF gave (:func:`_described`), else Franka's for a Franka arm.
 
     Raises:
         ExportError: a prefix that is not a valid name, limits of the wrong length, or none for an arm that is not a
-            Franka arm.
+            Franka arm and whose URDF gave none.
     """
     n = model.n_joints
     named = model.extras.get("joint_names") if prefix is None else None
@@ -290,6 +306,8 @@ def names_and_limits(model: RobotModel, prefix: str | None = None, effort: Seque
     prefix = default_prefix(model) if prefix is None else prefix
     if not _NAME.match(prefix):
         raise ExportError(f"field '--prefix': {prefix!r} may contain only letters, digits and _ . / : -")
+    effort, velocity = (_described(model, key) if given is None else given
+                        for key, given in (("effort", effort), ("velocity", velocity)))
     missing = [field for field, given in (("--effort", effort), ("--velocity", velocity)) if given is None]
     if missing and not is_franka(model):
         raise ExportError(f"field '{missing[0]}': no default for {model.name!r} (Franka's are for a Franka arm, whose "
@@ -313,8 +331,9 @@ def robot_to_urdf(
         model: the (calibrated) robot.
         prefix: prepended to every link and joint name (``panda_link3``, ``panda_joint3``); None:
             :func:`default_prefix`, and the joints keep the names the model's description gave them.
-        effort: (n,) joint torque limits [N m]; Franka's for a Franka arm by default, required otherwise.
-        velocity: (n,) joint velocity limits [rad/s]; Franka's for a Franka arm by default, required otherwise.
+        effort: (n,) joint torque limits [N m]; by default those of the URDF the model was read from (every
+            joint's ``<limit effort>``), else Franka's for a Franka arm; required otherwise.
+        velocity: (n,) joint velocity limits [rad/s]; likewise.
         mujoco: add :data:`MUJOCO_EXTENSION` so that MuJoCo compiles the file as is.
         header: more lines for the top comment (inputs, versions).
 

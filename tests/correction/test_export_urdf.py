@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import xml.etree.ElementTree as ET
+from dataclasses import replace
 
 import mujoco
 import numpy as np
@@ -90,7 +91,10 @@ def test_another_arm_keeps_its_joint_names_and_must_give_its_limits(tmp_path, ca
     from spherecal.correction import save_robot
     from spherecal.correction.files.urdf_write import is_franka
 
-    iiwa = load_robot("iiwa14")
+    described = load_robot("iiwa14")  # its URDF's <limit effort velocity> are the defaults (test below)
+    assert 'effort="300.0" velocity="10.0"' in robot_to_urdf(described)
+    block = {k: v for k, v in described.extras["urdf"].items() if k not in ("effort", "velocity")}
+    iiwa = replace(described, extras={**described.extras, "urdf": block})
     assert not is_franka(iiwa) and is_franka(load_robot("panda")) and is_franka(load_robot("fr3"))
     with pytest.raises(ExportError, match=r"field '--effort': no default for 'kuka_iiwa14'"):
         robot_to_urdf(iiwa)
@@ -136,3 +140,44 @@ def test_joint_limit_bounds_leave_real_arms_their_limits(panda) -> None:
     assert f'effort="{MAX_EFFORT!r}" velocity="{MAX_VELOCITY!r}"' in text
     with pytest.raises(ExportError, match=r"field '--velocity': joint 2: .* beyond any real arm"):
         robot_to_urdf(panda, velocity=[1.0, MAX_VELOCITY * 1.01, 1, 1, 1, 1, 1])
+
+
+#: A 4-joint arm that is not a Franka one, its joints' <limit> naming effort [N m] and velocity [rad/s]; the last
+#: one continuous.
+_LIMITED = """<robot name="ur_like">
+  <link name="base"/><link name="l1"/><link name="l2"/><link name="l3"/><link name="l4"/><link name="ball"/>
+  <joint name="pan" type="revolute"><parent link="base"/><child link="l1"/><origin xyz="0 0 0.16"/>
+    <axis xyz="0 0 1"/><limit lower="-6.28" upper="6.28" effort="150" velocity="3.14"/></joint>
+  <joint name="lift" type="revolute"><parent link="l1"/><child link="l2"/><origin rpy="1.5708 0 0"/>
+    <axis xyz="0 0 1"/><limit lower="-3" upper="3" effort="150" velocity="3.14"/></joint>
+  <joint name="elbow" type="revolute"><parent link="l2"/><child link="l3"/><origin xyz="-0.425 0 0"/>
+    <axis xyz="0 0 1"/><limit lower="-3" upper="3" effort="150" velocity="3.14"/></joint>
+  <joint name="wrist" type="continuous"><parent link="l3"/><child link="l4"/><origin xyz="-0.39 0 0.13"/>
+    <axis xyz="0 1 0"/><limit effort="28" velocity="6.28"/></joint>
+  <joint name="tip" type="fixed"><parent link="l4"/><child link="ball"/><origin xyz="0 -0.1 0.05"/></joint>
+</robot>"""
+
+
+def test_a_urdf_arm_exports_standalone_with_its_own_limits(tmp_path) -> None:
+    # a UR5e-like arm read from its own URDF (limits effort="150" ...) was refused a standalone export: "no default
+    # for 'ur5e_like' (Franka's are for a Franka arm ...)": its description's limits now are the defaults, through
+    # the calibrated robot file as well
+    from spherecal.correction import save_robot
+
+    source = tmp_path / "ur_like.urdf"
+    source.write_text(_LIMITED)
+    model = load_robot(source)
+    assert model.extras["urdf"]["effort"] == [150.0, 150.0, 150.0, 28.0]
+    assert model.extras["urdf"]["velocity"] == [3.14, 3.14, 3.14, 6.28]
+    back = load_robot(save_robot(model, tmp_path / "cal.yaml"))
+    for text in (robot_to_urdf(model), robot_to_urdf(back)):
+        limits = [(float(e.get("effort")), float(e.get("velocity"))) for e in ET.fromstring(text).iter("limit")]
+        assert limits == [(150.0, 3.14)] * 3 + [(28.0, 6.28)]
+    written = robot_to_urdf(back, effort=[1, 2, 3, 4], velocity=[5, 6, 7, 8])  # given ones still win
+    assert [float(e.get("effort")) for e in ET.fromstring(written).iter("limit")] == [1.0, 2.0, 3.0, 4.0]
+    # a joint without them leaves none for the arm: refused as before
+    source.write_text(_LIMITED.replace(' effort="28" velocity="6.28"', ""))
+    partial = load_robot(source)
+    assert "effort" not in partial.extras["urdf"] and "velocity" not in partial.extras["urdf"]
+    with pytest.raises(ExportError, match=r"field '--effort': no default for 'ur_like'"):
+        robot_to_urdf(partial)
