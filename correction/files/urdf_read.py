@@ -150,7 +150,8 @@ class UrdfTree:
         more = f" and {len(ends) - MAX_LISTED} more" if len(ends) > MAX_LISTED else ""
         raise RobotFileError(
             f"{self.source}: the chain below {base!r} ends in {len(ends)} links at different points: "
-            f"{listed}{more}; name the one at the tool point (the ball's centre) with --tip-link"
+            f"{listed}{more}; name the tool's link with --tip-link (for calibrate and import, the link at the ball's "
+            "centre; for tool, the new tool's point)"
         )
 
 

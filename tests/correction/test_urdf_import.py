@@ -218,6 +218,8 @@ def test_gen3lite_default_tip_lists_its_ball_fingers_and_tool_frame(tmp_path, ca
 
     with pytest.raises(RobotFileError, match=r"4 links at different points: tool_frame \(130 mm.*ball_link \(180 mm"):
         load_urdf(DATA / "gen3lite.urdf")
+    with pytest.raises(RobotFileError, match=r"for tool, the new tool's point"):  # not only the ball (a UR trial)
+        load_urdf(DATA / "gen3lite.urdf")
     source = tmp_path / "left"
     source.mkdir()
     (source / "hole_0.csv").write_text("0.1,0.2,0.3,0.4,0.5,0.6\n")
