@@ -109,9 +109,16 @@ class RobotModel:
 
     @property
     def full_turn(self) -> np.ndarray:
-        """(n,) bool: the joints whose limits span exactly one turn, as a URDF ``continuous`` joint is read
-        (``[-pi, pi]``): they turn freely and an export writes them without limits (MJCF) or as ``continuous``
-        (URDF). A joint limited to more than a turn (a UR arm's +-2 pi) keeps its limits."""
+        """(n,) bool: the joints that turn freely, a URDF's ``continuous`` joints (read as ``[-pi, pi]``): an export
+        writes them without limits (MJCF) or as ``continuous`` (URDF). A model read from a URDF names them
+        (``extras["urdf"]["continuous_joints"]``, by the names in ``extras["joint_names"]``), so a revolute joint
+        limited to ``[-pi, pi]`` (a UR arm's elbow) keeps its limits; any other model (a DH file, one written before
+        the names were kept) counts every joint whose limits span exactly one turn. A joint limited to more than a
+        turn (a UR arm's +-2 pi) keeps its limits."""
+        block, names = self.extras.get("urdf"), self.extras.get("joint_names")
+        named = block.get("continuous_joints") if isinstance(block, dict) else None
+        if isinstance(named, list) and isinstance(names, list) and len(names) == self.n_joints:
+            return np.array([name in named for name in names])
         return np.abs(np.asarray(self.upper) - np.asarray(self.lower) - 2 * np.pi) <= FULL_TURN_TOL
 
     @property

@@ -205,7 +205,8 @@ def urdf_model(tree: UrdfTree, tip_link: str | None = None, base_link: str | Non
     """The revolute chain of a parsed URDF as a :class:`RobotModel` (see the module docstring).
 
     ``extras`` carries ``urdf`` (base and tip link, joint and child link names, the axes
-    found parallel, and ``effort`` [N m] and ``velocity`` [rad/s] when every joint's ``<limit>`` gives them),
+    found parallel, the continuous ones, and ``effort`` [N m] and ``velocity`` [rad/s] when every joint's
+    ``<limit>`` gives them),
     ``joint_names`` and, when the URDF has masses, ``inertials`` and ``payload``.
     ``parallel_tol`` [rad] and ``far_normal`` [m] decide which joints get a Hayati ``beta``
     (:data:`PARALLEL_TOL`, :data:`FAR_NORMAL`).
@@ -230,6 +231,9 @@ def urdf_model(tree: UrdfTree, tip_link: str | None = None, base_link: str | Non
             "tip_link": tip,
             "links": [j.child for j in movable],
             "parallel_joints": [names[k] for k in dh["parallel"]],
+            # which joints turn freely (RobotModel.full_turn): a revolute joint limited to [-pi, pi] (a UR elbow)
+            # spans a turn as well, and is no continuous joint
+            "continuous_joints": [j.name for j in movable if j.type == "continuous"],
         },
     }
     for key in ("effort", "velocity"):  # every joint's, or none: the defaults of a standalone URDF export

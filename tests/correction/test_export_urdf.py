@@ -181,3 +181,25 @@ def test_a_urdf_arm_exports_standalone_with_its_own_limits(tmp_path) -> None:
     assert "effort" not in partial.extras["urdf"] and "velocity" not in partial.extras["urdf"]
     with pytest.raises(ExportError, match=r"field '--effort': no default for 'ur_like'"):
         robot_to_urdf(partial)
+
+
+def test_a_revolute_joint_of_one_turn_keeps_its_limits(tmp_path) -> None:
+    # a UR trial: the elbow, revolute within [-pi, pi], was written back as 'continuous' (its limit dropped) because
+    # a continuous joint is read as [-pi, pi] too; a URDF's model now names its continuous joints
+    from spherecal.correction import save_robot
+
+    source = tmp_path / "ur_like.urdf"
+    source.write_text(_LIMITED.replace('lower="-3" upper="3"', f'lower="{-np.pi!r}" upper="{np.pi!r}"'))
+    model = load_robot(source)
+    assert model.upper[1] - model.lower[1] == pytest.approx(2 * np.pi)  # a span of one turn, like the wrist's
+    assert model.full_turn.tolist() == [False, False, False, True]
+    back = load_robot(save_robot(model, tmp_path / "cal.yaml"))
+    assert back.full_turn.tolist() == [False, False, False, True]
+    joints = {e.get("name"): e for e in ET.fromstring(robot_to_urdf(back)).iter("joint")}
+    kinds = [(e.get("type"), e.find("limit").get("lower")) for e in joints.values() if e.get("type") != "fixed"]
+    assert kinds == [("revolute", "-6.28"), ("revolute", repr(-np.pi)), ("revolute", repr(-np.pi)),
+                     ("continuous", None)], kinds
+    # a model that does not name them (a DH file, a file written before) counts every span of one turn
+    unnamed = replace(model, extras={**model.extras, "urdf": {
+        k: v for k, v in model.extras["urdf"].items() if k != "continuous_joints"}})
+    assert unnamed.full_turn.tolist() == [False, True, True, True]
