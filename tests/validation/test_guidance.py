@@ -411,6 +411,18 @@ def test_plan_command_ranks_refuses_out_of_reach_and_writes_json(tmp_path, panda
                        "joint limits"]
     plan = json.loads(out.read_text())
     assert [r["name"] for r in plan["ranking"]] == ["front"] and plan["refused"][0]["name"] == "far"
+    # what a colour means (a reviewer could not tell): a scale labelled in the table's gain, the most at its blue
+    # bottom, none at its red top, and a heading naming the column and the grey of a refused candidate
+    scale = {}
+    for chunk in RrdReader(str(rrd)).stream().to_chunks():
+        if chunk.entity_path.strip("/") in ("world/colour_scale", "world/colour_scale_heading"):
+            batch = chunk.to_record_batch()
+            scale[chunk.entity_path.strip("/")] = batch.column(
+                next(n for n in batch.schema.names if n.endswith("labels"))).to_pylist()[0]
+    gain = max(plan["ranking"][0]["gain_m"], 0.0) * 1e3
+    assert [label for label in scale["world/colour_scale"] if label][::4] == [f"{gain:+.4f} mm", "+0.0000 mm"]
+    heading = scale["world/colour_scale_heading"][0]
+    assert "'gain'" in heading and "grey: refused" in heading
     assert 0 < plan["ranking"][0]["predicted_error_m"] < plan["recorded"]["predicted_error_m"]
     assert ("record front next" in text) == plan["stop"]["worth_it"]
     # nothing recordable: one line naming the candidate, exit 1, nothing written

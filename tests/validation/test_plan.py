@@ -127,6 +127,40 @@ def test_unreachable_candidates_are_reported(panda):
     assert ranked[-2:] in (["far", "inside"], ["inside", "far"])
 
 
+def test_plan_recording_has_a_colour_scale_in_mm(tmp_path, panda):
+    """A reviewer could not tell what a candidate's colour meant: beside the candidates a colour scale labelled in mm
+    from the least predicted error (blue) to the most (red), the ramp the candidates wear, and a heading saying what
+    the colour is. A chosen candidate is named by its fixture's wire sphere (two labels at one point were drawn one
+    over the other)."""
+    from spherecal.validation.planning.plan_report import write_recording
+    from spherecal.validation.viewer.recording_shapes import colour_ramp
+
+    from .test_validation import _scene
+
+    candidates = [Candidate(k, np.array(v)) for k, v in REACHABLE.items()]
+    candidates.append(Candidate("far", np.array([1.5, 0.0, 0.3])))
+    result = plan(panda, candidates, 2, np.random.default_rng(0), samples=300)
+    write_recording(str(tmp_path / "p.rrd"), result)
+    scene = _scene(tmp_path / "p.rrd", "world/")
+    mm = {s.candidate.name: s.alone.mean * 1e3 for s in result.surveys if s.alone is not None}
+    scale = scene["world/colour_scale"]
+    labelled = [label for label in scale["labels"] if label]
+    assert labelled[0] == f"{min(mm.values()):.3f} mm" and labelled[-1] == f"{max(mm.values()):.3f} mm"
+    packed = [int.from_bytes(bytes([*c, 255]), "big") for c in colour_ramp(np.linspace(0.0, 1.0, len(scale["labels"])))]
+    assert scale["colors"] == packed
+    heading = scene["world/colour_scale_heading"]["labels"][0]
+    assert "predicted mean error" in heading and "ALONE" in heading and "grey: unreachable" in heading
+    names = [s.candidate.name for s in result.surveys]
+    colours = dict(zip(names, scene["world/candidates"]["colors"], strict=True))
+    best, worst = min(mm, key=mm.get), max(mm, key=mm.get)
+    assert colours[best] == packed[0] and colours[worst] == packed[-1]  # the ends of the scale
+    assert colours["far"] == int.from_bytes(bytes([150, 150, 150, 255]), "big")
+    labels = dict(zip(names, scene["world/candidates"]["labels"], strict=True))
+    assert all(labels[n] == "" for n in result.best.names) and labels["far"] == "far unreachable"
+    chosen = sorted(f"{n} {mm[n]:.3f} mm (chosen)" for n in result.best.names)
+    assert sorted(scene["world/fixtures"]["labels"]) == chosen
+
+
 def test_cli_plan_and_too_few_reachable(tmp_path, capsys):
     path = _yaml(tmp_path, "candidates:\n  A: {position: [0.5, -0.25, 0.5]}\n  far: {position: [2, 0, 0]}\n")
     rrd = tmp_path / "plan.rrd"

@@ -85,3 +85,32 @@ def test_parameter_bars_wear_no_model_s_colour() -> None:
     assert np.all(bars["sizes"][:, 1] > 0) and bars["mins"][0, 1] < 0 <= bars["mins"][1, 1]  # up, down
     used = {tuple(int(v) for v in c) for c in bars["colours"]}
     assert used.isdisjoint({COLOURS["nominal"], COLOURS["calibrated"]})
+
+
+def test_round_up_gives_one_two_or_five_times_a_power_of_ten() -> None:
+    from spherecal.validation.viewer.recording_shapes import round_up
+
+    assert [round_up(v) for v in (0.7e-3, 1e-3, 1.3e-3, 3e-3, 6e-3, 0.04)] == pytest.approx(
+        [1e-3, 1e-3, 2e-3, 5e-3, 1e-2, 0.05])
+
+
+def test_magnification_fills_the_sphere_with_the_scatter_and_names_a_round_radius(rng) -> None:
+    """The samples' 95th percentile offset fits the sphere once magnified, and the sphere's radius stands for a
+    round figure; a scatter as wide as the sphere is drawn as it is."""
+    from spherecal.validation.viewer.recording_shapes import magnification
+
+    offsets = rng.normal(0.0, 0.25e-3, (1500, 3))  # a calibrated socket: 0.25 mm per axis
+    gain, reach = magnification(offsets, 0.05)
+    far = np.quantile(np.linalg.norm(offsets, axis=1), 0.95)
+    assert reach == pytest.approx(1e-3) and gain == pytest.approx(50.0)  # 0.7 mm -> the sphere stands for 1 mm
+    assert far * gain <= 0.05 < 2.5 * far * gain
+    assert magnification(rng.normal(0.0, 0.05, (100, 3)), 0.05) == (1.0, 0.05)
+    assert magnification(np.zeros((3, 3)), 0.02) == (1.0, 0.02)
+
+
+def test_scale_labels_label_every_fifth_sphere_from_bottom_to_top() -> None:
+    from spherecal.validation.viewer.recording_shapes import SCALE_STEPS, scale_labels
+
+    labels = scale_labels(1.0, 3.0, lambda v: f"{v:.1f} mm")
+    assert len(labels) == SCALE_STEPS
+    assert [label for label in labels if label] == ["1.0 mm", "1.5 mm", "2.0 mm", "2.5 mm", "3.0 mm"]

@@ -241,6 +241,35 @@ def test_samples_and_coverage_take_their_fixture_s_colour_whatever_the_order(tmp
     assert scene["coverage/a"]["color"] == [a] and scene["coverage/b"]["color"] == [b]
 
 
+def test_samples_are_drawn_magnified_inside_wire_spheres(tmp_path, rng) -> None:
+    """A reviewer found the recorded samples hidden inside the fixture spheres: tenths of a millimetre apart, they
+    made one dot inside a solid 20 mm ball. The spheres are wire frames (0.4 of the distance between the nearest two,
+    20 to 50 mm), the samples are drawn about their fixture's centre, their offsets magnified by one gain so that their
+    95th percentile fills the sphere, and the first fixture's label says what the sphere stands for; world/fixtures
+    is still one row."""
+    from spherecal.validation.viewer.recording import FIXTURE_RADIUS, Recording, read_entity_rows
+
+    centres = np.array([[0.5, -0.25, 0.5], [0.5, 0.0, 0.4]])
+    labels = np.repeat(["P1", "P2"], 300)
+    points = centres[[0] * 300 + [1] * 300] + rng.normal(0.0, 0.25e-3, (600, 3))
+    recording = Recording(tmp_path / "m.rrd")
+    recording.fixtures(["P1", "P2 (fit)"], centres)
+    recording.samples(points, labels)
+    recording.close()
+    scene = _scene(tmp_path / "m.rrd", "world/")
+    fixtures, shown = scene["world/fixtures"], np.array(scene["world/samples"]["positions"])
+    assert read_entity_rows(tmp_path / "m.rrd")["world/fixtures"] == 1
+    assert fixtures["fill_mode"][0] != 3  # FillMode.Solid hid the samples
+    radius = fixtures["half_sizes"][0][0]
+    assert radius == pytest.approx(FIXTURE_RADIUS[1], rel=1e-6)  # 0.4 x 269 mm apart, at most 50 mm
+    assert fixtures["labels"] == ["P1\nsamples x50 about each centre:\nsphere 1 mm", "P2 (fit)"]
+    np.testing.assert_allclose(shown - centres[[0] * 300 + [1] * 300], 50 * (points - centres[[0] * 300 + [1] * 300]),
+                               atol=1e-6)
+    far = np.quantile(np.linalg.norm(shown - centres[[0] * 300 + [1] * 300], axis=1), 0.95)
+    assert 0.4 * radius < far <= radius  # the scatter fills the sphere
+    assert scene["world/samples"]["radii"][0] < 0  # of a size on the screen (ui points), not in metres
+
+
 def test_the_tables_tab_opens_on_the_results_not_the_provenance(tmp_path) -> None:
     """validate and demo log the provenance first: the Tables tab showed it and hid the table a reviewer opens it
     for behind a second tab."""

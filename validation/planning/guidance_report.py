@@ -5,6 +5,7 @@ from __future__ import annotations
 import numpy as np
 
 from spherecal.correction import tool_point
+from spherecal.validation.viewer.recording_shapes import SCALE_STEPS, colour_ramp, scale_labels
 
 from . import guidance as guidance_module
 from .guidance import mm_text
@@ -95,7 +96,6 @@ def write_guidance_recording(path: str, guidance, provenance: str = "") -> str:
     grey: refused), the best candidate's sockets marked and labelled (``world/next``: record it next, or not worth
     it), with the table as a text panel."""
     from spherecal.validation.viewer.recording import Recording  # Rerun: only for --rrd
-    from spherecal.validation.viewer.recording_shapes import colour_ramp
 
     recording = Recording(path, application_id="spherecal_plan", title="Recorded sockets and candidates by gain")
     try:
@@ -115,6 +115,13 @@ def write_guidance_recording(path: str, guidance, provenance: str = "") -> str:
                   for j in judged for _ in j.placement.sockets]
         recording.stream.log("world/candidates", recording.rr.Points3D(
             points, colors=np.repeat(np.array(colours), each, axis=0), labels=labels, radii=0.012), static=True)
+        if guidance.ranking:  # the colours' meaning beside what can be recorded: blue the most gain, red none
+            steps = np.linspace(0.0, 1.0, SCALE_STEPS)
+            grey = "\ngrey: refused" if guidance.refused else ""
+            recording.colour_legend(
+                "colour_scale", points[: sum(each[: len(guidance.ranking)])], colour_ramp(steps),
+                scale_labels(max(gains.max(), 0.0) * 1e3, 0.0, lambda v: f"{v:+.4f} mm"),  # all red: none gains
+                f"colour: the table's 'gain' [mm],\neach candidate recorded as well{grey}")
         if guidance.ranking:  # the camera frames what can be recorded, not a refused far-away candidate
             recording.extend_bounds("world", points[: sum(each[: len(guidance.ranking)])])
             # the answer, where a reviewer sees it: among dozens of candidates Rerun shows no label (a reviewer trial)

@@ -5,6 +5,10 @@ from __future__ import annotations
 import numpy as np
 
 from spherecal.validation.viewer.recording import Recording
+from spherecal.validation.viewer.recording_shapes import SCALE_STEPS, colour_ramp, scale_labels
+
+#: Colour of a candidate with no prediction (unreachable, or not identifiable alone).
+GREY = (150, 150, 150)
 
 
 def format_plan(result) -> str:
@@ -51,30 +55,40 @@ def format_plan(result) -> str:
 
 
 def write_recording(path: str, result, provenance: str = "") -> str:
-    """The candidates coloured by predicted error alone (green good, red poor, grey unreachable),
-    the chosen set as the fixtures (labelled spheres), the printed plan and its provenance as a
-    table, in the layout of every recording (:mod:`validation.blueprint`)."""
-    title = "Candidate fixtures, coloured by predicted error"
+    """The candidates coloured by predicted error alone on the ramp of the Errors views
+    (:func:`validation.viewer.recording_shapes.colour_ramp`: blue the least, red the most; grey unreachable) with
+    its colour scale labelled in mm beside them, the chosen set as the fixtures (wire spheres around their
+    candidates, labelled with the candidate's error), the printed plan and its provenance as a table, in the layout
+    of every recording (:mod:`validation.blueprint`)."""
+    title = "Candidate fixtures, coloured by predicted error alone"
     recording = Recording(path, application_id="spherecal_plan", title=title)
     try:
         rr = recording.rr
         surveys = result.surveys
         positions = np.array([s.candidate.position for s in surveys])
-        values = np.array([s.alone.mean if s.alone is not None else np.nan for s in surveys])
+        values = np.array([s.alone.mean if s.alone is not None else np.nan for s in surveys]) * 1e3  # mm
         ok = np.isfinite(values)
-        colours = np.tile([150, 150, 150], (len(surveys), 1))
-        if ok.any():
-            span = np.ptp(np.log(values[ok])) or 1.0
-            share = (np.log(values[ok]) - np.log(values[ok]).min()) / span
-            colours[ok] = np.stack([255 * share, 255 * (1 - share), 40 + 0 * share], axis=1)
-        labels = [f"{s.candidate.name} {v * 1e3:.3f} mm" if np.isfinite(v) else f"{s.candidate.name} unreachable"
+        low, high = (float(values[ok].min()), float(values[ok].max())) if ok.any() else (0.0, 1.0)
+        span = high - low if high > low else 1.0
+        colours = np.tile(np.array(GREY, dtype=np.uint8), (len(surveys), 1))
+        colours[ok] = colour_ramp((values[ok] - low) / span)
+        chosen = set(result.best.names) if result.best is not None else set()
+        # a chosen candidate is named by its fixture's sphere: two labels at one point were drawn one over the other
+        labels = ["" if s.candidate.name in chosen else
+                  f"{s.candidate.name} {v:.3f} mm" if np.isfinite(v) else f"{s.candidate.name} unreachable"
                   for s, v in zip(surveys, values, strict=True)]
-        recording.stream.log("world/candidates", rr.Points3D(positions, colors=colours.astype(np.uint8),
-                                                             labels=labels, radii=0.01), static=True)
+        recording.stream.log("world/candidates", rr.Points3D(positions, colors=colours, labels=labels, radii=0.01),
+                             static=True)
         recording.extend_bounds("world", positions)
-        if result.best is not None:
-            chosen = [s.candidate for s in surveys if s.candidate.name in result.best.names]
-            recording.fixtures([c.name for c in chosen], np.array([c.position for c in chosen]))
+        if chosen:
+            picked = [(s.candidate, v) for s, v in zip(surveys, values, strict=True) if s.candidate.name in chosen]
+            recording.fixtures([f"{c.name} {v:.3f} mm (chosen)" for c, v in picked],
+                               np.array([c.position for c, _ in picked]))
+        grey = "; grey: unreachable" if not ok.all() else ""
+        recording.colour_legend(
+            "colour_scale", positions, colour_ramp(np.linspace(0.0, 1.0, SCALE_STEPS)),
+            scale_labels(low, high, lambda v: f"{v:.3f} mm"),
+            f"colour: predicted mean error\nof each candidate ALONE{grey}")
         text = f"{provenance}\n\n{format_plan(result)}" if provenance else format_plan(result)
         recording.text("plan", text, "The plan: candidates ranked by predicted error (mm)")
     except BaseException:

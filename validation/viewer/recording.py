@@ -7,11 +7,11 @@ in the README, checked by the tests):
 ===================================  =============  ==========  ======================================
 path                                 archetype      timeline    what
 ===================================  =============  ==========  ======================================
-``world/fixtures``                   Ellipsoids3D   static      one labelled sphere per fixture
+``world/fixtures``                   Ellipsoids3D   static      one labelled wire sphere per fixture
 ``world/base_frame``                 Arrows3D       static      the base frame's x, y, z, 0.25 m each
 ``world/robot/arm``                  Capsules3D     ``time``    one capsule per link, per logged step
 ``world/robot/tool``                 Points3D       ``time``    the tool point, per logged step
-``world/samples``                    Points3D       static      tool points of the calibration samples
+``world/samples``                    Points3D       static      calibration samples, scatter magnified
 ``errors/<model>/points``            Points3D       static      workspace tool points coloured by error
 ``errors/<model>/colour_scale``      Points3D       static      the colour scale, labelled in mm
 ``errors/<model>/heading``           Points3D       static      what the error is a distance to, labelled
@@ -51,7 +51,7 @@ from spherecal.correction.files.provenance import comment_block
 from spherecal.correction.layout import ParamKind
 
 from .blueprint import build_blueprint, union_box, view_axes
-from .recording_shapes import BAR_HEIGHT, capsules, colour_ramp, histogram, parameter_bars
+from .recording_shapes import BAR_HEIGHT, capsules, colour_ramp, histogram, magnification, parameter_bars
 
 COLOURS = {
     "measured": (30, 30, 30),
@@ -64,6 +64,10 @@ FIXTURE_COLOURS = [(250, 170, 20), (160, 80, 200), (20, 170, 170), (200, 90, 60)
 #: on a plate 50 mm, one socket's predictions a few mm). The scale's place, its spheres and the room left for its
 #: labels follow that height, so the view frames the points and the scale alike.
 SCALE_HEIGHT = 0.01
+#: Least and largest radius of a fixture's wire sphere in the 3D view [m]: 0.4 of the distance to the nearest other
+#: fixture between them (MUKCa's plate holds its sockets 50 mm apart, a simulation's fixtures stand 0.25 m apart: at
+#: 20 mm, plan --samples' default camera showed each socket's magnified samples as one dot).
+FIXTURE_RADIUS = (0.02, 0.05)
 #: Capsule radius of the links and of the tool segment [m].
 LINK_RADIUS, TOOL_RADIUS = 0.04, 0.012
 #: Length of the base frame's arrows in the 3D view [m]: out of the base link's 40 mm capsule (0.1 m barely left it).
@@ -133,6 +137,10 @@ class Recording:
         self._scales: dict[str, tuple[np.ndarray, float]] = {}  # model -> its Errors points [m], scale top [mm]
         self._against: dict[str, str] = {}  # model -> what its Errors are distances to
         self._fixture_colours: dict[str, tuple[int, int, int]] = {}  # fixture name -> its colour in every view
+        self._fixture_places: dict[str, np.ndarray] = {}  # fixture name -> its centre in the 3D view [m]
+        self._fixture_log = None  # (names, positions, colours) of world/fixtures, logged again with a sample note
+        self._sample_note = ""  # what the fixtures' spheres stand for when samples() magnified the samples
+        self._fixture_radius = FIXTURE_RADIUS[0]  # of the fixtures' wire spheres [m]
         self._tmp = None
         if self.path is not None:
             self._tmp = self.path.with_name(f".{self.path.name}.tmp")
@@ -160,18 +168,38 @@ class Recording:
 
     # --------------------------------------------------------------------- scene
     def fixtures(self, names: list[str], positions: np.ndarray) -> None:
-        """The fixtures (ball centres) as labelled spheres, base frame [m]; positions (F, 3)."""
+        """The fixtures (ball centres) as labelled wire spheres, base frame [m]; positions (F, 3). Their radius is 0.4
+        of the distance between the nearest two, within :data:`FIXTURE_RADIUS`. Solid, they hid what stood inside
+        them: the samples (:meth:`samples`), the tool point of the self-motion, a plan's chosen candidate and its
+        colour."""
         positions = np.asarray(positions, dtype=float).reshape(-1, 3)
+        apart = np.linalg.norm(positions[:, None] - positions[None], axis=-1) + np.diag(np.full(len(positions), np.inf))
+        nearest = float(apart.min()) if len(positions) > 1 else np.inf
+        self._fixture_radius = float(np.clip(0.4 * nearest, *FIXTURE_RADIUS))
         colours = [FIXTURE_COLOURS[k % len(FIXTURE_COLOURS)] for k in range(len(positions))]
-        for name, colour in zip(names, colours, strict=True):
-            self._fixture_colours.setdefault(name, colour)
-            self._fixture_colours.setdefault(name.split(" (")[0], colour)  # 'P1 (fit)' is fixture P1
+        for name, colour, place in zip(names, colours, positions, strict=True):
+            for key in (name, name.split(" (")[0]):  # 'P1 (fit)' is fixture P1
+                self._fixture_colours.setdefault(key, colour)
+                self._fixture_places.setdefault(key, place)
         self.extend_bounds("world", positions)
+        self._fixture_log = (list(names), positions, colours)  # logged on closing, with what samples() drew
+
+    def _log_fixtures(self) -> None:
+        """``world/fixtures`` (on closing, once) as :meth:`fixtures` was given it, the first label followed by what the
+        spheres stand for when :meth:`samples` magnified the samples (``P1`` / ``samples x50 about each centre:`` /
+        ``sphere 1 mm``)."""
+        if self._fixture_log is None:
+            return
+        names, positions, colours = self._fixture_log
+        labels = list(names)
+        if self._sample_note and labels:
+            labels[0] = f"{labels[0]}\n{self._sample_note}"  # once: a plate's sockets are centimetres apart
         self.stream.log(
             "world/fixtures",
             self.rr.Ellipsoids3D(
-                centers=positions, half_sizes=np.full((len(positions), 3), 0.02), colors=colours,
-                labels=list(names), show_labels=True, fill_mode="solid",
+                centers=positions, half_sizes=np.full((len(positions), 3), self._fixture_radius), colors=colours,
+                labels=labels, show_labels=True, fill_mode="majorwireframe",
+                line_radii=self.rr.Radius.ui_points(1.0),
             ),
             static=True,
         )
@@ -213,11 +241,50 @@ class Recording:
         return self._fixture_colours.get(name) or FIXTURE_COLOURS[k % len(FIXTURE_COLOURS)]
 
     def samples(self, points: np.ndarray, labels: list[str] | np.ndarray) -> None:
-        """The recorded calibration samples' tool points (N, 3) [m], coloured by fixture."""
+        """The recorded calibration samples' tool points (N, 3) [m], coloured by fixture, their scatter magnified.
+
+        Each sample is drawn at its fixture's centre (:meth:`fixtures`, else the mean of its samples) plus its offset
+        from it times one gain for all fixtures (:func:`.recording_shapes.magnification`): the 95th percentile of the
+        offsets fills the fixture's wire sphere, whose radius then stands for a round figure, named in the first
+        fixture's label (``samples x40 about each centre: sphere 0.5 mm``). Drawn where they are, tenths of a
+        millimetre apart, the samples made one dot hidden inside the fixture's 20 mm sphere (a reviewer's finding).
+        The dots are of one size on the screen.
+        """
+        points = np.asarray(points, dtype=float).reshape(-1, 3)
         names, ids = np.unique(np.asarray(labels), return_inverse=True)
+        ids = np.ravel(ids)
         palette = [self.fixture_colour(str(name), k) for k, name in enumerate(names)]
-        colours = np.array([palette[i] for i in np.ravel(ids)], dtype=np.uint8).reshape(-1, 3)
-        self.stream.log("world/samples", self.rr.Points3D(np.asarray(points), radii=0.003, colors=colours), static=True)
+        colours = np.array([palette[i] for i in ids], dtype=np.uint8).reshape(-1, 3)
+        centres = np.array([self._fixture_places.get(str(name), points[ids == k].mean(axis=0))
+                            for k, name in enumerate(names)]).reshape(-1, 3)
+        offsets = points - centres[ids]
+        gain, reach = magnification(offsets, self._fixture_radius)
+        shown = centres[ids] + gain * offsets
+        self.stream.log("world/samples", self.rr.Points3D(shown, radii=self.rr.Radius.ui_points(2.0), colors=colours),
+                        static=True)
+        self.extend_bounds("world", shown)
+        if gain > 1:  # in the first fixture's label (:meth:`_log_fixtures`)
+            self._sample_note = f"samples x{gain:.3g} about each centre:\nsphere {reach * 1e3:.3g} mm"
+
+    def colour_legend(self, name: str, points: np.ndarray, colours: np.ndarray, labels: list[str],
+                      heading: str) -> None:
+        """A colour scale in the 3D view of the robot (``world/<name>``): spheres in ``colours`` (S, 3) from bottom
+        to top, labelled ``labels`` (S,; empty strings for none), beside points (N, 3) [m] as the default camera sees
+        them (:func:`_scale_beside`), with ``heading`` above it (what the colours mean). Rerun has no colour bar:
+        a plan's candidates were coloured and nothing said what a colour meant (a reviewer's finding)."""
+        colours = np.asarray(colours, dtype=np.uint8).reshape(-1, 3)
+        steps = np.linspace(0.0, 1.0, len(colours))
+        scale, height = _scale_beside(np.asarray(points, dtype=float).reshape(-1, 3), steps)
+        right, up, _ = view_axes()
+        top = scale[-1] + 0.08 * height * (1 + heading.count("\n")) * up  # its label centred on it
+        rr = self.rr
+        self.stream.log(f"world/{name}", rr.Points3D(scale, radii=min(0.02, 0.5 * height / max(len(steps), 1)),
+                                                      colors=colours, labels=list(labels), show_labels=True),
+                        static=True)
+        self.stream.log(f"world/{name}_heading", rr.Points3D(top[None], radii=rr.Radius.ui_points(0.5),
+                                                              colors=(235, 235, 235), labels=[heading],
+                                                              show_labels=True), static=True)
+        self.extend_bounds("world", np.vstack([scale, top, scale[-1] + 0.3 * height * right]))
 
     # ---------------------------------------------------------------- results
     def workspace_errors(
@@ -434,14 +501,15 @@ class Recording:
 
     # -------------------------------------------------------------------- close
     def close(self) -> Path | None:
-        """Log the Errors views' colour scales, send the blueprint, flush, close the sink and move the ``.rrd`` into
-        place; returns its path.
+        """Log the Errors views' colour scales and the fixtures, send the blueprint, flush, close the sink and move the
+        ``.rrd`` into place; returns its path.
 
         Raises:
             OutputError: Rerun could not write the file (one line); nothing is left behind.
         """
         try:
             self._colour_scales()
+            self._log_fixtures()
             self._base_frame()
             blueprint = build_blueprint(self.contents, self.title, self.bounds)
             self.stream.send_blueprint(blueprint, make_active=True, make_default=True)

@@ -8,6 +8,8 @@ from spherecal.correction.layout import ParamKind
 
 #: Anchors of the error colour ramp, all readable on the viewer's dark background (blue: small, red: large).
 RAMP = np.array([(60, 110, 240), (30, 190, 210), (90, 205, 90), (245, 215, 40), (235, 60, 40)], dtype=float)
+#: Spheres of a colour scale, and which of them are labelled (every fifth: at 0, 25, 50, 75 and 100 %).
+SCALE_STEPS, SCALE_LABELLED = 21, 5
 #: Height of the tallest bar in the parameter panels (2D view units; the labels carry the values).
 BAR_HEIGHT = 4.0
 #: Outline of every parameter bar: a grey of no model's, the sign is the bar's direction. Negative bars were red and
@@ -43,6 +45,13 @@ def colour_ramp(share: np.ndarray) -> np.ndarray:
     low = np.minimum(s.astype(int), len(RAMP) - 2)
     frac = (s - low)[:, None]
     return np.round(RAMP[low] * (1 - frac) + RAMP[low + 1] * frac).astype(np.uint8)
+
+
+def scale_labels(low: float, high: float, text) -> list[str]:
+    """Labels of the :data:`SCALE_STEPS` spheres of a colour scale whose values run from ``low`` (bottom) to ``high``
+    (top): every :data:`SCALE_LABELLED`-th is ``text(value)``, the others empty."""
+    values = np.linspace(low, high, SCALE_STEPS)
+    return [text(v) if k % SCALE_LABELLED == 0 else "" for k, v in enumerate(values)]
 
 
 def histogram(values: np.ndarray, bins: int = 30) -> tuple[np.ndarray, np.ndarray, float]:
@@ -108,3 +117,32 @@ def parameter_bars(
             shapes["truth"] = np.column_stack([x, -true * k])
         out[group] = shapes
     return out
+
+
+def round_up(value: float) -> float:
+    """The least of 1, 2 and 5 times a power of ten at least ``value`` (> 0)."""
+    power = 10.0 ** np.floor(np.log10(value))
+    return float(next(m * power for m in (1.0, 2.0, 5.0, 10.0) if m * power >= value * (1 - 1e-12)))
+
+
+def magnification(offsets: np.ndarray, radius: float) -> tuple[float, float]:
+    """How much to magnify samples' offsets from their fixture's centre so that their scatter fills a sphere.
+
+    A fixture's residual scatter is tenths of a millimetre: drawn where they are, its samples sit in one dot inside
+    the fixture's sphere of ``radius``. Magnified ``gain`` times about the centre, the sphere's radius stands for a
+    round ``reach`` (1, 2 or 5 times a power of ten) at least the 95th percentile of the offsets' lengths.
+
+    Args:
+        offsets: (N, 3) samples less their fixture's centre [m].
+        radius: the sphere's radius in the view [m].
+
+    Returns:
+        ``(gain, reach)``: the magnification (at least 1: a scatter wider than the sphere is drawn as it is) and the
+        offset [m] the sphere's radius stands for (``radius`` when ``gain`` is 1).
+    """
+    lengths = np.linalg.norm(np.asarray(offsets, dtype=float).reshape(-1, 3), axis=1)
+    far = float(np.quantile(lengths, 0.95)) if lengths.size else 0.0
+    if not far > 0 or far >= radius:
+        return 1.0, radius
+    reach = min(round_up(far), radius)
+    return radius / reach, reach
