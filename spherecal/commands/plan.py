@@ -166,7 +166,10 @@ def run(args: argparse.Namespace) -> int:
         return 0
     links = urdf_links(args)
     if args.predict is not None:
-        print(plan_files.predict_files(args.robot, args.predict, args.fixtures, args.noise * 1e-3, **links).summary())
+        from spherecal.validation.planning.plan_report import format_prediction
+
+        print(format_prediction(plan_files.predict_files(args.robot, args.predict, args.fixtures, args.noise * 1e-3,
+                                                         **links)))
         return 0
     if args.samples is not None:
         from spherecal.validation.planning.guidance_report import format_guidance
