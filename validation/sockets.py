@@ -405,6 +405,7 @@ def record_sockets(recording, report: SocketReport, models: dict[str, RobotModel
     labels = [f"{f.name}{'' if f.held_out else ' (fit)'}" for f in report.fixtures]
     recording.fixtures(labels, np.array([f.centre["calibrated"] for f in report.fixtures]))
     points = {key: tool_point(model, dataset.q) for key, model in models.items()}
+    recording.samples(points["calibrated"], [labels[k] for k in index])  # the scatter about each socket's centre
     spread = {}
     for key, p in points.items():
         centres = np.array([f.centre[key] for f in report.fixtures])

@@ -155,6 +155,7 @@ def test_calibration_on_one_placement_holds_on_the_others(imported, capsys) -> N
     names = report["fixtures"]
     assert len(names) == 6 and all(rows[f"sockets/{f}/{m}"] == 1 for f in names for m in ("nominal", "calibrated"))
     assert rows["errors/calibrated/points"] == rows["tables/sockets"] == rows["world/fixtures"] == 1
+    assert rows["world/samples"] == 1  # the calibrated tool points about each socket (hidden before: never logged)
     samples = len(read_samples(imported / "all/samples.csv", load_robot(PANDA)).labels)
     assert rows["world/robot/arm"] == samples + 1  # the calibrated arm through every recorded configuration
     views = read_view_names(imported / "v.rrd")
