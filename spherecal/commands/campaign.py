@@ -57,7 +57,6 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 def run(args: argparse.Namespace) -> int:
     """Check the options, run the campaign, print Table 2 and where it was written (CSV and Markdown)."""
-    import re
     import sys
     from pathlib import Path
 
@@ -113,7 +112,7 @@ def run(args: argparse.Namespace) -> int:
     print(f"wall time {done.wall:.1f} s ({len(results)} sets, {len(done.run.workers)} worker processes, {where})")
     failures = done.run.failures
     if failures:  # each also reported as it happened (TaskFailedWarning); the table holds the others
-        rerun = ",".join(dict.fromkeys(re.match(r"P(all|\d)", name).group(0) for name in done.run.failed_rows))
+        rerun = ",".join(dict.fromkeys(done.run.failed_sets))
         print(f"spherecal campaign: error: {len(failures)} of {len(failures) + len(results)} sets failed "
               f"({', '.join(f.name for f in failures)}): written as incomplete rows (the 'failed' column of "
               f"{done.files[0].name} and {done.files[1].name}); --rows {rerun} runs them again", file=sys.stderr)

@@ -17,6 +17,7 @@ from spherecal.validation.experiments.campaign import (
     tasks,
     write_tables,
 )
+from spherecal.validation.parallel import TaskFailedWarning
 from tests.refusal import refused
 
 
@@ -34,6 +35,7 @@ def test_tasks_cover_every_row_and_set_with_distinct_seeds() -> None:
     assert [t.row for t in todo[::3]] == ["P1", "P2", "P3", "Pall", "P1N", "P2N", "P3N", "PallN"]
     assert len({t.seed for t in todo}) == len(todo)
     assert todo[9].fixtures == ("P1", "P2", "P3") and todo[9].noise == 0.0
+    assert [t.fixture_set for t in todo[::3]] == ["P1", "P2", "P3", "Pall"] * 2  # the set --rows takes, not parsed
     # a row alone (--rows P2) reproduces that row of the full table (its seeds used to shift with the selection)
     alone = tasks(CampaignConfig(sets=3, fixture_sets=("P2",)))
     assert [t.seed for t in alone] == [t.seed for t in todo if t.row in ("P2", "P2N")]
@@ -177,3 +179,19 @@ def test_failed_sets_are_counted_in_their_rows_in_the_campaigns_order() -> None:
     assert rows[1].average[0] == pytest.approx(2e-4) and np.isnan(rows[0].average[0])  # failed sets not averaged
     assert table(results) == table(results, (), ())  # without failures: as before
     assert "err" in format_table(rows).splitlines()[0]
+
+
+def _fails_on_pall(task) -> TaskResult:
+    if task.fixtures == ("P1", "P2", "P3"):
+        raise RuntimeError("solver exploded")
+    return fake_runner(task)
+
+
+def test_failed_sets_carry_their_fixture_set_for_the_rerun() -> None:
+    """The rerun's --rows was recovered from the row's name by a regex; each task carries its fixture set instead,
+    whatever the name's suffixes (noise, elastic truth, model)."""
+    config = CampaignConfig(sets=2, fixture_sets=("P2", "Pall"), stiffness=(0, 3e4, 3e4, 3e4, 0, 0, 0), model="auto")
+    with pytest.warns(TaskFailedWarning, match=r"task PallN?E/auto set [01] failed"):
+        run = run_campaign(config, workers=1, progress=False, runner=_fails_on_pall)
+    assert run.failed_rows == ("PallE/auto",) * 2 + ("PallNE/auto",) * 2
+    assert run.failed_sets == ("Pall",) * 4 and {r.row for r in run.results} == {"P2E/auto", "P2NE/auto"}

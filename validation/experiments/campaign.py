@@ -95,9 +95,20 @@ class CampaignConfig:
 
 @dataclass(frozen=True)
 class Task:
-    """One motion set of one row: what a worker needs, nothing else."""
+    """One motion set of one row: what a worker needs, nothing else.
+
+    Attributes:
+        row: the row's name in Table 2 (``P1``, ``PallN``, ``P2E/elastic``): a label, never parsed.
+        fixture_set: the fixture set (a key of :data:`FIXTURE_SETS`): what ``--rows`` takes to run the row again.
+        fixtures: that set's fixtures.
+        noise: fixture noise std [m].
+        index: the set's number in its row.
+        seed: what the set's generator is seeded from.
+        config: the protocol.
+    """
 
     row: str
+    fixture_set: str
     fixtures: tuple[str, ...]
     noise: float
     index: int
@@ -140,7 +151,7 @@ def tasks(config: CampaignConfig) -> list[Task]:
                 seed = (config.seed, row, index)
                 label = row_name(name, noise) + ("E" if any(config.stiffness) else "")
                 label += "" if config.model == "dh" else f"/{config.model}"
-                out.append(Task(label, FIXTURE_SETS[name], noise, index, seed, config))
+                out.append(Task(label, name, FIXTURE_SETS[name], noise, index, seed, config))
     return out
 
 
@@ -199,6 +210,8 @@ class CampaignRun:
         workers: worker -> its package versions (for the provenance of the files written).
         failed_rows: the row of each task in ``failures``, in the same order.
         rows: every row of the campaign, in table order (a row whose every set failed is one of them).
+        failed_sets: the fixture set of each task in ``failures`` (:attr:`Task.fixture_set`), in the same order:
+            the ``--rows`` that runs them again.
     """
 
     results: list[TaskResult]
@@ -206,6 +219,7 @@ class CampaignRun:
     workers: dict[str, dict[str, str]]
     failed_rows: tuple[str, ...] = ()
     rows: tuple[str, ...] = ()
+    failed_sets: tuple[str, ...] = ()
 
     def table(self) -> list[TableRow]:
         """Table 2 of this run: every row of the campaign in its order, the failed sets counted in their rows."""
@@ -242,9 +256,9 @@ def run_campaign(
             with parallel.executor(workers, scheduler) as own:
                 outcome = run_tasks(runner, todo, own, names, update)
     results = [result for result in outcome.results if result is not None]
-    failed_rows = tuple(task.row for task, result in zip(todo, outcome.results, strict=True) if result is None)
-    return CampaignRun(results, outcome.failures, outcome.workers, failed_rows,
-                       tuple(dict.fromkeys(task.row for task in todo)))
+    failed = [task for task, result in zip(todo, outcome.results, strict=True) if result is None]
+    return CampaignRun(results, outcome.failures, outcome.workers, tuple(task.row for task in failed),
+                       tuple(dict.fromkeys(task.row for task in todo)), tuple(task.fixture_set for task in failed))
 
 
 @dataclass(frozen=True)
