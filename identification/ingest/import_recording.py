@@ -166,7 +166,9 @@ def label(recording: Recording, model: RobotModel, options: ImportOptions) -> tu
                                 "check it, a wrong rate stretches or shrinks every window and duration") from None
     labels = labels_of(segments, recording.q.shape[0])
     keep = labels != ""
-    dataset = Dataset(labels=labels[keep], q=recording.q[keep], t=t[keep], source=recording.source)
+    names = tuple(dict.fromkeys(seg.name for seg in sorted(segments, key=lambda seg: seg.rows[0])))  # as they come:
+    dataset = Dataset(labels=labels[keep], q=recording.q[keep], t=t[keep], source=recording.source,  # not sorted
+                      fixture_names=names)  # out of a million labels again
     return dataset, segments
 
 
@@ -208,7 +210,8 @@ def import_recording(
         recording, spec = read_source(source, fmt, model, options), None
     _warn_unused_rate(recording, fmt, options.rate)
     dataset, segments = label(recording, model, options)
-    read = recording.q.shape[0]
+    read, notes, timed = recording.q.shape[0], recording.notes, _timed_and_split(recording, options)
+    del recording  # its angles are freed before the duplicates are sought (a 1.8 M-sample recording: 100 MB)
     deduplicated = dataset.deduplicated(options.dedup_tol)
     kept = deduplicated.subsampled(options.max_per_fixture, np.random.default_rng(options.seed))
     if spec is None:
@@ -218,7 +221,7 @@ def import_recording(
         raise DatasetError(f"{source}: field 'fixture': {missing[0]!r} has no samples left")
     block = dict(extras or {})
     if recorded is not None:
-        block["provenance"] = provenance(options.seed, recorded | _timed_and_split(recording, options))
+        block["provenance"] = provenance(options.seed, recorded | timed)
     if segments:
         block["segments"] = {
             s.label: {"from_s": s.start, "to_s": s.end, "samples": int(len(s.rows)), "spread_max_m": s.spread_max}
@@ -229,7 +232,7 @@ def import_recording(
     _write_together(_outputs(Path(out), source, inputs), kept, spec)
     return ImportResult(
         kept, spec, read, segments, read - dataset.n_samples, dataset.n_samples - deduplicated.n_samples,
-        recording.notes, _scale_note(fmt, spec, bool(segments)),
+        notes, _scale_note(fmt, spec, bool(segments)),
     )
 
 
