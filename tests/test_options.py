@@ -218,7 +218,7 @@ def test_the_options_a_run_uses_are_not_refused() -> None:
     (["export", "panda", "--format", "urdf", "--out", "a.urdf", "--prefix", "a b"], "--prefix"),
     (["export", "panda", "--format", "yaml", "--out", "a.yaml", "--prefix", "arm_"], "--prefix"),
     (["export", "panda", "--format", "mjcf", "--out", "a.xml", "--velocity", "1,1,1,1,1,1,1"], "--velocity"),
-    (["export", "iiwa14", "--format", "urdf", "--out", "a.urdf"], "--effort"),
+    (["export", "iiwa14", "--format", "urdf", "--out", "a.urdf", "--effort", "1,2"], "--effort"),  # (its own: 300 Nm)
     (["export", "panda", "--format", "yaml", "--out", "a.yaml", "--tip-link", "x"], "--tip-link"),
     (["tool", "panda", "--offset", "0", "0", "0.2", "--base-link", "x", "--out", "t.yaml"], "--base-link"),
     (["calibrate", "--robot", "panda", "--samples", "s.csv", "--method", "pso", "--loss", "huber", "--out",
