@@ -60,7 +60,8 @@ def _one_line(message: str) -> str:
 
 def main(argv: list[str] | None = None) -> int:
     """Run one subcommand; return its exit status. Every refusal (a bad option, bad input, a file that
-    cannot be read or written) prints one line and returns 1."""
+    cannot be read or written) prints one line and returns 1, after the warnings the command gave before it (each
+    on its own line; on success they follow the command's own lines)."""
     try:
         args = build_parser().parse_args(argv)  # --help and bad options end here, before numpy loads
     except SystemExit as done:
@@ -76,7 +77,7 @@ def main(argv: list[str] | None = None) -> int:
     missing = [folder for folder in output_folders(args) if not folder.exists()]
     existing = [path for path in output_files(args) if path.is_file()]
 
-    held: list[str] = []  # warnings wait for the outcome: a refusal stays ONE line (it mentions them)
+    held: list[str] = []  # warnings wait for the outcome: printed after the success lines, or before the refusal
 
     def one_line_warning(message, category, filename, lineno, file=None, line=None) -> None:
         held.append(_one_line(str(message)))
@@ -94,8 +95,10 @@ def main(argv: list[str] | None = None) -> int:
         flush()
         return status
     except (SpherecalError, OptionError) as error:
-        also = f" (after {len(held)} warning{'s' * (len(held) > 1)}: {held[0]}{'; ...' if len(held) > 1 else ''})" \
-            if held else ""
+        # every warning on its own line, then the refusal's one line: a refusal that quoted the first warning and
+        # hid the rest behind '; ...' lost the Gen3 lite's joint-limit warning (a user trial)
+        flush()
+        also = f" (after {len(held)} warning{'s' * (len(held) > 1)}, above)" if held else ""
         print(f"spherecal {args.command}: error: {_one_line(str(error))}{also}", file=sys.stderr)
         return 1
     except OSError as error:  # a file that cannot be read or written: one line, not a traceback

@@ -115,3 +115,28 @@ def test_readme_python_block_is_the_calibrate_command(tmp_path, monkeypatch, cap
     written = load_robot("cal.yaml")
     np.testing.assert_allclose(space["done"].model.params, written.params, atol=1e-12)
     assert space["shift"].shape == (1000, 3) and "model: " in capsys.readouterr().out
+
+
+def test_every_warning_before_a_refusal_reaches_the_user(tmp_path, capsys, monkeypatch) -> None:
+    """A user trial: a refusal after two warnings printed '(after 2 warnings: <first>; ...)', and the Gen3 lite's
+    joint-limit warning, the second, was never seen. Each warning is its own line before the refusal, whose line
+    says how many came before it and does not grow with them."""
+    import warnings
+
+    import spherecal.commands.tool as tool
+    from spherecal.cli import main
+    from spherecal.correction.errors import SpherecalError
+
+    said = [f"warning number {k}: {'x' * 300}" for k in range(5)]
+
+    def run(args) -> int:
+        for text in said:
+            warnings.warn(text, stacklevel=1)
+        raise SpherecalError("cal.yaml: field 'tool': refused")
+
+    monkeypatch.setattr(tool, "run", run)
+    assert main(["tool", str(tmp_path / "cal.yaml"), "--offset", "0", "0", "0.1", "--out",
+                 str(tmp_path / "t.yaml")]) == 1
+    lines = capsys.readouterr().err.splitlines()
+    assert lines[:-1] == [f"spherecal tool: warning: {text}" for text in said]
+    assert lines[-1] == "spherecal tool: error: cal.yaml: field 'tool': refused (after 5 warnings, above)"

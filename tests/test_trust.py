@@ -239,15 +239,18 @@ def test_plan_with_too_few_reachable_candidates_refuses_on_stderr(tmp_path, caps
             "no plan: 1 of 2 candidates reachable, fewer than the 2 fixtures wanted")
 
 
-def test_a_warning_before_a_refusal_keeps_the_refusal_one_line(tmp_path, capsys, panda) -> None:
-    # was: the warning line, then the error line
+def test_a_warning_before_a_refusal_is_its_own_line_and_the_refusal_one_line(tmp_path, capsys, panda) -> None:
+    # was: the warning line, then the error line; then the first warning inside the refusal's line, and the others
+    # hidden behind '; ...' (tests/test_cli.py: every warning reaches the user)
     dataset, _ = make_dataset(panda, per_fixture=20, rng=np.random.default_rng(1))
     q = dataset.q.copy()
     q[3, 5] = panda.upper[5] + 0.2  # past the limit: used, with a warning
     write_samples(tmp_path / "samples.csv", replace(dataset, q=q))
     err = refused(["calibrate", "--robot", "panda", "--samples", tmp_path / "samples.csv", "--fixtures",
                    tmp_path / "missing.yaml", "--out", tmp_path / "cal.yaml"], tmp_path, capsys, "missing.yaml")
-    assert "(after 1 warning: " in err and "beyond the joint limits" in err
+    warning, error = err.splitlines()
+    assert warning.startswith("spherecal calibrate: warning: ") and "beyond the joint limits" in warning
+    assert error.startswith("spherecal calibrate: error: ") and error.endswith(" (after 1 warning, above)")
 
 
 # ------------------------------------------------------------------------------------ validate
