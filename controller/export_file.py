@@ -10,7 +10,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from spherecal.correction import RobotModel, load_robot
-from spherecal.correction.files.outputs import OutputSet, check_suffix
+from spherecal.correction.files.outputs import OutputError, OutputSet, check_suffix
 from spherecal.correction.files.provenance import matched_record
 from spherecal.correction.files.robot_file import forced_calibration
 from spherecal.correction.files.text_input import read_xml_text
@@ -20,8 +20,9 @@ from .export import calibration_samples, export_model, fit_seed, provenance_head
 
 #: Per format: what the file holds, the name endings that fit it (the first is suggested) and, for a format read
 #: by its ending, why another is refused (check_suffix; MuJoCo reads an MJCF, spherecal a robot file, by content).
-SUFFIXES = {"urdf": ("a URDF", (".urdf", ".xml"), "spherecal and Rerun read a URDF only as .urdf, ROS tools also as "
-                     ".xml"),
+#: A URDF is not written as .xml, the MJCF export's ending (a user: '--format urdf --out arm.xml' was written);
+#: spherecal still reads one so named by its <robot> root.
+SUFFIXES = {"urdf": ("a URDF", (".urdf",), "Rerun opens a URDF only by that ending"),
             "mjcf": ("an MJCF model", (".xml", ".mjcf"), ""),
             "yaml": ("a robot file (YAML)", (".yaml", ".yml"), "")}
 
@@ -91,6 +92,9 @@ def export_file(config: ExportConfig, outputs: OutputSet, report: Callable[[str]
             read, limits that are not numbers, an option the format does not take (one line); nothing is written.
     """
     written, accepted, read_by_ending = SUFFIXES[config.output_format]
+    if config.output_format == "urdf" and Path(config.out).suffix.lower() == ".xml":  # check_suffix: 'read as XML'
+        raise OutputError(f"{config.out}: field '--out': {written} (--format urdf) named .xml would be taken for an "
+                          f"MJCF model (--format mjcf writes .xml); name it {accepted[0]}")
     check_suffix(config.out, "--out", f"{written} (--format {config.output_format})", accepted,
                  read_by_ending=read_by_ending)
     model = load_robot(config.robot, tip_link=config.tip_link, base_link=config.base_link,

@@ -87,13 +87,15 @@ def test_validate_a_calibration_of_a_urdf_arm_against_that_urdf(tmp_path, ur5e_f
     assert out.exists()
 
 
-def test_a_urdf_exported_under_xml_is_read_back_as_a_urdf(tmp_path, panda, capsys):
+def test_a_urdf_named_xml_is_read_back_as_a_urdf(tmp_path, panda, capsys):
     """A review: 'export --format urdf --out arm.xml' (the ending ROS tools use) was accepted, but spherecal refused
     to read what it wrote ('arm.xml: row 1: a URDF (<robot>) not named .urdf'). A file whose XML root is <robot> is
-    read as a URDF whatever its ending, its link options with it; a robot file still refuses them."""
+    read as a URDF whatever its ending, its link options with it; a robot file still refuses them. (export now
+    writes a URDF only as .urdf, .xml being the MJCF export's ending: tests/test_outputs.py; one renamed is read.)"""
     cal = save_robot(perturb(panda, np.random.default_rng(2)), tmp_path / "cal.yaml")
     xml = tmp_path / "arm.xml"
-    assert main(["export", str(cal), "--format", "urdf", "--out", str(xml)]) == 0
+    assert main(["export", str(cal), "--format", "urdf", "--out", str(tmp_path / "arm.urdf")]) == 0
+    (tmp_path / "arm.urdf").rename(xml)
     tip = re.findall(r'<link name="([^"]+)"', xml.read_text())[-1]  # the exported chain's end
     back = load_robot(xml, tip_link=tip)
     q = panda.random_configurations(200, np.random.default_rng(5))

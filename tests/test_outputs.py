@@ -160,6 +160,11 @@ def test_simulate_refuses_before_any_work_when_one_of_its_files_cannot_be_writte
      "an MJCF model (--format mjcf) named .urdf"),
     (["export", "calibrated.yaml", "--format", "yaml", "--out", "arm.xml"],
      "a robot file (YAML) (--format yaml) named .xml"),
+    # a user: 'export --format urdf --out arm.xml' was written, under the ending of the MJCF export (--format mjcf)
+    (["export", "calibrated.yaml", "--format", "urdf", "--out", "arm.xml", "--effort", "1,1,1,1,1,1,1"],
+     "arm.xml: field '--out': a URDF (--format urdf) named .xml would be taken for an MJCF model (--format mjcf "
+     "writes .xml); name it .urdf"),
+    (["export", "calibrated.yaml", "--format", "urdf", "--out", "arm.XML"], "named .xml would be taken for an MJCF"),
     # plan, validate: a Rerun recording or a JSON report written under a name another reader would take
     (["plan", "--candidates", "candidates.yaml", "--fixture-count", "1", "--rrd", "plan.json"],
      "plan.json: field '--rrd': a Rerun recording named .json would be read as JSON; name it .rrd"),
@@ -183,7 +188,7 @@ def test_an_output_named_for_another_format_is_refused(files, capsys, monkeypatc
      "plan: field '--rrd': a Rerun recording must be named .rrd"),
     # Rerun (and ROS tools) read a URDF by its ending: spherecal reads an XML <robot> as one, they do not
     (["export", "calibrated.yaml", "--format", "urdf", "--out", "arm.txt", "--effort", "1,1,1,1,1,1,1"],
-     "arm.txt: field '--out': a URDF (--format urdf) must be named .urdf or .xml"),
+     "arm.txt: field '--out': a URDF (--format urdf) must be named .urdf (Rerun opens a URDF only by that ending)"),
 ])
 def test_an_output_read_by_its_ending_is_refused_under_another(files, capsys, monkeypatch, argv, expected) -> None:
     monkeypatch.chdir(files)
