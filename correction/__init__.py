@@ -21,7 +21,15 @@ from .files.samples import Dataset, DatasetError
 from .files.samples_csv import format_samples, read_samples, write_samples
 from .files.urdf_to_dh import NearlyParallelAxesWarning, load_urdf
 from .gravity import InertialsError, gravity_torques, has_inertials, inertials_of
-from .kinematics import joint_jacobian, link_angle_jacobian, param_jacobian, pose_jacobian, tool_point, tool_pose
+from .kinematics import (
+    JointAngleError,
+    joint_jacobian,
+    link_angle_jacobian,
+    param_jacobian,
+    pose_jacobian,
+    tool_point,
+    tool_pose,
+)
 from .model import RobotModel, geometric_part, matrix_rpy, param_names, pose_matrix, rpy_matrix
 from .perturb import perturb
 from .rigid import apply_transform, fit_rigid_transform, registered_errors
@@ -39,6 +47,7 @@ __all__ = [
     "write_samples",
     "Frames",
     "InertialsError",
+    "JointAngleError",
     "NearlyParallelAxesWarning",
     "RobotFileError",
     "RobotModel",

@@ -2,19 +2,26 @@
 
 from __future__ import annotations
 
+from dataclasses import replace
+
 import numpy as np
 import pytest
 
 from spherecal.correction import (
+    JointAngleError,
     RobotModel,
+    SpherecalError,
     joint_jacobian,
+    link_angle_jacobian,
     link_frames,
     param_jacobian,
+    pose_jacobian,
     to_modified,
     to_standard,
     tool_point,
     tool_pose,
 )
+from spherecal.correction.kinematics import ANGLE_MARGIN
 from tests.conftest import perturbed
 
 # MuJoCo Menagerie's franka_emika_panda/panda_nohand.xml: body pos and quat (w x y z) in
@@ -204,3 +211,31 @@ def test_bad_shapes_are_refused(panda) -> None:
         tool_point(panda, np.zeros((4, 6)))
     with pytest.raises(ValueError, match=r"params must have shape"):
         panda.with_params(np.zeros(3))
+
+
+@pytest.mark.parametrize("entry", [tool_point, tool_pose, joint_jacobian, param_jacobian, link_angle_jacobian,
+                                   pose_jacobian])
+def test_joint_angles_in_degrees_are_refused_at_every_public_entry(panda, entry) -> None:
+    """A reviewer: tool_point(model, q) with q in degrees returned a tool point metres away without a word. An angle
+    more than a full turn beyond its joint's limits is refused with the package's own exception, naming the sample,
+    the joint and the limits; an angle a turn past them less a hair (a wrapped encoder, an arm beyond its file's
+    limits) is still computed."""
+    q = panda.random_configurations(50, np.random.default_rng(3))
+    with pytest.raises(JointAngleError, match=r"^q\[\d+, \d\] \(joint \d\): .* rad is more than a full turn .* "
+                       r"beyond the joint limits \[.*\] of franka_panda: no angle of this joint \(degrees\?"):
+        entry(panda, np.degrees(q))
+    with pytest.raises(SpherecalError, match=r"^q\[3\] \(joint 4\): -20 rad"):
+        entry(panda, np.where(np.arange(7) == 3, -20.0, q[0]))
+    edge = np.tile(q[0], (2, 1))
+    edge[0, 5], edge[1, 0] = panda.upper[5] + ANGLE_MARGIN - 1e-9, panda.lower[0] - ANGLE_MARGIN + 1e-9
+    out = entry(panda, edge)  # link_angle_jacobian: None for a rigid arm
+    assert out is None or np.all(np.isfinite(out))
+
+
+def test_a_full_turn_joint_accepts_three_half_turns_either_way(panda) -> None:
+    """A URDF 'continuous' joint is read as [-pi, pi]: its angles, wrapped or not, within a turn of that."""
+    free = replace(panda, lower=np.full(7, -np.pi), upper=np.full(7, np.pi))
+    q = np.full(7, 3 * np.pi - 1e-9)
+    assert np.allclose(tool_point(free, q), tool_point(free, q - 2 * np.pi))
+    with pytest.raises(JointAngleError, match=r"^q\[0\] \(joint 1\): 9.42478 rad"):
+        tool_point(free, q + 2e-9)
