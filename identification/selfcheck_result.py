@@ -23,6 +23,69 @@ class InconsistentDataError(SpherecalError):
         super().__init__(message)
         self.moved = tuple(moved)
 
+    @property
+    def lines(self) -> tuple[str, ...]:
+        """The refusal as the command line prints it (:func:`refusal_lines`): its reason in a first line, then its
+        clauses (figures, causes, remedies, the commands to try) one a line; the message alone when it is short."""
+        return refusal_lines(str(self))
+
+
+#: A refusal longer than this [characters] is printed as a short first line and its clauses below it (a user trial:
+#: MUKCa's dinova_2 gen3lite refused in one line of 1,850 characters).
+HEADLINE = 160
+
+
+def refusal_lines(message: str) -> tuple[str, ...]:
+    """A long refusal (over :data:`HEADLINE` characters) as a first line saying it is refused and why, then each of its
+    clauses (the message split at every '; ' outside parentheses) in order: every word of the message is in them.
+
+    The first line is the first clause without its location (the file and rows, which its own line gives), without
+    what it says in parentheses and without what follows its first ': ' (the causes and figures that line gives):
+    ``refused: residual noise 1.09 mm per axis with the prior's rows is 3.64x the fit's default noise 0.3 mm and no
+    single fixture, distance or position explains it``.
+    """
+    if len(message) <= HEADLINE:
+        return (message,)
+    clauses = _split_outside_parentheses(message, "; ")
+    first = clauses[0]
+    located = _LOCATION.match(first)
+    reason = first[located.end():] if located else first
+    reason = _split_outside_parentheses(_without_parentheses(reason), ": ")[0].strip()
+    return (f"refused: {reason}", *clauses)
+
+
+#: A finding's location: ``samples.csv: rows 7-30: ``, ``samples.csv: rows 7-26, field 'fixture': ``, ``samples: all
+#: rows: `` (:func:`.problem.samples_location`), ``samples.csv: rows 2, 5, ..., field 'q*': ``, ``fixtures.yaml: field
+#: 'distances[0]': ``.
+_LOCATION = re.compile(r"^[^\n]*?: (?:(?:all rows|rows? \d[\d, .-]*?)(?:, field '[^']*')?|field '[^']*'): ")
+
+
+def _split_outside_parentheses(text: str, separator: str) -> list[str]:
+    """``text`` split at every ``separator`` outside parentheses (a figure's '(limit 2x; worst fixture ...)' stays)."""
+    parts, depth, start, k = [], 0, 0, 0
+    while k < len(text):
+        char = text[k]
+        depth += (char == "(") - (char == ")")
+        if depth <= 0 and text.startswith(separator, k):
+            parts.append(text[start:k])
+            start = k = k + len(separator)
+            continue
+        k += 1
+    return [*parts, text[start:]]
+
+
+def _without_parentheses(text: str) -> str:
+    """``text`` without its parenthesised groups (and the space before each)."""
+    out, depth = [], 0
+    for char in text:
+        if char == "(":
+            depth += 1
+        if depth == 0:
+            out.append(char)
+        if char == ")" and depth:
+            depth -= 1
+    return re.sub(r" +(?=[ ,:;.]|$)", "", "".join(out))
+
 
 #: A fixture whose residual per axis exceeds this multiple of the median of the other fixtures' stands out
 #: (:meth:`SelfCheck._standing_out`): the residual level's own limit (its residual against the noise).

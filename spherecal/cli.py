@@ -61,7 +61,9 @@ def _one_line(message: str) -> str:
 def main(argv: list[str] | None = None) -> int:
     """Run one subcommand; return its exit status. Every refusal (a bad option, bad input, a file that
     cannot be read or written) prints one line and returns 1, after the warnings the command gave before it (each
-    on its own line; on success they follow the command's own lines)."""
+    on its own line; on success they follow the command's own lines). A long refusal of a calibration (an error
+    with ``lines``: :attr:`spherecal.identification.selfcheck_result.InconsistentDataError.lines`) gives its reason in
+    that line and its detail on indented lines below it."""
     try:
         args = build_parser().parse_args(argv)  # --help and bad options end here, before numpy loads
     except SystemExit as done:
@@ -99,7 +101,12 @@ def main(argv: list[str] | None = None) -> int:
         # hid the rest behind '; ...' lost the Gen3 lite's joint-limit warning (a user trial)
         flush()
         also = f" (after {len(held)} warning{'s' * (len(held) > 1)}, above)" if held else ""
-        print(f"spherecal {args.command}: error: {_one_line(str(error))}{also}", file=sys.stderr)
+        # a long refusal of the calibration: its reason in the error line, its clauses (figures, causes, remedies,
+        # the commands to try) one an indented line below it (a user trial: 1,850 characters in one line)
+        first, *details = getattr(error, "lines", None) or (str(error),)
+        print(f"spherecal {args.command}: error: {_one_line(first)}{also}", file=sys.stderr)
+        for detail in details:
+            print(f"  {_one_line(detail)}", file=sys.stderr)
         return 1
     except OSError as error:  # a file that cannot be read or written: one line, not a traceback
         where = f"{error.filename}: " if error.filename else ""

@@ -28,18 +28,20 @@ def snapshot(folder: Path) -> dict[str, tuple[bytes, int] | None]:
 
 def refused(argv: list[str], folder: Path, capsys, *expected: str) -> str:
     """Run ``spherecal argv``: exit status 1, one error line on stderr (after the warnings the command gave before it,
-    each on its own line) that with them contains every ``expected`` text, and nothing under ``folder`` changed
-    (inputs' content and mtime, no file added or removed)."""
+    each on its own line, and before the indented lines of a long refusal's detail) that with them contains every
+    ``expected`` text, and nothing under ``folder`` changed (inputs' content and mtime, no file added or removed)."""
     capsys.readouterr()  # what earlier commands of the test printed is not this refusal's
     before = snapshot(folder)
     status = main([str(a) for a in argv])
     captured = capsys.readouterr()
     err = captured.err
     assert status == 1, (status, err)
-    lines = err.strip().splitlines()
+    lines = err.rstrip("\n").splitlines()
     warned = [line for line in lines if line.startswith(f"spherecal {argv[0]}: warning: ")]
-    assert lines[:len(warned)] == warned and len(lines) == len(warned) + 1, err
-    assert lines[-1].startswith(f"spherecal {argv[0]}: error: "), err
+    assert lines[:len(warned)] == warned, err
+    error, *details = lines[len(warned):]
+    assert error.startswith(f"spherecal {argv[0]}: error: "), err
+    assert all(line.startswith("  ") and line.strip() for line in details), err  # a long refusal's detail
     for text in expected:
         assert text in err, (text, err)
     after = snapshot(folder)

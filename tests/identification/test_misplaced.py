@@ -105,7 +105,7 @@ def test_a_press_far_from_its_socket_is_named_with_the_remedies_when_it_is_all_t
     samples = _samples(tmp_path / "samples.csv", [("A", a), ("B", b)])
     argv = _calibrate(tmp_path, samples)
     refused(argv, tmp_path, capsys, "field 'fixture'",  # header row 1: sample k of A is row k + 2
-            f"; 1 of {len(a) + len(b)} samples (row 6) lies over 4x the median distance from its socket, and without "
+            f"\n  1 of {len(a) + len(b)} samples (row 6) lies over 4x the median distance from its socket, and without "
             "them the rest is consistent: remove them if the ball was not seated in its socket, or calibrate --loss "
             "huber to discount them")
     assert main([str(v) for v in [*argv, "--loss", "huber"]]) == 0  # the remedy the refusal names

@@ -1,0 +1,54 @@
+"""A long refusal of a calibration: its reason in a short first line, its clauses one an indented line below it
+(:func:`spherecal.identification.selfcheck_result.refusal_lines`), every word of the message kept."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+
+from spherecal.cli import main
+from spherecal.identification.selfcheck_result import HEADLINE, InconsistentDataError, refusal_lines
+from spherecal.identification.workflow import calibrate_files
+from tests.refusal import refused
+
+DATA = Path(__file__).parents[1] / "data" / "mukca"
+KINOVA = DATA / "gen3lite_ball.yaml"
+
+
+def test_a_long_refusal_gives_its_reason_in_a_short_line_and_its_detail_below(tmp_path, capsys) -> None:
+    """A user trial: MUKCa's dinova_2 gen3lite (one socket, drifting) refused in one line of 1,850 characters. The
+    error line says it is refused and why in under 200 characters; the figures, causes, remedies and commands follow,
+    one clause an indented line, and joined again they are the message word for word."""
+    assert main(["import", str(DATA / "dinova_2/gen3lite"), "--format", "mukca", "--robot", str(KINOVA), "--out",
+                 str(tmp_path / "imp")]) == 0
+    samples, fixtures = tmp_path / "imp/samples.csv", tmp_path / "imp/fixtures.yaml"
+    with pytest.raises(InconsistentDataError) as raised:
+        calibrate_files(str(KINOVA), samples, fixtures, tmp_path / "python.yaml")
+    message = str(raised.value)
+    assert len(message) > 1200  # the figures of the level, the prediction and the trend, and the remedies
+    err = refused(["calibrate", "--robot", KINOVA, "--samples", samples, "--fixtures", fixtures, "--out",
+                   tmp_path / "cal.yaml"], tmp_path, capsys, "record it again (it is the only fixture)")
+    first, *details = err.rstrip("\n").splitlines()
+    assert first.startswith("spherecal calibrate: error: refused: residual noise ") and len(first) < 200, first
+    assert first.endswith("and no single fixture, distance or position explains it"), first
+    assert all(line.startswith("  ") for line in details) and len(details) >= 5
+    assert "; ".join(line[2:] for line in details) == message
+    assert details[0][2:].startswith(f"{samples}: rows 7-30: residual noise ")
+    assert details[-1] == "  record it again (it is the only fixture)"
+
+
+def test_a_short_refusal_stays_one_line_and_parentheses_hold_their_clauses() -> None:
+    short = "samples.csv: rows 1-20: residual noise 2 mm per axis"
+    assert refusal_lines(short) == (short,) and InconsistentDataError(short).lines == (short,)
+    long = ("samples.csv: rows 7-26, field 'fixture': the samples at fixture P2 disagree with the others by 6 mm rms "
+            "(the others alone: 1 mm; expected 1 mm): samples of another arm, a fixture that moved, or a wrong label; "
+            "or a wrong known distance (fixtures.yaml: row 6, field 'distances[0]': P1-P2 0.05 m); leaving P2 out "
+            "does not help: without P2 the rest is refused too (calibrate --exclude-fixture P2 says why)")
+    assert len(long) > HEADLINE
+    assert refusal_lines(long) == (
+        "refused: the samples at fixture P2 disagree with the others by 6 mm rms",
+        "samples.csv: rows 7-26, field 'fixture': the samples at fixture P2 disagree with the others by 6 mm rms (the "
+        "others alone: 1 mm; expected 1 mm): samples of another arm, a fixture that moved, or a wrong label",
+        "or a wrong known distance (fixtures.yaml: row 6, field 'distances[0]': P1-P2 0.05 m)",
+        "leaving P2 out does not help: without P2 the rest is refused too (calibrate --exclude-fixture P2 says why)")
