@@ -39,19 +39,19 @@ def refusal_lines(message: str) -> tuple[str, ...]:
     """A long refusal (over :data:`HEADLINE` characters) as a first line saying it is refused and why, then each of its
     clauses (the message split at every '; ' outside parentheses) in order: every word of the message is in them.
 
-    The first line is the first clause without its location (the file and rows, which its own line gives), without
-    what it says in parentheses and without what follows its first ': ' (the causes and figures that line gives):
-    ``refused: residual noise 1.09 mm per axis with the prior's rows is 3.64x the fit's default noise 0.3 mm and no
-    single fixture, distance or position explains it``.
+    The first line is the first clause's location (file, rows, field: every refusal names them in its line) and its
+    reason without what it says in parentheses and without what follows its first ': ' (the causes and figures that
+    the clause's own line gives): ``refused: samples.csv: rows 7-30: residual noise 1.09 mm per axis with the prior's
+    rows is 3.64x the fit's default noise 0.3 mm and no single fixture, distance or position explains it``.
     """
     if len(message) <= HEADLINE:
         return (message,)
     clauses = _split_outside_parentheses(message, "; ")
     first = clauses[0]
     located = _LOCATION.match(first)
-    reason = first[located.end():] if located else first
+    where, reason = (first[: located.end()], first[located.end():]) if located else ("", first)
     reason = _split_outside_parentheses(_without_parentheses(reason), ": ")[0].strip()
-    return (f"refused: {reason}", *clauses)
+    return (f"refused: {where}{reason}", *clauses)
 
 
 #: A finding's location: ``samples.csv: rows 7-30: ``, ``samples.csv: rows 7-26, field 'fixture': ``, ``samples: all

@@ -30,7 +30,8 @@ def test_a_long_refusal_gives_its_reason_in_a_short_line_and_its_detail_below(tm
     err = refused(["calibrate", "--robot", KINOVA, "--samples", samples, "--fixtures", fixtures, "--out",
                    tmp_path / "cal.yaml"], tmp_path, capsys, "record it again (it is the only fixture)")
     first, *details = err.rstrip("\n").splitlines()
-    assert first.startswith("spherecal calibrate: error: refused: residual noise ") and len(first) < 200, first
+    where = f"spherecal calibrate: error: refused: {samples}: rows 7-30: "  # the file, rows and field first
+    assert first.startswith(f"{where}residual noise ") and len(first) - len(where) < 200, first
     assert first.endswith("and no single fixture, distance or position explains it"), first
     assert all(line.startswith("  ") for line in details) and len(details) >= 5
     assert "; ".join(line[2:] for line in details) == message
@@ -47,7 +48,8 @@ def test_a_short_refusal_stays_one_line_and_parentheses_hold_their_clauses() -> 
             "does not help: without P2 the rest is refused too (calibrate --exclude-fixture P2 says why)")
     assert len(long) > HEADLINE
     assert refusal_lines(long) == (
-        "refused: the samples at fixture P2 disagree with the others by 6 mm rms",
+        "refused: samples.csv: rows 7-26, field 'fixture': the samples at fixture P2 disagree with the others by 6 mm "
+        "rms",
         "samples.csv: rows 7-26, field 'fixture': the samples at fixture P2 disagree with the others by 6 mm rms (the "
         "others alone: 1 mm; expected 1 mm): samples of another arm, a fixture that moved, or a wrong label",
         "or a wrong known distance (fixtures.yaml: row 6, field 'distances[0]': P1-P2 0.05 m)",
