@@ -38,7 +38,8 @@ from .scale import joint_angles, scale_of
 
 #: How far beyond a joint's limits [rad] an angle given to the public entry points may lie: a full turn. Further, it
 #: is no angle of that joint whatever its encoder's wrap or its file's limits (MUKCa's Gen3 lite passes gen3lite.urdf's
-#: q6 limit by 0.65 rad; a joint of a full turn, URDF "continuous", read as [-pi, pi], so accepts [-3 pi, 3 pi]), and
+#: q6 limit by 0.65 rad; a joint that turns freely, URDF "continuous" (:attr:`RobotModel.full_turn`), is not checked:
+#: a wrist that has turned five times reads 31 rad), and
 #: most likely degrees: a Panda's joints accept up to 9.2 to 10 rad (down to -6.3 on its 6th), so a configuration in
 #: degrees passes only with every joint within about 10 deg of zero. The samples reader is stricter (a quarter turn:
 #: files.samples.HARD_MARGIN); these functions also see controller and IK states.
@@ -62,6 +63,8 @@ def _checked(model: RobotModel, q: np.ndarray) -> tuple[np.ndarray, bool]:
     if not (q2.max() <= model.upper.min() + ANGLE_MARGIN and q2.min() >= model.lower.max() - ANGLE_MARGIN):
         # past the narrowest joint's bound (the test above: 2 x 7 us per 10k x 7): per joint, 0.6 ms per 10k x 7
         upper, lower = np.asarray(model.upper) + ANGLE_MARGIN, np.asarray(model.lower) - ANGLE_MARGIN
+        turning = model.full_turn  # a joint that turns freely (URDF "continuous") counts its turns: any angle is one
+        upper, lower = np.where(turning, np.inf, upper), np.where(turning, -np.inf, lower)
         high, low = q2.max(axis=0), q2.min(axis=0)
         if np.any(high > upper) or np.any(low < lower):
             i = int(np.argmax(np.maximum(high - upper, lower - low)))

@@ -232,10 +232,14 @@ def test_joint_angles_in_degrees_are_refused_at_every_public_entry(panda, entry)
     assert out is None or np.all(np.isfinite(out))
 
 
-def test_a_full_turn_joint_accepts_three_half_turns_either_way(panda) -> None:
-    """A URDF 'continuous' joint is read as [-pi, pi]: its angles, wrapped or not, within a turn of that."""
+def test_a_joint_that_turns_freely_takes_any_number_of_turns(panda) -> None:
+    """A URDF 'continuous' joint is read as [-pi, pi] and counts its turns (a wrist turned five times reads 31 rad):
+    no angle of it is refused; a revolute joint limited to [-pi, pi] (a UR elbow, named so by its URDF) is."""
     free = replace(panda, lower=np.full(7, -np.pi), upper=np.full(7, np.pi))
-    q = np.full(7, 3 * np.pi - 1e-9)
-    assert np.allclose(tool_point(free, q), tool_point(free, q - 2 * np.pi))
-    with pytest.raises(JointAngleError, match=r"^q\[0\] \(joint 1\): 9.42478 rad"):
-        tool_point(free, q + 2e-9)
+    assert free.full_turn.all()
+    q = np.full(7, 10 * np.pi + 0.3)
+    assert np.allclose(tool_point(free, q), tool_point(free, q - 10 * np.pi))
+    names = [f"j{i + 1}" for i in range(7)]
+    limited = replace(free, extras={"joint_names": names, "urdf": {"continuous_joints": names[1:]}})
+    with pytest.raises(JointAngleError, match=r"^q\[0\] \(joint 1\): 31.7159 rad"):
+        tool_point(limited, q)
