@@ -36,7 +36,7 @@ def what_it_counts(prediction, survey: str) -> list[str]:
         "estimates it from its residuals), noise correlated from sample to sample (hand guiding, a compliant socket), "
         "and the noise of what a validation measures against: compare this with validate's 'vs exact tool point' "
         "column (a simulation); its 'vs mocap' mean holds the motion capture's noise as well, about the root of the "
-        "sum of squares of the two (0.20 mm exact beside its 0.31 mm 'mocap floor' read 0.37 mm)",
+        "sum of squares of the two (the exact figure's and its 'mocap floor')",
     ]
 
 
