@@ -537,8 +537,24 @@ def say_created(args: argparse.Namespace, missing: list[Path]) -> None:
             print(f"spherecal {args.command}: created the folder {folder} (it did not exist)")
 
 
-def check_folder(path: str, option: str = "--out") -> None:
-    """Refuse an output folder that is an existing file or lies under one, before a long run."""
+#: Endings of the files the commands read and write: an output folder named so is a file name given by mistake (a
+#: user's ``import ... --out train/samples.csv`` created a folder ``samples.csv`` holding samples.csv and
+#: fixtures.yaml, and the next ``calibrate --samples train/samples.csv`` found a folder).
+FILE_ENDINGS = (".csv", ".yaml", ".yml", ".json", ".rrd", ".urdf", ".xml", ".mjcf", ".bag", ".mcap", ".db3", ".md")
+
+
+def check_folder(path: str, option: str = "--out", writes: tuple[str, ...] = ()) -> None:
+    """Refuse an output folder that is an existing file or lies under one, before a long run, or that does not
+    exist yet and is named like a file (:data:`FILE_ENDINGS`), naming the folder to give instead (``writes``: the
+    names of the files the command writes into it; ``--out train/samples.csv`` then means ``--out train``)."""
     from spherecal.correction.files.outputs import check_folder as check
 
+    folder = Path(path)
+    # an existing file or link (a loop too): check() names it
+    if folder.suffix.lower() in FILE_ENDINGS and not (folder.is_symlink() or folder.exists()):
+        meant = folder.parent if folder.name in writes else folder.with_suffix("")
+        what = f" ({', '.join(writes)})" if writes else ""
+        example = "" if meant.is_dir() and any(meant.iterdir()) else f", e.g. {option} {meant}"
+        raise fail(f"{path}: field '{option}': a folder named like a file ({folder.suffix}): {option} is the folder "
+                   f"the command writes its files into{what}; give a folder{example}")
     check(path, option)

@@ -267,6 +267,29 @@ def test_demo_and_campaign_refuse_before_any_work(files, capsys) -> None:
     refused(["campaign", "--out", files / "samples.csv"], files, capsys, "field '--out': exists and is not a folder")
 
 
+@pytest.mark.parametrize("command, out, meant", [
+    (["import", "samples.csv", "--format", "csv", "--robot", "robot.yaml"], "train/samples.csv", "--out train"),
+    (["import", "samples.csv", "--format", "csv", "--robot", "robot.yaml"], "train.csv", "--out train"),
+    (["simulate"], "sim/fixtures.yaml", "--out sim"),
+    (["campaign"], "tables/table2.md", "--out tables"),
+])
+def test_a_folder_option_named_like_a_file_is_refused(files, capsys, monkeypatch, command, out, meant) -> None:
+    # `import ... --out train/samples.csv` (a user trial) created a folder samples.csv holding samples.csv and
+    # fixtures.yaml, exit 0, and the next `calibrate --samples train/samples.csv` found a folder
+    monkeypatch.chdir(files)
+    line = refused(command + ["--out", out], files, capsys, "field '--out': a folder named like a file", meant)
+    assert line.startswith(f"spherecal {command[0]}: error: {out}: ")
+
+
+def test_an_existing_folder_named_like_a_file_is_used(files, monkeypatch) -> None:
+    from spherecal.cli import main
+
+    monkeypatch.chdir(files)
+    (files / "kept.csv").mkdir()  # the user's own folder, named so: used as named
+    assert main(["import", "samples.csv", "--format", "csv", "--robot", "robot.yaml", "--out", "kept.csv"]) == 0
+    assert sorted(p.name for p in (files / "kept.csv").iterdir()) == ["fixtures.yaml", "samples.csv"]
+
+
 def test_validate_writes_report_and_recording_together(files, capsys, monkeypatch) -> None:
     # the report used to be written first; a recording failing after it left a report without its recording
     import spherecal.validation.validate_files as validate_files  # the recording's writer, where validate calls it

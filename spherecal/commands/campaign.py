@@ -80,7 +80,7 @@ def run(args: argparse.Namespace) -> int:
         raise fail(f"field '--rows': {twice} is given twice (its sets would be counted twice, the same seeds each "
                    "time)")
     check_per_fixture(args, 10, simulated=args.source == "mujoco")
-    check_folder(args.out)
+    check_folder(args.out, writes=TABLE_FILES)
     outputs = planned_outputs(args, {"--out": [Path(args.out) / name for name in TABLE_FILES]})
     refuse_foreign_tables(args.out)
     config = CampaignConfig(

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import argparse
 
-from spherecal.options import fail, named, urdf_links
+from spherecal.options import check_folder, fail, named, urdf_links
 
 HELP = "Turn a real recording (MUKCa folder, ROS bag, joint CSV) into samples.csv and fixtures.yaml."
 
@@ -73,6 +73,7 @@ def run(args: argparse.Namespace) -> int:
     from spherecal.identification.ingest.import_recording import ImportOptions, import_files
     from spherecal.identification.ingest.segment import SegmentSettings
 
+    check_folder(args.out, writes=("samples.csv", "fixtures.yaml"))
     clock = time.perf_counter()
     given = _format_options(args, [f.name for f in fields(SegmentSettings)])
     segmentation = {k: v * 1e-3 if k in MILLIMETRES else v for k, v in given.pop("segmentation", {}).items()}

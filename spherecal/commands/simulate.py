@@ -47,7 +47,7 @@ def run(args: argparse.Namespace) -> int:
     from spherecal.validation.experiments.simulation import SimulationConfig, simulate_to_folder, simulation_outputs
 
     check_per_fixture(args, 1)
-    check_folder(args.out)
+    check_folder(args.out, writes=("samples.csv", "fixtures.yaml", "truth.yaml"))
     # found before the simulation runs, not when the files are written; --fixtures may be out/fixtures.yaml
     outputs = planned_outputs(args, {"--out": simulation_outputs(args.out)})
     links = urdf_links(args)
