@@ -314,6 +314,22 @@ def test_fixtures_refuse_a_misspelt_top_level_key(tmp_path, key, message) -> Non
     assert read_fixtures(path).extras == {"notes": "plate screwed to the table", "import": {"format": "csv"}}
 
 
+def test_fixtures_refuse_centres_beside_the_fixtures_and_suggest_a_name(tmp_path) -> None:
+    # a user trial: 'positions:' beside 'fixtures:' was kept unread (the calibration ran without the known centres),
+    # and a distance naming 'P3' among P1, P2 said only that it is not listed
+    path = tmp_path / "fixtures.yaml"
+    path.write_text("fixtures:\n  P1: {}\n  P2: {}\npositions:\n  P1: [0.5, 0.0, 0.3]\n")
+    with pytest.raises(DatasetError, match=r"row 5, field 'positions': unknown key 'positions': a fixture's known "
+                                           r"centre is given under its name, 'fixtures: \{P1: \{position: \[x, y, z\]"):
+        read_fixtures(path)
+    path.write_text("fixtures:\n  front_h0: {}\n  front_h1: {}\ndistances:\n  - [front_h0, front_hl, 0.05]\n")
+    with pytest.raises(DatasetError, match=r"'front_hl' is not listed under 'fixtures' \(did you mean 'front_h1'\?\)"):
+        read_fixtures(path)
+    path.write_text("fixtures:\n  P1: {}\n  P2: {}\ndistances:\n  - [P1, left, 0.05]\n")
+    with pytest.raises(DatasetError, match=r"'left' is not listed under 'fixtures' \(listed: P1, P2\)"):
+        read_fixtures(path)
+
+
 @pytest.mark.parametrize(("argv", "message"), [
     (["import", "x", "--format", "mukca", "--robot", "panda", "--out", "o", "--distance", "50"],
      "at most 10 m, got '50' (millimetres? it is in metres)"),

@@ -191,7 +191,9 @@ def read_fixtures(path: str | os.PathLike) -> FixtureSpec:
         a, b, value = _written_name(item_node.value[0]), _written_name(item_node.value[1]), item[2]
         for j, name in enumerate((a, b)):
             if name not in fixtures:
-                raise fail(f"fixture {name!r} is not listed under 'fixtures'", "distances", k, j)
+                near = difflib.get_close_matches(str(name), list(fixtures), n=1, cutoff=0.6)
+                hint = f" (did you mean {near[0]!r}?)" if near else f" (listed: {', '.join(map(str, fixtures))})"
+                raise fail(f"fixture {name!r} is not listed under 'fixtures'{hint}", "distances", k, j)
         if a == b:
             raise fail(f"a distance needs two different fixtures, got {a!r} twice", "distances", k)
         if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
@@ -211,9 +213,18 @@ def read_fixtures(path: str | os.PathLike) -> FixtureSpec:
         near = difflib.get_close_matches(str(key).lower(), ["fixtures", "distances"], n=1, cutoff=0.75)
         if near:
             raise fail(f"unknown key {key!r} (did you mean {near[0]!r}? as written, it would be ignored)", key)
+        value = extras[key]  # known centres go under their fixture, not beside the fixtures (an anchor is no centre)
+        if str(key).lower() in CENTRE_KEYS and isinstance(value, dict) and set(map(str, value)) & set(fixtures):
+            raise fail(f"unknown key {key!r}: a fixture's known centre is given under its name, 'fixtures: {{P1: "
+                       "{position: [x, y, z]}}' [m] (as written, it would be ignored)", key)
     rows = {f"fixtures.{name}": node_line(root, "fixtures", name) for name in names}
     rows.update({f"distances[{k}]": node_line(root, "distances", k) for k in range(len(distances))})
     return FixtureSpec(tuple(names), positions, distances, extras, source=str(path), rows=rows)
+
+
+#: Top-level keys that mean known fixture centres when they map fixture names, given in the wrong place (a user
+#: trial's 'positions: {P1: [...]}' beside 'fixtures:' was kept unread, and the calibration ran without the centres).
+CENTRE_KEYS = ("position", "positions", "centre", "centres", "center", "centers")
 
 
 def format_fixtures(spec: FixtureSpec) -> str:
