@@ -724,10 +724,16 @@ def _prediction(nominal: RobotModel, built: CalibrationProblem, noise: float, sh
                 + "): record a placement there to calibrate it")
             text += f"; warning: {figures['region_warning']}"
         return Finding("prediction", True, text, figures), record
+    remedy = "record more self-motion, more fixtures or known distances, or with less play"
+    if from_data and excess < floor:  # no error of the nominal's to find here: more of the same would not help
+        remedy = (f"the nominal model already fits these samples within their noise (its spread per socket "
+                  f"{nominal_spread * 1e3:.3g} mm, {excess * 1e3:.3g} mm beyond the noise's {floor * 1e3:.3g} mm): "
+                  "there is nothing here to calibrate; if the arm is known to be off, record where it is (sockets "
+                  "farther apart, known distances), or with less play")
     return Finding(
         "prediction",
         False,
         f"{samples_location(built.dataset)}: the calibration cannot be expected to beat the nominal model: {text} "
-        f"(at most {BEAT:g}x needed); record more self-motion, more fixtures or known distances, or with less play",
+        f"(at most {BEAT:g}x needed); {remedy}",
         figures,
     ), record

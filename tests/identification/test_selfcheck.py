@@ -348,3 +348,15 @@ def test_residuals_correlated_in_recording_order_are_named_beside_the_prediction
     assert rho > 0.3
     assert re.search(rf"correlated from one sample to the next \(lag-1 {rho:.2f} in recording order\).*expect up "
                      r"to [\d.]+x more", again.summary())
+
+
+def test_samples_the_nominal_model_already_fits_are_refused_with_the_right_advice() -> None:
+    """A user trial: a recording of an arm that is its nominal model was refused with 'record more self-motion, more
+    fixtures or known distances, or with less play': more of the same would not help. The refusal says that the
+    nominal model already fits the samples within their noise."""
+    panda = load_robot("panda")
+    dataset, spec = make_dataset(panda, per_fixture=200, rng=np.random.default_rng(4), noise=2e-4)
+    with pytest.raises(InconsistentDataError, match=r"the nominal model already fits these samples within their "
+                                                    r"noise .*: there is nothing here to calibrate") as refused:
+        calibrate(panda, dataset, spec)
+    assert "record more self-motion" not in str(refused.value)
