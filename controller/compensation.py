@@ -32,7 +32,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from spherecal.correction import RobotModel, tool_point, tool_pose
+from spherecal.correction import JointAngleError, RobotModel, tool_point, tool_pose
 from spherecal.correction.errors import SpherecalError
 from spherecal.correction.files.samples import HARD_MARGIN
 from spherecal.correction.rigid import rotation_angle
@@ -255,16 +255,25 @@ def _seed(q: np.ndarray, model: RobotModel, field: str) -> np.ndarray:
     far = np.flatnonzero((excess > HARD_MARGIN) & ~model.full_turn)
     if far.size:
         i = far[0]
-        raise SpherecalError(f"{field}: joint {i + 1} is {q[i]:.6g} rad, {excess[i]:.3g} rad outside its limits "
+        raise JointAngleError(f"{field}: joint {i + 1} is {q[i]:.6g} rad, {excess[i]:.3g} rad outside its limits "
                              f"[{model.lower[i]:.6g}, {model.upper[i]:.6g}] of {model.name} (more than a quarter "
                              "turn: a reading of another arm, or degrees?)")
     return q
 
 
-def _target(target: np.ndarray, orientation: np.ndarray | None) -> tuple[np.ndarray, np.ndarray | None]:
+def _target(target: np.ndarray, orientation: np.ndarray | None,
+            model: RobotModel) -> tuple[np.ndarray, np.ndarray | None]:
+    """The target [m] and orientation checked; a target farther from the base than the arm's links and tool reach
+    at all (a target in millimetres: a user trial got 'misses by 634888 mm') is refused, naming the distance."""
     target = np.asarray(target, dtype=float)
     if target.shape != (3,) or not np.all(np.isfinite(target)):
         raise SpherecalError(f"target: expected 3 finite coordinates [m], got {target.tolist()!r}")
+    reach = model.chain_length + float(np.linalg.norm(model.tool))
+    away = float(np.linalg.norm(target - np.asarray(model.base_xyz, dtype=float)))
+    if away > 2.0 * reach:  # beyond any posture by twice: not a target of this arm
+        raise UnreachableError(f"target {np.round(target, 4).tolist()} m is {away:.4g} m from the base of "
+                               f"{model.name!r}, whose links and tool reach {reach:.3g} m at most (millimetres? "
+                               "targets are in metres)")
     if orientation is None:
         return target, None
     orientation = np.asarray(orientation, dtype=float)
@@ -372,7 +381,7 @@ def corrected_ik(
         UnreachableError: no joint angles reach the target from the seed nor from starts near it (outside the
             workspace).
     """
-    target, orientation = _target(target, orientation)
+    target, orientation = _target(target, orientation, calibrated)
     q0 = _seed(q0, calibrated, "q0")
     if nominal is not None:
         check_models(nominal, calibrated)
@@ -449,7 +458,7 @@ def compensate(
             workspace).
         CompensationError: (``strict`` only) the residual is still above ``tol`` at the end.
     """
-    target, orientation = _target(target, orientation)
+    target, orientation = _target(target, orientation, nominal)
     check_models(nominal, calibrated)
     q_seed = _seed(q_seed, nominal, "q_seed")
     if max_iter < 0:

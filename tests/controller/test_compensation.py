@@ -246,3 +246,21 @@ def test_a_target_the_seeds_ik_stalls_short_of_names_what_may_reach_it() -> None
     assert np.linalg.norm(tool_point(panda, reached) - target) < 1e-9
     with pytest.raises(UnreachableError, match="IK from the seed without restarts, stalls there .* corrected_ik"):
         nominal_ik_controller(panda, target, q_seed)
+
+
+def test_a_target_in_millimetres_and_a_seed_in_degrees_are_named_as_such() -> None:
+    """A user trial: a target given in mm ([484, 0, 412]) ended 'misses by 634888 mm' after the IK's restarts, and a
+    seed in degrees raised a plain SpherecalError where tool_point raises JointAngleError."""
+    from spherecal.correction import JointAngleError
+
+    panda = load_robot("panda")
+    calibrated = perturb(panda, np.random.default_rng(2))
+    q = np.array([0.0, -0.3, 0.0, -2.2, 0.0, 2.0, 0.8])
+    metres = tool_point(panda, q)
+    for call in (lambda t, s: corrected_ik(calibrated, t, s), lambda t, s: compensate(t, panda, calibrated, s)):
+        with pytest.raises(UnreachableError, match=r"m from the base of 'franka_panda', whose links and tool reach "
+                                                   r"[\d.]+ m at most \(millimetres\? targets are in metres\)"):
+            call(metres * 1e3, q)
+        with pytest.raises(JointAngleError, match=r"joint 2 is -17.1887 rad.*degrees\?"):
+            call(metres, np.degrees(q))
+        call(metres + 0.01, q)  # a target in metres within reach: no refusal
