@@ -51,7 +51,8 @@ def format_plan(result) -> str:
         f"{len(result.surveys)} candidates, {sum(s.reachable for s in result.surveys)} reachable; "
         f"self-motion: {result.motion}; noise {result.noise * 1e3:.3g} mm, {result.samples} samples per fixture",
         "predicted mean / 95th percentile tool-point error after registration [mm] of each candidate ALONE "
-        "(scale from the nominal model), and the share of each joint's range its self-motion covers [%]",
+        "(scale from the nominal model), and the share of each joint's range its self-motion covers [%] "
+        "(a range longer than a turn counted as one turn: the kinematics sees no more)",
         f"{'rank':>4} {'name':<8} {'x [m]':>7} {'y [m]':>7} {'z [m]':>7} | {'mean':>7} {'p95':>7} | "
         + " ".join(f"{'q' + str(j + 1):>4}" for j in range(len(result.surveys[0].coverage) if result.surveys else 0))
         + " | note",

@@ -9,7 +9,8 @@ the right one tab per kind of result that was logged, each view named in plain w
   below in the models' colours;
 * **Residuals**: histograms of the calibration residuals before and after;
 * **Parameter changes**: bars with +-1 std whiskers, lengths [mm] and angles [deg];
-* **Joint coverage**: per fixture, the share of each joint's range visited [%];
+* **Joint coverage**: per fixture, the share of each joint's range visited [%] (one turn at most: a full turn of a
+  joint limited to +-2 pi reads 100 %);
 * **Socket spread**: per held-out socket, the predicted tool points of both models [mm], each model's spread a wire
   sphere around its mean point and named in a legend above and below them;
 * **Tables**: the printed tables, the provenance last.

@@ -18,7 +18,7 @@ path                                 archetype      timeline    what
 ``errors/<model>/histogram``         BarChart       static      error histogram [mm]
 ``residuals/<before|after>``         BarChart       static      calibration residual histogram [mm]
 ``parameters/<lengths|angles>/*``    2D shapes      static      change per parameter, +-1 std, truth
-``coverage/<fixture>``               BarChart       static      share of each joint's range [%]
+``coverage/<fixture>``               BarChart       static      share of each joint's range, one turn at most [%]
 ``sockets/<fixture>/<model>``        Points3D       static      predicted tool points, mm from their mean
 ``sockets/<fixture>/<model>_mean``   Ellipsoids3D   static      wire sphere: the mean point, spread [mm]
 ``sockets/<fixture>/legend``         Points3D       static      each model's spread, labelled
@@ -50,6 +50,7 @@ from spherecal.correction.files.atomic import OutputError
 from spherecal.correction.files.provenance import comment_block
 from spherecal.correction.layout import ParamKind
 
+from ..coverage import visible_coverage
 from .blueprint import build_blueprint, union_box, view_axes
 from .recording_shapes import BAR_HEIGHT, capsules, colour_ramp, histogram, magnification, parameter_bars
 
@@ -420,20 +421,21 @@ class Recording:
     def coverage(self, per_fixture: dict[str, np.ndarray], lower: np.ndarray, upper: np.ndarray) -> None:
         """Share of each joint's range visited at each fixture (bars q1..qn, percent; the paper's Fig. 5).
 
+        A joint whose range is longer than one turn (a UR's +-2 pi) is measured against one turn, all the
+        kinematics can tell apart: a full turn of it reads 100 % (:mod:`spherecal.validation.coverage`).
+
         Args:
             per_fixture: fixture name -> (K, n) joint angles [rad] recorded there.
             lower, upper: (n,) joint limits [rad].
         """
-        span = np.asarray(upper) - np.asarray(lower)
         for k, (name, q) in enumerate(per_fixture.items()):
-            q = np.atleast_2d(q)
-            share = 100 * np.divide(np.ptp(q, axis=0), span, out=np.zeros(span.shape), where=span > 0)
+            share = 100 * visible_coverage(q, lower, upper)
             chart = self.rr.BarChart(share, abscissa=np.arange(share.size) + 0.6, widths=np.full(share.size, 0.8),
                                      color=self.fixture_colour(name, k))  # its sphere's colour in the 3D view
             self.stream.log(f"coverage/{name}", chart, static=True)
             # the fixture's name first: in a grid of 14 the title bar showed 'Joint cover' of every view
-            self._note("coverage", name, f"{name}: joint coverage, % of each joint's range (q1..q{share.size}), "
-                                         f"lowest {share.min():.0f} %")
+            self._note("coverage", name, f"{name}: joint coverage, % of each joint's range, a turn at most "
+                                         f"(q1..q{share.size}), lowest {share.min():.0f} %")
 
     def socket_spread(self, fixture: str, nominal: np.ndarray, calibrated: np.ndarray) -> None:
         """A held-out socket: the tool points each model predicts there, in mm around that model's own mean.
