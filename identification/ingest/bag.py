@@ -200,41 +200,48 @@ def _read_ros1(path: Path, model: RobotModel, topic: str) -> tuple[_Messages, st
     return messages, topic
 
 
+def _stamps(sec: np.ndarray, nanosec: np.ndarray, received: np.ndarray) -> np.ndarray:
+    """(K,) stamps [s]: ``header.stamp`` (``sec``, ``nanosec`` (K,)), or the bag's receive time ``received`` (K,) [ns]
+    where it is zero."""
+    seconds = sec + nanosec * 1e-9
+    return np.where(seconds > 0, seconds, received * 1e-9)
+
+
 @dataclass
 class _Group:
-    """The messages read with one list of joint names: their numbers, stamps and ``position`` arrays."""
+    """The messages read with one list of joint names: their numbers, stamps and the arm's joint angles.
+
+    Only the arm's joints are kept (``index``: their places in the names, in the model's order), and the stamp as one
+    float (:func:`_stamps`): a Panda's messages carry 9 positions (the fingers too) and the blocks held them all with
+    four int64 columns (number, sec, nanosec, receive time) until joined, 104 bytes a message where 72 do."""
 
     index: np.ndarray  # the arm's joints' places in the names
-    size: int  # names (= positions) per message
     numbers: array = field(default_factory=lambda: array("q"))  # 1-based message number on the topic
-    sec: array = field(default_factory=lambda: array("q"))  # header.stamp
-    nanosec: array = field(default_factory=lambda: array("q"))
-    received: array = field(default_factory=lambda: array("q"))  # the bag's receive time [ns]
-    positions: bytearray = field(default_factory=bytearray)  # little-endian float64, ``size`` per message
-    blocks: list = field(default_factory=list)  # (numbers, sec, nanosec, received, positions): read in arrays
+    stamps: array = field(default_factory=lambda: array("d"))  # [s] (:func:`_stamps`)
+    q: array = field(default_factory=lambda: array("d"))  # the arm's joint angles [rad], n per message
+    blocks: list = field(default_factory=list)  # (numbers, stamps, q): read in arrays
 
     def parts(self):
-        """``(numbers, sec, nanosec, received, positions)`` of the group's messages, a block at a time (in no particular
-        order): the ones deserialised, then each block read in arrays."""
-        one = [np.frombuffer(getattr(self, name), dtype=np.int64) for name in ("numbers", "sec", "nanosec", "received")]
-        yield (*one, np.frombuffer(self.positions, dtype="<f8").reshape(-1, self.size))
+        """``(numbers, stamps, q)`` of the group's messages, a block at a time (in no particular order): the ones
+        deserialised, then each block read in arrays; ``q`` (K, n) [rad]."""
+        yield (np.frombuffer(self.numbers, dtype=np.int64), np.frombuffer(self.stamps, dtype=float),
+               np.frombuffer(self.q, dtype=float).reshape(-1, len(self.index)))
         yield from self.blocks
 
-    def columns(self) -> tuple[np.ndarray, ...]:
-        """``(numbers, sec, nanosec, received, q)`` of every message of the group (the deserialised ones, then the
-        blocks in the order read), ``q`` (K, n) the arm's joint angles [rad]. Each block is let go once copied (the
-        blocks and their copies side by side, then concatenated, were a read's memory peak)."""
+    def columns(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """``(numbers, stamps, q)`` of every message of the group (the deserialised ones, then the blocks in the order
+        read), ``q`` (K, n) the arm's joint angles [rad]. Each block is let go once copied (the blocks and their copies
+        side by side, then concatenated, were a read's memory peak)."""
         parts, self.blocks = [*self.parts()][::-1], []
         total = sum(len(part[0]) for part in parts)
-        out = [np.empty(total, dtype=np.int64) for _ in range(4)] + [np.empty((total, len(self.index)))]
+        out = (np.empty(total, dtype=np.int64), np.empty(total), np.empty((total, len(self.index))))
         at = 0
         while parts:
             part = parts.pop()
-            for column, values in zip(out[:4], part[:4], strict=True):
+            for column, values in zip(out, part, strict=True):
                 column[at : at + len(values)] = values
-            out[4][at : at + len(part[0])] = part[4][:, self.index]
             at += len(part[0])
-        return tuple(out)
+        return out
 
 
 @dataclass
@@ -256,6 +263,7 @@ class _Layout:
     length: int  # of the whole message
     names: tuple[str, ...]
     group: _Group | None = None  # the arm's messages of these names (None: another device's, no positions, ...)
+    arm: slice | np.ndarray = field(default_factory=lambda: slice(None))  # the group's joints' places in the names
     raw: list = field(default_factory=list)  # messages matched and not yet read into ``group``
     numbers: array = field(default_factory=lambda: array("q"))  # theirs
     received: array = field(default_factory=lambda: array("q"))
@@ -279,13 +287,14 @@ class _Layout:
         return same
 
     def read(self, data: np.ndarray, numbers: np.ndarray, received: np.ndarray) -> tuple[np.ndarray, ...]:
-        """``(numbers, sec, nanosec, received, positions)`` (a :class:`_Group` block) of messages of this layout:
-        ``data`` (K, length) their bytes (uint8), ``numbers`` and ``received`` (K,) theirs."""
+        """``(numbers, stamps, q)`` (a :class:`_Group` block) of messages of this layout: ``data`` (K, length) their
+        bytes (uint8), ``numbers`` and ``received`` [ns] (K,) theirs; ``q`` (K, n) the arm's joint angles [rad]."""
         stamps = np.ascontiguousarray(data[:, 4:12]).view(np.dtype([("sec", "<i4"), ("nanosec", "<u4")]))[:, 0]
         positions = np.ascontiguousarray(data[:, self.at_position:self.at_velocity]).view("<f8")
-        return (np.asarray(numbers, dtype=np.int64), stamps["sec"].astype(np.int64),
-                stamps["nanosec"].astype(np.int64), np.asarray(received, dtype=np.int64),
-                positions.astype(float, copy=False))
+        return (np.asarray(numbers, dtype=np.int64),
+                _stamps(stamps["sec"].astype(np.int64), stamps["nanosec"].astype(np.int64),
+                        np.asarray(received, dtype=np.int64)),
+                positions[:, self.arm].astype(float, copy=False))
 
     def flush(self) -> None:
         """Read the stamps and positions of the messages matched into the group's arrays, all at once."""
@@ -416,6 +425,9 @@ class _Messages:
         if layout is None:
             return None
         layout.group = self.groups.get(layout.names) if layout.positioned else None
+        if layout.group is not None:
+            index = layout.group.index
+            layout.arm = slice(None) if np.array_equal(index, np.arange(len(layout.names))) else index
         self.layouts.append(layout)
         return layout
 
@@ -495,13 +507,11 @@ class _Messages:
             if self.arm.isdisjoint(names) or missing_joints(names, self.model):
                 self._other(names, True, k)
                 return
-            group = self.groups[names] = _Group(match_joints(list(names), self.model, where)[0], len(names))
+            group = self.groups[names] = _Group(match_joints(list(names), self.model, where)[0])
         stamp = message.header.stamp
         group.numbers.append(k + 1)
-        group.sec.append(stamp.sec)
-        group.nanosec.append(stamp.nanosec)
-        group.received.append(timestamp)
-        group.positions += position.astype("<f8").tobytes()
+        group.stamps.append(float(_stamps(np.int64(stamp.sec), np.int64(stamp.nanosec), np.int64(timestamp))))
+        group.q.extend(position[group.index])
         self.count += 1
 
     def arrays(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -513,14 +523,12 @@ class _Messages:
         groups = []
         for names in list(self.groups):  # each group's blocks let go once read
             groups.append(self.groups.pop(names).columns())
-        numbers, sec, nanosec, received, q = groups[0] if len(groups) == 1 else (
-            np.concatenate([g[i] for g in groups]) for i in range(5))
+        numbers, stamps, q = groups[0] if len(groups) == 1 else (
+            np.concatenate([g[i] for g in groups]) for i in range(3))
         del groups
         order = np.argsort(numbers, kind="stable")
         if np.any(order != np.arange(order.size)):
-            numbers, sec, nanosec, received, q = numbers[order], sec[order], nanosec[order], received[order], q[order]
-        seconds = sec + nanosec * 1e-9
-        stamps = np.where(seconds > 0, seconds, received * 1e-9)
+            numbers, stamps, q = numbers[order], stamps[order], q[order]
         return numbers, stamps, q
 
     def check_finite(self) -> None:
@@ -533,8 +541,8 @@ class _Messages:
             return
         for layout in self.layouts:
             layout.flush()
-        bad = np.concatenate([numbers[~np.isfinite(positions[:, g.index]).all(axis=1)]
-                              for g in self.groups.values() for numbers, *_, positions in g.parts()])
+        bad = np.concatenate([numbers[~np.isfinite(q).all(axis=1)]
+                              for g in self.groups.values() for numbers, _, q in g.parts()])
         if bad.size:
             raise RecordingError(f"{self.where}{int(bad.min())}, field 'position': not finite")
 

@@ -584,6 +584,25 @@ def test_a_bag_read_at_its_messages_offsets_is_read_as_deserialised(recording, r
     _same_reading(fast, read_bag(bag, model))
 
 
+@pytest.mark.parametrize("ros1", [False, True])
+def test_the_blocks_hold_the_arms_joints_only(recording, ros1, tmp_path, monkeypatch) -> None:
+    # until joined, the blocks held every position of a message (a Panda's 9, the fingers too) and four int64 columns
+    # (number, sec, nanosec, receive time): now the arm's 7 angles, by name, the number and one float stamp
+    _, t, q, _ = recording
+    bag = tmp_path / ("mixed.bag" if ros1 else "mixed")
+    _raw_joint_states(bag, _mixed(t, q), ros1=ros1, chunk=2000)
+    monkeypatch.setattr(bag_module, "_BLOCK", 5)
+    columns, shapes = bag_module._Group.columns, []
+
+    def recorded(group):
+        shapes.extend((len(part), part[2].shape[1:], part[1].dtype) for part in group.parts())
+        return columns(group)
+
+    monkeypatch.setattr(bag_module._Group, "columns", recorded)
+    read_bag(bag, load_robot(PANDA))
+    assert len(shapes) > 5 and set(shapes) == {(3, (7,), np.dtype(float))}
+
+
 def test_a_ros1_bag_is_read_in_rosbags_order_across_chunks_and_publishers(recording, tmp_path, monkeypatch) -> None:
     # the messages come in the order of their receive times (rosbags' reader: a tie by the connection, then by the
     # index), numbered so: two publishers on the topic, receive times that go back across chunks of 1 kB and ties
