@@ -14,12 +14,14 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("robot", metavar="CAL.yaml", help="calibrated robot file")
     tool = parser.add_mutually_exclusive_group(required=True)
     tool.add_argument("--offset", nargs=3, type=finite, metavar=("X", "Y", "Z"),
-                      help="the new tool's nominal point in the last DH frame [m] (from that frame's origin, not "
-                      "from the flange: the Panda's flange is at 0 0 0.107 in it, so a TCP 0.1034 m past the flange "
-                      "is 0 0 0.2104); the "
-                      "calibration's correction of the old tool point is carried over and added. The old tool's "
-                      "nominal point (the ball's) is calibration.nominal_tool in CAL.yaml, e.g. its z + 0.1 for a "
-                      "tool 0.1 m further along z; the command prints both points")
+                      help="the new tool's nominal point in the last DH frame [m]: from that frame's origin and "
+                      "along its axes, which are not the flange's in general (where the flange sits in that frame "
+                      "depends on the arm and on how its model was built). Simplest: the old tool's nominal point "
+                      "(the ball's, calibration.nominal_tool in CAL.yaml; the command prints both points) plus the "
+                      "new tool's offset from the ball, e.g. its z + 0.1 for a tool 0.1 m further along z; or take "
+                      "the point from the arm's URDF with --urdf and --tip-link. The calibration's correction of the "
+                      "old tool point is carried over and added. Example, the embedded Panda: its flange is at "
+                      "0 0 0.107 in that frame, so a TCP 0.1034 m past the flange is 0 0 0.2104")
     tool.add_argument("--urdf", default=None, metavar="TOOL.urdf",
                       help="a URDF of the same arm with the new tool (its last DH frame must be the calibrated "
                       "file's); --tip-link names the tool link")
