@@ -96,7 +96,8 @@ def point_of(value, where: str) -> np.ndarray:
 
 def with_tool(model: RobotModel, tool: np.ndarray, payload: dict | None = None,
               angle: float = ANGLE.prior_std, nominal_tool: np.ndarray | None = None, field: str = "tool",
-              samples_tool: np.ndarray | None = None, adapter: bool | None = None) -> ToolSwap:
+              samples_tool: np.ndarray | None = None, adapter: bool | None = None,
+              source: str | None = None) -> ToolSwap:
     """Put another tool point on a (calibrated) model.
 
     The calibrated tool point carries more than the ball's mounting: the last joint's ``d`` and ``theta``
@@ -127,6 +128,7 @@ def with_tool(model: RobotModel, tool: np.ndarray, payload: dict | None = None,
             nominal_tool``); False: the ball's own, not carried (only ``model.tool - samples_tool``, the
             calibration's correction). Needed, and recorded in ``tool_swap``, only when ``samples_tool`` is given
             and beyond :data:`TIP_MOVED` from ``nominal_tool``.
+        source: the calibrated file ``samples_tool`` came from, named in the refusal that asks for ``adapter``.
 
     Raises:
         ToolError: ``adapter`` not given where it is needed (the controller would aim the offset off, one way or
@@ -153,7 +155,8 @@ def with_tool(model: RobotModel, tool: np.ndarray, payload: dict | None = None,
         shift = samples_shift(nominal_tool, samples_tool)
         if shift is not None:
             if adapter is None:
-                raise ToolError(f"field '--adapter': {adapter_question(shift)}: say which")
+                raise ToolError(f"{f'{source}: ' if source else ''}field '--adapter': {adapter_question(shift)}: "
+                                "say which")
             stated = {"adapter": bool(adapter), "samples_shift": [float(v) for v in shift]}
             if not adapter:
                 carried = carried - shift

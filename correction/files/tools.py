@@ -56,7 +56,7 @@ def put_tool(model: RobotModel, offset: np.ndarray | None = None, urdf: str | os
         nominal = point_of(nominal, f"{source or model.name}: field '{NOMINAL_TOOL}'")
         samples = None if samples is None else point_of(samples, f"{source or model.name}: field '{SAMPLES_TOOL}'")
     swap = with_tool(model, offset, payload, nominal_tool=nominal, field="--offset" if urdf is None else "--tip-link",
-                     samples_tool=samples, adapter=adapter)
+                     samples_tool=samples, adapter=adapter, source=None if source is None else str(source))
     swap = replace(swap, model=_retipped(swap.model, description.extras.get("urdf") if urdf is not None else None))
     if payload is not None:
         line = f"payload from {urdf}: {payload['mass']:.3f} kg (what its last link carries)"

@@ -126,6 +126,8 @@ def test_a_tool_swap_and_a_controller_must_be_told_whether_the_balls_offset_is_a
     q = data.q[::7]
     with pytest.raises(ToolError, match=r"field '--adapter': the calibration's samples put the ball 3\d\.\d mm from"):
         put_tool(out.model, offset=tcp)
+    with pytest.raises(ToolError, match=r"^cal\.yaml: field '--adapter': "):  # the file whose samples it is about
+        put_tool(out.model, offset=tcp, source="cal.yaml")
     own_tcp = true.tool - SENSOR + [0.0, 0.0, 0.1]  # the true arm's flange error is every tool's; the mount is not
     for adapter, truth in ((False, own_tcp), (True, own_tcp + SENSOR)):
         swap, _ = put_tool(out.model, offset=tcp, adapter=adapter)
