@@ -247,7 +247,7 @@ def test_samples_are_drawn_magnified_inside_wire_spheres(tmp_path, rng) -> None:
     20 to 50 mm), the samples are drawn about their fixture's centre, their offsets magnified by one gain so that their
     95th percentile fills the sphere, and the first fixture's label says what the sphere stands for; world/fixtures
     is still one row."""
-    from spherecal.validation.viewer.recording import FIXTURE_RADIUS, Recording, read_entity_rows
+    from spherecal.validation.viewer.recording import FIXTURE_RADIUS, Recording, read_entity_rows, read_layout
 
     centres = np.array([[0.5, -0.25, 0.5], [0.5, 0.0, 0.4]])
     labels = np.repeat(["P1", "P2"], 300)
@@ -262,7 +262,9 @@ def test_samples_are_drawn_magnified_inside_wire_spheres(tmp_path, rng) -> None:
     assert fixtures["fill_mode"][0] != 3  # FillMode.Solid hid the samples
     radius = fixtures["half_sizes"][0][0]
     assert radius == pytest.approx(FIXTURE_RADIUS[1], rel=1e-6)  # 0.4 x 269 mm apart, at most 50 mm
-    assert fixtures["labels"] == ["P1\nsamples x50 about each centre:\nsphere 1 mm", "P2 (fit)"]
+    assert fixtures["labels"] == ["P1", "P2 (fit)"]  # the note covered the next socket's label: in the view's title
+    title = read_layout(tmp_path / "m.rrd")["title"]
+    assert title.endswith("; samples x50 about each fixture's centre, its sphere 1 mm")
     np.testing.assert_allclose(shown - centres[[0] * 300 + [1] * 300], 50 * (points - centres[[0] * 300 + [1] * 300]),
                                atol=1e-6)
     far = np.quantile(np.linalg.norm(shown - centres[[0] * 300 + [1] * 300], axis=1), 0.95)

@@ -186,15 +186,11 @@ class Recording:
         self._fixture_log = (list(names), positions, colours)  # logged on closing, with what samples() drew
 
     def _log_fixtures(self) -> None:
-        """``world/fixtures`` (on closing, once) as :meth:`fixtures` was given it, the first label followed by what the
-        spheres stand for when :meth:`samples` magnified the samples (``P1`` / ``samples x50 about each centre:`` /
-        ``sphere 1 mm``)."""
+        """``world/fixtures`` (on closing, once) as :meth:`fixtures` was given it."""
         if self._fixture_log is None:
             return
         names, positions, colours = self._fixture_log
         labels = list(names)
-        if self._sample_note and labels:
-            labels[0] = f"{labels[0]}\n{self._sample_note}"  # once: a plate's sockets are centimetres apart
         self.stream.log(
             "world/fixtures",
             self.rr.Ellipsoids3D(
@@ -246,8 +242,8 @@ class Recording:
 
         Each sample is drawn at its fixture's centre (:meth:`fixtures`, else the mean of its samples) plus its offset
         from it times one gain for all fixtures (:func:`.recording_shapes.magnification`): the 95th percentile of the
-        offsets fills the fixture's wire sphere, whose radius then stands for a round figure, named in the first
-        fixture's label (``samples x40 about each centre: sphere 0.5 mm``). Drawn where they are, tenths of a
+        offsets fills the fixture's wire sphere, whose radius then stands for a round figure, named in the main 3D
+        view's title (``samples x40 about each fixture's centre, its sphere 0.5 mm``). Drawn where they are, tenths of a
         millimetre apart, the samples made one dot hidden inside the fixture's 20 mm sphere (a reviewer's finding).
         The dots are of one size on the screen.
         """
@@ -264,8 +260,8 @@ class Recording:
         self.stream.log("world/samples", self.rr.Points3D(shown, radii=self.rr.Radius.ui_points(2.0), colors=colours),
                         static=True)
         self.extend_bounds("world", shown)
-        if gain > 1:  # in the first fixture's label (:meth:`_log_fixtures`)
-            self._sample_note = f"samples x{gain:.3g} about each centre:\nsphere {reach * 1e3:.3g} mm"
+        if gain > 1:  # in the main view's title (:meth:`close`)
+            self._sample_note = f"samples x{gain:.3g} about each fixture's centre, its sphere {reach * 1e3:.3g} mm"
 
     def colour_legend(self, name: str, points: np.ndarray, colours: np.ndarray, labels: list[str],
                       heading: str) -> None:
@@ -513,10 +509,13 @@ class Recording:
             self._colour_scales()
             self._log_fixtures()
             self._base_frame()
-            blueprint = build_blueprint(self.contents, self.title, self.bounds)
+            # what the fixtures' spheres stand for when samples() magnified the samples, in the main view's title: in
+            # the first fixture's label it covered the next socket's label, a plate's sockets centimetres apart
+            title = f"{self.title}; {self._sample_note}" if self._sample_note else self.title
+            blueprint = build_blueprint(self.contents, title, self.bounds)
             self.stream.send_blueprint(blueprint, make_active=True, make_default=True)
             bounds = {k: v.tolist() for k, v in self.bounds.items()}
-            layout = {"contents": self.contents, "title": self.title, "bounds": bounds}
+            layout = {"contents": self.contents, "title": title, "bounds": bounds}
             layout["application_id"] = self.application_id
             self.stream.send_property("spherecal_layout", self.rr.AnyValues(layout=json.dumps(layout)))
             self.stream.flush()
