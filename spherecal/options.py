@@ -152,7 +152,14 @@ class Parser(argparse.ArgumentParser):
         return namespace, extras
 
     def error(self, message: str):  # noqa: D102 - argparse's hook
-        self.exit(1, f"{self.prog}: error: {_as_field(message)} (see {self.prog} --help)\n")
+        said = _as_field(message)
+        missing = _ARGPARSE_MISSING.match(message)
+        if missing:  # a missing option with a few values names them ('export' without --format said only 'required')
+            first = missing.group(1).split(", ")[0]
+            action = next((a for a in self._actions if first in a.option_strings), None)
+            if action is not None and action.choices:
+                said += f" (one of {', '.join(map(str, action.choices))})"
+        self.exit(1, f"{self.prog}: error: {said} (see {self.prog} --help)\n")
 
 
 # --------------------------------------------------------------------------------------- types

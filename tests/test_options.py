@@ -307,6 +307,9 @@ def test_a_value_argparse_refuses_names_its_option_as_field(argv, field, said, t
     # a positional argument kept argparse's words: 'the following arguments are required: CAL.yaml, --format, --out'
     (["export"], "field 'CAL.yaml': required (also missing: --format, --out) (see spherecal export --help)"),
     (["tool", "--out", "t.yaml"], "field 'CAL.yaml': required (see spherecal tool --help)"),
+    # a missing option of a few values names them (a user trial: 'export' said only 'required')
+    (["export", "c.yaml", "--out", "c.urdf"], "field '--format': required (one of urdf, mjcf, yaml) (see spherecal "
+                                              "export --help)"),
     (["import"], "field 'SOURCE': required (also missing: --format, --robot, --out)"),
 ])
 def test_a_missing_option_is_named_as_field(argv, said, tmp_path, capsys, monkeypatch) -> None:
