@@ -29,27 +29,39 @@ GOAL_SAME_START = 0.01  # [rad] a goal not found at GOAL_MISSES decisions from w
 GOAL_MISSES = 3  # is not sought again from there (a saturated fixture)
 
 
-def joint_coverage(q: np.ndarray, lower: np.ndarray, upper: np.ndarray) -> np.ndarray:
-    """Share of each joint's range visited by a continuous trajectory (the paper's Fig. 5).
+#: One turn [rad]: the most of a revolute joint's range the kinematics can tell apart.
+TURN = 2 * np.pi
 
-    A continuous path visits every angle between its extremes, so this is
-    ``(max q_j - min q_j) / (upper_j - lower_j)``.
+
+def joint_coverage(q: np.ndarray, lower: np.ndarray, upper: np.ndarray) -> np.ndarray:
+    """Share of each joint's distinct angles visited by a continuous trajectory (the paper's Fig. 5).
+
+    A continuous path visits every angle between its extremes. Every joint spherecal models is revolute (the URDF
+    reader refuses prismatic ones), so ``q_j`` and ``q_j + 2 pi`` put every link in the same place: a joint limited to
+    +-2 pi (a UR's) has one turn of distinct poses, and a sweep of one turn has seen them all. So::
+
+        coverage_j = min(max q_j - min q_j, 2 pi) / min(upper_j - lower_j, 2 pi)
+
+    the share of the range for a joint of one turn or less (a Panda's, a UR's elbow). A UR trial's q1 swept through a
+    full turn read 50 % against the whole range.
 
     Args:
-        q: (K, n) joint angles [rad] (K >= 1).
+        q: (K, n) joint angles [rad] (K >= 1; a (n,) configuration reads as K = 1).
         lower, upper: (n,) limits [rad].
 
     Returns:
-        (n,) shares in [0, 1].
+        (n,) shares, 1 for a full turn or the whole range (0 for a joint without range); samples past the limits
+        (the samples reader lets a reading through a little beyond them) can read a little above 1.
     """
-    return range_share(q.min(axis=0), q.max(axis=0), lower, upper)
+    q = np.atleast_2d(np.asarray(q, dtype=float))
+    return range_share(q.min(axis=0), q.max(axis=0), np.asarray(lower, dtype=float), np.asarray(upper, dtype=float))
 
 
 def range_share(low: np.ndarray, high: np.ndarray, lower: np.ndarray, upper: np.ndarray) -> np.ndarray:
-    """(n,) ``(high - low) / (upper - lower)``, 0 for a joint without range: :func:`joint_coverage` of a
-    trajectory with extremes ``low``, ``high`` (n,) [rad] between the limits ``lower``, ``upper`` (n,) [rad]."""
-    span = upper - lower
-    return np.divide(high - low, span, out=np.zeros(span.shape), where=span > 0)
+    """(n,) ``min(high - low, 2 pi) / min(upper - lower, 2 pi)``, 0 for a joint without range: :func:`joint_coverage`
+    of a trajectory with extremes ``low``, ``high`` (n,) [rad] between the limits ``lower``, ``upper`` (n,) [rad]."""
+    span = np.minimum(upper - lower, TURN)
+    return np.divide(np.minimum(high - low, TURN), span, out=np.zeros(span.shape), where=span > 0)
 
 
 class RunningExtent:

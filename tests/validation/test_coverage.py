@@ -6,8 +6,7 @@ from dataclasses import replace
 
 import numpy as np
 
-from spherecal.controller.exploration import joint_coverage
-from spherecal.validation.coverage import TURN, visible_coverage
+from spherecal.controller.exploration import TURN, joint_coverage
 from spherecal.validation.planning.candidates import Candidate
 from spherecal.validation.planning.plan import survey_candidate
 
@@ -18,7 +17,8 @@ UR_UPPER = -UR_LOWER
 
 def test_a_full_turn_of_a_joint_limited_to_two_turns_reads_100_percent() -> None:
     """q1 on +-2 pi swept through one turn read 50 % (and a sweep of 0.5 rad 4 % in a UR trial); the kinematics
-    cannot tell q from q + 2 pi, so one turn is all there is to see."""
+    cannot tell q from q + 2 pi, so one turn is all there is to see. One definition: the simulation's exploration,
+    its printed table, plan and the Rerun bars (two read 50 % and 100 % for the same sweep)."""
     turn = np.linspace(-np.pi, np.pi, 50)
     q = np.zeros((50, 6))
     q[:, 0] = turn  # one full turn
@@ -26,20 +26,17 @@ def test_a_full_turn_of_a_joint_limited_to_two_turns_reads_100_percent() -> None
     q[:, 2] = turn  # the elbow's whole +-pi range
     q[:, 3] = turn / 2  # half a turn of a +-2 pi joint
     q[:, 4] = np.linspace(0.0, 0.5, 50)
-    share = visible_coverage(q, UR_LOWER, UR_UPPER)
-    np.testing.assert_allclose(share, [1.0, 1.0, 1.0, 0.5, 0.5 / TURN, 0.0])
-    # the share of the range, as before, reads a quarter or half of that on the +-2 pi joints
-    np.testing.assert_allclose(joint_coverage(q, UR_LOWER, UR_UPPER), [0.5, 1.0, 1.0, 0.25, 0.25 / TURN, 0.0])
+    np.testing.assert_allclose(joint_coverage(q, UR_LOWER, UR_UPPER), [1.0, 1.0, 1.0, 0.5, 0.5 / TURN, 0.0])
 
 
 def test_a_joint_within_one_turn_reads_the_share_of_its_range(panda, rng) -> None:
     q = panda.random_configurations(30, rng)
-    np.testing.assert_allclose(visible_coverage(q, panda.lower, panda.upper), joint_coverage(q, panda.lower,
-                                                                                             panda.upper))
+    reference = (q.max(axis=0) - q.min(axis=0)) / (panda.upper - panda.lower)  # the paper's Fig. 5
+    np.testing.assert_allclose(joint_coverage(q, panda.lower, panda.upper), reference)
     locked = panda.upper.copy()
     locked[2] = panda.lower[2]  # a joint without range: 0, no division by zero
     q[:, 2] = locked[2]
-    assert visible_coverage(q, panda.lower, locked)[2] == 0.0
+    assert joint_coverage(q, panda.lower, locked)[2] == 0.0
 
 
 def test_plan_survey_counts_a_long_joint_against_one_turn(panda) -> None:

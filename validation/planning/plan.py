@@ -30,6 +30,7 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
+from spherecal.controller.exploration import joint_coverage
 from spherecal.controller.reach import UnreachableFixtureError, check_fixture
 from spherecal.correction import RobotModel
 from spherecal.correction.errors import SpherecalError
@@ -39,7 +40,6 @@ from spherecal.identification.prediction import Prediction, Workspace, predict_a
 from spherecal.identification.selfcheck import MIN_SEPARATION
 from spherecal.identification.synthetic import fixture_samples, project_to_point
 
-from ..coverage import visible_coverage
 from ..parallel import Outcome, run_tasks
 from .candidates import Candidate, CandidateError
 
@@ -62,7 +62,7 @@ class Survey:
         reason: why not (one line), or ``""``.
         q: (K, n) self-motion samples [rad] (empty when unreachable).
         coverage: (n,) share of each joint's range covered by the samples, a range longer than a turn counted
-            as one turn (:func:`spherecal.validation.coverage.visible_coverage`; zeros when unreachable).
+            as one turn (:func:`spherecal.controller.exploration.joint_coverage`; zeros when unreachable).
         alone: predicted accuracy of this candidate alone (None when unreachable or unidentifiable).
     """
 
@@ -214,7 +214,7 @@ def survey_candidate(
         q = motion_samples(model, candidate, count, candidate_rng(seed, candidate), motion, seconds)
     except SpherecalError as error:
         return Survey(candidate, False, str(error), np.zeros((0, model.n_joints)), np.zeros(model.n_joints))
-    return Survey(candidate, True, "", q, visible_coverage(q, model.lower, model.upper))
+    return Survey(candidate, True, "", q, joint_coverage(q, model.lower, model.upper))
 
 
 def survey(

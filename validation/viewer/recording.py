@@ -45,12 +45,12 @@ from pathlib import Path
 
 import numpy as np
 
+from spherecal.controller.exploration import joint_coverage
 from spherecal.correction import RobotModel, link_frames, tool_point
 from spherecal.correction.files.atomic import OutputError
 from spherecal.correction.files.provenance import comment_block
 from spherecal.correction.layout import ParamKind
 
-from ..coverage import visible_coverage
 from .blueprint import build_blueprint, union_box, view_axes
 from .recording_shapes import BAR_HEIGHT, capsules, colour_ramp, histogram, magnification, parameter_bars
 
@@ -418,14 +418,15 @@ class Recording:
         """Share of each joint's range visited at each fixture (bars q1..qn, percent; the paper's Fig. 5).
 
         A joint whose range is longer than one turn (a UR's +-2 pi) is measured against one turn, all the
-        kinematics can tell apart: a full turn of it reads 100 % (:mod:`spherecal.validation.coverage`).
+        kinematics can tell apart: a full turn of it reads 100 %
+        (:func:`spherecal.controller.exploration.joint_coverage`).
 
         Args:
             per_fixture: fixture name -> (K, n) joint angles [rad] recorded there.
             lower, upper: (n,) joint limits [rad].
         """
         for k, (name, q) in enumerate(per_fixture.items()):
-            share = 100 * visible_coverage(q, lower, upper)
+            share = 100 * joint_coverage(q, lower, upper)
             chart = self.rr.BarChart(share, abscissa=np.arange(share.size) + 0.6, widths=np.full(share.size, 0.8),
                                      color=self.fixture_colour(name, k))  # its sphere's colour in the 3D view
             self.stream.log(f"coverage/{name}", chart, static=True)
