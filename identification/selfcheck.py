@@ -192,7 +192,8 @@ def self_check(
     free = leave_out(jac, res, {k: groups[k] for k in shrink})[2] if shrink else {}
     left = {k: held[k] if k in held else free[k] for k in groups}
     checkable = sum(1 for k, g in left.items() if g.dof > 0 and not unchecked_scale(problem, kinds[k]))
-    trends = _trends(problem, x)
+    errors = problem.sample_errors(x)  # (K, 3): the trends and the serial correlation read them
+    trends = _trends(problem, errors)
     # the largest joint-angle error the nominal's spread at the sockets holds: bounds the leave-one-out allowance
     # and the recorded error alike (computed once)
     bound = joint_error_bound(nominal, (built or problem).dataset)
@@ -219,7 +220,7 @@ def self_check(
                                    excess_energy(shown, noise, problem.n_data - unknowns), std=parts[1],
                                    free=problem.free, bound=bound)
     prediction, record = _prediction(nominal, built or problem, judged, sigma, shown, bias=joint_error[1])
-    rho = serial_correlation(problem.dataset, problem.sample_errors(x))
+    rho = serial_correlation(problem.dataset, errors)
     prediction = replace(prediction, figures={**prediction.figures, "residual_lag1_correlation": rho})
     if rho > SERIAL:  # said, not applied: the split of the residual (:mod:`.joint_error`) holds a part of it
         inflation = (1.0 + rho) / (1.0 - rho)
@@ -330,22 +331,28 @@ def serial_correlation(dataset, errors: np.ndarray) -> float:
     ``(1 - rho) / (1 + rho)`` as many independent observations as they number (a first-order autoregressive noise).
     """
     num = den = 0.0
-    for j in range(len(dataset.fixture_names)):
-        rows = np.flatnonzero(dataset.fixture_index == j)
-        if len(rows) < TREND_SAMPLES:
-            continue
-        order = rows if dataset.t is None else rows[np.argsort(dataset.t[rows], kind="stable")]
+    for _, order in _in_recording_order(dataset):
         e = errors[order] - errors[order].mean(axis=0)
         num += float(np.sum(e[1:] * e[:-1]))
         den += float(np.sum(e * e))
     return num / den if den > 0.0 else float("nan")
 
 
-def _trends(problem: CalibrationProblem, x: np.ndarray) -> list[Finding]:
+def _in_recording_order(dataset):
+    """``(fixture name, its rows in recording order)`` for each fixture of at least :data:`TREND_SAMPLES` samples:
+    file order, or time order when the samples were stamped."""
+    for j, name in enumerate(dataset.fixture_names):
+        rows = np.flatnonzero(dataset.fixture_index == j)
+        if len(rows) >= TREND_SAMPLES:
+            yield name, rows if dataset.t is None else rows[np.argsort(dataset.t[rows], kind="stable")]
+
+
+def _trends(problem: CalibrationProblem, errors: np.ndarray) -> list[Finding]:
     """Per fixture, does the residual trend with recording order (file order, or time when recorded)? A
     socket or ball that moved while it was recorded (MUKCa's Gen3 lite ``front_h0``).
 
-    The residual vectors (K, 3) are fitted by a line in the sample number; the trend is its change from
+    ``errors``: (K, 3) the samples' residual vectors [m] (``problem.sample_errors`` at the solution). Each fixture's
+    are fitted by a line in the sample number; the trend is its change from
     the first sample to the last, significant when an axis's slope has ``|t| >`` :data:`TREND_T` and the
     change exceeds :data:`TREND_CHANGE` x the declared noise.
 
@@ -358,13 +365,8 @@ def _trends(problem: CalibrationProblem, x: np.ndarray) -> list[Finding]:
     refused as before, by their disagreement.
     """
     dataset = problem.dataset
-    errors = problem.sample_errors(x)
     out = []
-    for j, name in enumerate(dataset.fixture_names):
-        rows = np.flatnonzero(dataset.fixture_index == j)
-        if len(rows) < TREND_SAMPLES:
-            continue
-        order = rows if dataset.t is None else rows[np.argsort(dataset.t[rows], kind="stable")]
+    for name, order in _in_recording_order(dataset):
         e = errors[order]
         k = np.arange(len(e), dtype=float)
         k -= k.mean()
