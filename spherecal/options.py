@@ -110,10 +110,12 @@ _ARGPARSE_MISSING = re.compile(r"^the following arguments are required: (.+)$")
 _ARGPARSE_ONE_OF = re.compile(r"^one of the arguments (.+) is required$")
 
 
-def _as_field(message: str) -> str:
+def _as_field(message: str, choices: dict[str, tuple] | None = None) -> str:
     """argparse's ``argument --name: ...`` as ``field '--name': ...`` (the long spelling of several), and its
     missing arguments as ``field '--robot': required (also missing: --out)``, a positional one by its name as
-    ``field 'CAL.yaml': required (also missing: --format, --out)``."""
+    ``field 'CAL.yaml': required (also missing: --format, --out)``; a missing option of a few values (``choices``:
+    option string -> its values) names them: ``field '--format': required (one of urdf, mjcf, yaml)`` (``export``
+    without --format said only 'required')."""
     def field(match: re.Match) -> str:
         spellings = match.group(1).split("/")
         return f"field '{next((s for s in spellings if s.startswith('--')), spellings[0])}': "
@@ -121,7 +123,9 @@ def _as_field(message: str) -> str:
     missing = _ARGPARSE_MISSING.match(message)
     if missing:
         first, *rest = missing.group(1).split(", ")
-        return f"field '{first}': required" + (f" (also missing: {', '.join(rest)})" if rest else "")
+        values = (choices or {}).get(first)
+        return (f"field '{first}': required" + (f" (also missing: {', '.join(rest)})" if rest else "")
+                + (f" (one of {', '.join(map(str, values))})" if values else ""))
     one_of = _ARGPARSE_ONE_OF.match(message)
     if one_of:
         options = one_of.group(1).split()
@@ -152,14 +156,8 @@ class Parser(argparse.ArgumentParser):
         return namespace, extras
 
     def error(self, message: str):  # noqa: D102 - argparse's hook
-        said = _as_field(message)
-        missing = _ARGPARSE_MISSING.match(message)
-        if missing:  # a missing option with a few values names them ('export' without --format said only 'required')
-            first = missing.group(1).split(", ")[0]
-            action = next((a for a in self._actions if first in a.option_strings), None)
-            if action is not None and action.choices:
-                said += f" (one of {', '.join(map(str, action.choices))})"
-        self.exit(1, f"{self.prog}: error: {said} (see {self.prog} --help)\n")
+        choices = {name: tuple(a.choices) for a in self._actions if a.choices for name in a.option_strings}
+        self.exit(1, f"{self.prog}: error: {_as_field(message, choices)} (see {self.prog} --help)\n")
 
 
 # --------------------------------------------------------------------------------------- types
