@@ -268,11 +268,10 @@ def _target(target: np.ndarray, orientation: np.ndarray | None,
     target = np.asarray(target, dtype=float)
     if target.shape != (3,) or not np.all(np.isfinite(target)):
         raise SpherecalError(f"target: expected 3 finite coordinates [m], got {target.tolist()!r}")
-    reach = model.chain_length + float(np.linalg.norm(model.tool))
-    away = float(np.linalg.norm(target - np.asarray(model.base_xyz, dtype=float)))
-    if away > 2.0 * reach:  # beyond any posture by twice: not a target of this arm
+    away = float(np.linalg.norm(target - model.base_transform[:3, 3]))
+    if away > 2.0 * model.reach:  # beyond any posture by twice: not a target of this arm
         raise UnreachableError(f"target {np.round(target, 4).tolist()} m is {away:.4g} m from the base of "
-                               f"{model.name!r}, whose links and tool reach {reach:.3g} m at most (millimetres? "
+                               f"{model.name!r}, whose links and tool reach {model.reach:.3g} m at most (millimetres? "
                                "targets are in metres)")
     if orientation is None:
         return target, None

@@ -122,6 +122,13 @@ class RobotModel:
         return np.abs(np.asarray(self.upper) - np.asarray(self.lower) - 2 * np.pi) <= FULL_TURN_TOL
 
     @property
+    def reach(self) -> float:
+        """:attr:`chain_length` plus ``|tool|`` [m]: no tool point lies farther than this from the base origin (the
+        bound known positions, distances and controller targets are checked against: millimetres typed for
+        metres)."""
+        return self.chain_length + float(np.linalg.norm(self.tool))
+
+    @property
     def chain_length(self) -> float:
         """Sum of ``|a|`` and ``|d|`` [m]: no point of the chain is farther than this from the base frame's
         origin along the links (a bound on reach, tool excluded)."""

@@ -49,7 +49,7 @@ def _check_reach(model: RobotModel, spec: FixtureSpec) -> None:
 
     Reach bound: ``sum |a| + sum |d| + |tool|`` from the base origin.
     """
-    reach = model.chain_length + float(np.linalg.norm(model.tool))
+    reach = model.reach
     where = spec.source or "fixtures"
     origin = model.base_transform[:3, 3]
     for name, position in spec.positions.items():
