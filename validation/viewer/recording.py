@@ -139,7 +139,6 @@ class Recording:
         self._against: dict[str, str] = {}  # model -> what its Errors are distances to
         self._fixture_colours: dict[str, tuple[int, int, int]] = {}  # fixture name -> its colour in every view
         self._fixture_places: dict[str, np.ndarray] = {}  # fixture name -> its centre in the 3D view [m]
-        self._fixture_log = None  # (names, positions, colours) of world/fixtures, logged again with a sample note
         self._sample_note = ""  # what the fixtures' spheres stand for when samples() magnified the samples
         self._fixture_radius = FIXTURE_RADIUS[0]  # of the fixtures' wire spheres [m]
         self._tmp = None
@@ -183,19 +182,11 @@ class Recording:
                 self._fixture_colours.setdefault(key, colour)
                 self._fixture_places.setdefault(key, place)
         self.extend_bounds("world", positions)
-        self._fixture_log = (list(names), positions, colours)  # logged on closing, with what samples() drew
-
-    def _log_fixtures(self) -> None:
-        """``world/fixtures`` (on closing, once) as :meth:`fixtures` was given it."""
-        if self._fixture_log is None:
-            return
-        names, positions, colours = self._fixture_log
-        labels = list(names)
         self.stream.log(
             "world/fixtures",
             self.rr.Ellipsoids3D(
                 centers=positions, half_sizes=np.full((len(positions), 3), self._fixture_radius), colors=colours,
-                labels=labels, show_labels=True, fill_mode="majorwireframe",
+                labels=list(names), show_labels=True, fill_mode="majorwireframe",
                 line_radii=self.rr.Radius.ui_points(1.0),
             ),
             static=True,
@@ -500,7 +491,7 @@ class Recording:
 
     # -------------------------------------------------------------------- close
     def close(self) -> Path | None:
-        """Log the Errors views' colour scales and the fixtures, send the blueprint, flush, close the sink and move the
+        """Log the Errors views' colour scales, send the blueprint, flush, close the sink and move the
         ``.rrd`` into place; returns its path.
 
         Raises:
@@ -508,7 +499,6 @@ class Recording:
         """
         try:
             self._colour_scales()
-            self._log_fixtures()
             self._base_frame()
             # what the fixtures' spheres stand for when samples() magnified the samples, in the main view's title: in
             # the first fixture's label it covered the next socket's label, a plate's sockets centimetres apart
