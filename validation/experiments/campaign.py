@@ -100,7 +100,6 @@ class Task:
     Attributes:
         row: the row's name in Table 2 (``P1``, ``PallN``, ``P2E/elastic``): a label, never parsed.
         fixture_set: the fixture set (a key of :data:`FIXTURE_SETS`): what ``--rows`` takes to run the row again.
-        fixtures: that set's fixtures.
         noise: fixture noise std [m].
         index: the set's number in its row.
         seed: what the set's generator is seeded from.
@@ -109,11 +108,15 @@ class Task:
 
     row: str
     fixture_set: str
-    fixtures: tuple[str, ...]
     noise: float
     index: int
     seed: tuple[int, ...]
     config: CampaignConfig
+
+    @property
+    def fixtures(self) -> tuple[str, ...]:
+        """The fixtures of :attr:`fixture_set`."""
+        return FIXTURE_SETS[self.fixture_set]
 
 
 @dataclass(frozen=True)
@@ -151,7 +154,7 @@ def tasks(config: CampaignConfig) -> list[Task]:
                 seed = (config.seed, row, index)
                 label = row_name(name, noise) + ("E" if any(config.stiffness) else "")
                 label += "" if config.model == "dh" else f"/{config.model}"
-                out.append(Task(label, name, FIXTURE_SETS[name], noise, index, seed, config))
+                out.append(Task(label, name, noise, index, seed, config))
     return out
 
 
