@@ -63,6 +63,7 @@ from spherecal.correction.files.fixtures import FixtureSpec
 from spherecal.correction.files.samples import Dataset
 
 from .identifiability import Identifiability, normal_inverse
+from .selfcheck_result import CalibrationRefused
 
 #: Joint-1 parameters that move every tool point rigidly (the gauge against unknown centres).
 GAUGE: dict[str, tuple[str, ...]] = {"modified": ("a1", "alpha1", "d1", "theta1"), "standard": ("d1", "theta1")}
@@ -101,7 +102,7 @@ class UnidentifiableError(SpherecalError):
     """The data cannot determine any parameter (or the problem is otherwise rank deficient)."""
 
 
-class ImplausibleCalibrationError(SpherecalError):
+class ImplausibleCalibrationError(CalibrationRefused):
     """The fit moved a parameter further from nominal than any real arm differs from its design."""
 
 

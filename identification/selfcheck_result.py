@@ -10,7 +10,18 @@ from statistics import median
 from spherecal.correction.errors import SpherecalError
 
 
-class InconsistentDataError(SpherecalError):
+class CalibrationRefused(SpherecalError):
+    """A calibration the data cannot support (:class:`InconsistentDataError`,
+    :class:`.problem.ImplausibleCalibrationError`): printed as its reason, then its clauses (:attr:`lines`)."""
+
+    @property
+    def lines(self) -> tuple[str, ...]:
+        """The refusal as the command line prints it (:func:`refusal_lines`): its reason in a first line, then its
+        clauses (figures, causes, remedies, the commands to try) one a line; the message alone when it is short."""
+        return refusal_lines(str(self))
+
+
+class InconsistentDataError(CalibrationRefused):
     """The samples, fixtures and declared noise contradict each other, or the result cannot beat nominal.
 
     Attributes:
@@ -22,12 +33,6 @@ class InconsistentDataError(SpherecalError):
     def __init__(self, message: str, moved: tuple[str, ...] = ()) -> None:
         super().__init__(message)
         self.moved = tuple(moved)
-
-    @property
-    def lines(self) -> tuple[str, ...]:
-        """The refusal as the command line prints it (:func:`refusal_lines`): its reason in a first line, then its
-        clauses (figures, causes, remedies, the commands to try) one a line; the message alone when it is short."""
-        return refusal_lines(str(self))
 
 
 #: A refusal longer than this [characters] is printed as a short first line and its clauses below it (a user trial:

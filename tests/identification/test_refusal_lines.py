@@ -5,10 +5,16 @@ from __future__ import annotations
 
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 from spherecal.cli import main
+from spherecal.correction import load_robot, perturb
+from spherecal.identification.build import build_problem
+from spherecal.identification.calibrate import check_plausible
+from spherecal.identification.problem import ImplausibleCalibrationError
 from spherecal.identification.selfcheck_result import HEADLINE, InconsistentDataError, refusal_lines
+from spherecal.identification.synthetic import make_dataset
 from spherecal.identification.workflow import calibrate_files
 from tests.refusal import refused
 
@@ -54,3 +60,21 @@ def test_a_short_refusal_stays_one_line_and_parentheses_hold_their_clauses() -> 
         "others alone: 1 mm; expected 1 mm): samples of another arm, a fixture that moved, or a wrong label",
         "or a wrong known distance (fixtures.yaml: row 6, field 'distances[0]': P1-P2 0.05 m)",
         "leaving P2 out does not help: without P2 the rest is refused too (calibrate --exclude-fixture P2 says why)")
+
+
+def test_an_implausible_fit_is_refused_with_its_reason_first_and_its_remedy_below() -> None:
+    """The plausibility refusal (a fit that moves the tool point further than a real arm's errors) was one line of
+    about 400 characters; it reads as the self-check's refusals do: the reason, then each clause."""
+    nominal = load_robot("panda")
+    dataset, spec = make_dataset(perturb(nominal, np.random.default_rng(1)), per_fixture=40,
+                                 rng=np.random.default_rng(2))
+    params = nominal.params.copy()
+    params[nominal.param_index("alpha3")] += np.deg2rad(150.0)
+    with pytest.raises(ImplausibleCalibrationError) as raised:
+        check_plausible(build_problem(nominal, dataset, spec), params)
+    message = str(raised.value)
+    first, *details = raised.value.lines
+    assert len(message) > HEADLINE and len(first) < 200, first
+    assert first.startswith("refused: samples: all rows, field 'alpha3': the fit moves the tool point "), first
+    assert first.endswith("changing alpha3 by 150 deg"), first
+    assert "; ".join(details) == message and details[-1].startswith("record more self-motion")
