@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import os
 import warnings
-from dataclasses import dataclass, field, fields
+from dataclasses import dataclass, field, fields, replace
 from pathlib import Path
 
 import numpy as np
@@ -27,6 +27,7 @@ from ..tool_fit import pivot_tool, recentred_tool
 from .bag import read_bag
 from .importers import MUKCA_DISTANCE, Recording, RecordingError, read_joint_csv, read_mukca
 from .segment import (
+    NoFixtureError,
     Segment,
     SegmentationError,
     SegmentSettings,
@@ -34,6 +35,7 @@ from .segment import (
     labels_of,
     revisit_notes,
     segment,
+    still_point,
 )
 
 FORMATS = ("mukca", "bag", "csv")
@@ -145,10 +147,13 @@ def read_source(source: str | os.PathLike, fmt: str, model: RobotModel, options:
     raise ValueError(f"unknown format {fmt!r}")
 
 
-def label(recording: Recording, model: RobotModel, options: ImportOptions) -> tuple[Dataset, list[Segment]]:
-    """The labelled dataset: the recording's own labels, or fixtures found by :func:`.segment.segment`."""
+def label(recording: Recording, model: RobotModel,
+          options: ImportOptions) -> tuple[Dataset, list[Segment], tuple[str, ...]]:
+    """The labelled dataset: the recording's own labels, or fixtures found by :func:`.segment.segment` (at the
+    point of the last link that stays still, with a line saying so, when the robot file's tool point does nowhere:
+    :func:`_segment_at_still_point`), and those lines."""
     if recording.labels is not None:
-        return recording.dataset(), []
+        return recording.dataset(), [], ()
     t = recording.t
     rated = t is None
     if rated:
@@ -157,8 +162,12 @@ def label(recording: Recording, model: RobotModel, options: ImportOptions) -> tu
         k = int(np.flatnonzero(np.diff(t) < 0)[0]) + 1
         raise RecordingError(f"{recording.rows[k]}, field {recording.time_field!r}: time goes back ({t[k]:.6f} s "
                              f"after {t[k - 1]:.6f} s)")
+    notes: tuple[str, ...] = ()
     try:
-        segments = segment(model, recording.q, t, options.segmentation, recording.source, sources=recording.rows)
+        try:
+            segments = segment(model, recording.q, t, options.segmentation, recording.source, sources=recording.rows)
+        except NoFixtureError as error:
+            segments, notes = _segment_at_still_point(model, recording, t, options.segmentation, error)
     except SegmentationError as error:
         if not rated:
             raise
@@ -169,7 +178,35 @@ def label(recording: Recording, model: RobotModel, options: ImportOptions) -> tu
     names = tuple(dict.fromkeys(seg.name for seg in sorted(segments, key=lambda seg: seg.rows[0])))  # as they come:
     dataset = Dataset(labels=labels[keep], q=recording.q[keep], t=t[keep], source=recording.source,  # not sorted
                       fixture_names=names)  # out of a million labels again
-    return dataset, segments
+    return dataset, segments, notes
+
+
+def _segment_at_still_point(model: RobotModel, recording: Recording, t: np.ndarray, settings: SegmentSettings,
+                            error: NoFixtureError) -> tuple[list[Segment], tuple[str, ...]]:
+    """The fixtures of a recording whose robot file's tool point stays still nowhere, found at the point of the
+    last link that does (:func:`.segment.still_point`: the ball beyond the flange an embedded arm ends at, a
+    ``--tip-link`` naming another link than the ball's), and one line saying so. A review: a Panda's bag imported
+    with ``--robot panda``, which the guide says is not refused, was refused 'no fixture found', naming no cause.
+
+    Raises:
+        NoFixtureError: no point of the last link stays still either (``error``, saying so).
+        SegmentationError: what :func:`.segment.segment` refuses at that point.
+    """
+    found = still_point(model, recording.q, t, settings)
+    if found is None:
+        raise NoFixtureError(f"{error}; nor does any other point of the last link (a ball beyond the robot file's "
+                             "tool point)") from None
+    tool, stretches = found
+    moved = (np.asarray(tool) - model.tool) * 1e3
+    where = ", ".join(f"{v:+.1f}" for v in moved)
+    segments = segment(replace(model, tool=np.asarray(tool, dtype=float)), recording.q, t, settings,
+                       recording.source, sources=recording.rows)
+    return segments, (
+        f"the robot file's tool point stays still nowhere; a point {np.linalg.norm(moved):.1f} mm from it in the last "
+        f"joint frame ({where} mm) does, in {stretches} stretches of {settings.min_duration:g} s: the ball's centre, "
+        "beyond the link the robot file ends at (an embedded arm's flange, a --tip-link naming another link); "
+        "segmented at that point (calibrate finds the ball from the samples too; --tip-link names the link at the "
+        "ball's centre)",)
 
 
 def import_recording(
@@ -209,8 +246,8 @@ def import_recording(
     else:
         recording, spec = read_source(source, fmt, model, options), None
     _warn_unused_rate(recording, fmt, options.rate)
-    dataset, segments = label(recording, model, options)
-    read, notes, timed = recording.q.shape[0], recording.notes, _timed_and_split(recording, options)
+    dataset, segments, found = label(recording, model, options)
+    read, notes, timed = recording.q.shape[0], recording.notes + found, _timed_and_split(recording, options)
     del recording  # its angles are freed before the duplicates are sought (a 1.8 M-sample recording: 100 MB)
     deduplicated = dataset.deduplicated(options.dedup_tol)
     kept = deduplicated.subsampled(options.max_per_fixture, np.random.default_rng(options.seed))

@@ -25,7 +25,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from spherecal.correction.files.samples import DatasetError, first_of_rows
-from spherecal.correction.kinematics import tool_point
+from spherecal.correction.kinematics import tool_point, tool_pose
 from spherecal.correction.model import RobotModel
 
 #: Bin of the stillness test [s].
@@ -37,6 +37,10 @@ POINT_BLOCK = 100_000
 
 class SegmentationError(DatasetError):
     """A recording that cannot be split into fixtures unambiguously (one line)."""
+
+
+class NoFixtureError(SegmentationError):
+    """No stretch of a recording where the tool point stays still (one line)."""
 
 
 @dataclass(frozen=True)
@@ -175,7 +179,7 @@ def segment(
             )
         )
     if not found:
-        raise SegmentationError(
+        raise NoFixtureError(
             f"{where}field 'q': no fixture found (no stretch of {s.min_duration:g} s and {s.min_configurations} "
             f"configurations where the nominal tool point stays within {s.still_radius * 1e3:g} mm over "
             f"{s.window:g} s)"
@@ -203,6 +207,57 @@ def segment(
                     f"--still-radius above {s.still_radius * 1e3:g} mm"
                 )
     return found
+
+
+#: Spacing of the samples :func:`still_point` fits [s] (50 Hz: a 2 s stretch gives 100 poses).
+PIVOT_STEP = 0.02
+
+
+def still_point(model: RobotModel, q: np.ndarray, t: np.ndarray,
+                settings: SegmentSettings = SegmentSettings()) -> tuple[np.ndarray, int] | None:
+    """The point of the last link that stays still where the robot file's tool point does not: the ball's centre
+    when the robot file ends at the flange or another link than the ball's (the embedded arms, a ``--tip-link``
+    naming the hand). Its stillness cannot be tested as :func:`segment` tests the tool point's, so each
+    ``settings.min_duration`` of the recording gets a pivot fit of its own (the point ``x`` of the last joint frame
+    whose ``p_k + R_k x`` lie closest to their mean, the nominal model's frames at :data:`PIVOT_STEP`): a stretch is
+    held in a socket when that point stays within ``settings.still_radius`` rms of its mean and the rotations
+    recorded pin it within ``still_radius`` (transport rotates about a line at most: its point is not pinned).
+
+    Args:
+        model: the nominal robot.
+        q: (T, n) joint angles [rad], in time order.
+        t: (T,) time stamps [s], non-decreasing.
+        settings: thresholds (``min_duration``, ``still_radius``).
+
+    Returns:
+        ``(tool, stretches)``: (3,) the point [m] in the last joint frame, one pivot fit over every stretch held, and
+        how many stretches were; None when no stretch is held.
+    """
+    if len(t) < 2:
+        return None
+    keep = np.flatnonzero(np.diff(np.floor((t - t[0]) / PIVOT_STEP), prepend=-1) > 0)
+    pose = tool_pose(model, q[keep])
+    frame = pose[:, :3, :3]
+    origin = pose[:, :3, 3] - frame @ np.asarray(model.tool, dtype=float)
+    chunk = np.floor((t[keep] - t[0]) / settings.min_duration).astype(np.int64)
+    lhs, rhs = [], []
+    for c in np.unique(chunk):
+        rows = chunk == c
+        if np.count_nonzero(rows) < 3:
+            continue
+        a = (frame[rows] - frame[rows].mean(axis=0)).reshape(-1, 3)
+        b = -(origin[rows] - origin[rows].mean(axis=0)).reshape(-1)
+        x, *_ = np.linalg.lstsq(a, b, rcond=None)
+        residual = (a @ x - b).reshape(-1, 3)
+        rms = float(np.sqrt(np.mean(np.sum(residual**2, axis=1))))
+        smallest = float(np.linalg.svd(a, compute_uv=False)[-1])
+        if rms <= settings.still_radius and smallest > 0 and rms / smallest <= settings.still_radius:
+            lhs.append(a)
+            rhs.append(b)
+    if not lhs:
+        return None
+    tool, *_ = np.linalg.lstsq(np.concatenate(lhs), np.concatenate(rhs), rcond=None)
+    return tool, len(lhs)
 
 
 #: Two visits whose mean nominal tool points are this close [m] are one socket whatever their spread (a socket is

@@ -1,0 +1,54 @@
+"""A ROS 2 user's trial of `spherecal import`: a Panda's /joint_states bag (9 joints, shuffled, the fingers too)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from spherecal.cli import main
+from spherecal.correction import load_robot, perturb
+from spherecal.correction.files.samples_csv import read_samples
+
+from .recordings import stream, write_bag
+from .test_import_bag import NAMES, _offset
+from .test_import_mukca import PANDA
+
+
+@pytest.fixture(scope="module")
+def ball_bag(tmp_path_factory):
+    """A sqlite3 bag of two sockets 50 mm apart held by the ball of ``panda_ball.yaml`` (133 mm beyond the embedded
+    Panda's flange) on a perturbed 'true' arm; and the recording's (T,) socket index, -1 in motion."""
+    true = perturb(load_robot(PANDA), np.random.default_rng(3))
+    t, q, truth = stream(true, [0.0, _offset(true, 0.05)])
+    return write_bag(tmp_path_factory.mktemp("bag") / "rec", "sqlite3", t, q, NAMES), t, truth
+
+
+def test_a_bag_imported_with_the_embedded_panda_is_segmented_at_the_ball(ball_bag, tmp_path, capsys) -> None:
+    """Found in the trial: `import --robot panda` of a Panda's bag (the guide: the embedded arms end at their flange,
+    'neither is refused', import warns) was refused 'no fixture found' with no word of the cause, the flange
+    swinging around the ball in every socket. The ball is the point of the last link that stays still."""
+    bag, t, truth = ball_bag
+    out = tmp_path / "out"
+    status = main(["import", str(bag), "--format", "bag", "--robot", "panda", "--out", str(out)])
+    captured = capsys.readouterr()
+    assert status == 0, captured.err
+    assert "the robot file's tool point stays still nowhere; a point 13" in captured.out  # 133.5 mm beyond the flange
+    assert "segmented into 2 fixtures" in captured.out
+    dataset = read_samples(out / "samples.csv", load_robot("panda"))
+    index = {value: k for k, value in enumerate(t)}
+    for j, name in enumerate(("S1", "S2")):
+        rows = np.array([index[value] for value in dataset.t[dataset.labels == name]])
+        assert np.all(truth[rows] == j) and rows.size >= 0.5 * np.count_nonzero(truth == j)
+
+
+def test_a_bag_held_nowhere_is_refused_saying_no_point_of_the_last_link_stays_still(tmp_path, capsys) -> None:
+    """Transport alone (no socket): still refused, and the refusal says no other point stays still either."""
+    from tests.refusal import refused
+
+    from .recordings import Q0, transport
+
+    q = np.concatenate([transport(Q0, Q0 + [0.8, 0.3, 0, 0.3, 0, 0, 0], 4.0, 200.0),
+                        transport(Q0 + [0.8, 0.3, 0, 0.3, 0, 0, 0], Q0 + [0, 0, 0.5, 0, 0.6, 0, 0], 4.0, 200.0)])
+    bag = write_bag(tmp_path / "rec", "sqlite3", np.arange(len(q)) / 200.0 + 1.7e9, q, NAMES)
+    refused(["import", bag, "--format", "bag", "--robot", "panda", "--out", tmp_path / "out"], tmp_path, capsys,
+            "no fixture found", "nor does any other point of the last link")
