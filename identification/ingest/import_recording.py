@@ -32,6 +32,7 @@ from .segment import (
     SegmentationError,
     SegmentSettings,
     format_segments,
+    labelled_spans,
     labels_of,
     revisit_notes,
     segment,
@@ -42,6 +43,7 @@ FORMATS = ("mukca", "bag", "csv")
 #: Options of :class:`ImportOptions` used by some formats only -> those formats (the others are shaped by all).
 FORMAT_OPTIONS: dict[str, tuple[str, ...]] = {
     "topic": ("bag",), "distance": ("mukca",), "rate": ("csv",), "segmentation": ("bag", "csv"),
+    "spans": ("bag", "csv"),
 }
 #: Sampling rate of a CSV without time stamps when none is given [Hz].
 DEFAULT_RATE = 1000.0
@@ -67,6 +69,8 @@ class ImportOptions:
             for a recording with a time column or fixture labels, or in another format, is not used: an
             :class:`IgnoredRateWarning` says so (the recording's stamps decide).
         segmentation: thresholds of the automatic split.
+        spans: fixtures labelled by hand in time instead, ``(name, start, end)`` [s] since the recording's first sample
+            (``--fixture NAME=START:END``; :func:`.segment.labelled_spans`): samples in no span are dropped.
         max_per_fixture: samples kept per fixture (random, seeded), None for all.
         dedup_tol: duplicate tolerance [rad].
         seed: seed of the subsampling.
@@ -76,6 +80,7 @@ class ImportOptions:
     distance: float = MUKCA_DISTANCE
     rate: float | None = None
     segmentation: SegmentSettings = field(default_factory=SegmentSettings)
+    spans: tuple[tuple[str, float, float], ...] = ()
     max_per_fixture: int | None = 500
     dedup_tol: float = 1e-4
     seed: int = 0
@@ -103,8 +108,10 @@ class ImportResult:
         """The printed report."""
         lines = [f"read {self.read} samples"] + list(self.notes)
         if self.segments:
-            lines.append(f"segmented into {len(self.dataset.fixture_names)} fixtures ({self.dropped_motion} samples in "
-                         "motion dropped):")
+            how = ("labelled by --fixture into", "outside the spans") if self.segments[0].labelled else (
+                "segmented into", "in motion")
+            lines.append(f"{how[0]} {len(self.dataset.fixture_names)} fixtures ({self.dropped_motion} samples {how[1]} "
+                         "dropped):")
             lines.append(format_segments(self.segments, self.dataset.counts()))
             lines += revisit_notes(self.segments)
         else:
@@ -153,6 +160,9 @@ def label(recording: Recording, model: RobotModel,
     point of the last link that stays still, with a line saying so, when the robot file's tool point does nowhere:
     :func:`_segment_at_still_point`), and those lines."""
     if recording.labels is not None:
+        if options.spans:
+            raise RecordingError(f"{recording.source}: field '--fixture': the recording's own 'fixture' column labels "
+                                 "its samples; leave --fixture out")
         return recording.dataset(), [], ()
     t = recording.t
     rated = t is None
@@ -164,10 +174,19 @@ def label(recording: Recording, model: RobotModel,
                              f"after {t[k - 1]:.6f} s)")
     notes: tuple[str, ...] = ()
     try:
-        try:
-            segments = segment(model, recording.q, t, options.segmentation, recording.source, sources=recording.rows)
-        except NoFixtureError as error:
-            segments, notes = _segment_at_still_point(model, recording, t, options.segmentation, error)
+        if options.spans:
+            segments = labelled_spans(model, recording.q, t, options.spans, recording.source, sources=recording.rows)
+            limit = options.segmentation.max_spread
+            notes = tuple(f"--fixture {seg.name}={seg.start:g}:{seg.end:g}: its nominal tool points lie up to "
+                          f"{seg.spread_max * 1e3:.1f} mm from their mean (a ball held in a socket: within "
+                          f"{limit * 1e3:g} mm): does the span hold the ball's transport too?"
+                          for seg in segments if seg.spread_max > limit)
+        else:
+            try:
+                segments = segment(model, recording.q, t, options.segmentation, recording.source,
+                                   sources=recording.rows)
+            except NoFixtureError as error:
+                segments, notes = _segment_at_still_point(model, recording, t, options.segmentation, error)
     except SegmentationError as error:
         if not rated:
             raise
@@ -336,6 +355,8 @@ def _timed_and_split(recording: Recording, options: ImportOptions) -> dict:
         clock = {"time": recording.clock}
     else:
         clock = {"rate": options.row_rate}
+    if options.spans:
+        return clock | {"fixture": [f"{name}={start:g}:{end:g}" for name, start, end in options.spans]}
     return clock | vars(options.segmentation)
 
 

@@ -12,7 +12,8 @@ socket to the next moves it by centimetres within a second. So:
    is one fixture; everything between them (transport, pauses in the air) is dropped;
 3. a fixture whose points lie further than ``max_spread`` from their mean (a drift) or two fixtures
    whose mean points are closer than ``min_separation`` (one socket visited twice, or two sockets
-   that cannot be told apart) is refused: label such a recording by hand (a ``fixture`` column).
+   that cannot be told apart) is refused: label such a recording by hand (``--fixture NAME=START:END``,
+   :func:`labelled_spans`, or a CSV's ``fixture`` column).
 
 Thresholds measured on MUKCa's real Panda with its ball (nominal model): within one socket the
 nominal tool point lies on average 8 mm and at most 19 mm from its mean; the sockets are 50 mm apart.
@@ -86,6 +87,7 @@ class Segment:
     spread_mean: float
     spread_max: float
     visit: int = 1
+    labelled: bool = False  # a span given by hand (:func:`labelled_spans`), not found by stillness
 
     @property
     def label(self) -> str:
@@ -191,7 +193,7 @@ def segment(
                 f"{where}field 'q': ambiguous: the still stretch {seg.start:.2f}-{seg.end:.2f} s{_span(sources, seg)} "
                 f"drifts "
                 f"{seg.spread_max * 1e3:.1f} mm from its mean (max spread {s.max_spread * 1e3:g} mm); "
-                "label the fixtures (a 'fixture' column)"
+                "label the fixtures (--fixture NAME=START:END, or a CSV's 'fixture' column)"
             )
     for i, first in enumerate(found):
         for second in found[i + 1 :]:
@@ -202,7 +204,8 @@ def segment(
                     f"{_span(sources, first)} and {second.start:.2f}-{second.end:.2f} s{_span(sources, second)} are "
                     f"{gap * 1e3:.1f} mm apart (less than "
                     f"{s.min_separation * 1e3:g} mm): one socket twice or two sockets too close; label the "
-                    "fixtures (a 'fixture' column), or, where the arm moved on in one socket without leaving it, let "
+                    "fixtures (--fixture NAME=START:END, or a CSV's 'fixture' column), or, where the arm moved on in "
+                    "one socket without leaving it, let "
                     f"the stillness take the nominal model's own error (a real arm's several mm over a self-motion): "
                     f"--still-radius above {s.still_radius * 1e3:g} mm"
                 )
@@ -283,10 +286,61 @@ def _revisits(found: list[Segment]) -> list[Segment]:
     return out
 
 
+def labelled_spans(model: RobotModel, q: np.ndarray, t: np.ndarray, spans, where: str = "",
+                   sources=None) -> list[Segment]:
+    """The fixtures of a recording labelled by hand in time: ``spans`` ``(name, start, end)``, seconds since its first
+    sample (the clock of the import's table), ends included; a name given twice is one socket visited twice. The
+    nominal tool points' mean and spread are reported as :func:`segment`'s, never refused: the user said where the
+    ball was.
+
+    Args:
+        model: the nominal robot.
+        q: (T, n) joint angles [rad], in time order.
+        t: (T,) time stamps [s], non-decreasing.
+        spans: ``(name, start, end)`` [s] each.
+        where: the source, for messages.
+        sources: (T,) where each sample came from, for messages.
+
+    Returns:
+        The fixtures in time order.
+
+    Raises:
+        SegmentationError: a span holding no sample, two spans overlapping (one line naming them, field
+            ``--fixture``).
+    """
+    where = f"{where}: " if where else ""
+    since = t - t[0]
+    found: list[Segment] = []
+    for name, start, end in sorted(spans, key=lambda span: span[1]):
+        given = f"{name}={start:g}:{end:g}"
+        if found and start <= found[-1].end:
+            last = found[-1]
+            raise SegmentationError(f"{where}field '--fixture': {given} overlaps {last.name}="
+                                    f"{last.start:g}:{last.end:g} (seconds since the first sample): give each sample "
+                                    "one socket")
+        rows = np.flatnonzero((since >= start) & (since <= end))
+        if not rows.size:
+            raise SegmentationError(f"{where}field '--fixture': {given} holds no sample: the recording spans "
+                                    f"0-{since[-1]:.2f} s since its first sample{_first(sources)}")
+        p = tool_point(model, q[rows]) if rows.size <= POINT_BLOCK else _tool_points(model, q[rows])
+        centre = p.mean(axis=0)
+        spread = np.linalg.norm(p - centre, axis=1)
+        visit = 1 + sum(seg.name == name for seg in found)
+        found.append(Segment(name, rows, float(start), float(end), centre, float(spread.mean()), float(spread.max()),
+                             visit, labelled=True))
+    return found
+
+
+def _first(sources) -> str:
+    """`` (data.csv: row 2)``: where the first sample came from; "" without ``sources``."""
+    return "" if sources is None or not len(sources) else f" ({sources[0]})"
+
+
 def revisit_notes(segments: list[Segment]) -> tuple[str, ...]:
-    """One line per socket the recording visited more than once: its visits are one fixture."""
+    """One line per socket the recording visited more than once: its visits are one fixture (found by stillness;
+    spans labelled by hand say so themselves)."""
     notes = []
-    for first in (seg for seg in segments if seg.visit == 1):
+    for first in (seg for seg in segments if seg.visit == 1 and not seg.labelled):
         later = [seg for seg in segments if seg.name == first.name and seg.visit > 1]
         if later:
             gaps = ", ".join(f"{np.linalg.norm(seg.centre - first.centre) * 1e3:.1f}" for seg in later)

@@ -42,6 +42,12 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         help="csv without a time column: sampling rate [Hz] (default 1000); a recording's time column is used "
         "instead, with a warning when --rate is given",
     )
+    parser.add_argument(
+        "--fixture", action="append", type=_span, default=None, metavar="NAME=START:END",
+        help="bag, csv without a 'fixture' column: label the samples from START to END seconds after the recording's "
+        "first sample [s] (the clock of the import's table) as fixture NAME, instead of segmenting; repeat it for each "
+        "socket (a NAME given twice is one socket visited twice); samples in no span are dropped",
+    )
     group = parser.add_argument_group(
         "segmentation (bag, csv without a 'fixture' column): a fixture is where the NOMINAL tool point stays "
         "still; defaults measured on MUKCa's real Panda (nominal spread in a socket: 8 mm mean, 19 mm max)"
@@ -56,6 +62,29 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                        help="refuse a fixture drifting further from its mean [mm] (default 20)")
     group.add_argument("--min-separation", type=segment_mm, default=None,
                        help="refuse two fixtures closer than this [mm] (default 30)")
+
+
+def _span(text: str) -> tuple[str, float, float]:
+    """``--fixture NAME=START:END``: a fixture name and a time span [s] since the recording's first sample."""
+    import math
+
+    from spherecal.correction.files.fixtures import _name_problem
+
+    name, equals, span = text.rpartition("=")
+    start, colon, end = span.partition(":")
+    try:
+        values = (float(start), float(end)) if equals and colon else None
+    except ValueError:
+        values = None
+    if values is None or not all(math.isfinite(v) for v in values):
+        raise argparse.ArgumentTypeError(f"expected NAME=START:END, seconds since the recording's first sample "
+                                         f"(S1=6.5:25.5), got {text!r}")
+    problem = _name_problem(name)
+    if problem:
+        raise argparse.ArgumentTypeError(f"the fixture name {name!r} {problem}")
+    if not 0 <= values[0] < values[1]:
+        raise argparse.ArgumentTypeError(f"expected 0 <= START < END [s], got {text!r}")
+    return name, values[0], values[1]
 
 
 #: Segmentation options given in millimetres (:class:`SegmentSettings` holds metres).
@@ -100,7 +129,8 @@ def _format_options(args: argparse.Namespace, segmentation: list[str]) -> dict:
     """
     from spherecal.identification.ingest.import_recording import FORMAT_OPTIONS  # numpy: not at --help
 
-    dests = {"topic": ["topic"], "distance": ["distance"], "rate": ["rate"], "segmentation": segmentation}
+    dests = {"topic": ["topic"], "distance": ["distance"], "rate": ["rate"], "segmentation": segmentation,
+             "spans": ["fixture"]}
     given: dict = {}
     for name, formats in FORMAT_OPTIONS.items():
         typed = {dest: getattr(args, dest) for dest in dests[name] if getattr(args, dest) is not None}
@@ -108,5 +138,9 @@ def _format_options(args: argparse.Namespace, segmentation: list[str]) -> dict:
             raise fail(f"field '{named(args, next(iter(typed)))}': applies to --format {' or '.join(formats)} only, "
                        f"not {args.format}; leave it out")
         if typed:
-            given[name] = typed if name == "segmentation" else typed[name]
+            given[name] = (typed if name == "segmentation" else tuple(typed["fixture"]) if name == "spans"
+                           else typed[name])
+    if "spans" in given and "segmentation" in given:
+        raise fail(f"field '{named(args, next(iter(given['segmentation'])))}': the fixtures are labelled by --fixture, "
+                   "nothing is segmented; leave it out")
     return given

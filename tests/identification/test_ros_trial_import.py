@@ -52,3 +52,44 @@ def test_a_bag_held_nowhere_is_refused_saying_no_point_of_the_last_link_stays_st
     bag = write_bag(tmp_path / "rec", "sqlite3", np.arange(len(q)) / 200.0 + 1.7e9, q, NAMES)
     refused(["import", bag, "--format", "bag", "--robot", "panda", "--out", tmp_path / "out"], tmp_path, capsys,
             "no fixture found", "nor does any other point of the last link")
+
+
+def test_fixture_spans_label_a_bag_by_hand(ball_bag, tmp_path, capsys) -> None:
+    """Found in the trial: a bag's fixtures could only be found by stillness. When that is refused ('one socket twice
+    or two sockets too close: label the fixtures (a 'fixture' column)'), a bag has no such column: the user had to
+    convert it to a CSV first. ``--fixture NAME=START:END`` labels spans of the recording, seconds since its first
+    message, the clock of the import's table."""
+    bag, t, truth = ball_bag
+    since = t - t[0]
+    spans = [(name, float(since[truth == j].min()), float(since[truth == j].max())) for j, name in enumerate("AB")]
+    out = tmp_path / "out"
+    argv = ["import", str(bag), "--format", "bag", "--robot", str(PANDA), "--out", str(out), "--dedup-deg", "0",
+            "--max-per-fixture", "9999"]
+    assert main(argv + [f"--fixture={n}={a!r}:{b!r}" for n, a, b in spans]) == 0
+    printed = capsys.readouterr().out
+    assert "labelled by --fixture into 2 fixtures" in printed
+    dataset = read_samples(out / "samples.csv", load_robot(PANDA))
+    assert dataset.fixture_names == ("A", "B")
+    index = {value: k for k, value in enumerate(t)}
+    for j, name in enumerate("AB"):
+        rows = np.array([index[value] for value in dataset.t[dataset.labels == name]])
+        assert np.all(truth[rows] == j)
+        assert rows.size == np.count_nonzero(truth == j)  # every sample of the span, none outside it
+    assert "fixture: ['A=" in (out / "fixtures.yaml").read_text()  # in the provenance
+
+
+@pytest.mark.parametrize(("spans", "expected"), [
+    (["A=1:4", "B=3:6"], "field '--fixture': B=3:6 overlaps A=1:4"),
+    (["A=100:120"], "field '--fixture': A=100:120 holds no sample: the recording spans 0-"),
+    (["A=1:4", "--still-radius", "5"], "field '--still-radius': the fixtures are labelled by --fixture"),
+    (["A=4:1"], "field '--fixture': expected 0 <= START < END [s]"),
+])
+def test_fixture_spans_that_cannot_be_used_are_refused_in_one_line(ball_bag, spans, expected, tmp_path,
+                                                                   capsys) -> None:
+    from tests.refusal import refused
+
+    bag, _, _ = ball_bag
+    argv = ["import", bag, "--format", "bag", "--robot", PANDA, "--out", tmp_path / "out"]
+    for value in spans:
+        argv += [value] if value.startswith("-") or value[0].isdigit() else ["--fixture", value]
+    refused(argv, tmp_path, capsys, expected)

@@ -36,7 +36,7 @@ def test_one_socket_seen_twice_names_the_still_radius_beside_labelling() -> None
     assert 5e-3 < gap < 30e-3
     with pytest.raises(SegmentationError, match="one socket twice or two sockets too close") as refused:
         segment(panda, q, np.arange(len(q)) / rate, where="rec.csv: ")
-    assert "label the fixtures (a 'fixture' column)" in str(refused.value)
+    assert "label the fixtures (--fixture NAME=START:END, or a CSV's 'fixture' column)" in str(refused.value)
     assert "--still-radius above 3 mm" in str(refused.value)
 
 
