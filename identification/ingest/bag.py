@@ -63,12 +63,11 @@ def read_bag(path: str | os.PathLike, model: RobotModel, topic: str = TOPIC) -> 
     from rosbags.typesys import Stores, get_typestore  # (same)
 
     path = check_source(path)
+    if path.name == "metadata.yaml" and path.is_file():  # rosbags: "Unrecognized storage format '.yaml'"
+        raise RecordingError(f"{path}: field 'SOURCE': the bag's metadata.yaml; give the bag's folder, {path.parent}")
+    unindexed: tuple[str, ...] = ()
     if path.is_dir() and not (path / "metadata.yaml").is_file():  # rosbags would say the folder is a missing file
-        mukca = any(path.glob("hole_*.csv")) or any(path.glob("*/hole_*.csv"))
-        hint = "; it holds MUKCa per-socket files: use --format mukca" if mukca else ""
-        raise RecordingError(
-            f"{path}: cannot read the bag: a ROS 2 bag folder holds a metadata.yaml, this one has none{hint}"
-        )
+        path, unindexed = _without_metadata(path)
     try:
         found = _read_ros1(path, model, topic) if path.suffix == ".bag" and path.is_file() else None
         if found is None:  # a ROS 2 bag, or a ROS 1 bag that rosbags' reader reads message by message
@@ -116,7 +115,7 @@ def read_bag(path: str | os.PathLike, model: RobotModel, topic: str = TOPIC) -> 
                 f"the topic carries {others}"
             )
         raise RecordingError(f"{path}: field '--topic': no messages on {topic!r}")
-    notes = (
+    notes = unindexed + (
         (f"skipped {sum(skipped.values())} messages on {topic} without any of the arm's joints ({others}): "
          "another device (a gripper) publishing on the same topic",) if skipped else ()
     ) + ((f"skipped {unpositioned} messages on {topic} without positions (velocities or efforts only)",)
@@ -134,6 +133,32 @@ def read_bag(path: str | os.PathLike, model: RobotModel, topic: str = TOPIC) -> 
     if keep.all():
         return replace(recording, notes=notes + repeats)
     return replace(recording, q=q[keep], t=t[keep], rows=rows.select(keep), notes=notes + repeats)
+
+
+def _without_metadata(path: Path) -> tuple[Path, tuple[str, ...]]:
+    """The one storage file of a ROS 2 bag folder without its ``metadata.yaml`` (``ros2 bag record`` writes it when it
+    stops: a recording killed, or its terminal closed, leaves the folder without one; a review of a ROS 2 trial), read
+    as a bag of its own, and a line saying so.
+
+    Raises:
+        RecordingError: no storage file (MUKCa files named), or several (a split recording: ``ros2 bag reindex``).
+    """
+    files = sorted(f for f in path.iterdir() if f.suffix in (".db3", ".mcap") and f.is_file())
+    if len(files) == 1:
+        return files[0], (f"{path} has no metadata.yaml (a recording stopped before ros2 bag record wrote it?): read "
+                          f"its one storage file, {files[0].name}",)
+    if files:
+        shown = ", ".join(f.name for f in files[:3]) + (", ..." if len(files) > 3 else "")
+        raise RecordingError(
+            f"{path}: cannot read the bag: a ROS 2 bag folder holds a metadata.yaml, this one has none and "
+            f"{len(files)} storage files ({shown}): `ros2 bag reindex {path}` writes it (a recording stopped before "
+            "ros2 bag record did)"
+        )
+    mukca = any(path.glob("hole_*.csv")) or any(path.glob("*/hole_*.csv"))
+    hint = "; it holds MUKCa per-socket files: use --format mukca" if mukca else ""
+    raise RecordingError(
+        f"{path}: cannot read the bag: a ROS 2 bag folder holds a metadata.yaml, this one has none{hint}"
+    )
 
 
 def _connections(connections: list, topic: str, path: Path) -> tuple[list, str]:

@@ -93,3 +93,26 @@ def test_fixture_spans_that_cannot_be_used_are_refused_in_one_line(ball_bag, spa
     for value in spans:
         argv += [value] if value.startswith("-") or value[0].isdigit() else ["--fixture", value]
     refused(argv, tmp_path, capsys, expected)
+
+
+@pytest.mark.parametrize("kind", ["sqlite3", "mcap"])
+def test_a_bag_folder_without_its_metadata_is_read_from_its_one_storage_file(ball_bag, kind, tmp_path, capsys) -> None:
+    """Found in the trial: a recording stopped before ``ros2 bag record`` wrote its metadata.yaml (killed, its terminal
+    closed) was refused 'a ROS 2 bag folder holds a metadata.yaml, this one has none', though its one storage file
+    reads, given as SOURCE. The folder is read from it, with a line saying so; several files: ros2 bag reindex."""
+    from tests.refusal import refused
+
+    bag, t, _ = ball_bag
+    source = write_bag(tmp_path / "full", kind, t[:400], np.zeros((400, 7)) + [0, -0.3, 0, -2.2, 0, 2.0, 0.8], NAMES)
+    killed = tmp_path / "killed"
+    killed.mkdir()
+    storage = next(f for f in source.iterdir() if f.suffix in (".db3", ".mcap"))
+    (killed / storage.name).write_bytes(storage.read_bytes())
+    argv = ["import", killed, "--format", "bag", "--robot", PANDA, "--fixture", "A=0:1"]
+    assert main([str(a) for a in argv + ["--out", tmp_path / "out"]]) == 0
+    assert f"killed has no metadata.yaml (a recording stopped before ros2 bag record wrote it?): read its one " \
+           f"storage file, {storage.name}" in capsys.readouterr().out
+    (killed / f"second{storage.suffix}").write_bytes(storage.read_bytes())
+    refused(argv + ["--out", tmp_path / "out2"], tmp_path, capsys, "2 storage files", "`ros2 bag reindex ")
+    refused(["import", source / "metadata.yaml", "--format", "bag", "--robot", PANDA, "--out", tmp_path / "out3"],
+            tmp_path, capsys, "metadata.yaml: field 'SOURCE': the bag's metadata.yaml; give the bag's folder")
