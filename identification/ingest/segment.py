@@ -151,8 +151,11 @@ def segment(
     counts = np.diff(np.concatenate([starts, [len(t)]]))
     centres = np.add.reduceat(points, starts, axis=0) / counts[:, None]
     times = bins[starts] * BIN
-    # bins are indexed by time: a gap in the recording leaves no bin, so the window is counted in bins
-    half = max(1, int(round(s.window / 2 / BIN)))
+    # bins are indexed by time: a gap in the recording leaves no bin, so the window is counted in bins, at the
+    # recording's own spacing of its bins where that is wider than BIN (a 30 Hz /joint_states that
+    # joint_state_publisher republishes: every bin 33 ms on, a window counted in 10 ms bins was 3.3x --window)
+    step = float(np.median(np.diff(times))) if len(times) > 1 else BIN
+    half = max(1, int(round(s.window / 2 / max(BIN, step))))
     still = _still_bins(centres, half, s.still_radius)
     runs = np.flatnonzero(np.diff(np.concatenate([[0], still.astype(np.int8), [0]])))
     found: list[Segment] = []
