@@ -491,6 +491,12 @@ def read_joint_csv(path: str | os.PathLike, model: RobotModel) -> Recording:
             column read as seconds or nanoseconds).
     """
     path = check_source(path)
+    if path.is_dir():  # iter_lines said 'cannot read: Is a directory', naming no field nor what the folder is
+        bag = (path / "metadata.yaml").is_file() or any(path.glob("*.db3")) or any(path.glob("*.mcap"))
+        mukca = any(path.glob("hole_*.csv")) or any(path.glob("*/hole_*.csv"))
+        hint = ": it is a ROS 2 bag, use --format bag" if bag else ": it holds MUKCa per-socket files, use --format " \
+            "mukca" if mukca else ""
+        raise RecordingError(f"{path}: field 'SOURCE': a folder, not a CSV file{hint}")
     header: list[str] | None = None
     # joints, stamps and line numbers grow in place, block by block (a list of blocks and their concatenation were
     # 230 MB of a 1.8 M-row CSV, and the blocks freed stayed in the heap)

@@ -139,3 +139,13 @@ def test_the_stillness_window_is_window_seconds_at_a_30_hz_joint_states() -> Non
     assert [name for name, _, _ in spans[1]] == ["S1", "S2"]
     for (name, start, end), (other, start_30, end_30) in zip(*spans, strict=True):
         assert name == other and abs(start_30 - start) <= 0.5 / 3 and abs(end_30 - end) <= 0.5 / 3, spans
+
+
+def test_a_bag_folder_imported_as_csv_is_refused_naming_the_format_to_use(ball_bag, tmp_path, capsys) -> None:
+    """Found in the trial: `import BAG_FOLDER --format csv` said 'cannot read: Is a directory', naming no field and
+    not that the folder is a bag."""
+    from tests.refusal import refused
+
+    bag, _, _ = ball_bag
+    refused(["import", bag, "--format", "csv", "--robot", PANDA, "--out", tmp_path / "out"], tmp_path, capsys,
+            "field 'SOURCE': a folder, not a CSV file: it is a ROS 2 bag, use --format bag")
