@@ -203,3 +203,17 @@ def test_a_revolute_joint_of_one_turn_keeps_its_limits(tmp_path) -> None:
     unnamed = replace(model, extras={**model.extras, "urdf": {
         k: v for k, v in model.extras["urdf"].items() if k != "continuous_joints"}})
     assert unnamed.full_turn.tolist() == [False, True, True, True]
+
+
+def test_the_provenance_comment_leaves_the_machine_records_in_the_robot_file(panda):
+    """A ROS user's trial: a URDF of 8 kB exported with 56 kB of comment, most of it the parameters' covariance that
+    validate reads from the calibrated robot file. The comment keeps what a reader reviews and says what it left."""
+    block = {"method": "lm", "residual_mm": {"after": {"rms": 0.42}}, "trained_on": {"P1": {"digest": "ab" * 32}},
+             "self_check": {"verdict": "consistent", "prediction": {"covariance": [[1.0, 0.5], [0.5, 1.0]]}}}
+    model = replace(panda, extras={"calibration": block})
+    text = robot_to_urdf(model)
+    ET.fromstring(text)
+    assert "verdict: consistent" in text and "rms: 0.42" in text
+    assert "covariance" not in text and "digest" not in text
+    assert "(left out here, in the robot file: self_check.prediction, trained_on)" in text
+    assert block["self_check"]["prediction"] and block["trained_on"]  # the model's own block is left as it was
