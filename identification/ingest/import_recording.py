@@ -110,7 +110,8 @@ class ImportResult:
         if self.segments:
             how = ("labelled by --fixture into", "outside the spans") if self.segments[0].labelled else (
                 "segmented into", "in motion")
-            lines.append(f"{how[0]} {len(self.dataset.fixture_names)} fixtures ({self.dropped_motion} samples {how[1]} "
+            count = len(self.dataset.fixture_names)
+            lines.append(f"{how[0]} {count} fixture{'s' * (count != 1)} ({self.dropped_motion} samples {how[1]} "
                          "dropped):")
             lines.append(format_segments(self.segments, self.dataset.counts()))
             lines += revisit_notes(self.segments)

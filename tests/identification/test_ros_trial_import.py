@@ -7,7 +7,11 @@ import pytest
 
 from spherecal.cli import main
 from spherecal.correction import load_robot, perturb
+from spherecal.correction.files.fixtures import FixtureSpec
+from spherecal.correction.files.samples import Dataset
 from spherecal.correction.files.samples_csv import read_samples
+from spherecal.identification.ingest.import_recording import ImportResult
+from spherecal.identification.ingest.segment import Segment
 
 from .recordings import stream, write_bag
 from .test_import_bag import NAMES, _offset
@@ -149,3 +153,11 @@ def test_a_bag_folder_imported_as_csv_is_refused_naming_the_format_to_use(ball_b
     bag, _, _ = ball_bag
     refused(["import", bag, "--format", "csv", "--robot", PANDA, "--out", tmp_path / "out"], tmp_path, capsys,
             "field 'SOURCE': a folder, not a CSV file: it is a ROS 2 bag, use --format bag")
+
+
+def test_the_import_report_counts_one_fixture_in_the_singular() -> None:
+    """The ROS 2 trial's report read 'segmented into 1 fixtures'."""
+    dataset = Dataset(labels=np.array(["S1"] * 3), q=np.zeros((3, 7)), fixture_names=("S1",))
+    segment = Segment("S1", np.arange(3), 0.0, 2.0, np.zeros(3), 1e-4, 2e-4)
+    text = ImportResult(dataset, FixtureSpec(names=("S1",), distances=[]), 3, [segment], 0, 0).format()
+    assert "segmented into 1 fixture (0 samples in motion dropped):" in text
