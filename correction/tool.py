@@ -133,24 +133,18 @@ def with_tool(model: RobotModel, tool: np.ndarray, payload: dict | None = None,
     Raises:
         ToolError: ``adapter`` not given where it is needed (the controller would aim the offset off, one way or
             the other: a MUKCa Panda calibrated with ``--tip-link panda_hand_tcp`` aimed 30 mm off), a tool that is
-            not 3 finite numbers, or farther from the last frame than the arm is long
+            not 3 finite numbers, or a tool or ``nominal_tool`` farther from the last frame than the arm is long
             (:attr:`RobotModel.chain_length`: millimetres typed for metres; no real tool outreaches the arm carrying
             it, and on a small arm this bound is tighter than any fixed one of a few metres).
     """
-    tool = point_of(tool, f"field '{field}'")
-    largest = float(np.abs(tool).max())
-    distance = largest * float(np.linalg.norm(tool / largest)) if largest > 0 else 0.0  # 1e300 squared is inf
-    if distance > model.chain_length:
-        raise ToolError(
-            f"field '{field}': the new tool point {np.array2string(tool, precision=4)} m is {distance:.4g} m from the "
-            f"last frame, more than the arm itself ({model.chain_length:.3g} m, sum of |a| and |d|) (millimetres? the "
-            "offset is in m)")
+    tool = _within_arm(point_of(tool, f"field '{field}'"), model, f"field '{field}'", "the new tool point")
     calibrated = calibrated_tool(model)
     model = replace(model, tool=calibrated)
     carried = np.zeros(3)
     stated = {}
     if nominal_tool is not None:
-        nominal_tool = point_of(nominal_tool, f"field '{NOMINAL_TOOL}'")
+        where = f"field '{NOMINAL_TOOL}'"  # millimetres carried -107 m over to the new tool (a user trial)
+        nominal_tool = _within_arm(point_of(nominal_tool, where), model, where, "the calibrated tool's nominal point")
         carried = calibrated - nominal_tool
         shift = samples_shift(nominal_tool, samples_tool)
         if shift is not None:
@@ -191,6 +185,18 @@ def with_tool(model: RobotModel, tool: np.ndarray, payload: dict | None = None,
             note += (f"; the {np.linalg.norm(shift) * 1e3:.1f} mm at which the samples put the ball from the robot "
                      f"file's tool is {how}")
     return ToolSwap(replace(model, tool=tool, extras=extras), distance, unidentified, note)
+
+
+def _within_arm(point: np.ndarray, model: RobotModel, where: str, what: str) -> np.ndarray:
+    """``point`` (3,) [m] in the last frame, refused when farther from it than the arm is long
+    (:attr:`RobotModel.chain_length`: millimetres typed for metres; no real tool outreaches the arm carrying it)."""
+    largest = float(np.abs(point).max())
+    distance = largest * float(np.linalg.norm(point / largest)) if largest > 0 else 0.0  # 1e300 squared is inf
+    if distance > model.chain_length:
+        raise ToolError(
+            f"{where}: {what} {np.array2string(point, precision=4)} m is {distance:.4g} m from the last frame, more "
+            f"than the arm itself ({model.chain_length:.3g} m, sum of |a| and |d|) (millimetres? the offset is in m)")
+    return point
 
 
 def samples_shift(nominal_tool: np.ndarray, samples_tool: np.ndarray | None) -> np.ndarray | None:
