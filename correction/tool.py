@@ -28,6 +28,7 @@ import numpy as np
 
 from .chain import link_frames
 from .errors import SpherecalError
+from .gravity import InertialsError, inertials_of
 from .layout import ANGLE
 from .model import RobotModel, matrix_rpy
 
@@ -114,9 +115,11 @@ def with_tool(model: RobotModel, tool: np.ndarray, payload: dict | None = None,
             ``nominal_tool`` on a swapped file carried it twice, 30 mm off, and the controller took it).
         tool: (3,) the new tool point in the last DH frame [m] (its nominal position when ``nominal_tool``
             is given, else the point itself).
-        payload: the new ``payload`` block (``{mass: kg, com: [x, y, z] m}`` in the last frame) for gravity
-            torques, or None to keep the model's (say so to the user: an elastic model's sag depends on it).
-        angle: unidentified rotation of the last frame to translate into millimetres [rad].
+        payload: the new ``payload`` block (``{mass: kg, com: [x, y, z] m}`` in the last frame, optionally
+            ``inertia: [ixx, ixy, ixz, iyy, iyz, izz] kg m^2``) for gravity torques, checked as a robot file's, or None
+            to keep the model's (say so to the user: an elastic model's sag depends on it).
+        angle: unidentified rotation of the last frame to translate into millimetres [rad], in ``[0,
+            FRAME_ANGLE_TOL]`` (5 deg).
         nominal_tool: (3,) the calibrated tool's nominal position in the last frame [m]
             (``calibration.nominal_tool`` of a calibrated file), or None to put ``tool`` as given.
         field: what the caller calls ``tool`` in a refusal (``--offset`` on the command line).
@@ -131,13 +134,23 @@ def with_tool(model: RobotModel, tool: np.ndarray, payload: dict | None = None,
         source: the calibrated file ``samples_tool`` came from, named in the refusal that asks for ``adapter``.
 
     Raises:
-        ToolError: ``adapter`` not given where it is needed (the controller would aim the offset off, one way or
-            the other: a MUKCa Panda calibrated with ``--tip-link panda_hand_tcp`` aimed 30 mm off), a tool that is
-            not 3 finite numbers, or a tool or ``nominal_tool`` farther from the last frame than the arm is long
-            (:attr:`RobotModel.chain_length`: millimetres typed for metres; no real tool outreaches the arm carrying
-            it, and on a small arm this bound is tighter than any fixed one of a few metres).
+        ToolError: a ``payload`` the gravity torques would refuse, an ``adapter`` that is not a bool or None, an
+            ``angle`` outside ``[0, FRAME_ANGLE_TOL]`` (degrees), ``adapter`` not given where it is needed (the
+            controller would aim the offset off, one way or the other: a MUKCa Panda calibrated with ``--tip-link
+            panda_hand_tcp`` aimed 30 mm off), a tool that is not 3 finite numbers, or a tool or ``nominal_tool``
+            farther from the last frame than the arm is long (:attr:`RobotModel.chain_length`: millimetres typed for
+            metres; no real tool outreaches the arm carrying it, and on a small arm this bound is tighter than any
+            fixed one of a few metres).
     """
     tool = _within_arm(point_of(tool, f"field '{field}'"), model, f"field '{field}'", "the new tool point")
+    if adapter is not None and not isinstance(adapter, (bool, np.bool_)):  # "no" is truthy: it carried the offset
+        raise ToolError(f"field 'adapter': expected True, False or None, got {adapter!r}")
+    if not (0.0 <= angle <= FRAME_ANGLE_TOL):  # also a nan
+        raise ToolError(f"field 'angle': expected a rotation in [0, {FRAME_ANGLE_TOL:.4g}] rad (at most "
+                        f"{np.rad2deg(FRAME_ANGLE_TOL):.0f} deg: beyond, another frame), got {angle!r} (degrees? "
+                        "the angle is in rad)")
+    if payload is not None:
+        _check_payload(model, payload)
     calibrated = calibrated_tool(model)
     model = replace(model, tool=calibrated)
     carried = np.zeros(3)
@@ -197,6 +210,17 @@ def _within_arm(point: np.ndarray, model: RobotModel, where: str, what: str) -> 
             f"{where}: {what} {np.array2string(point, precision=4)} m is {distance:.4g} m from the last frame, more "
             f"than the arm itself ({model.chain_length:.3g} m, sum of |a| and |d|) (millimetres? the offset is in m)")
     return point
+
+
+def _check_payload(model: RobotModel, payload) -> None:
+    """Refuse a ``payload`` block the gravity torques would refuse at their first use (:func:`correction.gravity.
+    inertials_of`: a mapping ``{mass: kg >= 0, com: (3,) m, inertia: (6,) kg m^2 optional}``, a centre of mass within
+    10 m, a plausible mass for the arm), here, where it is given."""
+    probe = replace(model, extras={"inertials": [{"mass": 0.0}] * model.n_joints, "payload": payload})
+    try:
+        inertials_of(probe, source=model.name)
+    except InertialsError as error:
+        raise ToolError(str(error)) from None
 
 
 def samples_shift(nominal_tool: np.ndarray, samples_tool: np.ndarray | None) -> np.ndarray | None:
