@@ -78,12 +78,15 @@ def velocity_bounds(
         gain: [1/s].
 
     Returns:
-        ``(lb, ub)`` each (n,) [rad/s], with ``lb <= 0 <= ub`` whenever ``q`` is inside the
-        margins.
+        ``(lb, ub)`` each (n,) [rad/s], ``-max_velocity <= lb <= ub <= max_velocity``, with
+        ``lb <= 0 <= ub`` whenever ``q`` is inside the margins (outside, both push it back in).
     """
     margin = np.minimum(margin, 0.5 * (upper - lower))  # a locked joint (lower == upper) is held, not infeasible
-    lb = np.maximum(-max_velocity, gain * (lower + margin - q))
-    ub = np.minimum(max_velocity, gain * (upper - margin - q))
+    # both ends inside +-max_velocity: a joint more than max_velocity / gain past a limit (0.1 rad; a reading in
+    # degrees) had ub < lb, OSQP refused the data and the fallback, clamped to them, commanded 4 rad/s (2216 from
+    # degrees) against a limit of 2; now it is driven back at the velocity limit
+    lb = np.clip(gain * (lower + margin - q), -max_velocity, max_velocity)
+    ub = np.clip(gain * (upper - margin - q), -max_velocity, max_velocity)
     return lb, ub
 
 

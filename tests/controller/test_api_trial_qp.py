@@ -1,0 +1,50 @@
+"""A controls engineer's trial of the QP differential IK (``controller.nullspace``, ``controller.qp_ik``): what it
+commands from a reading outside the joint limits, checked against the velocity limit it is given."""
+
+from __future__ import annotations
+
+import warnings
+
+import numpy as np
+import pytest
+
+from spherecal.controller.nullspace import NullSpaceController
+from spherecal.controller.qp_ik import MAX_VELOCITY, ControllerFallbackWarning, velocity_bounds
+from spherecal.correction import load_robot, tool_point
+
+
+@pytest.fixture(scope="module")
+def panda():
+    return load_robot("panda")
+
+
+@pytest.mark.parametrize("beyond", [0.0, 0.05, 0.2, 1.0, 100.0])
+def test_bounds_stay_ordered_and_within_the_velocity_limit(panda, beyond) -> None:
+    """A joint ``beyond`` rad past its upper limit (a reading in degrees: 100 rad): the position bound asked
+    ``20 * (upper - margin - q)``, -4 rad/s at 0.2 rad, below the lower bound -2 rad/s: OSQP printed "ERROR in
+    osqp_update_data_vec: Problem data validation" and the fallback, clamped to the crossed bounds, commanded -4 rad/s
+    (-2216 rad/s from a Panda reading in degrees) against a velocity limit of 2."""
+    q = np.array([0.0, -0.3, 0.0, -2.2, 0.0, 2.0, 0.8])
+    q[1] = panda.upper[1] + beyond
+    q[3] = panda.lower[3] - beyond
+    lb, ub = velocity_bounds(q, panda.lower, panda.upper)
+    assert np.all(lb <= ub)
+    assert np.all(lb >= -MAX_VELOCITY) and np.all(ub <= MAX_VELOCITY)
+    assert ub[1] < 0 and lb[3] > 0  # still driven back inside
+    controller = NullSpaceController(panda)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", ControllerFallbackWarning)
+        for target in (None, tool_point(panda, np.clip(q, panda.lower, panda.upper)) + [0.0, 0.0, 0.01]):
+            qdot = controller.step(q, np.zeros(7), target)
+            assert np.all(np.abs(qdot) <= MAX_VELOCITY + 1e-9), qdot
+
+
+def test_bounds_inside_the_limits_are_unchanged(panda) -> None:
+    """Inside the limits (every reading a controller sees) the bounds are what they were: the velocity limit or the
+    approach to the margin, whichever is tighter (written out here)."""
+    q = panda.random_configurations(200, np.random.default_rng(1))
+    for qk in q:
+        lb, ub = velocity_bounds(qk, panda.lower, panda.upper)
+        margin = 0.01
+        np.testing.assert_array_equal(lb, np.maximum(-MAX_VELOCITY, 20.0 * (panda.lower + margin - qk)))
+        np.testing.assert_array_equal(ub, np.minimum(MAX_VELOCITY, 20.0 * (panda.upper - margin - qk)))
