@@ -10,7 +10,7 @@ from __future__ import annotations
 import mujoco
 import numpy as np
 
-from spherecal.correction import RobotModel, geometric_part
+from spherecal.correction import RobotModel, geometric_part, tool_point
 
 from .plant import TIMESTEP, build_plant
 from .qp_ik import (
@@ -36,7 +36,10 @@ class NullSpaceController:
     """Joint velocity commands: tool-point task first, ``q_r`` strictly in its null space.
 
     Args:
-        model: the kinematics the controller believes (nominal, or a calibrated model).
+        model: the kinematics the controller believes (nominal, or a calibrated model). Its Jacobian is the rigid
+            chain's at the measured angles (MuJoCo); a target is reached by the model's own tool point, so an
+            elastic calibration's sag (or a joint-angle scale) is aimed for (a numpy :func:`correction.tool_point`
+            per step with a target: 0.40 ms against 0.04 ms for a rigid model; self-motion does not need it).
         solver: ``"osqp"`` (default, a persistent ``osqp.OSQP`` updated each step when
             ``persistent``) or any name in ``qpsolvers.available_solvers``.
         persistent: keep one OSQP instance set up (only with ``solver="osqp"``).
@@ -79,7 +82,13 @@ class NullSpaceController:
         self.last_bounds: tuple[np.ndarray, np.ndarray] | None = None  # (lb, ub) of the last step [rad/s]
         # its kinematics are the rigid chain's at the measured angles, as a robot controller's are: an elastic model's
         # plant has a second hinge per joint (motor and link), which the controller does not command
-        self._kin = build_plant(geometric_part(model))
+        rigid = geometric_part(model)
+        self._kin = build_plant(rigid)
+        # a target is reached by the model's own tool point (an elastic arm's sags: 0.45 mm on a trial's calibration
+        # aimed rigidly); the rigid chain's Jacobian steers it
+        kept = set(rigid.layout.names)
+        self._joint_side = any(value != 0.0 for name, value in zip(model.layout.names, model.params, strict=True)
+                               if name not in kept)
         self._jac = np.zeros((3, self._kin.mj_model.nv))
         self._n = model.n_joints
         self._zero3 = np.zeros(3)
@@ -98,6 +107,18 @@ class NullSpaceController:
         mujoco.mj_jacSite(m, d, self._jac, None, self._kin.tool_site)
         return d.site_xpos[self._kin.tool_site], self._jac
 
+    def _task(self, q: np.ndarray, target: np.ndarray | None, gain: float) -> tuple[np.ndarray, np.ndarray]:
+        """The Jacobian (3, n) [m/rad] at ``q`` and the primary task velocity (3,) [m/s]: ``gain`` times the target's
+        offset from the model's own tool point (:func:`correction.tool_point`: an elastic arm's sag and a joint-angle
+        scale included; the rigid chain's when the model has neither), damped near a singularity; 0 without a
+        target."""
+        point, jac = self.kinematics(q)
+        if target is None:
+            return jac, self._zero3
+        if self._joint_side:
+            point = tool_point(self.model, q)
+        return jac, damped_task_velocity(jac, gain * (np.asarray(target) - point))
+
     # ------------------------------------------------------------------------ step
     def bounds(self, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """(n,) lower and upper joint velocity bounds at ``q`` [rad/s]."""
@@ -115,16 +136,14 @@ class NullSpaceController:
                 the model's tool position back against a fixture the chain already holds).
             gain: ``Kp`` [1/s].
         """
-        point, jac = self.kinematics(q)
-        v = self._zero3 if target is None else damped_task_velocity(jac, gain * (np.asarray(target) - point))
+        jac, v = self._task(q, target, gain)
         lb, ub = self.bounds(q)
         return build_problem(jac.copy(), v, q_r, lb, ub)
 
     def step(self, q: np.ndarray, q_r: np.ndarray, target: np.ndarray | None = None,
              gain: float = POSITION_GAIN) -> np.ndarray:
         """(n,) joint velocity command [rad/s] for one control period (arguments as :meth:`build`)."""
-        point, jac = self.kinematics(q)
-        v = self._zero3 if target is None else damped_task_velocity(jac, gain * (np.asarray(target) - point))
+        jac, v = self._task(q, target, gain)
         lb, ub = self.last_bounds = self.bounds(q)
         if self.closed_form:
             qdot = equality_solution(jac, v, q_r)
