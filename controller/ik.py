@@ -172,6 +172,19 @@ def _solve_batch(lower: np.ndarray, upper: np.ndarray, starts: np.ndarray, evalu
     return q, err, iterations, _answer(running, _reached(err))
 
 
+def _finite(value, shape: tuple[int, ...], field: str, expected: str) -> np.ndarray:
+    """``value`` as a float array of ``shape``; anything else (numpy's broadcast and reshape errors, a NaN that came
+    back as a NaN miss) raises :class:`SpherecalError` naming ``field``."""
+    try:
+        array = np.asarray(value, dtype=float)
+    except (TypeError, ValueError):
+        array = np.full(0, np.nan)
+    if array.shape != shape or not np.all(np.isfinite(array)):
+        raise SpherecalError(f"{field}: expected {expected}, got shape {array.shape}"
+                             f"{'' if array.shape != shape else ' with a value that is not finite'}")
+    return array
+
+
 def ik(
     model: RobotModel,
     target: np.ndarray,
@@ -209,13 +222,19 @@ def ik(
 
     Returns:
         :class:`IKResult` (check ``converged``; the best attempt is returned either way).
+
+    Raises:
+        SpherecalError: a ``target``, ``q0`` or ``orientation`` of another shape or not finite, ``restarts``
+            without ``rng``, an ``orientation`` with ``kinematics``.
     """
-    target = np.asarray(target, dtype=float).reshape(3)
-    orientation = None if orientation is None else np.asarray(orientation, dtype=float).reshape(3, 3)
+    target = _finite(target, (3,), "target", "3 finite coordinates [m]")
+    orientation = None if orientation is None else _finite(orientation, (3, 3), "orientation",
+                                                           "a (3, 3) rotation matrix")
+    q0 = _finite(q0, (model.n_joints,), "q0", f"{model.n_joints} finite joint angles [rad]")
     if restarts and rng is None:
-        raise ValueError("ik: restarts need a seeded rng")
+        raise SpherecalError("rng: ik's restarts need a seeded generator (rng=np.random.default_rng(seed))")
     if kinematics is not None and orientation is not None:
-        raise ValueError("ik: a kinematics callable gives the position only, not an orientation")
+        raise SpherecalError("orientation: ik with a kinematics callable solves for the position only")
     evaluate = _evaluator(model, target, orientation, kinematics)
     first = np.clip(np.asarray(q0, dtype=float), model.lower, model.upper)[None]
     if lockstep and restarts:

@@ -79,3 +79,22 @@ def test_qp_ik_of_an_elastic_model_lands_its_sagging_arm_on_the_target(panda) ->
     for _ in range(3000):
         q_loop = q_loop + 1e-3 * controller.step(q_loop, np.zeros(7), target)
     assert np.linalg.norm(tool_point(model, q_loop) - target) < 1e-10
+
+
+def test_ik_refuses_inputs_of_the_wrong_shape_in_its_own_words(panda) -> None:
+    """``controller.ik.ik`` (the public IK) let numpy speak: a 6-angle start raised "operands could not be broadcast",
+    a 2-coordinate target "cannot reshape array", a NaN target returned a NaN miss as a result, restarts without a
+    generator a bare ValueError. Each is now a SpherecalError naming the field."""
+    from spherecal.controller.ik import ik
+    from spherecal.correction import SpherecalError
+
+    q0 = np.array([0.0, -0.3, 0.0, -2.2, 0.0, 2.0, 0.8])
+    target = tool_point(panda, q0 + 0.05)
+    for kwargs, field in (({"q0": q0[:6]}, "q0"), ({"target": target[:2]}, "target"),
+                          ({"target": [np.nan, 0.0, 0.5]}, "target"), ({"q0": np.full(7, np.inf)}, "q0"),
+                          ({"restarts": 3}, "rng"), ({"orientation": np.eye(4)}, "orientation")):
+        with pytest.raises(SpherecalError, match=field):
+            ik(panda, **{"target": target, "q0": q0, **kwargs})
+    result = ik(panda, target, q0)
+    assert result.converged and np.linalg.norm(tool_point(panda, result.q) - target) < 1e-10
+
