@@ -2,6 +2,11 @@
 
 Public names are loaded lazily (PEP 562) so that ``spherecal --help``, which imports
 ``spherecal.commands``, does not import numpy or MuJoCo.
+
+The IK is :func:`controller.ik.ik` (``from spherecal.controller.ik import ik``): the package does not export the
+function under the name of its module. Python puts the submodule on the package as ``ik`` whenever anything imports
+it, so the name was the module after any import of the compensation (a controls engineer's trial: ``TypeError:
+'module' object is not callable``); ``from spherecal.controller import ik`` gives the module.
 """
 
 from __future__ import annotations
@@ -18,7 +23,6 @@ _EXPORTS: dict[str, str] = {
     "export_model": "export",
     "IKResult": "ik",
     "UnreachableError": "ik",
-    "ik": "ik",
     "NullSpaceController": "nullspace",
     "Plant": "plant",
     "build_mjcf": "plant",
