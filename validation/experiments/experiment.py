@@ -11,10 +11,11 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from spherecal.correction import RobotModel, SpherecalError, load_robot, perturb
+from spherecal.controller.reach import UnreachableFixtureError, check_fixture
+from spherecal.correction import RobotModel, SpherecalError, frames, load_robot, perturb
 from spherecal.correction.files.fixtures import FixtureSpec
 from spherecal.identification.calibrate import calibrate
-from spherecal.identification.synthetic import make_dataset
+from spherecal.identification.synthetic import make_dataset, project_to_point
 
 
 class ExperimentError(SpherecalError):
@@ -53,12 +54,72 @@ def true_robot(nominal: RobotModel, rng: np.random.Generator) -> RobotModel:
     return perturb(nominal, rng)
 
 
-def default_fixtures() -> dict[str, np.ndarray]:
-    """The three fixture centres P1, P2, P3 in the base frame [m]: ``spherecal simulate``'s defaults
-    (chosen by the controller for joint coverage under self-motion)."""
+#: The embedded Panda's reach beyond its base column [m] (:func:`arm_reach` of ``load_robot("panda")``: its
+#: :attr:`~correction.RobotModel.reach`, 1.393 m, less its 0.333 m column): the scale of :func:`default_fixtures`'s
+#: points, which were chosen on it.
+PANDA_REACH = 1.06
+#: The top of the embedded Panda's base column in its base frame [m] (:func:`column_top`).
+PANDA_COLUMN_TOP = (0.0, 0.0, 0.333)
+#: Shares of the scaled distance from the column top tried in turn until the arm reaches a default fixture inside
+#: its joint limits (:func:`default_fixtures`).
+PULL_IN = (1.0, 0.9, 0.8, 0.7, 0.6, 0.5)
+
+
+def column_top(model: RobotModel) -> np.ndarray:
+    """(3,) the top of ``model``'s base column [m]: the first joint's fixed point (modified DH: the origin of frame
+    1; standard DH: ``d1`` along the first axis), the column :func:`controller.reach.check_fixture` checks."""
+    f = frames(model, np.zeros((1, model.n_joints)))
+    a = f.origin[0, :, 0]
+    return f.origin[1, :, 0] if model.convention == "modified" else a + model.d[0] * f.z[0, :, 0]
+
+
+def arm_reach(model: RobotModel) -> float:
+    """How far the arm reaches beyond its base column [m]: :attr:`~correction.RobotModel.reach` (the links' and the
+    tool's lengths) less the column's height (the base origin to :func:`column_top`)."""
+    base = frames(model, np.zeros((1, model.n_joints))).origin[0, :, 0]
+    return model.reach - float(np.linalg.norm(column_top(model) - base))
+
+
+def default_fixtures(model: RobotModel | None = None) -> dict[str, np.ndarray]:
+    """The three fixture centres P1, P2, P3 in the base frame [m]: ``spherecal simulate``'s defaults.
+
+    The Panda's points (chosen by the controller for joint coverage under self-motion,
+    ``controller.self_motion.DEFAULT_FIXTURES``) for ``model`` None or an arm that reaches all three inside its joint
+    limits (the Panda, the FR3, the iiwa14, the Gen3 lite, a 1.3 m six-joint arm). An arm that does not reach one
+    of them (a 0.45 m arm: 0.24 m short of P1) gets the same points scaled about the top of its base column by its
+    reach over the Panda's (:func:`arm_reach`, :data:`PANDA_REACH`), where they sit for the Panda relative to the
+    arm's size; a point the arm does not reach there is pulled towards the column top (:data:`PULL_IN`) until it
+    does, and one still unreached is returned as scaled (the simulation refuses it, naming it).
+
+    Scaling every arm's points was tried and not kept: at the scaled points a 1.3 m six-joint arm calibrated worse
+    (workspace error against the truth 1.41, 1.71, 0.40 mm against 0.86, 0.18, 0.98 mm at the Panda's, seeds 0-2),
+    the Gen3 lite's P2 covered 2 % of its base joint (17 % at the Panda's).
+    """
     from spherecal.controller.self_motion import DEFAULT_FIXTURES  # MuJoCo: only a simulation needs it (start-up)
 
-    return {name: np.asarray(centre, dtype=float) for name, centre in DEFAULT_FIXTURES.items()}
+    points = {name: np.asarray(centre, dtype=float) for name, centre in DEFAULT_FIXTURES.items()}
+    if model is None or all(_reaches(model, p) for p in points.values()):
+        return points
+    scale = arm_reach(model) / PANDA_REACH
+    top, panda_top = column_top(model), np.asarray(PANDA_COLUMN_TOP)
+    return {name: _reached(model, [top + (p - panda_top) * scale * share for share in PULL_IN])
+            for name, p in points.items()}
+
+
+def _reaches(model: RobotModel, point: np.ndarray) -> bool:
+    """Whether ``point`` (3,) [m] lies outside the base column and the arm's tool point reaches it inside the joint
+    limits (64 random seeds projected onto it, seeded: the same answer every run)."""
+    try:
+        check_fixture(model, "", point)
+    except UnreachableFixtureError:
+        return False
+    seeds = model.random_configurations(64, np.random.default_rng(0))
+    return bool(project_to_point(model, seeds, point, freeze=True)[1].any())
+
+
+def _reached(model: RobotModel, tries: list[np.ndarray]) -> np.ndarray:
+    """The first of ``tries`` (3,) [m] the arm reaches (:func:`_reaches`), else the first."""
+    return next((point for point in tries if _reaches(model, point)), tries[0])
 
 
 @dataclass

@@ -18,7 +18,7 @@ from spherecal.correction.files.outputs import OutputSet
 from spherecal.correction.files.provenance import comment_block, provenance
 from spherecal.correction.files.samples_csv import format_samples
 
-from .experiment import ExperimentError, default_fixtures, fixture_spec, joint_stiffness
+from .experiment import PANDA_REACH, ExperimentError, arm_reach, default_fixtures, fixture_spec, joint_stiffness
 
 #: The files a simulation writes into its folder.
 SIMULATION_FILES = ("samples.csv", "fixtures.yaml", "truth.yaml")
@@ -118,7 +118,7 @@ def simulate_to_folder(config: SimulationConfig, outputs: OutputSet | None = Non
     if nominal.n_joints < 4:  # the tool point pinned leaves n - 3 degrees of freedom
         raise ExperimentError(f"field '--robot': {config.robot}: {nominal.n_joints} joints have no self-motion at a "
                               "spherical joint (needs at least 4)")
-    fixtures = true_centres(config.fixtures)
+    fixtures = true_centres(config.fixtures, nominal, report)
     rng = np.random.default_rng(config.seed)
     true = perturb(nominal, rng, config.length_std, np.deg2rad(config.angle_std_deg), config.tool_std)
     stiffness = joint_stiffness(config.stiffness, nominal.n_joints)
@@ -149,14 +149,24 @@ def simulate_to_folder(config: SimulationConfig, outputs: OutputSet | None = Non
     return SimulationResult(result, tuple(files))
 
 
-def true_centres(path: str | None) -> dict[str, np.ndarray]:
-    """name -> (3,) true fixture centre [m], from the fixtures.yaml ``path`` or the controller's defaults.
+def true_centres(path: str | None, nominal: RobotModel | None = None, report=None) -> dict[str, np.ndarray]:
+    """name -> (3,) true fixture centre [m], from the fixtures.yaml ``path`` or the defaults for ``nominal``
+    (:func:`.experiment.default_fixtures`: the Panda's points, scaled to another arm's reach; ``report`` is
+    given one line saying where they are when they are not the Panda's).
 
     Raises:
         ExperimentError: a fixture of the file without its position (one line naming the file and field).
     """
     if path is None:
-        return default_fixtures()
+        points = default_fixtures(nominal)
+        panda = default_fixtures()
+        if report is not None and any(not np.array_equal(points[k], panda[k]) for k in panda):
+            where = ", ".join(f"{k} {np.round(v, 3).tolist()}" for k, v in points.items())
+            reach = arm_reach(nominal)
+            report(f"the Panda's default fixtures are out of this arm's reach: scaled to its reach ({reach:.2f} m "
+                   f"beyond its base column, {reach / PANDA_REACH:.2f}x the Panda's): {where} m; give your own with "
+                   "--fixtures (spherecal plan ranks candidates)")
+        return points
     spec = read_fixtures(path)
     missing = [name for name in spec.names if name not in spec.positions]
     if missing:
