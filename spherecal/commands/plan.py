@@ -36,8 +36,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--per-fixture", type=count(1, MAX_PER_FIXTURE), default=500, metavar="N",
                         help="samples to be recorded per fixture (default 500)")
     parser.add_argument("--motion", choices=("kinematic", "controller"), default="kinematic",
-                        help="self-motion at a candidate: kinematic projection (default, the whole manifold) or "
-                             "the null-space controller on the MuJoCo plant for --seconds")
+                        help="self-motion at a candidate: kinematic projection (default, the whole manifold; one "
+                             "hand-guided walk on an arm of 6 joints or fewer) or the null-space controller on the "
+                             "MuJoCo plant for --seconds")
     add_seconds(parser, 3.0, "controller self-motion per candidate")
     add_seed(parser)
     parser.add_argument("--rrd", default=None, help="write a Rerun recording of the candidates coloured by score")

@@ -7,6 +7,8 @@ import numpy as np
 from spherecal.validation.viewer.recording import Recording
 from spherecal.validation.viewer.recording_shapes import SCALE_STEPS, colour_ramp, scale_labels
 
+from .plan import one_branch
+
 #: Colour of a candidate with no prediction (unreachable, or not identifiable alone).
 GREY = (150, 150, 150)
 
@@ -86,9 +88,16 @@ def format_plan(result) -> str:
         w = best.without_distances
         lines.append(f"  without any distance: mean {w.mean * 1e3:.4f} mm, 95th percentile {w.p95 * 1e3:.4f} mm")
     lines.append("  " + p.summary().replace("\n", "\n  "))
-    survey = ("the whole self-motion manifold at each fixture (a recording that covers less does worse: plan "
-              "--predict on it)" if result.motion == "kinematic" else
-              "the null-space controller's self-motion at each fixture (--seconds of it)")
+    n_joints = result.surveys[0].q.shape[1]
+    if result.motion != "kinematic":
+        survey = "the null-space controller's self-motion at each fixture (--seconds of it)"
+    elif one_branch(n_joints):
+        survey = (f"one hand-guided walk through the self-motion at each fixture, in one branch (a {n_joints}-joint "
+                  "arm's branches are not joined by any motion with the ball held; a recording that covers less does "
+                  "worse: plan --predict on it)")
+    else:
+        survey = ("the whole self-motion manifold at each fixture (a recording that covers less does worse: plan "
+                  "--predict on it)")
     lines.extend("  " + line for line in what_it_counts(p, survey))
     return "\n".join(lines)
 
