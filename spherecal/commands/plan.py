@@ -20,7 +20,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                        help="YAML: candidates: {C1: {position: [x, y, z], joint_range: [share per joint]}} [m]; "
                             "with --samples also plate placements {left: {sockets: {a: [x, y, z], b: [x, y, z]}, "
                             "distances: [[a, b, metres]]}}")
-    where.add_argument("--grid", default=None, help="box grid 'xmin,xmax,nx;ymin,ymax,ny;zmin,zmax,nz' [m]")
+    where.add_argument("--grid", default=None,
+                       help="box grid 'xmin,xmax,nx;ymin,ymax,ny;zmin,zmax,nz' [m], or 'auto' (5 x 5 x 5 over where "
+                            "the arm's tool point reaches in front of and above its base, x, z >= 0: any arm's size)")
     where.add_argument("--predict", default=None, metavar="SAMPLES_CSV",
                        help="instead of planning: predicted accuracy of this recorded or simulated data set")
     where.add_argument("--analysis", default=None, metavar="MARKDOWN",

@@ -8,6 +8,7 @@ from pathlib import Path
 
 import numpy as np
 
+from spherecal.correction import RobotModel, tool_point
 from spherecal.correction.errors import SpherecalError
 from spherecal.correction.files.text_input import read_text
 from spherecal.correction.files.yaml_safe import MAX_FILE_BYTES, load_yaml
@@ -64,6 +65,32 @@ def grid_candidates(text: str, option: str = "--grid") -> list[Candidate]:
         raise CandidateError(f"field '{option}': {text!r}: {total} points, at most {MAX_GRID}")
     points = np.stack(np.meshgrid(*axes, indexing="ij"), axis=-1).reshape(-1, 3)
     return [Candidate(f"C{k + 1}", p) for k, p in enumerate(points)]
+
+
+#: Points per axis of ``--grid auto`` (:func:`auto_grid`): 5 x 5 x 5 candidates.
+AUTO_COUNT = 5
+
+
+def auto_grid(model: RobotModel, rng: np.random.Generator, count: int = AUTO_COUNT) -> list[Candidate]:
+    """``--grid auto``: a ``count`` x ``count`` x ``count`` box grid over where the arm's tool point reaches in
+    front of its base and above it (x >= 0 and z >= 0 in the base frame: a socket stands on the table the arm is
+    mounted on, not below it): the 10th to 90th percentile of random configurations' tool points
+    along x, y and z, so that its spacing follows the arm's size (a 0.45 m arm and a 1.3 m one alike), named
+    ``C1`` ... as :func:`grid_candidates` names them. Points the arm does not reach there, or inside its base column,
+    are surveyed and named unreachable, as any candidate.
+
+    Raises:
+        CandidateError: the tool point rarely reaches the front of the base.
+    """
+    points = tool_point(model, model.random_configurations(20_000, rng))
+    front = points[(points[:, 0] >= 0.0) & (points[:, 2] >= 0.0)]
+    if len(front) < 50:
+        raise CandidateError("field '--grid': auto: the tool point rarely reaches in front of and above the base (x, "
+                             "z >= 0); give the box 'xmin,xmax,nx;ymin,ymax,ny;zmin,zmax,nz' [m]")
+    low, high = np.percentile(front, [10, 90], axis=0)
+    ticks = [np.round(np.linspace(low[k], high[k], count), 3) for k in range(3)]
+    grid = np.stack(np.meshgrid(*ticks, indexing="ij"), axis=-1).reshape(-1, 3)
+    return [Candidate(f"C{k + 1}", p) for k, p in enumerate(grid)]
 
 
 def read_candidates(path: str | Path, n_joints: int) -> list[Candidate]:

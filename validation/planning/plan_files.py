@@ -19,7 +19,7 @@ from spherecal.correction.files.samples_csv import read_samples
 from spherecal.identification.prediction import Prediction, predict_accuracy
 
 from ..parallel import executor
-from .candidates import CandidateError, grid_candidates, read_candidates
+from .candidates import CandidateError, auto_grid, grid_candidates, read_candidates
 from .guidance import Guidance, recording_guidance
 from .guidance_report import guidance_json, write_guidance_recording
 from .placements import read_placements
@@ -128,7 +128,8 @@ def plan_files(robot: str, candidates: str | None, grid: str | None, fixture_cou
     Args:
         robot, links: as :func:`predict_files`.
         candidates: YAML of candidate positions (:func:`.candidates.read_candidates`), or None.
-        grid: box grid ``"xmin,xmax,nx;ymin,ymax,ny;zmin,zmax,nz"`` of candidate positions [m], or None.
+        grid: box grid ``"xmin,xmax,nx;ymin,ymax,ny;zmin,zmax,nz"`` of candidate positions [m], ``"auto"`` (over the
+            arm's reach in front of its base, :func:`.candidates.auto_grid`), or None.
         fixture_count: fixtures wanted, 1..4.
         seed: seeds each candidate's survey (by its name) and the workspace.
         noise: fixture noise std per axis [m].
@@ -147,8 +148,14 @@ def plan_files(robot: str, candidates: str | None, grid: str | None, fixture_cou
     """
     model = load_robot(robot, **links)
     if candidates is None and grid is None:
-        raise CandidateError(f"field '--candidates': give --candidates C.yaml or --grid {GRID}")
-    found = read_candidates(candidates, model.n_joints) if candidates else grid_candidates(grid)
+        raise CandidateError(f"field '--candidates': give --candidates C.yaml or --grid {GRID} [m] (or --grid auto: "
+                             "5 x 5 x 5 over the arm's reach in front of and above its base)")
+    if candidates:
+        found = read_candidates(candidates, model.n_joints)
+    elif grid == "auto":  # its own generator: the surveys' seeds are the candidates' names, as for any grid
+        found = auto_grid(model, np.random.default_rng([seed, 2]))
+    else:
+        found = grid_candidates(grid)
     if not 1 <= fixture_count <= 4:
         raise CandidateError(f"field '--fixture-count': expected an integer in 1..4, got {fixture_count}")
     with executor(workers, scheduler) as pool:  # each candidate's survey a task, seeded by its name
