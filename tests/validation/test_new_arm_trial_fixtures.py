@@ -38,3 +38,15 @@ def test_arms_that_reach_the_pandas_points_keep_them(arms):
     for robot in (load_robot("panda"), load_robot("iiwa14"), load_robot(arms / "big.urdf", tip_link="ball")):
         points = default_fixtures(robot)
         assert all(np.array_equal(points[k], panda[k]) for k in panda)
+
+
+def test_a_fixture_out_of_reach_says_what_to_do(arms, capsys):
+    """'fixture P1 at [0.5, -0.25, 0.5] m is out of reach (IK ... misses it by 238.6 mm)' said what was wrong, not
+    what to do."""
+    fixtures = arms / "far.yaml"
+    fixtures.write_text("fixtures:\n  P1: {position: [0.5, -0.25, 0.5]}\n")
+    assert main(["simulate", "--robot", str(arms / "small.urdf"), "--tip-link", "ball", "--fixtures", str(fixtures),
+                 "--out", str(arms / "sim"), "--seconds", "1", "--per-fixture", "50"]) == 1
+    error = capsys.readouterr().err
+    assert "out of reach" in error and "move it where the arm reaches" in error and "--grid auto" in error
+    assert error.count("\n") == 1

@@ -132,7 +132,10 @@ def simulate_to_folder(config: SimulationConfig, outputs: OutputSet | None = Non
     except UnreachableFixtureError as error:  # name the file and field that put the fixture there
         source = f"{config.fixtures}: field 'fixtures.{error.fixture}.position'" if config.fixtures else \
             f"field '--fixtures': default fixture {error.fixture}"
-        raise ExperimentError(f"{source}: {error}") from None
+        remedy = "move it" if config.fixtures else "give --fixtures F.yaml with the positions"
+        robot = config.robot + (f" --tip-link {config.tip_link}" if config.tip_link else "")
+        raise ExperimentError(f"{source}: {error}; {remedy} where the arm reaches (spherecal plan --robot {robot} "
+                              "--grid auto ranks candidates)") from None
 
     names = result.fixture_names
     record = _record(config, settings, result, TIMESTEP)
