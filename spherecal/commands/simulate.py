@@ -22,7 +22,10 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--noise", type=noise_mm, default=0.3,
                         help="fixture compliance std per axis moving the physical point [mm] (default 0.3)")
     parser.add_argument("--fixtures", default=None,
-                        help="fixtures.yaml giving the true centre (position) of every fixture [m]")
+                        help="fixtures.yaml giving the true centre (position) of every fixture [m] (default: the "
+                             "Panda's P1, P2, P3 at (0.5, -0.25, 0.5), (0.5, 0, 0.4), (0.45, 0.25, 0.45) m, scaled "
+                             "to the reach of an arm that does not reach them; spherecal plan --grid auto ranks "
+                             "positions for yours)")
     add_robot(parser)
     parser.add_argument("--length-std", type=spread_mm, default=1.0, help="true-robot a, d error std [mm] (default 1)")
     parser.add_argument("--angle-std-deg", type=at_most(10.0, "deg", allow_zero=True), default=0.2,
@@ -33,7 +36,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="write the true centre-to-centre distances into fixtures.yaml")
     parser.add_argument("--stiffness", default=None, metavar="K[,K...]",
                         help="elastic joints of the true robot: stiffness [Nm/rad], one value for every joint or "
-                             "one per joint separated by commas, 0 = rigid (e.g. 0,3e4,3e4,3e4,0,0,0); links sag "
+                             "one per joint separated by commas, 0 = rigid (e.g. 0,3e4,3e4,3e4,0,0,0 on a 7-joint "
+                             "arm); links sag "
                              "under gravity from the robot's inertials (default: the robot file's compliance, rigid "
                              "without one)")
     parser.add_argument("--solver", default="osqp", help="QP solver (qpsolvers name; osqp is persistent)")
