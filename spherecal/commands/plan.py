@@ -44,6 +44,10 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     add_seconds(parser, 3.0, "controller self-motion per candidate")
     add_seed(parser)
     parser.add_argument("--rrd", default=None, help="write a Rerun recording of the candidates coloured by score")
+    parser.add_argument("--fixtures-out", default=None, metavar="FIXTURES_YAML",
+                        help="in a plan from scratch: write the chosen fixtures as a fixtures.yaml (positions [m], "
+                             "the distances to measure under 'plan:'), for simulate --fixtures or as the recording's "
+                             "template")
     add_workers(parser, "candidates' surveys", also=" and for --analysis")
 
 
@@ -113,7 +117,7 @@ USES = {
     "--samples": ("samples", *_ROBOT, "fixtures", "candidates", "grid", "plate_grid", "plate_orientations",
                   "per_socket", "min_gain", "noise", "seed", "out", "rrd"),
     "a plan from scratch": (*_ROBOT, "candidates", "grid", "fixture_count", "noise", "per_fixture", "motion",
-                            "seconds", "seed", "workers", "scheduler", "rrd"),
+                            "seconds", "seed", "workers", "scheduler", "rrd", "fixtures_out"),
 }
 
 
@@ -158,8 +162,10 @@ def run(args: argparse.Namespace) -> int:
 
     refuse_unused(args)
     check_per_fixture(args, 10, simulated=False)
-    outputs = planned_outputs(args, {"--rrd": args.rrd, "--analysis": args.analysis, "--out": args.out})
-    plan_files.refuse_foreign_outputs({"--out": args.out, "--analysis": args.analysis, "--rrd": args.rrd})
+    outputs = planned_outputs(args, {"--rrd": args.rrd, "--analysis": args.analysis, "--out": args.out,
+                                     "--fixtures-out": args.fixtures_out})
+    plan_files.refuse_foreign_outputs({"--out": args.out, "--analysis": args.analysis, "--rrd": args.rrd,
+                                       "--fixtures-out": args.fixtures_out})
     if args.analysis is not None:
         from spherecal.validation.planning.analysis import AnalysisConfig, write_analysis
 
@@ -191,9 +197,10 @@ def run(args: argparse.Namespace) -> int:
     result = plan_files.plan_files(
         args.robot, args.candidates, args.grid, args.fixture_count, args.seed, args.noise * 1e-3, args.per_fixture,
         args.motion, args.seconds, recorded_options(args), args.workers, args.scheduler, args.rrd, outputs,
-        show=lambda result: print(format_plan(result)), **links)
-    if args.rrd:
-        print(f"written: {args.rrd}")
+        show=lambda result: print(format_plan(result)), fixtures_out=args.fixtures_out, **links)
+    for name in (args.rrd, args.fixtures_out):
+        if name:
+            print(f"written: {name}")
     print(f"wall time {time.perf_counter() - start:.1f} s (survey {result.seconds['survey']:.1f} s, "
           f"scoring {result.seconds['score']:.1f} s, motion: {result.motion})")
     return 0

@@ -11,7 +11,7 @@ from pathlib import Path
 import numpy as np
 
 from spherecal.correction.files.earlier_run import refuse_unless_own, written_by
-from spherecal.correction.files.fixtures import read_fixtures
+from spherecal.correction.files.fixtures import FixtureSpec, format_fixtures, read_fixtures
 from spherecal.correction.files.outputs import OutputSet
 from spherecal.correction.files.provenance import comment_block, provenance
 from spherecal.correction.files.robots import load_robot
@@ -122,7 +122,7 @@ def guide_files(robot: str, samples: str, fixtures: str | None, candidates: str 
 def plan_files(robot: str, candidates: str | None, grid: str | None, fixture_count: int, seed: int, noise: float,
                per_fixture: int, motion: str, seconds: float, inputs: dict, workers: int = 2,
                scheduler: str | None = None, rrd: str | None = None, outputs: OutputSet | None = None,
-               show: Callable[[Plan], None] | None = None, **links) -> Plan:
+               show: Callable[[Plan], None] | None = None, fixtures_out: str | None = None, **links) -> Plan:
     """A plan from scratch: survey the candidate fixture positions, choose ``fixture_count`` of them, record it.
 
     Args:
@@ -141,6 +141,7 @@ def plan_files(robot: str, candidates: str | None, grid: str | None, fixture_cou
         rrd: Rerun recording of the candidates coloured by score to write, or None.
         outputs: the staged outputs holding ``rrd`` (checked by the caller); None: made here.
         show: called with the plan before a refusal or the recording.
+        fixtures_out: fixtures.yaml of the chosen set to write (:func:`chosen_fixtures`), or None.
 
     Raises:
         CandidateError: neither ``candidates`` nor ``grid``, ``fixture_count`` outside 1..4, fewer reachable
@@ -166,9 +167,26 @@ def plan_files(robot: str, candidates: str | None, grid: str | None, fixture_cou
         reachable = sum(s.reachable for s in result.surveys)
         raise CandidateError(f"no plan: {reachable} of {len(result.surveys)} candidates reachable, fewer than the "
                              f"{fixture_count} fixtures wanted (--fixture-count)")
-    if rrd:
-        outputs = OutputSet({"--rrd": rrd}) if outputs is None else outputs
+    if rrd or fixtures_out:
+        outputs = OutputSet({"--rrd": rrd, "--fixtures-out": fixtures_out}) if outputs is None else outputs
         with outputs:  # staged, renamed into place once Rerun has written it all
             info = provenance(seed, inputs, workers=result.workers)
-            write_recording(outputs.stage(rrd), result, comment_block(info))
+            if rrd:
+                write_recording(outputs.stage(rrd), result, comment_block(info))
+            if fixtures_out:
+                outputs.write_text(fixtures_out, chosen_fixtures(result, info))
     return result
+
+
+def chosen_fixtures(result: Plan, info: dict) -> str:
+    """fixtures.yaml text of the plan's chosen set: each fixture's position [m] (what ``simulate --fixtures`` takes as
+    the true centres), and under ``plan:`` the distances worth measuring (their planned values [m]: measure them on
+    the plate and give them under ``distances:``), the predicted error [m]; the provenance as the leading comment (by
+    which a later plan knows the file for its own)."""
+    best = result.best
+    position = {s.candidate.name: s.candidate.position for s in result.surveys}
+    measure = [[a, b, round(float(np.linalg.norm(position[a] - position[b])), 6)] for a, b in best.distances]
+    predicted = {"mean": float(best.prediction.mean), "p95": float(best.prediction.p95)}
+    spec = FixtureSpec(names=best.names, positions={name: position[name] for name in best.names},
+                       extras={"plan": {"measure_distances": measure, "predicted_error_m": predicted}})
+    return "".join(f"# {line}\n" for line in comment_block(info).splitlines()) + format_fixtures(spec)
