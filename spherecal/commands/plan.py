@@ -45,9 +45,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     add_seed(parser)
     parser.add_argument("--rrd", default=None, help="write a Rerun recording of the candidates coloured by score")
     parser.add_argument("--fixtures-out", default=None, metavar="FIXTURES_YAML",
-                        help="in a plan from scratch: write the chosen fixtures as a fixtures.yaml (positions [m], "
-                             "the distances to measure under 'plan:'), for simulate --fixtures or as the recording's "
-                             "template")
+                        help="in a plan from scratch: write the chosen fixtures as a fixtures.yaml for simulate "
+                             "--fixtures (positions [m]; the distances to measure under 'plan:'); not for calibrate, "
+                             "which would take the planned positions for measured centres")
     add_workers(parser, "candidates' surveys", also=" and for --analysis")
 
 

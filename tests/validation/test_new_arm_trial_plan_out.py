@@ -32,3 +32,11 @@ def test_the_chosen_fixtures_go_to_simulate_as_written(tmp_path, capsys):
     assert main(["plan", "--robot", str(robot), "--tip-link", "ball", "--grid", GRID, "--workers", "1",
                  "--fixtures-out", str(tmp_path / "mine.yaml")]) == 1
     assert "--fixtures-out" in capsys.readouterr().err
+
+
+def test_the_help_says_the_planned_positions_are_not_for_calibrate(capsys):
+    """A planned position given to calibrate is taken for a measured centre: the help said 'or as the recording's
+    template'."""
+    main(["plan", "--help"])
+    text = " ".join(capsys.readouterr().out.split())
+    assert "not for calibrate, which would take the planned positions for measured centres" in text

@@ -182,7 +182,8 @@ def chosen_fixtures(result: Plan, info: dict) -> str:
     """fixtures.yaml text of the plan's chosen set: each fixture's position [m] (what ``simulate --fixtures`` takes as
     the true centres), and under ``plan:`` the distances worth measuring (their planned values [m]: measure them on
     the plate and give them under ``distances:``), the predicted error [m]; the provenance as the leading comment (by
-    which a later plan knows the file for its own)."""
+    which a later plan knows the file for its own). Not a real recording's fixtures.yaml: calibrate takes a position
+    for a measured centre."""
     best = result.best
     position = {s.candidate.name: s.candidate.position for s in result.surveys}
     measure = [[a, b, round(float(np.linalg.norm(position[a] - position[b])), 6)] for a, b in best.distances]
