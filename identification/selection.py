@@ -315,13 +315,33 @@ def select_model(requested: str, fit, nominal: RobotModel, dataset: Dataset, spe
         if requested in NEEDS_INERTIALS and not has_inertials(nominal):
             raise SpherecalError(f"{nominal.extras.get('source') or nominal.name}: field 'inertials': --model "
                                  f"{requested} needs the link masses ({nominal.name} has none and matches no embedded "
-                                 "arm): give them with --inertials FILE or an inertials block in the robot file")
+                                 f"arm): give them with --inertials FILE or {_masses_go(nominal)}")
         if requested in NEEDS_INERTIALS and weighs_nothing(nominal):
             source = nominal.extras.get("inertials_source") or nominal.extras.get("source") or nominal.name
             raise SpherecalError(f"{source}: field 'inertials': every link mass and the payload are 0 kg, so "
                                  f"gravity loads no joint and --model {requested} has no compliance to fit (give the "
                                  "link masses [kg], or --model dh)")
         return ModelSelection(requested, requested, "requested")
+    selection = _auto(fit, nominal, dataset, spec, samples, seed, robust, fold_fit)
+    # said where the choice is printed: a URDF without masses lost them without a word (a new arm's trial)
+    why = (f"{nominal.name} has no link masses and matches no embedded arm: give them with --inertials FILE or "
+           f"{_masses_go(nominal)}" if not has_inertials(nominal) else
+           "every link mass and the payload are 0 kg: gravity loads no joint" if weighs_nothing(nominal) else None)
+    if why:
+        left = " and ".join(c for c in CANDIDATES if c in NEEDS_INERTIALS)
+        selection = replace(selection, reason=f"{selection.reason}; {left} not tried ({why})")
+    return selection
+
+
+def _masses_go(nominal: RobotModel) -> str:
+    """Where a robot file gives its link masses: a URDF's ``<inertial>`` elements, a robot file's inertials block."""
+    return ("<inertial> elements in its URDF" if str(nominal.extras.get("source", "")).endswith(".urdf")
+            else "an inertials block in the robot file")
+
+
+def _auto(fit, nominal: RobotModel, dataset: Dataset, spec: FixtureSpec | None, samples: int, seed: int,
+          robust: bool, fold_fit) -> ModelSelection:
+    """``select_model("auto", ...)``: cross-validation with 3 or more fixture groups, else BIC (module docstring)."""
     clock = time.perf_counter()
     names = candidates_for(nominal)
     groups = set(groups_of(dataset.fixture_names).values())

@@ -203,3 +203,21 @@ def test_a_candidate_whose_own_terms_are_all_barely_excited_is_no_candidate() ->
     assert "every term of its own barely excited" in auto.selection.reason
     assert set(auto.selection.fits) == {"dh"}
     np.testing.assert_allclose(auto.model.params, dh.model.params, atol=1e-5)  # from another start: within 2 um
+
+
+def test_auto_on_an_arm_without_masses_says_the_elastic_models_were_not_tried(tmp_path) -> None:
+    """A new arm's trial: a URDF without <inertial> calibrated with --model auto printed 'model: dh (scale's held-out
+    gain ...)', the elastic candidates gone without a word; only --model elastic said why."""
+    from tests.validation.new_arm_urdfs import big_urdf
+
+    path = tmp_path / "big.urdf"
+    path.write_text(big_urdf())
+    nominal = load_robot(path, tip_link="ball")
+    assert "inertials" not in nominal.extras
+    rng = np.random.default_rng(0)
+    true = perturb(nominal, rng)
+    centres = {"P1": np.array([0.9, -0.3, 0.6]), "P2": np.array([0.9, 0.0, 0.5]), "P3": np.array([0.8, 0.3, 0.6])}
+    dataset, spec = make_dataset(true, centres, per_fixture=40, rng=rng, noise=2e-4)
+    done = run_workflow(nominal, dataset, spec, WorkflowOptions())
+    assert ("elastic and elastic+scale not tried (big6 has no link masses and matches no embedded arm: give them "
+            "with --inertials FILE or <inertial> elements in its URDF)") in done.selection.summary()
