@@ -24,7 +24,8 @@ from .qp_ik import (
     damped_task_velocity,
     equality_solution,
     fall_back,
-    solve_step,
+    solve_qp,
+    task_share,
     velocity_bounds,
 )
 
@@ -152,15 +153,21 @@ class NullSpaceController:
                 self.report.closed_form += 1
                 self.report.status = "qp"
                 return qdot
-        if self._persistent is None:
-            return solve_step(build_problem(jac.copy(), v, q_r, lb, ub), self.solver, None, self.fallback,
-                              self.report)
-        qdot = self._persistent.solve(jac, v, q_r, lb, ub)
+        qdot = self._solve(jac, v, q_r, lb, ub)
+        if qdot is None and target is not None:  # too far for the bounds in one step: the same direction, slower
+            share = task_share(jac, v, lb, ub)
+            if 0.0 < share < 1.0:
+                v = v * share
+                qdot = self._solve(jac, v, q_r, lb, ub)
         self.report.steps += 1
         if qdot is not None:
             self.report.status = "qp"
             return qdot
-        return self._fail(build_problem(jac.copy(), v, q_r, lb, ub))
+        reason = self._persistent.last_status if self._persistent is not None else f"{self.solver} returned no solution"
+        return fall_back(build_problem(jac.copy(), v, q_r, lb, ub), reason, self.fallback, self.report)
 
-    def _fail(self, problem) -> np.ndarray:
-        return fall_back(problem, self._persistent.last_status, self.fallback, self.report)
+    def _solve(self, jac: np.ndarray, v: np.ndarray, q_r: np.ndarray, lb: np.ndarray, ub: np.ndarray):
+        """The step's QP solved (the persistent OSQP, else :attr:`solver` through qpsolvers): (n,) or None."""
+        if self._persistent is None:
+            return solve_qp(build_problem(jac.copy(), v, q_r, lb, ub), self.solver)
+        return self._persistent.solve(jac, v, q_r, lb, ub)

@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from spherecal.controller.nullspace import NullSpaceController
-from spherecal.controller.qp_ik import MAX_VELOCITY, ControllerFallbackWarning, velocity_bounds
+from spherecal.controller.qp_ik import MAX_VELOCITY, ControllerFallbackWarning, task_share, velocity_bounds
 from spherecal.correction import load_robot, tool_point
 
 
@@ -98,3 +98,34 @@ def test_ik_refuses_inputs_of_the_wrong_shape_in_its_own_words(panda) -> None:
     result = ik(panda, target, q0)
     assert result.converged and np.linalg.norm(tool_point(panda, result.q) - target) < 1e-10
 
+
+
+def test_a_far_target_is_approached_slower_not_through_the_fallback(panda) -> None:
+    """A target 0.2 rad of joint motion away asks ``Kp (p_B - p)`` faster than the velocity bounds allow: the strict
+    task was infeasible and every such step left the QP for the pseudo-inverse fallback (54 warnings in a trial).
+    The step now tracks the largest share of the task velocity the bounds allow: same target, no fallback, and
+    every command within the velocity limit."""
+    controller = NullSpaceController(panda)
+    q = np.array([0.0, -0.3, 0.0, -2.2, 0.0, 2.0, 0.8])
+    target = tool_point(panda, q + 0.2)
+    fastest = 0.0
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", ControllerFallbackWarning)
+        for _ in range(3000):
+            qdot = controller.step(q, np.zeros(7), target)
+            fastest = max(fastest, float(np.abs(qdot).max()))
+            q = q + qdot * 1e-3
+            if np.linalg.norm(tool_point(panda, q) - target) < 1e-6:
+                break
+    assert np.linalg.norm(tool_point(panda, q) - target) < 1e-6
+    assert fastest <= MAX_VELOCITY + 1e-9 and controller.report.fallbacks == 0
+    # the share: the minimum-norm step at it touches a bound, and a joint driven back from past a limit gets none
+    jac = np.random.default_rng(0).standard_normal((3, 7))
+    v = np.array([3.0, -1.0, 2.0])
+    lb, ub = -np.ones(7), np.ones(7)
+    share = task_share(jac, v, lb, ub)
+    step = share * np.linalg.pinv(jac) @ v
+    assert 0 < share < 1 and np.isclose(np.abs(step).max(), 1.0) and np.all(np.abs(step) <= 1 + 1e-12)
+    assert task_share(jac, 1e-6 * v, lb, ub) == 1.0
+    lb[2] = 0.5
+    assert task_share(jac, v, lb, ub) == 0.0
