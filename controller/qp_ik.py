@@ -6,6 +6,9 @@ Decision variable: the joint velocity ``qdot`` (n,) [rad/s]. Problem (one contro
     subject to  J qdot = v                       (primary task, strict: an equality)
                 lb <= qdot <= ub                 (velocity and position limits over a step)
 
+A target farther than the bounds allow in one step makes the equality infeasible: the controller then tracks the
+largest share of ``v`` they allow (:func:`task_share`), the same direction, slower.
+
 With no bound active the solution is ``J^+ v + (I - J^+ J) q_r``: the secondary velocity
 ``q_r`` projected into the null space of the tool-point task. :func:`equality_solution` gives it
 in closed form; when it lies inside the bounds it *is* the QP's solution (the KKT conditions hold
