@@ -15,11 +15,18 @@ from .model import RobotModel
 
 
 class Frames(NamedTuple):
-    """World-frame axes and origins of frames 0 (base) .. n, each (n+1, 3, N)."""
+    """World-frame axes and origins of frames 0 (base) .. n at N configurations (:func:`frames`).
 
+    Index ``[i, :, k]`` is frame ``i`` at configuration ``k``: frame 0 the base, frame ``i`` link ``i``'s.
+    """
+
+    #: (n+1, 3, N) unit x axes, in the world.
     x: np.ndarray
+    #: (n+1, 3, N) unit y axes, in the world.
     y: np.ndarray
+    #: (n+1, 3, N) unit z axes, in the world.
     z: np.ndarray
+    #: (n+1, 3, N) origins in the world [m].
     origin: np.ndarray
 
 
@@ -46,15 +53,21 @@ def _cross(u: np.ndarray, v: np.ndarray) -> np.ndarray:
 
 
 def frames(model: RobotModel, q: np.ndarray) -> Frames:
-    """Axes and origins of every link frame in the world.
+    """Axes and origins of every link frame in the world, for the geometric chain at given link angles.
+
+    The angles are taken as given: no joint scale or compliance is applied (see :func:`link_frames`), and no
+    :class:`~.kinematics.JointAngleError` check is made.
 
     Args:
         model: the robot.
-        q: (N, n) joint angles [rad]; (n,) gives N = 1 (the batch axis is kept).
+        q: (N, n) link angles [rad]; (n,) gives N = 1 (the batch axis is kept).
 
     Returns:
-        :class:`Frames` with arrays of shape (n+1, 3, N): frame 0 is the base, frame ``i``
-        the frame of link ``i`` [m].
+        :class:`Frames` with arrays of shape (n+1, 3, N): frame 0 is the base, frame ``i`` the frame of link
+        ``i``; unit axes, origins [m].
+
+    Raises:
+        ValueError: ``q`` not of shape (N, n) or (n,).
     """
     q, _ = _as_batch(model, q)
     n, count = model.n_joints, q.shape[0]
@@ -103,13 +116,24 @@ def _homogeneous(x: np.ndarray, y: np.ndarray, z: np.ndarray, o: np.ndarray) -> 
 
 
 def link_frames(model: RobotModel, q: np.ndarray) -> np.ndarray:
-    """Homogeneous transforms of every link frame in the world.
+    """Homogeneous transforms of every link frame in the world, for the geometric chain at given link angles.
+
+    The angles are taken as given (no :class:`~.kinematics.JointAngleError` check): on a model with a joint
+    scale or compliance these are not the frames at measured angles. Pass the link angles,
+    ``elastic.link_angles(model, scale.joint_angles(model, q))``, as :func:`.kinematics.tool_pose` does;
+    given measured angles instead, the last frame of a Panda with 3e4 Nm/rad joints and
+    0.1 % scales is off by up to 8e-3 in its rotation's entries.
 
     Args:
-        q: (N, n) joint angles [rad].
+        model: the robot.
+        q: (N, n) or (n,) link angles [rad] (the measured angles on a rigid, unscaled model).
 
     Returns:
-        (N, n+1, 4, 4): frame 0 is the base, frame ``i`` link ``i`` [m].
+        (N, n+1, 4, 4), or (n+1, 4, 4) for one configuration: frame 0 is the base, frame ``i`` link ``i``;
+        translations [m].
+
+    Raises:
+        ValueError: ``q`` not of shape (N, n) or (n,).
     """
     _, single = _as_batch(model, q)
     f = frames(model, q)
@@ -118,10 +142,21 @@ def link_frames(model: RobotModel, q: np.ndarray) -> np.ndarray:
 
 
 def rigid_tool_point(model: RobotModel, q: np.ndarray) -> np.ndarray:
-    """(N, 3) tool point [m] of the geometric chain at link angles ``q`` (N, n) [rad].
+    """Tool point of the geometric chain at given link angles (no scale, compliance or angle check).
 
     Runs the chain backwards on the point alone (three numbers per sample and joint instead
-    of a whole frame), the fast path that identification's residuals live on.
+    of a whole frame), the fast path that identification's residuals live on. On measured angles use
+    :func:`.kinematics.tool_point`, which applies the model's scale and compliance and refuses degrees.
+
+    Args:
+        model: the robot.
+        q: (N, n) or (n,) link angles [rad].
+
+    Returns:
+        (N, 3), or (3,) for one configuration, [m] in the world.
+
+    Raises:
+        ValueError: ``q`` not of shape (N, n) or (n,).
     """
     q, single = _as_batch(model, q)
     angle = (q + model.theta).T

@@ -1,20 +1,38 @@
 """Batched forward kinematics and analytic Jacobians of a :class:`RobotModel`.
 
-All functions take joint angles ``q`` of shape (N, n) (or (n,) for one configuration, in
-which case the batch axis is dropped from the result, except by :func:`frames`, which keeps
-it as N = 1). Joint angle scales (``extras["scale"]``, :mod:`.scale`) and an elastic model
-(``extras["compliance"]``, :mod:`.elastic`) are handled here, in that order: the tool point, tool pose
-and both Jacobians take the *measured* angles ``q`` and work at the link angles
+Every function takes measured joint angles ``q`` [rad] of shape (N, n), N configurations of an n-joint arm,
+or (n,) for one configuration, in which case the batch axis is dropped from the result (all but
+:func:`link_angle_jacobian`, which keeps it: (1, n, n)). Joint angle scales (``extras["scale"]``,
+:mod:`.scale`) and an elastic model (``extras["compliance"]``, :mod:`.elastic`) are handled here, in that
+order: the tool point, tool pose and the Jacobians take the *measured* angles ``q`` and work at the link
+angles::
 
     q_joint = (1 + s) q                  (scale first: what the joint turns)
     q_link  = q_joint - c tau(q_joint)   (then gravity's deflection of that joint)
 
-:func:`frames` and :func:`link_frames` take link angles as given. Internally a frame is kept as its
-three axes and origin, each of shape (3, N), so that every step is a handful of contiguous
-vector operations over the batch: no Python loop over samples.
+:func:`.chain.frames` and :func:`.chain.link_frames` take link angles as given (no scale, no compliance, no
+check). Internally a frame is kept as its three axes and origin, each of shape (3, N), so that every step is
+a handful of contiguous vector operations over the batch: no Python loop over samples.
 
-The public functions refuse (:class:`JointAngleError`) an angle more than a full turn beyond its joint's limits
-(:data:`ANGLE_MARGIN`): no revolute joint reports it, and a configuration in degrees does.
+The functions here refuse (:class:`JointAngleError`) an angle more than a full turn beyond its joint's limits
+(:data:`ANGLE_MARGIN`): no revolute joint reports it, and a configuration in degrees does. Every one raises:
+
+* :class:`JointAngleError`: an angle more than :data:`ANGLE_MARGIN` beyond its joint's limits;
+* ``ValueError``: ``q`` of another shape than (N, n) or (n,);
+* :class:`~.gravity.InertialsError`: an elastic model (non-zero ``compliance``) without an ``inertials``
+  block, or a ``compliance`` list that is not n finite numbers;
+* :class:`~.scale.ScaleError`: a ``scale`` list that is not n finite numbers.
+
+(A model read from a robot file has had its lists checked: only the first two can arise there.)
+
+Example::
+
+    import numpy as np
+    from spherecal.correction import load_robot, tool_point, joint_jacobian
+    panda = load_robot("panda")
+    q = np.array([0.0, -0.3, 0.0, -2.2, 0.0, 2.0, 0.8])   # (7,) [rad]
+    tool_point(panda, q)                                    # (3,) [m]
+    joint_jacobian(panda, q[None])                          # (1, 3, 7) [m/rad]
 """
 
 from __future__ import annotations
@@ -103,10 +121,18 @@ def _dlink_djoint(model: RobotModel, q_joint: np.ndarray, jac: np.ndarray) -> np
 
 
 def tool_pose(model: RobotModel, q: np.ndarray) -> np.ndarray:
-    """(N, 4, 4) pose of the tool: orientation of the last link, origin at the tool point.
+    """Pose of the tool in the world: the orientation of the last DH frame, the origin at the tool point.
+
+    Args:
+        model: the arm (scale and compliance applied as in :func:`tool_point`).
+        q: (N, n) or (n,) measured joint angles [rad].
+
+    Returns:
+        (N, 4, 4), or (4, 4) for one configuration: homogeneous transforms, translation [m].
 
     Raises:
         JointAngleError: an angle more than a full turn beyond its joint's limits (degrees given for radians?).
+        ValueError: ``q`` not of shape (N, n) or (n,).
     """
     _, single = _checked(model, q)
     f = frames(model, _link_angles(model, np.asarray(q, dtype=float)))
@@ -121,7 +147,7 @@ def tool_point(model: RobotModel, q: np.ndarray) -> np.ndarray:
     of a whole frame), the fast path that identification's residuals live on.
 
     Args:
-        model: the arm.
+        model: the arm (its scale and compliance, when it has them, applied: see the module's notes).
         q: (N, n) or (n,) measured joint angles [rad], each within a full turn (:data:`ANGLE_MARGIN`) of its
             joint's limits (``model.lower``, ``model.upper``); the check costs two reductions over ``q``.
 
@@ -130,6 +156,7 @@ def tool_point(model: RobotModel, q: np.ndarray) -> np.ndarray:
 
     Raises:
         JointAngleError: an angle more than a full turn beyond its joint's limits (degrees given for radians?).
+        ValueError: ``q`` not of shape (N, n) or (n,).
     """
     q, single = _checked(model, q)
     p = rigid_tool_point(model, _link_angles(model, q))
@@ -137,18 +164,21 @@ def tool_point(model: RobotModel, q: np.ndarray) -> np.ndarray:
 
 
 def joint_jacobian(model: RobotModel, q: np.ndarray) -> np.ndarray:
-    """Jacobian of the tool point with respect to the joint angles.
+    """Jacobian of the tool point with respect to the measured joint angles.
 
     Args:
-        q: (N, n) joint angles [rad].
+        model: the arm.
+        q: (N, n) or (n,) measured joint angles [rad].
 
     Returns:
-        (N, 3, n) ``d p / d q`` [m/rad]. Elastic model: ``J(q_link) (I - diag(c) d tau / d q_joint)``, the
-        torque's derivative by central differences (step 1e-6 rad: its error is ~1e-12 of the term, which
-        is itself ~1e-3 of the Jacobian); scaled model: times ``diag(1 + s)``.
+        (N, 3, n), or (3, n) for one configuration: ``d p / d q`` [m/rad]. Elastic model:
+        ``J(q_link) (I - diag(c) d tau / d q_joint)``, the torque's derivative by central differences (step
+        1e-6 rad: its error is ~1e-12 of the term, which is itself ~1e-3 of the Jacobian); scaled model: times
+        ``diag(1 + s)``.
 
     Raises:
         JointAngleError: an angle more than a full turn beyond its joint's limits (degrees given for radians?).
+        ValueError: ``q`` not of shape (N, n) or (n,).
     """
     q2, single = _checked(model, q)
     q_joint = joint_angles(model, q2)
@@ -159,15 +189,24 @@ def joint_jacobian(model: RobotModel, q: np.ndarray) -> np.ndarray:
 
 
 def link_angle_jacobian(model: RobotModel, q: np.ndarray) -> np.ndarray | None:
-    """(N, n, n) ``d q_link / d q`` of measured angles ``q`` (N, n) [rad/rad], None for a model whose link
-    angles are the measured ones.
+    """Jacobian ``d q_link / d q`` of the link angles with respect to the measured angles.
 
-    Central differences (step 1e-6 rad) of the model's own map from measured to link angles, so every term
-    that map carries (joint compliance, and any other joint-side term added to it) is differentiated without
-    a formula of its own: the map is smooth and within 1e-2 of the identity, the difference error ~1e-12.
+    Central differences (step 1e-6 rad) of the model's own map from measured to link angles (scale, then
+    compliance), so every term that map carries is differentiated without a formula of its own: the map is
+    smooth and within 1e-2 of the identity, the difference error ~1e-12.
+
+    Args:
+        model: the arm.
+        q: (N, n) or (n,) measured joint angles [rad].
+
+    Returns:
+        (N, n, n) [rad/rad], entry ``[k, i, j] = d q_link_i / d q_j`` at configuration ``k``; None for a model
+        whose link angles are the measured ones (no scale and no compliance, or all of them zero). Unlike the
+        other functions here, one configuration (n,) keeps its batch axis: (1, n, n).
 
     Raises:
         JointAngleError: an angle more than a full turn beyond its joint's limits (degrees given for radians?).
+        ValueError: ``q`` not of shape (N, n) or (n,).
     """
     q2, _ = _checked(model, q)
     if _link_angles(model, q2) is q2:
@@ -183,14 +222,17 @@ def pose_jacobian(model: RobotModel, q: np.ndarray) -> np.ndarray:
     model (elastic terms included: taken at the link angles, through :func:`link_angle_jacobian`).
 
     Args:
-        q: (N, n) measured joint angles [rad].
+        model: the arm.
+        q: (N, n) or (n,) measured joint angles [rad].
 
     Returns:
-        (N, 6, n): rows 0-2 ``d p / d q`` [m/rad] (as :func:`joint_jacobian`), rows 3-5 the angular
-        velocity of the tool frame in the world per unit joint rate [rad/rad].
+        (N, 6, n), or (6, n) for one configuration: rows 0-2 ``d p / d q`` [m/rad] (as :func:`joint_jacobian`),
+        rows 3-5 the angular velocity of the tool frame (:func:`tool_pose`) in the world per unit joint rate
+        [rad/rad].
 
     Raises:
         JointAngleError: an angle more than a full turn beyond its joint's limits (degrees given for radians?).
+        ValueError: ``q`` not of shape (N, n) or (n,).
     """
     q2, single = _checked(model, q)
     q_link = _link_angles(model, q2)
@@ -209,8 +251,9 @@ def param_jacobian(
 ) -> np.ndarray | tuple[np.ndarray, np.ndarray]:
     """Jacobian of the tool point with respect to every model parameter.
 
-    Columns follow :attr:`RobotModel.param_names`: per joint ``a, alpha, d, theta``, then
-    the tool point, then the base ``x, y, z, roll, pitch, yaw``. Each DH parameter moves the
+    Columns follow :attr:`RobotModel.param_names` (:mod:`.layout`): per joint ``a, alpha, d, theta``, then the
+    Hayati ``beta`` angles (if any), the tool point, the base ``x, y, z, roll, pitch, yaw``, then the
+    compliances ``c1..cn`` of an elastic model and the scales ``s1..sn`` of a scaled one. Each DH parameter moves the
     chain by a screw about a known world axis, so every column is an axis or an axis
     crossed with a lever arm:
 
@@ -231,14 +274,18 @@ def param_jacobian(
     geometric columns (:func:`joint_jacobian` keeps it: 14 more gravity evaluations per call).
 
     Args:
-        q: (N, n) joint angles [rad].
-        return_point: also return the (N, 3) tool point.
+        model: the arm.
+        q: (N, n) or (n,) measured joint angles [rad].
+        return_point: also return the tool point (:func:`tool_point`, computed on the way).
 
     Returns:
-        (N, 3, P) ``d p / d params`` [m/m and m/rad], and the tool point if asked.
+        (N, 3, P), or (3, P) for one configuration, ``P = model.n_params``: ``d p / d params``, per column
+        [m/m] for a length, [m/rad] for an angle, [m/(rad/Nm)] for a compliance, [m] per unit of a
+        (dimensionless) scale. With ``return_point``, the pair ``(jacobian, point)``, point (N, 3) or (3,) [m].
 
     Raises:
         JointAngleError: an angle more than a full turn beyond its joint's limits (degrees given for radians?).
+        ValueError: ``q`` not of shape (N, n) or (n,).
     """
     q2, single = _checked(model, q)
     lay = model.layout
