@@ -31,7 +31,15 @@ def _link_x(a: float, alpha: float, beta: float = 0.0) -> np.ndarray:
 
 
 def to_standard(model: RobotModel) -> RobotModel:
-    """The same arm in standard DH; the first joint's ``a, alpha`` go into the base."""
+    """The same arm in standard DH; the first joint's ``a, alpha`` (and ``beta``) go into the base.
+
+    Args:
+        model: the arm, either convention (a standard one is returned as it is).
+
+    Returns:
+        A model with the same tool point and tool orientation at every configuration (to rounding), the same
+        joint limits, compliance, scale and other ``extras``; link inertials moved into the new link frames.
+    """
     if model.convention == "standard":
         return model
     return _inertials_moved(_to_standard(model), model)
@@ -52,7 +60,17 @@ def _to_standard(model: RobotModel) -> RobotModel:
 
 
 def to_modified(model: RobotModel) -> RobotModel:
-    """The same arm in modified DH; the last joint's ``a, alpha`` go into the tool point."""
+    """The same arm in modified DH; the last joint's ``a, alpha`` (and ``beta``) go into the tool point.
+
+    Args:
+        model: the arm, either convention (a modified one is returned as it is).
+
+    Returns:
+        A model with the same tool point at every configuration (to rounding), the same joint limits,
+        compliance, scale and other ``extras``; link inertials moved into the new link frames. The last link's
+        ``a, alpha`` become a tool offset, so the last frame, and :func:`.kinematics.tool_pose`'s orientation,
+        differ from the standard model's unless they are zero.
+    """
     if model.convention == "modified":
         return model
     return _inertials_moved(_to_modified(model), model)
@@ -72,7 +90,15 @@ def _to_modified(model: RobotModel) -> RobotModel:
 
 
 def convert(model: RobotModel, convention: str) -> RobotModel:
-    """The same arm in ``convention`` (``"standard"`` or ``"modified"``)."""
+    """The same arm in ``convention``: :func:`to_standard` or :func:`to_modified`.
+
+    Args:
+        model: the arm, either convention.
+        convention: ``"standard"`` or ``"modified"``.
+
+    Raises:
+        ValueError: another ``convention``.
+    """
     if convention == "standard":
         return to_standard(model)
     if convention == "modified":

@@ -133,14 +133,22 @@ class ParameterLayout:
         return slice(self.base_xyz.start, self.base_rpy.stop)
 
     def index(self, name: str) -> int:
-        """Index of a named parameter (``"a3"``, ``"tool_z"``, ...)."""
+        """Index of a named parameter (``"a3"``, ``"tool_z"``, ...).
+
+        Raises:
+            KeyError: no parameter of that name in this layout.
+        """
         try:
             return self._lookup()[name]
         except KeyError:
             raise KeyError(f"no parameter named {name!r} in a {self.n_joints}-joint model") from None
 
     def field(self, name: str) -> np.ndarray:
-        """(n,) indices of one per-joint field (``"a"``, ``"theta"``, ...) for joints 1..n (read-only)."""
+        """(n,) indices of one per-joint field (``"a"``, ``"theta"``, ...) for joints 1..n (read-only).
+
+        Raises:
+            ValueError: ``name`` is not one of :attr:`joint_fields`.
+        """
         return _field_index(self.joints.start, self.n_joints, name)
 
     def held(self, convention: str) -> tuple[str, ...]:
@@ -214,7 +222,11 @@ def layout_for(
     n_joints: int, hayati: tuple[int, ...] = (), elastic: bool = False, scaled: bool = False
 ) -> ParameterLayout:
     """The (shared, immutable) layout of an ``n_joints`` model with Hayati ``beta`` on the 0-based
-    joints ``hayati`` (and the compliances ``c1..cn`` if ``elastic``, the scales ``s1..sn`` if ``scaled``)."""
+    joints ``hayati`` (and the compliances ``c1..cn`` if ``elastic``, the scales ``s1..sn`` if ``scaled``).
+
+    Raises:
+        ValueError: a ``hayati`` index outside ``0..n_joints-1``, or repeated.
+    """
     hayati = tuple(sorted(int(j) for j in hayati))
     if any(not 0 <= j < n_joints for j in hayati) or len(set(hayati)) != len(hayati):
         raise ValueError(f"hayati joints must be distinct indices in 0..{n_joints - 1}, got {hayati}")

@@ -61,6 +61,19 @@ class RobotModel:
             only on the ``hayati`` joints.
         hayati: 0-based joints whose ``beta`` is a parameter (in :attr:`params`); beside each, a
             ``d`` is held at zero (:meth:`ParameterLayout.held`).
+
+    Arrays are copied to read-only float arrays on construction.
+
+    Raises:
+        ValueError: an unknown convention, no joint, an array of another shape than above, ``lower > upper``
+            on a joint, a ``hayati`` index outside ``0..n-1`` or repeated, or a non-zero ``beta`` on a joint
+            not in ``hayati``.
+
+    Example::
+
+        model = RobotModel("two_link", "standard", a=[0.3, 0.2], alpha=[0.0, 0.0], d=[0.1, 0.0],
+                           theta=[0.0, 0.0], lower=[-2.9, -2.9], upper=[2.9, 2.9], tool=[0.05, 0.0, 0.0])
+        model.param_names[:4]        # ('a1', 'alpha1', 'd1', 'theta1')
     """
 
     name: str
@@ -149,13 +162,15 @@ class RobotModel:
     # ----------------------------------------------------- flat parameter view
     @property
     def param_names(self) -> tuple[str, ...]:
-        """Names of the flat parameter vector: ``a1, alpha1, d1, theta1, a2, ..., tool_x,
-        tool_y, tool_z, base_x, base_y, base_z, base_roll, base_pitch, base_yaw``."""
+        """(P,) names of the flat parameter vector: ``a1, alpha1, d1, theta1, a2, ..., beta{j} (Hayati joints),
+        tool_x, tool_y, tool_z, base_x, base_y, base_z, base_roll, base_pitch, base_yaw`` then ``c1..cn`` (an
+        elastic model) and ``s1..sn`` (a scaled one): :mod:`.layout`."""
         return self.layout.names
 
     @property
     def params(self) -> np.ndarray:
-        """(P,) flat parameter vector, ordered as :attr:`param_names` [m, rad]."""
+        """(P,) flat parameter vector, ordered as :attr:`param_names`: lengths [m], angles [rad], compliances
+        [rad/Nm], scales (dimensionless); the unit of each is ``layout.kinds[i].unit``."""
         lay = self.layout
         out = np.empty(lay.size)
         for name in lay.joint_fields:
@@ -172,7 +187,13 @@ class RobotModel:
         """A copy of this model with the flat parameter vector replaced.
 
         Args:
-            params: (P,) parameters ordered as :attr:`param_names`.
+            params: (P,) parameters ordered as :attr:`param_names`, in the units of :attr:`params`.
+
+        Returns:
+            The new model (same convention, joint limits, Hayati joints and other ``extras``).
+
+        Raises:
+            ValueError: ``params`` not of shape (P,).
         """
         params = np.asarray(params, dtype=float)
         if params.shape != (self.n_params,):
@@ -194,7 +215,11 @@ class RobotModel:
         )
 
     def param_index(self, name: str) -> int:
-        """Index of a named parameter (``"a3"``, ``"tool_z"``, ...) in :attr:`params`."""
+        """Index of a named parameter (``"a3"``, ``"tool_z"``, ...) in :attr:`params`.
+
+        Raises:
+            KeyError: no parameter of that name in this model.
+        """
         return self.layout.index(name)
 
     # -------------------------------------------------------------- helpers
@@ -204,12 +229,21 @@ class RobotModel:
         return pose_matrix(self.base_xyz, self.base_rpy)
 
     def within_limits(self, q: np.ndarray, tol: float = 0.0) -> np.ndarray:
-        """(N,) True where every joint of ``q`` (N, n) lies inside its limits ± ``tol``."""
+        """Which configurations lie inside the joint limits.
+
+        Args:
+            q: (N, n) or (n,) joint angles [rad].
+            tol: margin added to each limit [rad].
+
+        Returns:
+            (N,) bool, True where every joint lies inside ``[lower - tol, upper + tol]``; (1,) for one
+            configuration (the batch axis is kept).
+        """
         q = np.atleast_2d(q)
         return np.all((q >= self.lower - tol) & (q <= self.upper + tol), axis=1)
 
     def random_configurations(self, count: int, rng: np.random.Generator) -> np.ndarray:
-        """(count, n) joint angles drawn uniformly inside the joint limits [rad]."""
+        """(count, n) joint angles [rad] drawn uniformly inside the joint limits from ``rng``."""
         return rng.uniform(self.lower, self.upper, size=(count, self.n_joints))
 
     def mismatch(self, other: RobotModel, limits: bool = False) -> tuple[str, str] | None:
@@ -245,7 +279,8 @@ class RobotModel:
         return None
 
     def same_as(self, other: RobotModel, atol: float = 0.0) -> bool:
-        """True when both models have the same convention, parameters and limits."""
+        """True when both models have the same convention, joint count, Hayati joints, parameters (:attr:`params`)
+        and joint limits, within ``atol`` (absolute, in each parameter's unit: [m], [rad], ...)."""
         return (
             self.convention == other.convention
             and self.n_joints == other.n_joints
@@ -258,12 +293,13 @@ class RobotModel:
 
 
 def param_names(n_joints: int) -> tuple[str, ...]:
-    """Flat parameter names of an ``n_joints`` model (see :attr:`RobotModel.param_names`)."""
+    """Flat parameter names of an ``n_joints`` model without Hayati angles, compliances or scales (4 n + 9 names,
+    see :attr:`RobotModel.param_names`; a model's own: ``model.param_names``)."""
     return layout_for(n_joints).names
 
 
 def rpy_matrix(rpy: np.ndarray) -> np.ndarray:
-    """(3, 3) rotation ``Rz(yaw) Ry(pitch) Rx(roll)`` of roll-pitch-yaw angles [rad]."""
+    """(3, 3) rotation ``Rz(yaw) Ry(pitch) Rx(roll)`` (URDF's ``rpy``) of (3,) ``rpy = (roll, pitch, yaw)`` [rad]."""
     r, p, y = np.asarray(rpy, dtype=float)
     cr, sr, cp, sp, cy, sy = np.cos(r), np.sin(r), np.cos(p), np.sin(p), np.cos(y), np.sin(y)
     return np.array(
@@ -276,7 +312,12 @@ def rpy_matrix(rpy: np.ndarray) -> np.ndarray:
 
 
 def matrix_rpy(rotation: np.ndarray) -> np.ndarray:
-    """(3,) roll-pitch-yaw angles [rad] of a (3, 3) rotation (inverse of :func:`rpy_matrix`)."""
+    """(3,) roll-pitch-yaw angles [rad] of a (3, 3) rotation (inverse of :func:`rpy_matrix`).
+
+    Pitch in ``[-pi/2, pi/2]``, roll and yaw in ``(-pi, pi]``; at gimbal lock (pitch of +-pi/2) the yaw is
+    returned as 0 and roll carries the combined rotation (only ``roll - yaw`` or ``roll + yaw``
+    is defined there).
+    """
     r = np.asarray(rotation, dtype=float)
     pitch = np.arctan2(-r[2, 0], np.hypot(r[0, 0], r[1, 0]))
     if np.hypot(r[0, 0], r[1, 0]) < 1e-12:  # gimbal lock: put all of it in roll
@@ -285,7 +326,8 @@ def matrix_rpy(rotation: np.ndarray) -> np.ndarray:
 
 
 def pose_matrix(xyz: np.ndarray, rpy: np.ndarray) -> np.ndarray:
-    """(4, 4) homogeneous transform of a translation [m] and roll-pitch-yaw [rad]."""
+    """(4, 4) homogeneous transform of a (3,) translation ``xyz`` [m] and (3,) roll-pitch-yaw ``rpy`` [rad]
+    (:func:`rpy_matrix`)."""
     pose = np.eye(4)
     pose[:3, :3] = rpy_matrix(rpy)
     pose[:3, 3] = xyz
@@ -322,7 +364,11 @@ def with_joint_vector(model: RobotModel, key: str, values: np.ndarray | None) ->
 
 def geometric_part(model: RobotModel) -> RobotModel:
     """``model`` without its joint-side parameter blocks: every ``extras`` key whose removal shortens the
-    parameter vector (compliance and scale today, any block added to the layout the same way tomorrow)."""
+    parameter vector (compliance and scale today, any block added to the layout the same way tomorrow).
+
+    The rigid, unscaled geometry of an elastic or scaled calibration: DH, Hayati, tool and base unchanged,
+    every other ``extras`` key (inertials, calibration record, ...) kept.
+    """
     extras = dict(model.extras)
     size = model.layout.size
     for key in list(extras):
