@@ -35,6 +35,8 @@ from .model import RobotModel, matrix_rpy
 #: Largest distance [m] and angle [rad] between the last frame of the tool's description and the
 #: calibrated model's at zero angles: beyond a calibration's correction, the two name different frames.
 FRAME_DISTANCE_TOL = 0.03
+#: Largest angle [rad] (5 deg) between those frames (:data:`FRAME_DISTANCE_TOL`); also the largest ``angle`` that
+#: :func:`with_tool` takes.
 FRAME_ANGLE_TOL = np.deg2rad(5.0)
 
 
@@ -60,9 +62,10 @@ class ToolSwap:
     Attributes:
         model: the calibrated model with the new tool point.
         distance: ``|new tool - calibrated tool point|`` [m], in the last frame.
-        unidentified: tool displacement [m] of a rotation of the last frame about the old tool point by the
-            prior's angle spread (0.2 deg): what the calibration cannot vouch for at the new tool.
-        note: the above in one line, in mm.
+        unidentified: ``sin(angle) * distance`` [m]: the tool displacement of a rotation of the last frame about
+            the old tool point by :func:`with_tool`'s ``angle`` (default the prior's spread, 0.2 deg): what the
+            calibration cannot vouch for at the new tool.
+        note: the above in one line, in mm, with the correction carried over when ``nominal_tool`` was given.
     """
 
     model: RobotModel
@@ -133,6 +136,15 @@ def with_tool(model: RobotModel, tool: np.ndarray, payload: dict | None = None,
             and beyond :data:`TIP_MOVED` from ``nominal_tool``.
         source: the calibrated file ``samples_tool`` came from, named in the refusal that asks for ``adapter``.
 
+    Returns:
+        :class:`ToolSwap`: ``model`` with the new tool point (``swap.model.tool``, (3,) [m] in the last frame), its
+        ``payload`` replaced when given, and a ``tool_swap`` block in ``extras`` recording the calibrated tool, the
+        new one and the correction carried ([m]); the distance and the unidentified displacement [m] and a note.
+
+    Warns:
+        CarriedTipWarning: with ``nominal_tool`` and no ``samples_tool``, a carried correction beyond
+            :data:`TIP_MOVED` (an adapter the robot file lacks, carried to the new tool as it is).
+
     Raises:
         ToolError: a ``payload`` the gravity torques would refuse, an ``adapter`` that is not a bool or None, an
             ``angle`` outside ``[0, FRAME_ANGLE_TOL]`` (degrees), ``adapter`` not given where it is needed (the
@@ -140,7 +152,15 @@ def with_tool(model: RobotModel, tool: np.ndarray, payload: dict | None = None,
             panda_hand_tcp`` aimed 30 mm off), a tool that is not 3 finite numbers, or a tool or ``nominal_tool``
             farther from the last frame than the arm is long (:attr:`RobotModel.chain_length`: millimetres typed for
             metres; no real tool outreaches the arm carrying it, and on a small arm this bound is tighter than any
-            fixed one of a few metres).
+            fixed one of a few metres), or a ``tool_swap`` block whose ``calibrated_tool`` is malformed
+            (:func:`calibrated_tool`).
+
+    Example::
+
+        cal = load_robot("cal.yaml")
+        swap = with_tool(cal, [0.0, 0.0, 0.2104], nominal_tool=cal.extras["calibration"]["nominal_tool"])
+        swap.model.tool          # (3,) the new calibrated tool point [m]
+        print(swap.note)
     """
     tool = _within_arm(point_of(tool, f"field '{field}'"), model, f"field '{field}'", "the new tool point")
     if adapter is not None and not isinstance(adapter, (bool, np.bool_)):  # "no" is truthy: it carried the offset
