@@ -1,4 +1,4 @@
-"""Elastic joints: the link angle is the measured angle minus a compliance times the gravity torque.
+"""Elastic joints: the link angle is the measured angle minus a compliance times the gravity torque::
 
     q_link = q - c * tau(q)          c (n,) [rad/Nm], tau (N, n) from :func:`gravity_torques`
 
@@ -27,7 +27,8 @@ def compliance_of(model: RobotModel) -> np.ndarray:
     """(n,) joint compliances [rad/Nm] from ``model.extras["compliance"]``; zeros when absent.
 
     Raises:
-        InertialsError: a malformed list, or compliances without an ``inertials`` block.
+        InertialsError: not n finite numbers, or a non-zero compliance without an ``inertials`` block (or with a
+            malformed one).
     """
     c = joint_vector(model, "compliance", "[rad/Nm]", InertialsError)
     if np.any(c != 0):
@@ -36,13 +37,18 @@ def compliance_of(model: RobotModel) -> np.ndarray:
 
 
 def with_compliance(model: RobotModel, compliance: np.ndarray | None) -> RobotModel:
-    """A copy of ``model`` with ``extras["compliance"]`` set to (n,) [rad/Nm] (removed when None)."""
+    """A copy of ``model`` with ``extras["compliance"]`` set to ``compliance`` (n,) [rad/Nm] (removed when None).
+
+    Not checked here: :func:`compliance_of` (every kinematic function) refuses a non-zero compliance on a model
+    without ``inertials``. The parameter vector gains ``c1..cn`` (:attr:`RobotModel.layout`) even when all are
+    zero.
+    """
     return with_joint_vector(model, "compliance", compliance)
 
 
 def with_stiffness(model: RobotModel, stiffness) -> RobotModel:
-    """A copy of ``model`` with (n,) joint stiffness [Nm/rad] as its compliance (0 = a rigid joint; every joint
-    0: no compliance at all, removed)."""
+    """A copy of ``model`` with (n,) joint ``stiffness`` [Nm/rad] as its compliance ``1 / stiffness`` [rad/Nm]
+    (0 or less = a rigid joint; every joint rigid: no compliance at all, the list removed)."""
     k = np.asarray(stiffness, dtype=float)
     compliance = np.divide(1.0, k, out=np.zeros_like(k), where=k > 0)
     return with_compliance(model, compliance if np.any(compliance) else None)
@@ -50,11 +56,20 @@ def with_stiffness(model: RobotModel, stiffness) -> RobotModel:
 
 def link_angles(model: RobotModel, q: np.ndarray, compliance: np.ndarray | None = None,
                 torques: np.ndarray | None = None) -> np.ndarray:
-    """Link angles ``q - c tau(q)`` of measured angles ``q`` (N, n) or (n,) [rad].
+    """Link angles ``q - c tau(q)`` of joint angles ``q`` (compliance only: a scaled model's angles are scaled
+    first, :func:`.scale.joint_angles`; :mod:`.kinematics` does both).
 
     Args:
+        model: the arm (its ``inertials`` give ``tau``).
+        q: (N, n) or (n,) joint angles [rad] (not checked for degrees).
         compliance: (n,) [rad/Nm]; ``model``'s when None. All zero: ``q`` is returned unchanged.
-        torques: ``tau(q)`` (N, n) [Nm] when the caller has it already (:func:`gravity_torques`).
+        torques: ``tau(q)``, shaped as ``q`` [Nm], when the caller has it already (:func:`gravity_torques`).
+
+    Returns:
+        Link angles shaped as ``q`` [rad].
+
+    Raises:
+        InertialsError: as :func:`compliance_of`, or no ``inertials`` to compute ``tau``.
     """
     c = compliance_of(model) if compliance is None else np.asarray(compliance, dtype=float)
     q = np.asarray(q, dtype=float)
@@ -64,8 +79,22 @@ def link_angles(model: RobotModel, q: np.ndarray, compliance: np.ndarray | None 
 
 
 def motor_angles(model: RobotModel, q_link: np.ndarray, compliance: np.ndarray | None = None) -> np.ndarray:
-    """Measured angles that put the links at ``q_link`` (N, n) [rad]: solves ``q - c tau(q) = q_link``
-    by fixed-point iteration (a contraction: ``c |dtau/dq|`` is about 1e-3)."""
+    """Joint angles that put the links at ``q_link``: the inverse of :func:`link_angles`.
+
+    Solves ``q - c tau(q) = q_link`` by :data:`MOTOR_ITERATIONS` fixed-point iterations (a contraction:
+    ``c |dtau/dq|`` is about 1e-3: a Panda at 3e4 Nm/rad is back to rounding).
+
+    Args:
+        model: the arm.
+        q_link: (N, n) or (n,) link angles [rad].
+        compliance: (n,) [rad/Nm]; ``model``'s when None. All zero: ``q_link`` is returned unchanged.
+
+    Returns:
+        Joint angles shaped as ``q_link`` [rad].
+
+    Raises:
+        InertialsError: as :func:`link_angles`.
+    """
     c = compliance_of(model) if compliance is None else np.asarray(compliance, dtype=float)
     q_link = np.asarray(q_link, dtype=float)
     if not np.any(c):

@@ -136,13 +136,18 @@ def _parse(model: RobotModel, block: Any, payload: Any, source: str | None,
 
 
 def has_inertials(model: RobotModel) -> bool:
-    """True when ``model.extras`` carries an ``inertials`` block."""
+    """True when ``model.extras`` carries an ``inertials`` block (present, not checked: :func:`inertials_of`)."""
     return "inertials" in model.extras
 
 
 def weighs_nothing(model: RobotModel) -> bool:
     """True when ``model``'s inertials give every link and the payload 0 kg: gravity loads no joint, and a
-    compliance has nothing to be fitted against (an inertials file of zeros from another tool)."""
+    compliance has nothing to be fitted against (an inertials file of zeros from another tool). False without
+    an ``inertials`` block.
+
+    Raises:
+        InertialsError: a malformed ``inertials`` block (:func:`inertials_of`).
+    """
     return has_inertials(model) and not inertials_of(model)[0].any()
 
 
@@ -160,13 +165,18 @@ def gravity_torques(
 
     Args:
         model: the robot (either DH convention; base placement included).
-        q: (N, n) or (n,) joint angles [rad].
+        q: (N, n) or (n,) angles of the geometric chain [rad], taken as given: no joint scale or compliance is
+            applied, and no :class:`~.kinematics.JointAngleError` check is made.
         masses, coms: (n+1,) [kg] and (n+1, 3) [m] as :func:`inertials_of` returns them (read from
-            ``model.extras`` when None).
+            ``model.extras`` when either is None).
         g: (3,) gravity in the world frame [m/s^2].
 
     Returns:
-        (N, n) torques [Nm] ((n,) for a single configuration).
+        (N, n) torques [Nm] ((n,) for a single configuration): ``tau = dV/dq`` of the potential energy ``V``.
+
+    Raises:
+        InertialsError: ``masses`` or ``coms`` not given and ``model`` has no valid ``inertials`` block.
+        ValueError: ``q`` not of shape (N, n) or (n,).
     """
     if masses is None or coms is None:
         masses, coms = inertials_of(model)

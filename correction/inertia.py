@@ -22,7 +22,8 @@ ESTIMATE_RADIUS = 0.05
 
 
 def tensor(six: np.ndarray) -> np.ndarray:
-    """(3, 3) symmetric tensor [kg m^2] of ``[ixx, ixy, ixz, iyy, iyz, izz]``."""
+    """(3, 3) symmetric tensor [kg m^2] of ``six`` (6,) ``[ixx, ixy, ixz, iyy, iyz, izz]`` [kg m^2] (not checked:
+    :func:`checked_tensor`)."""
     out = np.zeros((3, 3))
     out[_ROWS, _COLS] = six
     out[_COLS, _ROWS] = six
@@ -30,7 +31,8 @@ def tensor(six: np.ndarray) -> np.ndarray:
 
 
 def six_of(matrix: np.ndarray) -> list[float]:
-    """``[ixx, ixy, ixz, iyy, iyz, izz]`` as plain floats of a (3, 3) tensor (its symmetric part)."""
+    """``[ixx, ixy, ixz, iyy, iyz, izz]`` [kg m^2] as plain floats of a (3, 3) tensor ``matrix`` [kg m^2] (its
+    symmetric part)."""
     matrix = 0.5 * (np.asarray(matrix, dtype=float) + np.asarray(matrix, dtype=float).T)
     return [float(v) for v in matrix[_ROWS, _COLS]]
 
@@ -41,6 +43,14 @@ def checked_tensor(values, where: str, error: type[Exception]) -> np.ndarray:
 
     The triangle inequality of the principal moments is not required: published descriptions break it by
     rounding, and gravity does not depend on the tensor.
+
+    Args:
+        values: the file's value, anything (a list of six numbers is expected) [kg m^2].
+        where: the start of the refusal (file and field).
+        error: the exception class raised.
+
+    Raises:
+        error: anything but six such numbers.
     """
     try:
         array = np.asarray(values, dtype=float)
@@ -56,7 +66,8 @@ def checked_tensor(values, where: str, error: type[Exception]) -> np.ndarray:
 
 
 def rotated(matrix: np.ndarray, rotation: np.ndarray) -> np.ndarray:
-    """(3, 3) tensor ``R I R^T``: ``matrix`` given in frame B, expressed in frame A (``rotation`` is B in A)."""
+    """(3, 3) tensor ``R I R^T`` [kg m^2]: ``matrix`` (3, 3) given in frame B, expressed in frame A (``rotation``
+    (3, 3) is B's axes in A)."""
     return rotation @ matrix @ rotation.T
 
 
@@ -84,5 +95,6 @@ def lumped(masses: np.ndarray, coms: np.ndarray, tensors: np.ndarray) -> tuple[f
 
 
 def sphere(mass: float, radius: float = ESTIMATE_RADIUS) -> np.ndarray:
-    """(3, 3) tensor [kg m^2] of a uniform solid sphere (``2/5 m r^2``): the stand-in for an unknown tensor."""
+    """(3, 3) tensor [kg m^2] of a uniform solid sphere of ``mass`` [kg] and ``radius`` [m] (``2/5 m r^2`` on
+    the diagonal): the stand-in for an unknown tensor."""
     return 0.4 * mass * radius**2 * np.eye(3)

@@ -50,7 +50,15 @@ def axis_mismatch(model: RobotModel, donor: RobotModel, ignore_base: bool = True
     """Largest distance [m] and angle [rad] between corresponding joint axes of two models.
 
     Compared at zero angles and two other postures; with ``ignore_base`` in each model's own base frame (the
-    base placement is where the arm stands, not the arm), else in the world. Joint counts must be equal.
+    base placement is where the arm stands, not the arm), else in the world. Joint counts must be equal
+    (else ``ValueError``). An axis and its reverse are pi apart.
+
+    Args:
+        model, donor: two models of the same joint count, either convention.
+        ignore_base: compare in the base frames (True) or in the world (False).
+
+    Returns:
+        ``(distance [m], angle [rad])``, the largest over joints and postures.
     """
     distance, angle = 0.0, 0.0
     model, donor = _placed(model, ignore_base), _placed(donor, ignore_base)
@@ -82,6 +90,9 @@ def transfer_inertials(model: RobotModel, donor: RobotModel, distance_tol: float
         The model with ``extras["inertials"]`` and ``extras["payload"]`` (masses [kg], centres of mass [m]
         in the model's DH frame ``i``, the payload in frame ``n``), or None when the joint counts differ or
         the joint axes do not coincide (another arm, or joint directions reversed).
+
+    Raises:
+        InertialsError: ``donor`` has no valid ``inertials`` block.
     """
     if model.n_joints != donor.n_joints:
         return None
@@ -124,6 +135,9 @@ def link_inertias(model: RobotModel) -> LinkInertias:
     A body with a mass but no ``inertia`` in its entry gets a uniform solid sphere of radius
     :data:`correction.inertia.ESTIMATE_RADIUS` (gravity is exact without it; accelerations are not), flagged in
     ``estimated``.
+
+    Returns:
+        :class:`LinkInertias` of n+1 bodies (links 1..n, then the payload; 0 kg when there is none).
 
     Raises:
         InertialsError: no ``inertials`` block, or a malformed entry (:func:`correction.gravity.inertials_of`).

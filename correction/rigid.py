@@ -12,10 +12,14 @@ def fit_rigid_transform(source: np.ndarray, target: np.ndarray) -> np.ndarray:
 
     Args:
         source: (N, 3) points [m].
-        target: (N, 3) corresponding points [m], N >= 3 and not collinear.
+        target: (N, 3) corresponding points [m], N >= 3 and not collinear (collinear points are not refused:
+            the rotation about their line is then arbitrary).
 
     Returns:
-        (4, 4) homogeneous transform ``T`` with ``target ~ T source``.
+        (4, 4) homogeneous transform ``T`` with ``target ~ T source`` (translation [m]).
+
+    Raises:
+        ValueError: point sets of different shapes, not (N, 3), or fewer than 3 points.
     """
     source, target = np.asarray(source, float), np.asarray(target, float)
     if source.shape != target.shape or source.ndim != 2 or source.shape[1] != 3 or len(source) < 3:
@@ -32,13 +36,22 @@ def fit_rigid_transform(source: np.ndarray, target: np.ndarray) -> np.ndarray:
 
 
 def apply_transform(transform: np.ndarray, points: np.ndarray) -> np.ndarray:
-    """(N, 3) points mapped by a (4, 4) homogeneous transform."""
+    """(N, 3) ``points`` [m] mapped by a (4, 4) homogeneous ``transform``: ``R p + t`` for each (also (3,) for one
+    point: the result is shaped as ``points``)."""
     return np.asarray(points) @ transform[:3, :3].T + transform[:3, 3]
 
 
 def registered_errors(predicted: np.ndarray, reference: np.ndarray) -> np.ndarray:
     """(N,) distances [m] between ``reference`` and ``predicted`` after the best rigid fit of
-    ``predicted`` onto ``reference`` (the base placement is not observable, so it is fitted)."""
+    ``predicted`` onto ``reference`` (the base placement is not observable, so it is fitted).
+
+    Args:
+        predicted: (N, 3) points [m], e.g. :func:`.kinematics.tool_point` of a model.
+        reference: (N, 3) the same points measured [m], N >= 3.
+
+    Raises:
+        ValueError: as :func:`fit_rigid_transform`.
+    """
     fitted = apply_transform(fit_rigid_transform(predicted, reference), predicted)
     return np.linalg.norm(fitted - reference, axis=1)
 

@@ -1,4 +1,4 @@
-"""Per-joint angle scale: the joint's angle is its recorded angle times ``1 + s``.
+"""Per-joint angle scale: the joint's angle is its recorded angle times ``1 + s``::
 
     q_joint = (1 + s) * q          s (n,) dimensionless, q (N, n) recorded angles [rad]
 
@@ -33,12 +33,18 @@ def scale_of(model: RobotModel) -> np.ndarray:
 
 
 def with_scale(model: RobotModel, scale: np.ndarray | None) -> RobotModel:
-    """A copy of ``model`` with ``extras["scale"]`` set to (n,) dimensionless numbers (removed when None)."""
+    """A copy of ``model`` with ``extras["scale"]`` set to ``scale`` (n,) dimensionless numbers (removed when None;
+    zeros keep the list, and the ``s1..sn`` parameters, with no effect on the angles)."""
     return with_joint_vector(model, "scale", scale)
 
 
 def joint_angles(model: RobotModel, q: np.ndarray) -> np.ndarray:
-    """Joint angles ``(1 + s) q`` of recorded angles ``q`` (N, n) or (n,) [rad]; ``q`` itself without scale."""
+    """Joint angles ``(1 + s) q`` [rad], shaped as ``q``, of recorded angles ``q`` (N, n) or (n,) [rad] of
+    ``model``; ``q`` itself without scale.
+
+    Raises:
+        ScaleError: as :func:`scale_of`.
+    """
     q = np.asarray(q, dtype=float)
     if "scale" not in model.extras:
         return q
@@ -47,7 +53,12 @@ def joint_angles(model: RobotModel, q: np.ndarray) -> np.ndarray:
 
 
 def recorded_angles(model: RobotModel, q_joint: np.ndarray) -> np.ndarray:
-    """The inverse of :func:`joint_angles`: recorded angles ``q_joint / (1 + s)`` [rad]."""
+    """The inverse of :func:`joint_angles`: recorded angles ``q_joint / (1 + s)`` [rad], shaped as ``q_joint``
+    (N, n) or (n,) [rad].
+
+    Raises:
+        ScaleError: as :func:`scale_of`.
+    """
     q_joint = np.asarray(q_joint, dtype=float)
     if "scale" not in model.extras:
         return q_joint
