@@ -42,13 +42,22 @@ def with_compliance(model: RobotModel, compliance: np.ndarray | None) -> RobotMo
     Not checked here: :func:`compliance_of` (every kinematic function) refuses a non-zero compliance on a model
     without ``inertials``. The parameter vector gains ``c1..cn`` (:attr:`RobotModel.layout`) even when all are
     zero.
+
+    Args:
+        model: the arm.
+        compliance: (n,) compliances [rad/Nm], or None.
     """
     return with_joint_vector(model, "compliance", compliance)
 
 
-def with_stiffness(model: RobotModel, stiffness) -> RobotModel:
-    """A copy of ``model`` with (n,) joint ``stiffness`` [Nm/rad] as its compliance ``1 / stiffness`` [rad/Nm]
-    (0 or less = a rigid joint; every joint rigid: no compliance at all, the list removed)."""
+def with_stiffness(model: RobotModel, stiffness: np.ndarray) -> RobotModel:
+    """A copy of ``model`` with joint stiffnesses as its compliance ``1 / stiffness`` [rad/Nm].
+
+    Args:
+        model: the arm.
+        stiffness: (n,) joint stiffness [Nm/rad]; 0 or less is a rigid joint (every joint rigid: no compliance
+            at all, the list removed).
+    """
     k = np.asarray(stiffness, dtype=float)
     compliance = np.divide(1.0, k, out=np.zeros_like(k), where=k > 0)
     return with_compliance(model, compliance if np.any(compliance) else None)

@@ -172,7 +172,7 @@ def gravity_torques(
         g: (3,) gravity in the world frame [m/s^2].
 
     Returns:
-        (N, n) torques [Nm] ((n,) for a single configuration): ``tau = dV/dq`` of the potential energy ``V``.
+        (N, n), or (n,) for one configuration: torques [Nm], ``tau = dV/dq`` of the potential energy ``V``.
 
     Raises:
         InertialsError: ``masses`` or ``coms`` not given and ``model`` has no valid ``inertials`` block.

@@ -22,8 +22,12 @@ ESTIMATE_RADIUS = 0.05
 
 
 def tensor(six: np.ndarray) -> np.ndarray:
-    """(3, 3) symmetric tensor [kg m^2] of ``six`` (6,) ``[ixx, ixy, ixz, iyy, iyz, izz]`` [kg m^2] (not checked:
-    :func:`checked_tensor`)."""
+    """(3, 3) symmetric tensor [kg m^2] of the six numbers of a URDF ``<inertia>`` (not checked:
+    :func:`checked_tensor`).
+
+    Args:
+        six: (6,) ``[ixx, ixy, ixz, iyy, iyz, izz]`` [kg m^2].
+    """
     out = np.zeros((3, 3))
     out[_ROWS, _COLS] = six
     out[_COLS, _ROWS] = six
@@ -31,8 +35,11 @@ def tensor(six: np.ndarray) -> np.ndarray:
 
 
 def six_of(matrix: np.ndarray) -> list[float]:
-    """``[ixx, ixy, ixz, iyy, iyz, izz]`` [kg m^2] as plain floats of a (3, 3) tensor ``matrix`` [kg m^2] (its
-    symmetric part)."""
+    """``[ixx, ixy, ixz, iyy, iyz, izz]`` [kg m^2] as plain floats (the inverse of :func:`tensor`).
+
+    Args:
+        matrix: (3, 3) tensor [kg m^2]; its symmetric part is taken.
+    """
     matrix = 0.5 * (np.asarray(matrix, dtype=float) + np.asarray(matrix, dtype=float).T)
     return [float(v) for v in matrix[_ROWS, _COLS]]
 
@@ -66,8 +73,12 @@ def checked_tensor(values, where: str, error: type[Exception]) -> np.ndarray:
 
 
 def rotated(matrix: np.ndarray, rotation: np.ndarray) -> np.ndarray:
-    """(3, 3) tensor ``R I R^T`` [kg m^2]: ``matrix`` (3, 3) given in frame B, expressed in frame A (``rotation``
-    (3, 3) is B's axes in A)."""
+    """(3, 3) tensor ``R I R^T`` [kg m^2]: a tensor given in frame B, expressed in frame A.
+
+    Args:
+        matrix: (3, 3) tensor in frame B's axes [kg m^2].
+        rotation: (3, 3) rotation of frame B in frame A (dimensionless).
+    """
     return rotation @ matrix @ rotation.T
 
 
@@ -75,7 +86,9 @@ def lumped(masses: np.ndarray, coms: np.ndarray, tensors: np.ndarray) -> tuple[f
     """One rigid body of several, all in one frame (parallel-axis theorem).
 
     Args:
-        masses: (K,) [kg]; coms: (K, 3) centres of mass [m]; tensors: (K, 3, 3) each about its own centre [kg m^2].
+        masses: (K,) [kg].
+        coms: (K, 3) centres of mass [m].
+        tensors: (K, 3, 3) each about its own centre [kg m^2].
 
     Returns:
         ``(mass [kg], centre of mass (3,) [m], tensor (3, 3) about it [kg m^2])``; a massless set gives

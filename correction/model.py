@@ -187,7 +187,8 @@ class RobotModel:
         """A copy of this model with the flat parameter vector replaced.
 
         Args:
-            params: (P,) parameters ordered as :attr:`param_names`, in the units of :attr:`params`.
+            params: (P,) parameters ordered as :attr:`param_names`, in the units of :attr:`params` ([m], [rad],
+                [rad/Nm], dimensionless scales).
 
         Returns:
             The new model (same convention, joint limits, Hayati joints and other ``extras``).
@@ -299,7 +300,11 @@ def param_names(n_joints: int) -> tuple[str, ...]:
 
 
 def rpy_matrix(rpy: np.ndarray) -> np.ndarray:
-    """(3, 3) rotation ``Rz(yaw) Ry(pitch) Rx(roll)`` (URDF's ``rpy``) of (3,) ``rpy = (roll, pitch, yaw)`` [rad]."""
+    """(3, 3) rotation ``Rz(yaw) Ry(pitch) Rx(roll)`` (URDF's ``rpy``).
+
+    Args:
+        rpy: (3,) ``(roll, pitch, yaw)`` [rad].
+    """
     r, p, y = np.asarray(rpy, dtype=float)
     cr, sr, cp, sp, cy, sy = np.cos(r), np.sin(r), np.cos(p), np.sin(p), np.cos(y), np.sin(y)
     return np.array(
@@ -314,6 +319,9 @@ def rpy_matrix(rpy: np.ndarray) -> np.ndarray:
 def matrix_rpy(rotation: np.ndarray) -> np.ndarray:
     """(3,) roll-pitch-yaw angles [rad] of a (3, 3) rotation (inverse of :func:`rpy_matrix`).
 
+    Args:
+        rotation: (3, 3) rotation matrix (dimensionless, orthonormal; not checked).
+
     Pitch in ``[-pi/2, pi/2]``, roll and yaw in ``(-pi, pi]``; at gimbal lock (pitch of +-pi/2) the yaw is
     returned as 0 and roll carries the combined rotation (only ``roll - yaw`` or ``roll + yaw``
     is defined there).
@@ -326,8 +334,12 @@ def matrix_rpy(rotation: np.ndarray) -> np.ndarray:
 
 
 def pose_matrix(xyz: np.ndarray, rpy: np.ndarray) -> np.ndarray:
-    """(4, 4) homogeneous transform of a (3,) translation ``xyz`` [m] and (3,) roll-pitch-yaw ``rpy`` [rad]
-    (:func:`rpy_matrix`)."""
+    """(4, 4) homogeneous transform of a translation and a roll-pitch-yaw rotation (:func:`rpy_matrix`).
+
+    Args:
+        xyz: (3,) translation [m].
+        rpy: (3,) ``(roll, pitch, yaw)`` [rad].
+    """
     pose = np.eye(4)
     pose[:3, :3] = rpy_matrix(rpy)
     pose[:3, 3] = xyz
@@ -355,7 +367,13 @@ def joint_vector(model: RobotModel, key: str, unit: str, error: type[Exception])
 
 
 def with_joint_vector(model: RobotModel, key: str, values: np.ndarray | None) -> RobotModel:
-    """A copy of ``model`` with ``extras[key]`` set to (n,) plain floats (removed when None)."""
+    """A copy of ``model`` with ``extras[key]`` set to (n,) plain floats (removed when None).
+
+    Args:
+        model: the arm.
+        key: the extras key (``compliance``, ``scale``).
+        values: (n,) numbers in the key's unit ([rad/Nm], dimensionless), or None.
+    """
     extras = {k: v for k, v in model.extras.items() if k != key}
     if values is not None:
         extras[key] = [float(v) for v in np.asarray(values, dtype=float).reshape(model.n_joints)]

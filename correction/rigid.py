@@ -36,8 +36,15 @@ def fit_rigid_transform(source: np.ndarray, target: np.ndarray) -> np.ndarray:
 
 
 def apply_transform(transform: np.ndarray, points: np.ndarray) -> np.ndarray:
-    """(N, 3) ``points`` [m] mapped by a (4, 4) homogeneous ``transform``: ``R p + t`` for each (also (3,) for one
-    point: the result is shaped as ``points``)."""
+    """Points mapped by a homogeneous transform: ``R p + t`` for each.
+
+    Args:
+        transform: (4, 4) homogeneous transform, translation [m].
+        points: (N, 3) points [m], or (3,) for one.
+
+    Returns:
+        The mapped points [m], shaped as ``points``.
+    """
     return np.asarray(points) @ transform[:3, :3].T + transform[:3, 3]
 
 
@@ -57,8 +64,15 @@ def registered_errors(predicted: np.ndarray, reference: np.ndarray) -> np.ndarra
 
 
 def rotation_angle(rotation: np.ndarray) -> np.ndarray:
-    """Rotation angle [rad], in [0, pi], of a (3, 3) rotation or each of a (..., 3, 3) stack: atan2 of the skew
-    part's length and the trace's share, accurate near zero where arccos of the trace is not."""
+    """Rotation angle [rad], in [0, pi], of a rotation matrix: atan2 of the skew part's length and the trace's
+    share, accurate near zero where arccos of the trace is not.
+
+    Args:
+        rotation: (3, 3) rotation or a (..., 3, 3) stack (dimensionless).
+
+    Returns:
+        A scalar, or (...,) angles [rad].
+    """
     rotation = np.asarray(rotation, dtype=float)
     axis = np.stack([rotation[..., 2, 1] - rotation[..., 1, 2], rotation[..., 0, 2] - rotation[..., 2, 0],
                      rotation[..., 1, 0] - rotation[..., 0, 1]], axis=-1)

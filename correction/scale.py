@@ -33,14 +33,25 @@ def scale_of(model: RobotModel) -> np.ndarray:
 
 
 def with_scale(model: RobotModel, scale: np.ndarray | None) -> RobotModel:
-    """A copy of ``model`` with ``extras["scale"]`` set to ``scale`` (n,) dimensionless numbers (removed when None;
-    zeros keep the list, and the ``s1..sn`` parameters, with no effect on the angles)."""
+    """A copy of ``model`` with ``extras["scale"]`` set (removed when None; zeros keep the list, and the
+    ``s1..sn`` parameters, with no effect on the angles).
+
+    Args:
+        model: the arm.
+        scale: (n,) angle scales ``s`` (dimensionless), or None.
+    """
     return with_joint_vector(model, "scale", scale)
 
 
 def joint_angles(model: RobotModel, q: np.ndarray) -> np.ndarray:
-    """Joint angles ``(1 + s) q`` [rad], shaped as ``q``, of recorded angles ``q`` (N, n) or (n,) [rad] of
-    ``model``; ``q`` itself without scale.
+    """Joint angles ``(1 + s) q`` of recorded angles ``q``; ``q`` itself without scale.
+
+    Args:
+        model: the arm.
+        q: (N, n) or (n,) recorded angles [rad].
+
+    Returns:
+        Joint angles [rad], shaped as ``q``.
 
     Raises:
         ScaleError: as :func:`scale_of`.
@@ -53,8 +64,14 @@ def joint_angles(model: RobotModel, q: np.ndarray) -> np.ndarray:
 
 
 def recorded_angles(model: RobotModel, q_joint: np.ndarray) -> np.ndarray:
-    """The inverse of :func:`joint_angles`: recorded angles ``q_joint / (1 + s)`` [rad], shaped as ``q_joint``
-    (N, n) or (n,) [rad].
+    """The inverse of :func:`joint_angles`: recorded angles ``q_joint / (1 + s)``.
+
+    Args:
+        model: the arm.
+        q_joint: (N, n) or (n,) joint angles [rad].
+
+    Returns:
+        Recorded angles [rad], shaped as ``q_joint``.
 
     Raises:
         ScaleError: as :func:`scale_of`.

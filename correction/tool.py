@@ -247,6 +247,10 @@ def samples_shift(nominal_tool: np.ndarray, samples_tool: np.ndarray | None) -> 
     """(3,) how far the samples put the ball from the robot file's tool, ``samples_tool - nominal_tool`` [m] in the
     last frame, when beyond :data:`TIP_MOVED`; None otherwise (nothing recorded, or a calibration's correction).
 
+    Args:
+        nominal_tool: (3,) the robot file's tool point in the last frame [m].
+        samples_tool: (3,) where the samples put the ball, in the last frame [m], or None.
+
     Raises:
         ToolError: a ``samples_tool`` that is not 3 finite numbers.
     """
@@ -257,8 +261,15 @@ def samples_shift(nominal_tool: np.ndarray, samples_tool: np.ndarray | None) -> 
 
 
 def adapter_question(shift: np.ndarray) -> str:
-    """Why a tool swap (or a controller) not told what ``shift`` (3,) [m] is refuses: an adapter every tool sits on, or
-    the ball's own mount (the caller names the field that answers)."""
+    """Why a tool swap (or a controller) not told what ``shift`` is refuses: an adapter every tool sits on, or
+    the ball's own mount (the caller names the field that answers).
+
+    Args:
+        shift: (3,) :func:`samples_shift` [m], in the last frame.
+
+    Returns:
+        One line of text, in mm.
+    """
     shown = ", ".join(f"{v * 1e3:.1f}" for v in shift)
     return (f"the calibration's samples put the ball {np.linalg.norm(shift) * 1e3:.1f} mm from the "
             f"robot file's tool ([{shown}] mm in the last frame, {SAMPLES_TOOL}), more than a calibration corrects "
