@@ -1,8 +1,7 @@
 """Batched forward kinematics and analytic Jacobians of a :class:`RobotModel`.
 
 Every function takes measured joint angles ``q`` [rad] of shape (N, n), N configurations of an n-joint arm,
-or (n,) for one configuration, in which case the batch axis is dropped from the result (all but
-:func:`link_angle_jacobian`, which keeps it: (1, n, n)). Joint angle scales (``extras["scale"]``,
+or (n,) for one configuration, in which case the batch axis is dropped from the result. Joint angle scales (``extras["scale"]``,
 :mod:`.scale`) and an elastic model (``extras["compliance"]``, :mod:`.elastic`) are handled here, in that
 order: the tool point, tool pose and the Jacobians take the *measured* angles ``q`` and work at the link
 angles::
@@ -200,21 +199,22 @@ def link_angle_jacobian(model: RobotModel, q: np.ndarray) -> np.ndarray | None:
         q: (N, n) or (n,) measured joint angles [rad].
 
     Returns:
-        (N, n, n) [rad/rad], entry ``[k, i, j] = d q_link_i / d q_j`` at configuration ``k``; None for a model
-        whose link angles are the measured ones (no scale and no compliance, or all of them zero). Unlike the
-        other functions here, one configuration (n,) keeps its batch axis: (1, n, n).
+        (N, n, n) [rad/rad], entry ``[k, i, j] = d q_link_i / d q_j`` at configuration ``k``, or (n, n) for one
+        configuration (n,) (until stop 17 it kept the batch axis, (1, n, n), unlike every other function here);
+        None for a model whose link angles are the measured ones (no scale and no compliance, or all of them zero).
 
     Raises:
         JointAngleError: an angle more than a full turn beyond its joint's limits (degrees given for radians?).
         ValueError: ``q`` not of shape (N, n) or (n,).
     """
-    q2, _ = _checked(model, q)
+    q2, single = _checked(model, q)
     if _link_angles(model, q2) is q2:
         return None
     n, h = model.n_joints, 1e-6
     shift = h * np.eye(n)
     columns = [(_link_angles(model, q2 + shift[k]) - _link_angles(model, q2 - shift[k])) / (2 * h) for k in range(n)]
-    return np.stack(columns, axis=2)  # [:, i, k] = d q_link_i / d q_k
+    jac = np.stack(columns, axis=2)  # [:, i, k] = d q_link_i / d q_k
+    return jac[0] if single else jac
 
 
 def pose_jacobian(model: RobotModel, q: np.ndarray) -> np.ndarray:

@@ -129,9 +129,8 @@ def _promised_shapes(function) -> tuple[str, str | None]:
     returns = " ".join(_section(inspect.getdoc(function), "Returns").split())
     batched = SHAPE.search(returns)
     single = re.search(r"or (\([^)]*\)) for one configuration", returns)
-    keeps = re.search(r"keeps its batch axis: (\([^)]*\))", returns)
     assert batched, f"{function.__name__}: Returns states no shape: {returns!r}"
-    return batched.group(0), (single or keeps).group(1) if (single or keeps) else None
+    return batched.group(0), single.group(1) if single else None
 
 
 def _shape(text: str, n: int, count: int, params: int) -> tuple[int, ...]:
