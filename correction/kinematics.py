@@ -1,9 +1,9 @@
 """Batched forward kinematics and analytic Jacobians of a :class:`RobotModel`.
 
 Every function takes measured joint angles ``q`` [rad] of shape (N, n), N configurations of an n-joint arm,
-or (n,) for one configuration, in which case the batch axis is dropped from the result. Joint angle scales (``extras["scale"]``,
-:mod:`.scale`) and an elastic model (``extras["compliance"]``, :mod:`.elastic`) are handled here, in that
-order: the tool point, tool pose and the Jacobians take the *measured* angles ``q`` and work at the link
+or (n,) for one configuration, in which case the batch axis is dropped from the result. Joint angle scales
+(``extras["scale"]``, :mod:`.scale`) and an elastic model (``extras["compliance"]``, :mod:`.elastic`) are handled
+here, in that order: the tool point, tool pose and the Jacobians take the *measured* angles ``q`` and work at the link
 angles::
 
     q_joint = (1 + s) q                  (scale first: what the joint turns)
