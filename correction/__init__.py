@@ -7,7 +7,7 @@ configuration. Every name below is importable from ``spherecal.correction`` and 
 defines it (the API reference lists them by group):
 
 * the model: :class:`~.model.RobotModel`, :func:`~.files.robots.load_robot`, :func:`~.files.urdf_to_dh.load_urdf`,
-  robot files (:func:`~.files.robot_file.save_robot`, ...), :func:`~.perturb.perturb`, :func:`~.tool.with_tool`,
+  robot files (:func:`~.files.robot_file.save_robot`, ...), :func:`~.perturbation.perturb`, :func:`~.tool.with_tool`,
   :func:`~.conversion.convert`, the elastic and scaled models (:func:`~.elastic.with_stiffness`,
   :func:`~.scale.with_scale`);
 * kinematics on measured angles: :func:`~.kinematics.tool_point`, :func:`~.kinematics.tool_pose`,
@@ -47,7 +47,7 @@ from .kinematics import (
     tool_pose,
 )
 from .model import RobotModel, geometric_part, matrix_rpy, param_names, pose_matrix, rpy_matrix
-from .perturb import perturb
+from .perturbation import perturb
 from .rigid import apply_transform, fit_rigid_transform, registered_errors
 from .scale import ScaleError, with_scale
 from .tool import CarriedTipWarning, ToolError, ToolSwap, with_tool

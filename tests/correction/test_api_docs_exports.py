@@ -23,7 +23,7 @@ from spherecal.correction.scale import with_scale
 
 API_PAGE = Path(__file__).resolve().parents[2] / "docs" / "api.md"
 MODULES = ("chain", "conversion", "elastic", "errors", "gravity", "inertia", "inertials", "kinematics", "layout",
-           "model", "perturb", "rigid", "scale", "tool")
+           "model", "perturbation", "rigid", "scale", "tool")
 SECTION = re.compile(r"^(Args|Arguments|Returns|Raises|Warns|Yields|Example|Examples|Attributes|Note):\s*$")
 
 

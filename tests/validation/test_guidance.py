@@ -20,7 +20,7 @@ from spherecal.correction import (
     write_samples,
 )
 from spherecal.correction.files.samples import Dataset
-from spherecal.correction.perturb import perturb
+from spherecal.correction.perturbation import perturb
 from spherecal.identification.build import build_problem
 from spherecal.identification.calibrate import calibrate
 from spherecal.identification.prediction import Workspace, held_out_joint_error, predict_accuracy
