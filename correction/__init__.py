@@ -16,13 +16,14 @@ defines it (the API reference lists them by group):
 * the data files: samples (:class:`~.files.samples.Dataset`) and fixtures;
 * the exceptions, all :class:`~.errors.SpherecalError`: :class:`~.kinematics.JointAngleError`,
   :class:`~.files.robot_file.RobotFileError`, :class:`~.gravity.InertialsError`, :class:`~.scale.ScaleError`,
-  :class:`~.tool.ToolError`, :class:`~.files.samples.DatasetError`; bad shapes raise ``ValueError``.
+  :class:`~.tool.ToolError`, :class:`~.files.samples.DatasetError`, :class:`~.errors.ShapeError` (joint angles of
+  the wrong shape: a ``ValueError`` too).
 """
 
 from .chain import Frames, frames, link_frames
 from .conversion import convert, to_modified, to_standard
 from .elastic import with_compliance, with_stiffness
-from .errors import SpherecalError
+from .errors import ShapeError, SpherecalError
 from .files.atomic import atomic_write_bytes, atomic_write_text
 from .files.fixtures import FixtureSpec, format_fixtures, read_fixtures, write_fixtures
 from .files.robot_file import (
@@ -68,6 +69,7 @@ __all__ = [
     "NearlyParallelAxesWarning",
     "RobotFileError",
     "RobotModel",
+    "ShapeError",
     "SpherecalError",
     "apply_transform",
     "atomic_write_bytes",

@@ -11,6 +11,7 @@ from typing import NamedTuple
 
 import numpy as np
 
+from .errors import ShapeError
 from .model import RobotModel
 
 
@@ -30,12 +31,21 @@ class Frames(NamedTuple):
     origin: np.ndarray
 
 
-def _as_batch(model: RobotModel, q: np.ndarray) -> tuple[np.ndarray, bool]:
+def as_batch(model: RobotModel, q: np.ndarray) -> tuple[np.ndarray, bool]:
+    """``q`` as (N, n) [rad], and whether it was one configuration (n,).
+
+    Args:
+        model: the arm (its joint count ``n``).
+        q: (N, n) or (n,) joint angles [rad].
+
+    Raises:
+        ShapeError: ``q`` not of shape (N, n) or (n,) for the model's ``n`` joints.
+    """
     q = np.asarray(q, dtype=float)
     single = q.ndim == 1
     q2 = q[None, :] if single else q
     if q2.ndim != 2 or q2.shape[1] != model.n_joints:
-        raise ValueError(
+        raise ShapeError(
             f"q must have shape (N, {model.n_joints}) or ({model.n_joints},), got {q.shape}"
         )
     return q2, single
@@ -69,7 +79,7 @@ def frames(model: RobotModel, q: np.ndarray) -> Frames:
     Raises:
         ValueError: ``q`` not of shape (N, n) or (n,).
     """
-    q, _ = _as_batch(model, q)
+    q, _ = as_batch(model, q)
     n, count = model.n_joints, q.shape[0]
     xs, ys, zs, os_ = (np.empty((n + 1, 3, count)) for _ in range(4))
     base = model.base_transform
@@ -135,7 +145,7 @@ def link_frames(model: RobotModel, q: np.ndarray) -> np.ndarray:
     Raises:
         ValueError: ``q`` not of shape (N, n) or (n,).
     """
-    _, single = _as_batch(model, q)
+    _, single = as_batch(model, q)
     f = frames(model, q)
     poses = np.moveaxis(_homogeneous(f.x, f.y, f.z, f.origin), 0, 1)
     return poses[0] if single else poses
@@ -158,7 +168,7 @@ def rigid_tool_point(model: RobotModel, q: np.ndarray) -> np.ndarray:
     Raises:
         ValueError: ``q`` not of shape (N, n) or (n,).
     """
-    q, single = _as_batch(model, q)
+    q, single = as_batch(model, q)
     angle = (q + model.theta).T
     cos_q, sin_q = np.cos(angle), np.sin(angle)
     count = q.shape[0]

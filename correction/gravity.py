@@ -26,7 +26,7 @@ from typing import Any
 
 import numpy as np
 
-from .chain import frames
+from .chain import as_batch, frames
 from .errors import SpherecalError
 from .inertia import checked_tensor
 from .model import RobotModel
@@ -176,13 +176,12 @@ def gravity_torques(
 
     Raises:
         InertialsError: ``masses`` or ``coms`` not given and ``model`` has no valid ``inertials`` block.
-        ValueError: ``q`` not of shape (N, n) or (n,).
+        ShapeError: ``q`` not of shape (N, n) or (n,) (a ``ValueError`` too).
     """
     if masses is None or coms is None:
         masses, coms = inertials_of(model)
-    q = np.asarray(q, dtype=float)
-    single = q.ndim == 1
-    f = frames(model, np.atleast_2d(q))  # axes and origins (n+1, 3, N): the rotations, not whole 4 x 4 poses
+    q, single = as_batch(model, q)
+    f = frames(model, q)  # axes and origins (n+1, 3, N): the rotations, not whole 4 x 4 poses
     rotations = np.stack([f.x, f.y, f.z], axis=-1).transpose(2, 0, 1, 3)  # (N, n+1, 3, 3), columns x y z
     origins = f.origin.transpose(2, 0, 1)  # (N, n+1, 3)
     n = model.n_joints

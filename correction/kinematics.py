@@ -39,11 +39,11 @@ from __future__ import annotations
 import numpy as np
 
 from .chain import (
-    _as_batch,
     _cross,
     _homogeneous,
     _rigid_joint_jacobian,
     _tool_point,
+    as_batch,
     frames,
     rigid_tool_point,
 )
@@ -73,8 +73,8 @@ def _checked(model: RobotModel, q: np.ndarray) -> tuple[np.ndarray, bool]:
     angle lies more than :data:`ANGLE_MARGIN` beyond its joint's limits: the public entry points' check (two
     reductions over the whole batch, per joint only when those pass the narrowest joint's bound; a NaN is not refused
     here). Internal callers on angles already read and checked (identification's residuals) may use
-    ``chain._as_batch`` and the ``_`` functions."""
-    q2, single = _as_batch(model, q)
+    ``chain.as_batch`` and the ``_`` functions."""
+    q2, single = as_batch(model, q)
     if not q2.size:
         return q2, single
     if not (q2.max() <= model.upper.min() + ANGLE_MARGIN and q2.min() >= model.lower.max() - ANGLE_MARGIN):

@@ -243,3 +243,15 @@ def test_a_joint_that_turns_freely_takes_any_number_of_turns(panda) -> None:
     limited = replace(free, extras={"joint_names": names, "urdf": {"continuous_joints": names[1:]}})
     with pytest.raises(JointAngleError, match=r"^q\[0\] \(joint 1\): 31.7159 rad"):
         tool_point(limited, q)
+
+
+@pytest.mark.parametrize("entry", [tool_point, tool_pose, joint_jacobian, param_jacobian, link_angle_jacobian])
+def test_angles_of_another_arm_raise_our_shape_error_naming_the_shape_given(panda, entry) -> None:
+    """h7's API review: a wrong shape raised numpy's ValueError family only, and gravity_torques named the shape it
+    had made of it ('got (1, 6)' for (6,)); ShapeError is ours (the command line's one line) and a ValueError."""
+    from spherecal.correction import ShapeError, gravity_torques
+
+    for function in (entry, gravity_torques):
+        with pytest.raises(ShapeError, match=r"q must have shape \(N, 7\) or \(7,\), got \(6,\)") as raised:
+            function(panda, np.zeros(6))
+        assert isinstance(raised.value, ValueError)
