@@ -166,7 +166,7 @@ def load_robot(
 
     Args:
         path_or_name: YAML robot file, URDF file or embedded name.
-        tip_link, base_link: URDF only: the chain to convert (see :func:`correction.urdf_to_dh.load_urdf`).
+        tip_link, base_link: URDF only: the chain to convert (see :func:`.urdf_to_dh.load_urdf`).
         inertials: an inertials file (:mod:`.inertials_file`) whose masses replace the description's.
         report: called with one line when the inertials come from a matching embedded arm
             (:func:`embedded_inertials`); the commands print it.

@@ -2,7 +2,7 @@
 
 The calibrated arm keeps every link frame of the original URDF attached to the same joint
 axis: for revolute joint ``k`` the pose ``M_k`` of its child link in DH frame ``k`` is taken
-from the original file (converted with :func:`correction.urdf_to_dh.urdf_model`), and the child
+from the original file (converted with :func:`.urdf_to_dh.urdf_model`), and the child
 link is placed at ``DH_k^cal(q = 0) M_k``. Joint ``k``'s ``<origin>`` is then what puts it
 there from its parent link (fixed joints in between are kept as they are), and the fixed joint
 into the tip link gets the calibrated tool point. Nothing else in the text is touched: the
