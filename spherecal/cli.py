@@ -8,7 +8,10 @@ imports numpy, MuJoCo, Rerun or pyswarms when it runs, so start-up stays short.
 from __future__ import annotations
 
 import argparse
+import contextlib
 import importlib
+import os
+import signal
 import sys
 import warnings
 from importlib.metadata import PackageNotFoundError, version
@@ -58,6 +61,48 @@ def _one_line(message: str) -> str:
     return message.replace("\r", "\\r").replace("\n", "\\n")
 
 
+class Terminated(BaseException):
+    """SIGTERM or SIGHUP: raised in the main thread, as Ctrl-C raises KeyboardInterrupt, so that the outputs being
+    staged are removed (``correction.files.outputs.OutputSet``) before the command ends with status 128 + signal."""
+
+    def __init__(self, number: int):
+        super().__init__(number)
+        self.number = number
+
+
+#: The signals taken as :class:`Terminated` (a ``kill``, a closed terminal); Ctrl-C is Python's KeyboardInterrupt.
+_TERMINATING = tuple(getattr(signal, name) for name in ("SIGTERM", "SIGHUP") if hasattr(signal, name))
+
+
+@contextlib.contextmanager
+def _terminate_cleanly():
+    """While a command runs, :data:`_TERMINATING` raise :class:`Terminated` in this process (by default they killed
+    it at once: a ``kill`` while the outputs were staged left every staged file and the created folder behind). A
+    signal a caller handles itself (a handler other than the default) is left to it; the handlers are put back
+    after. A worker process forked meanwhile dies of the signal as before."""
+    here = os.getpid()
+
+    def terminate(number, frame):
+        if os.getpid() != here:  # a forked worker inherited the handler: end it as the signal would
+            signal.signal(number, signal.SIG_DFL)
+            os.kill(os.getpid(), number)
+            return
+        raise Terminated(number)
+
+    previous = {}
+    try:
+        for number in _TERMINATING:
+            if signal.getsignal(number) is signal.SIG_DFL:
+                previous[number] = signal.signal(number, terminate)
+    except ValueError:  # not the main thread: signals cannot be handled here
+        pass
+    try:
+        yield
+    finally:
+        for number, handler in previous.items():
+            signal.signal(number, handler)
+
+
 def main(argv: list[str] | None = None) -> int:
     """Run one subcommand; return its exit status. Every refusal (a bad option, bad input, a file that
     cannot be read or written) prints one line and returns 1, after the warnings the command gave before it (each
@@ -89,7 +134,7 @@ def main(argv: list[str] | None = None) -> int:
             print(f"spherecal {args.command}: warning: {text}", file=sys.stderr)
 
     try:
-        with warnings.catch_warnings(), thread_cap():
+        with _terminate_cleanly(), warnings.catch_warnings(), thread_cap():
             warnings.showwarning = one_line_warning  # a warning for the user, not a source location
             status = int(args._run(args) or 0)
         say_created(args, missing)
@@ -115,6 +160,9 @@ def main(argv: list[str] | None = None) -> int:
     except KeyboardInterrupt:
         print(f"spherecal {args.command}: interrupted", file=sys.stderr)
         return 130
+    except Terminated as ended:
+        print(f"spherecal {args.command}: terminated ({signal.Signals(ended.number).name})", file=sys.stderr)
+        return 128 + ended.number
 
 
 if __name__ == "__main__":

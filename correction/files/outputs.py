@@ -19,9 +19,11 @@ Inputs are compared as files (links resolved, ``os.path.samefile``), never as st
 from __future__ import annotations
 
 import os
+import signal
 import sys
 import tempfile
-from collections.abc import Iterable, Mapping
+from collections.abc import Iterable, Iterator, Mapping
+from contextlib import contextmanager
 from pathlib import Path
 
 from .atomic import OutputError, _umask, refuse_special_file
@@ -214,17 +216,18 @@ class OutputSet:
             self.discard()
             raise RuntimeError(f"output {missing[0]} was planned but never written")
         done: list[Path] = []
-        try:
-            for path, tmp in self._staged.items():
-                if not tmp.exists():
-                    raise OutputError(f"{path}: field '{self.planned[path]}': its staged copy {tmp} disappeared")
-                os.replace(tmp, path)
-                done.append(path)
-        except OSError as error:
-            self.discard()
-            raise self._cannot_write(path, error) from None
-        self._staged.clear()
-        self._created.clear()
+        with _signals_held():  # a Ctrl-C or SIGTERM between two renames is taken after the last
+            try:
+                for path, tmp in self._staged.items():
+                    if not tmp.exists():
+                        raise OutputError(f"{path}: field '{self.planned[path]}': its staged copy {tmp} disappeared")
+                    os.replace(tmp, path)
+                    done.append(path)
+            except OSError as error:
+                self.discard()
+                raise self._cannot_write(path, error) from None
+            self._staged.clear()
+            self._created.clear()
         return done
 
     def discard(self) -> None:
@@ -247,7 +250,11 @@ class OutputSet:
 
     def __exit__(self, kind, error, trace) -> None:
         if kind is None:
-            self.commit()
+            try:
+                self.commit()
+            except BaseException:  # a Ctrl-C or SIGTERM taken as the commit began: no staged file left behind
+                self.discard()
+                raise
         else:
             self.discard()
 
@@ -272,6 +279,24 @@ class OutputSet:
         except OSError as error:
             raise OutputError(f"{folder}: cannot create the folder: {error.strerror or error}") from None
         self._created.extend(reversed(missing))
+
+
+#: The signals that end a command (Ctrl-C, ``kill``, a closed terminal), held back while the outputs are renamed.
+_HELD_SIGNALS = tuple(getattr(signal, name) for name in ("SIGINT", "SIGTERM", "SIGHUP") if hasattr(signal, name))
+
+
+@contextmanager
+def _signals_held() -> Iterator[None]:
+    """Hold back :data:`_HELD_SIGNALS` (delivered when the block ends): the renames of a set are not cut in two, some
+    outputs in place and the others left as staged files. Nothing held where threads cannot mask signals."""
+    if not hasattr(signal, "pthread_sigmask"):
+        yield
+        return
+    previous = signal.pthread_sigmask(signal.SIG_BLOCK, _HELD_SIGNALS)
+    try:
+        yield
+    finally:
+        signal.pthread_sigmask(signal.SIG_SETMASK, previous)
 
 
 #: File-name endings that say what a file holds (spherecal reads ``.urdf`` as URDF and a robot file as YAML).
