@@ -55,7 +55,8 @@ def run(args: argparse.Namespace) -> int:
         warnings.warn(forced, stacklevel=1)
     swap, payload = put_tool(model, args.offset, args.urdf, args.tip_link, args.base_link, source=args.robot,
                             adapter=args.adapter)
-    header = f"spherecal tool: {args.robot} with the tool at {[round(v, 6) for v in swap.model.tool]} m (frame n)"
+    header = (f"spherecal tool: {args.robot} with the tool at {swap.model.tool.round(6).tolist()} m (frame n)\n"
+              + _provenance(args))
     with outputs:
         path = outputs.write_text(args.out, dump_robot(swap.model, header=header))
     print(f"spherecal tool: wrote {path}: tool point {swap.model.tool.round(6).tolist()} m in the last frame "
@@ -64,6 +65,15 @@ def run(args: argparse.Namespace) -> int:
     print(f"spherecal tool: {swap.note}")
     print(f"spherecal tool: {payload}")
     return 0
+
+
+def _provenance(args: argparse.Namespace) -> str:
+    """The comment lines of the new file's provenance: this command, versions, and its inputs (CAL.yaml, --urdf)
+    with their SHA-256 (the file's calibration.provenance is the calibration's, not this swap's)."""
+    from spherecal.correction.files.provenance import comment_block, provenance
+    from spherecal.options import recorded_options
+
+    return comment_block(provenance(None, recorded_options(args)))
 
 
 def _nominal_points(model, swapped) -> str:
