@@ -448,11 +448,13 @@ INPUT_OPTIONS: tuple[str, ...] = (
 
 def recorded_options(args: argparse.Namespace) -> dict:
     """The options of a run as its provenance block records them (``correction.files.provenance``): every
-    option as given, argparse's internals left out, and each that names an existing file as a
-    :class:`~pathlib.Path`, so that the block records its SHA-256."""
+    option as given, argparse's internals left out, and each input that names an existing file as a
+    :class:`~pathlib.Path`, so that the block records its SHA-256. An output (:data:`RECORDED_OUTPUTS`) is recorded
+    as its name: the file it replaces is not an input (a second ``validate --out v.json`` recorded the first
+    report's SHA-256 among its inputs)."""
     from pathlib import Path
 
-    return {k: Path(v) if isinstance(v, str) and Path(v).is_file() else v
+    return {k: Path(v) if isinstance(v, str) and k not in RECORDED_OUTPUTS and Path(v).is_file() else v
             for k, v in vars(args).items() if not k.startswith("_") and k != "command"}
 
 
@@ -506,6 +508,8 @@ def planned_outputs(args: argparse.Namespace, outputs: dict):
 FOLDER_OUT = ("simulate", "import", "demo", "campaign")
 #: The options that name outputs (a command has some of them).
 OUTPUT_OPTIONS = ("out", "rrd", "analysis")
+#: The options (destinations) whose files a command writes, never reads: :func:`recorded_options` hashes none.
+RECORDED_OUTPUTS = (*OUTPUT_OPTIONS, "fixtures_out")
 
 
 def output_folders(args: argparse.Namespace) -> list[Path]:

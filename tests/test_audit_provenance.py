@@ -26,3 +26,22 @@ def test_tool_records_its_own_command_versions_and_inputs(tmp_path, monkeypatch)
     assert any(line.startswith("# versions: python ") and "spherecal " in line for line in head), text
     assert f"robot=cal.yaml (sha256 {_sha256(tmp_path / 'cal.yaml')})" in text, text
     assert "# seed: None" in head, text
+
+
+def test_a_replaced_output_is_not_recorded_as_an_input(tmp_path, monkeypatch) -> None:
+    import json
+
+    monkeypatch.chdir(tmp_path)
+    assert main(["export", "panda", "--format", "yaml", "--out", "cal.yaml"]) == 0
+    argv = ["validate", "--nominal", "panda", "--calibrated", "cal.yaml", "--truth", "cal.yaml", "--configurations",
+            "50", "--out", "v.json"]
+    assert main(argv) == 0
+    first = json.loads((tmp_path / "v.json").read_text())["provenance"]["inputs"]
+    assert main(argv) == 0  # replaces v.json
+    second = json.loads((tmp_path / "v.json").read_text())["provenance"]["inputs"]
+    # before: the second run recorded {'path': 'v.json', 'sha256': <the first report's>} as an input
+    assert first["out"] == second["out"] == "v.json", second["out"]
+    assert second["calibrated"]["sha256"] == _sha256(tmp_path / "cal.yaml")
+    assert main(["tool", "cal.yaml", "--offset", "0", "0", "0.2", "--out", "t.yaml"]) == 0
+    assert main(["tool", "cal.yaml", "--offset", "0", "0", "0.2", "--out", "t.yaml"]) == 0
+    assert "out=t.yaml (sha256" not in (tmp_path / "t.yaml").read_text()
