@@ -156,7 +156,8 @@ def comment_block(info: dict[str, Any]) -> str:
 
 
 def _workers(workers: dict[str, dict[str, str]], own: dict[str, str]) -> str:
-    """``host pid 1, host pid 2: the versions above; other pid 3: numpy 2.0.0, ...`` (grouped by versions)."""
+    """``host pid 1, host pid 2: the versions above; other pid 3: numpy 2.0.0, ...`` (grouped by versions; the
+    command's own process is ``host main process``)."""
     groups: dict[tuple, list[str]] = {}
     for name, packages in workers.items():
         groups.setdefault(tuple(sorted(packages.items())), []).append(name)
@@ -168,7 +169,14 @@ def _workers(workers: dict[str, dict[str, str]], own: dict[str, str]) -> str:
 
 
 def this_process() -> tuple[str, dict[str, str]]:
-    """This process's name (``"host pid N"``) and package versions: one entry of a block's ``workers``."""
+    """This process's name and package versions: one entry of a block's ``workers``. A worker process (of a pool, of a
+    Dask cluster) is ``"host pid N"``; a process no other started, as the command itself running its tasks in this
+    process (``--workers 1``), is ``"host main process"``: its pid, new at every run, made two runs of one command
+    and seed differ beyond their creation time."""
+    import multiprocessing  # not at --help (start-up)
+
+    if multiprocessing.parent_process() is None:
+        return f"{socket.gethostname()} main process", versions()
     return f"{socket.gethostname()} pid {os.getpid()}", versions()
 
 
