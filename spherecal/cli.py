@@ -103,6 +103,29 @@ def _terminate_cleanly():
             signal.signal(number, handler)
 
 
+@contextlib.contextmanager
+def _printable_streams():
+    """While a command runs, stdout and stderr print a file name's byte that is not UTF-8 as its escape (``\\udcff``):
+    with a strict stream (a UTF-8 locale other than C.UTF-8, a pipe under PYTHONIOENCODING) the 'wrote FILE' line
+    raised UnicodeEncodeError, a traceback after the outputs were written. Put back after."""
+    changed = []
+    for stream in (sys.stdout, sys.stderr):
+        if getattr(stream, "errors", None) == "strict" and hasattr(stream, "reconfigure"):
+            try:
+                stream.reconfigure(errors="backslashreplace")
+            except (ValueError, OSError):  # a stream that cannot change (detached, closed)
+                continue
+            changed.append(stream)
+    try:
+        yield
+    finally:
+        for stream in changed:
+            try:
+                stream.reconfigure(errors="strict")
+            except (ValueError, OSError):
+                pass
+
+
 def main(argv: list[str] | None = None) -> int:
     """Run one subcommand; return its exit status. Every refusal (a bad option, bad input, a file that
     cannot be read or written) prints one line and returns 1, after the warnings the command gave before it (each
@@ -134,11 +157,12 @@ def main(argv: list[str] | None = None) -> int:
             print(f"spherecal {args.command}: warning: {text}", file=sys.stderr)
 
     try:
-        with _terminate_cleanly(), warnings.catch_warnings(), thread_cap():
-            warnings.showwarning = one_line_warning  # a warning for the user, not a source location
-            status = int(args._run(args) or 0)
-        say_created(args, missing)
-        say_replaced(args, existing)
+        with _printable_streams():
+            with _terminate_cleanly(), warnings.catch_warnings(), thread_cap():
+                warnings.showwarning = one_line_warning  # a warning for the user, not a source location
+                status = int(args._run(args) or 0)
+            say_created(args, missing)
+            say_replaced(args, existing)
         flush()
         return status
     except (SpherecalError, OptionError) as error:

@@ -22,7 +22,7 @@ def test_tool_records_its_own_command_versions_and_inputs(tmp_path, monkeypatch)
     text = "\n".join(head)
     # before: only '# spherecal tool: cal.yaml with the tool at [np.float64(0.0), ...]': no version, no SHA-256
     assert "np.float64" not in text, text
-    assert "# command: spherecal tool cal.yaml --offset 0 0 0.2 --out new tool.yaml" in head, text
+    assert "# command: spherecal tool cal.yaml --offset 0 0 0.2 --out 'new tool.yaml'" in head, text
     assert any(line.startswith("# versions: python ") and "spherecal " in line for line in head), text
     assert f"robot=cal.yaml (sha256 {_sha256(tmp_path / 'cal.yaml')})" in text, text
     assert "# seed: None" in head, text
@@ -45,3 +45,37 @@ def test_a_replaced_output_is_not_recorded_as_an_input(tmp_path, monkeypatch) ->
     assert main(["tool", "cal.yaml", "--offset", "0", "0", "0.2", "--out", "t.yaml"]) == 0
     assert main(["tool", "cal.yaml", "--offset", "0", "0", "0.2", "--out", "t.yaml"]) == 0
     assert "out=t.yaml (sha256" not in (tmp_path / "t.yaml").read_text()
+
+
+def test_the_recorded_command_runs_again_in_a_shell(tmp_path, monkeypatch) -> None:
+    import shlex
+
+    monkeypatch.chdir(tmp_path)
+    argv = ["export", "panda", "--format", "yaml", "--out", "my run;1.yaml"]
+    monkeypatch.setattr(sys, "argv", ["spherecal", *argv])
+    assert main(argv) == 0
+    line = next(x for x in (tmp_path / "my run;1.yaml").read_text().splitlines() if x.startswith("# command: "))
+    # before: '--out my run;1.yaml' unquoted: a shell splits the name and ends the command at ';'
+    assert shlex.split(line.removeprefix("# command: ")) == ["spherecal", *argv], line
+
+
+def test_a_file_name_that_is_not_utf8_is_written_readably(tmp_path, monkeypatch, capsys) -> None:
+    import os
+
+    if os.name != "posix" or sys.getfilesystemencoding() != "utf-8":
+        import pytest
+
+        pytest.skip("a byte that is not UTF-8 in a file name: POSIX, UTF-8 file system encoding")
+    monkeypatch.chdir(tmp_path)
+    assert main(["export", "panda", "--format", "yaml", "--out", "cal.yaml"]) == 0
+    name = os.fsdecode(b"new\xfftool.yaml")  # 'new\udcfftool.yaml'
+    argv = ["tool", "cal.yaml", "--offset", "0", "0", "0.2", "--out", name]
+    monkeypatch.setattr(sys, "argv", ["spherecal", *argv])
+    # before: UnicodeEncodeError (a traceback) writing the command line into the file's comments
+    assert main(argv) == 0, capsys.readouterr().err
+    text = (tmp_path / name).read_text(encoding="utf-8")
+    assert "--out $'new\\xfftool.yaml'" in text, text[:400]
+    for fmt in ("urdf", "mjcf"):
+        out = os.fsdecode(b"exp\xff." + fmt.encode())
+        assert main(["export", "cal.yaml", "--format", fmt, "--out", out]) == 0, capsys.readouterr().err
+        (tmp_path / out).read_text(encoding="utf-8")

@@ -21,6 +21,8 @@ from __future__ import annotations
 import hashlib
 import os
 import platform
+import re
+import shlex
 import socket
 import stat
 import sys
@@ -126,10 +128,11 @@ def provenance(seed: int | None, inputs: dict[str, Any], command: list[str] | No
     if command is None:
         command = [Path(sys.argv[0]).name, *sys.argv[1:]] if sys.argv and sys.argv[0] else []
     recorded = {
-        key: input_record(value) if isinstance(value, os.PathLike) else value for key, value in inputs.items()
+        key: _readable(input_record(value) if isinstance(value, os.PathLike) else value)
+        for key, value in inputs.items()
     }
     info = {
-        "command": " ".join(str(word) for word in command),
+        "command": shell_line(command),
         "created": datetime.now(timezone.utc).isoformat(timespec="seconds"),
         "versions": versions(),
         "seed": seed,
@@ -138,6 +141,49 @@ def provenance(seed: int | None, inputs: dict[str, Any], command: list[str] | No
     if workers:
         info["workers"] = {name: dict(packages) for name, packages in sorted(workers.items())}
     return info
+
+
+def printable(text: str) -> str:
+    """``text`` as UTF-8 can hold it: a byte of a file name that is not UTF-8 (``\\udcff`` in Python's
+    ``surrogateescape``) as ``\\xff`` (writing it raised UnicodeEncodeError, a traceback instead of the file)."""
+    return text.encode("utf-8", "surrogateescape").decode("utf-8", "backslashreplace")
+
+
+def _readable(value: Any) -> Any:
+    """An input record or option with every string :func:`printable` (in lists and dicts too)."""
+    if isinstance(value, str):
+        return printable(value)
+    if isinstance(value, dict):
+        return {_readable(k): _readable(v) for k, v in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [_readable(v) for v in value]
+    return value
+
+
+#: What a plain quoted word cannot show on one line: control characters, and a file name's byte that is not UTF-8.
+_UNQUOTABLE = re.compile(r"[\x00-\x1f\x7f\udc80-\udcff]")
+_ESCAPES = {"\n": "\\n", "\t": "\\t", "\r": "\\r"}
+
+
+def _shell_word(word: str) -> str:
+    """One word of a command line as a POSIX shell reads it back: quoted when it holds a space or ``;`` (``shlex``),
+    and as ``$'...'`` with escapes when it holds a newline, another control character or a byte that is not UTF-8
+    (``\\xff``: the line stays one line of UTF-8)."""
+    if not _UNQUOTABLE.search(word):
+        return shlex.quote(word)
+
+    def escape(match: re.Match) -> str:
+        char = match.group()
+        return _ESCAPES.get(char, f"\\x{(ord(char) - 0xDC00 if ord(char) >= 0xDC80 else ord(char)):02x}")
+
+    return "$'" + _UNQUOTABLE.sub(escape, word.replace("\\", "\\\\").replace("'", "\\'")) + "'"
+
+
+def shell_line(command: list) -> str:
+    """The command line ``command`` (words) as one line a POSIX shell runs again as it was typed: ``--grid
+    '0.4,0.5,2;-0.2,0.2,2;0.4,0.5,2'`` and ``--out 'my run'`` quoted (joined with spaces, the ``;`` ended the
+    command and the space split the folder in two), a newline in a name escaped."""
+    return " ".join(_shell_word(str(word)) for word in command)
 
 
 def comment_block(info: dict[str, Any]) -> str:
