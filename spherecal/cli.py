@@ -156,37 +156,45 @@ def main(argv: list[str] | None = None) -> int:
         for text in held:
             print(f"spherecal {args.command}: warning: {text}", file=sys.stderr)
 
-    try:
-        with _printable_streams():
+    with _printable_streams():  # a file name that is not UTF-8 in the lines below: escaped, not a traceback
+        try:
             with _terminate_cleanly(), warnings.catch_warnings(), thread_cap():
                 warnings.showwarning = one_line_warning  # a warning for the user, not a source location
                 status = int(args._run(args) or 0)
             say_created(args, missing)
             say_replaced(args, existing)
-        flush()
-        return status
-    except (SpherecalError, OptionError) as error:
-        # every warning on its own line, then the refusal's one line: a refusal that quoted the first warning and
-        # hid the rest behind '; ...' lost the Gen3 lite's joint-limit warning (a user trial)
-        flush()
-        also = f" (after {len(held)} warning{'s' * (len(held) > 1)}, above)" if held else ""
-        # a long refusal of the calibration: its reason in the error line, its clauses (figures, causes, remedies,
-        # the commands to try) one an indented line below it (a user trial: 1,850 characters in one line)
-        first, *details = getattr(error, "lines", None) or (str(error),)
-        print(f"spherecal {args.command}: error: {_one_line(first)}{also}", file=sys.stderr)
-        for detail in details:
-            print(f"  {_one_line(detail)}", file=sys.stderr)
-        return 1
-    except OSError as error:  # a file that cannot be read or written: one line, not a traceback
-        where = f"{error.filename}: " if error.filename else ""
-        print(f"spherecal {args.command}: error: {_one_line(f'{where}{error.strerror or error}')}", file=sys.stderr)
-        return 1
-    except KeyboardInterrupt:
-        print(f"spherecal {args.command}: interrupted", file=sys.stderr)
-        return 130
-    except Terminated as ended:
-        print(f"spherecal {args.command}: terminated ({signal.Signals(ended.number).name})", file=sys.stderr)
-        return 128 + ended.number
+            flush()
+            return status
+        except (SpherecalError, OptionError) as error:
+            # every warning on its own line, then the refusal's one line: a refusal that quoted the first warning and
+            # hid the rest behind '; ...' lost the Gen3 lite's joint-limit warning (a user trial)
+            flush()
+            also = f" (after {len(held)} warning{'s' * (len(held) > 1)}, above)" if held else ""
+            # a long refusal of the calibration: its reason in the error line, its clauses (figures, causes, remedies,
+            # the commands to try) one an indented line below it (a user trial: 1,850 characters in one line)
+            first, *details = getattr(error, "lines", None) or (str(error),)
+            print(f"spherecal {args.command}: error: {_one_line(first)}{also}", file=sys.stderr)
+            for detail in details:
+                print(f"  {_one_line(detail)}", file=sys.stderr)
+            return 1
+        except OSError as error:  # a file that cannot be read or written: one line, not a traceback
+            where = f"{error.filename}: " if error.filename else ""
+            print(f"spherecal {args.command}: error: {_one_line(f'{where}{error.strerror or error}')}", file=sys.stderr)
+            return 1
+        except UnicodeEncodeError as error:  # a file name's byte that is not UTF-8 written into a text file: one line
+            from spherecal.correction.files.provenance import printable
+
+            held_text = error.object if isinstance(error.object, str) else ""
+            text = printable(held_text[max(error.start - 40, 0):error.end + 40])
+            why = f"cannot write '{text}' into a UTF-8 file: a byte in it is not UTF-8 (a file name?); rename it"
+            print(f"spherecal {args.command}: error: {_one_line(why)}", file=sys.stderr)
+            return 1
+        except KeyboardInterrupt:
+            print(f"spherecal {args.command}: interrupted", file=sys.stderr)
+            return 130
+        except Terminated as ended:
+            print(f"spherecal {args.command}: terminated ({signal.Signals(ended.number).name})", file=sys.stderr)
+            return 128 + ended.number
 
 
 if __name__ == "__main__":
