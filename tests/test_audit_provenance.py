@@ -98,3 +98,20 @@ def test_a_name_no_writer_can_hold_is_one_line_and_nothing_written(tmp_path, mon
     # (identification.workflow): before, UnicodeEncodeError escaped as a traceback
     refused(["calibrate", "--robot", "panda", "--samples", samples, "--fixtures", "sim/fixtures.yaml", "--model", "dh",
              "--out", "cal.yaml"], tmp_path, capsys, "not UTF-8", "s\\xff.csv")
+
+
+def test_a_recording_named_with_a_byte_that_is_not_utf8_is_written(tmp_path, monkeypatch, capsys) -> None:
+    import os
+
+    import pytest
+
+    if os.name != "posix" or sys.getfilesystemencoding() != "utf-8":
+        pytest.skip("a byte that is not UTF-8 in a file name: POSIX, UTF-8 file system encoding")
+    monkeypatch.chdir(tmp_path)
+    assert main(["export", "panda", "--format", "yaml", "--out", "cal.yaml"]) == 0
+    rrd, report = os.fsdecode(b"v\xff.rrd"), os.fsdecode(b"v\xff.json")
+    # before: 'spherecal validate: error: /tmp/.../.v\udcff.rrd.h14ardx6.staged: cannot write the recording: 'utf-8'
+    # codec can't encode character ...' (Rerun opens the staged file by a UTF-8 path)
+    assert main(["validate", "--nominal", "panda", "--calibrated", "cal.yaml", "--truth", "cal.yaml",
+                 "--configurations", "50", "--out", report, "--rrd", rrd]) == 0, capsys.readouterr().err
+    assert sorted(os.listdir(tmp_path)) == sorted(["cal.yaml", report, rrd])

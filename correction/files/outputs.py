@@ -130,6 +130,13 @@ def _check_parents(path: Path, option: str, shown: Path | None = None) -> None:
             return
 
 
+def _utf8_name(name: str) -> str:
+    """``name`` with each byte that is not UTF-8 (``\\udcff`` in Python's ``surrogateescape``) as ``_``: a staged file's
+    name that a writer taking UTF-8 paths can open (Rerun refused ``--rrd $'v\\xff.rrd'``: 'cannot write the
+    recording'); the rename gives the file its own name."""
+    return "".join("_" if "\udc80" <= char <= "\udcff" else char for char in name)
+
+
 class OutputSet:
     """Planned output files, checked now, staged while written and renamed into place together.
 
@@ -184,7 +191,7 @@ class OutputSet:
             return self._staged[path]
         self._make_folder(path.parent)
         try:
-            fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".staged", dir=path.parent)
+            fd, tmp = tempfile.mkstemp(prefix=f".{_utf8_name(path.name)}.", suffix=".staged", dir=path.parent)
             os.close(fd)
             os.chmod(tmp, 0o666 & ~_umask())  # mkstemp makes 0600; a result file is as open as any other
         except OSError as error:
