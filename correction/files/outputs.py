@@ -22,6 +22,7 @@ import os
 import signal
 import sys
 import tempfile
+import threading
 from collections.abc import Iterable, Iterator, Mapping
 from contextlib import contextmanager
 from pathlib import Path
@@ -294,16 +295,26 @@ _HELD_SIGNALS = tuple(getattr(signal, name) for name in ("SIGINT", "SIGTERM", "S
 
 @contextmanager
 def _signals_held() -> Iterator[None]:
-    """Hold back :data:`_HELD_SIGNALS` (delivered when the block ends): the renames of a set are not cut in two, some
-    outputs in place and the others left as staged files. Nothing held where threads cannot mask signals."""
-    if not hasattr(signal, "pthread_sigmask"):
+    """Hold back :data:`_HELD_SIGNALS` while the block runs and take them after it, as they would have been: the
+    renames of a set are not cut in two, some outputs in place and the others left as staged files. Their handlers
+    are replaced by one that notes the signal (a mask would not do: a signal sent to the process reaches another
+    thread, whose handler then runs in the main one between two renames); nothing held outside the main thread."""
+    if threading.current_thread() is not threading.main_thread():
         yield
         return
-    previous = signal.pthread_sigmask(signal.SIG_BLOCK, _HELD_SIGNALS)
+    caught: list[int] = []
+    previous = {}
+    for number in _HELD_SIGNALS:
+        if signal.getsignal(number) is None:  # a handler not installed from Python: it could not be put back
+            continue
+        previous[number] = signal.signal(number, lambda taken, frame: caught.append(taken))
     try:
         yield
     finally:
-        signal.pthread_sigmask(signal.SIG_SETMASK, previous)
+        for number, handler in previous.items():
+            signal.signal(number, handler)
+        for number in dict.fromkeys(caught):
+            signal.raise_signal(number)
 
 
 #: File-name endings that say what a file holds (spherecal reads ``.urdf`` as URDF and a robot file as YAML).
