@@ -84,3 +84,19 @@ def test_the_handler_is_put_back_after_main(tmp_path, monkeypatch) -> None:
     before = signal.getsignal(signal.SIGTERM)
     assert main(["export", "panda", "--format", "yaml", "--out", "p.yaml"]) == 0
     assert signal.getsignal(signal.SIGTERM) is before
+
+
+@pytest.mark.parametrize("argv", [
+    ["export", "panda", "--format", "yaml", "--out", "/proc/spherecal-audit/x.yaml"],
+    ["simulate", "--seconds", "0.2", "--per-fixture", "5", "--out", "/proc/spherecal-audit"],
+])
+def test_a_folder_that_cannot_be_created_is_refused_naming_the_option(argv, capsys) -> None:
+    from spherecal.cli import main
+
+    if not Path("/proc").is_dir():
+        pytest.skip("needs /proc, where no folder can be created")
+    assert main(argv) == 1
+    err = capsys.readouterr().err.strip().splitlines()
+    # before: 'spherecal simulate: error: /proc/spherecal-audit: cannot create the folder: No such file or directory'
+    # (no option named; as root the folder check before the run passes, the creation at the write fails)
+    assert len(err) == 1 and "field '--out'" in err[0], err

@@ -190,7 +190,7 @@ class OutputSet:
         path = self._planned(path)
         if path in self._staged:
             return self._staged[path]
-        self._make_folder(path.parent)
+        self._make_folder(path.parent, self.planned[path])
         try:
             fd, tmp = tempfile.mkstemp(prefix=f".{_utf8_name(path.name)}.", suffix=".staged", dir=path.parent)
             os.close(fd)
@@ -276,7 +276,7 @@ class OutputSet:
     def _cannot_write(self, path: Path, error: OSError) -> OutputError:
         return OutputError(f"{path}: field '{self.planned[path]}': cannot write: {error.strerror or error}")
 
-    def _make_folder(self, folder: Path) -> None:
+    def _make_folder(self, folder: Path, option: str) -> None:
         missing = []
         for parent in [folder, *folder.parents]:
             if parent.exists():
@@ -285,7 +285,8 @@ class OutputSet:
         try:
             folder.mkdir(parents=True, exist_ok=True)
         except OSError as error:
-            raise OutputError(f"{folder}: cannot create the folder: {error.strerror or error}") from None
+            why = error.strerror or error
+            raise OutputError(f"{folder}: field '{option}': cannot create the folder: {why}") from None
         self._created.extend(reversed(missing))
 
 
