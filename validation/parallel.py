@@ -61,7 +61,7 @@ class Outcome:
     Attributes:
         results: one per task, in task order; ``None`` where the task failed.
         failures: the tasks that raised, in task order.
-        workers: worker (``"host pid N"``) -> its package versions
+        workers: worker (``"host pid N"``; the command's own process ``"host main process"``) -> its package versions
             (``correction.files.provenance.this_process``), every worker that finished a task.
     """
 

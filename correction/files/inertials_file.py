@@ -33,10 +33,11 @@ KEYS = ("inertials", "payload")
 
 
 def inertial_rows(root) -> dict[str, int]:
-    """File line of ``inertials``, each ``inertials[i]`` and ``payload`` in the document's node tree."""
+    """File line of every top-level key (``inertials``, ``payload``, and any other, for its refusal) and of each
+    ``inertials[i]`` in the document's node tree."""
     rows: dict[str, int] = {}
     for key, value in getattr(root, "value", []) if isinstance(root, yaml.MappingNode) else []:
-        if getattr(key, "value", None) in KEYS:
+        if isinstance(getattr(key, "value", None), str):
             rows[key.value] = key.start_mark.line + 1
             if key.value == "inertials" and isinstance(value, yaml.SequenceNode):
                 rows.update({f"inertials[{i}]": item.start_mark.line + 1 for i, item in enumerate(value.value)})
@@ -58,10 +59,15 @@ def _read(path: str | os.PathLike) -> tuple[dict, dict[str, int]]:
     if not isinstance(data, dict) or "inertials" not in data:
         raise InertialsError(f"{path}: expected a mapping with an 'inertials' list (see correction.files."
                              f"inertials_file)")
+    rows = inertial_rows(root)
     unknown = [key for key in data if key not in KEYS]
-    if unknown:
-        raise InertialsError(f"{path}: unknown key {unknown[0]!r} (expected {', '.join(KEYS)})")
-    return {key: data[key] for key in KEYS if key in data}, inertial_rows(root)
+    if unknown:  # a robot file given for an inertials file names its 'name' here
+        key = unknown[0]
+        where = f"row {rows[key]}, " if key in rows else ""
+        also = "; a robot file (name:, dh:, ...) is not an inertials file" if "dh" in data or "name" in data else ""
+        raise InertialsError(f"{path}: {where}field {key!r}: unknown key (an inertials file holds "
+                             f"{', '.join(KEYS)}{also})")
+    return {key: data[key] for key in KEYS if key in data}, rows
 
 
 def with_inertials_file(model: RobotModel, path: str | os.PathLike) -> RobotModel:

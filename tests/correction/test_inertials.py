@@ -113,6 +113,13 @@ def test_inertials_file_replaces_and_a_bad_one_is_one_line(tmp_path, capsys) -> 
     assert err.count("\n") == 1 and "bad.yaml" in err and not out.exists()
     assert main(["export", "panda", "--format", "yaml", "--out", str(out), "--inertials", str(good)]) == 0
     assert load_robot(out).extras["inertials"][0]["mass"] == 1.0
+    # a robot file given for an inertials file (h5's audit: 'unknown key 'name'', no row, no field)
+    robot = tmp_path / "robot.yaml"
+    assert main(["export", "panda", "--format", "yaml", "--out", str(robot)]) == 0
+    row = 1 + next(k for k, line in enumerate(robot.read_text().splitlines()) if line.startswith("name:"))
+    with pytest.raises(InertialsError, match=rf"robot.yaml: row {row}, field 'name': unknown key \(an inertials file "
+                                             r"holds inertials, payload; a robot file .* is not an inertials file\)"):
+        load_robot("panda", inertials=robot)
 
 
 def test_converting_the_convention_keeps_gravity_torques(panda, rng) -> None:
