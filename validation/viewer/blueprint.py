@@ -13,7 +13,7 @@ the right one tab per kind of result that was logged, each view named in plain w
   joint limited to +-2 pi reads 100 %);
 * **Socket spread**: per held-out socket, the predicted tool points of both models [mm], each model's spread a wire
   sphere around its mean point and named in a legend above and below them;
-* **Tables**: the printed tables, the provenance last.
+* **Tables**: the printed tables as printed (monospace, unwrapped: a wide one scrolls sideways), the provenance last.
 
 Histograms and bars are static, so they show whatever the timeline selector is on.
 """
@@ -145,7 +145,10 @@ def build_blueprint(
                                    for k, n in views.items()], name=tab))
         else:  # the results first, the provenance (behind them, it hid the table a reviewer opens the tab for) last
             order = sorted(views, key=lambda k: k == "provenance")
-            tabs.append(rrb.Tabs(*[rrb.TextDocumentView(origin=f"tables/{k}", name=views[k]) for k in order], name=tab))
+            # monospace and unwrapped, scrolled sideways: wrapped, a table wider than the panel lost its columns
+            table = rrb.archetypes.TextDocumentFormat(monospace=True, word_wrap=False)
+            tabs.append(rrb.Tabs(*[rrb.TextDocumentView(origin=f"tables/{k}", name=views[k], format_options=table)
+                                   for k in order], name=tab))
     # far enough that the whole box fits the view: at 0.9 of its diagonal alone, plan's rows of candidates on a
     # 0.5 x 0.9 m table ran out of the bottom of the picture
     aspect = WORLD_ASPECT if tabs else WORLD_ALONE_ASPECT

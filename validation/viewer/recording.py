@@ -485,7 +485,10 @@ class Recording:
 
     def text(self, name: str, text: str, title: str) -> None:
         """A printed table as a text panel (``tables/<name>``)."""
-        document = self.rr.TextDocument(f"```\n{text}\n```", media_type=self.rr.MediaType.MARKDOWN)  # monospace
+        # plain text, in a monospace font and unwrapped (the view's format: validation.viewer.blueprint): as a
+        # Markdown code block the view wrapped every line longer than its width, and a table's columns ran into the
+        # next row ('std max' of the exact tool point under 'random workspace')
+        document = self.rr.TextDocument(text, media_type=self.rr.MediaType.TEXT)
         self.stream.log(f"tables/{name}", document, static=True)
         self._note("tables", name, title)
 
