@@ -135,8 +135,9 @@ def build_blueprint(
                                                          visual_bounds=area(f"parameters/{k}"))
                                        for k, n in views.items()], name=tab))
         elif section == "coverage":
-            tabs.append(rrb.Grid(*[rrb.BarChartView(origin=f"coverage/{k}", name=n) for k, n in views.items()],
-                                 name=tab))
+            # no legend: it named the entity path ('/coverage/P2') over the tallest bars, the view's name says more
+            tabs.append(rrb.Grid(*[rrb.BarChartView(origin=f"coverage/{k}", name=n, plot_legend=hidden)
+                                   for k, n in views.items()], name=tab))
         elif section == "sockets":
             # nearer than a workspace's camera: the points, spheres and legend fill the view, and a calibrated cluster
             # of a few tenths of a mm beside several of nominal spread shows as a cluster (six sockets in a grid too)
