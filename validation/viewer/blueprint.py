@@ -72,6 +72,19 @@ def fit_distance(box, aspect: float, margin: float = 0.9) -> float:
     return float(np.max(corners @ back + across))
 
 
+def eye_distance(box, least: float = 0.05, distance: float = 1.2, aspect: float | None = None) -> float:
+    """How far [m] the default camera of :func:`camera` stands from the centre of a (2, 3) bounding box [m]."""
+    box = np.asarray(box, dtype=float)
+    size = max(float(np.linalg.norm(box[1] - box[0])), least)
+    return max(distance * size, 0.0 if aspect is None else fit_distance(box, aspect))
+
+
+def world_eye_distance(box, tabs: bool) -> float:
+    """How far [m] the main 3D view's default camera stands from the centre of its (2, 3) bounding box [m]; ``tabs``:
+    whether the result tabs stand beside the view (:func:`build_blueprint`)."""
+    return eye_distance(box, 1.0, 0.9, WORLD_ASPECT if tabs else WORLD_ALONE_ASPECT)
+
+
 def camera(box, least: float = 0.05, distance: float = 1.2, aspect: float | None = None):
     """``rerun.blueprint.EyeControls3D`` looking at a (2, 3) bounding box [m] from the front right, above
     (:data:`EYE_DIRECTION`), from ``distance`` times as far as the box is wide (at least ``least`` [m]), and with
@@ -79,8 +92,7 @@ def camera(box, least: float = 0.05, distance: float = 1.2, aspect: float | None
     import rerun.blueprint as rrb  # Rerun: heavy, only when a recording is written
 
     box = np.asarray(box, dtype=float)
-    centre, size = box.mean(axis=0), max(float(np.linalg.norm(box[1] - box[0])), least)
-    far = max(distance * size, 0.0 if aspect is None else fit_distance(box, aspect))
+    centre, far = box.mean(axis=0), eye_distance(box, least, distance, aspect)
     return rrb.EyeControls3D(position=centre + far * EYE_DIRECTION, look_target=centre, eye_up=(0, 0, 1))
 
 
@@ -152,7 +164,7 @@ def build_blueprint(
                                    for k in order], name=tab))
     # far enough that the whole box fits the view: at 0.9 of its diagonal alone, plan's rows of candidates on a
     # 0.5 x 0.9 m table ran out of the bottom of the picture
-    aspect = WORLD_ASPECT if tabs else WORLD_ALONE_ASPECT
+    aspect = WORLD_ASPECT if tabs else WORLD_ALONE_ASPECT  # as world_eye_distance: the fixtures' labels follow it
     world = rrb.Spatial3DView(origin="world", contents="$origin/**", name=title,
                               eye_controls=eye("world", 1.0, 0.9, aspect))
     if active_tab is None:

@@ -7,7 +7,7 @@ in the README, checked by the tests):
 ===================================  =============  ==========  ======================================
 path                                 archetype      timeline    what
 ===================================  =============  ==========  ======================================
-``world/fixtures``                   Ellipsoids3D   static      one labelled wire sphere per fixture
+``world/fixtures``                   Ellipsoids3D   static      a wire sphere per fixture, labels apart (Points3D)
 ``world/base_frame``                 Arrows3D       static      the base frame's x, y, z, 0.25 m each
 ``world/robot/arm``                  Capsules3D     ``time``    one capsule per link, per logged step
 ``world/robot/tool``                 Points3D       ``time``    the tool point, per logged step
@@ -51,7 +51,7 @@ from spherecal.correction.files.atomic import OutputError
 from spherecal.correction.files.provenance import comment_block
 from spherecal.correction.layout import ParamKind
 
-from .blueprint import build_blueprint, union_box, view_axes
+from .blueprint import FIELD_OF_VIEW, TABS, build_blueprint, union_box, view_axes, world_eye_distance
 from .recording_shapes import BAR_HEIGHT, capsules, colour_ramp, histogram, magnification, parameter_bars
 
 COLOURS = {
@@ -73,6 +73,10 @@ FIXTURE_RADIUS = (0.02, 0.05)
 LINK_RADIUS, TOOL_RADIUS = 0.04, 0.012
 #: Length of the base frame's arrows in the 3D view [m]: out of the base link's 40 mm capsule (0.1 m barely left it).
 AXIS_LENGTH = 0.25
+#: Height of the main 3D view in the default window [points] (:data:`validation.viewer.blueprint.WORLD_ASPECT`), and a
+#: label's row height, width per character and padding there [points] (Rerun's labels, measured on screenshots): how
+#: much room a fixture's label takes in metres at the default camera (:func:`_label_places`).
+WORLD_VIEW_HEIGHT, LABEL_ROW, LABEL_CHAR, LABEL_PAD = 920.0, 24.0, 7.5, 12.0
 
 
 def _rerun():
@@ -141,6 +145,7 @@ class Recording:
         self._fixture_places: dict[str, np.ndarray] = {}  # fixture name -> its centre in the 3D view [m]
         self._sample_note = ""  # what the fixtures' spheres stand for when samples() magnified the samples
         self._fixture_radius = FIXTURE_RADIUS[0]  # of the fixtures' wire spheres [m]
+        self._fixture_scene = None  # names, centres [m] and colours of the fixtures, logged on closing
         self._tmp = None
         if self.path is not None:
             self._tmp = self.path.with_name(f".{self.path.name}.tmp")
@@ -182,13 +187,27 @@ class Recording:
                 self._fixture_colours.setdefault(key, colour)
                 self._fixture_places.setdefault(key, place)
         self.extend_bounds("world", positions)
+        self._fixture_scene = (list(names), positions, colours)  # logged on closing, its labels apart (_log_fixtures)
+
+    def _log_fixtures(self) -> None:
+        """The fixtures' wire spheres (:meth:`fixtures`) and their labels, one row of ``world/fixtures``: the labels
+        are points of their own (Rerun puts a point's label under it), each under its fixture's centre unless it
+        would cover another's label at the default camera, then moved up on the screen by a label's height until
+        it does not (:func:`_label_places`). Centred on their spheres, the labels of a plate's sockets 50 mm apart
+        were drawn one over the other ('back_left_h0' over 'back_left_h1' on MUKCa panda_2_clean)."""
+        if self._fixture_scene is None:
+            return
+        names, positions, colours = self._fixture_scene
+        tabs = any(self.contents.get(section) for section in TABS)
+        places = _label_places(positions, names, world_eye_distance(self.bounds["world"], tabs))
+        rr = self.rr
         self.stream.log(
             "world/fixtures",
-            self.rr.Ellipsoids3D(
+            rr.Ellipsoids3D(
                 centers=positions, half_sizes=np.full((len(positions), 3), self._fixture_radius), colors=colours,
-                labels=list(names), show_labels=True, fill_mode="majorwireframe",
-                line_radii=self.rr.Radius.ui_points(1.0),
+                labels=names, show_labels=False, fill_mode="majorwireframe", line_radii=rr.Radius.ui_points(1.0),
             ),
+            rr.Points3D(places, radii=rr.Radius.ui_points(0.5), colors=colours, labels=names, show_labels=True),
             static=True,
         )
 
@@ -503,6 +522,7 @@ class Recording:
         try:
             self._colour_scales()
             self._base_frame()
+            self._log_fixtures()  # after everything that frames the view: its labels follow the default camera
             # what the fixtures' spheres stand for when samples() magnified the samples, in the main view's title: in
             # the first fixture's label it covered the next socket's label, a plate's sockets centimetres apart
             title = f"{self.title}; {self._sample_note}" if self._sample_note else self.title
@@ -586,6 +606,30 @@ def _legend_places(points: np.ndarray, lines: tuple[int, int] = (1, 1)) -> tuple
                        middle + (np.min(points @ up) - middle @ up - 0.05 * size) * up])
     room = places[1] - 0.2 * lines[1] * size * up + np.outer([-0.6, 0.6], size * right)
     return places, room
+
+
+def _label_places(positions: np.ndarray, names: list[str], distance: float) -> np.ndarray:
+    """(F, 3) places [m] of the points that carry fixtures' labels (Rerun draws a label centred under its point) at
+    fixture centres (F, 3) [m], seen by the main view's default camera from ``distance`` [m]
+    (:func:`validation.viewer.blueprint.view_axes`): from the lowest on the screen up, each at its fixture's centre,
+    or moved up the screen to one label's height above the highest label it would cover (the size of a label in
+    metres from :data:`LABEL_ROW`, :data:`LABEL_CHAR` and :data:`LABEL_PAD` at that distance)."""
+    positions = np.asarray(positions, dtype=float).reshape(-1, 3)
+    right, up, _ = view_axes()
+    metre = WORLD_VIEW_HEIGHT / (2 * distance * np.tan(FIELD_OF_VIEW / 2))  # points per metre at the look target
+    row = LABEL_ROW / metre
+    widths = np.array([(LABEL_CHAR * len(name) + LABEL_PAD) / metre for name in names])
+    across, height = positions @ right, positions @ up
+    levels, placed = height.copy(), []
+    for i in np.argsort(height, kind="stable"):
+        while True:
+            covered = [levels[j] for j in placed if abs(across[i] - across[j]) < 0.5 * (widths[i] + widths[j])
+                       and abs(levels[i] - levels[j]) < 0.999 * row]
+            if not covered:
+                break
+            levels[i] = max(covered) + row
+        placed.append(i)
+    return positions + (levels - height)[:, None] * up
 
 
 def _colour(key: str) -> tuple[int, int, int]:
