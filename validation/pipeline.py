@@ -6,6 +6,7 @@ measured by the mocap), then compare; the report prints the two error columns an
 
 from __future__ import annotations
 
+import re
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -155,7 +156,10 @@ def record_validation(recording, report: ValidationReport, models: dict[str, Rob
     against = "the true tool point" if comparison.errors_exact else "the mocap"
     top = max(float(np.quantile(e, 0.99)) for e in errors.values()) * 1e3  # one colour scale for all models
     for key, model in models.items():
-        recording.workspace_errors(key, tool_point(model, first.q), errors[key], f"{against} ({first.name})", top)
+        # the set's name less its count ('recorded (5000)'): the heading counts the points ('the mocap (recorded
+        # (5000)), 5000 points' read double, h6's review)
+        name = re.sub(r" \(\d+\)$", "", first.name)
+        recording.workspace_errors(key, tool_point(model, first.q), errors[key], f"{against} ({name})", top)
     text = report.format()
     if report.deviations is not None:
         text += "\n\nparameter deviations from the truth:\n" + report.deviations.format()

@@ -54,10 +54,16 @@ def test_simulated_validation_prints_both_columns_and_writes_report(files, tmp_p
     assert len(report["provenance"]["inputs"]["truth"]["sha256"]) == 64
 
 
-def test_recorded_mocap_validation(files, capsys) -> None:
-    assert main(_args(files, "--mocap", str(files["mocap"]))) == 0
+def test_recorded_mocap_validation(files, capsys, tmp_path) -> None:
+    assert main(_args(files, "--mocap", str(files["mocap"]), "--rrd", str(tmp_path / "v.rrd"))) == 0
     text = capsys.readouterr().out
     assert "recorded (50)" in text
+    # the Errors views' heading: what the error is a distance to, then the count once (h6's review: 'the mocap
+    # (recorded (5000)), 5000 points')
+    from tests.validation.test_validation import _scene
+
+    heading = _scene(tmp_path / "v.rrd", "errors/calibrated/heading")["errors/calibrated/heading"]["labels"][0]
+    assert heading.replace("\n", " ") == "calibrated: distance [mm] to the mocap (recorded), 50 points"
     # the mocap points are the truth's, shifted by 1 m: the calibrated model is micrometres off
     calibrated = next(line for line in text.splitlines() if "calibrated" in line)
     assert float(calibrated.split("|")[1].split()[0]) < 0.01
