@@ -195,6 +195,11 @@ def test_cli_plan_and_too_few_reachable(tmp_path, capsys):
     rows = read_entity_rows(rrd)
     assert rows.get("world/candidates") == 1 and rows.get("world/fixtures") == 1 and rows.get("tables/plan") == 1
     assert "The plan: candidates ranked by predicted error (mm)" in read_view_names(rrd)
+    # the plan as printed first, its provenance below it (on top it pushed the ranking 15 lines down: h6's review)
+    from tests.validation.test_recording_review_tables import _document
+
+    table = _document(rrd, "tables/plan")["text"]
+    assert table.startswith(out.strip().splitlines()[0]) and table.split("\n\n")[-1].startswith("command: ")
     assert main(["plan", "--candidates", str(path), "--fixture-count", "2"]) == 1
     assert "no plan" in capsys.readouterr().out
 

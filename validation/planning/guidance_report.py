@@ -134,7 +134,8 @@ def write_guidance_recording(path: str, guidance, provenance: str = "") -> str:
                 + [""] * (len(at) - 1)),  # once: the plate's sockets are centimetres apart, their labels stacked
                 static=True)
         text = format_guidance(guidance)
-        recording.text("plan", f"{provenance}\n\n{text}" if provenance else text,
+        # the ranking first, the provenance below it (on top, the ranking began 15 lines down: h6's review)
+        recording.text("plan", f"{text}\n\n{provenance}" if provenance else text,
                        "What to record next: candidates by predicted gain (mm)")
     except BaseException:
         recording.abort()

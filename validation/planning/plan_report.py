@@ -137,7 +137,8 @@ def write_recording(path: str, result, provenance: str = "") -> str:
             "colour_scale", positions, colour_ramp(np.linspace(0.0, 1.0, SCALE_STEPS)),
             scale_labels(low, high, lambda v: f"{v:.3f} mm"),
             f"colour: predicted mean error\nof each candidate ALONE{grey}")
-        text = f"{provenance}\n\n{format_plan(result)}" if provenance else format_plan(result)
+        # the ranking first, the provenance below it (on top, the ranking began 15 lines down: h6's review)
+        text = f"{format_plan(result)}\n\n{provenance}" if provenance else format_plan(result)
         recording.text("plan", text, "The plan: candidates ranked by predicted error (mm)")
     except BaseException:
         recording.abort()
