@@ -212,7 +212,7 @@ def test_data_that_cannot_beat_nominal_is_refused(arm) -> None:
     dataset, _ = make_dataset(true, {"P1": PANDA_FIXTURES["P1"]}, 20, np.random.default_rng(3), noise=1e-2)
     forced = calibrate(panda, dataset, noise=1e-2, force=True)
     assert _error(forced.model, true) > _error(panda, true)
-    refusal = r"cannot be expected to beat the nominal model: .*predicted mean error"
+    refusal = r"cannot be expected to beat the nominal model by 2x.*is needed: predicted mean error"
     with pytest.raises(InconsistentDataError, match=refusal):
         calibrate(panda, dataset, noise=1e-2)
 
