@@ -128,10 +128,14 @@ class SocketReport:
         """The printed tables (mm)."""
         head = " ".join(f"{m + ' mean':>16} {m + ' max':>15}" for m in self.models)
         predicted = any(f.predicted is not None for f in self.fixtures)
+        # columns under their heads whatever the names' length (a user trial: MUKCa's 'gen3lite_raised_frontright_h0'
+        # and 'iiwa14_almostcenter_h0 (fit)' pushed their rows' figures out from under the heads)
+        label = {f.name: f.name + ("" if f.held_out else " (fit)") for f in self.fixtures}
+        width = max([22, *(len(v) for v in label.values())])
         lines = [
             f"tool-point spread per socket [mm] (no mocap: distance of each predicted point from the fixture's mean), "
             f"{self.source}",
-            f"{'fixture':<22} {'samples':>7} {head}" + (f" {'predicted mean':>15}" if predicted else ""),
+            f"{'fixture':<{width}} {'samples':>7} {head}" + (f" {'predicted mean':>15}" if predicted else ""),
         ]
         for f in self.fixtures:
             if f.measurable:
@@ -141,18 +145,19 @@ class SocketReport:
                         f"(at least {MIN_DISTINCT} needed)"
             if predicted and f.measurable:
                 cells += f" {f.predicted * 1e3:15.3f}" if f.held_out and f.predicted is not None else f" {'-':>15}"
-            lines.append(f"{f.name + ('' if f.held_out else ' (fit)'):<22} {f.count:>7} {cells}")
+            lines.append(f"{label[f.name]:<{width}} {f.count:>7} {cells}")
         if self.distances:
             head = " ".join(f"{m + ' error':>16}" for m in self.models)
+            names = [f"{d.a} - {d.b}" + ("" if d.held_out else " (fit)") for d in self.distances]
+            span = max([40, *(len(n) for n in names)])
             lines += [
                 "",
                 "known distances [mm] (distance between the fixtures' mean points minus the known one)",
-                f"{'fixtures':<40} {'known':>8} {head}",
+                f"{'fixtures':<{span}} {'known':>8} {head}",
             ]
-            for d in self.distances:
+            for d, name in zip(self.distances, names, strict=True):
                 cells = " ".join(f"{d.error(m) * 1e3:16.3f}" for m in self.models)
-                name = f"{d.a} - {d.b}" + ("" if d.held_out else " (fit)")
-                lines.append(f"{name:<40} {d.known * 1e3:8.3f} {cells}")
+                lines.append(f"{name:<{span}} {d.known * 1e3:8.3f} {cells}")
         held = sum(f.held_out and f.measurable for f in self.fixtures)
         fixtures = f"{held} fixture{'s' * (held != 1)}"
         lines.append("")

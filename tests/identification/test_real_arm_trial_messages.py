@@ -62,3 +62,20 @@ def test_a_one_socket_refusal_at_the_noise_shown_says_which_bar_it_missed(tmp_pa
         "error ")
     assert "by 2x" not in shown and "samples.csv" not in shown
     assert any(line.startswith("  over the whole workspace (500 random configurations") for line in detail)
+
+
+def test_validate_keeps_its_columns_under_their_heads_for_long_fixture_names(tmp_path, capsys) -> None:
+    # MUKCa's dinova_2 names a socket 'gen3lite_raised_frontright_h0' (29 characters): its figures stood 7 columns
+    # right of the heads
+    folder = _imported(tmp_path, "dinova_2")
+    capsys.readouterr()
+    assert main(["validate", "--nominal", str(KINOVA), "--calibrated", str(KINOVA), "--samples",
+                 str(folder / "samples.csv"), "--fixtures", str(folder / "fixtures.yaml")]) == 0
+    lines = capsys.readouterr().out.splitlines()
+    head = next(line for line in lines if line.startswith("fixture "))
+    for line in lines[lines.index(head) + 1:]:
+        if not line.strip():
+            break
+        # each figure ends where its head ends
+        assert line.index(" ", len(line.split()[0])) <= head.index("samples") + len("samples")
+        assert len(line) == len(head), (head, line)
