@@ -246,8 +246,10 @@ class SelfCheck:
         head = (f"consistent{', with warnings' if self.warnings else ''}" if self.consistent
                 else f"INCONSISTENT ({len(self.failed)} failed)")  # warnings: the lines below that say 'warning'
         lines = [f"self-check: {head}"]
-        lines += [f"  {f.message}" for f in self.findings if f.check in ("residual level", "prediction") and f.passed]
-        lines += [f"  {trend_text(f, self.consistent)}" for f in self.findings if f.figures.get("trend")]
+        lines += [line for f in self.findings if f.check in ("residual level", "prediction") and f.passed
+                  for line in _clauses(f.message)]
+        lines += [line for f in self.findings if f.figures.get("trend")
+                  for line in _clauses(trend_text(f, self.consistent))]
         worst = _worst_group(self.findings)
         if worst is not None:
             figures = worst.figures
@@ -263,6 +265,16 @@ class SelfCheck:
         lines += [f"  unchecked: {f.message}" for f in self.findings if f.figures.get("unchecked")]
         lines += [f"  FAILED: {f.message}" for f in self.failed]
         return lines
+
+
+def _clauses(message: str) -> list[str]:
+    """A finding's message as summary lines: indented, and over :data:`HEADLINE` characters its clauses (split at
+    every '; ' outside parentheses) one a line, the later ones indented once more. A h8 trial: a written Gen3 lite's
+    prediction was one line of about 1,000 characters, its 'warning: over the whole workspace ...' in the middle."""
+    if len(message) <= HEADLINE:
+        return [f"  {message}"]
+    first, *rest = _split_outside_parentheses(message, "; ")
+    return [f"  {first}", *(f"    {clause}" for clause in rest)]
 
 
 def trend_text(finding: Finding, kept: bool, only: bool = False) -> str:

@@ -13,7 +13,7 @@ from spherecal.correction import load_robot, perturb
 from spherecal.identification.build import build_problem
 from spherecal.identification.calibrate import check_plausible
 from spherecal.identification.problem import ImplausibleCalibrationError
-from spherecal.identification.selfcheck_result import HEADLINE, InconsistentDataError, refusal_lines
+from spherecal.identification.selfcheck_result import HEADLINE, Finding, InconsistentDataError, SelfCheck, refusal_lines
 from spherecal.identification.synthetic import make_dataset
 from spherecal.identification.workflow import calibrate_files
 from tests.refusal import refused
@@ -78,3 +78,21 @@ def test_an_implausible_fit_is_refused_with_its_reason_first_and_its_remedy_belo
     assert first.startswith("refused: samples: all rows, field 'alpha3': the fit moves the tool point "), first
     assert first.endswith("changing alpha3 by 150 deg"), first
     assert "; ".join(details) == message and details[-1].startswith("record more self-motion")
+
+
+def test_a_written_calibrations_long_prediction_gives_each_clause_its_line() -> None:
+    """h8's trial: a written Gen3 lite's prediction was one line of about 1,000 characters, its 'warning: farther than
+    300 mm ...' in the middle. The summary gives a long finding's clauses one a line, every word kept."""
+    prediction = ("predicted mean error 1.5 mm at 1.14 mm noise over 414 configurations within 300 mm of the recorded "
+                  "tool points (after registration; the recorded postures carried there), against 4.26 mm expected of "
+                  "the nominal model there; over the whole workspace 3.47 mm against 4.83 mm; warning: farther than "
+                  "300 mm from the recorded tool points the calibration is not expected to beat nominal by 2x")
+    check = SelfCheck((Finding("residual level", True, "residual noise 0.3 mm per axis"),
+                       Finding("prediction", True, prediction)), 3e-4, 3e-4)
+    lines = check.lines()
+    assert lines[:2] == ["self-check: consistent", "  residual noise 0.3 mm per axis"]
+    body = lines[2:]
+    assert body[0].startswith("  predicted mean error 1.5 mm") and all(line.startswith("    ") for line in body[1:])
+    assert body[-1] == ("    warning: farther than 300 mm from the recorded tool points the calibration is not "
+                        "expected to beat nominal by 2x")
+    assert "; ".join(line.strip() for line in body) == prediction
