@@ -34,6 +34,7 @@ from .problem import (
 )
 from .pruning import generic_excitation, prune
 from .selfcheck import MAX_SOCKET_NOISE, InconsistentDataError, SelfCheck, self_check
+from .selfcheck_result import leave_out_advice
 from .solvers import solve_lm, solve_pso
 
 METHODS: tuple[str, ...] = ("lm", "pso", "pso+lm")
@@ -477,7 +478,7 @@ def _far_presses(problem: CalibrationProblem, x: np.ndarray) -> tuple[str, tuple
     if crowded is not None:
         name, held, total = crowded
         return (f"{head}; {'all' if held == far.size else held} of them are at fixture {name}, {held} of its {total} "
-                f"samples: {_CROWDED_CAUSE}; leave it out (calibrate --exclude-fixture {name}) or record it again",
+                f"samples: {_CROWDED_CAUSE}; {leave_out_advice(name)}",
                 (name,))
     return (f"{head}: remove them if the ball was not seated in its socket, or calibrate --loss huber to discount "
             "them", ())

@@ -293,8 +293,13 @@ def trend_text(finding: Finding, kept: bool, only: bool = False) -> str:
     if only:  # a review: a one-socket refusal advised leaving out the only socket
         return (f"{finding.message}: the socket or the ball moved while it was recorded; record it again (it is the "
                 "only fixture)")
-    return (f"{finding.message}: the socket or the ball moved while it was recorded; leave it out "
-            f"(calibrate --exclude-fixture {name}) or record it again")
+    return f"{finding.message}: the socket or the ball moved while it was recorded; {leave_out_advice(name)}"
+
+
+def leave_out_advice(name: str) -> str:
+    """The advice of a refusal that names fixture ``name``: ``leave it out (calibrate --exclude-fixture NAME) or record
+    it again`` (:func:`.workflow.run_workflow` tries it, and keeps only 'record it again' when it does not help)."""
+    return f"leave it out (calibrate --exclude-fixture {name}) or record it again"
 
 
 def _fixture_of(trend: Finding) -> str:

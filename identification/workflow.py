@@ -37,7 +37,7 @@ from .calibrate import MAX_CHANGE, CalibrationResult, calibrate
 from .misplaced import misplaced
 from .problem import NOISE, PRIOR, ImplausibleCalibrationError
 from .selection import ModelSelection, select_model, start_for
-from .selfcheck_result import InconsistentDataError
+from .selfcheck_result import InconsistentDataError, leave_out_advice
 from .tool_fit import recentred_tool
 from .training import exclude_fixtures, training_record
 
@@ -269,7 +269,10 @@ def _remedy_tried(refused: InconsistentDataError, nominal: RobotModel, dataset: 
         return InconsistentDataError(f"{refused}; without {them} the rest is consistent and is written{warned} "
                                      f"(calibrate {flags(left_out)})", left_out)
     them = _listed(names)
-    return InconsistentDataError(f"{refused}; leaving {them} out does not help: without {them} the rest is refused too "
+    said = str(refused)
+    for name in names:  # the advice tried: what is left of it (h8's trial read 'leave it out', then 'does not help')
+        said = said.replace(leave_out_advice(name), "record it again")
+    return InconsistentDataError(f"{said}; leaving {them} out does not help: without {them} the rest is refused too "
                                  f"(calibrate {flags(names)} says why)", names)
 
 
