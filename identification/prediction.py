@@ -287,7 +287,7 @@ def deviation_root(
         cov = noise**2 * (inverse @ middle @ inverse)[:fp, :fp]
         cov = 0.5 * (cov + cov.T)
     free = pruned.free
-    std = np.sqrt(np.diag(cov))
+    std = np.sqrt(np.maximum(np.diag(cov), 0.0))  # a variance a little below 0 by rounding (a noise-free fit) is 0
     columns = [np.zeros((model.n_params, fp))]
     columns[0][free] = symmetric_root(cov)
     # biases, one column per standard-normal source
