@@ -415,6 +415,10 @@ def test_campaign_and_plan_keep_a_users_file_and_replace_their_own(tmp_path, cap
     old = tmp_path / "design.md"  # written before the program's path was shortened to its name
     old.write_text("<!--\ncommand: /work/venv/bin/spherecal plan --analysis design.md\ncreated: 2026-11-22\n-->\n")
     assert written_by(old, "spherecal plan") and not written_by(old, "spherecal plant")
+    # a run without arguments ('command: spherecal campaign', nothing after it): h10 could not run it again
+    bare = tmp_path / "table2.csv"
+    bare.write_text("# command: spherecal campaign\n# created: 2026-11-29\nset,n\n")
+    assert written_by(bare, "spherecal campaign") and not written_by(bare, "spherecal campaign2")
     report.write_text('{"a": 1}')
     refused(["plan", "--samples", tmp_path / "c" / "table2.csv", "--out", report], tmp_path, capsys,
             "report.json: field '--out': exists and was not written by an earlier `spherecal plan`")

@@ -85,7 +85,9 @@ def written_by(path: str | os.PathLike, command: str) -> bool:
     except OSError:
         return False
     lines = [line.lstrip("#<!- ") for line in head]
-    return any(line.startswith("command: ") and pattern.match(line[len("command: "):]) for line in lines)
+    # the line as the JSON's command, with a space after it: a run without arguments ('command: spherecal campaign')
+    # did not match, and could not be run again into its own folder (h10's docs walk-through)
+    return any(line.startswith("command: ") and pattern.match(f"{line[len('command: '):].rstrip()} ") for line in lines)
 
 
 def refuse_unless_own(files: list[str | os.PathLike], option: str, command: str,
