@@ -7,6 +7,7 @@ the output folder and rename it into place.
 
 from __future__ import annotations
 
+import difflib
 import os
 import warnings
 from dataclasses import dataclass, field, fields, replace
@@ -71,6 +72,8 @@ class ImportOptions:
         segmentation: thresholds of the automatic split.
         spans: fixtures labelled by hand in time instead, ``(name, start, end)`` [s] since the recording's first sample
             (``--fixture NAME=START:END``; :func:`.segment.labelled_spans`): samples in no span are dropped.
+        known_distances: measured centre distances ``(a, b, metres)`` between fixtures of the import
+            (``--known-distance``), added to those the recording gives (a MUKCa placement's sockets).
         max_per_fixture: samples kept per fixture (random, seeded), None for all.
         dedup_tol: duplicate tolerance [rad].
         seed: seed of the subsampling.
@@ -81,6 +84,7 @@ class ImportOptions:
     rate: float | None = None
     segmentation: SegmentSettings = field(default_factory=SegmentSettings)
     spans: tuple[tuple[str, float, float], ...] = ()
+    known_distances: tuple[tuple[str, str, float], ...] = ()
     max_per_fixture: int | None = 500
     dedup_tol: float = 1e-4
     seed: int = 0
@@ -276,6 +280,7 @@ def import_recording(
     missing = [name for name in spec.names if name not in kept.fixture_names]
     if missing:
         raise DatasetError(f"{source}: field 'fixture': {missing[0]!r} has no samples left")
+    spec = _with_known_distances(spec, options.known_distances)
     block = dict(extras or {})
     if recorded is not None:
         block["provenance"] = provenance(options.seed, recorded | timed)
@@ -293,6 +298,29 @@ def import_recording(
     )
 
 
+def _with_known_distances(spec: FixtureSpec, given: tuple[tuple[str, str, float], ...]) -> FixtureSpec:
+    """``spec`` with the measured distances ``given`` (``--known-distance``; a ROS user's trial had to edit
+    fixtures.yaml after the import to give one).
+
+    Raises:
+        DatasetError: a name that is not a fixture of the import (naming them), or a pair given twice or already known.
+    """
+    distances = list(spec.distances)
+    for a, b, value in given:
+        for name in (a, b):
+            if name not in spec.names:
+                near = difflib.get_close_matches(name, spec.names, n=1)
+                hint = f"did you mean {near[0]!r}? " if near else ""
+                raise DatasetError(f"field '--known-distance': {a} {b} {value:g}: no fixture {name!r} in this import "
+                                   f"({hint}its fixtures: {', '.join(spec.names)})")
+        known = next(((x, y, v) for x, y, v in distances if {x, y} == {a, b}), None)
+        if known is not None:
+            raise DatasetError(f"field '--known-distance': {a} {b} {value:g}: the distance {known[0]}-{known[1]} is "
+                               f"known already ({known[2]:g} m)")
+        distances.append((a, b, float(value)))
+    return FixtureSpec(spec.names, spec.positions, distances, spec.extras) if given else spec
+
+
 def _scale_note(fmt: str, spec: FixtureSpec, segmented: bool) -> tuple[str, ...]:
     """One line when nothing imported fixes the absolute scale: one fixture, or several and no known distance
     (nor two known positions; one alone fixes nothing): calibrate then takes the scale from the
@@ -305,14 +333,14 @@ def _scale_note(fmt: str, spec: FixtureSpec, segmented: bool) -> tuple[str, ...]
         how = ("record the plate's other socket as well (hole_0.csv and hole_1.csv in one placement folder, "
                "--distance apart) and import again")
     elif len(names) > 1:
-        how = (f"measure two sockets' centre distance and give it in fixtures.yaml (distances: [[{names[0]}, "
-               f"{names[1]}, metres]])")
+        how = (f"measure two sockets' centre distance and import again with --known-distance {names[0]} "
+               f"{names[1]} METRES (or give it in fixtures.yaml: distances: [[{names[0]}, {names[1]}, metres]])")
     elif segmented:
-        how = (f"carry the ball to a second socket in the recording (at least --min-separation away), import it again "
-               f"and give the two sockets' distance in fixtures.yaml (distances: [[{names[0]}, S2, metres]])")
+        how = ("carry the ball to a second socket in the recording (at least --min-separation away) and import it "
+               f"again with --known-distance {names[0]} S2 METRES, the two sockets' distance")
     else:
-        how = ("record a second socket under a fixture label of its own and give the two sockets' distance in "
-               f"fixtures.yaml (distances: [[{names[0]}, OTHER, metres]])")
+        how = ("record a second socket under a fixture label of its own and import again with --known-distance "
+               f"{names[0]} OTHER METRES, the two sockets' distance")
     if len(names) == 1:
         return (f"one fixture ({names[0]}): calibrate can fit the arm's errors about this one socket, for use near "
                 "the recorded postures, but not its absolute scale: one socket gives no known distance (and one "

@@ -48,6 +48,12 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         "first sample [s] (the clock of the import's table) as fixture NAME, instead of segmenting; repeat it for each "
         "socket (a NAME given twice is one socket visited twice); samples in no span are dropped",
     )
+    parser.add_argument(
+        "--known-distance", action="append", nargs=3, default=None, metavar=("A", "B", "METRES"),
+        help="the measured distance between the centres of fixtures A and B [m], written into fixtures.yaml (it gives "
+        "calibrate the arm's absolute scale); the names as this import gives them: --fixture's, a CSV's fixture "
+        "column's, S1, S2, ... in recording order when segmented, MUKCa's PLACEMENT_h0/_h1; repeat it for each pair",
+    )
     group = parser.add_argument_group(
         "segmentation (bag, csv without a 'fixture' column): a fixture is where the NOMINAL tool point stays "
         "still; defaults measured on MUKCa's real Panda (nominal spread in a socket: 8 mm mean, 19 mm max)"
@@ -87,6 +93,22 @@ def _span(text: str) -> tuple[str, float, float]:
     return name, values[0], values[1]
 
 
+def _known_distance(a: str, b: str, metres: str) -> tuple[str, str, float]:
+    """``--known-distance A B METRES``: two fixture names and their centres' distance [m] (0 < METRES <= 10)."""
+    import math
+
+    try:
+        value = float(metres)
+    except ValueError:
+        value = math.nan
+    if not (math.isfinite(value) and 0.0 < value <= 10.0):
+        raise fail(f"field '--known-distance': {a} {b} {metres}: expected a distance in metres, above 0 and at most "
+                   "10 (A B METRES)")
+    if a == b:
+        raise fail(f"field '--known-distance': {a} {b} {metres}: a fixture's distance to itself")
+    return a, b, value
+
+
 #: Segmentation options given in millimetres (:class:`SegmentSettings` holds metres).
 MILLIMETRES = ("still_radius", "max_spread", "min_separation")
 
@@ -108,6 +130,7 @@ def run(args: argparse.Namespace) -> int:
     segmentation = {k: v * 1e-3 if k in MILLIMETRES else v for k, v in given.pop("segmentation", {}).items()}
     options = ImportOptions(
         **given,
+        known_distances=tuple(_known_distance(*triple) for triple in args.known_distance or ()),
         segmentation=SegmentSettings(**segmentation),
         max_per_fixture=args.max_per_fixture,
         dedup_tol=DEDUP_TOL if args.dedup_deg is None else float(np.deg2rad(args.dedup_deg)),

@@ -443,7 +443,7 @@ def test_a_stream_with_one_socket_says_how_to_add_a_second(recording, tmp_path, 
     lines = [line for line in capsys.readouterr().out.splitlines() if line.startswith("one fixture")]
     assert len(lines) == 1 and lines[0].startswith("one fixture (S1): "), lines
     assert "carry the ball to a second socket in the recording" in lines[0]
-    assert "distances: [[S1, S2, metres]]" in lines[0]
+    assert "import it again with --known-distance S1 S2 METRES" in lines[0]
 
 
 @pytest.fixture(scope="module")
