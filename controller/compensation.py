@@ -47,7 +47,7 @@ from spherecal.correction.tool import (
     tools_apart,
 )
 
-from .ik import UnreachableError, ik
+from .ik import UnreachableError, check_target, ik
 
 #: Default position [m] and orientation [rad] tolerance of the fixed point.
 POSITION_TOL = 1e-9
@@ -265,14 +265,7 @@ def _target(target: np.ndarray, orientation: np.ndarray | None,
             model: RobotModel) -> tuple[np.ndarray, np.ndarray | None]:
     """The target [m] and orientation checked; a target farther from the base than the arm's links and tool reach
     at all (a target in millimetres: a user trial got 'misses by 634888 mm') is refused, naming the distance."""
-    target = np.asarray(target, dtype=float)
-    if target.shape != (3,) or not np.all(np.isfinite(target)):
-        raise SpherecalError(f"target: expected 3 finite coordinates [m], got {target.tolist()!r}")
-    away = float(np.linalg.norm(target - model.base_transform[:3, 3]))
-    if away > 2.0 * model.reach:  # beyond any posture by twice: not a target of this arm
-        raise UnreachableError(f"target {np.round(target, 4).tolist()} m is {away:.4g} m from the base of "
-                               f"{model.name!r}, whose links and tool reach {model.reach:.3g} m at most (millimetres? "
-                               "targets are in metres)")
+    target = check_target(model, target)
     if orientation is None:
         return target, None
     orientation = np.asarray(orientation, dtype=float)

@@ -185,6 +185,26 @@ def _finite(value, shape: tuple[int, ...], field: str, expected: str) -> np.ndar
     return array
 
 
+def check_target(model: RobotModel, target: np.ndarray) -> np.ndarray:
+    """``target`` (3,) [m] as an array, refused when it is not 3 finite coordinates or lies farther from the base than
+    twice the arm's links and tool reach at all (:attr:`correction.RobotModel.reach`): a target in millimetres (a
+    user trial: 'misses by 634888 mm'; a controls trial: the QP controller drove toward one at the velocity limit).
+
+    Raises:
+        SpherecalError: not 3 finite coordinates.
+        UnreachableError: beyond twice the reach, naming the distance.
+    """
+    target = np.asarray(target, dtype=float)
+    if target.shape != (3,) or not np.all(np.isfinite(target)):
+        raise SpherecalError(f"target: expected 3 finite coordinates [m], got {target.tolist()!r}")
+    away = float(np.linalg.norm(target - model.base_transform[:3, 3]))
+    if away > 2.0 * model.reach:  # beyond any posture by twice: not a target of this arm
+        raise UnreachableError(f"target {np.round(target, 4).tolist()} m is {away:.4g} m from the base of "
+                               f"{model.name!r}, whose links and tool reach {model.reach:.3g} m at most (millimetres? "
+                               "targets are in metres)")
+    return target
+
+
 def ik(
     model: RobotModel,
     target: np.ndarray,

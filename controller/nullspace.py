@@ -12,6 +12,7 @@ import numpy as np
 
 from spherecal.correction import RobotModel, geometric_part, tool_point
 
+from .ik import check_target
 from .plant import TIMESTEP, build_plant
 from .qp_ik import (
     LIMIT_GAIN,
@@ -79,6 +80,7 @@ class NullSpaceController:
         self.limit_gain = limit_gain
         self.dt = dt
         self.closed_form = closed_form
+        self._checked_target = b""  # the last target checked (check_target), as bytes
         self.report = StepReport()
         self.last_bounds: tuple[np.ndarray, np.ndarray] | None = None  # (lb, ub) of the last step [rad/s]
         # its kinematics are the rigid chain's at the measured angles, as a robot controller's are: an elastic model's
@@ -116,6 +118,11 @@ class NullSpaceController:
         point, jac = self.kinematics(q)
         if target is None:
             return jac, self._zero3
+        key = np.asarray(target, dtype=float).tobytes()
+        if key != self._checked_target:  # once per target, not every period: one in millimetres was driven toward
+            # at the velocity limit (a controls trial)
+            check_target(self.model, target)
+            self._checked_target = key
         if self._joint_side:
             point = tool_point(self.model, q)
         return jac, damped_task_velocity(jac, gain * (np.asarray(target) - point))

@@ -8,6 +8,7 @@ import warnings
 import numpy as np
 import pytest
 
+from spherecal.controller.ik import UnreachableError
 from spherecal.controller.nullspace import NullSpaceController
 from spherecal.controller.qp_ik import MAX_VELOCITY, ControllerFallbackWarning, task_share, velocity_bounds
 from spherecal.correction import load_robot, tool_point
@@ -129,3 +130,16 @@ def test_a_far_target_is_approached_slower_not_through_the_fallback(panda) -> No
     assert task_share(jac, 1e-6 * v, lb, ub) == 1.0
     lb[2] = 0.5
     assert task_share(jac, v, lb, ub) == 0.0
+
+
+def test_a_target_in_millimetres_is_refused_by_the_qp_controller(panda) -> None:
+    """h2's controls trial: `NullSpaceController.step` took a target in millimetres and drove toward it at the velocity
+    limit. It is refused as compensate refuses one (checked once per target, not every period)."""
+    controller = NullSpaceController(panda)
+    q = np.array([0.0, -0.3, 0.0, -2.2, 0.0, 2.0, 0.8])
+    in_mm = tool_point(panda, q) * 1e3
+    with pytest.raises(UnreachableError, match=r"from the base of 'franka_panda'.*\(millimetres\? targets are in "):
+        controller.step(q, np.zeros(7), in_mm)
+    with pytest.raises(UnreachableError):  # and again: a refused target is not remembered as checked
+        controller.step(q, np.zeros(7), in_mm)
+    assert np.all(np.isfinite(controller.step(q, np.zeros(7), in_mm * 1e-3)))
