@@ -194,9 +194,7 @@ def check_target(model: RobotModel, target: np.ndarray) -> np.ndarray:
         SpherecalError: not 3 finite coordinates.
         UnreachableError: beyond twice the reach, naming the distance.
     """
-    target = np.asarray(target, dtype=float)
-    if target.shape != (3,) or not np.all(np.isfinite(target)):
-        raise SpherecalError(f"target: expected 3 finite coordinates [m], got {target.tolist()!r}")
+    target = _finite(target, (3,), "target", "3 finite coordinates [m]")
     away = float(np.linalg.norm(target - model.base_transform[:3, 3]))
     if away > 2.0 * model.reach:  # beyond any posture by twice: not a target of this arm
         raise UnreachableError(f"target {np.round(target, 4).tolist()} m is {away:.4g} m from the base of "

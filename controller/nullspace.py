@@ -29,6 +29,7 @@ from .qp_ik import (
     task_share,
     velocity_bounds,
 )
+from .rigid_fit import joint_side_terms
 
 #: Gain of the primary task ``v = Kp (p_B - p)`` when a target is given [1/s].
 POSITION_GAIN = 20.0
@@ -85,13 +86,10 @@ class NullSpaceController:
         self.last_bounds: tuple[np.ndarray, np.ndarray] | None = None  # (lb, ub) of the last step [rad/s]
         # its kinematics are the rigid chain's at the measured angles, as a robot controller's are: an elastic model's
         # plant has a second hinge per joint (motor and link), which the controller does not command
-        rigid = geometric_part(model)
-        self._kin = build_plant(rigid)
+        self._kin = build_plant(geometric_part(model))
         # a target is reached by the model's own tool point (an elastic arm's sags: 0.45 mm on a trial's calibration
         # aimed rigidly); the rigid chain's Jacobian steers it
-        kept = set(rigid.layout.names)
-        self._joint_side = any(value != 0.0 for name, value in zip(model.layout.names, model.params, strict=True)
-                               if name not in kept)
+        self._joint_side = bool(joint_side_terms(model))
         self._jac = np.zeros((3, self._kin.mj_model.nv))
         self._n = model.n_joints
         self._zero3 = np.zeros(3)
