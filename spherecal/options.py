@@ -449,12 +449,12 @@ INPUT_OPTIONS: tuple[str, ...] = (
 def recorded_options(args: argparse.Namespace) -> dict:
     """The options of a run as its provenance block records them (``correction.files.provenance``): every
     option as given, argparse's internals left out, and each input that names an existing file as a
-    :class:`~pathlib.Path`, so that the block records its SHA-256. An output (:data:`RECORDED_OUTPUTS`) is recorded
+    :class:`~pathlib.Path`, so that the block records its SHA-256. An output (:data:`OUTPUT_OPTIONS`) is recorded
     as its name: the file it replaces is not an input (a second ``validate --out v.json`` recorded the first
     report's SHA-256 among its inputs)."""
     from pathlib import Path
 
-    return {k: Path(v) if isinstance(v, str) and k not in RECORDED_OUTPUTS and Path(v).is_file() else v
+    return {k: Path(v) if isinstance(v, str) and k not in OUTPUT_OPTIONS and Path(v).is_file() else v
             for k, v in vars(args).items() if not k.startswith("_") and k != "command"}
 
 
@@ -506,10 +506,9 @@ def planned_outputs(args: argparse.Namespace, outputs: dict):
 
 #: Commands whose ``--out`` is a folder their files go into; every other output option names a file.
 FOLDER_OUT = ("simulate", "import", "demo", "campaign")
-#: The options that name outputs (a command has some of them).
-OUTPUT_OPTIONS = ("out", "rrd", "analysis")
-#: The options (destinations) whose files a command writes, never reads: :func:`recorded_options` hashes none.
-RECORDED_OUTPUTS = (*OUTPUT_OPTIONS, "fixtures_out")
+#: The options that name outputs (a command has some of them): a command writes their files, never reads them
+#: (:func:`recorded_options` hashes none).
+OUTPUT_OPTIONS = ("out", "rrd", "analysis", "fixtures_out")
 
 
 def output_folders(args: argparse.Namespace) -> list[Path]:
@@ -523,7 +522,7 @@ def output_folders(args: argparse.Namespace) -> list[Path]:
 
 def output_files(args: argparse.Namespace) -> list[Path]:
     """The files a command names as its outputs (``--out`` of every command but :data:`FOLDER_OUT`, ``--rrd``,
-    ``--analysis``); one that exists is replaced (never an input: :func:`planned_outputs`), and
+    ``--analysis``, ``--fixtures-out``); one that exists is replaced (never an input: :func:`planned_outputs`), and
     :func:`say_replaced` names it."""
     return [Path(value) for name in OUTPUT_OPTIONS
             if isinstance(value := getattr(args, name, None), str) and value

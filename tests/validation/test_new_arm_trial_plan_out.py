@@ -40,3 +40,18 @@ def test_the_help_says_the_planned_positions_are_not_for_calibrate(capsys):
     main(["plan", "--help"])
     text = " ".join(capsys.readouterr().out.split())
     assert "not for calibrate, which would take the planned positions for measured centres" in text
+
+
+def test_fixtures_out_is_an_output_as_out_and_rrd_are(tmp_path, capsys, monkeypatch):
+    """--fixtures-out was left out of the command line's output options: its missing folder was created and an
+    existing file replaced without the line every other output gets, and a recorded option special-cased it."""
+    candidates = tmp_path / "c.yaml"
+    candidates.write_text("candidates:\n  A: {position: [0.5, -0.25, 0.5]}\n  B: {position: [0.5, 0.25, 0.5]}\n")
+    out = tmp_path / "new" / "fixtures.yaml"
+    argv = ["plan", "--candidates", str(candidates), "--fixture-count", "1", "--per-fixture", "100",
+            "--fixtures-out", str(out)]
+    monkeypatch.setattr("sys.argv", ["spherecal", *argv])  # the command line it records: the file is plan's own
+    assert main(argv) == 0
+    assert f"created the folder {out.parent} (it did not exist)" in capsys.readouterr().out
+    assert main(argv) == 0
+    assert f"replaced {out} (it existed)" in capsys.readouterr().out
