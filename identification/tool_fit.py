@@ -17,9 +17,10 @@ from __future__ import annotations
 
 import numpy as np
 
-from spherecal.correction import Dataset, RobotModel, tool_pose
+from spherecal.correction import Dataset, RobotModel
 
 from .calibrate import MAX_CHANGE, tool_point_change
+from .ingest.segment import last_frames
 from .selfcheck import MAX_SOCKET_NOISE
 
 
@@ -28,9 +29,7 @@ def pivot_tool(model: RobotModel, dataset: Dataset) -> tuple[np.ndarray, float, 
     rest of ``model`` as it is (its compliance and scale included); the samples' rms distance from their
     fixture's mean point per axis with it [m]; and the largest std of the tool's coordinates at that spread
     [m] (inf when the motion recorded does not determine the tool: too few samples, too little rotation)."""
-    pose = tool_pose(model, dataset.q).reshape(-1, 4, 4)  # the last joint frame, origin at the tool point
-    frame = pose[:, :3, :3]
-    origin = pose[:, :3, 3] - frame @ np.asarray(model.tool, dtype=float)
+    frame, origin = last_frames(model, dataset.q)
     lhs, rhs = frame.copy(), -origin
     for name in dataset.fixture_names:
         rows = dataset.labels == name

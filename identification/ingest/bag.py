@@ -32,6 +32,7 @@ from .importers import (
     arm_joint_names,
     check_source,
     first_jump,
+    holds_mukca,
     joint_name_candidates,
     match_joints,
     missing_joints,
@@ -154,8 +155,7 @@ def _without_metadata(path: Path) -> tuple[Path, tuple[str, ...]]:
             f"{len(files)} storage files ({shown}): `ros2 bag reindex {path}` writes it (a recording stopped before "
             "ros2 bag record did)"
         )
-    mukca = any(path.glob("hole_*.csv")) or any(path.glob("*/hole_*.csv"))
-    hint = "; it holds MUKCa per-socket files: use --format mukca" if mukca else ""
+    hint = "; it holds MUKCa per-socket files: use --format mukca" if holds_mukca(path) else ""
     raise RecordingError(
         f"{path}: cannot read the bag: a ROS 2 bag folder holds a metadata.yaml, this one has none{hint}"
     )

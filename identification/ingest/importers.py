@@ -493,9 +493,8 @@ def read_joint_csv(path: str | os.PathLike, model: RobotModel) -> Recording:
     path = check_source(path)
     if path.is_dir():  # iter_lines said 'cannot read: Is a directory', naming no field nor what the folder is
         bag = (path / "metadata.yaml").is_file() or any(path.glob("*.db3")) or any(path.glob("*.mcap"))
-        mukca = any(path.glob("hole_*.csv")) or any(path.glob("*/hole_*.csv"))
         hint = ": it is a ROS 2 bag, use --format bag" if bag else ": it holds MUKCa per-socket files, use --format " \
-            "mukca" if mukca else ""
+            "mukca" if holds_mukca(path) else ""
         raise RecordingError(f"{path}: field 'SOURCE': a folder, not a CSV file{hint}")
     header: list[str] | None = None
     # joints, stamps and line numbers grow in place, block by block (a list of blocks and their concatenation were
@@ -564,6 +563,12 @@ def read_joint_csv(path: str | os.PathLike, model: RobotModel) -> Recording:
         if not keep.all():  # a copy of every array only when a row is dropped
             recording = replace(recording, q=recording.q[keep], t=t[keep], rows=rows.select(keep), notes=notes)
     return replace(recording, notes=recording.notes + _more_joints(header, names, path))
+
+
+def holds_mukca(folder: Path) -> bool:
+    """Whether ``folder`` holds MUKCa per-socket files (``hole_*.csv``), itself or one level down: the hint of a
+    refusal that was given it as another format."""
+    return any(folder.glob("hole_*.csv")) or any(folder.glob("*/hole_*.csv"))
 
 
 class _Growing:

@@ -219,6 +219,15 @@ def segment(
 PIVOT_STEP = 0.02
 
 
+def last_frames(model: RobotModel, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The last joint frame at configurations ``q`` (K, n) [rad]: its rotations (K, 3, 3) and origins (K, 3) [m] (the
+    tool pose less the tool offset), for a pivot fit of a point ``x`` of that frame, ``origin + frame @ x``
+    (:func:`still_point`, :func:`.tool_fit.pivot_tool`)."""
+    pose = tool_pose(model, q).reshape(-1, 4, 4)
+    frame = pose[:, :3, :3]
+    return frame, pose[:, :3, 3] - frame @ np.asarray(model.tool, dtype=float)
+
+
 def still_point(model: RobotModel, q: np.ndarray, t: np.ndarray,
                 settings: SegmentSettings = SegmentSettings()) -> tuple[np.ndarray, int] | None:
     """The point of the last link that stays still where the robot file's tool point does not: the ball's centre
@@ -242,9 +251,7 @@ def still_point(model: RobotModel, q: np.ndarray, t: np.ndarray,
     if len(t) < 2:
         return None
     keep = np.flatnonzero(np.diff(np.floor((t - t[0]) / PIVOT_STEP), prepend=-1) > 0)
-    pose = tool_pose(model, q[keep])
-    frame = pose[:, :3, :3]
-    origin = pose[:, :3, 3] - frame @ np.asarray(model.tool, dtype=float)
+    frame, origin = last_frames(model, q[keep])
     chunk = np.floor((t[keep] - t[0]) / settings.min_duration).astype(np.int64)
     lhs, rhs = [], []
     for c in np.unique(chunk):
