@@ -79,10 +79,17 @@ def eye_distance(box, least: float = 0.05, distance: float = 1.2, aspect: float 
     return max(distance * size, 0.0 if aspect is None else fit_distance(box, aspect))
 
 
+def _world_camera(tabs: bool) -> tuple[float, float, float]:
+    """``(least, distance, aspect)`` of the main 3D view's default camera (:func:`camera`); ``tabs``: whether the
+    result tabs stand beside the view. Far enough that the whole box fits the view: at 0.9 of its diagonal alone,
+    plan's rows of candidates on a 0.5 x 0.9 m table ran out of the bottom of the picture."""
+    return 1.0, 0.9, WORLD_ASPECT if tabs else WORLD_ALONE_ASPECT
+
+
 def world_eye_distance(box, tabs: bool) -> float:
     """How far [m] the main 3D view's default camera stands from the centre of its (2, 3) bounding box [m]; ``tabs``:
     whether the result tabs stand beside the view (:func:`build_blueprint`)."""
-    return eye_distance(box, 1.0, 0.9, WORLD_ASPECT if tabs else WORLD_ALONE_ASPECT)
+    return eye_distance(box, *_world_camera(tabs))
 
 
 def camera(box, least: float = 0.05, distance: float = 1.2, aspect: float | None = None):
@@ -162,11 +169,8 @@ def build_blueprint(
             table = rrb.archetypes.TextDocumentFormat(monospace=True, word_wrap=False)
             tabs.append(rrb.Tabs(*[rrb.TextDocumentView(origin=f"tables/{k}", name=views[k], format_options=table)
                                    for k in order], name=tab))
-    # far enough that the whole box fits the view: at 0.9 of its diagonal alone, plan's rows of candidates on a
-    # 0.5 x 0.9 m table ran out of the bottom of the picture
-    aspect = WORLD_ASPECT if tabs else WORLD_ALONE_ASPECT  # as world_eye_distance: the fixtures' labels follow it
     world = rrb.Spatial3DView(origin="world", contents="$origin/**", name=title,
-                              eye_controls=eye("world", 1.0, 0.9, aspect))
+                              eye_controls=eye("world", *_world_camera(bool(tabs))))  # the fixtures' labels follow it
     if active_tab is None:
         shown = [section for section in TABS if contents.get(section)]
         active_tab = shown.index("sockets") if "sockets" in shown else 0
