@@ -18,6 +18,7 @@ from __future__ import annotations
 import difflib
 import math
 import os
+from collections.abc import Iterable
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any
@@ -116,6 +117,13 @@ def _name_problem(name: str) -> str | None:
     return None
 
 
+def nearest_name(name: Any, names: Iterable) -> str | None:
+    """The fixture name of ``names`` nearest a misspelt ``name`` (difflib's ratio at least 0.6), or None: the
+    did-you-mean of a refusal naming a fixture that is not there."""
+    near = difflib.get_close_matches(str(name), [str(n) for n in names], n=1, cutoff=0.6)
+    return near[0] if near else None
+
+
 def _value(mapping: yaml.MappingNode, key: str) -> Any:
     """The value node of ``key`` in a mapping node (the last, as the constructed mapping keeps)."""
     return [value for k, value in mapping.value if getattr(k, "value", None) == key][-1]
@@ -191,8 +199,8 @@ def read_fixtures(path: str | os.PathLike) -> FixtureSpec:
         a, b, value = _written_name(item_node.value[0]), _written_name(item_node.value[1]), item[2]
         for j, name in enumerate((a, b)):
             if name not in fixtures:
-                near = difflib.get_close_matches(str(name), list(fixtures), n=1, cutoff=0.6)
-                hint = f" (did you mean {near[0]!r}?)" if near else f" (listed: {', '.join(map(str, fixtures))})"
+                near = nearest_name(name, fixtures)
+                hint = f" (did you mean {near!r}?)" if near else f" (listed: {', '.join(map(str, fixtures))})"
                 raise fail(f"fixture {name!r} is not listed under 'fixtures'{hint}", "distances", k, j)
         if a == b:
             raise fail(f"a distance needs two different fixtures, got {a!r} twice", "distances", k)

@@ -7,7 +7,6 @@ the output folder and rename it into place.
 
 from __future__ import annotations
 
-import difflib
 import os
 import warnings
 from dataclasses import dataclass, field, fields, replace
@@ -15,7 +14,7 @@ from pathlib import Path
 
 import numpy as np
 
-from spherecal.correction.files.fixtures import FixtureSpec, write_fixtures
+from spherecal.correction.files.fixtures import FixtureSpec, nearest_name, write_fixtures
 from spherecal.correction.files.outputs import OutputSet
 from spherecal.correction.files.provenance import comment_block, provenance
 from spherecal.correction.files.robots import load_robot
@@ -309,8 +308,8 @@ def _with_known_distances(spec: FixtureSpec, given: tuple[tuple[str, str, float]
     for a, b, value in given:
         for name in (a, b):
             if name not in spec.names:
-                near = difflib.get_close_matches(name, spec.names, n=1)
-                hint = f"did you mean {near[0]!r}? " if near else ""
+                near = nearest_name(name, spec.names)
+                hint = f"did you mean {near!r}? " if near else ""
                 raise DatasetError(f"field '--known-distance': {a} {b} {value:g}: no fixture {name!r} in this import "
                                    f"({hint}its fixtures: {', '.join(spec.names)})")
         known = next(((x, y, v) for x, y, v in distances if {x, y} == {a, b}), None)
