@@ -112,11 +112,23 @@ def _dlink_djoint(model: RobotModel, q_joint: np.ndarray, jac: np.ndarray) -> np
     c, h = compliance_of(model), 1e-6
     if not np.any(c):
         return jac
-    n = model.n_joints
-    shift = h * np.eye(n)
-    dtau = np.stack([gravity_torques(model, q_joint + shift[k]) - gravity_torques(model, q_joint - shift[k])
-                     for k in range(n)], axis=2) / (2 * h)  # (N, n, n): d tau_i / d q_k
+    tau = gravity_torques(model, _shifted(q_joint, h))  # one batch of the 2 n shifted copies
+    dtau = _central(tau, h, q_joint.shape)  # (N, n, n): d tau_i / d q_k
     return jac - np.einsum("nxi,nik->nxk", jac * c, dtau)
+
+
+def _shifted(q: np.ndarray, h: float) -> np.ndarray:
+    """(2 n N, n): ``q`` (N, n) shifted by ``+h`` on each joint in turn, then by ``-h`` (:func:`_central`)."""
+    shift = h * np.eye(q.shape[1])[:, None, :]  # (n, 1, n)
+    return np.concatenate([q[None] + shift, q[None] - shift]).reshape(-1, q.shape[1])
+
+
+def _central(values: np.ndarray, h: float, shape: tuple[int, int]) -> np.ndarray:
+    """(N, m, n) central differences ``[:, i, k] = d value_i / d q_k`` of ``values`` (2 n N, m) at :func:`_shifted`'s
+    angles for ``q`` of ``shape`` (N, n)."""
+    count, n = shape
+    plus, minus = values.reshape(2, n, count, -1)
+    return (plus - minus).transpose(1, 2, 0) / (2 * h)
 
 
 def tool_pose(model: RobotModel, q: np.ndarray) -> np.ndarray:
@@ -210,10 +222,8 @@ def link_angle_jacobian(model: RobotModel, q: np.ndarray) -> np.ndarray | None:
     q2, single = _checked(model, q)
     if _link_angles(model, q2) is q2:
         return None
-    n, h = model.n_joints, 1e-6
-    shift = h * np.eye(n)
-    columns = [(_link_angles(model, q2 + shift[k]) - _link_angles(model, q2 - shift[k])) / (2 * h) for k in range(n)]
-    jac = np.stack(columns, axis=2)  # [:, i, k] = d q_link_i / d q_k
+    h = 1e-6
+    jac = _central(_link_angles(model, _shifted(q2, h)), h, q2.shape)  # [:, i, k] = d q_link_i / d q_k
     return jac[0] if single else jac
 
 
