@@ -29,6 +29,15 @@ COMMANDS: dict[str, str] = {
     "tool": "spherecal.commands.tool",
 }
 
+#: The commands that turn a URDF into the model they write, and say how they parametrise it: a joint whose axis is
+#: nearly parallel to the previous one's gets a Hayati beta instead of the d of the joint before
+#: (``correction.NearlyParallelAxesWarning``). Calibrate says it, and records it in the calibrated file
+#: (``urdf.parallel_joints``; ``calibration.fixed``: that d 'Hayati: held at zero ...'); export says it when it
+#: converts a URDF itself (``export ARM.urdf --format yaml``; a calibrated file's parametrisation was chosen
+#: already). Every other command reads the URDF for the chain alone and stays silent (a review: import, calibrate,
+#: validate and export of the Gen3 lite each repeated it).
+PARAMETRISING = ("calibrate", "export")
+
 
 def build_parser() -> argparse.ArgumentParser:
     """The top-level parser with every subcommand registered."""
@@ -142,6 +151,7 @@ def main(argv: list[str] | None = None) -> int:
 
     cap_environment()
     from spherecal.correction.errors import SpherecalError  # numpy: not at --help (start-up)
+    from spherecal.correction.files.urdf_to_dh import NearlyParallelAxesWarning
     from spherecal.options import OptionError, output_files, output_folders, say_created, say_replaced
 
     missing = [folder for folder in output_folders(args) if not folder.exists()]
@@ -160,6 +170,8 @@ def main(argv: list[str] | None = None) -> int:
         try:
             with _terminate_cleanly(), warnings.catch_warnings(), thread_cap():
                 warnings.showwarning = one_line_warning  # a warning for the user, not a source location
+                if args.command not in PARAMETRISING:  # said once, where the parametrisation is chosen
+                    warnings.filterwarnings("ignore", category=NearlyParallelAxesWarning)
                 status = int(args._run(args) or 0)
             say_created(args, missing)
             say_replaced(args, existing)

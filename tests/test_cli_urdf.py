@@ -41,14 +41,18 @@ def test_calibrate_urdf_and_export_into_it(tmp_path, ur5e_file, capsys):
     assert main(["calibrate", "--robot", str(ur5e_file), "--tip-link", "ball", "--samples", str(samples),
                  "--fixtures", str(fixtures), "--out", str(cal),
                  "--prior", "0"]) == 0  # noise-free: exact recovery (the default prior pulls by micrometres)
+    said = capsys.readouterr().err  # the parametrisation, said once where it is chosen
+    assert said.count("Hayati beta") == 1 and "joints elbow_joint, wrist_1_joint turn about axes" in said, said
     calibrated = load_robot(cal)
     assert calibrated.hayati == (2, 3) and calibrated.d[1] == 0.0 and calibrated.d[2] == 0.0
+    assert calibrated.extras["urdf"]["parallel_joints"] == ["elbow_joint", "wrist_1_joint"]  # and recorded
+    assert calibrated.extras["calibration"]["fixed"]["d2"].startswith("Hayati: held at zero")
     q = true.random_configurations(500, np.random.default_rng(5))
     assert registered_errors(tool_point(calibrated, q), tool_point(true, q)).max() < 1e-6
     assert main(["export", str(cal), "--format", "urdf", "--into", str(ur5e_file), "--out", str(out)]) == 0
     points, _ = MujocoUrdf(out.read_text()).body_pose("ball", calibrated.extras["joint_names"], q)
     assert np.abs(points - tool_point(calibrated, q)).max() < 1e-12
-    capsys.readouterr()
+    assert "Hayati" not in capsys.readouterr().err  # the calibrated file's parametrisation: nothing to choose
 
 
 def test_link_options_errors_are_one_line(tmp_path, ur5e_file, capsys):
@@ -83,8 +87,14 @@ def test_validate_a_calibration_of_a_urdf_arm_against_that_urdf(tmp_path, ur5e_f
     out = tmp_path / "report.json"
     args = ["validate", "--nominal", str(ur5e_file), "--tip-link", "wrist_3_link", "--calibrated", str(cal),
             "--truth", str(cal), "--configurations", "50", "--out", str(out)]
-    assert main(args) == 0, capsys.readouterr().err
+    capsys.readouterr()
+    assert main(args) == 0
+    said = capsys.readouterr().err  # a review: every command that read the Gen3 lite's URDF repeated the Hayati beta
+    assert "Hayati" not in said, said
     assert out.exists()
+    assert main(["simulate", "--robot", str(ur5e_file), "--tip-link", "wrist_3_link", "--seconds", "1",
+                 "--per-fixture", "10", "--out", str(tmp_path / "sim")]) == 0
+    assert "Hayati" not in capsys.readouterr().err
 
 
 def test_a_urdf_named_xml_is_read_back_as_a_urdf(tmp_path, panda, capsys):
