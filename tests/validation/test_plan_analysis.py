@@ -71,3 +71,61 @@ def test_the_page_says_the_cpu_time_and_the_load_beside_the_wall_time():
         in measured
     unmeasured = markdown(Analysis([], empty, AnalysisConfig(), {}), "p")
     assert "Wall time 0 s on 2 workers (plan 0 s, cells 0 s)." in unmeasured and "CPU" not in unmeasured
+
+
+def _empty_analysis(config: AnalysisConfig) -> Analysis:
+    from spherecal.validation.planning.plan import Plan
+
+    return Analysis([], Plan([], None, "none", "kinematic", 3e-4, 500), config, {"plan": 0.0, "cells": 0.0})
+
+
+def test_plan_analysis_is_one_of_the_staged_outputs(tmp_path, capsys, monkeypatch):
+    """A review: every command's outputs appear together or not at all. --analysis is staged like --out: written and
+    named when it replaced a file; interrupted during the analysis, or failing after the document was written,
+    nothing is left (no document, no staged copy, no folder it created) and an earlier document is kept."""
+    from spherecal.cli import main
+    from spherecal.correction.files.atomic import OutputError
+    from spherecal.validation.planning import analysis
+
+    monkeypatch.chdir(tmp_path)
+    monkeypatch.setattr(analysis, "run_analysis", _empty_analysis)  # the real one runs for minutes
+    monkeypatch.setattr("sys.argv", ["spherecal", "plan", "--analysis", "design.md"])
+    assert main(["plan", "--analysis", "design.md"]) == 0
+    first = (tmp_path / "design.md").read_text()
+    assert "plan --analysis design.md" in first and "written: design.md" in capsys.readouterr().out
+    assert main(["plan", "--analysis", "design.md"]) == 0  # its own earlier document: replaced, and said
+    assert "spherecal plan: replaced design.md (it existed)" in capsys.readouterr().out.splitlines()
+    (tmp_path / "design.md").write_text(first)
+
+    def interrupted(config):
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(analysis, "run_analysis", interrupted)
+    for name in ("design.md", "new/design.md"):
+        assert main(["plan", "--analysis", name]) == 130
+    assert capsys.readouterr().err.count("spherecal plan: interrupted") == 2
+
+    def written_then_failed(path, text):  # as atomic_write_text: its folder made, the whole document written
+        path.parent.mkdir(parents=True, exist_ok=True)
+        path.write_text("the new document\n")
+        raise OutputError(f"{path}: the disk filled after the document was written")
+
+    monkeypatch.setattr(analysis, "run_analysis", _empty_analysis)
+    monkeypatch.setattr(analysis, "atomic_write_text", written_then_failed)
+    for name in ("design.md", "new/design.md"):
+        assert main(["plan", "--analysis", name]) == 1
+    assert "the disk filled" in capsys.readouterr().err
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["design.md"]  # no staged copy, no folder 'new'
+    assert (tmp_path / "design.md").read_text() == first
+
+
+def test_plan_analysis_never_replaces_an_input_or_a_foreign_file(tmp_path, capsys, monkeypatch):
+    from spherecal.cli import main
+    from spherecal.validation.planning import analysis
+
+    monkeypatch.chdir(tmp_path)
+    monkeypatch.setattr(analysis, "run_analysis", _empty_analysis)
+    (tmp_path / "notes.md").write_text("my own notes\n")
+    assert main(["plan", "--analysis", "notes.md"]) == 1
+    assert "field '--analysis': exists and was not written by an earlier `spherecal plan`" in capsys.readouterr().err
+    assert (tmp_path / "notes.md").read_text() == "my own notes\n"
