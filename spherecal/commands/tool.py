@@ -14,9 +14,12 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("robot", metavar="CAL.yaml", help="calibrated robot file")
     tool = parser.add_mutually_exclusive_group(required=True)
     tool.add_argument("--offset", nargs=3, type=finite, metavar=("X", "Y", "Z"),
-                      help="the new tool's nominal point in the last DH frame [m]: from that frame's origin and "
-                      "along its axes, which are not the flange's in general (where the flange sits in that frame "
-                      "depends on the arm and on how its model was built). Simplest: the old tool's nominal point "
+                      help="the new tool's nominal point in the last DH frame [m]: the frame that turns with the "
+                      "last joint, z along its axis; for a URDF arm it is fixed to the child link of the last "
+                      "revolute joint (the last of 'urdf: links:' in CAL.yaml; the command names it), though not "
+                      "at that link's origin in general. From that frame's origin and along its axes, which are "
+                      "not the flange's in general (where the flange sits in that frame depends on the arm and on "
+                      "how its model was built). Simplest: the old tool's nominal point "
                       "(the ball's, calibration.nominal_tool in CAL.yaml; the command prints both points) plus the "
                       "new tool's offset from the ball, e.g. its z + 0.1 for a tool 0.1 m further along z; or take "
                       "the point from the arm's URDF with --urdf and --tip-link. The calibration's correction of the "
@@ -62,6 +65,7 @@ def run(args: argparse.Namespace) -> int:
     print(f"spherecal tool: wrote {path}: tool point {swap.model.tool.round(6).tolist()} m in the last frame "
           f"(was {model.tool.round(6).tolist()})")
     print(f"spherecal tool: {_nominal_points(model, swap.model)}")
+    print(f"spherecal tool: the last frame: {last_frame(model)}")
     print(f"spherecal tool: {swap.note}")
     print(f"spherecal tool: {payload}")
     return 0
@@ -74,6 +78,23 @@ def _provenance(args: argparse.Namespace) -> str:
     from spherecal.options import recorded_options
 
     return comment_block(provenance(None, recorded_options(args)))
+
+
+def last_frame(model) -> str:
+    """Which frame the tool point is given in, for the user: the last DH frame, and for a model converted from a URDF
+    (its ``urdf`` block) the link it turns with, the child of the last revolute joint (a review: neither --help nor
+    the output said which link that frame is). Its origin is on that joint's axis where the DH common normal puts
+    it, the link's own origin only in some URDFs (the Panda's panda_link7; 105 mm along z from the Gen3 lite's
+    end_effector_link): said, not hidden."""
+    n = model.n_joints
+    urdf = model.extras.get("urdf")
+    links = urdf.get("links") if isinstance(urdf, dict) else None
+    if not isinstance(links, list) or len(links) != n or not all(isinstance(name, str) for name in links):
+        return f"the last DH frame (frame {n} of the robot file; it records no URDF link)"
+    names = model.extras.get("joint_names")
+    joint = f" {names[-1]}" if isinstance(names, list) and len(names) == n and isinstance(names[-1], str) else ""
+    return (f"the last DH frame (frame {n}), fixed to link {links[-1]}, the child of the last revolute "
+            f"joint{joint}: z along that joint's axis, its origin on the axis, not necessarily the link's origin")
 
 
 def _nominal_points(model, swapped) -> str:

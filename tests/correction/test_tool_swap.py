@@ -317,3 +317,34 @@ def test_the_refusal_of_another_tool_prints_both_tools_without_float_noise(panda
     assert "-0.0" not in text and "e-1" not in text
     assert f"calibrates the tool at {(np.round(ball, 9) + 0.0).tolist()} m" in text
     assert f"the controller model's {(np.round(noisy, 9) + 0.0).tolist()} m" in text
+
+
+@pytest.mark.parametrize(("urdf", "tip", "link", "joint"), [
+    ("panda.urdf", "ball_link", "panda_link7", "panda_joint7"),
+    ("iiwa14.urdf", "ball_link", "link_7", "joint_a7"),
+])
+def test_tool_names_the_link_its_last_frame_is_fixed_to(urdf, tip, link, joint, tmp_path, capsys, rng) -> None:
+    """A review: --offset is a point in the last DH frame, and neither --help nor the output said which link of a URDF
+    arm that frame is. The output names it; MuJoCo's pose of that link, compiled from the URDF itself, stays at one
+    pose in the last DH frame over random postures (the frame is fixed to it), and no other link of the chain does."""
+    from spherecal.commands.tool import last_frame
+    from spherecal.correction import save_robot
+    from spherecal.correction.chain import link_frames
+
+    model = load_urdf(DATA / urdf, tip_link=tip)
+    cal = save_robot(model, tmp_path / "cal.yaml")
+    assert main(["tool", str(cal), "--offset", "0", "0", "0.2", "--out", str(tmp_path / "new.yaml")]) == 0
+    said = f"the last DH frame (frame {model.n_joints}), fixed to link {link}, the child of the last revolute joint "
+    assert f"spherecal tool: the last frame: {said}{joint}:" in capsys.readouterr().out
+    q = model.random_configurations(20, rng)
+    frames = link_frames(model, q)[:, -1]
+    mujoco = MujocoUrdf((DATA / urdf).read_text())
+    for name in model.extras["urdf"]["links"]:
+        points, rotations = mujoco.body_pose(name, model.extras["joint_names"], q)
+        relative = np.einsum("kji,kj->ki", frames[:, :3, :3], points - frames[:, :3, 3])  # the link's origin in it
+        fixed = np.ptp(relative, axis=0).max() < 1e-9 and np.ptp(
+            np.einsum("kji,kjl->kil", frames[:, :3, :3], rotations), axis=0).max() < 1e-9
+        assert fixed == (name == link), name
+    assert main(["tool", "--help"]) == 0
+    assert "fixed to the child link of the last revolute joint" in " ".join(capsys.readouterr().out.split())
+    assert last_frame(load_robot("panda")) == "the last DH frame (frame 7 of the robot file; it records no URDF link)"
