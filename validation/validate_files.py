@@ -195,7 +195,7 @@ def _write(config: ValidateConfig, outputs: OutputSet, result: dict, record: Cal
             from spherecal.validation.viewer.recording import Recording  # rerun
 
             recording = Recording(outputs.stage(config.rrd) if config.rrd else None, spawn=config.spawn,
-                                  application_id="spherecal_validate", title=title)
+                                  application_id="spherecal_validate", title=title, run=result["provenance"])
             try:
                 recording.provenance(result["provenance"])  # as the JSON report records it
                 record(recording)

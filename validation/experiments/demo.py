@@ -256,7 +256,8 @@ def write_recording(config: DemoConfig, result: DemoResult, data, fixtures: dict
     """The demo's Rerun recording (entity paths and layout in :mod:`validation.recording`), into ``path``
     (the staged ``demo.rrd``), or a live viewer only; ``info``: the provenance block the demo's other files hold."""
 
-    recording = Recording(path, spawn=config.spawn, title="True robot (simulated) and fixtures, self-motion on 'time'")
+    recording = Recording(path, spawn=config.spawn, title="True robot (simulated) and fixtures, self-motion on 'time'",
+                          run=info)
     try:
         if info is not None:
             recording.provenance(info)

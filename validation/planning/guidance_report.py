@@ -5,6 +5,7 @@ from __future__ import annotations
 import numpy as np
 
 from spherecal.correction import tool_point
+from spherecal.correction.files.provenance import comment_block
 from spherecal.validation.viewer.recording_shapes import SCALE_STEPS, colour_ramp, scale_labels
 
 from . import guidance as guidance_module
@@ -90,14 +91,17 @@ def guidance_json(guidance, provenance: dict | None = None) -> dict:
     }
 
 
-def write_guidance_recording(path: str, guidance, provenance: str = "") -> str:
+def write_guidance_recording(path: str, guidance, info: dict | None = None) -> str:
     """The calibrated arm through the recorded configurations, the recorded sockets, and every candidate's
     sockets coloured by gain (:func:`validation.viewer.recording_shapes.colour_ramp`, 0 = the best gain;
     grey: refused), the best candidate's sockets marked and labelled (``world/next``: record it next, or not worth
-    it), with the table as a text panel."""
+    it), with the table as a text panel. ``info``: the run's provenance block (shown below the table; the recording id
+    is derived from it, :func:`validation.viewer.recording.recording_id`), or None."""
     from spherecal.validation.viewer.recording import Recording  # Rerun: only for --rrd
 
-    recording = Recording(path, application_id="spherecal_plan", title="Recorded sockets and candidates by gain")
+    provenance = "" if info is None else comment_block(info)
+    recording = Recording(path, application_id="spherecal_plan", title="Recorded sockets and candidates by gain",
+                          run=info)
     try:
         r = guidance.recorded
         names = list(r.centres)

@@ -115,7 +115,7 @@ def guide_files(robot: str, samples: str, fixtures: str | None, candidates: str 
         if out:
             outputs.stage(out).write_text(json.dumps(guidance_json(guidance, info), indent=2) + "\n")
         if rrd:
-            write_guidance_recording(outputs.stage(rrd), guidance, comment_block(info))
+            write_guidance_recording(outputs.stage(rrd), guidance, info)
     return guidance
 
 
@@ -172,7 +172,7 @@ def plan_files(robot: str, candidates: str | None, grid: str | None, fixture_cou
         with outputs:  # staged, renamed into place once Rerun has written it all
             info = provenance(seed, inputs, workers=result.workers)
             if rrd:
-                write_recording(outputs.stage(rrd), result, comment_block(info))
+                write_recording(outputs.stage(rrd), result, info)
             if fixtures_out:
                 outputs.write_text(fixtures_out, chosen_fixtures(result, info))
     return result

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from spherecal.correction.files.provenance import comment_block
 from spherecal.validation.viewer.recording import Recording
 from spherecal.validation.viewer.recording_shapes import SCALE_STEPS, colour_ramp, scale_labels
 
@@ -102,14 +103,16 @@ def format_plan(result) -> str:
     return "\n".join(lines)
 
 
-def write_recording(path: str, result, provenance: str = "") -> str:
+def write_recording(path: str, result, info: dict | None = None) -> str:
     """The candidates coloured by predicted error alone on the ramp of the Errors views
     (:func:`validation.viewer.recording_shapes.colour_ramp`: blue the least, red the most; grey unreachable) with
     its colour scale labelled in mm beside them, the chosen set as the fixtures (wire spheres around their
     candidates, labelled with the candidate's error), the printed plan and its provenance as a table, in the layout
-    of every recording (:mod:`validation.blueprint`)."""
+    of every recording (:mod:`validation.blueprint`). ``info``: the run's provenance block (shown below the plan;
+    the recording id is derived from it, :func:`validation.viewer.recording.recording_id`), or None."""
     title = "Candidate fixtures, coloured by predicted error alone"
-    recording = Recording(path, application_id="spherecal_plan", title=title)
+    provenance = "" if info is None else comment_block(info)
+    recording = Recording(path, application_id="spherecal_plan", title=title, run=info)
     try:
         rr = recording.rr
         surveys = result.surveys

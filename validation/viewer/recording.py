@@ -27,7 +27,9 @@ path                                 archetype      timeline    what
 ===================================  =============  ==========  ======================================
 
 A recording of ``validate`` or ``demo`` also carries its provenance block as the recording property
-``spherecal_provenance`` (JSON), the block its JSON report holds (:meth:`Recording.provenance`).
+``spherecal_provenance`` (JSON), the block its JSON report holds (:meth:`Recording.provenance`). Every command's
+recording has the id of its run (:func:`recording_id`: from the block's seed, inputs and versions), the same for
+two runs alike.
 
 Histograms and bars are static, so they show whatever the timeline selector is on. Rerun is imported
 only when a recording is made. Saving a recording with the Python SDK writes no analytics file and
@@ -41,6 +43,7 @@ from __future__ import annotations
 import json
 import os
 import textwrap
+import uuid
 from pathlib import Path
 
 import numpy as np
@@ -77,6 +80,27 @@ AXIS_LENGTH = 0.25
 #: label's row height, width per character and padding there [points] (Rerun's labels, measured on screenshots): how
 #: much room a fixture's label takes in metres at the default camera (:func:`_label_places`).
 WORLD_VIEW_HEIGHT, LABEL_ROW, LABEL_CHAR, LABEL_PAD = 920.0, 24.0, 7.5, 12.0
+
+
+#: The namespace of the recording ids derived from a run (:func:`recording_id`): a UUID drawn once, fixed here.
+RECORDING_NAMESPACE = uuid.UUID("d7b6b826-b8ae-4544-8bcf-5e7aae4e54ad")
+#: The fields of a provenance block (``correction.files.provenance.provenance``) that name the run a recording is of.
+RUN_FIELDS = ("seed", "inputs", "versions")
+
+
+def recording_id(application_id: str, run: dict) -> str:
+    """The Rerun recording id of a run: a name-based UUID (version 5, :data:`RECORDING_NAMESPACE`) of the application
+    and of the run's seed, inputs (options as given, input files by their SHA-256) and package versions, from its
+    provenance block (:data:`RUN_FIELDS`). Two runs alike get one id; the block's creation time, command line (a
+    program path) and workers (process ids) play no part. Rerun's default, a random id per process, made two
+    otherwise identical runs' recordings differ (a review).
+
+    Args:
+        application_id: the recording's Rerun application name.
+        run: the run's provenance block.
+    """
+    key = {"application_id": application_id, **{name: run.get(name) for name in RUN_FIELDS}}
+    return str(uuid.uuid5(RECORDING_NAMESPACE, json.dumps(key, sort_keys=True, default=str)))
 
 
 def _rerun():
@@ -121,6 +145,8 @@ class Recording:
         spawn: also start (or connect to) a live viewer.
         application_id: the Rerun application name.
         title: name of the main 3D view.
+        run: the provenance block of the run recorded: its recording id is derived from it (:func:`recording_id`),
+            the same for two runs alike; None: a random id of its own.
     """
 
     def __init__(
@@ -129,11 +155,14 @@ class Recording:
         spawn: bool = False,
         application_id: str = "spherecal",
         title: str = "Robot and fixtures",
+        run: dict | None = None,
     ):
         if rrd is None and not spawn:
             raise ValueError("a recording needs an .rrd path or spawn=True")
         self.rr = _rerun()
-        self.stream = self.rr.RecordingStream(application_id)
+        # Rerun's default id is one per process: two recordings of one process shared it, two runs alike differed
+        identity = recording_id(application_id, run) if run is not None else str(uuid.uuid4())
+        self.stream = self.rr.RecordingStream(application_id, recording_id=identity)
         self.application_id = application_id
         self.path = None if rrd is None else Path(rrd)
         self.contents: dict[str, dict[str, str]] = {"world": {}}
