@@ -166,10 +166,29 @@ def test_marker_columns_need_a_cluster(tmp_path, truth, mocap, rng) -> None:
     assert default_cluster(truth.tool).n_markers == 4
 
 
+def _covered_column(origins: np.ndarray, radius: float) -> float:
+    """The top [m] of the stretch of the base's z axis, from its foot up, that lies inside a link capsule (segments
+    between consecutive origins, ``radius``), highest over the steps: by brute force, every millimetre of the axis
+    against every capsule."""
+    z = np.arange(0.0, 2.0, 1e-3)
+    axis = np.stack([np.zeros_like(z), np.zeros_like(z), z], axis=-1)
+    top = 0.0
+    for step in origins:
+        inside = np.zeros(len(z), dtype=bool)
+        for a, b in zip(step[:-1], step[1:], strict=True):
+            t = np.clip((axis - a) @ (b - a) / max((b - a) @ (b - a), 1e-12), 0.0, 1.0)
+            inside |= np.linalg.norm(axis - (a + t[:, None] * (b - a)), axis=-1) <= radius
+        if inside[0]:
+            top = max(top, z[np.argmin(inside)] if not inside.all() else z[-1])
+    return float(top)
+
+
 def test_recording_holds_the_documented_entities_and_its_blueprint(tmp_path, panda, truth, rng) -> None:
+    from spherecal.correction import link_frames
     from spherecal.validation.viewer.recording import (
         COLOURS,
         FIXTURE_COLOURS,
+        LINK_RADIUS,
         Recording,
         read_entity_rows,
         read_view_names,
@@ -217,10 +236,16 @@ def test_recording_holds_the_documented_entities_and_its_blueprint(tmp_path, pan
     assert scene["residuals/after"]["color"] == [packed["calibrated"]]
     assert [scene[f"coverage/{f}"]["color"] for f in ("P1", "P2")] == [[packed["P1"]], [packed["P2"]]]
     assert scene["world/samples"]["colors"] == [packed["P1"]] * 20 + [packed["P2"]] * 20
-    # the base frame: which way x, y, z point and how long 0.25 m is, at the origin of the fixture centres' frame
-    np.testing.assert_allclose(scene["world/base_frame"]["vectors"], np.eye(3) * 0.25)
+    # the base frame: which way x, y, z point and how long 0.25 m is, at the origin of the fixture centres' frame; z
+    # out of the arm's links (at 0.25 m it ran inside the Panda's first link, 0.333 m high: a review)
+    vectors = np.array(scene["world/base_frame"]["vectors"])
+    np.testing.assert_allclose(vectors[:2], np.eye(3)[:2] * 0.25)
+    up = vectors[2, 2]
+    assert vectors[2, :2].tolist() == [0.0, 0.0] and up == pytest.approx(round(up / 0.05) * 0.05)
+    covered = _covered_column(link_frames(truth, q)[:, :, :3, 3], LINK_RADIUS)
+    assert 0.333 + LINK_RADIUS <= covered and covered + 0.1 <= up < covered + 0.15 + 1e-9, (covered, up)
     np.testing.assert_allclose(scene["world/base_frame"]["origins"], np.zeros((3, 3)))
-    assert scene["world/base_frame"]["labels"] == ["x (250 mm)", "y", "z"]
+    assert scene["world/base_frame"]["labels"] == ["x (250 mm)", "y", f"z ({up * 1e3:.0f} mm)"]
     assert sorted(p.name for p in tmp_path.iterdir()) == ["r.rrd"]
 
 

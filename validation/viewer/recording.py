@@ -8,7 +8,7 @@ in the README, checked by the tests):
 path                                 archetype      timeline    what
 ===================================  =============  ==========  ======================================
 ``world/fixtures``                   Ellipsoids3D   static      a wire sphere per fixture, labels apart (Points3D)
-``world/base_frame``                 Arrows3D       static      the base frame's x, y, z, 0.25 m each
+``world/base_frame``                 Arrows3D       static      the base frame's x, y, z, 0.25 m (z out of the arm)
 ``world/robot/arm``                  Capsules3D     ``time``    one capsule per link, per logged step
 ``world/robot/tool``                 Points3D       ``time``    the tool point, per logged step
 ``world/samples``                    Points3D       static      calibration samples, scatter magnified
@@ -55,7 +55,15 @@ from spherecal.correction.files.provenance import comment_block
 from spherecal.correction.layout import ParamKind
 
 from .blueprint import FIELD_OF_VIEW, TABS, build_blueprint, union_box, view_axes, world_eye_distance
-from .recording_shapes import BAR_HEIGHT, capsules, colour_ramp, histogram, magnification, parameter_bars
+from .recording_shapes import (
+    BAR_HEIGHT,
+    capsules,
+    colour_ramp,
+    column_top,
+    histogram,
+    magnification,
+    parameter_bars,
+)
 
 COLOURS = {
     "measured": (30, 30, 30),
@@ -76,6 +84,9 @@ FIXTURE_RADIUS = (0.02, 0.05)
 LINK_RADIUS, TOOL_RADIUS = 0.04, 0.012
 #: Length of the base frame's arrows in the 3D view [m]: out of the base link's 40 mm capsule (0.1 m barely left it).
 AXIS_LENGTH = 0.25
+#: How far the base frame's z arrow reaches beyond the links that stand on that axis [m] (:func:`column_top`): at
+#: 0.25 m it ran inside the Panda's first link (0.333 m), its head hidden (a review).
+AXIS_CLEARANCE = 0.1
 #: Height of the main 3D view in the default window [points] (:data:`validation.viewer.blueprint.WORLD_ASPECT`), and a
 #: label's row height, width per character and padding there [points] (Rerun's labels, measured on screenshots): how
 #: much room a fixture's label takes in metres at the default camera (:func:`_label_places`).
@@ -175,6 +186,7 @@ class Recording:
         self._sample_note = ""  # what the fixtures' spheres stand for when samples() magnified the samples
         self._fixture_radius = FIXTURE_RADIUS[0]  # of the fixtures' wire spheres [m]
         self._fixture_scene = None  # names, centres [m] and colours of the fixtures, logged on closing
+        self._column = 0.0  # how high the arm's links stand on the base's z axis [m] (column_top)
         self._tmp = None
         if self.path is not None:
             self._tmp = self.path.with_name(f".{self.path.name}.tmp")
@@ -251,6 +263,7 @@ class Recording:
         origins = link_frames(model, q)[:, :, :3, 3]
         tips = tool_point(model, q)
         self.extend_bounds("world", origins)
+        self._column = max(self._column, column_top(origins, LINK_RADIUS))
         lengths, translations, quaternions = capsules(np.concatenate([origins, tips[:, None]], axis=1))
         segments = lengths.shape[1]
         rr = self.rr
@@ -387,15 +400,19 @@ class Recording:
     def _base_frame(self) -> None:
         """The robot's base frame in the 3D view (``world/base_frame``): arrows of :data:`AXIS_LENGTH` along x, y, z
         (red, green, blue), labelled. Without them nothing in the view said which way x was or how long a metre was,
-        so a fixture centre printed by calibrate ('centre P1 [m]: [0.4998 -0.2504 0.4992]') could not be found."""
+        so a fixture centre printed by calibrate ('centre P1 [m]: [0.4998 -0.2504 0.4992]') could not be found.
+        The z arrow reaches :data:`AXIS_CLEARANCE` beyond the links standing on that axis (a round length, labelled
+        when it is not x's): inside the Panda's first link, 0.333 m high, a 0.25 m arrow was hidden."""
         if "world" not in self.bounds:
             return
-        axes = np.eye(3) * AXIS_LENGTH
+        up = max(AXIS_LENGTH, np.ceil((self._column + AXIS_CLEARANCE) / 0.05) * 0.05)  # to 50 mm
+        axes = np.diag([AXIS_LENGTH, AXIS_LENGTH, up])
         self.stream.log(
             "world/base_frame",
             self.rr.Arrows3D(vectors=axes, origins=np.zeros((3, 3)), radii=0.004, show_labels=True,
                              colors=[(230, 70, 70), (70, 200, 90), (80, 130, 240)],
-                             labels=[f"x ({AXIS_LENGTH * 1e3:.0f} mm)", "y", "z"]),
+                             labels=[f"x ({AXIS_LENGTH * 1e3:.0f} mm)", "y",
+                                     "z" if up == AXIS_LENGTH else f"z ({up * 1e3:.0f} mm)"]),
             static=True,
         )
         self.extend_bounds("world", np.vstack([np.zeros(3), axes]))

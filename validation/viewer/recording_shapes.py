@@ -119,6 +119,32 @@ def parameter_bars(
     return out
 
 
+def column_top(origins: np.ndarray, radius: float, steps: int = 2000, along: int = 41) -> float:
+    """How high the arm's links cover the base's z axis [m], over the steps: at each step the links that start on that
+    axis (the run of link origins from the base within ``radius`` of it: the Panda's first link, its upper arm when
+    upright) and the link that leaves it (a capsule leaning off the axis still covers it for a while), the highest
+    point of the axis inside one of their capsules; 0 when none starts on it (a base placed off the origin).
+
+    Args:
+        origins: (T, n + 1, 3) link frame origins, base frame [m], the base's first; capsules of ``radius`` [m] join
+            consecutive ones.
+        steps: at most this many steps are looked at, evenly spread (a long self-motion moves little between them).
+        along: points looked at along each link.
+    """
+    origins = np.asarray(origins, dtype=float)
+    origins = origins[np.unique(np.linspace(0, len(origins) - 1, min(steps, len(origins))).astype(int))]
+    starts, ends = origins[:, :-1], origins[:, 1:]  # (T, n, 3): one capsule each
+    on_axis = np.linalg.norm(starts[..., :2], axis=-1) <= radius
+    leading = np.cumprod(on_axis, axis=1).astype(bool)  # from the base, at each step
+    if not leading.any():
+        return 0.0
+    t = np.linspace(0.0, 1.0, along)[:, None]
+    points = starts[leading][:, None] + t * (ends[leading] - starts[leading])[:, None]  # (L, along, 3)
+    reach = radius**2 - np.sum(points[..., :2] ** 2, axis=-1)  # where > 0, the capsule holds the axis ...
+    top = np.where(reach >= 0.0, points[..., 2] + np.sqrt(np.clip(reach, 0.0, None)), -np.inf)  # ... this high
+    return float(max(top.max(), 0.0))
+
+
 def round_up(value: float) -> float:
     """The least of 1, 2 and 5 times a power of ten at least ``value`` (> 0)."""
     power = 10.0 ** np.floor(np.log10(value))
