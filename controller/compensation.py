@@ -47,7 +47,7 @@ from spherecal.correction.tool import (
     tools_apart,
 )
 
-from .ik import UnreachableError, check_target, ik
+from .ik import UnreachableError, check_joint_angles, check_target, ik
 
 #: Default position [m] and orientation [rad] tolerance of the fixed point.
 POSITION_TOL = 1e-9
@@ -307,6 +307,11 @@ class DifferentialIKFlow:
         seconds: longest integration [s].
         tol: tool-point tolerance of the end point [m].
         dt: integration step [s] (the controller's period).
+
+    Calling it, ``flow(model, target (3,) [m], q_seed (n,) [rad], orientation=None) -> q (n,) [rad]``, raises
+    :class:`~spherecal.correction.errors.ShapeError` for a ``target`` or ``q_seed`` of another shape (naming it, with
+    the shape expected and given), :class:`SpherecalError` for one that is not finite or a target beyond twice the
+    arm's reach, :class:`UnreachableError` when the flow stops short of the target.
     """
 
     def __init__(self, seconds: float = 4.0, tol: float = 1e-11, dt: float | None = None):
@@ -324,10 +329,11 @@ class DifferentialIKFlow:
 
         if orientation is not None:
             raise SpherecalError("orientation: DifferentialIKFlow models position-only controllers")
+        target = check_target(model, target)  # once per call, not per integration step
+        q, rest = check_joint_angles(model, q_seed, "q_seed").copy(), np.zeros(model.n_joints)
         controller = self._controllers.get(id(model))
         if controller is None or controller.model is not model:
             controller = self._controllers[id(model)] = NullSpaceController(model)
-        q, rest = np.array(q_seed, dtype=float), np.zeros(model.n_joints)
         with warnings.catch_warnings(record=True) as caught:
             warnings.simplefilter("always", ControllerFallbackWarning)
             for step in range(int(round(self.seconds / self.dt))):

@@ -12,7 +12,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from spherecal.correction import RobotModel, joint_jacobian, pose_jacobian, tool_point, tool_pose
-from spherecal.correction.errors import SpherecalError
+from spherecal.correction.errors import ShapeError, SpherecalError
 
 #: Position tolerance [m] and orientation tolerance [rad] of a converged solution.
 POSITION_TOL = 1e-10
@@ -174,15 +174,37 @@ def _solve_batch(lower: np.ndarray, upper: np.ndarray, starts: np.ndarray, evalu
 
 def _finite(value, shape: tuple[int, ...], field: str, expected: str) -> np.ndarray:
     """``value`` as a float array of ``shape``; anything else (numpy's broadcast and reshape errors, a NaN that came
-    back as a NaN miss) raises :class:`SpherecalError` naming ``field``."""
+    back as a NaN miss) raises naming ``field``: :class:`ShapeError` for another shape (or no array at all),
+    :class:`SpherecalError` for a value that is not finite."""
     try:
         array = np.asarray(value, dtype=float)
     except (TypeError, ValueError):
         array = np.full(0, np.nan)
-    if array.shape != shape or not np.all(np.isfinite(array)):
-        raise SpherecalError(f"{field}: expected {expected}, got shape {array.shape}"
-                             f"{'' if array.shape != shape else ' with a value that is not finite'}")
+    if array.shape != shape:
+        raise ShapeError(f"{field}: expected {expected}, got shape {array.shape}")
+    if not np.all(np.isfinite(array)):
+        raise SpherecalError(f"{field}: expected {expected}, got shape {array.shape} with a value that is not finite")
     return array
+
+
+def check_shape(value, shape: tuple[int, ...], field: str, expected: str) -> None:
+    """Raise :class:`ShapeError` naming ``field`` unless ``value`` (an array, or a list numpy reads as one) has
+    ``shape``: the check a control loop can afford every period (an array's shape compared, about 0.1 us), where
+    :func:`_finite` also converts and reads every value."""
+    if getattr(value, "shape", None) != shape:
+        given = np.shape(value)  # a list or a tuple: the shape numpy would give it
+        if given != shape:
+            raise ShapeError(f"{field}: expected {expected}, got shape {given}")
+
+
+def check_joint_angles(model: RobotModel, q, field: str) -> np.ndarray:
+    """``q`` as (n,) float joint angles [rad] of ``model``.
+
+    Raises:
+        ShapeError: not (n,) (another arm's joint count, a batch), naming ``field`` and both shapes.
+        SpherecalError: an angle that is not finite.
+    """
+    return _finite(q, (model.n_joints,), field, f"{model.n_joints} finite joint angles [rad]")
 
 
 def check_target(model: RobotModel, target: np.ndarray) -> np.ndarray:
@@ -191,7 +213,8 @@ def check_target(model: RobotModel, target: np.ndarray) -> np.ndarray:
     user trial: 'misses by 634888 mm'; a controls trial: the QP controller drove toward one at the velocity limit).
 
     Raises:
-        SpherecalError: not 3 finite coordinates.
+        ShapeError: not 3 coordinates.
+        SpherecalError: a coordinate that is not finite.
         UnreachableError: beyond twice the reach, naming the distance.
     """
     target = _finite(target, (3,), "target", "3 finite coordinates [m]")
@@ -242,13 +265,13 @@ def ik(
         :class:`IKResult` (check ``converged``; the best attempt is returned either way).
 
     Raises:
-        SpherecalError: a ``target``, ``q0`` or ``orientation`` of another shape or not finite, ``restarts``
-            without ``rng``, an ``orientation`` with ``kinematics``.
+        ShapeError: a ``target``, ``q0`` or ``orientation`` of another shape.
+        SpherecalError: one that is not finite, ``restarts`` without ``rng``, an ``orientation`` with ``kinematics``.
     """
     target = _finite(target, (3,), "target", "3 finite coordinates [m]")
     orientation = None if orientation is None else _finite(orientation, (3, 3), "orientation",
                                                            "a (3, 3) rotation matrix")
-    q0 = _finite(q0, (model.n_joints,), "q0", f"{model.n_joints} finite joint angles [rad]")
+    q0 = check_joint_angles(model, q0, "q0")
     if restarts and rng is None:
         raise SpherecalError("rng: ik's restarts need a seeded generator (rng=np.random.default_rng(seed))")
     if kinematics is not None and orientation is not None:

@@ -12,7 +12,7 @@ import numpy as np
 
 from spherecal.correction import RobotModel, geometric_part, tool_point
 
-from .ik import check_target
+from .ik import check_shape, check_target
 from .plant import TIMESTEP, build_plant
 from .qp_ik import (
     LIMIT_GAIN,
@@ -92,6 +92,9 @@ class NullSpaceController:
         self._joint_side = bool(joint_side_terms(model))
         self._jac = np.zeros((3, self._kin.mj_model.nv))
         self._n = model.n_joints
+        self._shape = (self._n,)
+        self._angles = f"{self._n} joint angles [rad]"
+        self._speeds = f"{self._n} joint velocities [rad/s]"
         self._zero3 = np.zeros(3)
         self._persistent = PersistentOSQP(self._n) if (solver == "osqp" and persistent) else None
 
@@ -108,14 +111,23 @@ class NullSpaceController:
         mujoco.mj_jacSite(m, d, self._jac, None, self._kin.tool_site)
         return d.site_xpos[self._kin.tool_site], self._jac
 
-    def _task(self, q: np.ndarray, target: np.ndarray | None, gain: float) -> tuple[np.ndarray, np.ndarray]:
+    def _task(self, q: np.ndarray, q_r: np.ndarray, target: np.ndarray | None,
+              gain: float) -> tuple[np.ndarray, np.ndarray]:
         """The Jacobian (3, n) [m/rad] at ``q`` and the primary task velocity (3,) [m/s]: ``gain`` times the target's
         offset from the model's own tool point (:func:`correction.tool_point`: an elastic arm's sag and a joint-angle
         scale included; the rigid chain's when the model has neither), damped near a singularity; 0 without a
-        target."""
+        target. ``q_r`` (n,) is only checked here, with the others.
+
+        Raises:
+            ShapeError: ``q`` not (n,), ``q_r`` not (n,) or ``target`` not (3,), naming it (a shape comparison every
+                period, about 0.1 us each; the target's values are checked once per target).
+        """
+        check_shape(q, self._shape, "q", self._angles)
+        check_shape(q_r, self._shape, "q_r", self._speeds)
         point, jac = self.kinematics(q)
         if target is None:
             return jac, self._zero3
+        check_shape(target, (3,), "target", "3 coordinates [m]")
         key = np.asarray(target, dtype=float).tobytes()
         if key != self._checked_target:  # once per target, not every period: one in millimetres was driven toward
             # at the velocity limit (a controls trial)
@@ -141,15 +153,19 @@ class NullSpaceController:
             target: (3,) tool-point target [m]; None during self-motion (``v = 0``: never feed
                 the model's tool position back against a fixture the chain already holds).
             gain: ``Kp`` [1/s].
+
+        Raises:
+            ShapeError: ``q``, ``q_r`` or ``target`` of another shape (the argument, the shape expected and given).
+            SpherecalError: a target that is not finite or beyond twice the arm's reach (checked once per target).
         """
-        jac, v = self._task(q, target, gain)
+        jac, v = self._task(q, q_r, target, gain)
         lb, ub = self.bounds(q)
         return build_problem(jac.copy(), v, q_r, lb, ub)
 
     def step(self, q: np.ndarray, q_r: np.ndarray, target: np.ndarray | None = None,
              gain: float = POSITION_GAIN) -> np.ndarray:
-        """(n,) joint velocity command [rad/s] for one control period (arguments as :meth:`build`)."""
-        jac, v = self._task(q, target, gain)
+        """(n,) joint velocity command [rad/s] for one control period (arguments and errors as :meth:`build`)."""
+        jac, v = self._task(q, q_r, target, gain)
         lb, ub = self.last_bounds = self.bounds(q)
         if self.closed_form:
             qdot = equality_solution(jac, v, q_r)

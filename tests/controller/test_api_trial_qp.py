@@ -143,3 +143,38 @@ def test_a_target_in_millimetres_is_refused_by_the_qp_controller(panda) -> None:
     with pytest.raises(UnreachableError):  # and again: a refused target is not remembered as checked
         controller.step(q, np.zeros(7), in_mm)
     assert np.all(np.isfinite(controller.step(q, np.zeros(7), in_mm * 1e-3)))
+
+
+def test_arrays_of_the_wrong_shape_are_named_every_period(panda) -> None:
+    """A controls review: ``NullSpaceController.step`` and ``DifferentialIKFlow`` let numpy speak for arrays of the
+    wrong shape ("could not broadcast input array from shape (6,) into shape (7,)", an IndexError), since their
+    shapes were not checked every period. Each is now our ShapeError (a ValueError too) naming the argument, the
+    shape expected and the shape given; a (1, 3) target, the same bytes as a (3,) one already checked, included."""
+    from spherecal.controller.compensation import DifferentialIKFlow
+    from spherecal.correction import ShapeError
+
+    controller = NullSpaceController(panda)
+    q = np.array([0.0, -0.3, 0.0, -2.2, 0.0, 2.0, 0.8])
+    target = tool_point(panda, q + 0.01)
+    controller.step(q, np.zeros(7), target)  # the target's values are checked and remembered
+    cases = (
+        ((q[:6], np.zeros(7), None), r"q: expected 7 joint angles \[rad\], got shape \(6,\)"),
+        ((q[None], np.zeros(7), target), r"q: expected 7 joint angles \[rad\], got shape \(1, 7\)"),
+        ((q, np.zeros(6), None), r"q_r: expected 7 joint velocities \[rad/s\], got shape \(6,\)"),
+        ((q, np.zeros(7), target[None]), r"target: expected 3 coordinates \[m\], got shape \(1, 3\)"),
+        ((q, np.zeros(7), target[:2]), r"target: expected 3 coordinates \[m\], got shape \(2,\)"),
+    )
+    for call in (controller.step, controller.build):
+        for args, message in cases:
+            with pytest.raises(ShapeError, match=message):
+                call(*args)
+    flow = DifferentialIKFlow()
+    for args, message in (((target, q[:6]), r"q_seed: expected 7 finite joint angles \[rad\], got shape \(6,\)"),
+                          ((target[None], q), r"target: expected 3 finite coordinates \[m\], got shape \(1, 3\)")):
+        with pytest.raises(ShapeError, match=message) as raised:
+            flow(panda, *args)
+        assert isinstance(raised.value, ValueError) and "\n" not in str(raised.value)
+    # lists of the right length are arrays to numpy, and the command is the array's
+    np.testing.assert_array_equal(controller.step(list(q), [0.0] * 7, list(target)),
+                                  controller.step(q, np.zeros(7), target))
+    assert np.linalg.norm(tool_point(panda, flow(panda, list(target), list(q))) - target) < 1e-10
