@@ -43,6 +43,7 @@ _EXPORTS: dict[str, str] = {
     "SelfMotionSettings": "self_motion",
     "UnreachableFixtureError": "reach",
     "check_fixture": "reach",
+    "check_fixture_distance": "reach",
     "collect_self_motion": "self_motion",
     "reach_fixture": "self_motion",
 }

@@ -21,6 +21,7 @@ from spherecal.correction.files.urdf_write import xml_comment
 from spherecal.correction.gravity import has_inertials, inertials_of
 from spherecal.correction.inertials import link_inertias
 
+from .reach import check_fixture_distance
 from .stiffness import stiffness_of
 
 #: Physical defaults of the plant (settings that keep the closed chain stable at 1 kHz).
@@ -403,9 +404,16 @@ def build_plant(
     **options,
 ) -> Plant:
     """Build the MuJoCo plant of ``model`` (see :func:`build_mjcf` for the arguments); MuJoCo writes
-    no log file from then on (:func:`no_log_file`)."""
+    no log file from then on (:func:`no_log_file`).
+
+    Raises:
+        UnreachableFixtureError: a fixture centre farther from the base than any posture of ``model`` reaches
+            (:func:`controller.reach.check_fixture_distance`: one in millimetres), naming it, before MuJoCo is called.
+    """
     no_log_file()
     fixtures = {str(k): np.asarray(v, dtype=float).reshape(3) for k, v in (fixtures or {}).items()}
+    for name, centre in fixtures.items():
+        check_fixture_distance(model, name, centre)
     mjcf = build_mjcf(model, fixtures, markers, **options)
     mj_model = mujoco.MjModel.from_xml_string(mjcf)
     mj_data = mujoco.MjData(mj_model)

@@ -11,6 +11,10 @@ from spherecal.correction.errors import SpherecalError
 #: A fixture closer than this to the base column (base to the first joint's frame) is inside
 #: the robot [m].
 BASE_RADIUS = 0.12
+#: Share of an arm's :attr:`~spherecal.correction.RobotModel.reach` a fixture centre may lie beyond it (a fixture
+#: placed for the nominal arm on a perturbed one; the reach, every link laid end to end, is already more than any
+#: posture reaches).
+REACH_MARGIN = 0.1
 
 
 class UnreachableFixtureError(SpherecalError):
@@ -27,6 +31,21 @@ class UnreachableFixtureError(SpherecalError):
 
 class FixtureInsideRobotError(UnreachableFixtureError):
     """A fixture lies inside the robot's base column."""
+
+
+def check_fixture_distance(model: RobotModel, name: str, centre: np.ndarray) -> None:
+    """Raise :class:`UnreachableFixtureError` if ``centre`` (3,) [m] lies farther from ``model``'s base than its
+    :attr:`~spherecal.correction.RobotModel.reach` and :data:`REACH_MARGIN` of it, or is not finite: a fixture in
+    millimetres (``[500, 0, 300]``), which no arm of this model reaches in any posture. Kinematics alone: the bound
+    is the model's own, no IK is run."""
+    centre = np.asarray(centre, dtype=float)
+    away = float(np.linalg.norm(centre - model.base_transform[:3, 3]))
+    limit = (1.0 + REACH_MARGIN) * model.reach
+    if not away <= limit:  # a NaN too
+        raise UnreachableFixtureError(
+            f"fixture {name} at {np.round(centre, 4).tolist()} is out of reach: {away:.4g} m from the base of "
+            f"{model.name!r}, whose links and tool reach {model.reach:.3g} m at most (the unit of fixture positions "
+            "is metres: millimetres given?)", name)
 
 
 def check_fixture(model: RobotModel, name: str, centre: np.ndarray) -> None:

@@ -32,7 +32,7 @@ from .ik import ik
 from .nullspace import NullSpaceController
 from .plant import TIMESTEP, build_plant
 from .qp_ik import LIMIT_MARGIN
-from .reach import UnreachableFixtureError, check_fixture
+from .reach import UnreachableFixtureError, check_fixture, check_fixture_distance
 
 #: Default fixtures [m], base frame: over the front of the Panda's workspace, chosen by the
 #: coverage table (every joint >= 30% of its range in 20 s with coverage exploration).
@@ -175,8 +175,10 @@ def reach_fixture(model: RobotModel, name: str, centre: np.ndarray, rng: np.rand
     """(n,) joint angles putting ``model``'s tool point on ``centre``, ``margin`` inside the limits.
 
     Raises:
-        FixtureInsideRobotError, UnreachableFixtureError.
+        FixtureInsideRobotError, UnreachableFixtureError (farther than the arm reaches in any posture: in millimetres?
+            before the IK is tried).
     """
+    check_fixture_distance(model, name, centre)
     check_fixture(model, name, centre)
     margin = np.minimum(margin, 0.5 * (model.upper - model.lower))  # a joint narrower than 2 margins: its middle
     inner = replace(model, lower=model.lower + margin, upper=model.upper - margin)

@@ -98,3 +98,35 @@ def test_a_mujoco_warning_writes_no_log_file_into_the_working_directory(tmp_path
     assert out.returncode == 0, out.stderr
     assert "warned 1" in out.stdout and "Nan, Inf or huge value in QVEL" in out.stdout + out.stderr
     assert list(tmp_path.iterdir()) == []
+
+
+def test_a_fixture_no_posture_reaches_is_refused_in_one_line(panda):
+    """A controls review: build_plant took a fixture centre in millimetres ([500, 0, 300]) silently and built a plant
+    whose fixture no posture reaches. It is refused, naming the fixture and the unit, with a bound from the model's
+    own lengths: every tool point the arm reaches passes, an arm twice as long takes what the Panda is refused."""
+    from dataclasses import replace
+
+    from spherecal.controller.reach import UnreachableFixtureError
+    from spherecal.correction import perturb
+
+    with pytest.raises(UnreachableFixtureError, match=r"^fixture P2 at \[500.0, 0.0, 300.0\] is out of reach: 583.1 m "
+                                                      r"from the base of 'franka_panda'.*unit of fixture positions is "
+                                                      r"metres") as raised:
+        build_plant(panda, {"P1": [0.5, 0.0, 0.4], "P2": [500.0, 0.0, 300.0]})
+    assert raised.value.fixture == "P2" and "\n" not in str(raised.value)
+    with pytest.raises(UnreachableFixtureError, match="fixture P1 at \\[nan"):
+        build_plant(panda, {"P1": [np.nan, 0.0, 0.4]})
+    # no posture is refused: the farthest tool points of 20000 random configurations of a perturbed arm, and the
+    # arm stretched straight up, build
+    true = perturb(panda, np.random.default_rng(1))
+    points = tool_point(true, true.random_configurations(20000, np.random.default_rng(2)))
+    far = points[np.argsort(np.linalg.norm(points, axis=1))[-3:]]
+    stretched = tool_point(true, np.zeros(7))
+    plant = build_plant(true, {f"F{k}": p for k, p in enumerate([*far, stretched])})
+    assert plant.fixture_centres.shape == (4, 3)
+    # the bound is the model's: twice the Panda's lengths reach a fixture the Panda cannot
+    big = replace(panda, a=2 * panda.a, d=2 * panda.d, tool=2 * panda.tool)
+    outside = np.array([1.9, 0.0, 0.6])  # 1.99 m from the base: beyond 1.1 x the Panda's 1.39 m
+    with pytest.raises(UnreachableFixtureError, match="fixture A"):
+        build_plant(panda, {"A": outside})
+    assert build_plant(big, {"A": outside}).fixture_names == ("A",)
