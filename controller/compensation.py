@@ -41,6 +41,7 @@ from spherecal.correction.tool import (
     TOOL_MATCH_TOL,
     ToolError,
     adapter_question,
+    calibrated_from,
     nominal_tool_of,
     samples_shift,
     swapped_tool,
@@ -155,6 +156,33 @@ def check_models(nominal: RobotModel, calibrated: RobotModel, source: str = "cal
         raise ModelMismatchError(
             f"{source}: field {field}: {what} (the controller's model is {nominal.name!r}: a file of another robot?)"
         )
+
+
+def check_roles(nominal: RobotModel, calibrated: RobotModel, call: str = "compensate") -> None:
+    """Raise :class:`ModelMismatchError` when ``nominal`` and ``calibrated`` were passed swapped.
+
+    Detected when the model passed as ``nominal`` is a calibration recorded as made from the model passed as
+    ``calibrated`` (its ``calibration.nominal_tool`` is that model's tool within
+    :data:`~spherecal.correction.tool.TOOL_MATCH_TOL`, :func:`correction.tool.calibrated_from`) and the model passed
+    as ``calibrated`` records no calibration or tool swap (:func:`correction.tool.nominal_tool_of` is None): the
+    robot file and its calibration, in the wrong order. Swapped, the command would be corrected the wrong way, twice
+    the calibration's correction off, and no other check notices (both describe one arm, within millimetres).
+
+    Not detected, as nothing tells the two apart: two models without records (a simulation's true robot and its
+    nominal: :func:`correction.perturb` leaves none), a calibration from a file older than its ``nominal_tool``
+    record, or two calibrations. Refused although meant, the one case known: a controller that runs calibration A of a
+    robot file compensated toward a calibration B of the same file that lost its record (B converted to a URDF) and
+    whose tool moved less than ``TOOL_MATCH_TOL`` (0.1 mm) from the file's; give B with its record (its robot file).
+
+    Args:
+        call: the function's name, for the message.
+    """
+    if calibrated_from(nominal, calibrated) and nominal_tool_of(calibrated) is None:
+        raise ModelMismatchError(
+            f"{call}: nominal and calibrated swapped? the model passed as nominal ({nominal.name!r}) is a calibration "
+            "of the one passed as calibrated (its 'calibration' block records that model's tool as its robot file's, "
+            "and that model records no calibration): pass the controller's model (the robot file) as nominal and the "
+            "calibrated model as calibrated")
 
 
 def _check_difference(nominal: RobotModel, calibrated: RobotModel, q: np.ndarray, source: str) -> None:
@@ -374,7 +402,8 @@ def corrected_ik(
         (n,) joint angles inside the limits [rad].
 
     Raises:
-        ModelMismatchError: ``calibrated`` is not a calibration of ``nominal``.
+        ModelMismatchError: ``calibrated`` is not a calibration of ``nominal``, or the two were passed swapped
+            (:func:`check_roles`).
         SpherecalError: a NaN or infinite target coordinate, a NaN, infinite or far out of range start angle (named).
         UnreachableError: no joint angles reach the target from the seed nor from starts near it (outside the
             workspace).
@@ -383,6 +412,7 @@ def corrected_ik(
     q0 = _seed(q0, calibrated, "q0")
     if nominal is not None:
         check_models(nominal, calibrated)
+        check_roles(nominal, calibrated, "corrected_ik")
         _check_difference(nominal, calibrated, q0, "calibrated model")
     try:
         return nominal_ik_controller(calibrated, target, q0, orientation)
@@ -450,7 +480,8 @@ def compensate(
 
     Raises:
         ModelMismatchError: the calibrated model is of another robot (joint count, convention,
-            limits) or differs from the nominal one by more than :data:`MAX_MODEL_DIFFERENCE`.
+            limits) or differs from the nominal one by more than :data:`MAX_MODEL_DIFFERENCE`; or the two were
+            passed swapped, when their records tell (:func:`check_roles` says when they do and when not).
         SpherecalError: a NaN or infinite target coordinate, a NaN, infinite or far out of range seed angle (named).
         UnreachableError: the nominal controller cannot reach a command (target outside the
             workspace).
@@ -459,6 +490,7 @@ def compensate(
     """
     target, orientation = _target(target, orientation, nominal)
     check_models(nominal, calibrated)
+    check_roles(nominal, calibrated)
     q_seed = _seed(q_seed, nominal, "q_seed")
     if max_iter < 0:
         raise SpherecalError(f"max_iter: expected >= 0 controller evaluations, got {max_iter}")

@@ -264,3 +264,35 @@ def test_a_target_in_millimetres_and_a_seed_in_degrees_are_named_as_such() -> No
         with pytest.raises(JointAngleError, match=r"joint 2 is -17.1887 rad.*degrees\?"):
             call(metres, np.degrees(q))
         call(metres + 0.01, q)  # a target in metres within reach: no refusal
+
+
+def test_nominal_and_calibrated_passed_swapped_are_refused_when_the_records_tell(panda, tmp_path):
+    """A controls review: compensate(target, calibrated, nominal) ran and returned a command corrected the wrong
+    way (twice the calibration's correction off the target) with no word. A calibration written by the workflow and
+    read back records the robot file's tool it started from; the robot file records nothing: that order is refused,
+    in corrected_ik too. Models without records (a simulation's truth) cannot be told apart and still run."""
+    from spherecal.controller.compensation import check_roles
+    from spherecal.correction import save_robot
+    from spherecal.identification.synthetic import make_dataset
+    from spherecal.identification.workflow import WorkflowOptions, run_workflow
+
+    true = perturb(panda, np.random.default_rng(3))
+    dataset, spec = make_dataset(true, per_fixture=150, rng=np.random.default_rng(4), noise=1e-4)
+    calibrated = load_robot(save_robot(run_workflow(panda, dataset, spec, WorkflowOptions()).model,
+                                       tmp_path / "cal.yaml"))
+    q_seed = np.array([0.0, -0.3, 0.0, -2.2, 0.0, 2.0, 0.8])
+    target = tool_point(calibrated, q_seed + 0.05)
+    right = compensate(target, panda, calibrated, q_seed)
+    landing = tool_point(calibrated, nominal_ik_controller(panda, right.command, q_seed))
+    assert np.linalg.norm(landing - target) < 1e-9 < 1e-3 < np.linalg.norm(right.command - target)
+    for call in (lambda: compensate(target, calibrated, panda, q_seed),
+                 lambda: corrected_ik(panda, target, q_seed, nominal=calibrated)):
+        with pytest.raises(ModelMismatchError, match=r"nominal and calibrated swapped\? the model passed as nominal "
+                                                     r"\('franka_panda'\) is a calibration of the one passed") as error:
+            call()
+        assert "\n" not in str(error.value)
+    check_roles(panda, calibrated)  # the right order
+    check_roles(calibrated, calibrated)  # a calibration against itself: its tool is not its file's
+    check_roles(true, panda)  # no records: nothing tells, nothing refused
+    check_roles(panda, true)
+    assert compensate(target, true, panda, q_seed).converged
