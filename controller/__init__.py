@@ -42,6 +42,7 @@ _EXPORTS: dict[str, str] = {
     "SelfMotionRun": "self_motion",
     "SelfMotionSettings": "self_motion",
     "UnreachableFixtureError": "reach",
+    "base_radius": "reach",
     "check_fixture": "reach",
     "check_fixture_distance": "reach",
     "collect_self_motion": "self_motion",

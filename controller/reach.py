@@ -8,9 +8,12 @@ import numpy as np
 from spherecal.correction import RobotModel, frames
 from spherecal.correction.errors import SpherecalError
 
-#: A fixture closer than this to the base column (base to the first joint's frame) is inside
-#: the robot [m].
+#: A fixture closer than this to the Panda's base column (base to the first joint's frame) is inside the robot [m];
+#: another arm's radius is this scaled by its size (:func:`base_radius`).
 BASE_RADIUS = 0.12
+#: :attr:`~spherecal.correction.RobotModel.chain_length` of the embedded Panda [m] (``|a|`` and ``|d|`` summed:
+#: 0.333 + 0.316 + 0.0825 + 0.0825 + 0.384 + 0.088), the length :data:`BASE_RADIUS` goes with.
+PANDA_CHAIN_LENGTH = 1.286
 #: Share of an arm's :attr:`~spherecal.correction.RobotModel.reach` a fixture centre may lie beyond it (a fixture
 #: placed for the nominal arm on a perturbed one; the reach, every link laid end to end, is already more than any
 #: posture reaches).
@@ -33,6 +36,19 @@ class FixtureInsideRobotError(UnreachableFixtureError):
     """A fixture lies inside the robot's base column."""
 
 
+def base_radius(model: RobotModel) -> float:
+    """The radius [m] of ``model``'s base column that a fixture must keep out of: :data:`BASE_RADIUS` (the Panda's,
+    0.12 m) times the arm's :attr:`~spherecal.correction.RobotModel.chain_length` over the Panda's
+    (:data:`PANDA_CHAIN_LENGTH`).
+
+    A DH model carries no link thickness, only lengths; an arm's links are about as thick for its length as the
+    Panda's are for its own (they carry its payload over its reach), so the column scales with the chain, tool
+    excluded (a longer tool does not thicken the base). The Panda keeps 0.12 m; an iiwa14 (1.18 m of chain) gets
+    0.110 m, a Kinova Gen3 lite (0.835 m) 0.078 m (its base is about 0.05 m in radius), a UR5 (1.19 m) 0.111 m.
+    """
+    return BASE_RADIUS * model.chain_length / PANDA_CHAIN_LENGTH
+
+
 def check_fixture_distance(model: RobotModel, name: str, centre: np.ndarray) -> None:
     """Raise :class:`UnreachableFixtureError` if ``centre`` (3,) [m] lies farther from ``model``'s base than its
     :attr:`~spherecal.correction.RobotModel.reach` and :data:`REACH_MARGIN` of it, or is not finite: a fixture in
@@ -53,7 +69,7 @@ def check_fixture(model: RobotModel, name: str, centre: np.ndarray) -> None:
 
     The base column is the segment from the base origin to the first joint's fixed point
     (modified DH: the origin of frame 1; standard DH: ``d1`` along the first axis, since
-    frame 1 turns with joint 1 and carries ``a1``), thickened by :data:`BASE_RADIUS`.
+    frame 1 turns with joint 1 and carries ``a1``), thickened by :func:`base_radius`.
     """
     f = frames(model, np.zeros((1, model.n_joints)))
     a = f.origin[0, :, 0]
@@ -61,7 +77,8 @@ def check_fixture(model: RobotModel, name: str, centre: np.ndarray) -> None:
     axis = b - a
     s = np.clip(np.dot(centre - a, axis) / max(np.dot(axis, axis), 1e-12), 0.0, 1.0)
     distance = np.linalg.norm(centre - (a + s * axis))
-    if distance < BASE_RADIUS:
+    radius = base_radius(model)
+    if distance < radius:
         raise FixtureInsideRobotError(
             f"fixture {name} at {np.round(centre, 4).tolist()} m is inside the robot "
-            f"({distance * 1e3:.0f} mm from the base column, need >= {BASE_RADIUS * 1e3:.0f} mm)", name)
+            f"({distance * 1e3:.0f} mm from the base column, need >= {radius * 1e3:.0f} mm)", name)

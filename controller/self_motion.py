@@ -28,6 +28,7 @@ from spherecal.correction.errors import SpherecalError
 from spherecal.correction.files.samples import Dataset
 
 from .exploration import COVERAGE_PERIOD, RANDOM_PERIOD, Ramp, joint_coverage, make_exploration
+from .home import home
 from .ik import ik
 from .nullspace import NullSpaceController
 from .plant import TIMESTEP, build_plant
@@ -42,15 +43,7 @@ DEFAULT_FIXTURES: dict[str, tuple[float, float, float]] = {
     "P3": (0.45, 0.25, 0.45),
 }
 
-
-#: Start of the reaching IK (the Panda's "ready" pose) and reach settings.
-HOME = np.array([0.0, -0.785, 0.0, -2.356, 0.0, 1.571, 0.785])
-
-
-def home(model: RobotModel) -> np.ndarray:
-    """(n,) start posture of the reach IK: the Panda's ready pose for 7 joints, mid-range otherwise."""
-    start = HOME if model.n_joints == HOME.size else 0.5 * (model.lower + model.upper)
-    return np.clip(start, model.lower, model.upper)
+#: Random restarts of the reach IK, which starts at :func:`controller.home.home`.
 REACH_RESTARTS = 20
 #: Correlation time of the fixture compliance [s]: a new offset every this often, blended.
 NOISE_PERIOD = 0.05
