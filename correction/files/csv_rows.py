@@ -159,13 +159,16 @@ def block_rows(block: list[str], first: int, path: str | os.PathLike, error: typ
 
 def plain_values(block: list[str], width: int, columns: Sequence[int]) -> np.ndarray | None:
     """(len(block), len(columns)) values of a block of plain CSV lines, converted by numpy's C reader,
-    or None when the block is not plain: a quote, a ``#``, a line without exactly ``width`` fields,
+    or None when the block is not plain: a quote, a ``#``, a line without exactly ``width`` fields (each line's
+    count, not the block's total: numpy reads the ``columns`` of a ragged block without a word),
     a line over the field limit, or a value that is not a finite number. The caller then reads the
     block line by line (:func:`block_rows`), which names the row and field of the problem.
     """
     text = "".join(block)
     if '"' in text or "#" in text or text.count(",") != len(block) * (width - 1):
         return None
+    if any(line.count(",") != width - 1 for line in block):  # one line short, another long: the same total, and
+        return None  # numpy's reader takes the columns asked of each line and ignores the rest
     if max(map(len, block)) > field_limit():
         return None
     try:

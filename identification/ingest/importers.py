@@ -759,6 +759,11 @@ def _careful_block(block: list[str], start: int, path: Path, header: list[str], 
         if len(fields) < len(header):
             missing = header[len(fields)]
             raise RecordingError(f"{where}, field {missing!r}: {len(fields)} fields, the header has {len(header)}")
+        extra = next((k for k in range(len(header), len(fields)) if fields[k].strip()), None)
+        if extra is not None:  # a value past the header's columns: a row shifted, or two rows run together (empty
+            # fields there, a logger's trailing comma, hold nothing to misread)
+            raise RecordingError(f"{where}, field 'column {extra + 1}': {len(fields)} fields, the header has "
+                                 f"{len(header)} (a value past the last named column)")
         if [f.strip() for f in fields] == header:
             raise RecordingError(f"{where}, field {header[columns[0]]!r}: the header again (two files concatenated? "
                                  "a recording has one header; merge the rows without it)")

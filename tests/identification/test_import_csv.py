@@ -80,3 +80,54 @@ def test_a_bad_value_in_a_later_block_names_its_row_and_field(tmp_path, monkeypa
         read_joint_csv(path, panda)
     assert str(error.value).startswith(f"{path}: row 11, field 'panda_joint3'")
     assert "\n" not in str(error.value)
+
+
+def _rows(q: np.ndarray) -> list[str]:
+    """One line per row of ``q`` (T, 7) [rad], stamped 1 ms apart, with the finger column ``_write`` writes."""
+    return [",".join([repr(1.7e9 + k * 1e-3)] + [repr(float(v)) for v in row] + ["0.04"]) for k, row in enumerate(q)]
+
+
+def test_a_row_short_of_an_unread_column_is_refused_even_beside_a_long_one(tmp_path) -> None:
+    """A block whose lines hold the header's commas in total, one short and one long, was read by numpy's reader
+    (it takes the columns asked of each line): the short row is named, as it is alone."""
+    panda = load_robot("panda")
+    q = np.tile([0.0, -0.3, 0.0, -2.2, 0.0, 2.0, 0.8], (6, 1)) + np.arange(6)[:, None] * 1e-4
+    rows = _rows(q)
+    rows[1] = rows[1].rsplit(",", 1)[0]  # no finger value
+    rows[2] += ",0.04"  # a finger value too many
+    path = tmp_path / "rec.csv"
+    path.write_text("\n".join([",".join(["time", *JOINTS, "panda_finger_joint1"]), *rows]) + "\n")
+    with pytest.raises(RecordingError) as error:
+        read_joint_csv(path, panda)
+    assert str(error.value).startswith(f"{path}: row 3, field 'panda_finger_joint1': 8 fields, the header has 9")
+
+
+def test_a_value_past_the_last_named_column_is_refused_naming_its_row(tmp_path) -> None:
+    panda = load_robot("panda")
+    q = np.tile([0.0, -0.3, 0.0, -2.2, 0.0, 2.0, 0.8], (6, 1)) + np.arange(6)[:, None] * 1e-4
+    rows = _rows(q)
+    rows[3] += ",0.5"
+    path = tmp_path / "rec.csv"
+    path.write_text("\n".join([",".join(["time", *JOINTS, "panda_finger_joint1"]), *rows]) + "\n")
+    with pytest.raises(RecordingError) as error:
+        read_joint_csv(path, panda)
+    assert str(error.value).startswith(f"{path}: row 5, field 'column 10': 10 fields, the header has 9")
+    assert "\n" not in str(error.value)
+
+
+def test_a_trailing_comma_on_every_row_is_read_as_without_it(tmp_path) -> None:
+    """A logger's trailing comma adds an empty field past the header's: nothing to misread, the rows are read."""
+    panda = load_robot("panda")
+    q = np.tile([0.0, -0.3, 0.0, -2.2, 0.0, 2.0, 0.8], (6, 1)) + np.arange(6)[:, None] * 1e-4
+    head = ",".join(["time", *JOINTS, "panda_finger_joint1"])
+    plain, trailing = tmp_path / "plain.csv", tmp_path / "trailing.csv"
+    plain.write_text("\n".join([head, *_rows(q)]) + "\n")
+    trailing.write_text("\n".join([head, *(row + "," for row in _rows(q))]) + "\n")
+    np.testing.assert_array_equal(read_joint_csv(trailing, panda).q, read_joint_csv(plain, panda).q)
+    np.testing.assert_array_equal(read_joint_csv(trailing, panda).q, q)
+
+
+def test_plain_values_leaves_a_ragged_block_to_the_careful_reader() -> None:
+    """Two lines with the header's commas in total but not each: not plain (None), whatever columns are asked."""
+    assert csv_rows.plain_values(["1,2,3\n", "4,5,6\n"], 3, [0, 1]).tolist() == [[1.0, 2.0], [4.0, 5.0]]
+    assert csv_rows.plain_values(["1,2\n", "4,5,6,7\n"], 3, [0, 1]) is None
