@@ -19,6 +19,7 @@ from the URDF's own ``<inertial>`` elements, which are converted for you). No ot
 
 from __future__ import annotations
 
+import difflib
 import os
 from dataclasses import replace
 
@@ -56,17 +57,23 @@ def read_inertials(path: str | os.PathLike) -> dict:
 def _read(path: str | os.PathLike) -> tuple[dict, dict[str, int]]:
     """:func:`read_inertials` and the file line of each block and entry."""
     data, root = load_yaml(read_text(path, InertialsError, limit=MAX_FILE_BYTES), str(path), InertialsError)
-    if not isinstance(data, dict) or "inertials" not in data:
-        raise InertialsError(f"{path}: expected a mapping with an 'inertials' list (see correction.files."
-                             f"inertials_file)")
+    if not isinstance(data, dict):
+        got = "an empty file" if data is None else type(data).__name__
+        raise InertialsError(f"{path}: row 1, field 'inertials': expected a mapping with an 'inertials' list, got "
+                             f"{got} (see correction.files.inertials_file)")
     rows = inertial_rows(root)
     unknown = [key for key in data if key not in KEYS]
-    if unknown:  # a robot file given for an inertials file names its 'name' here
+    if unknown:  # a robot file given for an inertials file names its 'name' here; a misspelt block its spelling
         key = unknown[0]
         where = f"row {rows[key]}, " if key in rows else ""
         also = "; a robot file (name:, dh:, ...) is not an inertials file" if "dh" in data or "name" in data else ""
-        raise InertialsError(f"{path}: {where}field {key!r}: unknown key (an inertials file holds "
+        near = difflib.get_close_matches(str(key), [k for k in KEYS if k not in data], n=1, cutoff=0.8)
+        hint = f"did you mean {near[0]!r}? " if near and not also else ""
+        raise InertialsError(f"{path}: {where}field {key!r}: unknown key ({hint}an inertials file holds "
                              f"{', '.join(KEYS)}{also})")
+    if "inertials" not in data:
+        raise InertialsError(f"{path}: row 1, field 'inertials': missing; expected a mapping with an 'inertials' "
+                             f"list (see correction.files.inertials_file)")
     return {key: data[key] for key in KEYS if key in data}, rows
 
 

@@ -16,6 +16,7 @@ from spherecal.cli import main
 from spherecal.correction import load_robot
 from spherecal.correction.gravity import InertialsError, gravity_torques, has_inertials
 from tests.correction.urdf_helpers import DATA, mujoco_ready
+from tests.refusal import refused
 
 
 def _qfrc_bias(urdf_text: str, joint_names: list[str], q: np.ndarray) -> np.ndarray:
@@ -120,6 +121,25 @@ def test_inertials_file_replaces_and_a_bad_one_is_one_line(tmp_path, capsys) -> 
     with pytest.raises(InertialsError, match=rf"robot.yaml: row {row}, field 'name': unknown key \(an inertials file "
                                              r"holds inertials, payload; a robot file .* is not an inertials file\)"):
         load_robot("panda", inertials=robot)
+
+
+
+@pytest.mark.parametrize("text, expected", [
+    ("inertial:\n  - {mass: 1.0, com: [0, 0, 0.01]}\n",  # a misspelt block: named, not 'expected a mapping'
+     r"m.yaml: row 1, field 'inertial': unknown key \(did you mean 'inertials'\? an inertials file holds"),
+    ("payload: {mass: 0.5, com: [0, 0, 0.1]}\n", r"m.yaml: row 1, field 'inertials': missing"),
+    ("- {mass: 1.0, com: [0, 0, 0.01]}\n", r"m.yaml: row 1, field 'inertials': expected a mapping .*, got list"),
+    ("", r"m.yaml: row 1, field 'inertials': expected a mapping .*, got an empty file"),
+])
+def test_an_inertials_file_without_its_list_names_the_row_and_field(tmp_path, capsys, text, expected) -> None:
+    """A bad-input sweep: 'inertial:' for 'inertials:' said only 'expected a mapping with an inertials list'."""
+    path = tmp_path / "m.yaml"
+    path.write_text(text)
+    with pytest.raises(InertialsError, match=expected):
+        load_robot("panda", inertials=path)
+    err = refused(["export", "panda", "--format", "yaml", "--out", tmp_path / "out.yaml", "--inertials", path],
+                  tmp_path, capsys)
+    assert re.search(expected, err), err
 
 
 def test_converting_the_convention_keeps_gravity_torques(panda, rng) -> None:
