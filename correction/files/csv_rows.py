@@ -19,6 +19,7 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import SpherecalError
+from .text_input import undecodable_hint
 
 #: Longest physical line read [characters]: a row of joint angles is a few hundred; a file without line
 #: ends (``/dev/zero``, a binary file) is refused here instead of being read whole into one line.
@@ -98,12 +99,32 @@ def iter_lines(path: str | os.PathLike, error: type[SpherecalError], chunk: int 
             try:
                 block = list(islice(lines, chunk))
             except UnicodeDecodeError as problem:
-                raise error(f"{path}: cannot read: not UTF-8 text ({problem.reason})") from None
+                raise error(f"{path}: cannot read: not UTF-8 text ({_undecodable(path, problem)})") from None
             except OSError as problem:
                 raise error(f"{path}: cannot read: {problem.strerror or problem}") from None
             if not block:
                 return
             yield block
+
+
+def _undecodable(path: Path, problem: UnicodeDecodeError) -> str:
+    """Where the first byte that is not UTF-8 is, as ``row N, field K: 0xe9; <what it likely is>`` (``problem``'s
+    reason when the file cannot be read again): the decoder reads the file in chunks, so the row it failed in is
+    found by reading the file again with each bad byte kept as an escape (only on this refusal's path)."""
+    try:
+        with open(path, "rb") as raw:
+            head = raw.read(4)
+        with open(path, encoding="utf-8-sig", errors="surrogateescape", newline=None) as handle:
+            row = 0
+            while line := handle.readline(MAX_LINE + 1):
+                row += 1
+                column = next((k for k, ch in enumerate(line) if "\udc80" <= ch <= "\udcff"), None)
+                if column is not None:
+                    return f"row {row}, field {line[:column].count(',') + 1}: " \
+                           f"{undecodable_hint(ord(line[column]) - 0xDC00, head)}"
+    except OSError:
+        pass
+    return problem.reason
 
 
 def _bounded_lines(handle, path: Path, error: type[SpherecalError]) -> Iterator[str]:

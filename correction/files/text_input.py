@@ -31,7 +31,22 @@ def read_text(path: str | os.PathLike, error: type[Exception], encoding: str = "
     try:
         return data.decode(encoding)
     except UnicodeDecodeError as why:
-        raise error(f"{path}: cannot read: not UTF-8 text (byte {why.start})") from None
+        start = why.start + (len(codecs.BOM_UTF8) if encoding == "utf-8-sig" and data.startswith(codecs.BOM_UTF8)
+                             else 0)
+        row = len(_LINE_BREAK.split(data[:start]))
+        raise error(f"{path}: cannot read: not UTF-8 text (byte {start}, row {row}: "
+                    f"{undecodable_hint(data[start], data)})") from None
+
+
+#: A line break as Python's universal newlines and YAML read it.
+_LINE_BREAK = re.compile(rb"\r\n|\r|\n")
+
+
+def undecodable_hint(byte: int, head: bytes) -> str:
+    """What a byte that is not UTF-8 likely is, for a refusal: ``head`` is the file's start (its byte-order mark)."""
+    if head.startswith((codecs.BOM_UTF16_LE, codecs.BOM_UTF16_BE)):
+        return f"0x{byte:02x}; the file is UTF-16, as its byte-order mark says: save it as UTF-8"
+    return f"0x{byte:02x}; a text file saved as Latin-1 or Windows-1252, or not a text file? save it as UTF-8"
 
 
 def _read_bytes(path: Path, error: type[Exception], limit: int) -> bytes:
