@@ -23,6 +23,8 @@ from pathlib import Path
 import numpy as np
 
 from spherecal.correction.files.csv_rows import RowNames
+from spherecal.correction.files.text_input import read_text
+from spherecal.correction.files.yaml_safe import MAX_FILE_BYTES, load_yaml, node_line
 from spherecal.correction.model import RobotModel
 
 from .importers import (
@@ -66,9 +68,14 @@ def read_bag(path: str | os.PathLike, model: RobotModel, topic: str = TOPIC) -> 
     path = check_source(path)
     if path.name == "metadata.yaml" and path.is_file():  # rosbags: "Unrecognized storage format '.yaml'"
         raise RecordingError(f"{path}: field 'SOURCE': the bag's metadata.yaml; give the bag's folder, {path.parent}")
+    if path.is_file() and path.suffix.lower() == ".csv":  # rosbags: "Unrecognized storage format '.csv'"
+        raise RecordingError(f"{path}: field 'SOURCE': a CSV file, not a bag (a ROS 1 .bag file or a ROS 2 bag "
+                             "folder): use --format csv")
     unindexed: tuple[str, ...] = ()
     if path.is_dir() and not (path / "metadata.yaml").is_file():  # rosbags would say the folder is a missing file
         path, unindexed = _without_metadata(path)
+    elif path.is_dir():
+        _check_metadata(path / "metadata.yaml")
     try:
         found = _read_ros1(path, model, topic) if path.suffix == ".bag" and path.is_file() else None
         if found is None:  # a ROS 2 bag, or a ROS 1 bag that rosbags' reader reads message by message
@@ -134,6 +141,27 @@ def read_bag(path: str | os.PathLike, model: RobotModel, topic: str = TOPIC) -> 
     if keep.all():
         return replace(recording, notes=notes + repeats)
     return replace(recording, q=q[keep], t=t[keep], rows=rows.select(keep), notes=notes + repeats)
+
+
+#: The one top-level key of a ROS 2 bag's ``metadata.yaml``.
+METADATA_KEY = "rosbag2_bagfile_information"
+
+
+def _check_metadata(meta: Path) -> None:
+    """Refuse a ``metadata.yaml`` that is not a ROS 2 bag's, naming it (rosbags said "Invalid bag metadata: 'NoneType'
+    object is not subscriptable" of an empty one, and named the folder only).
+
+    Raises:
+        RecordingError: unreadable, invalid YAML (its row), or no ``rosbag2_bagfile_information`` mapping.
+    """
+    data, root = load_yaml(read_text(meta, RecordingError, limit=MAX_FILE_BYTES), str(meta), RecordingError)
+    if isinstance(data, dict) and isinstance(data.get(METADATA_KEY), dict):
+        return
+    got = ("an empty file" if data is None else f"keys {', '.join(map(repr, list(data)[:3]))}"
+           if isinstance(data, dict) else f"a {type(data).__name__}")
+    row = node_line(root, METADATA_KEY, key_line=True) if isinstance(data, dict) else 1
+    raise RecordingError(f"{meta}: row {row}, field {METADATA_KEY!r}: not a ROS 2 bag's metadata ({got}); "
+                         f"`ros2 bag reindex {meta.parent}` writes it again from the storage file")
 
 
 def _without_metadata(path: Path) -> tuple[Path, tuple[str, ...]]:

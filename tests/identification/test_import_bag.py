@@ -690,3 +690,26 @@ def test_a_ros1_bag_whose_record_time_is_not_its_index_time_is_refused_in_one_li
     with pytest.raises(RecordingError, match=r"late\.bag: cannot read the bag: \w") as error:
         read_bag(bag, load_robot(PANDA))
     assert "\n" not in str(error.value)
+
+
+@pytest.mark.parametrize("text, said", [
+    ("", "row 1, field 'rosbag2_bagfile_information': not a ROS 2 bag's metadata (an empty file)"),
+    ("- a\n- b\n", "row 1, field 'rosbag2_bagfile_information': not a ROS 2 bag's metadata (a list)"),
+    ("version: 9\n", "row 1, field 'rosbag2_bagfile_information': not a ROS 2 bag's metadata (keys 'version')"),
+    ("rosbag2_bagfile_information: {version: 9\n", "row 2: invalid YAML"),
+])
+def test_a_metadata_yaml_not_a_bags_is_refused_naming_it(recording, tmp_path, capsys, text, said) -> None:
+    """A bad-input sweep: an empty or list metadata.yaml said "Invalid bag metadata: 'NoneType' object is not
+    subscriptable", naming the folder; invalid YAML, the YAML parser's lines with no row of ours."""
+    true, t, q, _ = recording
+    bag = write_bag(tmp_path / "bag", "sqlite3", t[:50], q[:50], [f"panda_joint{i + 1}" for i in range(7)])
+    (bag / "metadata.yaml").write_text(text)
+    refused(["import", bag, "--format", "bag", "--robot", PANDA, "--out", tmp_path / "out"], tmp_path, capsys,
+            f"{bag / 'metadata.yaml'}: {said}")
+
+
+def test_a_csv_given_as_a_bag_is_pointed_to_format_csv(recording, tmp_path, capsys) -> None:
+    path = tmp_path / "rec.csv"
+    path.write_text("time,q1\n0,0\n")
+    refused(["import", path, "--format", "bag", "--robot", PANDA, "--out", tmp_path / "out"], tmp_path, capsys,
+            f"{path}: field 'SOURCE': a CSV file, not a bag", "use --format csv")
