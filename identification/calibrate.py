@@ -34,7 +34,7 @@ from .problem import (
 )
 from .pruning import generic_excitation, prune
 from .selfcheck import MAX_SOCKET_NOISE, InconsistentDataError, SelfCheck, self_check
-from .selfcheck_result import leave_out_advice
+from .selfcheck_result import Advice, Piece, told
 from .solvers import solve_lm, solve_pso
 
 METHODS: tuple[str, ...] = ("lm", "pso", "pso+lm")
@@ -373,7 +373,7 @@ def calibrate(
     clock = time.perf_counter()
     checked = (self_check(problem, x, nominal, built, loss=figures, declared=noise_declared, unknowns=edf,
                           inverse=inverse) if check else None)
-    hint, moved_by_hint = "", ()
+    hint, moved_by_hint = (), ()
     if checked is not None and not checked.consistent and scale is not None:
         # ``auto`` refused at least squares' figures. Where a few presses far off are all that is wrong (judged
         # without them, as --loss huber judges, the data is consistent) the refusal names them and the remedies; the
@@ -391,7 +391,7 @@ def calibrate(
         except InconsistentDataError as refused:
             # far presses explain it: the remedy is theirs (a crowded socket, or none for a few presses), not the
             # culprit fixture's (without a trend: a hint is only sought then)
-            raise InconsistentDataError(f"{refused}{hint}{_already_calibrated(nominal, checked)}",
+            raise InconsistentDataError((*refused.pieces, *hint, _already_calibrated(nominal, checked)),
                                         moved_by_hint if hint else refused.moved) from None
     clock = time.perf_counter()
     check_plausible(problem, params, max_change)
@@ -409,7 +409,7 @@ def calibrate(
     if figures != "linear":  # the user's robust loss (auto judges as least squares and refuses such a socket)
         warnings.extend(_discounted_socket(problem, x, figures))
     if hint:  # written with --force: the refusal's remedy stays with the file
-        warnings.append(hint.removeprefix("; "))
+        warnings.append(told(hint).removeprefix("; "))
     if method == "pso" and report:
         warnings.extend(_short_of_minimum(problem, x, jac, inverse))
     return CalibrationResult(
@@ -464,7 +464,7 @@ _CROWDED_CAUSE = ("too many for presses taken before the ball sat; the ball play
                   "ball moved while it was recorded")
 
 
-def _far_presses(problem: CalibrationProblem, x: np.ndarray) -> tuple[str, tuple[str, ...]]:
+def _far_presses(problem: CalibrationProblem, x: np.ndarray) -> tuple[tuple[Piece, ...], tuple[str, ...]]:
     """The clause a refusal gains when samples far from their socket are all that is wrong (``auto``), and the
     fixture it advises leaving out: the one that holds most of them when they are over :data:`MOVED_SHARE` of its
     samples (then they are that socket's moving, not presses before the ball sat), else none."""
@@ -478,10 +478,9 @@ def _far_presses(problem: CalibrationProblem, x: np.ndarray) -> tuple[str, tuple
     if crowded is not None:
         name, held, total = crowded
         return (f"{head}; {'all' if held == far.size else held} of them are at fixture {name}, {held} of its {total} "
-                f"samples: {_CROWDED_CAUSE}; {leave_out_advice(name)}",
-                (name,))
+                f"samples: {_CROWDED_CAUSE}; ", Advice(name)), (name,)
     return (f"{head}: remove them if the ball was not seated in its socket, or calibrate --loss huber to discount "
-            "them", ())
+            "them",), ()
 
 
 def _discounted_socket(problem: CalibrationProblem, x: np.ndarray, loss: str) -> list[str]:

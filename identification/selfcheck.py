@@ -182,7 +182,10 @@ def self_check(
     # few presses and refused calibrations at 0.15x nominal: a review, stop 10)
     relaxed = _zeros_at_tolerance(problem, r)
     level = _level(problem, relaxed, float(np.sqrt(relaxed @ relaxed / dof)), dof, excluded, declared)
-    findings.append(replace(level, message=level.message + outliers) if excluded else level)
+    if excluded:  # the honest-noise warning quotes it with a cause the level names, not after its list of causes
+        level = replace(level, message=level.message + outliers,
+                        clause=level.clause + outliers if level.clause and not level.remedy else level.clause)
+    findings.append(level)
     full = problem.jacobian(x)  # one Jacobian: the leave-one-out, the scale's shrink and the split below
     jac, res, groups, kinds, spread = augmented(problem, x, r, full)
     shrink = _scale_shrink(problem, x, kinds, full, r)
@@ -224,8 +227,8 @@ def self_check(
     prediction = replace(prediction, figures={**prediction.figures, "residual_lag1_correlation": rho})
     if rho > SERIAL:  # said, not applied: the split of the residual (:mod:`.joint_error`) holds a part of it
         inflation = (1.0 + rho) / (1.0 - rho)
-        prediction = replace(prediction, message=(
-            f"{prediction.message}; the residuals are correlated from one sample to the next (lag-1 {rho:.2f} in "
+        prediction = _noted(prediction, (
+            f"the residuals are correlated from one sample to the next (lag-1 {rho:.2f} in "
             f"recording order): the samples hold about 1/{inflation:.2g} as many independent observations as they "
             f"number, the figures above count each as one, so expect up to {np.sqrt(inflation):.2g}x more"))
     _record_held_out(record, nominal, built or problem, judged, noise, parts, joint_error,
@@ -234,12 +237,17 @@ def self_check(
     findings, prediction = _honest_noise(findings, prediction, len(problem.dataset.fixture_names) == 1)
     if record.get("joint_error_rad"):  # say it: validate's predicted spreads include it
         std = record["joint_error_rad"]
-        prediction = replace(prediction, figures={**prediction.figures, "joint_error_mrad": std * 1e3}, message=(
-            f"{prediction.message}; the residual's part that varies smoothly over joint space and any beyond the "
+        prediction = _noted(replace(prediction, figures={**prediction.figures, "joint_error_mrad": std * 1e3}), (
+            f"the residual's part that varies smoothly over joint space and any beyond the "
             f"declared noise are taken as the arm's unmodelled joint-angle error, {std * 1e3:.2g} mrad per joint, "
             "which validate adds at sockets it did not see"))
     findings.append(prediction)
     return SelfCheck(findings=tuple(findings), noise=noise, sigma=sigma, prediction=record)
+
+
+def _noted(finding: Finding, note: str) -> Finding:
+    """``finding`` ending with the clause ``note`` (its message and :attr:`Finding.notes`)."""
+    return replace(finding, message=f"{finding.message}; {note}", notes=(*finding.notes, note))
 
 
 # ------------------------------------------------------------------------------------ geometry
@@ -385,13 +393,17 @@ def _trends(problem: CalibrationProblem, errors: np.ndarray) -> list[Finding]:
         trends = t > TREND_T and change > TREND_CHANGE * problem.noise
         figures = {"t": t, "change_mm": change * 1e3, "first_mm": float(first) * 1e3, "last_mm": float(last) * 1e3,
                    "samples": int(len(e)), "trend": bool(trends)}
-        text = (
-            f"{samples_location(dataset.select(order))}, field 'fixture': the residual at fixture {name} moves "
+        move = (
+            f"the residual at fixture {name} moves "
             f"{change * 1e3:.3g} mm with recording order over its {len(e)} samples (from {first * 1e3:.3g} mm off "
             f"the centre at the first to {last * 1e3:.3g} mm off{' on the other side' if across else ''} at the last)"
         )  # what it means and what to do: :func:`.selfcheck_result.trend_text` (a refusal, a written file's warning)
         # a trend is named, not refused: the level and leave-one-out checks judge what it does to the fit
-        out.append(Finding(f"trend {name}", True, text if trends else f"no trend at {name}", figures))
+        if trends:
+            out.append(Finding(f"trend {name}", True, f"{samples_location(dataset.select(order))}, field 'fixture': "
+                               f"{move}", figures, clause=move))
+        else:
+            out.append(Finding(f"trend {name}", True, f"no trend at {name}", figures))
     return out
 
 
@@ -425,20 +437,19 @@ def _honest_noise(findings: list[Finding], prediction: Finding, one_fixture: boo
     whole = figures["whole_workspace_predicted_mean_mm"], figures["whole_workspace_nominal_expected_mm"]
     # near the recording, where it is used; from one socket, not worse over the whole workspace either
     if figures["predicted_mean_mm"] < figures["nominal_expected_mean_mm"] and (whole[0] < whole[1] or not one_fixture):
-        shown = level.message.split(": ", 1)[-1].split(" and no single")[0]
         level = replace(level, passed=True, figures={**level.figures, "honest_noise_warning": True}, message=(
-            f"warning: {shown}; judged at that noise, the calibration is still expected to beat nominal "
+            f"warning: {level.clause}; judged at that noise, the calibration is still expected to beat nominal "
             f"({figures['predicted_mean_mm']:.3g} mm against {figures['nominal_expected_mean_mm']:.3g} mm, the "
-            f"prediction below): written"))
-        if not prediction.passed:
-            message = _prediction_figures(prediction.message)
+            f"prediction below): written"), remedy="")
+        if not prediction.passed:  # its figures without the verdict and the remedy of the 2x margin (nor its notes)
+            message = prediction.clause
             if not whole[0] < whole[1] and not isinstance(figures.get("region_warning"), str):
                 warning = (f"over the whole workspace the calibration is not expected to beat nominal (predicted "
                            f"{whole[0]:.3g} mm against {whole[1]:.3g} mm): use it near the recorded postures, or "
                            "record a placement where the arm will work")
                 figures = {**figures, "region_warning": warning}
                 message += f"; warning: {warning}"
-            prediction = replace(prediction, passed=True, message=message, figures=figures)
+            prediction = replace(prediction, passed=True, message=message, figures=figures, remedy="", notes=())
     else:  # what failed at that noise, not the 2x verdict of the declared one (a user trial: '1.8 mm against 2.64 mm'
         # under 'cannot be expected to beat the nominal model by 2x' refused one socket for its whole workspace; with
         # the prediction passed, the refusal gave no reason at all)
@@ -447,9 +458,8 @@ def _honest_noise(findings: list[Finding], prediction: Finding, one_fixture: boo
                    "the recording" if not near[0] < near[1] else "at the noise the residuals show, the calibration is "
                    "expected to beat the nominal model near the recording, but from one socket it must not be worse "
                    "over the whole workspace, and it is expected to be")
-        body = _prediction_figures(prediction.message)
-        tail = prediction.message[prediction.message.find(body) + len(body):]
-        level = replace(level, message=f"{level.message}; {verdict}: {body}{tail}")
+        tail = "".join(f"; {clause}" for clause in (prediction.remedy, *prediction.notes) if clause)
+        level = replace(level, message=f"{level.message}; {verdict}: {prediction.clause}{tail}")
     return [level if f.check == "residual level" else f for f in findings], prediction
 
 
@@ -497,33 +507,33 @@ def _level(problem: CalibrationProblem, r: np.ndarray, sigma: float, dof: int, e
                      if declared else "; no noise declared (--noise): accuracy is judged at the residuals' noise")
         return Finding("residual level", True, text, figures)
     against = "the declared" if declared else stated
-    where = (f"{samples_location(dataset)}: residual noise {sigma * 1e3:.3g} mm per axis{with_prior} is "
-             f"{sigma / noise:.3g}x {against} {noise * 1e3:.3g} mm{unstated} (limit {LEVEL_FACTOR:g}x; worst fixture "
-             f"{worst} {per_fixture[worst] * 1e3:.3g} mm)")
+    residual = (f"residual noise {sigma * 1e3:.3g} mm per axis{with_prior} is {sigma / noise:.3g}x {against} "
+                f"{noise * 1e3:.3g} mm{unstated} (limit {LEVEL_FACTOR:g}x; worst fixture {worst} "
+                f"{per_fixture[worst] * 1e3:.3g} mm)")
+    location = samples_location(dataset)
+    where = f"{location}: {residual}"
+    # the noise as the honest-noise warning quotes it (:func:`_honest_noise`): its rows, without the file
+    source = dataset.source or "samples"  # samples_location's head
+    noise_clause = f"{location.removeprefix(source + ': ')}: {residual}"
     weight = problem.prior_weight
     if alone is not None:  # the prior's rows are in sigma: is it the samples, or a prior holding the arm at nominal?
+        cause = None
         if alone <= LEVEL_FACTOR * noise and weight > PRIOR:
-            return Finding("residual level", False, (
-                f"{where}: the prior "
-                f"(--prior {weight:g}, default {PRIOR:g}) holds the parameters nearer the nominal model than this arm "
-                "is; lower it"), figures)
-        if alone <= LEVEL_FACTOR * noise:
-            return Finding("residual level", False, (
-                f"{where}: the samples fit only with parameters "
-                "further from the nominal model than a real arm differs from its design: known distances or positions "
-                "that are wrong (all alike, as no single one stands out), or a nominal model of another arm"),
-                figures)
+            cause = (f"the prior (--prior {weight:g}, default {PRIOR:g}) holds the parameters nearer the nominal model "
+                     "than this arm is; lower it")
+        elif alone <= LEVEL_FACTOR * noise:
+            cause = ("the samples fit only with parameters further from the nominal model than a real arm differs from "
+                     "its design: known distances or positions that are wrong (all alike, as no single one stands "
+                     "out), or a nominal model of another arm")
+        if cause is not None:  # a cause it names: the honest-noise warning quotes it with the noise
+            return Finding("residual level", False, f"{where}: {cause}", figures, clause=f"{noise_clause}: {cause}")
     held = (f", the prior (--prior {weight:g}, default {PRIOR:g}) holding the model at nominal"
             if weight > HEAVY_PRIOR * PRIOR else "")
-    return Finding(
-        "residual level",
-        False,
-        f"{where} and no single fixture, distance or position explains it: samples of another arm, a fixture that "
-        f"moved, a fit that did not converge{held}, or "
-        + ("the noise declared too small (--noise)" if declared else
-           f"more noise than the fit assumes ({noise * 1e3:.3g} mm: none declared; give it with --noise)"),
-        figures,
-    )
+    causes = (f"no single fixture, distance or position explains it: samples of another arm, a fixture that "
+              f"moved, a fit that did not converge{held}, or "
+              + ("the noise declared too small (--noise)" if declared else
+                 f"more noise than the fit assumes ({noise * 1e3:.3g} mm: none declared; give it with --noise)"))
+    return Finding("residual level", False, f"{where} and {causes}", figures, clause=noise_clause, remedy=causes)
 
 
 # --------------------------------------------------------------------------------- prediction
@@ -733,7 +743,7 @@ def _prediction(nominal: RobotModel, built: CalibrationProblem, noise: float, sh
                 + (", with the bias of the arm's joint-angle error" if far is not whole else "")
                 + "): record a placement there to calibrate it")
             text += f"; warning: {figures['region_warning']}"
-        return Finding("prediction", True, text, figures), record
+        return Finding("prediction", True, text, figures, clause=text), record
     remedy = "record more self-motion, more fixtures or known distances, or with less play"
     if from_data and excess < floor:  # no error of the nominal's to find here: more of the same would not help
         remedy = (f"the nominal model already fits these samples within their noise (its spread per socket "
@@ -744,24 +754,11 @@ def _prediction(nominal: RobotModel, built: CalibrationProblem, noise: float, sh
     # printed on the training sockets' line, under '1.74 mm against 2.85 mm' that reads as a pass (a user trial,
     # MUKCa's dinova_2 right-high)
     ratio = f", its predicted error {predicted_mean / reference:.2g}x the nominal's," if reference > 0 else ""
-    return Finding(
-        "prediction",
-        False,
-        f"{samples_location(built.dataset)}: {PREDICTION_REFUSED} by {1 / BEAT:g}x "
-        f"{'near the recording' if is_near else 'over the workspace'}{ratio} where at most {BEAT:g}x is needed: "
-        f"{text}; {remedy}",
-        figures,
-    ), record
+    verdict = (f"{samples_location(built.dataset)}: {PREDICTION_REFUSED} by {1 / BEAT:g}x "
+               f"{'near the recording' if is_near else 'over the workspace'}{ratio} where at most {BEAT:g}x is needed")
+    return Finding("prediction", False, f"{verdict}: {text}; {remedy}", figures, clause=text, remedy=remedy), record
 
 
 #: The head of a prediction's refusal (:func:`_prediction`), before its margin and figures.
 PREDICTION_REFUSED = "the calibration cannot be expected to beat the nominal model"
 
-
-def _prediction_figures(message: str) -> str:
-    """A prediction finding's figures (from ``predicted mean error`` to its remedy, exclusive) without its verdict: what
-    a refusal judged at another bar (:func:`_honest_noise`) quotes."""
-    body = message[message.find("predicted mean error "):]
-    for remedy in ("; record more self-motion", "; the nominal model already fits"):
-        body = body.split(remedy, 1)[0]
-    return body

@@ -4,6 +4,7 @@ and the refusal (:class:`InconsistentDataError`, one line)."""
 from __future__ import annotations
 
 import re
+from collections.abc import Collection, Sequence
 from dataclasses import dataclass, field
 from statistics import median
 
@@ -21,18 +22,46 @@ class CalibrationRefused(SpherecalError):
         return refusal_lines(str(self))
 
 
+@dataclass(frozen=True)
+class Advice:
+    """A refusal's advice to leave out fixture ``fixture`` (:func:`leave_out_advice`), kept apart from its text: the
+    workflow tries it, and where leaving the fixture out does not help, the refusal says 'record it again' in its place
+    (:meth:`InconsistentDataError.told`)."""
+
+    fixture: str
+
+    def __str__(self) -> str:
+        return leave_out_advice(self.fixture)
+
+
+#: A piece of a refusal's text: plain text, or the advice to leave a fixture out.
+Piece = str | Advice
+
+
+def told(pieces: Sequence[Piece], tried: Collection[str] = ()) -> str:
+    """The text of ``pieces``; the advice to leave out a fixture of ``tried`` (the workflow tried it, and it did not
+    help) reads 'record it again'."""
+    return "".join("record it again" if isinstance(p, Advice) and p.fixture in tried else str(p) for p in pieces)
+
+
 class InconsistentDataError(CalibrationRefused):
     """The samples, fixtures and declared noise contradict each other, or the result cannot beat nominal.
 
     Attributes:
+        pieces: the message as it was composed (:data:`Piece`: text, and the advice to leave a fixture out apart).
         moved: fixtures the refusal names: whose residual trends with recording order (the socket or the ball moved
             while they were recorded), or the one fixture that alone explains the inconsistency (the culprit); the
             workflow says what leaving them out gives (:func:`.workflow.run_workflow`).
     """
 
-    def __init__(self, message: str, moved: tuple[str, ...] = ()) -> None:
-        super().__init__(message)
+    def __init__(self, message: str | Sequence[Piece], moved: tuple[str, ...] = ()) -> None:
+        self.pieces = (message,) if isinstance(message, str) else tuple(message)
+        super().__init__(told(self.pieces))
         self.moved = tuple(moved)
+
+    def told(self, tried: Collection[str]) -> str:
+        """The message with the advice to leave out a fixture of ``tried`` reading 'record it again' (:func:`told`)."""
+        return told(self.pieces, tried)
 
 
 #: A refusal longer than this [characters] is printed as a short first line and its clauses below it (a user trial:
@@ -105,9 +134,17 @@ class Finding:
         check: what was checked (``"residual level"``, ``"distance P1-P2"``, ``"position P2"``,
             ``"fixture P3"``, ``"prediction"``, ``"separation P1-P2"``, ``"motion P2"``).
         passed: False when the check failed (True also for ``unchecked`` findings).
-        message: one line for humans (the refusal's text when it failed).
+        message: one line for humans (the refusal's text when it failed), composed of the pieces below where the
+            check has them.
         figures: plain numbers (mm where the key says so).
         culprit: a failure that names the one input to fix.
+        clause: the part of ``message`` that a later message quotes, without the file it names and the verdict: a
+            failed residual level's noise (its rows, the figure, a cause it names), a trend's move (the fixture, the
+            move), the prediction's figures; "" for the other checks.
+        remedy: what ``message`` says after ``clause``: a failed prediction's remedy, a failed residual level's list of
+            what may cause it (what judging at the noise the residuals show answers); "" otherwise.
+        notes: clauses ``message`` ends with after them (the prediction's: its residuals' serial correlation, the
+            arm's joint-angle error).
     """
 
     check: str
@@ -115,6 +152,9 @@ class Finding:
     message: str
     figures: dict = field(default_factory=dict)
     culprit: bool = False
+    clause: str = ""
+    remedy: str = ""
+    notes: tuple[str, ...] = ()
 
 
 @dataclass(frozen=True)
@@ -152,14 +192,14 @@ class SelfCheck:
     def refusal(self) -> str:
         """The one line of a refusal ("" when consistent): the culprit, else the failed level or
         prediction figure, else the most inconsistent group with the note that no single one explains it."""
-        return self._refusal()[0]
+        return told(self._refusal()[0])
 
-    def _refusal(self) -> tuple[str, tuple[str, ...]]:
-        """(:attr:`refusal`, the fixtures it names for leaving out: a culprit fixture, a trending one, and on a refusal
-        of the residual level the fixture that stands out before the trending ones)."""
+    def _refusal(self) -> tuple[tuple[Piece, ...], tuple[str, ...]]:
+        """(:attr:`refusal` as :data:`Piece` s, the fixtures it names for leaving out: a culprit fixture, a trending
+        one, and on a refusal of the residual level the fixture that stands out before the trending ones)."""
         failed = self.failed
         if not failed:
-            return "", ()
+            return (), ()
         if self.culprit is not None:
             text, moved = self._with_trend(self.culprit)
             if not moved and self.culprit.check.startswith("fixture "):  # left out even without a trend
@@ -175,14 +215,16 @@ class SelfCheck:
             standing = None if alien else self._standing_out()
             if standing is not None and standing not in moved:  # tried first: the level names it as the worst
                 moved = (standing, *moved)
-            return ("; ".join([figures[0].message, *(_without_location(trend_text(f, False, self._one_fixture))
-                                                     for f in trends)]), moved)
+            text: tuple[Piece, ...] = (figures[0].message,)
+            for trend in trends:
+                text += ("; ", *_trend_told(trend, self._one_fixture))
+            return text, moved
         worst = max(failed, key=lambda f: f.figures.get("statistic", 0.0) - f.figures.get("dof", 0))
         others = len(failed) - 1
         text, moved = self._with_trend(worst)
         if not others:
             return text, moved
-        return f"{text}; {others} other check(s) failed too and no single one explains the data", moved
+        return (*text, f"; {others} other check(s) failed too and no single one explains the data"), moved
 
     def _standing_out(self) -> str | None:
         """The fixture whose residual per axis exceeds :data:`STANDS_OUT` x the median of the others' (the residual
@@ -197,14 +239,14 @@ class SelfCheck:
         worst = max(per, key=per.get)
         return worst if per[worst] > STANDS_OUT * median(v for k, v in per.items() if k != worst) else None
 
-    def _with_trend(self, finding: Finding) -> tuple[str, tuple[str, ...]]:
-        """A fixture's failed ``finding`` with the trend of the same fixture, if its residual trends with recording
-        order (then the fixture is the one to leave out), and that fixture."""
+    def _with_trend(self, finding: Finding) -> tuple[tuple[Piece, ...], tuple[str, ...]]:
+        """A fixture's failed ``finding`` (as :data:`Piece` s) with the trend of the same fixture, if its residual
+        trends with recording order (then the fixture is the one to leave out), and that fixture."""
         trend = next((f for f in self.findings if f.figures.get("trend") and finding.check.endswith(
             " " + _fixture_of(f))), None)
         if trend is None:
-            return finding.message, ()
-        return (f"{finding.message}; {_without_location(trend_text(trend, False, self._one_fixture))}",
+            return (finding.message,), ()
+        return ((finding.message, "; ", *_trend_told(trend, self._one_fixture)),
                 () if self._one_fixture else (_fixture_of(trend),))
 
     @property
@@ -290,10 +332,20 @@ def trend_text(finding: Finding, kept: bool, only: bool = False) -> str:
         return (f"{finding.message}: the socket or the ball moved while it was recorded, or the arm's own error "
                 f"changes along the self-motion; the checks find it consistent with the other fixtures, so it is kept "
                 f"(calibrate --exclude-fixture {name} leaves it out)")
-    if only:  # a review: a one-socket refusal advised leaving out the only socket
-        return (f"{finding.message}: the socket or the ball moved while it was recorded; record it again (it is the "
-                "only fixture)")
-    return f"{finding.message}: the socket or the ball moved while it was recorded; {leave_out_advice(name)}"
+    return finding.message + told(_trend_advice(finding, only))
+
+
+def _trend_told(finding: Finding, only: bool) -> tuple[Piece, ...]:
+    """A trend in a refusal, joined after the finding that says where: the move (its :attr:`Finding.clause`, without
+    the file and rows) with what it means and what to do (:func:`trend_text`)."""
+    return (finding.clause, *_trend_advice(finding, only))
+
+
+def _trend_advice(finding: Finding, only: bool) -> tuple[Piece, ...]:
+    """What a refused trend means and what to do, after its move: leave the fixture out (:class:`Advice`) or record it
+    again; ``only`` (a review: a one-socket refusal advised leaving out the only socket): record it again."""
+    moved = ": the socket or the ball moved while it was recorded; "
+    return (f"{moved}record it again (it is the only fixture)",) if only else (moved, Advice(_fixture_of(finding)))
 
 
 def leave_out_advice(name: str) -> str:
@@ -310,10 +362,3 @@ def _fixture_of(trend: Finding) -> str:
 def _worst_group(findings: tuple[Finding, ...]) -> Finding | None:
     groups = [f for f in findings if "log10_p" in f.figures and f.passed and not f.figures.get("unchecked")]
     return min(groups, key=lambda f: f.figures["log10_p"]) if groups else None
-
-
-def _without_location(message: str) -> str:
-    """A finding's message without its leading ``"samples.csv: rows 7-26, field 'fixture': "`` (joined after
-    another finding that already says where)."""
-    found = re.match(r".*?field '[^']*': ", message)
-    return message[found.end():] if found else message.split(": ", 1)[-1]

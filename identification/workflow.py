@@ -37,7 +37,7 @@ from .calibrate import MAX_CHANGE, CalibrationResult, calibrate
 from .misplaced import misplaced
 from .problem import NOISE, PRIOR, ImplausibleCalibrationError
 from .selection import ModelSelection, select_model, start_for
-from .selfcheck_result import InconsistentDataError, leave_out_advice
+from .selfcheck_result import InconsistentDataError
 from .tool_fit import recentred_tool
 from .training import exclude_fixtures, training_record
 
@@ -266,14 +266,12 @@ def _remedy_tried(refused: InconsistentDataError, nominal: RobotModel, dataset: 
         # and the self-check's trend lines carry no 'warning:' label, so a count never matched what it prints (a
         # review: 'with 4 warnings' where the run printed 5 'warning:' lines, 'with 5' where it printed 4)
         warned = ", with warnings" if done.result.warnings or (check is not None and check.warnings) else ""
-        return InconsistentDataError(f"{refused}; without {them} the rest is consistent and is written{warned} "
-                                     f"(calibrate {flags(left_out)})", left_out)
+        return InconsistentDataError((*refused.pieces, f"; without {them} the rest is consistent and is written"
+                                                        f"{warned} (calibrate {flags(left_out)})"), left_out)
     them = _listed(names)
-    said = str(refused)
-    for name in names:  # the advice tried: what is left of it (h8's trial read 'leave it out', then 'does not help')
-        said = said.replace(leave_out_advice(name), "record it again")
-    return InconsistentDataError(f"{said}; leaving {them} out does not help: without {them} the rest is refused too "
-                                 f"(calibrate {flags(names)} says why)", names)
+    # the advice tried: what is left of it, 'record it again' (h8's trial read 'leave it out', then 'does not help')
+    return InconsistentDataError(f"{refused.told(names)}; leaving {them} out does not help: without {them} the rest "
+                                 f"is refused too (calibrate {flags(names)} says why)", names)
 
 
 def _listed(names: tuple[str, ...]) -> str:

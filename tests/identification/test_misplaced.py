@@ -123,11 +123,20 @@ def test_one_press_in_the_other_socket_is_named_in_the_singular(tmp_path, capsys
 
 
 def test_a_refusal_joining_two_findings_says_where_once() -> None:
-    from spherecal.identification.selfcheck_result import _without_location
+    # a fixture's disagreement and its trend: the trend joins as its move (its clause), without the file and rows again
+    from spherecal.identification.selfcheck_result import Finding, InconsistentDataError, SelfCheck
 
-    assert _without_location("s.csv: rows 7-26, field 'fixture': the residual at fixture A moves 13.5 mm") == (
-        "the residual at fixture A moves 13.5 mm")
-    assert _without_location("samples: all rows: residual 2 mm") == "all rows: residual 2 mm"
+    where = "s.csv: rows 7-26, field 'fixture': "
+    level = Finding("residual level", True, "residual 1 mm", {"per_fixture_std_mm": {"A": 1.0, "B": 1.0}})
+    culprit = Finding("fixture A", False, f"{where}the samples at fixture A disagree", culprit=True)
+    move = "the residual at fixture A moves 13.5 mm"
+    trend = Finding("trend A", True, where + move, {"trend": True}, clause=move)
+    with pytest.raises(InconsistentDataError) as refused:
+        SelfCheck((level, culprit, trend), 3e-4, 3e-4).raise_if_inconsistent()
+    assert str(refused.value) == (f"{where}the samples at fixture A disagree; {move}: the socket or the ball moved "
+                                  "while it was recorded; leave it out (calibrate --exclude-fixture A) or record it "
+                                  "again")
+    assert refused.value.moved == ("A",)
 
 
 def test_presses_far_off_under_a_robust_loss_are_not_advised_that_loss_again() -> None:

@@ -71,8 +71,9 @@ def test_a_fault_in_the_remedy_run_leaves_the_refusal_as_it_was(monkeypatch) -> 
 
 
 def _trend(name: str, change_mm: float = 6.0) -> Finding:
-    return Finding(f"trend {name}", True, f"samples.csv: rows 21-40, field 'fixture': the residual at fixture {name} "
-                   f"moves {change_mm:g} mm with recording order", {"trend": True, "change_mm": change_mm})
+    move = f"the residual at fixture {name} moves {change_mm:g} mm with recording order"
+    return Finding(f"trend {name}", True, f"samples.csv: rows 21-40, field 'fixture': {move}",
+                   {"trend": True, "change_mm": change_mm}, clause=move)
 
 
 def test_the_fixtures_to_leave_out_come_strongest_trend_first() -> None:
@@ -128,7 +129,7 @@ def test_a_refusal_of_the_only_fixture_advises_recording_it_again_not_leaving_it
 def test_a_written_calibration_keeps_its_drifting_fixture_and_advises_no_exclusion() -> None:
     check = SelfCheck((Finding("residual level", True, "residual 0.3 mm per axis"), _trend("P2")), 3e-4, 3e-4)
     check.raise_if_inconsistent()  # consistent: nothing raised
-    assert check._refusal() == ("", ())
+    assert check.refusal == "" and check._refusal()[1] == ()
     (warning,) = check.warnings
     assert warning.endswith("so it is kept (calibrate --exclude-fixture P2 leaves it out)")
     assert "leave it out" not in warning

@@ -18,6 +18,7 @@ from spherecal.identification.calibrate import calibrate
 from spherecal.identification.leave_out import leave_out
 from spherecal.identification.problem import PRIOR
 from spherecal.identification.selfcheck import InconsistentDataError
+from spherecal.identification.selfcheck_result import Advice, Finding, leave_out_advice
 from spherecal.identification.synthetic import PANDA_FIXTURES, make_dataset
 
 
@@ -360,3 +361,50 @@ def test_samples_the_nominal_model_already_fits_are_refused_with_the_right_advic
                                                     r"noise .*: there is nothing here to calibrate") as refused:
         calibrate(panda, dataset, spec)
     assert "record more self-motion" not in str(refused.value)
+
+
+# ------------------------------------------------------------------ messages composed of pieces
+def _noise_like_level(message: str) -> Finding:
+    """A failed residual level whose residuals look like noise, its message worded as ``message``."""
+    return Finding("residual level", False, message, {"robust_ratio": 0.9, "residual_std_mm": 1.0},
+                   clause="rows 2-9: residual noise 1 mm per axis", remedy="causes")
+
+
+def _prediction_finding(whole_mm: float) -> Finding:
+    """A failed prediction (2x margin) that beats nominal near the recording, ``whole_mm`` over the whole workspace
+    against 4 mm of the nominal model."""
+    figures = {"predicted_mean_mm": 1.0, "nominal_expected_mean_mm": 1.5, "whole_workspace_predicted_mean_mm": whole_mm,
+               "whole_workspace_nominal_expected_mm": 4.0}
+    return Finding("prediction", False, "s.csv: rows 2-9: refused by 2x: predicted mean error 1 mm; remedy; serial",
+                   figures, clause="predicted mean error 1 mm", remedy="remedy", notes=("serial",))
+
+
+@pytest.mark.parametrize("wording", ["s.csv: rows 2-9: residual noise 1 mm per axis and no single one: causes",
+                                     "reworded: the residual is 1 mm (nothing else named)"])
+def test_judged_at_the_noise_shown_the_messages_quote_the_findings_pieces_not_their_wording(wording) -> None:
+    # the warning once took the level's message up to ' and no single', and the prediction's from 'predicted mean
+    # error ' to its remedy: a reworded message would have changed both silently
+    from spherecal.identification.selfcheck import _honest_noise
+
+    findings, prediction = _honest_noise([_noise_like_level(wording)], _prediction_finding(3.0))
+    assert findings[0].passed and findings[0].message == (
+        "warning: rows 2-9: residual noise 1 mm per axis; judged at that noise, the calibration is still expected to "
+        "beat nominal (1 mm against 1.5 mm, the prediction below): written")
+    assert prediction.passed and prediction.message == "predicted mean error 1 mm"
+    # one socket that would make the whole workspace worse: refused, the prediction's figures, remedy and notes quoted
+    findings, prediction = _honest_noise([_noise_like_level(wording)], _prediction_finding(5.0), one_fixture=True)
+    assert not findings[0].passed and not prediction.passed
+    assert findings[0].message == (
+        f"{wording}; at the noise the residuals show, the calibration is expected to beat the nominal model near the "
+        "recording, but from one socket it must not be worse over the whole workspace, and it is expected to be: "
+        "predicted mean error 1 mm; remedy; serial")
+
+
+def test_the_advice_tried_is_replaced_where_it_was_given_and_nowhere_else() -> None:
+    # the workflow replaced the advice's text in the whole refusal; now the advice is a piece of its own
+    said = f"a message that quotes '{leave_out_advice('A')}'; "
+    refused = InconsistentDataError((said, Advice("A"), "; ", Advice("B")), ("A", "B"))
+    assert str(refused) == said + leave_out_advice("A") + "; " + leave_out_advice("B")
+    assert refused.told(("A",)) == said + "record it again; " + leave_out_advice("B")
+    plain = InconsistentDataError("plain")
+    assert plain.told(("A",)) == "plain" and plain.pieces == ("plain",)
