@@ -219,5 +219,12 @@ def test_auto_on_an_arm_without_masses_says_the_elastic_models_were_not_tried(tm
     centres = {"P1": np.array([0.9, -0.3, 0.6]), "P2": np.array([0.9, 0.0, 0.5]), "P3": np.array([0.8, 0.3, 0.6])}
     dataset, spec = make_dataset(true, centres, per_fixture=40, rng=rng, noise=2e-4)
     done = run_workflow(nominal, dataset, spec, WorkflowOptions())
-    assert ("elastic and elastic+scale not tried (big6 has no link masses and matches no embedded arm: give them "
-            "with --inertials FILE or <inertial> elements in its URDF)") in done.selection.summary()
+    said = ("elastic and elastic+scale not tried (big6 has no link masses and matches no embedded arm: give them "
+            "with --inertials FILE or <inertial> elements in its URDF)")
+    assert said in done.selection.summary()
+    # once, in what calibrate prints and in the file (a review read it twice in model selection's report)
+    assert done.summary().count("not tried") == 1 and done.block["model_selection"]["reason"].count("not tried") == 1
+    # the same with too few groups to cross-validate (BIC), from two of the sockets
+    two = dataset.select(np.flatnonzero(dataset.labels != "P3"))
+    two = Dataset(labels=two.labels, q=two.q, fixture_names=("P1", "P2"))
+    assert run_workflow(nominal, two, None, WorkflowOptions()).summary().count("not tried") == 1
