@@ -8,14 +8,16 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from functools import cache
 
 import numpy as np
 
-from spherecal.controller.reach import UnreachableFixtureError, check_fixture
 from spherecal.correction import RobotModel, SpherecalError, frames, load_robot, perturb
 from spherecal.correction.files.fixtures import FixtureSpec
 from spherecal.identification.calibrate import calibrate
-from spherecal.identification.synthetic import make_dataset, project_to_point
+from spherecal.identification.synthetic import make_dataset
+
+from ..planning.postures import reaches
 
 
 class ExperimentError(SpherecalError):
@@ -54,12 +56,6 @@ def true_robot(nominal: RobotModel, rng: np.random.Generator) -> RobotModel:
     return perturb(nominal, rng)
 
 
-#: The embedded Panda's reach beyond its base column [m] (:func:`arm_reach` of ``load_robot("panda")``: its
-#: :attr:`~correction.RobotModel.reach`, 1.393 m, less its 0.333 m column): the scale of :func:`default_fixtures`'s
-#: points, which were chosen on it.
-PANDA_REACH = 1.06
-#: The top of the embedded Panda's base column in its base frame [m] (:func:`column_top`).
-PANDA_COLUMN_TOP = (0.0, 0.0, 0.333)
 #: Shares of the scaled distance from the column top tried in turn until the arm reaches a default fixture inside
 #: its joint limits (:func:`default_fixtures`).
 PULL_IN = (1.0, 0.9, 0.8, 0.7, 0.6, 0.5)
@@ -71,6 +67,20 @@ def column_top(model: RobotModel) -> np.ndarray:
     f = frames(model, np.zeros((1, model.n_joints)))
     a = f.origin[0, :, 0]
     return f.origin[1, :, 0] if model.convention == "modified" else a + model.d[0] * f.z[0, :, 0]
+
+
+@cache
+def fixtures_arm() -> RobotModel:
+    """The arm :func:`default_fixtures`'s points were chosen on: the embedded Panda, read once per process (measured,
+    never handed out: its reach beyond its base column, 1.06 m, and its column's top, 0.333 m above the base, are
+    what another arm's points are scaled from)."""
+    return load_robot("panda")
+
+
+def reach_scale(model: RobotModel) -> float:
+    """``model``'s :func:`arm_reach` over that of :func:`fixtures_arm` (the Panda's 1.06 m): how much larger the arm
+    is than the one the default fixtures were chosen on (a 0.45 m six-joint arm 0.42, an iiwa14 0.89)."""
+    return arm_reach(model) / arm_reach(fixtures_arm())
 
 
 def arm_reach(model: RobotModel) -> float:
@@ -87,7 +97,7 @@ def default_fixtures(model: RobotModel | None = None) -> dict[str, np.ndarray]:
     ``controller.self_motion.DEFAULT_FIXTURES``) for ``model`` None or an arm that reaches all three inside its joint
     limits (the Panda, the FR3, the iiwa14, the Gen3 lite, a 1.3 m six-joint arm). An arm that does not reach one
     of them (a 0.45 m arm: 0.24 m short of P1) gets the same points scaled about the top of its base column by its
-    reach over the Panda's (:func:`arm_reach`, :data:`PANDA_REACH`), where they sit for the Panda relative to the
+    reach over the Panda's (:func:`reach_scale`), where they sit for the Panda relative to the
     arm's size; a point the arm does not reach there is pulled towards the column top (:data:`PULL_IN`) until it
     does, and one still unreached is returned as scaled (the simulation refuses it, naming it).
 
@@ -98,28 +108,17 @@ def default_fixtures(model: RobotModel | None = None) -> dict[str, np.ndarray]:
     from spherecal.controller.self_motion import DEFAULT_FIXTURES  # MuJoCo: only a simulation needs it (start-up)
 
     points = {name: np.asarray(centre, dtype=float) for name, centre in DEFAULT_FIXTURES.items()}
-    if model is None or all(_reaches(model, p) for p in points.values()):
+    if model is None or all(reaches(model, p) for p in points.values()):
         return points
-    scale = arm_reach(model) / PANDA_REACH
-    top, panda_top = column_top(model), np.asarray(PANDA_COLUMN_TOP)
+    scale = reach_scale(model)
+    top, panda_top = column_top(model), column_top(fixtures_arm())
     return {name: _reached(model, [top + (p - panda_top) * scale * share for share in PULL_IN])
             for name, p in points.items()}
 
 
-def _reaches(model: RobotModel, point: np.ndarray) -> bool:
-    """Whether ``point`` (3,) [m] lies outside the base column and the arm's tool point reaches it inside the joint
-    limits (64 random seeds projected onto it, seeded: the same answer every run)."""
-    try:
-        check_fixture(model, "", point)
-    except UnreachableFixtureError:
-        return False
-    seeds = model.random_configurations(64, np.random.default_rng(0))
-    return bool(project_to_point(model, seeds, point, freeze=True)[1].any())
-
-
 def _reached(model: RobotModel, tries: list[np.ndarray]) -> np.ndarray:
-    """The first of ``tries`` (3,) [m] the arm reaches (:func:`_reaches`), else the first."""
-    return next((point for point in tries if _reaches(model, point)), tries[0])
+    """The first of ``tries`` (3,) [m] the arm reaches (:func:`.planning.postures.reaches`), else the first."""
+    return next((point for point in tries if reaches(model, point)), tries[0])
 
 
 @dataclass

@@ -18,7 +18,14 @@ from spherecal.correction.files.outputs import OutputSet
 from spherecal.correction.files.provenance import comment_block, provenance
 from spherecal.correction.files.samples_csv import format_samples
 
-from .experiment import PANDA_REACH, ExperimentError, arm_reach, default_fixtures, fixture_spec, joint_stiffness
+from .experiment import (
+    ExperimentError,
+    arm_reach,
+    default_fixtures,
+    fixture_spec,
+    joint_stiffness,
+    reach_scale,
+)
 
 #: The files a simulation writes into its folder.
 SIMULATION_FILES = ("samples.csv", "fixtures.yaml", "truth.yaml")
@@ -165,9 +172,9 @@ def true_centres(path: str | None, nominal: RobotModel | None = None, report=Non
         panda = default_fixtures()
         if report is not None and any(not np.array_equal(points[k], panda[k]) for k in panda):
             where = ", ".join(f"{k} {np.round(v, 3).tolist()}" for k, v in points.items())
-            reach = arm_reach(nominal)
-            report(f"the Panda's default fixtures are out of this arm's reach: scaled to its reach ({reach:.2f} m "
-                   f"beyond its base column, {reach / PANDA_REACH:.2f}x the Panda's): {where} m; give your own with "
+            report(f"the Panda's default fixtures are out of this arm's reach: scaled to its reach "
+                   f"({arm_reach(nominal):.2f} m beyond its base column, {reach_scale(nominal):.2f}x the Panda's): "
+                   f"{where} m; give your own with "
                    "--fixtures (spherecal plan ranks candidates)")
         return points
     spec = read_fixtures(path)

@@ -47,11 +47,12 @@ from spherecal.correction.files.fixtures import FixtureSpec
 from spherecal.correction.files.samples import Dataset
 from spherecal.identification.prediction import Prediction, Workspace, predict_accuracy
 from spherecal.identification.selfcheck import MIN_SEPARATION
-from spherecal.identification.synthetic import fixture_samples, project_to_point
+from spherecal.identification.synthetic import fixture_samples
 
 from ..parallel import Outcome, run_tasks
 from .candidates import Candidate, CandidateError
 from .hand_guiding import hand_guided
+from .postures import reach_configuration
 
 MOTIONS: tuple[str, ...] = ("kinematic", "controller")
 #: An arm of at most this many joints is surveyed kinematically along one branch of its self-motion (one
@@ -134,22 +135,6 @@ class Plan:
 
 
 # --------------------------------------------------------------------------------------- survey
-def reach_configuration(
-    model: RobotModel, centre: np.ndarray, rng: np.random.Generator, seeds: int = 200
-) -> np.ndarray:
-    """(n,) a configuration reaching ``centre``, as far from the joint limits as the seeds find.
-
-    Raises:
-        UnreachableFixtureError (from the controller package's family): no seed reaches it.
-    """
-    q, ok = project_to_point(model, model.random_configurations(seeds, rng), centre)
-    if not ok.any():
-        where = np.round(centre, 4).tolist()
-        raise UnreachableFixtureError(f"no configuration inside the joint limits reaches {where} m")
-    share = np.minimum(q[ok] - model.lower, model.upper - q[ok]) / (model.upper - model.lower)
-    return q[ok][np.argmax(share.min(axis=1))]
-
-
 def restricted(model: RobotModel, q0: np.ndarray, joint_range: np.ndarray) -> RobotModel:
     """The model with each joint's limits narrowed to ``joint_range`` of its range around ``q0``
     (the window is shifted to stay inside the original limits)."""
