@@ -18,14 +18,7 @@ from spherecal.correction.files.outputs import OutputSet
 from spherecal.correction.files.provenance import comment_block, provenance
 from spherecal.correction.files.samples_csv import format_samples
 
-from .experiment import (
-    ExperimentError,
-    arm_reach,
-    default_fixtures,
-    fixture_spec,
-    joint_stiffness,
-    reach_scale,
-)
+from .experiment import ExperimentError, arm_reach, default_fixtures, fixture_spec, joint_stiffness, reach_scale
 
 #: The files a simulation writes into its folder.
 SIMULATION_FILES = ("samples.csv", "fixtures.yaml", "truth.yaml")
