@@ -6,14 +6,9 @@ import numpy as np
 import pytest
 
 from spherecal.controller.reach import UnreachableFixtureError
-from spherecal.correction import load_robot, tool_point
+from spherecal.correction import tool_point
 from spherecal.identification.synthetic import project_to_point
 from spherecal.validation.planning.postures import reach_configuration, reaches
-
-
-@pytest.fixture(scope="module")
-def panda():
-    return load_robot("panda")
 
 
 def test_the_reach_configuration_is_on_the_point_and_the_least_cramped_of_its_seeds(panda):
