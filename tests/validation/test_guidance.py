@@ -97,6 +97,18 @@ def test_a_bad_candidate_group_is_refused_naming_file_and_field(tmp_path, text, 
         read_placements(path)
 
 
+def test_a_socket_in_millimetres_is_refused_asking_for_metres(tmp_path):
+    """'expected 3 finite numbers within 10 m [m], got [450, 200, 20]' did not say which unit was taken."""
+    path = tmp_path / "c.yaml"
+    path.write_text("candidates:\n  L: {sockets: {a: [450, 200, 20]}}\n")
+    with pytest.raises(CandidateError, match=re.escape("got [450, 200, 20] (positions are in metres: millimetres "
+                                                       "given?)")):
+        read_placements(path)
+    path.write_text("candidates:\n  L: {sockets: {a: [0.45, .nan, 0.02]}}\n")
+    with pytest.raises(CandidateError, match=r"got \[0.45, nan, 0.02\]$"):  # not a unit's mistake
+        read_placements(path)
+
+
 def test_plate_placements_cover_the_grid_in_every_orientation():
     spec = FixtureSpec(names=("p_h0", "p_h1"), distances=[("p_h0", "p_h1", 0.05)])
     layout = plate_layout(spec, {"p_h0": np.array([0.4, 0.1, 0.0]), "p_h1": np.array([0.4, 0.15, 0.0])})
@@ -384,7 +396,7 @@ def test_plan_command_ranks_refuses_out_of_reach_and_writes_json(tmp_path, panda
         "candidates:\n"
         "  front:\n    sockets: {front_h0: [0.55, -0.025, 0.05], front_h1: [0.55, 0.025, 0.05]}\n"
         "    distances: [[front_h0, front_h1, 0.05]]\n"
-        "  far:\n    sockets: {far_h0: [1.6, 0.0, 0.2], far_h1: [1.65, 0.0, 0.2]}\n"
+        "  far:\n    sockets: {far_h0: [1.45, 0.0, 0.2], far_h1: [1.5, 0.0, 0.2]}\n"
         "    distances: [[far_h0, far_h1, 0.05]]\n"
     )
     out, rrd = tmp_path / "plan.json", tmp_path / "plan.rrd"
@@ -407,7 +419,8 @@ def test_plan_command_ranks_refuses_out_of_reach_and_writes_json(tmp_path, panda
     said = "record next: front" if worth else "best, not worth recording: front"
     assert labels[1:] == [""] and labels[0].startswith(said) and labels[0].endswith(" mm own)"), labels
     refused = [line for line in text.splitlines() if line.startswith("refused:")]
-    assert refused == ["refused: candidate far: socket far_h0 at [1.6, 0.0, 0.2] m is out of reach inside the "
+    # 1.46 m from the base: beyond the Panda's 1.39 m of links and tool, within the 1.1 x of a distance refusal
+    assert refused == ["refused: candidate far: socket far_h0 at [1.45, 0.0, 0.2] m is out of reach inside the "
                        "joint limits"]
     plan = json.loads(out.read_text())
     assert [r["name"] for r in plan["ranking"]] == ["front"] and plan["refused"][0]["name"] == "far"
@@ -430,7 +443,10 @@ def test_plan_command_ranks_refuses_out_of_reach_and_writes_json(tmp_path, panda
     out.unlink()
     assert main(argv) == 1
     err = capsys.readouterr().err.strip().splitlines()
-    assert len(err) == 1 and "candidate far: socket far at [1.6, 0.0, 0.2] m is out of reach" in err[0], err
+    # 1.61 m from the base, beyond 1.1 x what the arm reaches in any posture: said so, with the unit, before any IK
+    # (was '... m is out of reach inside the joint limits', as a point the walk missed)
+    assert len(err) == 1 and "candidate far: fixture far at [1.6, 0.0, 0.2] is out of reach: 1.612 m from the base" \
+        in err[0] and "millimetres given?" in err[0], err
     assert not out.exists()
 
 

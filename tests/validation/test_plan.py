@@ -11,6 +11,7 @@ from spherecal.validation.planning.plan import (
     motion_samples,
     plan,
     restricted,
+    survey,
 )
 from spherecal.validation.planning.plan_report import format_plan
 
@@ -269,3 +270,38 @@ def test_a_fixture_count_outside_1_to_4_is_refused_as_the_cli_names_it(panda, fi
     with pytest.raises(CandidateError) as refused:
         plan(panda, candidates, fixtures, seed=0)
     assert str(refused.value) == f"field '--fixture-count': expected an integer in 1..4, got {fixtures}"
+
+
+def test_a_given_candidate_no_posture_reaches_is_named_so_with_the_unit(tmp_path, panda):
+    """A candidate from a file or --grid farther than 1.1 x the arm's links and tool (1.53 m on the Panda) was surveyed
+    through the IK and reported 'out of reach inside the joint limits'; it is refused by its distance first, with
+    the unit of positions (a file in decimetres, or millimetres under the 10 m bound). One placed by the program
+    (``--grid auto``: no source) keeps the IK's line, which asks nothing of the user."""
+    path = _yaml(tmp_path, "candidates:\n  dm: {position: [5.0, 0.0, 3.0]}\n  near: {position: [1.45, 0.0, 0.2]}\n")
+    given = read_candidates(path, panda.n_joints)
+    assert {c.source for c in given} == {str(path)}
+    assert {c.source for c in grid_candidates("2,2,1;0,0,1;0.3,0.3,1")} == {"--grid"}
+    placed = Candidate("auto", np.array([5.0, 0.0, 3.0]))
+    surveys = {s.candidate.name: s for s in survey(panda, [*given, placed], 0)}
+    assert not any(s.reachable for s in surveys.values())
+    assert surveys["dm"].reason == ("fixture dm at [5.0, 0.0, 3.0] is out of reach: 5.831 m from the base of "
+                                    "'franka_panda', whose links and tool reach 1.39 m at most (the unit of fixture "
+                                    "positions is metres: millimetres given?)")
+    # 1.46 m: beyond the links' reach, within the 1.1 x margin: the IK's line, as before
+    assert surveys["near"].reason == "fixture near at [1.45, 0.0, 0.2] m is out of reach inside the joint limits"
+    assert surveys["auto"].reason == "fixture auto at [5.0, 0.0, 3.0] m is out of reach inside the joint limits"
+
+
+@pytest.mark.parametrize("where, text", [
+    ("file", "candidates:\n  A: {position: [500, 0, 300]}\n"),
+    ("grid", "400,600,2;0,0,1;300,300,1"),
+])
+def test_a_candidate_in_millimetres_is_refused_asking_for_metres(tmp_path, panda, where, text):
+    """Beyond the 10 m bound the refusal said 'not physical' without the unit the positions are in."""
+    with pytest.raises(CandidateError, match=r"at most 10 m|<= 10 m") as error:
+        if where == "file":
+            read_candidates(_yaml(tmp_path, text), panda.n_joints)
+        else:
+            grid_candidates(text)
+    assert str(error.value).endswith("positions are in metres: millimetres given?)" if where == "file" else
+                                     "positions are in metres: millimetres given?")

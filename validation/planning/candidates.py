@@ -31,11 +31,15 @@ class Candidate:
         name: label (``C1`` ... or from the file).
         position: (3,) centre in the base frame [m].
         joint_range: (n,) share of each joint's range the self-motion may use there (None: all).
+        source: the candidates file or the command-line option that gave it (``""`` when placed by the program,
+            ``--grid auto``): a given one farther than the arm reaches in any posture is named so, with the unit of
+            positions (:func:`controller.reach.check_fixture_distance`), before any IK is tried.
     """
 
     name: str
     position: np.ndarray
     joint_range: np.ndarray | None = None
+    source: str = ""
 
 
 def grid_candidates(text: str, option: str = "--grid") -> list[Candidate]:
@@ -57,14 +61,15 @@ def grid_candidates(text: str, option: str = "--grid") -> list[Candidate]:
             raise CandidateError(
                 f"field '{option}': {text!r}: {axis}: expected 'min,max,count', got {part!r}") from None
         if len(fields) != 3 or count < 1 or not (abs(lo) <= 10.0 and abs(hi) <= 10.0):  # finite, metres
+            unit = "; positions are in metres: millimetres given?" if max(abs(lo), abs(hi)) > 10.0 else ""
             raise CandidateError(f"field '{option}': {text!r}: {axis}: expected 'min,max,count', count >= 1, |min|, "
-                                 "|max| <= 10 m")
+                                 f"|max| <= 10 m{unit}")
         axes.append(np.linspace(lo, hi, count) if count > 1 else np.array([(lo + hi) / 2]))
     total = math.prod(a.size for a in axes)
     if total > MAX_GRID:
         raise CandidateError(f"field '{option}': {text!r}: {total} points, at most {MAX_GRID}")
     points = np.stack(np.meshgrid(*axes, indexing="ij"), axis=-1).reshape(-1, 3)
-    return [Candidate(f"C{k + 1}", p) for k, p in enumerate(points)]
+    return [Candidate(f"C{k + 1}", p, source=option) for k, p in enumerate(points)]
 
 
 #: Points per axis of ``--grid auto`` (:func:`auto_grid`): 5 x 5 x 5 candidates.
@@ -111,7 +116,8 @@ def read_candidates(path: str | Path, n_joints: int) -> list[Candidate]:
             raise CandidateError(f"{where}': expected a mapping with 'position: [x, y, z]'")
         position = _vector(entry["position"], 3, f"{where}.position'")
         if np.abs(position).max() > 10.0:
-            raise CandidateError(f"{where}.position': {position.tolist()} m is not physical (at most 10 m)")
+            raise CandidateError(f"{where}.position': {position.tolist()} m is not physical (at most 10 m; positions "
+                                 "are in metres: millimetres given?)")
         joint_range = None
         if entry.get("joint_range") is not None:
             joint_range = _vector(entry["joint_range"], n_joints, f"{where}.joint_range'")
@@ -120,7 +126,7 @@ def read_candidates(path: str | Path, n_joints: int) -> list[Candidate]:
         unknown = set(entry) - {"position", "joint_range"}
         if unknown:
             raise CandidateError(f"{where}.{sorted(unknown)[0]}': unknown field")
-        out.append(Candidate(str(name), position, joint_range))
+        out.append(Candidate(str(name), position, joint_range, str(path)))
     return out
 
 

@@ -64,7 +64,7 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
-from spherecal.controller.reach import check_fixture
+from spherecal.controller.reach import check_fixture, check_fixture_distance
 from spherecal.correction import RobotModel, geometric_part, param_jacobian, tool_point
 from spherecal.correction.errors import SpherecalError
 from spherecal.correction.files.fixtures import FixtureSpec
@@ -466,6 +466,8 @@ def rank_placements(
     for p in placements:
         try:
             for socket, centre in p.sockets.items():
+                if p.source:  # from the user's file: beyond any posture's reach is said so (millimetres?)
+                    check_fixture_distance(recorded.model, socket, centre)
                 check_fixture(recorded.model, socket, centre)
             kept.append(p)
         except SpherecalError as error:

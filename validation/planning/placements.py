@@ -130,7 +130,9 @@ def _point(value, where: str) -> np.ndarray:
     except (TypeError, ValueError):
         raise CandidateError(f"{where}: expected [x, y, z] [m], got {value!r}") from None
     if point.shape != (3,) or not np.all(np.isfinite(point)) or np.abs(point).max() > 10.0:
-        raise CandidateError(f"{where}: expected 3 finite numbers within 10 m [m], got {value!r}")
+        unit = " (positions are in metres: millimetres given?)" if point.shape == (3,) and np.isfinite(point).all() \
+            else ""
+        raise CandidateError(f"{where}: expected 3 finite numbers within 10 m [m], got {value!r}{unit}")
     return point
 
 

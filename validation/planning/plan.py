@@ -40,7 +40,7 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 
 from spherecal.controller.exploration import joint_coverage
-from spherecal.controller.reach import UnreachableFixtureError, check_fixture
+from spherecal.controller.reach import UnreachableFixtureError, check_fixture, check_fixture_distance
 from spherecal.correction import RobotModel
 from spherecal.correction.errors import SpherecalError
 from spherecal.correction.files.fixtures import FixtureSpec
@@ -166,10 +166,13 @@ def motion_samples(
         truth: the robot the samples are taken on (default ``model``).
 
     Raises:
-        FixtureInsideRobotError, UnreachableFixtureError: the candidate cannot be used.
+        FixtureInsideRobotError, UnreachableFixtureError: the candidate cannot be used (one the user gave
+            (:attr:`.candidates.Candidate.source`) farther than the arm reaches in any posture: before any IK).
     """
     truth = model if truth is None else truth
     centre = candidate.position
+    if candidate.source:  # the user's: beyond any posture's reach is said so (millimetres?), not as an IK miss
+        check_fixture_distance(model, candidate.name, centre)
     check_fixture(model, candidate.name, centre)
     if candidate.joint_range is not None:
         window = candidate.joint_range
