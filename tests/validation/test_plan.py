@@ -305,3 +305,42 @@ def test_a_candidate_in_millimetres_is_refused_asking_for_metres(tmp_path, panda
             grid_candidates(text)
     assert str(error.value).endswith("positions are in metres: millimetres given?)" if where == "file" else
                                      "positions are in metres: millimetres given?")
+
+
+def test_the_plan_recording_draws_the_arm_reaching_its_best_candidate(tmp_path, panda, capsys):
+    """plan --rrd drew the candidates and no arm: a user could not see where the arm stands among them. It draws the
+    nominal arm (as the demo draws it: one capsule per link, the tool point) in the least cramped of the surveyed
+    postures at the table's first candidate, its tool point on that candidate, and the view's title says so."""
+    from rerun.chunk import RrdReader
+
+    from spherecal.correction import link_frames, tool_point
+    from spherecal.validation.planning.plan_report import arm_posture
+    from spherecal.validation.viewer.recording import read_entity_rows, read_layout
+
+    path = _yaml(tmp_path, "candidates:\n" + "".join(f"  {k}: {{position: {v}}}\n" for k, v in REACHABLE.items()))
+    rrd = tmp_path / "plan.rrd"
+    assert main(["plan", "--candidates", str(path), "--fixture-count", "2", "--rrd", str(rrd)]) == 0
+    best = capsys.readouterr().out.splitlines()[3].split()[1]  # the table's first row: '   1 B   0.500 ...'
+    assert best in REACHABLE
+    rows = read_entity_rows(rrd)
+    assert rows["world/robot/arm"] == rows["world/robot/tool"] == 2  # the static style and one posture
+    assert read_layout(rrd)["title"].endswith(f"; the arm reaching {best}")
+    logged = {}
+    for chunk in RrdReader(str(rrd)).stream().to_chunks():
+        batch = chunk.to_record_batch()
+        for name in batch.schema.names:
+            if name.endswith(("Points3D:positions", "Capsules3D:translations")):
+                logged[chunk.entity_path.strip("/")] = np.array(batch.column(name).to_pylist()[0])
+    assert np.linalg.norm(logged["world/robot/tool"][0] - REACHABLE[best]) < 1e-6
+    # the capsules start at the base and at every link frame of one posture of the arm that reaches the candidate
+    starts = logged["world/robot/arm"]
+    assert np.allclose(starts[0], 0.0, atol=1e-12)
+    result = plan(panda, [Candidate(k, np.array(v), source="f") for k, v in REACHABLE.items()], 2, 0)
+    q, words = arm_posture(panda, result)
+    assert words == f"the arm reaching {best}"
+    assert np.allclose(starts, link_frames(panda, q)[:, :3, 3][: len(starts)], atol=1e-9)
+    assert np.linalg.norm(tool_point(panda, q) - REACHABLE[best]) < 1e-6
+    # the least cramped of that candidate's surveyed postures (brute force over them)
+    samples = next(s.q for s in result.surveys if s.candidate.name == best)
+    share = np.minimum(samples - panda.lower, panda.upper - samples) / (panda.upper - panda.lower)
+    assert np.min(np.minimum(q - panda.lower, panda.upper - q) / (panda.upper - panda.lower)) == share.min(axis=1).max()

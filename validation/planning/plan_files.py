@@ -138,7 +138,8 @@ def plan_files(robot: str, candidates: str | None, grid: str | None, fixture_cou
         seconds: controller self-motion per candidate [s].
         inputs: the options of the run as the provenance records them.
         workers, scheduler: where the surveys run (:func:`validation.parallel.executor`).
-        rrd: Rerun recording of the candidates coloured by score to write, or None.
+        rrd: Rerun recording of the candidates coloured by score, and the arm reaching the best one, to write, or
+            None.
         outputs: the staged outputs holding ``rrd`` (checked by the caller); None: made here.
         show: called with the plan before a refusal or the recording.
         fixtures_out: fixtures.yaml of the chosen set to write (:func:`chosen_fixtures`), or None.
@@ -172,7 +173,7 @@ def plan_files(robot: str, candidates: str | None, grid: str | None, fixture_cou
         with outputs:  # staged, renamed into place once Rerun has written it all
             info = provenance(seed, inputs, workers=result.workers)
             if rrd:
-                write_recording(outputs.stage(rrd), result, info)
+                write_recording(outputs.stage(rrd), result, info, model)
             if fixtures_out:
                 outputs.write_text(fixtures_out, chosen_fixtures(result, info))
     return result

@@ -4,11 +4,14 @@ from __future__ import annotations
 
 import numpy as np
 
+from spherecal.controller.home import home
+from spherecal.correction import RobotModel
 from spherecal.correction.files.provenance import comment_block
 from spherecal.validation.viewer.recording import Recording
 from spherecal.validation.viewer.recording_shapes import SCALE_STEPS, colour_ramp, scale_labels
 
-from .plan import one_branch
+from .plan import Plan, one_branch
+from .postures import least_cramped
 
 #: Colour of a candidate with no prediction (unreachable, or not identifiable alone).
 GREY = (150, 150, 150)
@@ -103,14 +106,29 @@ def format_plan(result) -> str:
     return "\n".join(lines)
 
 
-def write_recording(path: str, result, info: dict | None = None) -> str:
+def arm_posture(model: RobotModel, result: Plan) -> tuple[np.ndarray, str]:
+    """(n,) the posture [rad] the plan's recording draws ``model`` in, and where it is, in words: the least cramped
+    (:func:`.postures.least_cramped`) of the surveyed self-motion samples at the best reachable candidate (the table's
+    first), its tool point on it; ``model``'s home pose (:func:`controller.home.home`) when none was reachable."""
+    reached = [s for s in result.ranked() if s.reachable and len(s.q)]
+    if not reached:
+        return home(model), "the arm at its home pose"
+    return least_cramped(model, reached[0].q), f"the arm reaching {reached[0].candidate.name}"
+
+
+def write_recording(path: str, result, info: dict | None = None, model: RobotModel | None = None) -> str:
     """The candidates coloured by predicted error alone on the ramp of the Errors views
     (:func:`validation.viewer.recording_shapes.colour_ramp`: blue the least, red the most; grey unreachable) with
     its colour scale labelled in mm beside them, the chosen set as the fixtures (wire spheres around their
     candidates, labelled with the candidate's error), the printed plan and its provenance as a table, in the layout
     of every recording (:mod:`validation.blueprint`). ``info``: the run's provenance block (shown below the plan;
-    the recording id is derived from it, :func:`validation.viewer.recording.recording_id`), or None."""
+    the recording id is derived from it, :func:`validation.viewer.recording.recording_id`), or None. ``model``: the
+    arm planned for, drawn as the demo draws it (:meth:`validation.viewer.recording.Recording.self_motion`) in
+    :func:`arm_posture`, named in the view's title (without it a user could not tell where the arm stands among
+    its candidates); None: no arm."""
     title = "Candidate fixtures, coloured by predicted error alone"
+    arm = None if model is None else arm_posture(model, result)
+    title += "" if arm is None else f"; {arm[1]}"
     provenance = "" if info is None else comment_block(info)
     recording = Recording(path, application_id="spherecal_plan", title=title, run=info)
     try:
@@ -131,6 +149,8 @@ def write_recording(path: str, result, info: dict | None = None) -> str:
         recording.stream.log("world/candidates", rr.Points3D(positions, colors=colours, labels=labels, radii=0.01),
                              static=True)
         recording.extend_bounds("world", positions)
+        if arm is not None:  # one posture at time 0
+            recording.self_motion(model, np.zeros(1), arm[0][None])
         if chosen:
             picked = [(s.candidate, v) for s, v in zip(surveys, values, strict=True) if s.candidate.name in chosen]
             recording.fixtures([f"{c.name} {v:.3f} mm (chosen)" for c, v in picked],

@@ -1,6 +1,7 @@
 """Postures of an arm whose tool point reaches a point: random configurations inside the joint limits projected onto
 it (:func:`identification.synthetic.project_to_point`). Kinematics alone (no MuJoCo): the plan's restricted
-candidates start their window from one, the simulations' default fixtures are kept or moved by whether one exists."""
+candidates start their window from one, the simulations' default fixtures are kept or moved by whether one exists,
+the plan's recording draws the arm in one."""
 
 from __future__ import annotations
 
@@ -31,8 +32,14 @@ def reach_configuration(
     if not ok.any():
         where = np.round(centre, 4).tolist()
         raise UnreachableFixtureError(f"no configuration inside the joint limits reaches {where} m")
-    share = np.minimum(q[ok] - model.lower, model.upper - q[ok]) / (model.upper - model.lower)
-    return q[ok][np.argmax(share.min(axis=1))]
+    return least_cramped(model, q[ok])
+
+
+def least_cramped(model: RobotModel, q: np.ndarray) -> np.ndarray:
+    """(n,) the configuration of ``q`` (K, n) [rad], K >= 1, whose joint nearest its limit is farthest from it, in
+    shares of that joint's range (the first of equals)."""
+    share = np.minimum(q - model.lower, model.upper - q) / (model.upper - model.lower)
+    return q[np.argmax(share.min(axis=1))]
 
 
 def reaches(model: RobotModel, point: np.ndarray) -> bool:
