@@ -17,23 +17,12 @@ from spherecal.correction.elastic import link_angles, motor_angles, with_complia
 from spherecal.correction.errors import ShapeError
 from spherecal.correction.gravity import GRAVITY, gravity_torques, inertials_of
 from spherecal.correction.scale import with_scale
+from tests.correction.hand_transforms import rot, shift
 
 #: Torques [Nm] and tool points [m] agree with the reference to this (the brief: the rewrite changes no result).
 TOL = 1e-12
 
 
-def _rot(axis: int, angle: float) -> np.ndarray:
-    c, s = np.cos(angle), np.sin(angle)
-    i, j = [(1, 2), (2, 0), (0, 1)][axis]
-    m = np.eye(4)
-    m[i, i], m[i, j], m[j, i], m[j, j] = c, -s, s, c
-    return m
-
-
-def _shift(axis: int, length: float) -> np.ndarray:
-    m = np.eye(4)
-    m[axis, 3] = length
-    return m
 
 
 def _frames(model: RobotModel, q: np.ndarray) -> list[np.ndarray]:
@@ -44,11 +33,11 @@ def _frames(model: RobotModel, q: np.ndarray) -> list[np.ndarray]:
     for i in range(model.n_joints):
         turn = model.theta[i] + q[i]
         if model.convention == "modified":  # Rx(alpha) Lx(a) Ry(beta) Rz(theta+q) Lz(d)
-            step = (_rot(0, model.alpha[i]) @ _shift(0, model.a[i]) @ _rot(1, model.beta[i]) @ _rot(2, turn)
-                    @ _shift(2, model.d[i]))
+            step = (rot(0, model.alpha[i]) @ shift(0, model.a[i]) @ rot(1, model.beta[i]) @ rot(2, turn)
+                    @ shift(2, model.d[i]))
         else:  # Rz(theta+q) Lz(d) Lx(a) Rx(alpha) Ry(beta)
-            step = (_rot(2, turn) @ _shift(2, model.d[i]) @ _shift(0, model.a[i]) @ _rot(0, model.alpha[i])
-                    @ _rot(1, model.beta[i]))
+            step = (rot(2, turn) @ shift(2, model.d[i]) @ shift(0, model.a[i]) @ rot(0, model.alpha[i])
+                    @ rot(1, model.beta[i]))
         out.append(out[-1] @ step)
     return out
 

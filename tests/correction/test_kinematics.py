@@ -23,6 +23,7 @@ from spherecal.correction import (
 )
 from spherecal.correction.kinematics import ANGLE_MARGIN
 from tests.conftest import perturbed
+from tests.correction.hand_transforms import rot, shift
 
 # MuJoCo Menagerie's franka_emika_panda/panda_nohand.xml: body pos and quat (w x y z) in
 # their parents, each joint a hinge about its body's z, a flange site 0.107 m along z7.
@@ -150,25 +151,11 @@ def test_frames_pose_and_point_agree(panda, convention, rng) -> None:
     assert param_jacobian(model, q[0]).shape == (3, model.n_params)
 
 
-def _rot(axis: int, angle: float) -> np.ndarray:
-    """(4, 4) rotation about x, y or z (axis 0, 1, 2) [rad], written out by hand."""
-    c, s = np.cos(angle), np.sin(angle)
-    i, j = [(1, 2), (2, 0), (0, 1)][axis]
-    t = np.eye(4)
-    t[i, i], t[i, j], t[j, i], t[j, j] = c, -s, s, c
-    return t
-
-
-def _shift(axis: int, length: float) -> np.ndarray:
-    """(4, 4) translation along x, y or z [m]."""
-    t = np.eye(4)
-    t[axis, 3] = length
-    return t
 
 
 def test_frames_follow_the_convention_definition(panda, rng) -> None:
     """Each link transform is the product the convention defines, built here by hand."""
-    rot, trans = _rot, _shift
+    trans = shift
 
     for convention in ("standard", "modified"):
         model = _generic(panda, convention, rng)
