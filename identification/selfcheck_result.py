@@ -266,7 +266,8 @@ class SelfCheck:
         """Passed checks the user must still know of: a fixture whose residual trends with recording
         order, residuals above the declared noise judged at the noise they show, a calibration not expected to beat
         nominal far from the recording."""
-        found = [trend_text(f, self.consistent) if f.figures.get("trend") else f.message for f in self.findings
+        found = [trend_text(f, self.consistent, self._one_fixture) if f.figures.get("trend") else f.message
+                 for f in self.findings
                  if f.figures.get("trend") or f.figures.get("honest_noise_warning")]
         return tuple(found + [f.figures["region_warning"] for f in self.findings
                               if isinstance(f.figures.get("region_warning"), str)])
@@ -291,7 +292,7 @@ class SelfCheck:
         lines += [line for f in self.findings if f.check in ("residual level", "prediction") and f.passed
                   for line in _clauses(f.message)]
         lines += [line for f in self.findings if f.figures.get("trend")
-                  for line in _clauses(trend_text(f, self.consistent))]
+                  for line in _clauses(trend_text(f, self.consistent, self._one_fixture))]
         worst = _worst_group(self.findings)
         if worst is not None:
             figures = worst.figures
@@ -323,15 +324,19 @@ def trend_text(finding: Finding, kept: bool, only: bool = False) -> str:
     """A trend finding's message (a fixture whose residual trends with recording order) with what it means and what
     to do: in a refusal, leave the fixture out or record it again; in a written calibration (``kept``), the checks
     found the fixture consistent with the others and it was kept, and how to leave it out (``only``: the recording's
-    one fixture, to record again, not to leave out). A written file's warning
+    one fixture, to record again, not to leave out, in a refusal, a written file's warning and a forced file's summary
+    alike; a review: a forced one-socket calibration, MUKCa's dinova_1 ``front_h0``, printed 'leave it out (calibrate
+    --exclude-fixture front_h0)' under its summary). A written file's warning
     does not advise leaving it out: on every real Gen3 lite recording written with a trending socket, the
     calibration with the socket beat the one without it at sockets it never saw (stop 10), and leaving out MUKCa's
     dinova_2 ``front_rotated_h1`` leaves one socket, which is refused."""
     name = _fixture_of(finding)
     if kept:
+        kept_because = ("it is the only fixture, so it is kept (record it again to check it)" if only else
+                        f"the checks find it consistent with the other fixtures, so it is kept (calibrate "
+                        f"--exclude-fixture {name} leaves it out)")
         return (f"{finding.message}: the socket or the ball moved while it was recorded, or the arm's own error "
-                f"changes along the self-motion; the checks find it consistent with the other fixtures, so it is kept "
-                f"(calibrate --exclude-fixture {name} leaves it out)")
+                f"changes along the self-motion; {kept_because}")
     return finding.message + told(_trend_advice(finding, only))
 
 

@@ -126,6 +126,37 @@ def test_a_refusal_of_the_only_fixture_advises_recording_it_again_not_leaving_it
     assert str(refused.value).endswith("moved while it was recorded; record it again (it is the only fixture)")
 
 
+def test_a_forced_calibration_of_the_only_fixture_advises_recording_it_again_in_its_summary() -> None:
+    # a review: a forced one-socket calibration (MUKCa dinova_1 front_h0, drifting) printed 'leave it out (calibrate
+    # --exclude-fixture front_h0) or record it again' under its summary and in its file's warnings
+    level = Finding("residual level", False, "samples.csv: rows 1-20: residual noise 2 mm per axis",
+                    {"per_fixture_std_mm": {"P2": 2.0}})
+    check = SelfCheck((level, _trend("P2")), 3e-4, 2e-3)
+    assert not check.consistent
+    (warning,) = check.warnings
+    assert warning.endswith("moved while it was recorded; record it again (it is the only fixture)")
+    summary = "\n".join(check.lines())
+    assert "record it again (it is the only fixture)" in summary
+    assert "exclude-fixture" not in summary and "leave it out" not in summary
+    assert all("exclude-fixture" not in w for w in check.block()["warnings"])
+
+
+def test_a_forced_calibration_of_several_fixtures_still_advises_leaving_the_drifting_one_out() -> None:
+    level = Finding("residual level", False, "samples.csv: rows 1-40: residual noise 2 mm per axis",
+                    {"per_fixture_std_mm": {"P1": 0.4, "P2": 2.0}})
+    (warning,) = SelfCheck((level, _trend("P2")), 3e-4, 2e-3).warnings
+    assert warning.endswith("leave it out (calibrate --exclude-fixture P2) or record it again")
+
+
+def test_a_written_calibration_of_the_only_fixture_does_not_advise_leaving_it_out() -> None:
+    level = Finding("residual level", True, "residual 0.3 mm per axis", {"per_fixture_std_mm": {"P2": 0.3}})
+    check = SelfCheck((level, _trend("P2")), 3e-4, 3e-4)
+    check.raise_if_inconsistent()  # consistent: nothing raised
+    (warning,) = check.warnings
+    assert warning.endswith("it is the only fixture, so it is kept (record it again to check it)")
+    assert "exclude-fixture" not in warning and "other fixtures" not in warning
+
+
 def test_a_written_calibration_keeps_its_drifting_fixture_and_advises_no_exclusion() -> None:
     check = SelfCheck((Finding("residual level", True, "residual 0.3 mm per axis"), _trend("P2")), 3e-4, 3e-4)
     check.raise_if_inconsistent()  # consistent: nothing raised
