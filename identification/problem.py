@@ -508,14 +508,18 @@ def row_list(dataset: Dataset, rows: np.ndarray) -> str:
 
 def samples_location(dataset: Dataset) -> str:
     """``"samples.csv: rows 2-1501"``: where a dataset came from, for one-line errors
-    (``"samples: all rows"`` when it was not read from a file)."""
+    (``"samples: all rows"`` when it was not read from a file); the rows part is :func:`samples_rows`."""
+    return f"{dataset.source or 'samples'}: {samples_rows(dataset)}"
+
+
+def samples_rows(dataset: Dataset) -> str:
+    """``"rows 2-1501"``, ``"row 37"`` or ``"all rows"`` (not read from a file): the rows part of
+    :func:`samples_location`, for a clause that follows one naming the file (the honest-noise warning)."""
     if dataset.lines is None or dataset.n_samples == 0:
-        rows = "all rows"
-    elif dataset.lines.min() == dataset.lines.max():  # 'row 37', not 'rows 37-37'
-        rows = f"row {dataset.lines.min()}"
-    else:
-        rows = f"rows {dataset.lines.min()}-{dataset.lines.max()}"
-    return f"{dataset.source or 'samples'}: {rows}"
+        return "all rows"
+    if dataset.lines.min() == dataset.lines.max():  # 'row 37', not 'rows 37-37'
+        return f"row {dataset.lines.min()}"
+    return f"rows {dataset.lines.min()}-{dataset.lines.max()}"
 
 
 def mean_points(model: RobotModel, dataset: Dataset) -> np.ndarray:

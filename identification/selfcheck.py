@@ -87,6 +87,7 @@ from .problem import (
     prior_std,
     row_list,
     samples_location,
+    samples_rows,
     tolerance,
     zero_indices,
 )
@@ -543,8 +544,7 @@ def _level(problem: CalibrationProblem, r: np.ndarray, sigma: float, dof: int, e
     location = samples_location(dataset)
     where = f"{location}: {residual}"
     # the noise as the honest-noise warning quotes it (:func:`_honest_noise`): its rows, without the file
-    source = dataset.source or "samples"  # samples_location's head
-    noise_clause = f"{location.removeprefix(source + ': ')}: {residual}"
+    noise_clause = f"{samples_rows(dataset)}: {residual}"
     weight = problem.prior_weight
     if alone is not None:  # the prior's rows are in sigma: is it the samples, or a prior holding the arm at nominal?
         cause = None

@@ -16,7 +16,7 @@ from spherecal.correction.files.fixtures import FixtureSpec
 from spherecal.correction.files.samples import Dataset, DatasetError
 from spherecal.identification.calibrate import calibrate
 from spherecal.identification.leave_out import leave_out
-from spherecal.identification.problem import PRIOR
+from spherecal.identification.problem import PRIOR, samples_location, samples_rows
 from spherecal.identification.selfcheck import InconsistentDataError
 from spherecal.identification.selfcheck_result import Advice, Finding, leave_out_advice
 from spherecal.identification.synthetic import PANDA_FIXTURES, make_dataset
@@ -193,6 +193,31 @@ def test_noise_declared_far_too_small_is_judged_at_the_noise_the_residuals_show(
                  if f.check == "residual level")
     assert level.passed and level.figures["honest_noise_warning"]
     assert re.search(r"residual noise 0\.\d+ mm per axis is \d\.\d+x the declared 0\.05 mm", level.message)
+
+
+def test_the_honest_noise_warning_names_the_rows_as_samples_location_does(arm, noisy) -> None:
+    # a review: the warning took its rows by cutting the file name off samples_location's text; both now come from
+    # samples_rows, so the warning's rows are the location's without the file
+    panda, _ = arm
+    dataset, spec = noisy
+    dataset = replace(dataset, source="samples.csv", lines=np.arange(dataset.n_samples) + 2)
+    level = next(f for f in calibrate(panda, dataset, spec, noise=5e-5).selfcheck.findings
+                 if f.check == "residual level")
+    assert level.figures["honest_noise_warning"]
+    assert level.message.startswith(f"warning: rows 2-{dataset.n_samples + 1}: residual noise ")
+    assert samples_location(dataset) == f"samples.csv: rows 2-{dataset.n_samples + 1}"
+
+
+@pytest.mark.parametrize(("source", "lines", "rows", "location"), [
+    ("samples.csv", [4, 9, 7], "rows 4-9", "samples.csv: rows 4-9"),
+    ("samples.csv", [37], "row 37", "samples.csv: row 37"),
+    ("", None, "all rows", "samples: all rows"),
+])
+def test_samples_rows_is_the_rows_part_of_samples_location(noisy, source, lines, rows, location) -> None:
+    dataset, _ = noisy
+    picked = dataset.select(np.arange(len(lines) if lines else 3))
+    picked = replace(picked, source=source, lines=None if lines is None else np.array(lines))
+    assert samples_rows(picked) == rows and samples_location(picked) == location
 
 
 def test_an_honest_large_noise_is_judged_at_the_declared_noise(arm, noisy) -> None:
