@@ -492,9 +492,10 @@ def _discounted_socket(problem: CalibrationProblem, x: np.ndarray, loss: str) ->
     if crowded is None:
         return []
     name, held, total = crowded
+    remedy = (f"calibrate --exclude-fixture {name} leaves it out" if len(problem.dataset.fixture_names) > 1 else
+              "it is the only fixture: record it again")  # no advice to leave out all there is
     return [f"{held} of the {total} samples at fixture {name} lie over {OUTLIER:g}x the median distance from their "
-            f"socket and were discounted by the {loss} loss: {_CROWDED_CAUSE} (calibrate --exclude-fixture {name} "
-            "leaves it out)"]
+            f"socket and were discounted by the {loss} loss: {_CROWDED_CAUSE} ({remedy})"]
 
 
 def robust_noise(problem: CalibrationProblem, x: np.ndarray) -> float:

@@ -166,3 +166,23 @@ def test_a_robust_loss_that_discounts_a_socket_says_so() -> None:
     assert len(said) == 1 and "at fixture P2" in said[0] and "--exclude-fixture P2" in said[0], done.result.warnings
     clean = run_workflow(panda, data, spec, WorkflowOptions(loss="huber"))
     assert not any("were discounted" in w for w in clean.result.warnings), clean.result.warnings
+
+
+def test_a_discounted_only_socket_is_not_advised_left_out() -> None:
+    """The discount warning's remedy for a recording of one socket is to record it again: leaving out the only fixture
+    leaves nothing to calibrate (a review: the forced one-socket summary advised it)."""
+    from types import SimpleNamespace
+
+    from spherecal.identification.calibrate import _discounted_socket
+
+    def problem(names: tuple[str, ...]) -> SimpleNamespace:
+        index = np.repeat(np.arange(len(names)), 10)
+        inliers = np.ones(index.size, bool)
+        inliers[:6] = False  # six of fixture 0's ten samples far: a socket's worth
+        dataset = SimpleNamespace(fixture_index=index, fixture_names=names)
+        return SimpleNamespace(dataset=dataset, inliers=lambda x: inliers)
+
+    one = _discounted_socket(problem(("P1",)), None, "huber")
+    two = _discounted_socket(problem(("P1", "P2")), None, "huber")
+    assert len(one) == 1 and "record it again" in one[0] and "--exclude-fixture" not in one[0], one
+    assert len(two) == 1 and "(calibrate --exclude-fixture P1 leaves it out)" in two[0], two
