@@ -23,7 +23,9 @@ from spherecal.correction.files.urdf_read import parse_urdf
 from spherecal.correction.files.urdf_to_dh import NearlyParallelAxesWarning, urdf_model
 from spherecal.correction.layout import layout_for
 from tests.conftest import perturbed
-from tests.correction.test_kinematics import _central_difference, _rot, _shift
+from tests.correction.hand_transforms import rot as _rot
+from tests.correction.hand_transforms import shift as _shift
+from tests.correction.test_kinematics import _central_difference
 from tests.correction.ur5e_urdf import ur5e_urdf
 
 
