@@ -59,7 +59,7 @@ def check_fixture_distance(model: RobotModel, name: str, centre: np.ndarray) -> 
     limit = (1.0 + REACH_MARGIN) * model.reach
     if not away <= limit:  # a NaN too
         raise UnreachableFixtureError(
-            f"fixture {name} at {np.round(centre, 4).tolist()} is out of reach: {away:.4g} m from the base of "
+            f"fixture {name} at {np.round(centre, 4).tolist()} m is out of reach: {away:.4g} m from the base of "
             f"{model.name!r}, whose links and tool reach {model.reach:.3g} m at most (the unit of fixture positions "
             "is metres: millimetres given?)", name)
 

@@ -445,7 +445,7 @@ def test_plan_command_ranks_refuses_out_of_reach_and_writes_json(tmp_path, panda
     err = capsys.readouterr().err.strip().splitlines()
     # 1.61 m from the base, beyond 1.1 x what the arm reaches in any posture: said so, with the unit, before any IK
     # (was '... m is out of reach inside the joint limits', as a point the walk missed)
-    assert len(err) == 1 and "candidate far: fixture far at [1.6, 0.0, 0.2] is out of reach: 1.612 m from the base" \
+    assert len(err) == 1 and "candidate far: fixture far at [1.6, 0.0, 0.2] m is out of reach: 1.612 m from the base" \
         in err[0] and "millimetres given?" in err[0], err
     assert not out.exists()
 

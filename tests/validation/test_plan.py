@@ -284,7 +284,7 @@ def test_a_given_candidate_no_posture_reaches_is_named_so_with_the_unit(tmp_path
     placed = Candidate("auto", np.array([5.0, 0.0, 3.0]))
     surveys = {s.candidate.name: s for s in survey(panda, [*given, placed], 0)}
     assert not any(s.reachable for s in surveys.values())
-    assert surveys["dm"].reason == ("fixture dm at [5.0, 0.0, 3.0] is out of reach: 5.831 m from the base of "
+    assert surveys["dm"].reason == ("fixture dm at [5.0, 0.0, 3.0] m is out of reach: 5.831 m from the base of "
                                     "'franka_panda', whose links and tool reach 1.39 m at most (the unit of fixture "
                                     "positions is metres: millimetres given?)")
     # 1.46 m: beyond the links' reach, within the 1.1 x margin: the IK's line, as before
