@@ -253,6 +253,25 @@ def test_plan_output_under_a_file_is_refused_before_planning(tmp_path, capsys):
     assert f"field '--rrd': {blocker} is not a folder" in err and out == ""
 
 
+@pytest.mark.parametrize("entry, row, field, message", [
+    ("    position: [0.5, 0]\n", 5, "B.position", "expected 3 finite numbers, got [0.5, 0]"),
+    ("    position: [500, 0, 300]\n", 5, "B.position", "[500.0, 0.0, 300.0] m is not physical"),
+    ("    position: [0.5, 0, 0.3]\n    joint_range: [1, 1]\n", 6, "B.joint_range", "expected 7 finite numbers"),
+    ("    position: [0.5, 0, 0.3]\n    colour: red\n", 6, "B.colour", "unknown field"),
+    ("    [0.5, 0, 0.3]\n", 4, "B", "expected a mapping with 'position: [x, y, z]'"),
+])
+def test_a_bad_candidate_names_its_row(tmp_path, panda, entry, row, field, message):
+    """A review: a bad position in a candidates file named the file and the field but not the row, where the
+    fixtures and robot files name all three. The row is the field's key line (the candidate's name line for an entry
+    that is not a mapping), as correction.files readers report YAML nodes."""
+    head = "# candidates of the left bench\ncandidates:\n  A: {position: [0.5, 0, 0.4]}\n  B:\n"
+    path = _yaml(tmp_path, head + entry)
+    with pytest.raises(CandidateError) as error:
+        read_candidates(path, panda.n_joints)
+    assert str(error.value).startswith(f"{path}: row {row}, field 'candidates.{field}': {message}"), str(error.value)
+    assert "\n" not in str(error.value)
+
+
 def test_binary_candidates_file_is_one_line(tmp_path, panda):
     # a binary file escaped as a UnicodeDecodeError traceback
     path = tmp_path / "c.yaml"

@@ -11,7 +11,7 @@ import numpy as np
 from spherecal.correction import RobotModel, tool_point
 from spherecal.correction.errors import SpherecalError
 from spherecal.correction.files.text_input import read_text
-from spherecal.correction.files.yaml_safe import MAX_FILE_BYTES, load_yaml
+from spherecal.correction.files.yaml_safe import MAX_FILE_BYTES, load_yaml, node_line
 
 #: Most candidates of one plan, from a grid or a file (each one is surveyed and scored: 1000 single sockets take
 #: 70 s on one core, 1000 plate placements of guidance about 50 s; 10^4 from a file ran for 12 minutes).
@@ -104,28 +104,34 @@ def read_candidates(path: str | Path, n_joints: int) -> list[Candidate]:
     ``joint_range`` (optional) gives, per joint, the share of its range the self-motion may use.
 
     Raises:
-        CandidateError: unreadable file, no candidates, a bad position or joint range.
+        CandidateError: unreadable file, no candidates, a bad position or joint range (one line naming the file, the
+            row of the field's key and the field, as :mod:`correction.files` readers name a YAML node).
     """
 
     path = Path(path)
-    entries = candidate_entries(path, "{position: [x, y, z]}")
+    entries, root = _candidate_document(path, "{position: [x, y, z]}")
+
+    def where(name, *field: str) -> str:
+        """``"FILE: row N, field 'candidates.NAME.FIELD'"``, the row of that key in the file."""
+        row = node_line(root, "candidates", str(name), *field, key_line=True)
+        return f"{path}: row {row}, field '{'.'.join(['candidates', str(name), *field])}'"
+
     out = []
     for name, entry in entries.items():
-        where = f"{path}: field 'candidates.{name}"
         if not isinstance(entry, dict) or "position" not in entry:
-            raise CandidateError(f"{where}': expected a mapping with 'position: [x, y, z]'")
-        position = _vector(entry["position"], 3, f"{where}.position'")
+            raise CandidateError(f"{where(name)}: expected a mapping with 'position: [x, y, z]'")
+        position = _vector(entry["position"], 3, where(name, "position"))
         if np.abs(position).max() > 10.0:
-            raise CandidateError(f"{where}.position': {position.tolist()} m is not physical (at most 10 m; positions "
-                                 "are in metres: millimetres given?)")
+            raise CandidateError(f"{where(name, 'position')}: {position.tolist()} m is not physical (at most 10 m; "
+                                 "positions are in metres: millimetres given?)")
         joint_range = None
         if entry.get("joint_range") is not None:
-            joint_range = _vector(entry["joint_range"], n_joints, f"{where}.joint_range'")
+            joint_range = _vector(entry["joint_range"], n_joints, where(name, "joint_range"))
             if np.any(joint_range <= 0) or np.any(joint_range > 1):
-                raise CandidateError(f"{where}.joint_range': every share must be in (0, 1]")
+                raise CandidateError(f"{where(name, 'joint_range')}: every share must be in (0, 1]")
         unknown = set(entry) - {"position", "joint_range"}
         if unknown:
-            raise CandidateError(f"{where}.{sorted(unknown)[0]}': unknown field")
+            raise CandidateError(f"{where(name, str(sorted(unknown)[0]))}: unknown field")
         out.append(Candidate(str(name), position, joint_range, str(path)))
     return out
 
@@ -136,15 +142,20 @@ def candidate_entries(path: Path, expected: str) -> dict:
     Raises:
         CandidateError: unreadable file, or no non-empty mapping (``expected`` names an entry's form).
     """
+    return _candidate_document(path, expected)[0]
+
+
+def _candidate_document(path: Path, expected: str) -> tuple[dict, object]:
+    """:func:`candidate_entries` and the document's YAML node tree (for the rows of its fields)."""
     text = read_text(path, CandidateError, limit=MAX_FILE_BYTES)
-    data, _ = load_yaml(text, str(path), CandidateError)
+    data, root = load_yaml(text, str(path), CandidateError)
     entries = data.get("candidates") if isinstance(data, dict) else None
     if not isinstance(entries, dict) or not entries:
         raise CandidateError(f"{path}: field 'candidates': expected a non-empty mapping name -> {expected}")
     if len(entries) > MAX_CANDIDATES:
         raise CandidateError(f"{path}: field 'candidates': {len(entries)} candidates, at most {MAX_CANDIDATES} (each "
                              "is surveyed and scored: about a minute per 1000 on one core)")
-    return entries
+    return entries, root
 
 
 def _vector(value, size: int, where: str) -> np.ndarray:
