@@ -227,7 +227,7 @@ def read_mocap_csv(path: str | os.PathLike, n_joints: int, cluster: MarkerCluste
 
     Raises:
         MocapError: missing file, unexpected header, wrong column count, missing or non-finite
-            value: one line naming file, row and field.
+            value: one line naming file, row and field (``header`` for the header, or the column given twice).
     """
     path = Path(path)
     rows = list(read_rows(path, MocapError))  # blank lines and comments skipped; one line per error
@@ -239,13 +239,17 @@ def read_mocap_csv(path: str | os.PathLike, n_joints: int, cluster: MarkerCluste
     n_markers = (len(header) - int(with_t) - n_joints) // 3 if len(header) > int(with_t) + n_joints + 3 else None
     expected = _header(n_joints, n_markers, with_t)
     if header != expected:
+        twice = next((h for k, h in enumerate(header) if h in header[:k]), None)  # a column given twice: name it
+        field, why = ("header", "") if twice is None else (twice, f" ({twice} given twice)")
         raise MocapError(
-            f"{path}: row {header_line}: header {','.join(header)!r} does not match a {n_joints}-joint robot, "
-            f"expected {','.join(_header(n_joints, None, with_t))!r} or marker columns m0_x, m0_y, m0_z, ..."
+            f"{path}: row {header_line}: field {field}: header {','.join(header)!r} does not match a {n_joints}-joint "
+            f"robot{why}, expected {','.join(_header(n_joints, None, with_t))!r} or marker columns m0_x, m0_y, m0_z, "
+            "..."
         )
     if n_markers is not None and (cluster is None or cluster.n_markers != n_markers):
         raise MocapError(
-            f"{path}: row {header_line}: {n_markers} marker columns need a cluster geometry of {n_markers} markers"
+            f"{path}: row {header_line}: field header: {n_markers} marker columns need a cluster geometry of "
+            f"{n_markers} markers"
         )
     if len(rows) < 4:
         raise MocapError(f"{path}: {len(rows) - 1} data rows, need at least 3 to register the mocap frame")

@@ -130,7 +130,15 @@ def test_mocap_csv_round_trip(tmp_path, truth, mocap, rng, markers) -> None:
         (lambda lines: lines.__setitem__(3, lines[3].replace(",", ",,", 1)), "row 4: 11 columns, expected 10"),
         (lambda lines: lines.__setitem__(2, ",".join(lines[2].split(",")[:-1] + [""])), "row 3: field z: missing"),
         (lambda lines: lines.__setitem__(5, lines[5].replace(lines[5].split(",")[2], "abc")), "row 6: field q3"),
-        (lambda lines: lines.__setitem__(0, "q1,q2,q3,x,y,z"), "row 1: header"),
+        # the header named the row but not the field (a review): field header, or the column given twice
+        (lambda lines: lines.__setitem__(0, "q1,q2,q3,x,y,z"), "row 1: field header: header 'q1,q2,q3,x,y,z' does "
+                                                               "not match a 7-joint robot, expected 'q1,q2,q3,q4,q5,"
+                                                               "q6,q7,x,y,z' or marker columns"),
+        (lambda lines: lines.__setitem__(0, "q1,q2,q2,q4,q5,q6,q7,x,y,z"), "row 1: field q2: header 'q1,q2,q2,q4,"
+                                                                           "q5,q6,q7,x,y,z' does not match a 7-joint "
+                                                                           "robot (q2 given twice), expected"),
+        (lambda lines: lines.__setitem__(0, "q1,q2,q3,q4,q5,q6,q7,m0_x,m0_y,m0_z,m1_x,m1_y,m1_z"),
+         "row 1: field header: 2 marker columns need a cluster"),
     ],
 )
 def test_mocap_csv_errors_name_file_row_field(tmp_path, truth, rng, edit, message) -> None:
