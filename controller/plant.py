@@ -21,7 +21,7 @@ from spherecal.correction.files.urdf_write import xml_comment
 from spherecal.correction.gravity import has_inertials, inertials_of
 from spherecal.correction.inertials import link_inertias
 
-from .reach import check_fixture_distance
+from .reach import check_fixture_distance, fixture_centre
 from .stiffness import stiffness_of
 
 #: Physical defaults of the plant (settings that keep the closed chain stable at 1 kHz).
@@ -352,8 +352,17 @@ class Plant:
         self.mj_data.eq_active[:] = 0
 
     def move_fixture(self, name: str, centre: np.ndarray) -> None:
-        """Move the world site of fixture ``name`` to ``centre`` (3,) [m] (compliance, backlash)."""
-        self.mj_model.site_pos[self.fixture_sites[self.fixture_index(name)]] = centre
+        """Move the world site of fixture ``name`` to ``centre`` (3,) [m] (compliance, backlash).
+
+        Raises:
+            KeyError: no fixture ``name``.
+            ShapeError, UnreachableFixtureError: ``centre`` is not three numbers, or lies out of reach
+                (:func:`controller.reach.check_fixture_distance`, as :func:`build_plant` checks); the site is left
+                where it was.
+        """
+        site = self.fixture_sites[self.fixture_index(name)]
+        check_fixture_distance(self.model, name, centre)
+        self.mj_model.site_pos[site] = fixture_centre(name, centre)
 
     # ----------------------------------------------------------------- kinematics
     def tool_position(self) -> np.ndarray:
@@ -407,11 +416,13 @@ def build_plant(
     no log file from then on (:func:`no_log_file`).
 
     Raises:
+        ShapeError: a fixture centre that is not three numbers (:func:`controller.reach.fixture_centre`), naming the
+            fixture and the shape given.
         UnreachableFixtureError: a fixture centre farther from the base than any posture of ``model`` reaches
             (:func:`controller.reach.check_fixture_distance`: one in millimetres), naming it, before MuJoCo is called.
     """
     no_log_file()
-    fixtures = {str(k): np.asarray(v, dtype=float).reshape(3) for k, v in (fixtures or {}).items()}
+    fixtures = {str(k): fixture_centre(str(k), v) for k, v in (fixtures or {}).items()}
     for name, centre in fixtures.items():
         check_fixture_distance(model, name, centre)
     mjcf = build_mjcf(model, fixtures, markers, **options)

@@ -6,7 +6,7 @@ from __future__ import annotations
 import numpy as np
 
 from spherecal.correction import RobotModel, frames
-from spherecal.correction.errors import SpherecalError
+from spherecal.correction.errors import ShapeError, SpherecalError
 
 #: A fixture closer than this to the Panda's base column (base to the first joint's frame) is inside the robot [m];
 #: another arm's radius is this scaled by its size (:func:`base_radius`).
@@ -49,12 +49,30 @@ def base_radius(model: RobotModel) -> float:
     return BASE_RADIUS * model.chain_length / PANDA_CHAIN_LENGTH
 
 
+def fixture_centre(name: str, centre) -> np.ndarray:
+    """``centre`` as a (3,) float array [m]; :class:`~spherecal.correction.errors.ShapeError` naming fixture ``name``
+    and the shape given for anything else (two numbers, a (1, 3) row, text), where numpy's reshape error named
+    neither."""
+    try:
+        array = np.asarray(centre, dtype=float)
+    except (TypeError, ValueError):
+        raise ShapeError(f"fixture {name}: expected a position (3,) [m], got {centre!r}") from None
+    if array.shape != (3,):
+        raise ShapeError(f"fixture {name}: expected a position (3,) [m], got shape {array.shape}")
+    return array
+
+
 def check_fixture_distance(model: RobotModel, name: str, centre: np.ndarray) -> None:
     """Raise :class:`UnreachableFixtureError` if ``centre`` (3,) [m] lies farther from ``model``'s base than its
     :attr:`~spherecal.correction.RobotModel.reach` and :data:`REACH_MARGIN` of it, or is not finite: a fixture in
     millimetres (``[500, 0, 300]``), which no arm of this model reaches in any posture. Kinematics alone: the bound
-    is the model's own, no IK is run."""
-    centre = np.asarray(centre, dtype=float)
+    is the model's own, no IK is run.
+
+    Raises:
+        ShapeError: ``centre`` is not three numbers (:func:`fixture_centre`), naming the fixture and the shape.
+        UnreachableFixtureError: out of reach, as above.
+    """
+    centre = fixture_centre(name, centre)
     away = float(np.linalg.norm(centre - model.base_transform[:3, 3]))
     limit = (1.0 + REACH_MARGIN) * model.reach
     if not away <= limit:  # a NaN too

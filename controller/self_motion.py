@@ -33,7 +33,7 @@ from .ik import ik
 from .nullspace import NullSpaceController
 from .plant import TIMESTEP, build_plant
 from .qp_ik import LIMIT_MARGIN
-from .reach import UnreachableFixtureError, check_fixture, check_fixture_distance
+from .reach import UnreachableFixtureError, check_fixture, check_fixture_distance, fixture_centre
 
 #: Default fixtures [m], base frame: over the front of the Panda's workspace, chosen by the
 #: coverage table (every joint >= 30% of its range in 20 s with coverage exploration).
@@ -249,11 +249,12 @@ def collect_self_motion(
             :data:`PROGRESS_PERIOD` of simulated time, and at the end of each fixture), or None.
 
     Raises:
+        ShapeError: a fixture centre that is not three numbers, naming it (before anything is simulated).
         FixtureInsideRobotError, UnreachableFixtureError: before anything is simulated.
     """
     settings = settings or SelfMotionSettings()
     every_control = settings.control_steps()
-    fixtures = {str(k): np.asarray(v, dtype=float).reshape(3) for k, v in fixtures.items()}
+    fixtures = {str(k): fixture_centre(str(k), v) for k, v in fixtures.items()}
     names = tuple(fixtures)
     reach = np.array([reach_fixture(true_model, k, c, rng) for k, c in fixtures.items()]).reshape(len(names), -1)
     plant = build_plant(true_model, fixtures)

@@ -131,3 +131,36 @@ def test_a_fixture_no_posture_reaches_is_refused_in_one_line(panda):
     with pytest.raises(UnreachableFixtureError, match="fixture A"):
         build_plant(panda, {"A": outside})
     assert build_plant(big, {"A": outside}).fixture_names == ("A",)
+
+
+@pytest.mark.parametrize("centre, shape", [([0.5, 0.0], r"\(2,\)"), ([[0.5, 0.0, 0.4]], r"\(1, 3\)"),
+                                           ([0.5, 0.0, 0.4, 1.0], r"\(4,\)"), ("far", "'far'")])
+def test_a_fixture_of_the_wrong_shape_is_refused_naming_it(panda, centre, shape):
+    """A review: build_plant({'P1': [0.5, 0.0]}) raised numpy's 'cannot reshape array of size 2 into shape (3,)',
+    naming neither the fixture nor what was expected. Our ShapeError (a ValueError too), one line, naming both; a
+    (1, 3) row, which reshape took silently, is refused too."""
+    from spherecal.correction.errors import ShapeError
+
+    with pytest.raises(ShapeError, match=rf"^fixture P1: expected a position \(3,\) \[m\], got (shape )?{shape}$"):
+        build_plant(panda, {"A": [0.5, 0.0, 0.4], "P1": centre})
+    assert issubclass(ShapeError, ValueError)
+
+
+def test_move_fixture_checks_the_centre_as_build_plant_does(panda):
+    """A review: Plant.move_fixture put a site anywhere (millimetres, two numbers) without the check build_plant
+    runs. It refuses a centre out of reach or of the wrong shape, naming the fixture, and leaves the site where it
+    was; a centre in reach moves it."""
+    from spherecal.controller.reach import UnreachableFixtureError
+    from spherecal.correction.errors import ShapeError
+
+    plant = build_plant(panda, {"A": [0.5, 0.0, 0.4], "B": [0.4, 0.2, 0.3]})
+    site = plant.fixture_sites[1]
+    with pytest.raises(UnreachableFixtureError, match=r"^fixture B at \[400.0, 200.0, 300.0\] m is out of reach") \
+            as raised:
+        plant.move_fixture("B", [400.0, 200.0, 300.0])
+    assert raised.value.fixture == "B"
+    with pytest.raises(ShapeError, match=r"^fixture B: expected a position \(3,\) \[m\], got shape \(2,\)$"):
+        plant.move_fixture("B", [0.4, 0.2])
+    assert np.array_equal(plant.mj_model.site_pos[site], [0.4, 0.2, 0.3])
+    plant.move_fixture("B", np.array([0.45, 0.1, 0.35]))
+    assert np.array_equal(plant.mj_model.site_pos[site], [0.45, 0.1, 0.35])

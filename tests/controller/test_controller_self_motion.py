@@ -18,6 +18,7 @@ from spherecal.controller.self_motion import (
     reach_fixture,
 )
 from spherecal.correction import perturb, tool_point
+from spherecal.correction.errors import ShapeError
 
 
 @pytest.fixture(scope="module")
@@ -83,6 +84,10 @@ def test_bad_fixtures_are_refused(panda, rng):
         reach_fixture(panda, "far", np.array([1.5, 0.0, 0.3]), rng)
     with pytest.raises(FixtureInsideRobotError, match="fixture in .* inside the robot"):
         reach_fixture(panda, "in", np.array([0.02, 0.03, 0.2]), rng)
+    # two numbers: our ShapeError naming the fixture before anything runs (was numpy's 'cannot reshape array of
+    # size 2 into shape (3,)')
+    with pytest.raises(ShapeError, match=r"^fixture P: expected a position \(3,\) \[m\], got shape \(2,\)$"):
+        collect_self_motion(panda, panda, {"P": [0.5, 0.0]}, rng)
 
 
 def test_ramp_is_smooth():
