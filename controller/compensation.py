@@ -33,7 +33,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from spherecal.correction import JointAngleError, RobotModel, tool_point, tool_pose
-from spherecal.correction.errors import SpherecalError
+from spherecal.correction.errors import ShapeError, SpherecalError
 from spherecal.correction.files.samples import HARD_MARGIN
 from spherecal.correction.rigid import rotation_angle
 from spherecal.correction.tool import (
@@ -272,10 +272,11 @@ def _seed(q: np.ndarray, model: RobotModel, field: str) -> np.ndarray:
     """(n,) start joint angles [rad] as floats; a wrong shape, a NaN/inf angle (a joint reading lost on the way)
     or one more than a quarter turn (:data:`~spherecal.correction.files.samples.HARD_MARGIN`) outside the limits of
     a joint that has limits (another arm's reading, or degrees) raises, naming the joint, instead of an IK started
-    nowhere ("misses by nan mm") or silently from the nearest limit."""
+    nowhere ("misses by nan mm") or silently from the nearest limit. A wrong shape is a :class:`ShapeError` (a
+    ``ValueError`` too, as elsewhere for joint angles), not a :class:`ModelMismatchError`: the models may well match."""
     q, n = np.asarray(q, dtype=float), model.n_joints
     if q.shape != (n,):
-        raise ModelMismatchError(f"{field}: expected {n} joint angles, got shape {q.shape}")
+        raise ShapeError(f"{field}: expected {n} joint angles, got shape {q.shape}")
     bad = np.flatnonzero(~np.isfinite(q))
     if bad.size:
         raise SpherecalError(f"{field}: joint {bad[0] + 1} is {q[bad[0]]} (expected {n} finite joint angles [rad])")
@@ -404,6 +405,7 @@ def corrected_ik(
     Raises:
         ModelMismatchError: ``calibrated`` is not a calibration of ``nominal``, or the two were passed swapped
             (:func:`check_roles`).
+        ShapeError: ``q0`` is not (n,) joint angles of ``calibrated`` (named, with the shape given).
         SpherecalError: a NaN or infinite target coordinate, a NaN, infinite or far out of range start angle (named).
         UnreachableError: no joint angles reach the target from the seed nor from starts near it (outside the
             workspace).
@@ -482,6 +484,7 @@ def compensate(
         ModelMismatchError: the calibrated model is of another robot (joint count, convention,
             limits) or differs from the nominal one by more than :data:`MAX_MODEL_DIFFERENCE`; or the two were
             passed swapped, when their records tell (:func:`check_roles` says when they do and when not).
+        ShapeError: ``q_seed`` is not (n,) joint angles of ``nominal`` (named, with the shape given).
         SpherecalError: a NaN or infinite target coordinate, a NaN, infinite or far out of range seed angle (named).
         UnreachableError: the nominal controller cannot reach a command (target outside the
             workspace).

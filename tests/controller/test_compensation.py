@@ -16,7 +16,7 @@ from spherecal.controller.compensation import (
 )
 from spherecal.controller.ik import UnreachableError
 from spherecal.correction import RobotModel, load_robot, perturb, to_standard, tool_point, tool_pose
-from spherecal.correction.errors import SpherecalError
+from spherecal.correction.errors import ShapeError, SpherecalError
 
 
 @pytest.fixture
@@ -129,8 +129,14 @@ def test_a_file_of_another_robot_raises(robots, panda):
         assert fragment in _one_line(error), fragment
     with pytest.raises(ModelMismatchError, match="6 joints"):
         corrected_ik(six, target, q_seed[:6], nominal=nominal)
-    with pytest.raises(ModelMismatchError, match="q_seed"):
+    # a seed of the wrong shape is not a model mismatch (the models match): ShapeError, a ValueError too, naming the
+    # argument and the shape, in compensate and corrected_ik alike (was ModelMismatchError)
+    with pytest.raises(ShapeError, match=r"^q_seed: expected 7 joint angles, got shape \(6,\)$") as error:
         compensate(target, nominal, calibrated, q_seed[:6])
+    assert not isinstance(error.value, ModelMismatchError) and isinstance(error.value, ValueError)
+    with pytest.raises(ShapeError, match=r"^q0: expected 7 joint angles, got shape \(1, 7\)$") as error:
+        corrected_ik(calibrated, target, q_seed[None], nominal=nominal)
+    assert not isinstance(error.value, ModelMismatchError)
     with pytest.raises(SpherecalError, match="target"):
         compensate(np.array([0.3, np.nan, 0.5]), nominal, calibrated, q_seed)
 
