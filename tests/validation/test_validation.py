@@ -594,3 +594,25 @@ def test_the_robot_view_frames_everything_in_it(tmp_path, rng) -> None:
     seen = _pinhole(*read_eyes(tmp_path / "w.rrd")["world"], np.vstack([grid, np.zeros((1, 3))]))
     half_height = np.tan(np.radians(55.0) / 2)
     assert np.all(np.abs(seen) < [0.95 * half_height, half_height])
+
+
+def test_link_capsules_scale_with_the_arm_the_panda_keeping_40_mm(tmp_path, panda, truth, rng) -> None:
+    """A review: the links were drawn 0.04 m thick on any arm (the Panda's size), a Kinova Gen3 lite's 0.835 m chain
+    as thick as the Panda's 1.286 m one. The radius follows the chain's length, to the millimetre: the Panda and a
+    calibration of it keep 0.04 m (their recordings unchanged), the Gen3 lite gets 0.04 x 0.835 / 1.286 = 0.026 m;
+    the tool segment keeps its 12 mm."""
+    from spherecal.correction import load_robot
+    from spherecal.validation.viewer.recording import LINK_RADIUS, TOOL_RADIUS, Recording
+
+    lite = load_robot("kinova_gen3_lite")
+    expected = {"panda": 0.04, "truth": 0.04, "lite": round(0.04 * lite.chain_length / 1.286, 3)}
+    assert LINK_RADIUS == 0.04 and expected["lite"] == 0.026
+    for name, model in {"panda": panda, "truth": truth, "lite": lite}.items():
+        q = model.random_configurations(5, rng)
+        recording = Recording(tmp_path / f"{name}.rrd")
+        recording.self_motion(model, np.arange(5) * 0.01, q)
+        assert recording.close() == tmp_path / f"{name}.rrd"
+        radii = _scene(tmp_path / f"{name}.rrd", "world/robot/arm")["world/robot/arm"]["radii"]
+        assert len(radii) == model.n_joints + 1  # n links from the base, then the tool segment
+        # Rerun stores radii as float32
+        np.testing.assert_allclose(radii, [expected[name]] * model.n_joints + [TOOL_RADIUS], rtol=1e-6)

@@ -49,6 +49,7 @@ from pathlib import Path
 import numpy as np
 
 from spherecal.controller.exploration import joint_coverage
+from spherecal.controller.reach import PANDA_CHAIN_LENGTH
 from spherecal.correction import RobotModel, link_frames, tool_point
 from spherecal.correction.files.atomic import OutputError
 from spherecal.correction.files.provenance import comment_block
@@ -80,7 +81,8 @@ SCALE_HEIGHT = 0.01
 #: fixture between them (MUKCa's plate holds its sockets 50 mm apart, a simulation's fixtures stand 0.25 m apart: at
 #: 20 mm, plan --samples' default camera showed each socket's magnified samples as one dot).
 FIXTURE_RADIUS = (0.02, 0.05)
-#: Capsule radius of the links and of the tool segment [m].
+#: Capsule radius of the Panda's links and of the tool segment [m]; another arm's links are scaled by its size
+#: (:func:`link_radius`), the tool segment is not (a tool is as thick on any arm).
 LINK_RADIUS, TOOL_RADIUS = 0.04, 0.012
 #: Length of the base frame's arrows in the 3D view [m]: out of the base link's 40 mm capsule (0.1 m barely left it).
 AXIS_LENGTH = 0.25
@@ -97,6 +99,16 @@ WORLD_VIEW_HEIGHT, LABEL_ROW, LABEL_CHAR, LABEL_PAD = 920.0, 24.0, 7.5, 12.0
 RECORDING_NAMESPACE = uuid.UUID("d7b6b826-b8ae-4544-8bcf-5e7aae4e54ad")
 #: The fields of a provenance block (``correction.files.provenance.provenance``) that name the run a recording is of.
 RUN_FIELDS = ("seed", "inputs", "versions")
+
+
+def link_radius(model: RobotModel) -> float:
+    """The capsule radius [m] of ``model``'s links in the 3D view: :data:`LINK_RADIUS` (the Panda's, 0.04 m) times
+    the arm's :attr:`~spherecal.correction.RobotModel.chain_length` over the Panda's
+    (:data:`controller.reach.PANDA_CHAIN_LENGTH`), to the millimetre, as :func:`controller.reach.base_radius` scales
+    the base column: an arm's links are about as thick for its length as the Panda's. The Panda (and a calibration
+    of it, millimetres off) keeps 0.04 m; an iiwa14 (1.18 m of chain) gets 0.037 m, a Kinova Gen3 lite (0.835 m)
+    0.026 m: a fixed 0.04 m drew a small arm's links too thick for its size."""
+    return round(LINK_RADIUS * model.chain_length / PANDA_CHAIN_LENGTH, 3)
 
 
 def recording_id(application_id: str, run: dict) -> str:
@@ -263,11 +275,12 @@ class Recording:
         origins = link_frames(model, q)[:, :, :3, 3]
         tips = tool_point(model, q)
         self.extend_bounds("world", origins)
-        self._column = max(self._column, column_top(origins, LINK_RADIUS))
+        radius = link_radius(model)
+        self._column = max(self._column, column_top(origins, radius))
         lengths, translations, quaternions = capsules(np.concatenate([origins, tips[:, None]], axis=1))
         segments = lengths.shape[1]
         rr = self.rr
-        radii = np.full(segments, LINK_RADIUS)
+        radii = np.full(segments, radius)
         radii[-1] = TOOL_RADIUS
         colours = np.tile(np.array([205, 205, 210], dtype=np.uint8), (segments, 1))
         colours[-1] = (250, 140, 30)
