@@ -256,7 +256,9 @@ def read_mocap_csv(path: str | os.PathLike, n_joints: int, cluster: MarkerCluste
     data = np.empty((len(rows) - 1, len(header)))
     for k, (line, row) in enumerate(rows[1:]):
         if len(row) != len(header):
-            raise MocapError(f"{path}: row {line}: {len(row)} columns, expected {len(header)} ({','.join(header)})")
+            field = header[len(row)] if len(row) < len(header) else f"column {len(header) + 1}"  # first missing / extra
+            raise MocapError(f"{path}: row {line}: field {field}: {len(row)} columns, expected {len(header)} "
+                             f"({','.join(header)})")
         for j, cell in enumerate(row):
             try:
                 value = plain_float(cell)

@@ -127,7 +127,9 @@ def test_mocap_csv_round_trip(tmp_path, truth, mocap, rng, markers) -> None:
 @pytest.mark.parametrize(
     ("edit", "message"),
     [
-        (lambda lines: lines.__setitem__(3, lines[3].replace(",", ",,", 1)), "row 4: 11 columns, expected 10"),
+        (lambda lines: lines.__setitem__(3, lines[3].replace(",", ",,", 1)),
+         "row 4: field column 11: 11 columns, expected 10"),
+        (lambda lines: lines.__setitem__(3, lines[3].rsplit(",", 1)[0]), "row 4: field z: 9 columns, expected 10"),
         (lambda lines: lines.__setitem__(2, ",".join(lines[2].split(",")[:-1] + [""])), "row 3: field z: missing"),
         (lambda lines: lines.__setitem__(5, lines[5].replace(lines[5].split(",")[2], "abc")), "row 6: field q3"),
         # the header named the row but not the field (a review): field header, or the column given twice
