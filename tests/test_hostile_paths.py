@@ -77,9 +77,10 @@ def test_a_tool_swap_of_a_forced_calibration_says_so(tmp_path, capsys) -> None:
 # ----------------------------------------------------------------------------------------- plan
 @pytest.mark.parametrize(("sockets", "distances", "expected"), [
     ("{a: [0.42, 0.21, 0.02], b: [0.42, 0.26, 0.02]}", "[[a, b, 0.5]]",
-     "field 'candidates.left.distances[0]': a - b is 500 mm here, but their positions are 50 mm apart"),
+     "row 4, field 'candidates.left.distances[0]': a - b is 500 mm here, but their positions are 50 mm apart"),
     ("{a: [0.42, 0.21, 0.02], b: [0.42, 0.21, 0.02]}", "[]",
-     "field 'candidates.left.sockets.b': 0 mm from socket a: sockets closer than 20 mm are one socket under two names"),
+     "row 3, field 'candidates.left.sockets.b': 0 mm from socket a: sockets closer than 20 mm are one socket under "
+     "two names"),
 ])
 def test_a_candidate_plate_that_contradicts_itself_is_refused(tmp_path, sockets, distances, expected) -> None:
     # was: exit 0, a plate whose drawing says 500 mm between sockets placed 50 mm apart ranked as given; two sockets

@@ -93,7 +93,22 @@ def test_a_candidate_group_keeps_its_sockets_and_distance(tmp_path):
 def test_a_bad_candidate_group_is_refused_naming_file_and_field(tmp_path, text, field):
     path = tmp_path / "c.yaml"
     path.write_text(text)
-    with pytest.raises(CandidateError, match=re.escape(f"{path}: field '{field}'")):
+    with pytest.raises(CandidateError, match=re.escape(f"{path}: row ") + r"\d+" + re.escape(f", field '{field}'")):
+        read_placements(path)
+
+
+def test_a_bad_candidate_group_names_the_row_of_its_field(tmp_path):
+    """The row of the offending key or list item, as the candidates reader and correction.files name a YAML node (a
+    review: the file and the field, not the row)."""
+    path = tmp_path / "c.yaml"
+    path.write_text("candidates:\n  L:\n    sockets:\n      a: [0, 0, 0]\n      b: [0, 0, 0.001]\n"
+                    "  M:\n    sockets: {c: [0, 0, 1], d: [0, 0, 1.05]}\n    distances:\n      - [c, d, 0.05]\n"
+                    "      - [c, e, 0.05]\n")
+    with pytest.raises(CandidateError, match=re.escape(f"{path}: row 5, field 'candidates.L.sockets.b': 1 mm from")):
+        read_placements(path)
+    path.write_text(path.read_text().replace("b: [0, 0, 0.001]", "b: [0, 0, 0.05]"))
+    with pytest.raises(CandidateError, match=re.escape(f"{path}: row 10, field 'candidates.M.distances[1]': 'c' and "
+                                                       "'e' must be two sockets")):
         read_placements(path)
 
 

@@ -109,7 +109,7 @@ def read_candidates(path: str | Path, n_joints: int) -> list[Candidate]:
     """
 
     path = Path(path)
-    entries, root = _candidate_document(path, "{position: [x, y, z]}")
+    entries, root = candidate_document(path, "{position: [x, y, z]}")
 
     def where(name, *field: str) -> str:
         """``"FILE: row N, field 'candidates.NAME.FIELD'"``, the row of that key in the file."""
@@ -136,17 +136,13 @@ def read_candidates(path: str | Path, n_joints: int) -> list[Candidate]:
     return out
 
 
-def candidate_entries(path: Path, expected: str) -> dict:
-    """The ``candidates:`` mapping of a YAML file (bounded reader: size, depth, aliases, no duplicate keys).
+def candidate_document(path: Path, expected: str) -> tuple[dict, object]:
+    """The ``candidates:`` mapping of a YAML file (bounded reader: size, depth, aliases, no duplicate keys) and the
+    document's YAML node tree (for the rows of its fields).
 
     Raises:
         CandidateError: unreadable file, or no non-empty mapping (``expected`` names an entry's form).
     """
-    return _candidate_document(path, expected)[0]
-
-
-def _candidate_document(path: Path, expected: str) -> tuple[dict, object]:
-    """:func:`candidate_entries` and the document's YAML node tree (for the rows of its fields)."""
     text = read_text(path, CandidateError, limit=MAX_FILE_BYTES)
     data, root = load_yaml(text, str(path), CandidateError)
     entries = data.get("candidates") if isinstance(data, dict) else None

@@ -16,6 +16,7 @@ box grid in several orientations about the vertical axis (:func:`plate_placement
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -23,8 +24,9 @@ import numpy as np
 
 from spherecal.correction import RobotModel, tool_point
 from spherecal.correction.files.fixtures import FixtureSpec
+from spherecal.correction.files.yaml_safe import node_line
 
-from .candidates import MAX_CANDIDATES, Candidate, CandidateError, candidate_entries, grid_candidates
+from .candidates import MAX_CANDIDATES, Candidate, CandidateError, candidate_document, grid_candidates
 
 #: Sockets of one candidate closer than this are one socket under two names (a copied line) [m]; the
 #: calibration's self-check refuses such fixtures (``identification.selfcheck.MIN_SEPARATION``).
@@ -67,60 +69,66 @@ def read_placements(path: str | Path) -> list[Placement]:
 
     Raises:
         CandidateError: unreadable file, no candidates, a bad socket position, a distance naming a
-            socket not in its placement or not positive, a socket name used twice (message names
-            the file and the field).
+            socket not in its placement or not positive, a socket name used twice (one line naming
+            the file, the row of the field's key or list item, and the field).
     """
     path = Path(path)
-    entries = candidate_entries(path, "{sockets: {name: [x, y, z]}, distances: [[a, b, metres]]}")
+    entries, root = candidate_document(path, "{sockets: {name: [x, y, z]}, distances: [[a, b, metres]]}")
     out, seen = [], set()
     for name, entry in entries.items():
-        where = f"{path}: field 'candidates.{name}"
+        def at(*field, name=name) -> str:
+            """``"FILE: row N, field 'candidates.NAME.FIELD'"``: the row of that key (or list item) in the file."""
+            row = node_line(root, "candidates", str(name), *field, key_line=True)
+            dotted = "".join(f"[{f}]" if isinstance(f, int) else f".{f}" for f in ("candidates", str(name), *field))
+            return f"{path}: row {row}, field '{dotted[1:]}'"
+
         if not isinstance(entry, dict) or not ({"sockets", "position"} & set(entry)):
-            raise CandidateError(f"{where}': expected 'sockets: {{name: [x, y, z]}}' or 'position: [x, y, z]'")
+            raise CandidateError(f"{at()}: expected 'sockets: {{name: [x, y, z]}}' or 'position: [x, y, z]'")
         unknown = set(entry) - {"sockets", "distances", "position"}
         if unknown:
-            raise CandidateError(f"{where}.{sorted(unknown)[0]}': unknown field")
+            raise CandidateError(f"{at(str(sorted(unknown)[0]))}: unknown field")
         if "position" in entry:
-            sockets = {str(name): _point(entry["position"], f"{where}.position'")}
+            sockets = {str(name): _point(entry["position"], at("position"))}
         elif not isinstance(entry["sockets"], dict) or not entry["sockets"]:
-            raise CandidateError(f"{where}.sockets': expected a non-empty mapping name -> [x, y, z] [m]")
+            raise CandidateError(f"{at('sockets')}: expected a non-empty mapping name -> [x, y, z] [m]")
         else:
-            sockets = {str(k): _point(v, f"{where}.sockets.{k}'") for k, v in entry["sockets"].items()}
-        _separated(sockets, where)
+            sockets = {str(k): _point(v, at("sockets", str(k))) for k, v in entry["sockets"].items()}
+        _separated(sockets, lambda socket: at("sockets", socket))
         for socket in sockets:
             if socket in seen:
-                raise CandidateError(f"{where}.sockets.{socket}': socket name used by another candidate")
+                raise CandidateError(f"{at('sockets', socket)}: socket name used by another candidate")
             seen.add(socket)
         distances = []
         raw = entry.get("distances") or []
         if not isinstance(raw, list):
-            raise CandidateError(f"{where}.distances': expected a list of [socket_a, socket_b, metres]")
+            raise CandidateError(f"{at('distances')}: expected a list of [socket_a, socket_b, metres]")
         for k, item in enumerate(raw):
-            at = f"{where}.distances[{k}]'"
+            where = at("distances", k)
             if not isinstance(item, list) or len(item) != 3:
-                raise CandidateError(f"{at}: expected [socket_a, socket_b, metres], got {item!r}")
+                raise CandidateError(f"{where}: expected [socket_a, socket_b, metres], got {item!r}")
             a, b, value = str(item[0]), str(item[1]), item[2]
             if a not in sockets or b not in sockets or a == b:
-                raise CandidateError(f"{at}: {a!r} and {b!r} must be two sockets of this candidate")
+                raise CandidateError(f"{where}: {a!r} and {b!r} must be two sockets of this candidate")
             if not isinstance(value, (int, float)) or not 0.0 < float(value) <= 10.0:
-                raise CandidateError(f"{at}: the distance must be in (0, 10] m, got {value!r}")
+                raise CandidateError(f"{where}: the distance must be in (0, 10] m, got {value!r}")
             apart = float(np.linalg.norm(sockets[a] - sockets[b]))
             if abs(apart - value) > max(DISTANCE_SHARE * min(apart, value), DISTANCE_SLACK):
-                raise CandidateError(f"{at}: {a} - {b} is {value * 1e3:.4g} mm here, but their positions are "
+                raise CandidateError(f"{where}: {a} - {b} is {value * 1e3:.4g} mm here, but their positions are "
                                      f"{apart * 1e3:.4g} mm apart (a typo in one of them?)")
             distances.append((a, b, float(value)))
         out.append(Placement(str(name), sockets, tuple(distances), str(path)))
     return out
 
 
-def _separated(sockets: dict[str, np.ndarray], where: str) -> None:
-    """Refuse two sockets of one candidate closer than :data:`MIN_SOCKET_SEPARATION`."""
+def _separated(sockets: dict[str, np.ndarray], where: Callable[[str], str]) -> None:
+    """Refuse two sockets of one candidate closer than :data:`MIN_SOCKET_SEPARATION` (``where(socket)``: the file,
+    row and field of a socket, for the message)."""
     names = list(sockets)
     for i, b in enumerate(names):
         for a in names[:i]:
             apart = float(np.linalg.norm(sockets[a] - sockets[b]))
             if apart < MIN_SOCKET_SEPARATION:
-                raise CandidateError(f"{where}.sockets.{b}': {apart * 1e3:.3g} mm from socket {a}: sockets closer "
+                raise CandidateError(f"{where(b)}: {apart * 1e3:.3g} mm from socket {a}: sockets closer "
                                      f"than {MIN_SOCKET_SEPARATION * 1e3:.0f} mm are one socket under two names")
 
 
