@@ -43,6 +43,7 @@ _EXPORTS: dict[str, str] = {
     "SelfMotionSettings": "self_motion",
     "UnreachableFixtureError": "reach",
     "base_radius": "reach",
+    "size_vs_panda": "reach",
     "check_fixture": "reach",
     "check_fixture_distance": "reach",
     "collect_self_motion": "self_motion",

@@ -36,17 +36,24 @@ class FixtureInsideRobotError(UnreachableFixtureError):
     """A fixture lies inside the robot's base column."""
 
 
-def base_radius(model: RobotModel) -> float:
-    """The radius [m] of ``model``'s base column that a fixture must keep out of: :data:`BASE_RADIUS` (the Panda's,
-    0.12 m) times the arm's :attr:`~spherecal.correction.RobotModel.chain_length` over the Panda's
-    (:data:`PANDA_CHAIN_LENGTH`).
+def size_vs_panda(model: RobotModel) -> float:
+    """How thick ``model``'s links are against the Panda's: its :attr:`~spherecal.correction.RobotModel.chain_length`
+    over the Panda's (:data:`PANDA_CHAIN_LENGTH`), tool excluded (a longer tool does not thicken the arm).
 
     A DH model carries no link thickness, only lengths; an arm's links are about as thick for its length as the
-    Panda's are for its own (they carry its payload over its reach), so the column scales with the chain, tool
-    excluded (a longer tool does not thicken the base). The Panda keeps 0.12 m; an iiwa14 (1.18 m of chain) gets
-    0.110 m, a Kinova Gen3 lite (0.835 m) 0.078 m (its base is about 0.05 m in radius), a UR5 (1.19 m) 0.111 m.
+    Panda's are for its own (they carry its payload over its reach). The Panda 1; an iiwa14 (1.18 m of chain) 0.92, a
+    Kinova Gen3 lite (0.835 m) 0.65, a UR5 (1.19 m) 0.93. What scales a Panda's thickness to another arm:
+    :func:`base_radius`, and the link capsules of the recordings (``validation.viewer.recording.link_radius``).
     """
-    return BASE_RADIUS * model.chain_length / PANDA_CHAIN_LENGTH
+    return model.chain_length / PANDA_CHAIN_LENGTH
+
+
+def base_radius(model: RobotModel) -> float:
+    """The radius [m] of ``model``'s base column that a fixture must keep out of: :data:`BASE_RADIUS` (the Panda's,
+    0.12 m) scaled by the arm's size (:func:`size_vs_panda`). The Panda keeps 0.12 m; an iiwa14 gets 0.110 m, a
+    Kinova Gen3 lite 0.078 m (its base is about 0.05 m in radius), a UR5 0.111 m.
+    """
+    return BASE_RADIUS * size_vs_panda(model)
 
 
 def fixture_centre(name: str, centre) -> np.ndarray:

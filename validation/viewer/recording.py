@@ -49,7 +49,7 @@ from pathlib import Path
 import numpy as np
 
 from spherecal.controller.exploration import joint_coverage
-from spherecal.controller.reach import PANDA_CHAIN_LENGTH
+from spherecal.controller.reach import size_vs_panda
 from spherecal.correction import RobotModel, link_frames, tool_point
 from spherecal.correction.files.atomic import OutputError
 from spherecal.correction.files.provenance import comment_block
@@ -102,13 +102,11 @@ RUN_FIELDS = ("seed", "inputs", "versions")
 
 
 def link_radius(model: RobotModel) -> float:
-    """The capsule radius [m] of ``model``'s links in the 3D view: :data:`LINK_RADIUS` (the Panda's, 0.04 m) times
-    the arm's :attr:`~spherecal.correction.RobotModel.chain_length` over the Panda's
-    (:data:`controller.reach.PANDA_CHAIN_LENGTH`), to the millimetre, as :func:`controller.reach.base_radius` scales
-    the base column: an arm's links are about as thick for its length as the Panda's. The Panda (and a calibration
-    of it, millimetres off) keeps 0.04 m; an iiwa14 (1.18 m of chain) gets 0.037 m, a Kinova Gen3 lite (0.835 m)
-    0.026 m: a fixed 0.04 m drew a small arm's links too thick for its size."""
-    return round(LINK_RADIUS * model.chain_length / PANDA_CHAIN_LENGTH, 3)
+    """The capsule radius [m] of ``model``'s links in the 3D view: :data:`LINK_RADIUS` (the Panda's, 0.04 m) scaled by
+    the arm's size (:func:`controller.reach.size_vs_panda`, as :func:`controller.reach.base_radius` scales the base
+    column), to the millimetre. The Panda (and a calibration of it, millimetres off) keeps 0.04 m; an iiwa14 gets
+    0.037 m, a Kinova Gen3 lite 0.026 m: a fixed 0.04 m drew a small arm's links too thick for its size."""
+    return round(LINK_RADIUS * size_vs_panda(model), 3)
 
 
 def recording_id(application_id: str, run: dict) -> str:
