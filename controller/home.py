@@ -3,11 +3,10 @@ on any other arm. Kinematics alone (no MuJoCo)."""
 
 from __future__ import annotations
 
-from functools import cache
-
 import numpy as np
 
-from spherecal.correction import RobotModel, joint_jacobian, load_robot, tool_point
+from spherecal.correction import RobotModel, joint_jacobian, tool_point
+from spherecal.correction.files.robots import reference_robot
 from spherecal.correction.inertials import axis_mismatch
 
 #: The Panda's "ready" pose [rad] (franka_ros; the FR3, whose chain is the Panda's, shares it).
@@ -24,17 +23,11 @@ CANDIDATES, CANDIDATE_SEED = 256, 0
 CANDIDATE_SPAN = 0.5
 
 
-@cache
-def _panda() -> RobotModel:
-    """The embedded Panda, read once per process (only compared with, never handed out)."""
-    return load_robot("panda")
-
-
 def is_panda(model: RobotModel) -> bool:
     """Whether ``model``'s chain is the embedded Panda's: 7 joints whose axes lie within :data:`PANDA_AXIS_DISTANCE`
     and :data:`PANDA_AXIS_ANGLE` of the Panda's (in their base frames, either DH convention), as the embedded arm
     whose inertials a chain takes is matched (:func:`correction.files.robots.embedded_inertials`)."""
-    panda = _panda()
+    panda = reference_robot("panda")
     if model.n_joints != panda.n_joints:
         return False
     distance, angle = axis_mismatch(model, panda)

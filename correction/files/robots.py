@@ -158,6 +158,14 @@ def _refuse_xml(text: str, source: str) -> None:
     raise RobotFileError(f"{source}: row 1: {why}")
 
 
+@cache
+def reference_robot(name: str) -> RobotModel:
+    """The embedded robot ``name`` (``"panda"``, ...: :func:`load_robot`'s names), read once per process: a reference
+    that code compares with or measures (a chain matched against the Panda's, the arm default fixtures were chosen
+    on). Shared by every caller: never change it, and hand out :func:`load_robot`'s own copy instead."""
+    return load_robot(name)
+
+
 def load_robot(
     path_or_name: str | os.PathLike, tip_link: str | None = None, base_link: str | None = None,
     inertials: str | os.PathLike | None = None, report: Callable[[str], None] | None = None,

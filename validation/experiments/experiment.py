@@ -8,12 +8,12 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from functools import cache
 
 import numpy as np
 
 from spherecal.correction import RobotModel, SpherecalError, frames, load_robot, perturb
 from spherecal.correction.files.fixtures import FixtureSpec
+from spherecal.correction.files.robots import reference_robot
 from spherecal.identification.calibrate import calibrate
 from spherecal.identification.synthetic import make_dataset
 
@@ -69,12 +69,11 @@ def column_top(model: RobotModel) -> np.ndarray:
     return f.origin[1, :, 0] if model.convention == "modified" else a + model.d[0] * f.z[0, :, 0]
 
 
-@cache
 def fixtures_arm() -> RobotModel:
-    """The arm :func:`default_fixtures`'s points were chosen on: the embedded Panda, read once per process (measured,
-    never handed out: its reach beyond its base column, 1.06 m, and its column's top, 0.333 m above the base, are
-    what another arm's points are scaled from)."""
-    return load_robot("panda")
+    """The arm :func:`default_fixtures`'s points were chosen on: the embedded Panda, read once per process
+    (:func:`correction.files.robots.reference_robot`; measured, never handed out: its reach beyond its base column,
+    1.06 m, and its column's top, 0.333 m above the base, are what another arm's points are scaled from)."""
+    return reference_robot("panda")
 
 
 def reach_scale(model: RobotModel) -> float:
