@@ -469,12 +469,11 @@ def _honest_noise(findings: list[Finding], prediction: Finding, one_fixture: boo
         # under 'cannot be expected to beat the nominal model by 2x' refused one socket for its whole workspace; with
         # the prediction passed, the refusal gave no reason at all)
         near = figures["predicted_mean_mm"], figures["nominal_expected_mean_mm"]
-        verdict = ("at the noise the residuals show, the calibration is not expected to beat the nominal model near "
-                   "the recording" if not near[0] < near[1] else "at the noise the residuals show, the calibration is "
-                   "expected to beat the nominal model near the recording, but from one socket it must not be worse "
-                   "over the whole workspace, and it is expected to be")
-        tail = "".join(f"; {clause}" for clause in (prediction.remedy, *prediction.notes) if clause)
-        level = replace(level, message=f"{level.message}; {verdict}: {prediction.clause}{tail}")
+        shown = "at the noise the residuals show"
+        verdict = (f"{shown}, the calibration is not expected to beat the nominal model near the recording"
+                   if not near[0] < near[1] else f"{shown}, {ONE_SOCKET_WORSE}")
+        level = replace(level, message=f"{level.message}; {verdict}: {prediction.clause}"
+                                       f"{_tail(prediction.remedy, prediction.notes)}")
     return [level if f.check == "residual level" else f for f in findings], prediction
 
 
@@ -492,12 +491,21 @@ def _one_socket(prediction: Finding, dataset: Dataset) -> Finding:
     whole = figures["whole_workspace_predicted_mean_mm"], figures["whole_workspace_nominal_expected_mm"]
     if not prediction.passed or whole[0] < whole[1]:
         return prediction
-    verdict = (f"{samples_location(dataset)}: the calibration is expected to beat the nominal model near the "
-               "recording, but from one socket it must not be worse over the whole workspace, and it is expected to be "
-               f"({whole[0]:.3g} mm against {whole[1]:.3g} mm)")
+    verdict = f"{samples_location(dataset)}: {ONE_SOCKET_WORSE} ({whole[0]:.3g} mm against {whole[1]:.3g} mm)"
     remedy = "record a second socket or another placement to calibrate the arm beyond this one"
-    tail = "".join(f"; {clause}" for clause in (remedy, *prediction.notes))
-    return replace(prediction, passed=False, message=f"{verdict}: {prediction.clause}{tail}", remedy=remedy)
+    return replace(prediction, passed=False, message=f"{verdict}: {prediction.clause}{_tail(remedy, prediction.notes)}",
+                   remedy=remedy)
+
+
+#: The verdict on a calibration from one socket expected to beat nominal near the recording and not over the whole
+#: workspace (:func:`_honest_noise`, :func:`_one_socket`).
+ONE_SOCKET_WORSE = ("the calibration is expected to beat the nominal model near the recording, but from one socket it "
+                    "must not be worse over the whole workspace, and it is expected to be")
+
+
+def _tail(remedy: str, notes: tuple[str, ...]) -> str:
+    """``"; remedy; note; ..."``: what a refusal quoting a prediction's figures ends with (an empty remedy left out)."""
+    return "".join(f"; {clause}" for clause in (remedy, *notes) if clause)
 
 
 # ------------------------------------------------------------------------------- residual level
