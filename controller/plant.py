@@ -361,8 +361,7 @@ class Plant:
                 where it was.
         """
         site = self.fixture_sites[self.fixture_index(name)]
-        check_fixture_distance(self.model, name, centre)
-        self.mj_model.site_pos[site] = fixture_centre(name, centre)
+        self.mj_model.site_pos[site] = check_fixture_distance(self.model, name, centre)
 
     # ----------------------------------------------------------------- kinematics
     def tool_position(self) -> np.ndarray:
@@ -422,7 +421,7 @@ def build_plant(
             (:func:`controller.reach.check_fixture_distance`: one in millimetres), naming it, before MuJoCo is called.
     """
     no_log_file()
-    fixtures = {str(k): fixture_centre(str(k), v) for k, v in (fixtures or {}).items()}
+    fixtures = {str(k): fixture_centre(str(k), v) for k, v in (fixtures or {}).items()}  # every shape, then reach
     for name, centre in fixtures.items():
         check_fixture_distance(model, name, centre)
     mjcf = build_mjcf(model, fixtures, markers, **options)

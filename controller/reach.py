@@ -69,8 +69,9 @@ def fixture_centre(name: str, centre) -> np.ndarray:
     return array
 
 
-def check_fixture_distance(model: RobotModel, name: str, centre: np.ndarray) -> None:
-    """Raise :class:`UnreachableFixtureError` if ``centre`` (3,) [m] lies farther from ``model``'s base than its
+def check_fixture_distance(model: RobotModel, name: str, centre: np.ndarray) -> np.ndarray:
+    """``centre`` as a (3,) float array [m] (:func:`fixture_centre`), checked: raise :class:`UnreachableFixtureError`
+    if it lies farther from ``model``'s base than its
     :attr:`~spherecal.correction.RobotModel.reach` and :data:`REACH_MARGIN` of it, or is not finite: a fixture in
     millimetres (``[500, 0, 300]``), which no arm of this model reaches in any posture. Kinematics alone: the bound
     is the model's own, no IK is run.
@@ -87,6 +88,7 @@ def check_fixture_distance(model: RobotModel, name: str, centre: np.ndarray) -> 
             f"fixture {name} at {np.round(centre, 4).tolist()} m is out of reach: {away:.4g} m from the base of "
             f"{model.name!r}, whose links and tool reach {model.reach:.3g} m at most (the unit of fixture positions "
             "is metres: millimetres given?)", name)
+    return centre
 
 
 def check_fixture(model: RobotModel, name: str, centre: np.ndarray) -> None:
