@@ -186,10 +186,12 @@ def plain_values(block: list[str], width: int, columns: Sequence[int]) -> np.nda
     block line by line (:func:`block_rows`), which names the row and field of the problem.
     """
     text = "".join(block)
-    if '"' in text or "#" in text or text.count(",") != len(block) * (width - 1):
+    if '"' in text or "#" in text:
         return None
-    if any(line.count(",") != width - 1 for line in block):  # one line short, another long: the same total, and
-        return None  # numpy's reader takes the columns asked of each line and ignores the rest
+    # each line's count, not the block's total: one line short and another long make the same total, and numpy's
+    # reader takes the columns asked of each line and ignores the rest
+    if any(line.count(",") != width - 1 for line in block):
+        return None
     if max(map(len, block)) > field_limit():
         return None
     try:
