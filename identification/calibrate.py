@@ -34,7 +34,7 @@ from .problem import (
 )
 from .pruning import generic_excitation, prune
 from .selfcheck import MAX_SOCKET_NOISE, InconsistentDataError, SelfCheck, self_check
-from .selfcheck_result import Advice, Piece, told
+from .selfcheck_result import ONLY_FIXTURE, Advice, Piece, told
 from .solvers import solve_lm, solve_pso
 
 METHODS: tuple[str, ...] = ("lm", "pso", "pso+lm")
@@ -492,10 +492,10 @@ def _discounted_socket(problem: CalibrationProblem, x: np.ndarray, loss: str) ->
     if crowded is None:
         return []
     name, held, total = crowded
-    remedy = (f"calibrate --exclude-fixture {name} leaves it out" if len(problem.dataset.fixture_names) > 1 else
-              "it is the only fixture: record it again")  # no advice to leave out all there is
+    remedy = (f" (calibrate --exclude-fixture {name} leaves it out)" if len(problem.dataset.fixture_names) > 1 else
+              f"; {ONLY_FIXTURE}")  # no advice to leave out all there is
     return [f"{held} of the {total} samples at fixture {name} lie over {OUTLIER:g}x the median distance from their "
-            f"socket and were discounted by the {loss} loss: {_CROWDED_CAUSE} ({remedy})"]
+            f"socket and were discounted by the {loss} loss: {_CROWDED_CAUSE}{remedy}"]
 
 
 def robust_noise(problem: CalibrationProblem, x: np.ndarray) -> float:

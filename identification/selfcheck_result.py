@@ -320,19 +320,27 @@ def _clauses(message: str) -> list[str]:
     return [f"  {first}", *(f"    {clause}" for clause in rest)]
 
 
+#: The advice for a fixture that moved or whose samples stray, when it is the recording's only fixture: record it again,
+#: never leave it out (that leaves nothing to calibrate). One phrase for a refusal's trend (:func:`_trend_advice`), a
+#: written file's trend warning (:func:`trend_text`) and a robust loss's discount warning
+#: (:func:`.calibrate._discounted_socket`), which read 'record it again (it is the only fixture)', 'it is the only
+#: fixture, so it is kept (record it again to check it)' and 'it is the only fixture: record it again' (a review).
+ONLY_FIXTURE = "record it again (it is the only fixture)"
+
+
 def trend_text(finding: Finding, kept: bool, only: bool = False) -> str:
     """A trend finding's message (a fixture whose residual trends with recording order) with what it means and what
     to do: in a refusal, leave the fixture out or record it again; in a written calibration (``kept``), the checks
     found the fixture consistent with the others and it was kept, and how to leave it out (``only``: the recording's
-    one fixture, to record again, not to leave out, in a refusal, a written file's warning and a forced file's summary
-    alike; a review: a forced one-socket calibration, MUKCa's dinova_1 ``front_h0``, printed 'leave it out (calibrate
-    --exclude-fixture front_h0)' under its summary). A written file's warning
-    does not advise leaving it out: on every real Gen3 lite recording written with a trending socket, the
-    calibration with the socket beat the one without it at sockets it never saw (stop 10), and leaving out MUKCa's
-    dinova_2 ``front_rotated_h1`` leaves one socket, which is refused."""
+    one fixture, to record again (:data:`ONLY_FIXTURE`), not to leave out, in a refusal, a written file's warning and a
+    forced file's summary alike, a written one's to tell a moved socket from the arm's own error; a review: a forced
+    one-socket calibration, MUKCa's dinova_1 ``front_h0``, printed 'leave it out (calibrate --exclude-fixture
+    front_h0)' under its summary). A written file's warning does not advise leaving it out: on every real Gen3 lite
+    recording written with a trending socket, the calibration with the socket beat the one without it at sockets it
+    never saw (stop 10), and leaving out MUKCa's dinova_2 ``front_rotated_h1`` leaves one socket, which is refused."""
     name = _fixture_of(finding)
     if kept:
-        kept_because = ("it is the only fixture, so it is kept (record it again to check it)" if only else
+        kept_because = (f"the checks pass, so it is kept; to tell which, {ONLY_FIXTURE}" if only else
                         f"the checks find it consistent with the other fixtures, so it is kept (calibrate "
                         f"--exclude-fixture {name} leaves it out)")
         return (f"{finding.message}: the socket or the ball moved while it was recorded, or the arm's own error "
@@ -350,7 +358,7 @@ def _trend_advice(finding: Finding, only: bool) -> tuple[Piece, ...]:
     """What a refused trend means and what to do, after its move: leave the fixture out (:class:`Advice`) or record it
     again; ``only`` (a review: a one-socket refusal advised leaving out the only socket): record it again."""
     moved = ": the socket or the ball moved while it was recorded; "
-    return (f"{moved}record it again (it is the only fixture)",) if only else (moved, Advice(_fixture_of(finding)))
+    return (f"{moved}{ONLY_FIXTURE}",) if only else (moved, Advice(_fixture_of(finding)))
 
 
 def leave_out_advice(name: str) -> str:

@@ -4,12 +4,14 @@ from __future__ import annotations
 
 from types import SimpleNamespace
 
+import numpy as np
 import pytest
 
 import spherecal.identification.workflow as workflow
 from spherecal.correction import load_robot
 from spherecal.correction.files.samples import DatasetError
-from spherecal.identification.selfcheck_result import Finding, InconsistentDataError, SelfCheck
+from spherecal.identification.calibrate import _discounted_socket
+from spherecal.identification.selfcheck_result import ONLY_FIXTURE, Finding, InconsistentDataError, SelfCheck
 from spherecal.identification.workflow import WorkflowOptions
 
 
@@ -153,8 +155,27 @@ def test_a_written_calibration_of_the_only_fixture_does_not_advise_leaving_it_ou
     check = SelfCheck((level, _trend("P2")), 3e-4, 3e-4)
     check.raise_if_inconsistent()  # consistent: nothing raised
     (warning,) = check.warnings
-    assert warning.endswith("it is the only fixture, so it is kept (record it again to check it)")
+    assert warning.endswith("changes along the self-motion; the checks pass, so it is kept; to tell which, record it "
+                            "again (it is the only fixture)")
     assert "exclude-fixture" not in warning and "other fixtures" not in warning
+
+
+def test_the_only_fixture_is_advised_recorded_again_in_one_phrase_wherever_it_is_named() -> None:
+    """A review: a discounted only socket read 'it is the only fixture: record it again', a refused trending one
+    'record it again (it is the only fixture)', a written one 'it is the only fixture, so it is kept (record it again
+    to check it)'. Each now ends with the one phrase (:data:`ONLY_FIXTURE`)."""
+    assert ONLY_FIXTURE == "record it again (it is the only fixture)"
+    only = {"per_fixture_std_mm": {"P2": 2.0}}
+    refused = SelfCheck((Finding("residual level", False, "samples.csv: rows 1-20: residual noise 2 mm", only),
+                         _trend("P2")), 3e-4, 2e-3)
+    written = SelfCheck((Finding("residual level", True, "residual 0.3 mm per axis", only), _trend("P2")), 3e-4, 3e-4)
+    inliers = np.arange(10) >= 6  # six of the only fixture's ten samples far: a socket's worth
+    problem = SimpleNamespace(dataset=SimpleNamespace(fixture_index=np.zeros(10, int), fixture_names=("P2",)),
+                              inliers=lambda x: inliers)
+    (discounted,) = _discounted_socket(problem, None, "huber")
+    said = [refused.refusal, *refused.warnings, *written.warnings, discounted]
+    assert len(said) == 4 and all(text.endswith(ONLY_FIXTURE) for text in said), said
+    assert all(text.count("only fixture") == 1 and "exclude-fixture" not in text for text in said), said
 
 
 def test_a_written_calibration_keeps_its_drifting_fixture_and_advises_no_exclusion() -> None:
