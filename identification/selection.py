@@ -19,7 +19,9 @@ Candidates (each also usable alone with ``--model``):
 
   The candidate with the lowest mean error is kept only when its mean improvement over ``dh`` exceeds
   its standard error (the fold-to-fold spread of the differences) and BIC (below) on all samples prefers it
-  to ``dh`` too: a richer model must earn its place. The folds' sockets lie where the recording was, and a
+  to ``dh`` too: a richer model must earn its place. The report gives dh's score and the richer ones' against it
+  with that standard error, and calls a difference within it, either way, a tie (the folds cannot tell the two
+  apart; the simpler ``dh`` is kept). The folds' sockets lie where the recording was, and a
   richer model's extra terms can win there by micrometres and lose millimetres elsewhere: on ten simulated
   rigid Pandas from short self-motion (``spherecal simulate --seconds 10 --per-fixture 200
   --known-distances``, seeds 0-9) the folds alone took elastic+scale twice and elastic once, with 0.83 and
@@ -33,7 +35,8 @@ Candidates (each also usable alone with ``--model``):
                                            k_eff the effective number of unknowns of the regularised fit
 
   (the trace of the data rows' hat matrix: with the prior toward nominal a weakly seen parameter counts
-  less than one). The lowest BIC wins. BIC rather than AIC (``2 k_eff``): on simulated single placements
+  less than one). The lowest BIC wins; a margin under :data:`BIC_TIE` (2) is reported as a tie, no evidence
+  either way on the scale of Kass & Raftery (1995). BIC rather than AIC (``2 k_eff``): on simulated single placements
   (kinematic, 2 sockets 50 mm apart, 2 x 250 samples, 0.1 mm noise) AIC took a richer model on 2 of 10
   rigid arms (seeds 7, 9: elastic by 3.3, scale by 0.9), BIC keeps dh on all while an elastic arm's gain
   (about 560) dwarfs either penalty.
@@ -102,6 +105,10 @@ NEEDS_INERTIALS: tuple[str, ...] = ("elastic", "elastic+scale")
 COMBINED: tuple[str, ...] = ("elastic+scale",)
 #: Samples per fixture of every fold's fits (the final fit uses all): keeps `calibrate` interactive.
 CV_SAMPLES = 150
+#: A BIC difference below this is no evidence either way: the report calls it a tie (:func:`_bic_margin`). BIC
+#: difference approximates 2 ln(Bayes factor), and Kass & Raftery (1995, J. Am. Stat. Assoc. 90, 773) read 0-2 on
+#: that scale as "not worth more than a bare mention", 2-6 as positive evidence.
+BIC_TIE = 2.0
 
 
 def groups_of(names: tuple[str, ...] | list[str]) -> dict[str, str]:
@@ -356,34 +363,27 @@ def _auto(fit, nominal: RobotModel, dataset: Dataset, spec: FixtureSpec | None, 
         best = min(names, key=lambda k: (scores[k], names.index(k)))
         selection = ModelSelection("auto", "dh", "", "cross-validation", scores, folds, errors, used,
                                    time.perf_counter() - clock)
-        if best == "dh":
-            return replace(selection, reason="no richer model predicts held-out fixtures better than dh")
-        _, _, gain, se = selection.stats(best)
-        if gain > se:
-            won = (f"{best} predicts held-out fixtures {gain * 1e3:.3g} mm better than dh, more than the fold "
-                   f"spread {se * 1e3:.2g} mm")
-            fits = {}
-            for name in ("dh", best):  # BIC on all samples must agree (module docstring)
-                try:
-                    fits[name] = fit(start_for(name, nominal), dataset, spec, None)
-                except SpherecalError as error:
-                    if name == "dh":
-                        raise
-                    return replace(selection, reason=f"{won}, but it cannot be fitted to all samples ({error})",
-                                   seconds=time.perf_counter() - clock)
-            below = information_criterion(fits["dh"]) - information_criterion(fits[best])
-            selection = replace(selection, fits=fits, seconds=time.perf_counter() - clock)
-            if not own_terms(fits[best], nominal) & set(fits[best].identified):
-                return replace(selection, reason=f"{won}, but on all samples every term of its own is barely excited: "
-                                                 "the simpler model is kept")
-            if below > 0:
-                return replace(selection, chosen=best,
-                               reason=f"{won}; BIC on all samples agrees ({below:.1f} below dh)")
-            return replace(selection, reason=f"{won}, but BIC on all samples prefers dh ({-below:.1f} below {best}): "
+        if best == "dh" or not _beats_dh(selection, best):
+            return replace(selection, reason=_kept_reason(selection))
+        won = (f"{best} predicts held-out fixtures better than dh, by more than the standard error of the difference: "
+               f"{_against_dh(selection, [best])}")
+        fits = {}
+        for name in ("dh", best):  # BIC on all samples must agree (module docstring)
+            try:
+                fits[name] = fit(start_for(name, nominal), dataset, spec, None)
+            except SpherecalError as error:
+                if name == "dh":
+                    raise
+                return replace(selection, reason=f"{won}, but it cannot be fitted to all samples ({error})",
+                               seconds=time.perf_counter() - clock)
+        below = information_criterion(fits["dh"]) - information_criterion(fits[best])
+        selection = replace(selection, fits=fits, seconds=time.perf_counter() - clock)
+        if not own_terms(fits[best], nominal) & set(fits[best].identified):
+            return replace(selection, reason=f"{won}, but on all samples every term of its own is barely excited: "
                                              "the simpler model is kept")
-        reason = (f"{best}'s held-out gain {gain * 1e3:.3g} mm does not exceed the fold spread {se * 1e3:.2g} mm; "
-                  f"the simpler model is kept")
-        return replace(selection, reason=reason)
+        if below > 0:
+            return replace(selection, chosen=best, reason=f"{won}; {_bic_on_all(below, best)}")
+        return replace(selection, reason=f"{won}, but {_bic_on_all(below, best)}: the simpler model is kept")
     left_out = [k for k in names if k in COMBINED]
     names = tuple(k for k in names if k not in COMBINED)
     fits = {}
@@ -411,8 +411,93 @@ def _auto(fit, nominal: RobotModel, dataset: Dataset, spec: FixtureSpec | None, 
         return ModelSelection("auto", "dh", only + note, "none", fits=fits, seconds=time.perf_counter() - clock)
     scores = {k: information_criterion(f) for k, f in fits.items()}
     best = min(names, key=lambda k: (scores[k], names.index(k)))
-    margin = (f"{scores['dh'] - scores[best]:.1f} below dh" if best != "dh" else
-              f"{min(v for k, v in scores.items() if k != 'dh') - scores['dh']:.1f} below the next candidate")
     reason = (f"{len(groups)} fixture group(s), too few to cross-validate (need 3): lowest BIC "
-              f"(effective unknowns of the regularised fit), {margin}")
+              f"(effective unknowns of the regularised fit), {_bic_margin(scores, best)}")
     return ModelSelection("auto", best, reason + note, "BIC", scores, fits=fits, seconds=time.perf_counter() - clock)
+
+
+def _beats_dh(selection: ModelSelection, name: str) -> bool:
+    """Cross-validation's rule: candidate ``name``'s mean held-out gain over dh exceeds its standard error over the
+    folds (:meth:`ModelSelection.stats`)."""
+    _, _, gain, se = selection.stats(name)
+    return gain > se
+
+
+def _ties_dh(selection: ModelSelection, name: str) -> bool:
+    """Candidate ``name`` and dh are a tie on the folds: their mean held-out errors differ, either way, by no more than
+    the standard error of that difference over the folds (the fold-by-fold differences' std / sqrt(folds)).
+
+    The resolution is the criterion's own: the figure a richer model's gain must exceed to be chosen
+    (:func:`_beats_dh`), and a difference within one standard error of 0 is one the folds cannot tell from none (a
+    review: ``model: dh (no richer model predicts held-out fixtures better than dh)`` where elastic scored 0.0005 mm
+    from dh). In a tie the simpler dh is kept, as it is whenever the gain does not exceed it."""
+    _, _, gain, se = selection.stats(name)
+    return abs(gain) <= se
+
+
+def _against_dh(selection: ModelSelection, names: list[str]) -> str:
+    """The held-out errors of dh and the candidates ``names``, each with its difference from dh and that difference's
+    standard error over the folds [mm]: ``held-out error dh 0.4690 mm, scale 0.4733 mm (+0.0043 mm, standard error
+    over the 3 folds 0.0081 mm)``."""
+    parts = [f"held-out error dh {selection.scores['dh'] * 1e3:.4f} mm"]
+    for k, name in enumerate(names):
+        _, other, gain, se = selection.stats(name)
+        over = f" over the {len(selection.folds)} folds" if k == 0 else ""
+        parts.append(f"{name} {other * 1e3:.4f} mm ({-gain * 1e3:+.2g} mm, standard error{over} {se * 1e3:.2g} mm)")
+    return ", ".join(parts)
+
+
+def _kept_reason(selection: ModelSelection) -> str:
+    """Why cross-validation keeps dh, with the scores: the richer candidates that tie with it (:func:`_ties_dh`),
+    else the nearest one (no richer model is better); and any that beats dh by more than its standard error without
+    scoring lowest (the rule judges the lowest score only)."""
+    richer = sorted((k for k in selection.errors if k != "dh"), key=lambda k: selection.scores[k])
+    ties = [k for k in richer if _ties_dh(selection, k)]
+    if ties:
+        reason = (f"{_listed(ties)} {'ties' if len(ties) == 1 else 'tie'} with dh on held-out fixtures, within the "
+                  f"standard error of the difference, so the simpler dh is kept: {_against_dh(selection, ties)}")
+    else:
+        reason = (f"no richer model predicts held-out fixtures better than dh; the nearest is {richer[0]}: "
+                  f"{_against_dh(selection, richer[:1])}")
+    beyond = [k for k in richer if _beats_dh(selection, k)]
+    if beyond:
+        reason += (f"; {_listed(beyond)} {'beats' if len(beyond) == 1 else 'beat'} dh by more than the standard error "
+                   f"({_against_dh(selection, beyond)}), but the rule judges the lowest score only, {richer[0]}'s")
+    return reason
+
+
+def _bic_on_all(below: float, best: str) -> str:
+    """What BIC on all samples says of cross-validation's winner ``best`` (``below``: dh's BIC minus ``best``'s): it
+    agrees (``below`` >= :data:`BIC_TIE`), prefers dh (<= -2), or, in between, neither, a tie that the rule reads by
+    its sign (``best`` is taken where ``below`` > 0)."""
+    if below >= BIC_TIE:
+        return f"BIC on all samples agrees ({below:.1f} below dh)"
+    if below <= -BIC_TIE:
+        return f"BIC on all samples prefers dh ({-below:.1f} below {best})"
+    said, lower = (("does not disagree", f"{best} {below:.1f} below dh") if below > 0 else
+                   ("does not agree", f"dh {-below:.1f} below {best}"))
+    return f"BIC on all samples {said} ({lower}{_no_evidence(abs(below))})"
+
+
+def _bic_margin(scores: dict[str, float], best: str) -> str:
+    """The BIC choice's margin: ``best``'s score below dh's, or dh's below the next candidate's, with
+    :func:`_no_evidence`. A tie leaves the choice to the lowest score, as the rule does: dh where it scores lowest (the
+    simpler kept), a richer model where it does (the margin then says it is no evidence)."""
+    if best == "dh":
+        runner = min((k for k in scores if k != "dh"), key=scores.get)
+        margin = scores[runner] - scores["dh"]
+        kept = ", and the simpler dh is kept" if margin < BIC_TIE else ""
+        return f"{margin:.1f} below the next candidate, {runner}{_no_evidence(margin)}{kept}"
+    margin = scores["dh"] - scores[best]
+    taken = f", and {best} is taken as the lowest all the same" if margin < BIC_TIE else ""
+    return f"{margin:.1f} below dh{_no_evidence(margin)}{taken}"
+
+
+def _no_evidence(margin: float) -> str:
+    """``", under 2: a tie, no evidence either way"`` for a BIC margin under :data:`BIC_TIE`, else ``""``."""
+    return f", under {BIC_TIE:g}: a tie, no evidence either way" if margin < BIC_TIE else ""
+
+
+def _listed(names: list[str]) -> str:
+    """``"a"``, ``"a and b"``, ``"a, b and c"``."""
+    return names[0] if len(names) == 1 else f"{', '.join(names[:-1])} and {names[-1]}"
