@@ -402,17 +402,22 @@ def _auto(fit, nominal: RobotModel, dataset: Dataset, spec: FixtureSpec | None, 
     fits = {k: v for k, v in fits.items() if k not in unseen}
     names = tuple(fits)
     note = "" if not failed else f"; not fitted: {', '.join(failed)}"
-    if unseen:
-        note += f"; {', '.join(unseen)}: every term of its own barely excited"
+    if unseen:  # a review read 'scale, elastic: every term of its own barely excited'
+        whose = "its" if len(unseen) == 1 else "their"
+        note += f"; {_listed(unseen)} left out: every term of {whose} own barely excited"
     if left_out:
-        note += f"; {', '.join(left_out)} only with 3 or more groups (cross-validation)"
+        note += f"; {_listed(left_out)} only with 3 or more groups, by cross-validation"
     if len(names) == 1:
         only = "the only candidate left" if unseen else "the only candidate"
         return ModelSelection("auto", "dh", only + note, "none", fits=fits, seconds=time.perf_counter() - clock)
     scores = {k: information_criterion(f) for k, f in fits.items()}
     best = min(names, key=lambda k: (scores[k], names.index(k)))
-    reason = (f"{len(groups)} fixture group(s), too few to cross-validate (need 3): lowest BIC "
-              f"(effective unknowns of the regularised fit), {_bic_margin(scores, best)}")
+    # a review read '1 fixture group(s), too few to cross-validate (need 3): lowest BIC (effective unknowns of the
+    # regularised fit), 86.6 below dh; ...': the choice first, and no parentheses within the summary's
+    many = len(groups) > 1
+    reason = (f"lowest BIC, counting the regularised fit's effective unknowns, {_bic_margin(scores, best)}; "
+              f"{len(groups)} fixture group{'s' if many else ''} {'are' if many else 'is'} too few to cross-validate, "
+              "which needs 3")
     return ModelSelection("auto", best, reason + note, "BIC", scores, fits=fits, seconds=time.perf_counter() - clock)
 
 

@@ -303,11 +303,18 @@ class SelfCheck:
             )
             lines.append(
                 f"  closest to failing when left out: {worst.check}, {size} from what the rest predicts "
-                f"(p = 10^{figures['log10_p']:.1f}, {figures['excess']:.2g} std per row)"
+                f"(p = {_p_value(figures['log10_p'])}, {figures['excess']:.2g} std per row)"
             )
         lines += [f"  unchecked: {f.message}" for f in self.findings if f.figures.get("unchecked")]
-        lines += [f"  FAILED: {f.message}" for f in self.failed]
+        # a review: a forced Gen3 lite's failed prediction was one summary line of 1,500 characters
+        lines += [line for f in self.failed for line in _clauses(f"FAILED: {f.message}")]
         return lines
+
+
+def _p_value(log10_p: float) -> str:
+    """A p-value from its log10: plain down to 0.001 (``0.63``; a review read ``p = 10^-0.0`` and ``10^-0.2`` in a
+    real arm's summary), a power of ten below it (``10^-9.3``)."""
+    return f"{10.0 ** log10_p:.2g}" if log10_p >= -3.0 else f"10^{log10_p:.1f}"
 
 
 def _clauses(message: str) -> list[str]:
@@ -331,17 +338,18 @@ ONLY_FIXTURE = "record it again (it is the only fixture)"
 def trend_text(finding: Finding, kept: bool, only: bool = False) -> str:
     """A trend finding's message (a fixture whose residual trends with recording order) with what it means and what
     to do: in a refusal, leave the fixture out or record it again; in a written calibration (``kept``), the checks
-    found the fixture consistent with the others and it was kept, and how to leave it out (``only``: the recording's
-    one fixture, to record again (:data:`ONLY_FIXTURE`), not to leave out, in a refusal, a written file's warning and a
-    forced file's summary alike, a written one's to tell a moved socket from the arm's own error; a review: a forced
-    one-socket calibration, MUKCa's dinova_1 ``front_h0``, printed 'leave it out (calibrate --exclude-fixture
-    front_h0)' under its summary). A written file's warning does not advise leaving it out: on every real Gen3 lite
-    recording written with a trending socket, the calibration with the socket beat the one without it at sockets it
-    never saw (stop 10), and leaving out MUKCa's dinova_2 ``front_rotated_h1`` leaves one socket, which is refused."""
+    found the fixture consistent with the rest ('the other fixtures' read oddly beside one other) and it was kept, and
+    how to leave it out (``only``: the recording's one fixture, to record again (:data:`ONLY_FIXTURE`), not to leave
+    out, in a refusal, a written file's warning and a forced file's summary alike, a written one's to tell a moved
+    socket from the arm's own error; a review: a forced one-socket calibration, MUKCa's dinova_1 ``front_h0``, printed
+    'leave it out (calibrate --exclude-fixture front_h0)' under its summary). A written file's warning does not advise
+    leaving it out: on every real Gen3 lite recording written with a trending socket, the calibration with the socket
+    beat the one without it at sockets it never saw (stop 10), and leaving out MUKCa's dinova_2 ``front_rotated_h1``
+    leaves one socket, which is refused."""
     name = _fixture_of(finding)
     if kept:
         kept_because = (f"the checks pass, so it is kept; to tell which, {ONLY_FIXTURE}" if only else
-                        f"the checks find it consistent with the other fixtures, so it is kept (calibrate "
+                        f"the checks find it consistent with the rest, so it is kept (calibrate "
                         f"--exclude-fixture {name} leaves it out)")
         return (f"{finding.message}: the socket or the ball moved while it was recorded, or the arm's own error "
                 f"changes along the self-motion; {kept_because}")

@@ -304,7 +304,7 @@ def test_a_second_gen3_lite_is_written_where_it_helps_with_its_trending_socket_n
     assert "the residual at fixture front_rotated_h1 moves" in said and "--exclude-fixture front_rotated_h1" in said
     # written: the trend is named, and kept without advising to leave it out (that is refused, below, and the socket
     # helps at held-out sockets: 2.59 against 2.91 mm)
-    assert ("the checks find it consistent with the other fixtures, so it is kept (calibrate --exclude-fixture "
+    assert ("the checks find it consistent with the rest, so it is kept (calibrate --exclude-fixture "
             "front_rotated_h1 leaves it out)" in said) and "leave it out (calibrate" not in said
     warned = yaml.safe_load((tmp_path / "cal_all.yaml").read_text())["calibration"]["self_check"]["warnings"]
     assert any("so it is kept" in w for w in warned)

@@ -96,3 +96,34 @@ def test_a_written_calibrations_long_prediction_gives_each_clause_its_line() -> 
     assert body[-1] == ("    warning: farther than 300 mm from the recorded tool points the calibration is not "
                         "expected to beat nominal by 2x")
     assert "; ".join(line.strip() for line in body) == prediction
+
+
+def test_a_forced_calibrations_long_failed_check_gives_each_clause_its_line() -> None:
+    """A review: a forced Gen3 lite (MUKCa dinova_2 gen3lite, --force) printed each failed check as one summary line
+    of about 1,500 characters. It is cut as the passed ones are: 'FAILED: ' and its first clause, then one clause an
+    indented line, every word kept; a short one stays one line."""
+    long = ("samples.csv: rows 7-30: the calibration cannot be expected to beat the nominal model by 2x near the "
+            "recording: predicted mean error 1.82 mm (after registration; at 1.12 mm noise) against 2.7 mm; over the "
+            "whole workspace 7.36 mm against 4.68 mm; record more self-motion, more fixtures or known distances")
+    check = SelfCheck((Finding("prediction", False, long), Finding("position P1", False, "fixtures.yaml: off")),
+                      3e-4, 3e-4)
+    lines = check.lines()
+    start = lines.index("  FAILED: samples.csv: rows 7-30: the calibration cannot be expected to beat the nominal "
+                        "model by 2x near the recording: predicted mean error 1.82 mm (after registration; at 1.12 mm "
+                        "noise) against 2.7 mm")
+    clauses = lines[start + 1: start + 3]
+    assert clauses == ["    over the whole workspace 7.36 mm against 4.68 mm",
+                       "    record more self-motion, more fixtures or known distances"]
+    assert "; ".join(line.strip() for line in lines[start: start + 3]) == f"FAILED: {long}"
+    assert lines[start + 3:] == ["  FAILED: fixtures.yaml: off"]
+
+
+@pytest.mark.parametrize(("log10_p", "said"), [(-0.02, "p = 0.95"), (-0.2, "p = 0.63"), (-2.5, "p = 0.0032"),
+                                                (-3.0, "p = 0.001"), (-9.3, "p = 10^-9.3")])
+def test_the_check_closest_to_failing_gives_its_p_value_plainly_down_to_a_thousandth(log10_p, said) -> None:
+    """A review read 'p = 10^-0.0' and 'p = 10^-0.2' under real arms' summaries: a p-value is plain down to 0.001,
+    a power of ten below it (the reference figures are 10 ** log10_p)."""
+    group = Finding("distance P1-P2", True, "ok", {"log10_p": log10_p, "excess": 0.4, "disagreement_mm": 0.07})
+    line = SelfCheck((Finding("residual level", True, "residual noise 0.3 mm per axis"), group), 3e-4, 3e-4).lines()[-1]
+    assert line == (f"  closest to failing when left out: distance P1-P2, 0.07 mm from what the rest predicts ({said}, "
+                    "0.4 std per row)")
