@@ -404,9 +404,9 @@ def _auto(fit, nominal: RobotModel, dataset: Dataset, spec: FixtureSpec | None, 
     note = "" if not failed else f"; not fitted: {', '.join(failed)}"
     if unseen:  # a review read 'scale, elastic: every term of its own barely excited'
         whose = "its" if len(unseen) == 1 else "their"
-        note += f"; {_listed(unseen)} left out: every term of {whose} own barely excited"
+        note += f"; {listed(unseen)} left out: every term of {whose} own barely excited"
     if left_out:
-        note += f"; {_listed(left_out)} only with 3 or more groups, by cross-validation"
+        note += f"; {listed(left_out)} only with 3 or more groups, by cross-validation"
     if len(names) == 1:
         only = "the only candidate left" if unseen else "the only candidate"
         return ModelSelection("auto", "dh", only + note, "none", fits=fits, seconds=time.perf_counter() - clock)
@@ -459,14 +459,14 @@ def _kept_reason(selection: ModelSelection) -> str:
     richer = sorted((k for k in selection.errors if k != "dh"), key=lambda k: selection.scores[k])
     ties = [k for k in richer if _ties_dh(selection, k)]
     if ties:
-        reason = (f"{_listed(ties)} {'ties' if len(ties) == 1 else 'tie'} with dh on held-out fixtures, within the "
+        reason = (f"{listed(ties)} {'ties' if len(ties) == 1 else 'tie'} with dh on held-out fixtures, within the "
                   f"standard error of the difference, so the simpler dh is kept: {_against_dh(selection, ties)}")
     else:
         reason = (f"no richer model predicts held-out fixtures better than dh; the nearest is {richer[0]}: "
                   f"{_against_dh(selection, richer[:1])}")
     beyond = [k for k in richer if _beats_dh(selection, k)]
     if beyond:
-        reason += (f"; {_listed(beyond)} {'beats' if len(beyond) == 1 else 'beat'} dh by more than the standard error "
+        reason += (f"; {listed(beyond)} {'beats' if len(beyond) == 1 else 'beat'} dh by more than the standard error "
                    f"({_against_dh(selection, beyond)}), but the rule judges the lowest score only, {richer[0]}'s")
     return reason
 
@@ -503,6 +503,6 @@ def _no_evidence(margin: float) -> str:
     return f", under {BIC_TIE:g}: a tie, no evidence either way" if margin < BIC_TIE else ""
 
 
-def _listed(names: list[str]) -> str:
-    """``"a"``, ``"a and b"``, ``"a, b and c"``."""
+def listed(names) -> str:
+    """Names in a sentence: ``"a"``, ``"a and b"``, ``"a, b and c"`` (also the workflow's fixtures)."""
     return names[0] if len(names) == 1 else f"{', '.join(names[:-1])} and {names[-1]}"

@@ -36,7 +36,7 @@ from .build import build_problem
 from .calibrate import MAX_CHANGE, CalibrationResult, calibrate
 from .misplaced import misplaced
 from .problem import NOISE, PRIOR, ImplausibleCalibrationError
-from .selection import ModelSelection, select_model, start_for
+from .selection import ModelSelection, listed, select_model, start_for
 from .selfcheck_result import InconsistentDataError
 from .tool_fit import recentred_tool
 from .training import exclude_fixtures, training_record
@@ -260,7 +260,7 @@ def _remedy_tried(refused: InconsistentDataError, nominal: RobotModel, dataset: 
             continue
         except Exception:  # noqa: BLE001 - the remedy's run is advice: a fault in it must not hide the refusal itself
             return refused
-        them = _listed(left_out)
+        them = listed(left_out)
         check = done.result.selfcheck
         # whether it warns, not how often: the run also prints the robot file's and the recording's own warnings,
         # and the self-check's trend lines carry no 'warning:' label, so a count never matched what it prints (a
@@ -268,15 +268,11 @@ def _remedy_tried(refused: InconsistentDataError, nominal: RobotModel, dataset: 
         warned = ", with warnings" if done.result.warnings or (check is not None and check.warnings) else ""
         return InconsistentDataError((*refused.pieces, f"; without {them} the rest is consistent and is written"
                                                         f"{warned} (calibrate {flags(left_out)})"), left_out)
-    them = _listed(names)
+    them = listed(names)
     # the advice tried: what is left of it, 'record it again' (h8's trial read 'leave it out', then 'does not help')
     return InconsistentDataError(f"{refused.told(names)}; leaving {them} out does not help: without {them} the rest "
                                  f"is refused too (calibrate {flags(names)} says why)", names)
 
-
-def _listed(names: tuple[str, ...]) -> str:
-    """``"P1"``, ``"P1 and P2"``, ``"P1, P2 and P3"``."""
-    return names[0] if len(names) == 1 else f"{', '.join(names[:-1])} and {names[-1]}"
 
 
 def calibrate_files(robot: str, samples: str | Path, fixtures: str | Path | None, out: str | Path,

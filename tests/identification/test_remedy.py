@@ -7,6 +7,7 @@ from types import SimpleNamespace
 import numpy as np
 import pytest
 
+import spherecal.identification.selection as selection
 import spherecal.identification.workflow as workflow
 from spherecal.correction import load_robot
 from spherecal.correction.files.samples import DatasetError
@@ -188,6 +189,6 @@ def test_a_written_calibration_keeps_its_drifting_fixture_and_advises_no_exclusi
 
 
 def test_the_verdict_lists_the_fixtures_it_names() -> None:
-    assert workflow._listed(("P2",)) == "P2"
-    assert workflow._listed(("P2", "P3")) == "P2 and P3"
-    assert workflow._listed(("P1", "P2", "P3")) == "P1, P2 and P3"
+    assert selection.listed(("P2",)) == "P2"
+    assert selection.listed(("P2", "P3")) == "P2 and P3"
+    assert selection.listed(("P1", "P2", "P3")) == "P1, P2 and P3"
