@@ -111,19 +111,21 @@ class NullSpaceController:
         mujoco.mj_jacSite(m, d, self._jac, None, self._kin.tool_site)
         return d.site_xpos[self._kin.tool_site], self._jac
 
-    def _task(self, q: np.ndarray, q_r: np.ndarray, target: np.ndarray | None,
-              gain: float) -> tuple[np.ndarray, np.ndarray]:
-        """The Jacobian (3, n) [m/rad] at ``q`` and the primary task velocity (3,) [m/s]: ``gain`` times the target's
-        offset from the model's own tool point (:func:`correction.tool_point`: an elastic arm's sag and a joint-angle
-        scale included; the rigid chain's when the model has neither), damped near a singularity; 0 without a
-        target. ``q_r`` (n,) is only checked here, with the others.
-
-        Raises:
-            ShapeError: ``q`` not (n,), ``q_r`` not (n,) or ``target`` not (3,), naming it (a shape comparison every
-                period, about 0.1 us each; the target's values are checked once per target).
-        """
+    def _check(self, q: np.ndarray, q_r: np.ndarray) -> None:
+        """``q`` and ``q_r`` each (n,), in that order (then :meth:`_task` checks the target): a :class:`ShapeError`
+        naming the argument, every period (a shape comparison, about 0.1 us each)."""
         check_shape(q, self._shape, "q", self._angles)
         check_shape(q_r, self._shape, "q_r", self._speeds)
+
+    def _task(self, q: np.ndarray, target: np.ndarray | None, gain: float) -> tuple[np.ndarray, np.ndarray]:
+        """The Jacobian (3, n) [m/rad] at ``q`` ((n,), checked by :meth:`_check`) and the primary task velocity (3,)
+        [m/s]: ``gain`` times the target's offset from the model's own tool point (:func:`correction.tool_point`: an
+        elastic arm's sag and a joint-angle scale included; the rigid chain's when the model has neither), damped near
+        a singularity; 0 without a target.
+
+        Raises:
+            ShapeError: ``target`` not (3,), naming it (its shape every period; its values once per target).
+        """
         point, jac = self.kinematics(q)
         if target is None:
             return jac, self._zero3
@@ -158,14 +160,16 @@ class NullSpaceController:
             ShapeError: ``q``, ``q_r`` or ``target`` of another shape (the argument, the shape expected and given).
             SpherecalError: a target that is not finite or beyond twice the arm's reach (checked once per target).
         """
-        jac, v = self._task(q, q_r, target, gain)
+        self._check(q, q_r)
+        jac, v = self._task(q, target, gain)
         lb, ub = self.bounds(q)
         return build_problem(jac.copy(), v, q_r, lb, ub)
 
     def step(self, q: np.ndarray, q_r: np.ndarray, target: np.ndarray | None = None,
              gain: float = POSITION_GAIN) -> np.ndarray:
         """(n,) joint velocity command [rad/s] for one control period (arguments and errors as :meth:`build`)."""
-        jac, v = self._task(q, q_r, target, gain)
+        self._check(q, q_r)
+        jac, v = self._task(q, target, gain)
         lb, ub = self.last_bounds = self.bounds(q)
         if self.closed_form:
             qdot = equality_solution(jac, v, q_r)

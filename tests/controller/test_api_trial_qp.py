@@ -163,6 +163,9 @@ def test_arrays_of_the_wrong_shape_are_named_every_period(panda) -> None:
         ((q, np.zeros(6), None), r"q_r: expected 7 joint velocities \[rad/s\], got shape \(6,\)"),
         ((q, np.zeros(7), target[None]), r"target: expected 3 coordinates \[m\], got shape \(1, 3\)"),
         ((q, np.zeros(7), target[:2]), r"target: expected 3 coordinates \[m\], got shape \(2,\)"),
+        # two wrong at once: q, then q_r, then the target (the order kept when q_r's check left _task)
+        ((q[:6], np.zeros(6), target[:2]), r"^q: expected 7 joint angles \[rad\], got shape \(6,\)"),
+        ((q, np.zeros(6), target[:2]), r"^q_r: expected 7 joint velocities \[rad/s\], got shape \(6,\)"),
     )
     for call in (controller.step, controller.build):
         for args, message in cases:
