@@ -103,18 +103,29 @@ def _link_angles(model: RobotModel, q: np.ndarray, torques: np.ndarray | None = 
     return link_angles(model, q, torques=torques)
 
 
+#: Step [rad] of the central differences of the gravity torque (:func:`_torque_slope`).
+_STEP = 1e-6
+
+
 def _dlink_djoint(model: RobotModel, q_joint: np.ndarray, jac: np.ndarray) -> np.ndarray:
     """``jac`` (N, 3, n) ``d p / d q_link`` times ``d q_link / d q_joint = I - diag(c) d tau / d q_joint``
     (unchanged for a rigid model); the torque's derivative by central differences (step 1e-6 rad: its
     error is ~1e-12 of the term, which is itself ~1e-3 of the Jacobian)."""
     if "compliance" not in model.extras:
         return jac
-    c, h = compliance_of(model), 1e-6
+    c = compliance_of(model)
     if not np.any(c):
         return jac
-    tau = gravity_torques(model, _shifted(q_joint, h))  # one batch of the 2 n shifted copies
-    dtau = _central(tau, h, q_joint.shape)  # (N, n, n): d tau_i / d q_k
-    return jac - np.einsum("nxi,nik->nxk", jac * c, dtau)
+    return jac - np.einsum("nxi,nik->nxk", jac * c, _torque_slope(model, q_joint))
+
+
+def _torque_slope(model: RobotModel, q_joint: np.ndarray) -> np.ndarray:
+    """(N, n, n) ``[:, i, k] = d tau_i / d q_joint_k`` [Nm/rad] at ``q_joint`` (N, n) [rad]: central differences
+    (step :data:`_STEP`) of :func:`gravity_torques`, one batch of the 2 n shifted copies. Its rounding floor is
+    ~1e-16 |tau| / step, ~1e-8 Nm/rad, and its truncation ~1e-12 |d3 tau|: times a compliance (~1e-4 rad/Nm at
+    most), ~1e-12 of an angle's derivative."""
+    tau = gravity_torques(model, _shifted(q_joint, _STEP))
+    return _central(tau, _STEP, q_joint.shape)
 
 
 def _shifted(q: np.ndarray, h: float) -> np.ndarray:
@@ -202,9 +213,14 @@ def joint_jacobian(model: RobotModel, q: np.ndarray) -> np.ndarray:
 def link_angle_jacobian(model: RobotModel, q: np.ndarray) -> np.ndarray | None:
     """Jacobian ``d q_link / d q`` of the link angles with respect to the measured angles.
 
-    Central differences (step 1e-6 rad) of the model's own map from measured to link angles (scale, then
-    compliance), so every term that map carries is differentiated without a formula of its own: the map is
-    smooth and within 1e-2 of the identity, the difference error ~1e-12.
+    ``q_link = q_joint - c tau(q_joint)`` with ``q_joint = (1 + s) q``, so::
+
+        d q_link / d q = (I - diag(c) d tau / d q_joint) diag(1 + s)
+
+    The linear part exactly; ``d tau / d q_joint`` by central differences (step 1e-6 rad) of the gravity torque
+    alone, so the difference's rounding error is that of the deflection ``c tau`` (~1e-3 rad), not of the angles
+    (~3 rad, whose rounding over a 2e-6 step was a 2e-10 floor until stop 20): within ~1e-12 of the exact
+    derivative, the torque being smooth.
 
     Args:
         model: the arm.
@@ -220,10 +236,14 @@ def link_angle_jacobian(model: RobotModel, q: np.ndarray) -> np.ndarray | None:
         ValueError: ``q`` not of shape (N, n) or (n,).
     """
     q2, single = _checked(model, q)
-    if _link_angles(model, q2) is q2:
+    s = scale_of(model) if "scale" in model.extras else np.zeros(model.n_joints)
+    c = compliance_of(model) if "compliance" in model.extras else np.zeros(model.n_joints)
+    if not (np.any(s) or np.any(c)):
         return None
-    h = 1e-6
-    jac = _central(_link_angles(model, _shifted(q2, h)), h, q2.shape)  # [:, i, k] = d q_link_i / d q_k
+    jac = np.broadcast_to(np.eye(model.n_joints), (len(q2), model.n_joints, model.n_joints))
+    if np.any(c):
+        jac = jac - c[:, None] * _torque_slope(model, joint_angles(model, q2))
+    jac = jac * (1.0 + s)  # column k times d q_joint_k / d q_k
     return jac[0] if single else jac
 
 

@@ -21,7 +21,10 @@ from spherecal.correction import (
     tool_point,
     tool_pose,
 )
-from spherecal.correction.kinematics import ANGLE_MARGIN
+from spherecal.correction.elastic import with_compliance
+from spherecal.correction.gravity import gravity_torques
+from spherecal.correction.kinematics import ANGLE_MARGIN, _link_angles
+from spherecal.correction.scale import joint_angles, with_scale
 from tests.conftest import perturbed
 from tests.correction.hand_transforms import rot, shift
 
@@ -127,6 +130,37 @@ def test_joint_jacobian_equals_central_differences(panda, convention, rng) -> No
     )
     assert analytic.shape == (50, 3, 7)
     assert np.abs(analytic - numeric).max() / np.abs(numeric).max() < 1e-6
+
+
+def _stencil(f, q: np.ndarray, h: float) -> np.ndarray:
+    """(N, m, n) five-point central differences of ``f`` (N, n) -> (N, m) at ``q`` (N, n): error ~h^4."""
+    out = []
+    for k in range(q.shape[1]):
+        e = h * np.eye(q.shape[1])[k]
+        out.append((-f(q + 2 * e) + 8 * f(q + e) - 8 * f(q - e) + f(q - 2 * e)) / (12 * h))
+    return np.stack(out, axis=-1)
+
+
+@pytest.mark.parametrize("extras", ["scale", "compliance", "both"])
+def test_link_angle_jacobian_is_within_1e_12_of_the_exact_derivative(panda, extras, rng) -> None:
+    """h2's review: the Jacobian differenced the whole map q -> q_link with a 1e-6 step, so the angles' own rounding
+    (~3 rad x 1e-16 / 2e-6) left a 2e-10 floor under a docstring promising 1e-12. References: (a) the formula
+    (I - diag(c) d tau / d q_joint) diag(1 + s), d tau by a five-point stencil of the torque alone with a 1e-3 step
+    (truncation ~1e-12 of tau's fifth derivative, times c; rounding ~1e-16 |tau| / 1e-3: ~1e-15 in all); (b) a
+    five-point stencil of the whole map, step 1e-3 (its own rounding ~5e-13), which shares no formula with it."""
+    c = np.array([0.0, 2e-5, 3e-5, 4e-5, 1e-5, 5e-6, 1e-5]) if extras != "scale" else np.zeros(7)
+    s = np.array([1e-3, -2e-3, 0.0, 5e-4, 0.0, 1e-3, -1e-3]) if extras != "compliance" else np.zeros(7)
+    model = with_scale(with_compliance(panda, c if extras != "scale" else None), s if extras != "compliance" else None)
+    q = model.random_configurations(20, rng)
+    jac = link_angle_jacobian(model, q)
+    slope = _stencil(lambda x: c * gravity_torques(model, x), joint_angles(model, q), 1e-3)
+    np.testing.assert_allclose(jac, (np.eye(7) - slope) * (1 + s), rtol=0, atol=1e-12)
+    whole = _stencil(lambda x: _link_angles(model, x), q, 1e-3)
+    np.testing.assert_allclose(jac, whole, rtol=0, atol=2e-12)
+    old = _stencil(lambda x: _link_angles(model, x), q, 1e-6)  # (the old way, a 1e-6 step on the whole map, fails)
+    assert np.abs(old - whole).max() > 2e-11
+    np.testing.assert_array_equal(link_angle_jacobian(model, q[3]), jac[3])
+    assert link_angle_jacobian(with_scale(panda, np.zeros(7)), q) is None
 
 
 @pytest.mark.parametrize("convention", ["standard", "modified"])
