@@ -225,30 +225,45 @@ class _Chain(NamedTuple):
     modified: bool
 
 
-#: Models read by :func:`gravity_torques`: id -> (model, chain, inertials block, payload, bodies, their rows), the model
-#: held so that its id stays its own (its geometry is read-only arrays; the loads are checked against its extras'
-#: blocks). A controller asks for one model's torques every period: kept, one configuration's torques take 10 us
-#: instead of 40 (a Panda).
-_PREPARED: dict[int, tuple] = {}
+class _Prepared(NamedTuple):
+    """What :func:`gravity_torques` keeps of one model (:data:`_PREPARED`)."""
+
+    #: The model, held so that its id stays its own (its geometry is read-only arrays).
+    model: RobotModel
+    #: Its :class:`_Chain`.
+    chain: _Chain
+    #: The ``extras["inertials"]`` and ``extras["payload"]`` objects ``bodies`` were read from (the loads are checked
+    #: against the model's extras by identity); None with ``bodies`` before they are read.
+    block: Any
+    payload: Any
+    #: (n+1, 4) read-only rows ``[m com, m]`` [kg m, kg] of the links and payload, and the same as nested lists of
+    #: floats (:func:`_torques_one`); None until the inertials are read.
+    bodies: np.ndarray | None
+    rows: list | None
+
+
+#: Models read by :func:`gravity_torques`: id -> :class:`_Prepared`. A controller asks for one model's torques every
+#: period: kept, one configuration's torques take 10 us instead of 40 (a Panda).
+_PREPARED: dict[int, _Prepared] = {}
 
 
 def _prepared(model: RobotModel, masses: np.ndarray | None, coms: np.ndarray | None) -> tuple[_Chain, np.ndarray, list]:
     """``model``'s :class:`_Chain`, and the (n+1, 4) rows ``[m com, m]`` (kg m, kg) of its links and payload (of
     ``masses`` and ``coms`` when both are given), as an array and as nested lists; kept for the model's next call."""
     kept = _PREPARED.get(id(model))
-    if kept is None or kept[0] is not model:
-        kept = (model, _chain_of(model), None, None, None, None)
+    if kept is None or kept.model is not model:
+        kept = _Prepared(model, _chain_of(model), None, None, None, None)
         if len(_PREPARED) >= PARSED_KEPT:
             _PREPARED.clear()
         _PREPARED[id(model)] = kept
-    chain = kept[1]
+    chain = kept.chain
     block, payload = model.extras.get("inertials"), model.extras.get("payload")
     if masses is None or coms is None:
-        if kept[2] is block and kept[3] is payload and kept[4] is not None:
-            return chain, kept[4], kept[5]
+        if kept.block is block and kept.payload is payload and kept.bodies is not None:
+            return chain, kept.bodies, kept.rows
         bodies = _bodies(model, *inertials_of(model))
         rows = bodies.tolist()
-        _PREPARED[id(model)] = (model, chain, block, payload, bodies, rows)
+        _PREPARED[id(model)] = _Prepared(model, chain, block, payload, bodies, rows)
         return chain, bodies, rows
     bodies = _bodies(model, masses, coms)
     return chain, bodies, bodies.tolist()

@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 from spherecal.correction import RobotModel, link_frames, load_robot, rpy_matrix
-from spherecal.correction.gravity import InertialsError, gravity_torques, inertials_of
+from spherecal.correction.gravity import _PREPARED, InertialsError, gravity_torques, inertials_of
 
 
 def _quat(rotation):
@@ -122,3 +122,24 @@ def test_bad_inertials_name_the_field():
         inertials_of(replace(panda, extras={"inertials": bad}))
     with pytest.raises(InertialsError, match="'payload.com'"):
         inertials_of(replace(panda, extras={**panda.extras, "payload": {"mass": 1.0, "com": [0, 0]}}))
+
+
+def test_kept_loads_follow_the_model_and_its_blocks(rng):
+    """gravity_torques keeps each model's chain and loads (_PREPARED, one named record per model): a model with other
+    loads, explicit masses, and the first model again each get their own torques, which equal those computed from
+    explicit masses and centres (the path that keeps nothing), one configuration (Python floats) and a batch alike."""
+    panda = load_robot("panda")
+    heavier = replace(panda, extras={**panda.extras, "payload": {"mass": 2.5, "com": [0.0, 0.0, 0.2]}})
+    q = panda.random_configurations(6, rng)
+    for model in (panda, heavier, panda):
+        masses, coms = inertials_of(model)
+        for angles in (q, q[0]):
+            np.testing.assert_array_equal(gravity_torques(model, angles), gravity_torques(model, angles, masses, coms))
+        kept = _PREPARED[id(model)]
+        assert kept.model is model and kept.block is model.extras["inertials"]
+        assert kept.payload is model.extras.get("payload") and kept.rows == kept.bodies.tolist()
+    assert np.abs(gravity_torques(heavier, q) - gravity_torques(panda, q)).max() > 1.0  # 1.74 kg more at the flange
+    held = _PREPARED[id(panda)].bodies
+    lighter = gravity_torques(panda, q, *inertials_of(replace(panda, extras={"inertials": panda.extras["inertials"]})))
+    assert np.abs(lighter - gravity_torques(panda, q)).max() > 0.1  # explicit loads: not the kept ones ...
+    assert _PREPARED[id(panda)].bodies is held  # ... nor kept in their place
