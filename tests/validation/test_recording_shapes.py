@@ -6,7 +6,14 @@ import numpy as np
 import pytest
 
 from spherecal.correction.layout import ANGLE, LENGTH, layout_for
-from spherecal.validation.viewer.recording_shapes import BAR_HEIGHT, capsules, colour_ramp, histogram, parameter_bars
+from spherecal.validation.viewer.recording_shapes import (
+    BAR_HEIGHT,
+    capsules,
+    colour_ramp,
+    covered_axis_height,
+    histogram,
+    parameter_bars,
+)
 
 
 def _rotate(quaternion: np.ndarray, vector: np.ndarray) -> np.ndarray:
@@ -114,3 +121,20 @@ def test_scale_labels_label_every_fifth_sphere_from_bottom_to_top() -> None:
     labels = scale_labels(1.0, 3.0, lambda v: f"{v:.1f} mm")
     assert len(labels) == SCALE_STEPS
     assert [label for label in labels if label] == ["1.0 mm", "1.5 mm", "2.0 mm", "2.5 mm", "3.0 mm"]
+
+
+def test_covered_axis_height_is_where_the_capsules_leave_the_axis() -> None:
+    """How high the link capsules (radius r) cover the base's z axis, against geometry worked by hand: an upright
+    column capped by a level link covers it to the cap's height plus r; a link leaning at theta from the vertical, from
+    height h, to h + r / sin(theta) (where the axis leaves the capsule's cylinder: the highest point of the axis within
+    r of the link's line), here at a point the function samples (t = 1/4 of a 0.2771 m link, 41 points); a step that
+    stands higher wins; an arm whose base is off the axis covers none of it."""
+    r, h, theta = 0.04, 0.333, np.radians(30.0)
+    upright = np.array([[0, 0, 0], [0, 0, h], [0, 0, 0.649], [0.3, 0, 0.649], [0.3, 0, 0.4]], dtype=float)
+    assert covered_axis_height(upright[None], r) == pytest.approx(0.649 + r, abs=1e-12)
+    length = 40 * np.sqrt(3) * r / 10  # the highest point at t = cos r / (L sin) = 10/40
+    tip = np.array([length * np.sin(theta), 0.0, h + length * np.cos(theta)])
+    leaning = np.array([[0, 0, 0], [0, 0, h], tip, tip + [0.3, 0, 0]], dtype=float)
+    assert covered_axis_height(leaning[None], r) == pytest.approx(h + r / np.sin(theta), abs=1e-12)
+    assert covered_axis_height(np.stack([leaning[:4], upright[:4]]), r) == pytest.approx(0.649 + r, abs=1e-12)
+    assert covered_axis_height(upright[None] + [0.5, 0.0, 0.0], r) == 0.0

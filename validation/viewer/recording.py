@@ -60,7 +60,7 @@ from .recording_shapes import (
     BAR_HEIGHT,
     capsules,
     colour_ramp,
-    column_top,
+    covered_axis_height,
     histogram,
     magnification,
     parameter_bars,
@@ -86,8 +86,9 @@ FIXTURE_RADIUS = (0.02, 0.05)
 LINK_RADIUS, TOOL_RADIUS = 0.04, 0.012
 #: Length of the base frame's arrows in the 3D view [m]: out of the base link's 40 mm capsule (0.1 m barely left it).
 AXIS_LENGTH = 0.25
-#: How far the base frame's z arrow reaches beyond the links that stand on that axis [m] (:func:`column_top`): at
-#: 0.25 m it ran inside the Panda's first link (0.333 m), its head hidden (a review).
+#: How far the base frame's z arrow reaches beyond the links that stand on that axis [m]
+#: (:func:`.recording_shapes.covered_axis_height`): at 0.25 m it ran inside the Panda's first link (0.333 m), its head
+#: hidden (a review).
 AXIS_CLEARANCE = 0.1
 #: Height of the main 3D view in the default window [points] (:data:`validation.viewer.blueprint.WORLD_ASPECT`), and a
 #: label's row height, width per character and padding there [points] (Rerun's labels, measured on screenshots): how
@@ -196,7 +197,7 @@ class Recording:
         self._sample_note = ""  # what the fixtures' spheres stand for when samples() magnified the samples
         self._fixture_radius = FIXTURE_RADIUS[0]  # of the fixtures' wire spheres [m]
         self._fixture_scene = None  # names, centres [m] and colours of the fixtures, logged on closing
-        self._column = 0.0  # how high the arm's links stand on the base's z axis [m] (column_top)
+        self._axis_covered = 0.0  # how high the arm's links stand on the base's z axis [m] (covered_axis_height)
         self._tmp = None
         if self.path is not None:
             self._tmp = self.path.with_name(f".{self.path.name}.tmp")
@@ -274,7 +275,7 @@ class Recording:
         tips = tool_point(model, q)
         self.extend_bounds("world", origins)
         radius = link_radius(model)
-        self._column = max(self._column, column_top(origins, radius))
+        self._axis_covered = max(self._axis_covered, covered_axis_height(origins, radius))
         lengths, translations, quaternions = capsules(np.concatenate([origins, tips[:, None]], axis=1))
         segments = lengths.shape[1]
         rr = self.rr
@@ -416,7 +417,7 @@ class Recording:
         when it is not x's): inside the Panda's first link, 0.333 m high, a 0.25 m arrow was hidden."""
         if "world" not in self.bounds:
             return
-        up = max(AXIS_LENGTH, np.ceil((self._column + AXIS_CLEARANCE) / 0.05) * 0.05)  # to 50 mm
+        up = max(AXIS_LENGTH, np.ceil((self._axis_covered + AXIS_CLEARANCE) / 0.05) * 0.05)  # to 50 mm
         axes = np.diag([AXIS_LENGTH, AXIS_LENGTH, up])
         self.stream.log(
             "world/base_frame",

@@ -119,17 +119,22 @@ def parameter_bars(
     return out
 
 
-def column_top(origins: np.ndarray, radius: float, steps: int = 2000, along: int = 41) -> float:
-    """How high the arm's links cover the base's z axis [m], over the steps: at each step the links that start on that
-    axis (the run of link origins from the base within ``radius`` of it: the Panda's first link, its upper arm when
-    upright) and the link that leaves it (a capsule leaning off the axis still covers it for a while), the highest
-    point of the axis inside one of their capsules; 0 when none starts on it (a base placed off the origin).
+def covered_axis_height(origins: np.ndarray, radius: float, steps: int = 2000, along: int = 41) -> float:
+    """The height [m] up to which the arm's link capsules cover the base's z axis, the highest over the steps (not
+    the top of the base column: that is :func:`validation.experiments.experiment.column_top`, a point of the
+    kinematic chain at zero angles). At each step the links that start on that axis (the run of link origins from
+    the base within ``radius`` of it: the Panda's first link, its upper arm when upright) and the link that leaves
+    it (a capsule leaning off the axis still covers it for a while), the highest point of the axis inside one of
+    their capsules; 0 when none starts on it (a base placed off the origin). The viewer's z arrow reaches beyond it.
 
     Args:
         origins: (T, n + 1, 3) link frame origins, base frame [m], the base's first; capsules of ``radius`` [m] join
             consecutive ones.
         steps: at most this many steps are looked at, evenly spread (a long self-motion moves little between them).
         along: points looked at along each link.
+
+    Returns:
+        The height [m] along the base's z axis, at least 0.
     """
     origins = np.asarray(origins, dtype=float)
     origins = origins[np.unique(np.linspace(0, len(origins) - 1, min(steps, len(origins))).astype(int))]
