@@ -15,7 +15,6 @@ Errors are :class:`~spherecal.correction.files.samples.DatasetError`, one line n
 
 from __future__ import annotations
 
-import difflib
 import math
 import os
 from collections.abc import Iterable
@@ -29,6 +28,7 @@ import yaml
 from spherecal.correction.files.atomic import atomic_write_text
 from spherecal.correction.files.robot_file import MAX_LENGTH
 from spherecal.correction.files.samples import Dataset, DatasetError
+from spherecal.correction.files.suggest import close_names
 from spherecal.correction.files.text_input import read_text
 from spherecal.correction.files.yaml_safe import MAX_FILE_BYTES, dump_yaml, load_yaml, node_line
 
@@ -120,7 +120,7 @@ def _name_problem(name: str) -> str | None:
 def nearest_name(name: Any, names: Iterable) -> str | None:
     """The fixture name of ``names`` nearest a misspelt ``name`` (difflib's ratio at least 0.6), or None: the
     did-you-mean of a refusal naming a fixture that is not there."""
-    near = difflib.get_close_matches(str(name), [str(n) for n in names], n=1, cutoff=0.6)
+    near = close_names(name, names, cutoff=0.6)
     return near[0] if near else None
 
 
@@ -218,7 +218,7 @@ def read_fixtures(path: str | os.PathLike) -> FixtureSpec:
         distances.append((a, b, float(value)))
     extras = {k: v for k, v in data.items() if k not in ("fixtures", "distances")}
     for key in extras:  # kept unread (provenance blocks, notes), unless it is a misspelt key we read
-        near = difflib.get_close_matches(str(key).lower(), ["fixtures", "distances"], n=1, cutoff=0.75)
+        near = close_names(str(key).lower(), ["fixtures", "distances"], cutoff=0.75)
         if near:
             raise fail(f"unknown key {key!r} (did you mean {near[0]!r}? as written, it would be ignored)", key)
         value = extras[key]  # known centres go under their fixture, not beside the fixtures (an anchor is no centre)

@@ -19,7 +19,6 @@ from the URDF's own ``<inertial>`` elements, which are converted for you). No ot
 
 from __future__ import annotations
 
-import difflib
 import os
 from dataclasses import replace
 
@@ -27,6 +26,7 @@ import yaml
 
 from ..gravity import InertialsError, inertials_of
 from ..model import RobotModel
+from .suggest import close_names
 from .text_input import read_text
 from .yaml_safe import MAX_FILE_BYTES, load_yaml
 
@@ -67,7 +67,7 @@ def _read(path: str | os.PathLike) -> tuple[dict, dict[str, int]]:
         key = unknown[0]
         where = f"row {rows[key]}, " if key in rows else ""
         also = "; a robot file (name:, dh:, ...) is not an inertials file" if "dh" in data or "name" in data else ""
-        near = difflib.get_close_matches(str(key), [k for k in KEYS if k not in data], n=1, cutoff=0.8)
+        near = close_names(key, [k for k in KEYS if k not in data], cutoff=0.8)
         hint = f"did you mean {near[0]!r}? " if near and not also else ""
         raise InertialsError(f"{path}: {where}field {key!r}: unknown key ({hint}an inertials file holds "
                              f"{', '.join(KEYS)}{also})")

@@ -13,7 +13,6 @@ Schema (other top-level keys are kept in :attr:`RobotModel.extras` and written b
 
 from __future__ import annotations
 
-import difflib
 import math
 import os
 import re
@@ -26,6 +25,7 @@ from ..gravity import InertialsError, inertials_of
 from ..model import CONVENTIONS, JOINT_FIELDS, RobotModel
 from .atomic import atomic_write_text
 from .inertials_file import inertial_rows
+from .suggest import close_names
 from .yaml_safe import dump_yaml, node_line
 
 JOINT_KEYS: tuple[str, ...] = JOINT_FIELDS + ("lower", "upper")
@@ -117,7 +117,7 @@ def robot_from_dict(data: Any, source: str = "<robot>", root: Any = None) -> Rob
         raise RobotFileError(f"{at(str(next(iter(data), '')))}: not a spherecal robot file (keys {found}; "
                              f"expected {', '.join(_KNOWN_KEYS)}: see correction.files.robot_file)")
     for key in data:  # a misspelt block would be kept unread: 'inertial' left the embedded arm's masses in use
-        near = difflib.get_close_matches(str(key), READ_KEYS, n=1, cutoff=0.8)
+        near = close_names(key, READ_KEYS, cutoff=0.8)
         if key not in READ_KEYS and near and near[0] not in data:
             raise RobotFileError(f"{at(str(key))}: unknown key (did you mean {near[0]!r}? as written, "
                                  "it would be ignored)")

@@ -7,7 +7,6 @@ Every pose is evaluated at the URDF's zero configuration (all joint values 0).
 
 from __future__ import annotations
 
-import difflib
 import math
 import os
 import xml.etree.ElementTree as ET
@@ -19,6 +18,7 @@ import numpy as np
 from ..inertia import FIELDS, rotated, tensor
 from ..model import pose_matrix
 from .robot_file import MAX_ANGLE, MAX_LENGTH, RobotFileError
+from .suggest import close_names
 from .text_input import plain_float, read_xml_text
 
 MOVABLE = ("revolute", "continuous")
@@ -398,7 +398,7 @@ def _links_hint(tree: UrdfTree, link: str) -> str:
     ends of the tree (links no joint hangs from), a few of each."""
     parents = {joint.parent for joint in tree.joints.values()}
     ends = [name for name in tree.links if name not in parents]
-    close = difflib.get_close_matches(link, tree.links, n=3, cutoff=0.5)
+    close = close_names(link, tree.links, cutoff=0.5, n=3)
     said = f" (did you mean {', '.join(map(repr, close))}?" if close else " ("
     shown = ", ".join(ends[:8]) + (f" and {len(ends) - 8} more" if len(ends) > 8 else "")
     return f"{said}{' ' if close else ''}its ends: {shown})"
