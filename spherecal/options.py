@@ -360,6 +360,28 @@ def urdf_links(args: argparse.Namespace) -> dict:
             "inertials": getattr(args, "inertials", None), "report": _report(args)}
 
 
+#: Options (argparse destinations) that name a robot description: a file, or an embedded robot by its name.
+ROBOT_OPTIONS = ("robot", "nominal", "calibrated", "truth")
+
+
+def check_robot_names(args: argparse.Namespace) -> None:
+    """Refuse a robot option (:data:`ROBOT_OPTIONS`) given a bare name that is neither a file nor an embedded robot,
+    naming the option, before any work: ``iiwa: field '--robot': no such file, nor an embedded robot (did you mean
+    'iiwa14'? ...)`` (the library's refusal named the name, not the option; export's and tool's robot is CAL.yaml).
+
+    Raises:
+        OptionError: one line naming the value and the option.
+    """
+    from spherecal.correction.files.robots import unknown_name  # numpy: not at --help (start-up)
+
+    for dest in ROBOT_OPTIONS:
+        value = getattr(args, dest, None)
+        why = unknown_name(value) if isinstance(value, str) else None
+        if why is not None:
+            positional = dest == "robot" and getattr(args, "command", None) in ("export", "tool")
+            raise fail(f"{value}: field '{'CAL.yaml' if positional else named(args, dest)}': {why}")
+
+
 def _report(args: argparse.Namespace):
     """A printer of one library note, prefixed with the command's name."""
     command = getattr(args, "command", None)

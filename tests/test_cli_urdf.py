@@ -17,6 +17,7 @@ from spherecal.correction.files.urdf_to_dh import NearlyParallelAxesWarning
 from spherecal.identification.synthetic import make_dataset
 from tests.correction.ur5e_urdf import ur5e_urdf
 from tests.correction.urdf_helpers import MujocoUrdf
+from tests.refusal import refused
 
 
 @pytest.fixture
@@ -62,7 +63,7 @@ def test_link_options_errors_are_one_line(tmp_path, ur5e_file, capsys):
     warning = capsys.readouterr().err  # the UR's parallel axes: one line, as every message of the CLI
     assert warning.startswith("spherecal export: warning: ") and warning.count("\n") == 1 and "Hayati beta" in warning
     for args, message in (
-        (["--tip-link", "gripper"], "tip link 'gripper' is not a link"),
+        (["--tip-link", "gripper"], "field '--tip-link': no link 'gripper'"),
         (["--base-link", "ball"], "no revolute joint"),
     ):
         assert main(["export", str(ur5e_file), *args, "--format", "yaml", "--out", str(tmp_path / "y.yaml")]) == 1
@@ -78,6 +79,62 @@ def test_link_options_errors_are_one_line(tmp_path, ur5e_file, capsys):
     assert error.endswith(f"{folder}: cannot read: Is a directory (expected a robot file or a .urdf)\n")
     assert error.count("\n") == 1
     assert not (tmp_path / "y.yaml").exists() and not (tmp_path / "z.yaml").exists()
+
+
+#: Every command that takes --tip-link and --base-link, with what else it needs to reach the robot (ROBOT: the URDF).
+LINK_COMMANDS = [
+    ["simulate", "--robot", "ROBOT", "--out", "out", "--seconds", "0.01", "--per-fixture", "5"],
+    ["calibrate", "--robot", "ROBOT", "--samples", "s.csv", "--out", "cal.yaml"],
+    ["import", "rec", "--format", "csv", "--robot", "ROBOT", "--out", "out"],
+    ["validate", "--nominal", "ROBOT", "--calibrated", "panda", "--samples", "s.csv"],
+    ["plan", "--robot", "ROBOT", "--grid", "0.3,0.5,2;-0.1,0.1,2;0.2,0.4,2"],
+    ["export", "ROBOT", "--format", "yaml", "--out", "x.yaml"],
+    ["tool", "panda", "--urdf", "ROBOT", "--out", "t.yaml"],
+]
+
+
+@pytest.fixture
+def inputs(tmp_path, monkeypatch, ur5e_file):
+    """The working folder of a refused command: the URDF, an empty samples.csv, an empty recording folder."""
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "s.csv").write_text("fixture,q1,q2,q3,q4,q5,q6\n")
+    (tmp_path / "rec").mkdir()
+    return tmp_path
+
+
+@pytest.mark.parametrize("command", LINK_COMMANDS, ids=lambda c: c[0])
+@pytest.mark.parametrize(("option", "link", "said"), [
+    ("--tip-link", "wrist_3", "(did you mean 'wrist_3_link'"),
+    ("--base-link", "bse_link", "(did you mean 'base_link'"),
+    ("--tip-link", "gripper", "(its ends: ball)"),
+])
+def test_an_unknown_link_is_refused_naming_its_option(inputs, ur5e_file, capsys, command, option, link, said):
+    # a review: every command named the link ('tip link 'x' is not a link of robot ...') but not the option
+    argv = [str(ur5e_file) if a == "ROBOT" else a for a in command]
+    error = refused([*argv, option, link], inputs, capsys,
+                    f"ur5e.urdf: field '{option}': no link '{link}' in robot ", said)
+    assert error.rstrip("\n").endswith(")")  # the whole hint, on this one line
+
+
+#: Every command's options that name a robot (a file or an embedded arm), with what else the command needs.
+ROBOT_COMMANDS = [
+    (["simulate", "--out", "out", "--seconds", "0.01", "--per-fixture", "5", "--robot"], "--robot"),
+    (["calibrate", "--samples", "s.csv", "--out", "cal.yaml", "--robot"], "--robot"),
+    (["import", "rec", "--format", "csv", "--out", "out", "--robot"], "--robot"),
+    (["plan", "--grid", "0.3,0.5,2;-0.1,0.1,2;0.2,0.4,2", "--robot"], "--robot"),
+    (["validate", "--calibrated", "panda", "--samples", "s.csv", "--nominal"], "--nominal"),
+    (["validate", "--nominal", "panda", "--samples", "s.csv", "--calibrated"], "--calibrated"),
+    (["validate", "--nominal", "panda", "--calibrated", "panda", "--samples", "s.csv", "--truth"], "--truth"),
+    (["export", "--format", "yaml", "--out", "x.yaml"], "CAL.yaml"),
+    (["tool", "--offset", "0", "0", "0.1", "--out", "t.yaml"], "CAL.yaml"),
+]
+
+
+@pytest.mark.parametrize(("command", "option"), ROBOT_COMMANDS, ids=lambda c: c if isinstance(c, str) else c[0])
+def test_an_unknown_robot_name_is_refused_naming_its_option(inputs, capsys, command, option):
+    argv = [*command, "iiwa"] if option != "CAL.yaml" else [command[0], "iiwa", *command[1:]]
+    refused(argv, inputs, capsys, f"iiwa: field '{option}': no such file, nor an embedded robot (did you mean "
+            "'iiwa14'? embedded: panda, ")
 
 
 def test_validate_a_calibration_of_a_urdf_arm_against_that_urdf(tmp_path, ur5e_file, capsys):
@@ -111,7 +168,7 @@ def test_a_urdf_named_xml_is_read_back_as_a_urdf(tmp_path, panda, capsys):
     q = panda.random_configurations(200, np.random.default_rng(5))
     assert np.abs(tool_point(back, q) - tool_point(load_robot(cal), q)).max() < 1e-12
     assert back.extras["urdf"]["tip_link"] == tip
-    for argv, said in ((["export", str(xml), "--tip-link", "nope"], "tip link 'nope' is not a link"),
+    for argv, said in ((["export", str(xml), "--tip-link", "nope"], "field '--tip-link': no link 'nope'"),
                        (["export", str(cal), "--tip-link", tip], "only for a URDF")):
         assert main([*argv, "--format", "yaml", "--out", str(tmp_path / "x.yaml")]) == 1
         error = capsys.readouterr().err

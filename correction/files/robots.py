@@ -24,6 +24,7 @@ from ..inertials import transfer_inertials
 from ..model import RobotModel
 from .inertials_file import with_inertials_file
 from .robot_file import EMBEDDED_ROBOTS, RobotFileError, robot_from_dict
+from .suggest import close_names
 from .text_input import read_text
 from .urdf_to_dh import NearlyParallelAxesWarning, load_urdf
 from .yaml_safe import MAX_FILE_BYTES, load_yaml
@@ -96,9 +97,9 @@ def _load(path_or_name: str | os.PathLike, tip_link: str | None, base_link: str 
         _refuse_links(key, tip_link, base_link)
         return _embedded(EMBEDDED_ROBOTS[key], key)
     path = Path(path_or_name)
-    if not os.path.lexists(path) and not path.suffix and len(path.parts) == 1:  # a name, not a path: say which exist
-        raise RobotFileError(f"{key}: cannot read: no such file, nor an embedded robot "
-                             f"({', '.join(EMBEDDED_ROBOTS)})")
+    unknown = unknown_name(key)  # a name, not a path: say which exist
+    if unknown is not None:
+        raise RobotFileError(f"{key}: cannot read: {unknown}")
     text = read_text(path, RobotFileError, limit=MAX_FILE_BYTES)
     if _xml_root(text) == "robot":  # a URDF whatever its ending: 'export --format urdf --out arm.xml' (ROS's)
         return load_urdf(path_or_name, tip_link=tip_link, base_link=base_link)
@@ -106,6 +107,20 @@ def _load(path_or_name: str | os.PathLike, tip_link: str | None, base_link: str 
     _refuse_xml(text, key)
     data, root = load_yaml(text, str(path), RobotFileError)  # bounded: size, depth, aliases; no duplicate keys
     return robot_from_dict(data, source=str(path), root=root)
+
+
+def unknown_name(path_or_name: str | os.PathLike) -> str | None:
+    """Why ``path_or_name`` names no robot, when it is a bare name (no folder, no ending) that is neither a file nor
+    an embedded robot: ``"no such file, nor an embedded robot (did you mean 'iiwa14'? embedded: panda, ...)"``;
+    None for anything else (an embedded name, an existing file, a path, which :func:`load_robot` reads or refuses
+    itself). The command line names its option with it (``field '--robot': ...``)."""
+    key = str(path_or_name)
+    path = Path(key)
+    if key in EMBEDDED_ROBOTS or os.path.lexists(path) or path.suffix or len(path.parts) != 1:
+        return None
+    near = close_names(key.lower(), EMBEDDED_ROBOTS, cutoff=0.6, n=2)
+    said = f"did you mean {' or '.join(map(repr, near))}? embedded: " if near else ""
+    return f"no such file, nor an embedded robot ({said}{', '.join(EMBEDDED_ROBOTS)})"
 
 
 def is_urdf(path_or_name: str | os.PathLike) -> bool:

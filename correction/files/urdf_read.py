@@ -414,15 +414,16 @@ def chain(
         ``(base, tip, joints)``: every joint on the path, fixed ones included.
 
     Raises:
-        RobotFileError: an unknown link, a tip not below the base, a prismatic (or floating,
+        RobotFileError: an unknown link (named by its option, ``field '--tip-link': no link 'x' in robot ...``,
+            with the nearest names), a tip not below the base, a prismatic (or floating,
             planar) joint on the path, no revolute joint at all, or no ``tip_link`` where the chain
             ends in several links at different points.
     """
     source = tree.source
     base = tree.root if base_link is None else base_link
-    for option, link in (("base link", base), ("tip link", tip_link)):
+    for option, link in (("--base-link", base), ("--tip-link", tip_link)):  # the options that give them
         if link is not None and link not in tree.links:
-            raise RobotFileError(f"{source}: {option} {link!r} is not a link of robot {tree.name!r}"
+            raise RobotFileError(f"{source}: field '{option}': no link {link!r} in robot {tree.name!r}"
                                  f"{_links_hint(tree, link)}")
     tip = tree.default_tip(base) if tip_link is None else tip_link
     joints = tree.path(base, tip)

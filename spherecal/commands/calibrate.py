@@ -5,7 +5,7 @@ from __future__ import annotations
 import argparse
 import math
 
-from spherecal.options import refuse_given, urdf_links
+from spherecal.options import check_robot_names, refuse_given, urdf_links
 
 HELP = "Identify DH parameters from spherical-joint samples and write a calibrated robot file."
 
@@ -87,6 +87,7 @@ def run(args: argparse.Namespace) -> int:
     if args.method == "lm" and args.model != "auto" and args.max_per_fixture is None:  # nothing random is drawn
         refuse_given(args, ("seed",), f"with --method lm, --model {args.model} and every sample kept nothing random "
                      "is drawn (it seeds --max-per-fixture's subsampling, --model auto's cross-validation and PSO)")
+    check_robot_names(args)  # an unknown robot name, by its option
     outputs = planned_outputs(args, {"--out": args.out})  # before any work: never over an input, named as YAML
     clock = time.perf_counter()
     options = WorkflowOptions(

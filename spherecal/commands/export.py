@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import argparse
 
-from spherecal.options import add_seed, add_urdf_links, given, urdf_links
+from spherecal.options import add_seed, add_urdf_links, check_robot_names, given, urdf_links
 
 HELP = "Export a calibrated robot file as URDF, MJCF or YAML."
 FORMATS = ("urdf", "mjcf", "yaml")
@@ -56,6 +56,7 @@ def run(args: argparse.Namespace) -> int:
     from spherecal.controller.export_file import ExportConfig, export_file
     from spherecal.options import planned_outputs
 
+    check_robot_names(args)  # an unknown robot name, by its option
     outputs = planned_outputs(args, {"--out": args.out})  # never over CAL.yaml, --into or --samples
     links = urdf_links(args)
     config = ExportConfig(

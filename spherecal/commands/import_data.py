@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import argparse
 
-from spherecal.options import check_folder, fail, named, urdf_links
+from spherecal.options import check_folder, check_robot_names, fail, named, urdf_links
 
 HELP = "Turn a real recording (MUKCa folder, ROS bag, joint CSV) into samples.csv and fixtures.yaml."
 
@@ -124,6 +124,7 @@ def run(args: argparse.Namespace) -> int:
     from spherecal.identification.ingest.import_recording import ImportOptions, import_files
     from spherecal.identification.ingest.segment import SegmentSettings
 
+    check_robot_names(args)  # an unknown robot name, by its option
     check_folder(args.out, writes=("samples.csv", "fixtures.yaml"))
     clock = time.perf_counter()
     given = _format_options(args, [f.name for f in fields(SegmentSettings)])

@@ -157,10 +157,11 @@ def run(args: argparse.Namespace) -> int:
     """Plan (or predict, or regenerate the analysis, or guide the recording) and print the result."""
     import time
 
-    from spherecal.options import planned_outputs
+    from spherecal.options import check_robot_names, planned_outputs
     from spherecal.validation.planning import plan_files
 
     refuse_unused(args)
+    check_robot_names(args)  # an unknown robot name, by its option
     check_per_fixture(args, 10, simulated=False)
     outputs = planned_outputs(args, {"--rrd": args.rrd, "--analysis": args.analysis, "--out": args.out,
                                      "--fixtures-out": args.fixtures_out})

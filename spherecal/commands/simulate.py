@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import argparse
 
-from spherecal.options import check_per_fixture, urdf_links
+from spherecal.options import check_per_fixture, check_robot_names, urdf_links
 
 HELP = "Simulate self-motion at spherical-joint fixtures on a perturbed (true) robot and write samples."
 
@@ -51,6 +51,7 @@ def run(args: argparse.Namespace) -> int:
     from spherecal.validation.experiments.simulation import SimulationConfig, simulate_to_folder, simulation_outputs
 
     check_per_fixture(args, 1)
+    check_robot_names(args)  # an unknown robot name, by its option
     check_folder(args.out, writes=("samples.csv", "fixtures.yaml", "truth.yaml"))
     # found before the simulation runs, not when the files are written; --fixtures may be out/fixtures.yaml
     outputs = planned_outputs(args, {"--out": simulation_outputs(args.out)})

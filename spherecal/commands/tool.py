@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import argparse
 
-from spherecal.options import finite, refuse_given
+from spherecal.options import check_robot_names, finite, refuse_given
 
 HELP = "Put another tool on a calibrated arm: a new robot file with the tool point replaced."
 
@@ -47,6 +47,7 @@ def run(args: argparse.Namespace) -> int:
 
     if args.urdf is None:
         refuse_given(args, ("tip_link", "base_link"), "only with --urdf (the link of the new tool in its URDF)")
+    check_robot_names(args)  # an unknown robot name, by its option
     outputs = planned_outputs(args, {"--out": args.out})  # never over an input, named as YAML
     model = load_robot(args.robot)
     from spherecal.correction.files.robot_file import forced_calibration

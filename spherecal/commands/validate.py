@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import argparse
 
-from spherecal.options import recorded_options, refuse_given, start_viewer, urdf_links
+from spherecal.options import check_robot_names, recorded_options, refuse_given, start_viewer, urdf_links
 
 HELP = "Compare nominal and calibrated models against the truth, motion-capture data or socket samples alone."
 
@@ -51,6 +51,7 @@ def run(args: argparse.Namespace) -> int:
     if args.truth is None or args.mocap is not None:  # a review: '--configurations' without --truth did nothing
         refuse_given(args, ("configurations", "mocap_noise", "seed"),
                      "only with --truth and no --mocap (it sets the simulated motion capture)")
+    check_robot_names(args)  # an unknown robot name, by its option
     links = urdf_links(args)
     config = ValidateConfig(
         nominal=args.nominal, calibrated=args.calibrated, truth=args.truth, mocap=args.mocap, samples=args.samples,

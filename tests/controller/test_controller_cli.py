@@ -112,7 +112,7 @@ def test_an_unknown_robot_name_is_refused_with_the_embedded_names(tmp_path, caps
     (tmp_path / "s.csv").write_text("fixture,q1,q2,q3,q4,q5,q6,q7\n")
     option = "--nominal" if command[0] == "validate" else "--robot"
     refused([*command, option, "ur5x"], tmp_path, capsys,
-            "ur5x: cannot read: no such file, nor an embedded robot (" + ", ".join(EMBEDDED_ROBOTS) + ")")
+            f"ur5x: field '{option}': no such file, nor an embedded robot (" + ", ".join(EMBEDDED_ROBOTS) + ")")
 
 
 def test_out_below_a_file_fails_before_simulating(tmp_path, capsys):

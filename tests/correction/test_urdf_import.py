@@ -160,8 +160,9 @@ def test_bad_urdf_one_line_error(edit, match, tmp_path):
 @pytest.mark.parametrize(
     ("options", "match"),
     [
-        ({"tip_link": "gripper"}, r"tip link 'gripper' is not a link of robot '\w+' \(its ends: ball\)$"),
-        ({"tip_link": "wrist_3"}, r"'wrist_3' is not a link .* \(did you mean 'wrist_3_link'.*\? its ends: ball\)$"),
+        ({"tip_link": "gripper"}, r"field '--tip-link': no link 'gripper' in robot '\w+' \(its ends: ball\)$"),
+        ({"tip_link": "wrist_3"}, r"no link 'wrist_3' .* \(did you mean 'wrist_3_link'.*\? its ends: ball\)$"),
+        ({"base_link": "bse"}, r"field '--base-link': no link 'bse' in robot '\w+' \(did you mean 'base_link'"),
         ({"base_link": "wrist_1_link", "tip_link": "shoulder_link"}, "'shoulder_link' is not below base link"),
         ({"base_link": "ball"}, "no revolute joint"),
     ],
