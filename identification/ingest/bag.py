@@ -27,6 +27,7 @@ from spherecal.correction.files.text_input import read_text
 from spherecal.correction.files.yaml_safe import MAX_FILE_BYTES, load_yaml, node_line
 from spherecal.correction.model import RobotModel
 
+from .bag_files import check_mcap, storage_files, storage_module
 from .importers import (
     MAX_JOINT_SPEED,
     Recording,
@@ -58,7 +59,8 @@ def read_bag(path: str | os.PathLike, model: RobotModel, topic: str = TOPIC) -> 
         receive time where a stamp is zero), ``rows`` naming the message number on the topic.
 
     Raises:
-        RecordingError: unreadable bag, no such topic, another message type, a message whose
+        RecordingError: unreadable bag (a damaged storage file named: an MCAP file truncated or not MCAP, by its
+            magic bytes, :mod:`.bag_files`), no such topic, another message type, a message whose
             ``position`` does not match its ``name``, a missing joint (named), an angle outside
             the limits.
     """
@@ -72,10 +74,14 @@ def read_bag(path: str | os.PathLike, model: RobotModel, topic: str = TOPIC) -> 
         raise RecordingError(f"{path}: field 'SOURCE': a CSV file, not a bag (a ROS 1 .bag file or a ROS 2 bag "
                              "folder): use --format csv")
     unindexed: tuple[str, ...] = ()
+    info = None
     if path.is_dir() and not (path / "metadata.yaml").is_file():  # rosbags would say the folder is a missing file
         path, unindexed = _without_metadata(path)
     elif path.is_dir():
-        _check_metadata(path / "metadata.yaml")
+        info = _check_metadata(path / "metadata.yaml")
+    files = storage_files(path, info)
+    for file in files:  # rosbags: 'File end magic is invalid.' of a truncated MCAP file, naming the folder only
+        check_mcap(file)
     try:
         found = _read_ros1(path, model, topic) if path.suffix == ".bag" and path.is_file() else None
         if found is None:  # a ROS 2 bag, or a ROS 1 bag that rosbags' reader reads message by message
@@ -91,13 +97,13 @@ def read_bag(path: str | os.PathLike, model: RobotModel, topic: str = TOPIC) -> 
     except RecordingError:
         raise
     except (AnyReaderError, OSError) as error:
-        raise RecordingError(f"{path}: cannot read the bag: {error}") from None
+        raise RecordingError(_damaged(path, files, error, str(error))) from None
     except Exception as error:  # rosbags' own reader and deserialisation errors have no common base
         origin = _raised_by_rosbags(error)
         if not origin:
             raise
         said = str(error) or f"{type(error).__name__} in {origin}"
-        raise RecordingError(f"{path}: cannot read the bag: {said}") from None
+        raise RecordingError(_damaged(path, files, error, said)) from None
     skipped, partial, unpositioned = messages.skipped, messages.partial, messages.unpositioned
     others = "; ".join(f"{count} naming {', '.join(names[:4]) or 'no joint'}{', ...' if len(names) > 4 else ''}"
                        for names, count in skipped.items())
@@ -147,16 +153,26 @@ def read_bag(path: str | os.PathLike, model: RobotModel, topic: str = TOPIC) -> 
 METADATA_KEY = "rosbag2_bagfile_information"
 
 
-def _check_metadata(meta: Path) -> None:
+def _damaged(path: Path, files: list[Path], error: BaseException, said: str) -> str:
+    """The refusal of a bag rosbags could not read (``said``: what it said of ``error``): naming the bag's one storage
+    file (``files``) as damaged when rosbags' storage layer raised it (an MCAP file damaged inside, an SQLite file
+    that is not a database), else ``path`` (the folder, or a ROS 1 bag)."""
+    if len(files) == 1 and storage_module(error):
+        return f"{files[0]}: cannot read the bag: a damaged storage file ({said})"
+    return f"{path}: cannot read the bag: {said}"
+
+
+def _check_metadata(meta: Path) -> dict:
     """Refuse a ``metadata.yaml`` that is not a ROS 2 bag's, naming it (rosbags said "Invalid bag metadata: 'NoneType'
-    object is not subscriptable" of an empty one, and named the folder only).
+    object is not subscriptable" of an empty one, and named the folder only); return its ``rosbag2_bagfile_information``
+    mapping.
 
     Raises:
         RecordingError: unreadable, invalid YAML (its row), or no ``rosbag2_bagfile_information`` mapping.
     """
     data, root = load_yaml(read_text(meta, RecordingError, limit=MAX_FILE_BYTES), str(meta), RecordingError)
     if isinstance(data, dict) and isinstance(data.get(METADATA_KEY), dict):
-        return
+        return data[METADATA_KEY]
     got = ("an empty file" if data is None else f"keys {', '.join(map(repr, list(data)[:3]))}"
            if isinstance(data, dict) else f"a {type(data).__name__}")
     row = node_line(root, METADATA_KEY, key_line=True) if isinstance(data, dict) else 1

@@ -713,3 +713,40 @@ def test_a_csv_given_as_a_bag_is_pointed_to_format_csv(recording, tmp_path, caps
     path.write_text("time,q1\n0,0\n")
     refused(["import", path, "--format", "bag", "--robot", PANDA, "--out", tmp_path / "out"], tmp_path, capsys,
             f"{path}: field 'SOURCE': a CSV file, not a bag", "use --format csv")
+
+
+#: MCAP files start and end with these 8 bytes (mcap.dev/spec), written out here rather than taken from the reader.
+MAGIC = b"\x89MCAP0\r\n"
+
+
+def _summary_past_the_end(data: bytes) -> bytes:
+    """An MCAP file damaged inside, its two magics intact: its footer record (opcode 0x02, a uint64 length of 20,
+    then the uint64 summary start: mcap.dev/spec) pointing past the end of the file."""
+    footer = len(data) - len(MAGIC) - 29
+    assert data[footer] == 0x02 and int.from_bytes(data[footer + 1 : footer + 9], "little") == 20
+    return data[: footer + 9] + (len(data) + 100).to_bytes(8, "little") + data[footer + 17 :]
+
+
+@pytest.mark.parametrize("damage, said", [
+    (lambda data: data[: len(data) // 2], "a truncated MCAP file ({size} bytes, not ending with MCAP's closing magic"),
+    (lambda data: data[:-1], "a truncated MCAP file ({size} bytes, not ending with MCAP's closing magic"),
+    (lambda data: b"garbage\n" * 64, "not an MCAP file: it does not start with MCAP's magic bytes (starts b'garba"),
+    (lambda data: b"", "an empty MCAP file (0 bytes)"),
+    (lambda data: _summary_past_the_end(data), "a damaged storage file (Invalid MCAP summary offset"),
+], ids=["half", "last-byte", "garbage", "empty", "summary-offset"])
+@pytest.mark.parametrize("metadata", [True, False], ids=["folder", "no-metadata"])
+def test_a_damaged_mcap_file_is_named_not_its_folder(recording, tmp_path, capsys, damage, said, metadata) -> None:
+    # a review: a ROS 2 bag folder whose .mcap file was cut short said "rec: cannot read the bag: File end magic is
+    # invalid.", naming the folder and not which file, nor that it was cut short
+    _, t, q, _ = recording
+    bag = write_bag(tmp_path / "rec", "mcap", t[:300], q[:300], NAMES)
+    (storage,) = bag.glob("*.mcap")
+    data = storage.read_bytes()
+    assert data.startswith(MAGIC) and data.endswith(MAGIC)
+    assert len(read_bag(bag, load_robot(PANDA)).q) == 300  # the bag before its damage reads whole
+    storage.write_bytes(damage(data))
+    if not metadata:  # a recording killed before ros2 bag record wrote metadata.yaml: its one file read alone
+        (bag / "metadata.yaml").unlink()
+    error = refused(["import", bag, "--format", "bag", "--robot", PANDA, "--out", tmp_path / "out"], tmp_path, capsys,
+                    f"{storage}: cannot read the bag: {said.format(size=storage.stat().st_size)}")
+    assert f"{bag}:" not in error and not (tmp_path / "out").exists()
