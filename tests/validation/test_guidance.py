@@ -43,6 +43,7 @@ from spherecal.validation.planning.placements import (
     read_placements,
 )
 from spherecal.validation.viewer.recording import read_entity_rows
+from tests.refusal import refused as refused_line
 
 NOISE = 2e-4
 #: The recording so far: one placement of a two-socket plate (50 mm), in front of the Panda.
@@ -435,8 +436,9 @@ def test_plan_command_ranks_refuses_out_of_reach_and_writes_json(tmp_path, panda
     assert labels[1:] == [""] and labels[0].startswith(said) and labels[0].endswith(" mm own)"), labels
     refused = [line for line in text.splitlines() if line.startswith("refused:")]
     # 1.46 m from the base: beyond the Panda's 1.39 m of links and tool, within the 1.1 x of a distance refusal
-    assert refused == ["refused: candidate far: socket far_h0 at [1.45, 0.0, 0.2] m is out of reach inside the "
-                       "joint limits"]
+    # named by its file, the row of its key (the sixth line of c.yaml) and its field, not by 'candidate far' alone
+    assert refused == [f"refused: {tmp_path / 'c.yaml'}: row 6, field 'candidates.far.sockets.far_h0': socket far_h0 "
+                       "at [1.45, 0.0, 0.2] m is out of reach inside the joint limits"]
     plan = json.loads(out.read_text())
     assert [r["name"] for r in plan["ranking"]] == ["front"] and plan["refused"][0]["name"] == "far"
     # what a colour means (a reviewer could not tell): a scale labelled in the table's gain, the most at its blue
@@ -462,6 +464,13 @@ def test_plan_command_ranks_refuses_out_of_reach_and_writes_json(tmp_path, panda
     # (was '... m is out of reach inside the joint limits', as a point the walk missed)
     assert len(err) == 1 and "candidate far: fixture far at [1.6, 0.0, 0.2] m is out of reach: 1.612 m from the base" \
         in err[0] and "millimetres given?" in err[0], err
+    assert not out.exists()
+    # one the IK misses (1.46 m from the base: within the distance check's 1.1 x), the only candidate: the refusal
+    # names its file, row and field (was 'no candidate can be recorded: candidate far: socket far at ...')
+    (tmp_path / "c.yaml").write_text("# a plate beyond the table\ncandidates:\n  front: {position: [1.45, 0.0, 0.2]}\n")
+    refused_line([*argv, "--rrd", str(rrd)], tmp_path, capsys,
+                 f"no candidate can be recorded: {tmp_path / 'c.yaml'}: row 3, field 'candidates.front.position': "
+                 "socket front at [1.45, 0.0, 0.2] m is out of reach inside the joint limits")
     assert not out.exists()
 
 

@@ -307,7 +307,9 @@ def test_a_given_candidate_no_posture_reaches_is_named_so_with_the_unit(tmp_path
                                     "'franka_panda', whose links and tool reach 1.39 m at most (the unit of fixture "
                                     "positions is metres: millimetres given?)")
     # 1.46 m: beyond the links' reach, within the 1.1 x margin: the IK's line, as before
-    assert surveys["near"].reason == "fixture near at [1.45, 0.0, 0.2] m is out of reach inside the joint limits"
+    # the IK's line names where the file gives it: the file, the row of its key (the third line) and the field
+    assert surveys["near"].reason == (f"{path}: row 3, field 'candidates.near.position': fixture near at [1.45, 0.0, "
+                                      "0.2] m is out of reach inside the joint limits")
     assert surveys["auto"].reason == "fixture auto at [5.0, 0.0, 3.0] m is out of reach inside the joint limits"
 
 

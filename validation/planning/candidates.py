@@ -34,12 +34,15 @@ class Candidate:
         source: the candidates file or the command-line option that gave it (``""`` when placed by the program,
             ``--grid auto``): a given one farther than the arm reaches in any posture is named so, with the unit of
             positions (:func:`controller.reach.check_fixture_distance`), before any IK is tried.
+        located: where a candidates file gives its position (``"FILE: row N, field 'candidates.NAME.position'"``),
+            for the survey's line when the IK finds it out of reach; ``""`` for one from a grid.
     """
 
     name: str
     position: np.ndarray
     joint_range: np.ndarray | None = None
     source: str = ""
+    located: str = ""
 
 
 def grid_candidates(text: str, option: str = "--grid") -> list[Candidate]:
@@ -132,7 +135,7 @@ def read_candidates(path: str | Path, n_joints: int) -> list[Candidate]:
         unknown = set(entry) - {"position", "joint_range"}
         if unknown:
             raise CandidateError(f"{where(name, str(sorted(unknown)[0]))}: unknown field")
-        out.append(Candidate(str(name), position, joint_range, str(path)))
+        out.append(Candidate(str(name), position, joint_range, str(path), where(name, "position")))
     return out
 
 

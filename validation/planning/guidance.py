@@ -494,8 +494,8 @@ def rank_placements(
         else:
             socket = names[int(np.argmin(ok))]
             where = np.round(p.sockets[socket], 4).tolist()
-            refused.append(Judged(p, f"candidate {p.name}: socket {socket} at {where} m is out of reach inside the "
-                                     "joint limits"))
+            named = p.located.get(socket) or f"candidate {p.name}"  # a candidates file's: its file, row and field
+            refused.append(Judged(p, f"{named}: socket {socket} at {where} m is out of reach inside the joint limits"))
         k += len(names)
     if not configurations:
         raise CandidateError(f"no candidate can be recorded: {refused[0].reason}")

@@ -17,7 +17,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
@@ -46,12 +46,16 @@ class Placement:
         sockets: socket name -> (3,) centre in the base frame [m].
         distances: known centre-to-centre distances ``(socket_a, socket_b, metres)``.
         source: the candidates file it was read from ("" when generated), for refusals naming its field.
+        located: socket name -> where that file gives its position (``"FILE: row N, field
+            'candidates.NAME.sockets.SOCKET'"``, or ``'candidates.NAME.position'`` of a single socket), for the
+            refusal of a socket the IK finds out of reach; empty when generated.
     """
 
     name: str
     sockets: dict[str, np.ndarray]
     distances: tuple[tuple[str, str, float], ...] = ()
     source: str = ""
+    located: dict[str, str] = field(default_factory=dict)
 
     @property
     def centre(self) -> np.ndarray:
@@ -88,11 +92,13 @@ def read_placements(path: str | Path) -> list[Placement]:
         if unknown:
             raise CandidateError(f"{at(str(sorted(unknown)[0]))}: unknown field")
         if "position" in entry:
-            sockets = {str(name): _point(entry["position"], at("position"))}
+            located = {str(name): at("position")}
+            sockets = {str(name): _point(entry["position"], located[str(name)])}
         elif not isinstance(entry["sockets"], dict) or not entry["sockets"]:
             raise CandidateError(f"{at('sockets')}: expected a non-empty mapping name -> [x, y, z] [m]")
         else:
-            sockets = {str(k): _point(v, at("sockets", str(k))) for k, v in entry["sockets"].items()}
+            located = {str(k): at("sockets", str(k)) for k in entry["sockets"]}
+            sockets = {str(k): _point(v, located[str(k)]) for k, v in entry["sockets"].items()}
         _separated(sockets, lambda socket: at("sockets", socket))
         for socket in sockets:
             if socket in seen:
@@ -116,7 +122,7 @@ def read_placements(path: str | Path) -> list[Placement]:
                 raise CandidateError(f"{where}: {a} - {b} is {value * 1e3:.4g} mm here, but their positions are "
                                      f"{apart * 1e3:.4g} mm apart (a typo in one of them?)")
             distances.append((a, b, float(value)))
-        out.append(Placement(str(name), sockets, tuple(distances), str(path)))
+        out.append(Placement(str(name), sockets, tuple(distances), str(path), located))
     return out
 
 

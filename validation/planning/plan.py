@@ -186,8 +186,9 @@ def motion_samples(
         return collect_self_motion(truth, model, {candidate.name: centre}, rng, settings).q
     if motion != "kinematic":
         raise ValueError(f"unknown motion {motion!r}, expected one of {MOTIONS}")
+    named = f"{candidate.located}: " if candidate.located else ""  # a candidates file's: its file, row and field
     unreachable = UnreachableFixtureError(
-        f"fixture {candidate.name} at {np.round(centre, 4).tolist()} m is out of reach inside the joint limits")
+        f"{named}fixture {candidate.name} at {np.round(centre, 4).tolist()} m is out of reach inside the joint limits")
     if one_branch(truth.n_joints):
         q, reached = hand_guided(truth, centre[None], count, rng, walkers=1, noise=noise)
         if not reached[0]:
