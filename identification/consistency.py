@@ -233,16 +233,23 @@ def group_finding(problem: CalibrationProblem, name: str, kind: tuple, group: Le
         size = float(np.sqrt(np.mean(np.sum(predicted**2, axis=1))))
         figures["disagreement_rms_mm"] = size * 1e3
         rows = dataset.select(np.flatnonzero(dataset.labels == key))
-        text = (
-            f"{samples_location(rows)}, field 'fixture': the samples at fixture {key} disagree with the other "
-            f"fixtures by {size * 1e3:.3g} mm rms (the others alone: residual {group.sigma_rest * 1e3:.3g} mm per "
-            f"axis{_unmodelled_clause(unmodelled)}): samples of another arm, a fixture that moved, or a wrong label"
-        )
+        # beside one other fixture, 'the other fixtures' and 'the others alone' read as a miscount (a review, MUKCa's
+        # dinova_1 front: two sockets)
+        one = len(dataset.fixture_names) == 2
+        others, alone = ("the other fixture", "the other alone") if one else ("the other fixtures", "the others alone")
+        causes = ["samples of another arm", "a fixture that moved", "a wrong label"]
         linked = [k for k, (a, b, _) in enumerate(spec.distances) if key in (a, b)]
         if linked:  # a wrong known distance moves the fixtures it joins: the fixture is blamed for it
-            text += "; or a wrong known distance (" + ", ".join(
+            # one of the causes, in the same sentence: '; or a wrong known distance' was printed as a line of its own
+            # starting 'or' (a review)
+            causes.append("a wrong known distance (" + ", ".join(
                 f"{where}: {spec.distance_field(k)}: {spec.distances[k][0]}-{spec.distances[k][1]} "
-                f"{spec.distances[k][2]:.6g} m" for k in linked[:2]) + ")"
+                f"{spec.distances[k][2]:.6g} m" for k in linked[:2]) + ")")
+        text = (
+            f"{samples_location(rows)}, field 'fixture': the samples at fixture {key} disagree with {others} by "
+            f"{size * 1e3:.3g} mm rms ({alone}: residual {group.sigma_rest * 1e3:.3g} mm per "
+            f"axis{_unmodelled_clause(unmodelled)}): {', '.join(causes[:-1])}, or {causes[-1]}"
+        )
     else:
         value = predicted / weight
         size = float(np.linalg.norm(value))

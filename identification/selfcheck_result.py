@@ -168,12 +168,15 @@ class SelfCheck:
         prediction: the parameters' predicted error covariance at the noise judged with
             (``noise_m``, ``parameters``, ``covariance`` [m, rad squared]): what ``validate`` predicts
             held-out sockets' spreads with (:func:`.prediction.socket_spreads`).
+        forced: an inconsistent calibration returned anyway (``calibrate(force=True)``, ``--force``): the summary
+            says it is written because forced.
     """
 
     findings: tuple[Finding, ...]
     noise: float
     sigma: float
     prediction: dict = field(default_factory=dict)
+    forced: bool = False
 
     @property
     def failed(self) -> tuple[Finding, ...]:
@@ -288,6 +291,8 @@ class SelfCheck:
         """A few lines for the printed summary."""
         head = (f"consistent{', with warnings' if self.warnings else ''}" if self.consistent
                 else f"INCONSISTENT ({len(self.failed)} failed)")  # warnings: the lines below that say 'warning'
+        if self.forced and not self.consistent:  # not because it passed (a review: a forced run's level said 'written')
+            head += ": written only because forced (--force)"
         lines = [f"self-check: {head}"]
         lines += [line for f in self.findings if f.check in ("residual level", "prediction") and f.passed
                   for line in _clauses(f.message)]
@@ -307,8 +312,27 @@ class SelfCheck:
             )
         lines += [f"  unchecked: {f.message}" for f in self.findings if f.figures.get("unchecked")]
         # a review: a forced Gen3 lite's failed prediction was one summary line of 1,500 characters
-        lines += [line for f in self.failed for line in _clauses(f"FAILED: {f.message}")]
+        shown: list[Finding] = []
+        for f in self.failed:
+            lines += _clauses(f"FAILED: {_once(f, shown)}")
+            shown.append(f)
         return lines
+
+
+def _once(finding: Finding, shown: list[Finding]) -> str:
+    """A failed ``finding``'s message for the summary, without the figures a failure printed above it already quotes
+    (its :attr:`Finding.clause`) and without the clauses that one printed: its verdict, where those figures are, and
+    what else it says. A review: a forced one-socket Gen3 lite (MUKCa's dinova_2 gen3lite) printed the prediction's
+    figures twice, under its failed residual level (which quotes them) and under its failed prediction."""
+    message, clause = finding.message, finding.clause
+    quoting = next((g for g in shown if clause and clause in g.message), None)
+    start = message.find(clause) if quoting is not None else -1
+    verdict = message[:max(start, 0)].rstrip(": ")
+    if not verdict:
+        return message
+    printed = set(_split_outside_parentheses(quoting.message, "; "))
+    rest = [c for c in _split_outside_parentheses(message[start + len(clause):], "; ") if c and c not in printed]
+    return "; ".join([f"{verdict} (its figures above, under the failed {quoting.check})", *rest])
 
 
 def _p_value(log10_p: float) -> str:

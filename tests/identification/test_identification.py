@@ -206,7 +206,9 @@ def test_listed_fixture_without_samples_is_reported(truth, clean) -> None:
 
 def test_wrong_distance_is_flagged_not_written_silently(truth, clean) -> None:
     # a 10 mm typo in one distance used to give a 3 mm-off model with no word (residual 2 mm vs 0.3 expected);
-    # now the self-check refuses it, and with force the warning still names the most strained distance
+    # now the self-check refuses it; with force its failed check names the distance, and the residual noise is said
+    # once, by the self-check's residual level (a review: calibrate's own noise warning said it again with other
+    # figures); without the self-check (check=False) that warning still names the most strained distance
     from spherecal.identification.selfcheck import InconsistentDataError
 
     panda, _ = truth
@@ -217,7 +219,13 @@ def test_wrong_distance_is_flagged_not_written_silently(truth, clean) -> None:
     typo = FixtureSpec(spec.names, distances=[(a, b, value + 0.01), *rest])
     with pytest.raises(InconsistentDataError, match=rf"distance {a}-{b} .* disagrees with the samples by 9\.9"):
         calibrate(panda, small, typo)
-    warning = next((w for w in calibrate(panda, small, typo, force=True).warnings if "residual noise" in w), "")
+    forced = calibrate(panda, small, typo, force=True)
+    assert not any("residual noise" in w for w in forced.warnings), forced.warnings
+    failed = " ".join(f.message for f in forced.selfcheck.failed)
+    assert re.search(rf"distance {a}-{b} .* disagrees with the samples by 9\.9", failed), failed
+    said = re.findall(r"residual noise [\d.]+ mm per axis (?:is|with the prior).*", forced.summary())
+    assert len(said) == 1 and "the fit's" not in said[0] and "the declared 0.3 mm" in said[0], said
+    warning = next((w for w in calibrate(panda, small, typo, check=False).warnings if "residual noise" in w), "")
     assert f"the most strained distance is {a}-{b}" in warning, warning
 
 

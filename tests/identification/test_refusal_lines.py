@@ -3,6 +3,7 @@
 
 from __future__ import annotations
 
+import re
 from pathlib import Path
 
 import numpy as np
@@ -15,7 +16,7 @@ from spherecal.identification.calibrate import check_plausible
 from spherecal.identification.problem import ImplausibleCalibrationError
 from spherecal.identification.selfcheck_result import HEADLINE, Finding, InconsistentDataError, SelfCheck, refusal_lines
 from spherecal.identification.synthetic import make_dataset
-from spherecal.identification.workflow import calibrate_files
+from spherecal.identification.workflow import WorkflowOptions, calibrate_files
 from tests.refusal import refused
 
 DATA = Path(__file__).parents[1] / "data" / "mukca"
@@ -49,17 +50,42 @@ def test_a_short_refusal_stays_one_line_and_parentheses_hold_their_clauses() -> 
     short = "samples.csv: rows 1-20: residual noise 2 mm per axis"
     assert refusal_lines(short) == (short,) and InconsistentDataError(short).lines == (short,)
     long = ("samples.csv: rows 7-26, field 'fixture': the samples at fixture P2 disagree with the others by 6 mm rms "
-            "(the others alone: 1 mm; expected 1 mm): samples of another arm, a fixture that moved, or a wrong label; "
-            "or a wrong known distance (fixtures.yaml: row 6, field 'distances[0]': P1-P2 0.05 m); leaving P2 out "
+            "(the others alone: 1 mm; expected 1 mm): samples of another arm, a fixture that moved, a wrong label, or "
+            "a wrong known distance (fixtures.yaml: row 6, field 'distances[0]': P1-P2 0.05 m); leaving P2 out "
             "does not help: without P2 the rest is refused too (calibrate --exclude-fixture P2 says why)")
     assert len(long) > HEADLINE
     assert refusal_lines(long) == (
         "refused: samples.csv: rows 7-26, field 'fixture': the samples at fixture P2 disagree with the others by 6 mm "
         "rms",
         "samples.csv: rows 7-26, field 'fixture': the samples at fixture P2 disagree with the others by 6 mm rms (the "
-        "others alone: 1 mm; expected 1 mm): samples of another arm, a fixture that moved, or a wrong label",
-        "or a wrong known distance (fixtures.yaml: row 6, field 'distances[0]': P1-P2 0.05 m)",
+        "others alone: 1 mm; expected 1 mm): samples of another arm, a fixture that moved, a wrong label, or a wrong "
+        "known distance (fixtures.yaml: row 6, field 'distances[0]': P1-P2 0.05 m)",
         "leaving P2 out does not help: without P2 the rest is refused too (calibrate --exclude-fixture P2 says why)")
+
+
+def test_a_fixture_beside_one_other_is_refused_in_sentences() -> None:
+    """A review (MUKCa's dinova_1 front, two sockets and their known distance): the refusal printed a line starting
+    'or a wrong known distance (...)', and said 'the other fixtures' and 'the others alone' beside one other. The
+    wrong distance is one of the causes, in the same sentence; one other fixture is 'the other fixture'."""
+    from spherecal.correction.files.fixtures import FixtureSpec
+    from spherecal.correction.files.samples import Dataset
+    from spherecal.identification.calibrate import calibrate
+
+    panda = load_robot("panda")
+    ours, spec = make_dataset(perturb(panda, np.random.default_rng(1)), per_fixture=100, rng=np.random.default_rng(3))
+    theirs, _ = make_dataset(perturb(panda, np.random.default_rng(11)), per_fixture=100, rng=np.random.default_rng(4))
+    mine, other = ours.labels == "P1", theirs.labels == "P2"  # P2's samples from another arm
+    mixed = Dataset(np.concatenate([ours.labels[mine], theirs.labels[other]]),
+                    np.concatenate([ours.q[mine], theirs.q[other]]), fixture_names=("P1", "P2"))
+    distance = [d for d in spec.distances if {d[0], d[1]} == {"P1", "P2"}]
+    with pytest.raises(InconsistentDataError) as raised:
+        calibrate(panda, mixed, FixtureSpec(("P1", "P2"), distances=distance))
+    message, lines = str(raised.value), raised.value.lines
+    assert re.search(r"the samples at fixture P[12] disagree with the other fixture by [\d.]+ mm rms \(the other "
+                     r"alone: residual ", message), message
+    assert re.search(r": samples of another arm, a fixture that moved, a wrong label, or a wrong known distance "
+                     r"\(fixtures: field 'distances\[0\]': P1-P2 [\d.]+ m\)", message), message
+    assert not any(line.startswith("or ") for line in lines), lines
 
 
 def test_an_implausible_fit_is_refused_with_its_reason_first_and_its_remedy_below() -> None:
@@ -116,6 +142,42 @@ def test_a_forced_calibrations_long_failed_check_gives_each_clause_its_line() ->
                        "    record more self-motion, more fixtures or known distances"]
     assert "; ".join(line.strip() for line in lines[start: start + 3]) == f"FAILED: {long}"
     assert lines[start + 3:] == ["  FAILED: fixtures.yaml: off"]
+
+
+def test_a_failed_check_does_not_print_the_figures_another_failure_above_it_quotes() -> None:
+    """A review: a forced one-socket Gen3 lite (MUKCa's dinova_2 gen3lite) printed the prediction's figures twice, under
+    its failed residual level, which quotes them, and under its failed prediction. The prediction's line keeps its
+    verdict and says where its figures are; its clauses not printed above (a note added later) stay."""
+    figures = "predicted mean error 1.82 mm (after registration) against 2.7 mm; over the whole workspace 7.36 mm"
+    level = Finding("residual level", False, f"s.csv: rows 7-30: residual noise 1.09 mm per axis and no single one "
+                    f"explains it; at the noise the residuals show, worse: {figures}; record more; serial 0.57",
+                    clause="s.csv: rows 7-30: residual noise 1.09 mm per axis")
+    verdict = "s.csv: rows 7-30: the calibration cannot be expected to beat the nominal model by 2x near the recording"
+    prediction = Finding("prediction", False, f"{verdict}: {figures}; record more; serial 0.57; joint error 3.9 mrad",
+                         clause=figures, remedy="record more", notes=("serial 0.57", "joint error 3.9 mrad"))
+    lines = SelfCheck((level, prediction), 3e-4, 1e-3).lines()
+    assert sum("predicted mean error 1.82 mm" in line for line in lines) == 1, lines
+    assert sum("record more" in line for line in lines) == 1, lines
+    assert lines[-2:] == [f"  FAILED: {verdict} (its figures above, under the failed residual level)",
+                          "    joint error 3.9 mrad"]
+    alone = SelfCheck((prediction,), 3e-4, 1e-3).lines()  # nothing above quotes it: all of it
+    assert "; ".join(line.strip() for line in alone[1:]) == f"FAILED: {prediction.message}"
+
+
+def test_a_forced_one_socket_calibration_prints_its_figures_once(tmp_path) -> None:
+    """MUKCa's dinova_2 gen3lite with --force (one socket, refused for its residual level and its prediction): the
+    prediction's figures once, the residual noise once (calibrate's own noise warning said it again with other
+    figures), and written because forced."""
+    assert main(["import", str(DATA / "dinova_2/gen3lite"), "--format", "mukca", "--robot", str(KINOVA), "--out",
+                 str(tmp_path / "imp")]) == 0
+    done = calibrate_files(str(KINOVA), tmp_path / "imp/samples.csv", tmp_path / "imp/fixtures.yaml",
+                           tmp_path / "cal.yaml", WorkflowOptions(force=True))
+    summary = done.summary()
+    failed = [f.check for f in done.result.selfcheck.failed]
+    assert failed == ["residual level", "prediction"], failed
+    assert summary.count("predicted mean error ") == 1, summary
+    assert len(re.findall(r"residual noise [\d.]+ mm per axis (?:is|with the prior)", summary)) == 1, summary
+    assert "self-check: INCONSISTENT (2 failed): written only because forced (--force)" in summary.splitlines()
 
 
 @pytest.mark.parametrize(("log10_p", "said"), [(-0.02, "p = 0.95"), (-0.2, "p = 0.63"), (-2.5, "p = 0.0032"),
