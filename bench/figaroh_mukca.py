@@ -18,13 +18,16 @@ their mean, per socket, averaged; MUKCa's "test MAE"). Every placement with two 
   here by the same formula (checked: its nominal tool points score as spherecal's nominal model, printed ``chk``).
 * **MUKCa**: its published figure where there is one (``mukca.MUKCA``).
 
-Wall time: ``spherecal calibrate`` in this process (``run_cli``), FIGAROH's ``initialize()`` + ``solve()`` in the
-driver, both without interpreter start-up and imports, median of ``--repeats`` runs (spherecal after one warm-up run;
-``FIG map`` once).
-The load (``uptime``) is printed before and after.
+``--simulated N`` then checks the encoding on a simulated arm of each robot's family whose truth is known
+(``simulated``: FIGAROH given known socket centres must land on the true arm; both tools trained on two sockets).
+
+Wall time: ``spherecal calibrate`` in this process (``spherecal.cli.main``), FIGAROH's ``initialize()`` +
+``solve()`` in the driver, both without interpreter start-up and imports, median of ``--repeats`` runs (spherecal
+after one warm-up run; ``FIG map`` once). The load (``uptime``) is printed before and after.
 
     .venv/bin/python bench/figaroh_mukca.py --figaroh-python /path/to/figvenv/bin/python \\
-        --data /tmp/work/mukca_layout [--robots panda_2_clean panda_4_clean dinova_1 kuka_14] [--repeats 3]
+        --data /tmp/work/mukca_layout [--robots panda_2_clean panda_4_clean dinova_1 kuka_14] [--repeats 3] \\
+        [--simulated 3]
 
 Prints a table [mm] and writes ``bench/figaroh_mukca.json`` (or ``--out``): versions of both sides, inputs, every
 figure and time.
