@@ -197,6 +197,7 @@ def _linearised(problem: CalibrationProblem, noise: float, sample_weight: float 
     # problems made by dataclasses.replace share their cache (same model and samples): the key holds what else
     # the linearisation reads of ``problem``
     read = (problem.free.tobytes(), problem.free_centres, problem.pinned, problem.noise, problem.prior_weight,
+            problem.prior_noise,
             None if problem.prior_curvature is None else problem.prior_curvature.tobytes())
     key = ("linearised", float(noise), float(sample_weight), None if free is None else np.asarray(free).tobytes(),
            *read)
@@ -273,9 +274,10 @@ def deviation_root(
         samples, prior = slice(0, 3 * pruned.dataset.n_samples), pruned.prior_rows()
         rest = ~prior
         rest[samples] = False
-        stated = max(pruned.noise, SIGMA_FLOOR) ** 2  # (w distance_std)^2, and (sqrt(W) noise_p / s)^2 s^2 over W
+        stated = max(pruned.noise, SIGMA_FLOOR) ** 2  # (w distance_std)^2
+        held = pruned.prior_sigma() ** 2  # (sqrt(W) noise_p / s)^2 s^2 over W
         middle = (data_noise**2 * (jac[samples].T @ jac[samples]) + stated * (jac[rest].T @ jac[rest])
-                  + bias_scale**2 * pruned.prior_weight * stated * (jac[prior].T @ jac[prior]))
+                  + bias_scale**2 * pruned.prior_weight * held * (jac[prior].T @ jac[prior]))
         cov = (inverse @ middle @ inverse)[:fp, :fp]
         cov = 0.5 * (cov + cov.T)
     elif bias_scale == 1.0 or not pruned.n_prior:

@@ -11,7 +11,9 @@ Residuals (metres)::
 The prior rows (MAP toward the nominal model ``x0``) weigh each identified parameter's deviation by
 its prior spread ``s_i`` (:meth:`correction.layout.ParameterLayout.spread`: 1 mm, 0.2 deg, 3e-5 rad/Nm,
 1e-3 per scale); ``W`` (``prior_weight``, ``calibrate --prior``) scales them: ``W = 1`` is the Gaussian
-posterior when the spreads and the declared ``noise`` are right, ``W = 0`` plain least squares. Because
+posterior when the spreads and the declared ``noise`` are right, ``W = 0`` plain least squares. With
+``prior_noise`` set (no noise declared and residuals noisier than the default: :func:`.calibrate.prior_at_shown_noise`)
+the rows are weighed at that noise instead, each joint's zero spread over its tolerance (:meth:`prior_spread`). Because
 they are rows of the problem, the solvers, the stds, pruning, the self-check's leave-one-out and its
 prediction all see them. What the data alone can see (the rank test of :func:`build_problem`) is
 judged without them.
@@ -162,6 +164,10 @@ class CalibrationProblem:
         prior_centre: (P,) parameters the prior pulls toward (the nominal model's), or None (``model``'s).
         prior_tail: where the prior's tail starts [prior spreads] (inf: Gaussian; :data:`PRIOR_TAIL`).
         prior_curvature: (P,) frozen IRLS weights of the prior rows (:meth:`reweighted`), or None.
+        prior_noise: the noise [m] the prior rows are weighed at when it is not ``noise``: the noise per axis the
+            residuals show, where it is above the default (:func:`.calibrate.calibrate` without a declared noise;
+            the module docstring); the joints' zeros then spread over their tolerance (:meth:`prior_spread`).
+            None: ``noise``, every spread :func:`prior_std`'s.
         fixture_weights: ``(fixture, w)`` pairs: that fixture's sample rows are multiplied by ``w`` (the solves of
             ``--loss auto`` weigh each fixture by the noise it shows, :mod:`.fixture_noise`); a fixture not named,
             and every one when empty, weighs 1.
@@ -184,6 +190,7 @@ class CalibrationProblem:
     prior_tail: float = np.inf
     prior_curvature: np.ndarray | None = None
     fixture_weights: tuple[tuple[str, float], ...] = ()
+    prior_noise: float | None = None
     _cache: dict = field(default_factory=dict, repr=False)
 
     # ------------------------------------------------------------------------------ sizes
@@ -247,15 +254,24 @@ class CalibrationProblem:
         prior = np.sum(jac[self.prior_rows()][:, :fp] ** 2, axis=0)  # one prior row per parameter: its square
         return np.clip(1.0 - prior * np.diag(inverse)[:fp], 0.0, 1.0)
 
+    def prior_spread(self) -> np.ndarray:
+        """(P,) the prior's spread ``s`` of every parameter: :func:`prior_std`, or, with :attr:`prior_noise` (the
+        prior at the noise the residuals show), :func:`tolerance` (each joint's zero at :data:`ZERO_TOLERANCE`)."""
+        return prior_std(self.model) if self.prior_noise is None else tolerance(self.model)
+
+    def prior_sigma(self) -> float:
+        """The noise [m] the prior rows are weighed at: :attr:`prior_noise`, else ``noise`` (at least the floor)."""
+        return max(self.noise if self.prior_noise is None else self.prior_noise, SIGMA_FLOOR)
+
     def _prior_scale(self) -> np.ndarray:
         """(Fp,) ``sqrt(W) noise / s_i`` of the identified parameters [m per unit of the parameter]."""
-        spread = prior_std(self.model)[self.free]
-        return np.sqrt(self.prior_weight) * max(self.noise, SIGMA_FLOOR) / spread
+        spread = self.prior_spread()[self.free]
+        return np.sqrt(self.prior_weight) * self.prior_sigma() / spread
 
     def _prior_z(self, params: np.ndarray) -> np.ndarray:
         """(Fp,) deviations ``z = (p - p0) / s`` of the identified parameters from the prior's centre [spreads]."""
         centre = self.model.params if self.prior_centre is None else self.prior_centre
-        return (params[self.free] - centre[self.free]) / prior_std(self.model)[self.free]
+        return (params[self.free] - centre[self.free]) / self.prior_spread()[self.free]
 
     def _prior_shape(self, params: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """(Fp,) prior rows over ``sqrt(W) noise``, ``f(z)``, and their slope ``df/dz`` at the identified parameters'
@@ -432,7 +448,7 @@ class CalibrationProblem:
         _, _, target, delta = self._distances(centres)
         parts = [sample, self.distance_weight * (np.linalg.norm(delta, axis=1) - target)]
         if self.n_prior:
-            parts.append(np.sqrt(self.prior_weight) * max(self.noise, SIGMA_FLOOR) * self._prior_shape(params)[0])
+            parts.append(np.sqrt(self.prior_weight) * self.prior_sigma() * self._prior_shape(params)[0])
         if self.anchor is not None:
             name, point, radius = self.anchor
             gap = np.linalg.norm(centres[self.dataset.fixture_names.index(name)] - point) - radius

@@ -173,7 +173,8 @@ def run_workflow(nominal: RobotModel, dataset: Dataset, spec: FixtureSpec | None
 
     def fit(begin, data, fixtures, warm=None, report=True):  # a candidate's or a fold's fit: lm, no self-check
         return calibrate(begin, data, fixtures, start=warm, loss=candidate_loss, noise=options.fit_noise,
-                         max_change=options.max_change, check=False, prior=options.prior, report=report)
+                         max_change=options.max_change, check=False, prior=options.prior, report=report,
+                         noise_declared=options.noise is not None)
 
     def fold_fit(begin, data, fixtures, warm=None):  # a fold's model alone is judged: no stds or figures
         return fit(begin, data, fixtures, warm, report=False)

@@ -228,8 +228,10 @@ def test_gen3_lite_placements_that_a_rigid_model_cannot_join_within_a_millimetre
     ~5 mm. That is the arm's unmodelled error over its workspace, which the others' residual shows beyond the
     declared noise, not a fixture that moved: refused before ("the samples at fixture raised_back_h0 disagree with
     the other fixtures by 5.72 mm rms"); now written, and better than nominal on the held-out placement left.
-    front_h0, whose residual trends with recording order (the socket moved), is still refused: with the same
-    allowance as any fixture (since stop 10), it disagrees with the rest by more than the arm's error explains."""
+    front_h0's residual trends with recording order (the socket moved): it was refused with it until stop 19. With
+    the prior at the 1.7 mm per axis the residuals show (joints' zeros at their 1 deg tolerance,
+    ``calibrate.prior_at_shown_noise``) the rest carries it within the arm's error: written, the trend named, and
+    at the held-out placements left and lower_left better than without front_h0 (3.71 / 3.97 mm, nominal 4.91)."""
     both = tmp_path / "recorded"
     for placement in ("front", "raised_back"):
         shutil.copytree(MUKCA / "dinova_1" / placement, both / placement)
@@ -241,21 +243,20 @@ def test_gen3_lite_placements_that_a_rigid_model_cannot_join_within_a_millimetre
     calibrate_argv = ["calibrate", "--robot", str(GEN3LITE), "--tip-link", "ball_link", "--samples",
                       str(tmp_path / "train" / "samples.csv"), "--fixtures", str(tmp_path / "train" / "fixtures.yaml"),
                       "--out", str(tmp_path / "cal.yaml")]
-    # the socket that moved while recorded disagrees beyond the arm's allowance: still refused, named
-    assert main(calibrate_argv) == 1
-    err = capsys.readouterr().err
-    assert "fixture front_h0 disagree" in err and "the residual at fixture front_h0 moves" in err
-    assert re.search(r"without front_h0 the rest is consistent and is written(, with warnings)? \(calibrate "
-                     r"--exclude-fixture front_h0\)", err), err
-    assert not (tmp_path / "cal.yaml").exists()
-    assert main([*calibrate_argv, "--exclude-fixture", "front_h0"]) == 0, capsys.readouterr().err
-    assert main(["validate", "--nominal", str(GEN3LITE), "--tip-link", "ball_link", "--calibrated",
-                 str(tmp_path / "cal.yaml"), "--samples", str(tmp_path / "test" / "samples.csv"), "--out",
-                 str(tmp_path / "v.json")]) == 0
-    fixtures = json.loads((tmp_path / "v.json").read_text())["sockets"]["fixtures"]
-    for socket in ("left_h0", "left_h1"):
-        spread = fixtures[socket]["spread_mean"]
-        assert spread["calibrated"] < 0.8 * spread["nominal"], (socket, spread)
+    # the socket that moved while recorded: written with the trend named (with it and without it)
+    assert main(calibrate_argv) == 0, capsys.readouterr().err
+    out = capsys.readouterr().out
+    assert "the residual at fixture front_h0 moves" in out and "mm per axis the residuals show" in out
+    without = [*calibrate_argv[:-1], str(tmp_path / "without.yaml"), "--exclude-fixture", "front_h0"]
+    assert main(without) == 0, capsys.readouterr().err
+    for written in ("cal.yaml", "without.yaml"):
+        assert main(["validate", "--nominal", str(GEN3LITE), "--tip-link", "ball_link", "--calibrated",
+                     str(tmp_path / written), "--samples", str(tmp_path / "test" / "samples.csv"), "--out",
+                     str(tmp_path / f"v_{written}.json")]) == 0
+        fixtures = json.loads((tmp_path / f"v_{written}.json").read_text())["sockets"]["fixtures"]
+        for socket in ("left_h0", "left_h1"):
+            spread = fixtures[socket]["spread_mean"]
+            assert spread["calibrated"] < 0.8 * spread["nominal"], (written, socket, spread)
 
 
 def test_another_arms_fixture_is_still_named_on_an_arm_with_unmodelled_error(panda) -> None:

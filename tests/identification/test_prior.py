@@ -164,3 +164,59 @@ def test_data_share_is_how_little_the_estimate_follows_the_prior():
     # the summary's effective unknowns count the centres too, and says so (a review read them as parameters)
     assert (f"({result.effective_unknowns:.1f} effective unknowns with the {centre_coords} fixture centre "
             "coordinates)") in result.summary()
+
+
+def _noisy_panda(noise, seed=5, per_fixture=40):
+    panda = load_robot("panda")
+    truth = perturb(panda, np.random.default_rng(seed))
+    dataset, spec = make_dataset(truth, per_fixture=per_fixture, rng=np.random.default_rng(seed + 1), noise=noise)
+    return panda, dataset, spec
+
+
+def test_the_prior_is_weighed_at_the_noise_the_residuals_show_when_above_the_default():
+    from spherecal.identification.calibrate import prior_at_shown_noise
+    from spherecal.identification.fixture_noise import fixture_noise
+    from spherecal.identification.problem import NOISE, ZERO_TOLERANCE, prior_std, zero_indices
+
+    panda, dataset, spec = _noisy_panda(1.2e-3)
+    problem = build_problem(panda, dataset, spec, prior_weight=PRIOR)
+    x = solve_lm(problem, problem.x0).x
+    level = fixture_noise(problem, x).level
+    assert level > 2 * NOISE  # 1.2 mm of noise shows as such
+    honest = prior_at_shown_noise(problem, x)
+    assert honest.prior_noise == level and honest.noise == problem.noise  # the checks keep the default noise
+    # the prior rows by hand: sqrt(W) level (p - p0) / s, s the prior spread but 1 deg on the zeros
+    params = problem.unpack(x)[0]
+    spread = prior_std(panda)
+    spread[zero_indices(panda)] = ZERO_TOLERANCE
+    free = honest.free
+    expected = np.sqrt(PRIOR) * level * (params - panda.params)[free] / spread[free]
+    rows = honest.prior_rows()
+    np.testing.assert_allclose(honest.residuals(x)[rows], expected, rtol=1e-12, atol=1e-15)
+    np.testing.assert_allclose(honest.residuals(x)[~rows], problem.residuals(x)[~rows], atol=1e-15)
+    jac, h = honest.jacobian(x), 1e-7
+    for k in range(honest.n_free_params):  # its Jacobian against central differences
+        e = np.zeros_like(x)
+        e[k] = h
+        fd = (honest.residuals(x + e) - honest.residuals(x - e)) / (2 * h)
+        np.testing.assert_allclose(jac[rows, k], fd[rows], rtol=1e-6, atol=1e-9)
+    # quiet data keeps the default: the same problem
+    panda, quiet, spec = _noisy_panda(1e-4)
+    problem = build_problem(panda, quiet, spec, prior_weight=PRIOR)
+    assert prior_at_shown_noise(problem, solve_lm(problem, problem.x0).x) is problem
+
+
+def test_calibrate_switches_the_prior_only_without_a_declared_noise_and_says_so():
+    panda, dataset, spec = _noisy_panda(1.2e-3)
+    default = calibrate(panda, dataset, spec, check=False, prior=PRIOR, loss="auto", noise_declared=False)
+    declared = calibrate(panda, dataset, spec, check=False, prior=PRIOR, loss="auto", noise_declared=True)
+    linear = calibrate(panda, dataset, spec, check=False, prior=PRIOR, noise_declared=False)  # a candidate's fit
+    assert declared.problem.prior_noise is None and declared.block()["prior_noise_m"] is None
+    for result in (default, linear):
+        assert result.problem.prior_noise > 2 * result.problem.noise
+        assert result.block()["prior_noise_m"] == result.problem.prior_noise
+    assert "mm per axis the residuals show" in default.summary() and "zeros at 1 deg" in default.summary()
+    assert "mm per axis the residuals show" not in declared.summary()
+    assert not np.array_equal(default.model.params, declared.model.params)
+    quiet = calibrate(*_noisy_panda(1e-4), check=False, prior=PRIOR, loss="auto", noise_declared=False)
+    assert quiet.problem.prior_noise is None
