@@ -17,8 +17,9 @@ arm) and the marker's offset from ``tool_frame`` are estimated.
 JOB: {"urdf", "tip_link", "train": [{"q": (K, n) [rad], "centre": (3,) [m]}, ...], "test": [(K, n) [rad], ...],
 "variants": {name: overrides of FIGAROH's ``tasks.calibration.parameters``, e.g. {"estimation": {"method": "map"}}}
 (default: one, ``default``, FIGAROH's defaults), "repeats": runs per variant (an int, or {variant: int})}.
-OUT: versions, and per variant the parameter names and values, the fit's status and figures, the wall time [s] of
-each run (``initialize`` and ``solve`` apart), and the calibrated and nominal tool points at every test socket [m].
+OUT: packages (the versions in FIGAROH's venv), and per variant the parameter names and values, the fit's status and
+figures, the wall time [s] of each run (``initialize`` and ``solve`` apart), and the calibrated and nominal tool
+points at every test socket [m].
 """
 
 from __future__ import annotations
@@ -134,7 +135,9 @@ def fitted(calib: SocketCalibration, runs: list, tests: list[np.ndarray]) -> dic
 def main() -> int:
     job = json.loads(Path(sys.argv[1]).read_text())
     tests = [np.asarray(q, dtype=float) for q in job["test"]]
-    out: dict = {"versions": {name: version(name) for name in ("figaroh", "pin", "numpy", "scipy")}, "variants": {}}
+    # FIGAROH's venv has no spherecal (no provenance()): its own packages, which figaroh_mukca.py records beside its
+    # provenance block as figaroh_versions
+    out: dict = {"packages": {name: version(name) for name in ("figaroh", "pin", "numpy", "scipy")}, "variants": {}}
     with tempfile.TemporaryDirectory() as tmp:
         work = Path(tmp)
         robot = load_robot(str(kinematic_urdf(Path(job["urdf"]), work)), load_by_urdf=True)

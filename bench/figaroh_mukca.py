@@ -294,7 +294,7 @@ def main() -> int:
     print(f"uptime: {load_after}")
     out = bench_common.write_json(args.out, {
         "uptime": [load_before, load_after], "seconds": time.perf_counter() - clock,
-        "figaroh_versions": rows[0]["figaroh"]["versions"] if rows else {}, "figaroh_variants": VARIANTS,
+        "figaroh_versions": rows[0]["figaroh"]["packages"] if rows else {}, "figaroh_variants": VARIANTS,
         "socket_distance_m": SOCKET_DISTANCE, "rows": rows, "simulated": sims},
         seed=list(range(1, args.simulated + 1)) or None,
         inputs={"data": Path(root), "robots": args.robots, "repeats": args.repeats,
