@@ -86,13 +86,14 @@ def inertials_of(model: RobotModel, source: str | None = None,
     """
     block, payload = model.extras.get("inertials"), model.extras.get("payload")
     parsed = _PARSED.get(id(block))
-    if parsed is not None and parsed[0] is block and parsed[1] is payload and len(parsed[2]) == model.n_joints + 1:
-        masses, coms = parsed[2].copy(), parsed[3].copy()  # read before: the same objects, for as many joints
+    if (parsed is not None and parsed.block is block and parsed.payload is payload
+            and len(parsed.masses) == model.n_joints + 1):
+        masses, coms = parsed.masses.copy(), parsed.coms.copy()  # read before: the same objects, for as many joints
     else:
         masses, coms = _parse(model, block, payload, source, rows)
         if len(_PARSED) >= PARSED_KEPT:
             _PARSED.clear()
-        _PARSED[id(block)] = (block, payload, masses.copy(), coms.copy())  # held: their ids stay theirs
+        _PARSED[id(block)] = _Parsed(block, payload, masses.copy(), coms.copy())  # held: their ids stay theirs
     size = model.chain_length  # 0: a check of the entries alone (a robot file's block before its geometry is read)
     if size > 0 and masses.sum() > MAX_MASS_DENSITY * size**3:  # grams for kilograms, or a payload of another scale
         k = int(np.argmax(masses))
@@ -103,11 +104,23 @@ def inertials_of(model: RobotModel, source: str | None = None,
     return masses, coms
 
 
-#: Inertials blocks read (:func:`inertials_of`): id -> (block, payload, masses, coms). A fit reads a model's masses
-#: at every step (gravity torques, a compliance's check), and every model of one fit holds the same block: checking
-#: it once saves a seventh of a default calibration. The objects are held, so an id is not taken by another block;
-#: extras are not changed in place (every ``with_*`` makes a copy).
-_PARSED: dict[int, tuple] = {}
+class _Parsed(NamedTuple):
+    """One inertials block as :func:`inertials_of` read it (:data:`_PARSED`)."""
+
+    #: The ``extras["inertials"]`` and ``extras["payload"]`` objects it was read from, held so that their ids stay
+    #: theirs (a later model is matched by identity).
+    block: Any
+    payload: Any
+    #: (n+1,) masses [kg] and (n+1, 3) centres of mass [m], payload last.
+    masses: np.ndarray
+    coms: np.ndarray
+
+
+#: Inertials blocks read (:func:`inertials_of`): id -> :class:`_Parsed`. A fit reads a model's masses at every step
+#: (gravity torques, a compliance's check), and every model of one fit holds the same block: checking it once saves
+#: a seventh of a default calibration. The objects are held, so an id is not taken by another block; extras are not
+#: changed in place (every ``with_*`` makes a copy).
+_PARSED: dict[int, _Parsed] = {}
 #: Blocks kept before the memory of them is cleared.
 PARSED_KEPT = 64
 

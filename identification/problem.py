@@ -530,7 +530,7 @@ def samples_location(dataset: Dataset) -> str:
 
 def samples_rows(dataset: Dataset) -> str:
     """``"rows 2-1501"``, ``"row 37"`` or ``"all rows"`` (not read from a file): the rows part of
-    :func:`samples_location`, for a clause that follows one naming the file (the honest-noise warning)."""
+    :func:`samples_location`, which names the file before them (every message names both since stop 19)."""
     if dataset.lines is None or dataset.n_samples == 0:
         return "all rows"
     if dataset.lines.min() == dataset.lines.max():  # 'row 37', not 'rows 37-37'
