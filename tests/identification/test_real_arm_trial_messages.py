@@ -61,6 +61,9 @@ def test_a_one_socket_refusal_at_the_noise_shown_says_which_bar_it_missed(tmp_pa
         "but from one socket it must not be worse over the whole workspace, and it is expected to be: predicted mean "
         "error ")
     assert "by 2x" not in shown and "samples.csv" not in shown
+    # the one socket's remedy, not the 2x margin's 'record more self-motion'
+    assert any(line.startswith("  record a second socket or another placement") for line in detail), detail
+    assert not any("record more self-motion" in line for line in detail), detail
     assert any(line.startswith("  over the whole workspace (500 random configurations") for line in detail)
 
 

@@ -424,10 +424,12 @@ def test_judged_at_the_noise_shown_the_messages_quote_the_findings_pieces_not_th
     # one socket that would make the whole workspace worse: refused, the prediction's figures, remedy and notes quoted
     findings, prediction = _honest_noise([_noise_like_level(wording)], _prediction_finding(5.0), one_fixture=True)
     assert not findings[0].passed and not prediction.passed
+    # its remedy is the one socket's, not the 2x margin's the prediction carries (a review, stop 19)
     assert findings[0].message == (
         f"{wording}; at the noise the residuals show, the calibration is expected to beat the nominal model near the "
         "recording, but from one socket it must not be worse over the whole workspace, and it is expected to be: "
-        "predicted mean error 1 mm; remedy; serial")
+        "predicted mean error 1 mm; record a second socket or another placement to calibrate the arm beyond this one; "
+        "serial")
 
 
 def test_beside_another_failed_check_the_level_judged_at_the_noise_shown_does_not_say_written() -> None:
