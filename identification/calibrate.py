@@ -354,14 +354,17 @@ def calibrate(
         x_start = x
         solution = solve_lm(problem, x, loss=fit_loss)
         x, timings["lm"] = solution.x, solution.seconds
-        if not noise_declared and problem.n_prior:
-            honest = prior_at_shown_noise(problem, x)
+        honest_prior = not noise_declared and problem.n_prior
+        # the least-squares residuals' noise: auto's weights and scale, and the prior's noise (the samples' rows alone)
+        seen = fixture_noise(problem, x) if loss == "auto" or honest_prior else None
+        if honest_prior:
+            honest = prior_at_shown_noise(problem, seen.level)
             if honest is not problem and loss != "auto":  # auto's next solve is from here anyway
                 solution = solve_lm(honest, x, loss=fit_loss)
                 x, timings["lm"] = solution.x, timings["lm"] + solution.seconds
             problem = honest
         if loss == "auto":
-            shown = fixture_noise(problem, x)
+            shown = seen
             fit_loss, scale = "huber", ROBUST_CUT * shown.level
             solution = solve_lm(problem.weighted(shown.weights), x, loss=fit_loss, f_scale=scale)
             x, timings["lm"] = solution.x, timings["lm"] + solution.seconds
@@ -518,8 +521,8 @@ def _discounted_socket(problem: CalibrationProblem, x: np.ndarray, loss: str) ->
             f"socket and were discounted by the {loss} loss: {_CROWDED_CAUSE}{remedy}"]
 
 
-def prior_at_shown_noise(problem: CalibrationProblem, x: np.ndarray) -> CalibrationProblem:
-    """``problem`` with its prior weighed at the noise per axis the residuals at ``x`` (F,) show
+def prior_at_shown_noise(problem: CalibrationProblem, level: float) -> CalibrationProblem:
+    """``problem`` with its prior weighed at ``level`` [m], the noise per axis its least-squares residuals show
     (:attr:`.FixtureNoise.level`), where that is above the noise it assumes (no noise declared: the default
     :data:`.problem.NOISE`), and each joint's zero spread over its tolerance (:attr:`.CalibrationProblem.prior_noise`);
     else ``problem`` itself.
@@ -535,7 +538,6 @@ def prior_at_shown_noise(problem: CalibrationProblem, x: np.ndarray) -> Calibrat
     3.634, ``raised_back`` 3.669 -> 3.701), dinova_2 ``front_rotated`` 2.546 -> 2.469 mm; either half alone does not
     help (the prior at the shown noise with zeros at 0.2 deg 0.675x, zeros at 1 deg at the default noise 0.627x and
     MUKCa's panda_6 above MUKCa's own error). The quieter arms are unchanged."""
-    level = fixture_noise(problem, x).level
     return replace(problem, prior_noise=float(level), _cache={}) if level > problem.noise else problem
 
 

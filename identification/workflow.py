@@ -275,7 +275,6 @@ def _remedy_tried(refused: InconsistentDataError, nominal: RobotModel, dataset: 
                                  f"is refused too (calibrate {flags(names)} says why)", names)
 
 
-
 def calibrate_files(robot: str, samples: str | Path, fixtures: str | Path | None, out: str | Path,
                     options: WorkflowOptions = WorkflowOptions(), outputs: OutputSet | None = None,
                     **robot_options) -> WorkflowResult:

@@ -183,7 +183,7 @@ def test_the_prior_is_weighed_at_the_noise_the_residuals_show_when_above_the_def
     x = solve_lm(problem, problem.x0).x
     level = fixture_noise(problem, x).level
     assert level > 2 * NOISE  # 1.2 mm of noise shows as such
-    honest = prior_at_shown_noise(problem, x)
+    honest = prior_at_shown_noise(problem, level)
     assert honest.prior_noise == level and honest.noise == problem.noise  # the checks keep the default noise
     # the prior rows by hand: sqrt(W) level (p - p0) / s, s the prior spread but 1 deg on the zeros
     params = problem.unpack(x)[0]
@@ -203,7 +203,7 @@ def test_the_prior_is_weighed_at_the_noise_the_residuals_show_when_above_the_def
     # quiet data keeps the default: the same problem
     panda, quiet, spec = _noisy_panda(1e-4)
     problem = build_problem(panda, quiet, spec, prior_weight=PRIOR)
-    assert prior_at_shown_noise(problem, solve_lm(problem, problem.x0).x) is problem
+    assert prior_at_shown_noise(problem, fixture_noise(problem, solve_lm(problem, problem.x0).x).level) is problem
 
 
 def test_calibrate_switches_the_prior_only_without_a_declared_noise_and_says_so():
