@@ -568,11 +568,9 @@ def _level(problem: CalibrationProblem, r: np.ndarray, sigma: float, dof: int, e
     residual = (f"residual noise {sigma * 1e3:.3g} mm per axis{with_prior} is {sigma / noise:.3g}x {against} "
                 f"{noise * 1e3:.3g} mm{unstated} (limit {LEVEL_FACTOR:g}x; worst fixture {worst} "
                 f"{per_fixture[worst] * 1e3:.3g} mm)")
-    location = samples_location(dataset)
-    where = f"{location}: {residual}"
-    # the noise as the honest-noise warning quotes it (:func:`_honest_noise`): the file and its rows, as every other
+    # also the clause the honest-noise warning quotes (:func:`_honest_noise`): the file and its rows, as every other
     # location (a review read 'warning: rows 7-46: residual noise ...' under a summary that names no file)
-    noise_clause = f"{location}: {residual}"
+    where = f"{samples_location(dataset)}: {residual}"
     weight = problem.prior_weight
     if alone is not None:  # the prior's rows are in sigma: is it the samples, or a prior holding the arm at nominal?
         cause = None
@@ -584,14 +582,14 @@ def _level(problem: CalibrationProblem, r: np.ndarray, sigma: float, dof: int, e
                      "its design: known distances or positions that are wrong (all alike, as no single one stands "
                      "out), or a nominal model of another arm")
         if cause is not None:  # a cause it names: the honest-noise warning quotes it with the noise
-            return Finding("residual level", False, f"{where}: {cause}", figures, clause=f"{noise_clause}: {cause}")
+            return Finding("residual level", False, f"{where}: {cause}", figures, clause=f"{where}: {cause}")
     held = (f", the prior (--prior {weight:g}, default {PRIOR:g}) holding the model at nominal"
             if weight > HEAVY_PRIOR * PRIOR else "")
     causes = (f"no single fixture, distance or position explains it: samples of another arm, a fixture that "
               f"moved, a fit that did not converge{held}, or "
               + ("the noise declared too small (--noise)" if declared else
                  f"more noise than the fit assumes ({noise * 1e3:.3g} mm: none declared; give it with --noise)"))
-    return Finding("residual level", False, f"{where} and {causes}", figures, clause=noise_clause, remedy=causes)
+    return Finding("residual level", False, f"{where} and {causes}", figures, clause=where, remedy=causes)
 
 
 # --------------------------------------------------------------------------------- prediction
