@@ -56,13 +56,18 @@ def run_cli(argv: list[str]) -> str:
 # ----------------------------------------------------------------------------- MUKCa real data
 def socket_mae(model, sockets) -> float:
     """MUKCa's test MAE [m]: the mean over ``sockets`` ((K, n) joint angles each) of the mean distance of
-    ``model``'s tool points from their mean."""
-    import numpy as np
-
+    ``model``'s tool points from their mean (:func:`points_mae`)."""
     from spherecal.correction import tool_point
 
-    return float(np.mean([np.linalg.norm(p - p.mean(axis=0), axis=1).mean()
-                          for p in (tool_point(model, q) for q in sockets)]))
+    return points_mae(tool_point(model, q) for q in sockets)
+
+
+def points_mae(points) -> float:
+    """:func:`socket_mae`'s formula on tool points already computed (another tool's): the mean over sockets ((K, 3)
+    each [m]) of the mean distance from their mean [m]."""
+    import numpy as np
+
+    return float(np.mean([np.linalg.norm(p - p.mean(axis=0), axis=1).mean() for p in map(np.asarray, points)]))
 
 
 def find_mukca() -> Path:

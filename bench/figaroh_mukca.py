@@ -52,21 +52,14 @@ from mukca import MUKCA
 
 from spherecal.cli import main as cli_main
 from spherecal.correction import load_robot, read_samples, tool_point, write_samples
+from spherecal.identification.ingest.importers import MUKCA_DISTANCE
 
 HERE = Path(__file__).resolve().parent
-URDFS = {"panda": "panda.urdf", "dinova": "gen3lite.urdf", "kuka": "iiwa14.urdf"}
 ROBOTS = ("panda_2_clean", "panda_4_clean", "dinova_1", "kuka_14")
-SOCKET_DISTANCE = 0.05  # [m] between a MUKCa placement's two sockets
 #: FIGAROH's settings run: its defaults (``structural``), and ``map`` (its documented estimation method for weakly
 #: excited data: every joint parameter under a zero-mean prior of 1 mm, 2 mrad, 0.02 rad of joint offset), timed
 #: once (its ``initialize`` takes up to minutes).
 VARIANTS = {"default": {}, "map": {"estimation": {"method": "map"}}}
-
-
-def points_mae(points) -> float:
-    """``socket_mae``'s formula on tool points already computed: the mean over sockets ((K, 3) each [m]) of the mean
-    distance from their mean [m]."""
-    return float(np.mean([np.linalg.norm(p - p.mean(axis=0), axis=1).mean() for p in map(np.asarray, points)]))
 
 
 def cli(argv: list) -> tuple[int, str, str]:
@@ -119,8 +112,8 @@ def run_driver(python: str, job: dict, work: Path) -> dict:
         raise SystemExit(f"FIGAROH driver failed ({work}):\n{done.stderr[-3000:]}")
     out = json.loads((work / "fig.json").read_text())
     for fit in out["variants"].values():
-        fit["test_mae_mm"] = points_mae(fit["test_points"]) * 1e3
-        fit["nominal_mae_mm"] = points_mae(fit.pop("nominal_test_points")) * 1e3
+        fit["test_mae_mm"] = bench_common.points_mae(fit["test_points"]) * 1e3
+        fit["nominal_mae_mm"] = bench_common.points_mae(fit.pop("nominal_test_points")) * 1e3
         fit["seconds"] = [a + b for a, b in zip(fit["initialize_s"], fit["solve_s"], strict=True)]
     return out
 
@@ -129,7 +122,7 @@ def figaroh_run(python: str, urdf: Path, train: Path, sockets, repeats: int, wor
     """FIGAROH's calibration on ``train``'s two sockets, as the plate frame: socket k measured at (0.05 k, 0, 0)."""
     out = run_driver(python, {
         "urdf": str(urdf), "repeats": {name: repeats if name == "default" else 1 for name in VARIANTS},
-        "train": [{"q": q.tolist(), "centre": [SOCKET_DISTANCE * k, 0.0, 0.0]}
+        "train": [{"q": q.tolist(), "centre": [MUKCA_DISTANCE * k, 0.0, 0.0]}
                   for k, q in enumerate(sockets_of(train))],
         "test": [q.tolist() for q in sockets]}, work)
     for fit in out["variants"].values():
@@ -141,7 +134,7 @@ def run_robot(root: Path, robot: str, python: str, repeats: int, work: Path) -> 
     data = root / "data" / robot
     if not data.is_dir():
         raise SystemExit(f"{data}: no such robot folder (--data: a MUKCa layout with data/ and urdf/)")
-    urdf = root / "urdf" / URDFS[bench_common.mukca_family(robot)]
+    urdf = root / "urdf" / bench_common.MUKCA_FAMILIES[bench_common.mukca_family(robot)][0]
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         nominal = load_robot(urdf, tip_link="ball_link")
@@ -180,7 +173,7 @@ def simulated(root: Path, robot: str, seed: int, python: str, work: Path) -> dic
       sockets (at their true distance), held-out MAE [mm] at the second's, beside the true arm's (the noise floor)
       and the nominal model's.
     """
-    urdf = root / "urdf" / URDFS[bench_common.mukca_family(robot)]
+    urdf = root / "urdf" / bench_common.MUKCA_FAMILIES[bench_common.mukca_family(robot)][0]
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         nominal = load_robot(urdf, tip_link="ball_link")
@@ -295,7 +288,7 @@ def main() -> int:
     out = bench_common.write_json(args.out, {
         "uptime": [load_before, load_after], "seconds": time.perf_counter() - clock,
         "figaroh_versions": rows[0]["figaroh"]["packages"] if rows else {}, "figaroh_variants": VARIANTS,
-        "socket_distance_m": SOCKET_DISTANCE, "rows": rows, "simulated": sims},
+        "socket_distance_m": MUKCA_DISTANCE, "rows": rows, "simulated": sims},
         seed=list(range(1, args.simulated + 1)) or None,
         inputs={"data": Path(root), "robots": args.robots, "repeats": args.repeats,
                 "figaroh_python": args.figaroh_python}, indent=1)

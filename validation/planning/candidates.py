@@ -123,9 +123,10 @@ def read_candidates(path: str | Path, n_joints: int) -> list[Candidate]:
     for name, entry in entries.items():
         if not isinstance(entry, dict) or "position" not in entry:
             raise CandidateError(f"{where(name)}: expected a mapping with 'position: [x, y, z]'")
-        position = _vector(entry["position"], 3, where(name, "position"))
+        located = where(name, "position")  # checked below, and carried to the IK's refusal (Candidate.located)
+        position = _vector(entry["position"], 3, located)
         if np.abs(position).max() > 10.0:
-            raise CandidateError(f"{where(name, 'position')}: {position.tolist()} m is not physical (at most 10 m; "
+            raise CandidateError(f"{located}: {position.tolist()} m is not physical (at most 10 m; "
                                  "positions are in metres: millimetres given?)")
         joint_range = None
         if entry.get("joint_range") is not None:
@@ -135,7 +136,7 @@ def read_candidates(path: str | Path, n_joints: int) -> list[Candidate]:
         unknown = set(entry) - {"position", "joint_range"}
         if unknown:
             raise CandidateError(f"{where(name, str(sorted(unknown)[0]))}: unknown field")
-        out.append(Candidate(str(name), position, joint_range, str(path), where(name, "position")))
+        out.append(Candidate(str(name), position, joint_range, str(path), located))
     return out
 
 
