@@ -116,7 +116,23 @@ def _dlink_djoint(model: RobotModel, q_joint: np.ndarray, jac: np.ndarray) -> np
     c = compliance_of(model)
     if not np.any(c):
         return jac
-    return jac - np.einsum("nxi,nik->nxk", jac * c, _torque_slope(model, q_joint))
+    return _through_deflection(jac, c, _torque_slope(model, q_joint))
+
+
+def _through_deflection(jac: np.ndarray, c: np.ndarray, slope: np.ndarray) -> np.ndarray:
+    """``jac`` (N, m, n) ``d / d q_link`` carried to ``d / d q_joint``: ``jac (I - diag(c) slope)``, ``slope`` (N, n, n)
+    the torque's (:func:`_torque_slope`)."""
+    return jac - np.einsum("nxi,nik->nxk", jac * c, slope)
+
+
+def _link_chain(s: np.ndarray, c: np.ndarray, slope: np.ndarray | None, count: int) -> np.ndarray:
+    """(N, n, n) ``d q_link / d q = (I - diag(c) slope) diag(1 + s)`` for ``count`` configurations (``slope`` None:
+    no compliance)."""
+    n = len(s)
+    jac = np.broadcast_to(np.eye(n), (count, n, n))
+    if slope is not None:
+        jac = jac - c[:, None] * slope
+    return jac * (1.0 + s)  # column k times d q_joint_k / d q_k
 
 
 def _torque_slope(model: RobotModel, q_joint: np.ndarray) -> np.ndarray:
@@ -236,14 +252,11 @@ def link_angle_jacobian(model: RobotModel, q: np.ndarray) -> np.ndarray | None:
         ValueError: ``q`` not of shape (N, n) or (n,).
     """
     q2, single = _checked(model, q)
-    s = scale_of(model) if "scale" in model.extras else np.zeros(model.n_joints)
-    c = compliance_of(model) if "compliance" in model.extras else np.zeros(model.n_joints)
+    s, c = scale_of(model), compliance_of(model)  # zeros when absent
     if not (np.any(s) or np.any(c)):
         return None
-    jac = np.broadcast_to(np.eye(model.n_joints), (len(q2), model.n_joints, model.n_joints))
-    if np.any(c):
-        jac = jac - c[:, None] * _torque_slope(model, joint_angles(model, q2))
-    jac = jac * (1.0 + s)  # column k times d q_joint_k / d q_k
+    slope = _torque_slope(model, joint_angles(model, q2)) if np.any(c) else None
+    jac = _link_chain(s, c, slope, len(q2))
     return jac[0] if single else jac
 
 
@@ -269,10 +282,17 @@ def pose_jacobian(model: RobotModel, q: np.ndarray) -> np.ndarray:
     f = frames(model, q_link)
     axes = f.z[1:] if model.convention == "modified" else f.z[:-1]  # (n, 3, N): joint i turns about these
     angular = np.moveaxis(axes, 2, 0).transpose(0, 2, 1)  # (N, 3, n)
-    chain = link_angle_jacobian(model, q2)
-    if chain is not None:
-        angular = angular @ chain
-    jac = np.concatenate([joint_jacobian(model, q2), angular], axis=1)
+    # the rows of joint_jacobian and the chain of link_angle_jacobian from one set of frames and one torque slope
+    s, c = scale_of(model), compliance_of(model)  # zeros when absent
+    slope = _torque_slope(model, joint_angles(model, q2)) if np.any(c) else None
+    linear = _rigid_joint_jacobian(model, q_link, f)
+    if slope is not None:
+        linear = _through_deflection(linear, c, slope)
+    if "scale" in model.extras:
+        linear = linear * (1.0 + s)
+    if np.any(s) or np.any(c):
+        angular = angular @ _link_chain(s, c, slope, len(q2))
+    jac = np.concatenate([linear, angular], axis=1)
     return jac[0] if single else jac
 
 
