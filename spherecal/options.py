@@ -364,10 +364,11 @@ def urdf_links(args: argparse.Namespace) -> dict:
 ROBOT_OPTIONS = ("robot", "nominal", "calibrated", "truth")
 
 
-def check_robot_names(args: argparse.Namespace) -> None:
+def check_robot_names(args: argparse.Namespace, robot: str | None = None) -> None:
     """Refuse a robot option (:data:`ROBOT_OPTIONS`) given a bare name that is neither a file nor an embedded robot,
     naming the option, before any work: ``iiwa: field '--robot': no such file, nor an embedded robot (did you mean
-    'iiwa14'? ...)`` (the library's refusal named the name, not the option; export's and tool's robot is CAL.yaml).
+    'iiwa14'? ...)`` (the library's refusal named the name, not the option). ``robot``: how the command's parser
+    names its ``robot`` when it is not ``--robot`` (export's and tool's positional ``CAL.yaml``).
 
     Raises:
         OptionError: one line naming the value and the option.
@@ -378,8 +379,8 @@ def check_robot_names(args: argparse.Namespace) -> None:
         value = getattr(args, dest, None)
         why = unknown_name(value) if isinstance(value, str) else None
         if why is not None:
-            positional = dest == "robot" and getattr(args, "command", None) in ("export", "tool")
-            raise fail(f"{value}: field '{'CAL.yaml' if positional else named(args, dest)}': {why}")
+            label = robot if dest == "robot" and robot is not None else named(args, dest)
+            raise fail(f"{value}: field '{label}': {why}")
 
 
 def _report(args: argparse.Namespace):

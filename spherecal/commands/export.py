@@ -56,7 +56,7 @@ def run(args: argparse.Namespace) -> int:
     from spherecal.controller.export_file import ExportConfig, export_file
     from spherecal.options import planned_outputs
 
-    check_robot_names(args)  # an unknown robot name, by its option
+    check_robot_names(args, robot="CAL.yaml")  # an unknown robot name, by its positional CAL.yaml
     outputs = planned_outputs(args, {"--out": args.out})  # never over CAL.yaml, --into or --samples
     links = urdf_links(args)
     config = ExportConfig(

@@ -47,7 +47,7 @@ def run(args: argparse.Namespace) -> int:
 
     if args.urdf is None:
         refuse_given(args, ("tip_link", "base_link"), "only with --urdf (the link of the new tool in its URDF)")
-    check_robot_names(args)  # an unknown robot name, by its option
+    check_robot_names(args, robot="CAL.yaml")  # an unknown robot name, by its positional CAL.yaml
     outputs = planned_outputs(args, {"--out": args.out})  # never over an input, named as YAML
     model = load_robot(args.robot)
     from spherecal.correction.files.robot_file import forced_calibration
